@@ -1,0 +1,53 @@
+# Thin front over CMake: `make demo` and `make test` do all the set-up on a fresh machine.
+JOBS ?= 2
+BUILD ?= build
+BUILD_DOUBLE ?= build-double
+DEMO_SCENE ?= examples/jello_cubes.json
+CMAKE_FLAGS ?=
+
+DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev
+
+.PHONY: all deps build build-double demo test test-float test-double bench clean format
+
+all: build
+
+# Install the Debian packages the build needs, only when one is missing.
+deps:
+	@missing=""; for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  if [ "$$(id -u)" != 0 ]; then SUDO=sudo; fi; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
+	fi
+
+build: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD) -j $(JOBS)
+
+build-double: deps
+	cmake -S . -B $(BUILD_DOUBLE) -DCMAKE_BUILD_TYPE=Release -DMPM_DOUBLE=ON $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD_DOUBLE) -j $(JOBS)
+
+demo: build
+	./$(BUILD)/mpm run $(DEMO_SCENE) -o out
+
+# The whole suite, in the default float build and in the double build.
+test: test-float test-double
+
+test-float: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-double: build-double
+	cd $(BUILD_DOUBLE) && ctest --output-on-failure -j $(JOBS)
+
+bench: build
+	./$(BUILD)/mpm bench step
+	./$(BUILD)/mpm bench transfer
+
+format:
+	clang-format -i $$(git ls-files '*.c' '*.h')
+
+clean:
+	rm -rf $(BUILD) $(BUILD_DOUBLE) out

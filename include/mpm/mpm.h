@@ -1,0 +1,85 @@
+/* mpm.h - public API of the mpm Material Point Method engine.
+ *
+ * A simulation is an opaque handle created from a JSON scene (see docs/scene-format.md) and
+ * advanced frame by frame; results are read through bulk read-only views or written by the
+ * frame writers. Functions that can fail return an mpm_status; the message that names the
+ * file, key path, step or particle is available from mpm_sim_last_error or is written into
+ * the caller's buffer. No function of the library exits the process.
+ *
+ * Thread safety: one mpm_sim may be used by one caller thread at a time; the engine itself
+ * runs its transfers on OpenMP threads. */
+#ifndef MPM_MPM_H
+#define MPM_MPM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mpm_status {
+  MPM_OK = 0,
+  MPM_ERR_IO = 1,       /* a file could not be read or written */
+  MPM_ERR_PARSE = 2,    /* a file is not well formed (JSON, OBJ, PLY) */
+  MPM_ERR_INVALID = 3,  /* a value is out of range or a key is unknown */
+  MPM_ERR_NOMEM = 4,    /* an allocation failed */
+  MPM_ERR_UNSTABLE = 5, /* the simulation produced a non-finite or runaway value */
+} mpm_status;
+
+/// Human-readable name of a status ("ok", "parse error", ...). Static storage.
+const char *mpm_status_string(mpm_status s);
+
+/// Version string of the library, "MAJOR.MINOR.PATCH". Static storage.
+const char *mpm_version(void);
+
+/// Name of the real type this library was built with: "float" or "double".
+const char *mpm_real_type(void);
+
+typedef struct mpm_sim mpm_sim;
+
+/// Load and validate a JSON scene and build the simulation (particles sampled, colliders set).
+/// On failure *out is NULL and err (of errlen bytes, may be NULL) holds the message.
+mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char *err,
+                                    size_t errlen);
+
+/// Destroy a simulation; NULL is fine.
+void mpm_sim_destroy(mpm_sim *sim);
+
+/// Advance the simulation to the end of the next frame (several substeps).
+mpm_status mpm_sim_advance_frame(mpm_sim *sim);
+
+/// Advance by exactly one time step of at most max_dt seconds (the CFL bound applies too).
+mpm_status mpm_sim_step(mpm_sim *sim, double max_dt);
+
+/// The message of the last failure of this simulation ("" when none). Owned by sim.
+const char *mpm_sim_last_error(const mpm_sim *sim);
+
+/// Simulated time in seconds, steps taken, and frames completed.
+double mpm_sim_time(const mpm_sim *sim);
+int64_t mpm_sim_steps(const mpm_sim *sim);
+int mpm_sim_frame(const mpm_sim *sim);
+int mpm_sim_frame_count(const mpm_sim *sim);
+
+/// Read-only view of the particles, valid until the next call that advances sim.
+/// Components are separate arrays (structure of arrays) of `count` entries each, in the
+/// engine's real type (float or double, see real_size).
+typedef struct mpm_particle_view {
+  size_t count;
+  size_t real_size;       /* sizeof the real type: 4 or 8 */
+  const void *x[3];       /* position, m */
+  const void *v[3];       /* velocity, m/s */
+  const void *F[9];       /* deformation gradient, row-major */
+  const void *mass;       /* kg */
+  const void *volume0;    /* initial volume, m^3 */
+  const int32_t *material;
+  const int32_t *body;
+  const uint32_t *id;     /* stable particle id */
+} mpm_particle_view;
+
+mpm_particle_view mpm_sim_particles(const mpm_sim *sim);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

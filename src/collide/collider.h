@@ -1,0 +1,50 @@
+/* collider.h - analytic level-set colliders with kinematic motion, and the boundary rule.
+ *
+ * A collider is a shape (half-space, box, sphere, cylinder; inside-out for containers) whose
+ * signed distance phi is negative inside the solid. Its pose moves with a kinematic motion
+ * (constant velocity, rotation about an axis, or keyframes). Grid nodes (and, later, Zhu's
+ * domain corners) inside a collider get the boundary rule of Gao sec. 3.2 step 4: sticky,
+ * slip, or separate, with Coulomb friction. */
+#ifndef MPM_COLLIDE_COLLIDER_H
+#define MPM_COLLIDE_COLLIDER_H
+
+#include "core/real.h"
+#include "scene/scene.h"
+
+typedef struct mpm_collider {
+  mpm_collider_desc desc; /* copy; keyframes are owned by the collider */
+} mpm_collider;
+
+/* The collider's pose at one time, evaluated once per step and then used for every node. */
+typedef struct mpm_collider_pose {
+  const mpm_collider *collider;
+  mpm_real center[3];  /* current centre, m */
+  mpm_real R[9];       /* current rotation (local -> world) */
+  mpm_real velocity[3];/* translational velocity of the centre, m/s */
+  mpm_real omega[3];   /* angular velocity, rad/s */
+} mpm_collider_pose;
+
+int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d); /* 0, or -1 on OOM */
+void mpm_collider_free(mpm_collider *c);
+
+mpm_collider_pose mpm_collider_pose_at(const mpm_collider *c, double t);
+
+/* Signed distance (negative inside the solid; with inside_out the solid is the outside) and
+ * the unit outward normal of the solid at x (pointing into the free region). */
+mpm_real mpm_collider_phi(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real n[3]);
+
+/* Velocity of the collider's material point at x, m/s. */
+void mpm_collider_velocity(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real v[3]);
+
+/* Apply the boundary rule to the grid velocity v at x if x is inside (phi <= 0).
+ * Returns 1 if v was changed. */
+int mpm_collider_apply(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real v[3]);
+
+/* The rule itself, shared with the domain walls: given the unit normal n and the obstacle
+ * velocity vo, project v (sticky: v = vo; slip: remove the normal part of v - vo; separate:
+ * remove it only when (v - vo).n < 0), then Coulomb friction on the tangential part:
+ * |vt| <- max(0, |vt| - friction * |vn removed|). */
+void mpm_boundary_project(mpm_boundary_rule rule, mpm_real friction, const mpm_real n[3],
+                          const mpm_real vo[3], mpm_real v[3]);
+
+#endif

@@ -1,0 +1,35 @@
+/* error.c - status codes and messages. */
+#include "core/error.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+
+mpm_status mpm_error_set(mpm_error *err, mpm_status status, const char *fmt, ...) {
+  if (err) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->message, sizeof err->message, fmt, ap);
+    va_end(ap);
+    err->status = status;
+  }
+  return status;
+}
+
+void mpm_error_clear(mpm_error *err) {
+  if (err) {
+    err->status = MPM_OK;
+    err->message[0] = '\0';
+  }
+}
+
+const char *mpm_status_string(mpm_status s) {
+  switch (s) {
+  case MPM_OK: return "ok";
+  case MPM_ERR_IO: return "i/o error";
+  case MPM_ERR_PARSE: return "parse error";
+  case MPM_ERR_INVALID: return "invalid input";
+  case MPM_ERR_NOMEM: return "out of memory";
+  case MPM_ERR_UNSTABLE: return "simulation unstable";
+  }
+  return "unknown status";
+}

@@ -1,0 +1,20 @@
+/* error.h - status codes and the error message that travels with them.
+ *
+ * Library code never exits: a function that can fail returns an mpm_status and writes a
+ * message naming the file, key path, step or particle concerned into an mpm_error. */
+#ifndef MPM_CORE_ERROR_H
+#define MPM_CORE_ERROR_H
+
+#include "mpm/mpm.h"
+
+typedef struct mpm_error {
+  mpm_status status;
+  char message[1024];
+} mpm_error;
+
+/* Set err (if non-NULL) to status and a printf-style message; returns status. */
+mpm_status mpm_error_set(mpm_error *err, mpm_status status, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+void mpm_error_clear(mpm_error *err);
+
+#endif

@@ -1,0 +1,68 @@
+/* io.h - per-frame writers: VTU (binary, appended) + PVD index, PLY points, stats CSV.
+ *
+ * Every file is written atomically: to a temporary name in the same directory, then renamed,
+ * so a crash never leaves a half-written frame and an existing file is never truncated. */
+#ifndef MPM_IO_IO_H
+#define MPM_IO_IO_H
+
+#include "core/error.h"
+#include "core/real.h"
+#include "solver/particles.h"
+
+#include <stdio.h>
+
+/* ---- atomic files ---- */
+typedef struct mpm_atomic_file {
+  FILE *fp;
+  char final_path[1024];
+  char temp_path[1040];
+} mpm_atomic_file;
+
+mpm_status mpm_atomic_open(mpm_atomic_file *f, const char *path, mpm_error *err);
+/* flush, fsync-free close, rename over the final path */
+mpm_status mpm_atomic_commit(mpm_atomic_file *f, mpm_error *err);
+/* close and remove the temporary (after a failure); the final path is untouched */
+void mpm_atomic_abort(mpm_atomic_file *f);
+
+/* Create a directory and its parents (mkdir -p). */
+mpm_status mpm_make_dirs(const char *path, mpm_error *err);
+
+/* ---- per-particle fields written with a frame ---- */
+typedef struct mpm_frame_fields {
+  const mpm_particles *particles;
+  const mpm_real *J;           /* det F per particle */
+  const mpm_real *stress;      /* von Mises stress per particle, Pa */
+  double time;                 /* s */
+} mpm_frame_fields;
+
+/* VTK UnstructuredGrid, one vertex cell per particle, binary appended raw data with
+ * Float32/Float64 per the real type: points; point data id, velocity, mass, volume (current,
+ * V0 J), J, stress, material, body. */
+mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err);
+
+/* ParaView collection listing the frame files written so far (file names relative to the
+ * PVD's directory). */
+mpm_status mpm_write_pvd(const char *path, int count, const double *times,
+                         const char *const *files, mpm_error *err);
+
+/* Binary little-endian PLY point cloud: x y z, vx vy vz, and id. */
+mpm_status mpm_write_ply_points(const char *path, const mpm_frame_fields *f, mpm_error *err);
+
+/* ---- stats CSV ---- */
+typedef struct mpm_stats_row {
+  int frame;
+  double time, dt;
+  long long steps;
+  double kinetic, elastic;    /* J */
+  double momentum[3];         /* kg m/s */
+  double angular_momentum[3]; /* kg m^2/s about the origin */
+  double mass;                /* kg */
+  double wall_seconds;        /* wall time spent on this frame */
+  size_t particles;
+} mpm_stats_row;
+
+/* Rewrites the whole CSV (header + rows) atomically; rows are kept by the caller. */
+mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row *rows,
+                               mpm_error *err);
+
+#endif

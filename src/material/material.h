@@ -1,0 +1,55 @@
+/* material.h - the constitutive-model seam: one file per model behind one table.
+ *
+ * A model (fixed_corotated.c, neo_hookean.c, and later Hencky-StVK, Drucker-Prager, von
+ * Mises, snow) fills an mpm_model table. The solver groups particles by material and calls
+ * the batch entry on runs of particles of one material, so inner loops never branch per
+ * particle on the model. Plastic models will add a return map entry to the same table. */
+#ifndef MPM_MATERIAL_MATERIAL_H
+#define MPM_MATERIAL_MATERIAL_H
+
+#include "core/real.h"
+#include "scene/scene.h"
+
+/* Particles per batch call: small enough for a stack buffer, large enough to vectorize. */
+#define MPM_STRESS_CHUNK 64
+
+typedef struct mpm_model mpm_model;
+
+/* A material as the solver sees it: the model and its parameters in the real type. */
+typedef struct mpm_material {
+  const mpm_model *model;
+  mpm_model_kind kind;
+  mpm_real mu, lambda;   /* Lamé parameters, Pa */
+  mpm_real density;      /* kg/m^3 */
+  mpm_real min_stretch;  /* neo-Hookean singular-value clamp (Zhu sec. 5.3) */
+  mpm_real wave_speed;   /* sqrt((lambda + 2 mu) / density), m/s: the CFL bound */
+} mpm_material;
+
+struct mpm_model {
+  const char *name;
+  /* Energy density Psi(F), J/m^3. */
+  mpm_real (*energy)(const mpm_material *m, const mpm_real F[9]);
+  /* First Piola-Kirchhoff stress P = dPsi/dF, Pa. */
+  void (*pk1)(const mpm_material *m, const mpm_real F[9], mpm_real P[9]);
+  /* dP = (dP/dF) : dF, the action of the stress derivative on a direction (Zhu sec. 6). */
+  void (*dpdf_action)(const mpm_material *m, const mpm_real F[9], const mpm_real dF[9],
+                      mpm_real dP[9]);
+  /* Batch: for n <= MPM_STRESS_CHUNK particles whose F components start at F[0..8][0],
+   * write the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */
+  void (*kirchhoff_batch)(const mpm_material *m, int n, const mpm_real *const F[9],
+                          mpm_real tau[9][MPM_STRESS_CHUNK]);
+};
+
+extern const mpm_model mpm_model_fixed_corotated;
+extern const mpm_model mpm_model_neo_hookean;
+
+/* Table lookup by kind; NULL for an unknown kind. */
+const mpm_model *mpm_model_of(mpm_model_kind kind);
+
+/* Build the solver's material from a scene description (Lamé parameters, wave speed). */
+void mpm_material_init(mpm_material *m, const mpm_material_desc *d);
+
+/* Von Mises equivalent of the Cauchy stress sigma = tau / J, Pa (a scalar for outputs). */
+mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J);
+
+#endif

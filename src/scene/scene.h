@@ -1,0 +1,173 @@
+/* scene.h - the scene description: every input of a simulation, in SI units.
+ *
+ * A scene is loaded from JSON (scene_json.c, documented key by key in docs/scene-format.md)
+ * into these plain descriptor structs; `mpm_scene_default` fills every default so that a
+ * loader only overwrites what the file gives. The world (sim.c) is built from a scene and
+ * never reads JSON. */
+#ifndef MPM_SCENE_SCENE_H
+#define MPM_SCENE_SCENE_H
+
+#include "core/error.h"
+
+#include <stddef.h>
+
+#define MPM_NAME_MAX 64
+#define MPM_PATH_MAX 1024
+
+typedef enum mpm_kernel_kind {
+  MPM_KERNEL_LINEAR = 0,    /* trilinear hat (Gao eq. 2) */
+  MPM_KERNEL_QUADRATIC = 1, /* quadratic B-spline (Stomakhin et al. 2013) */
+  MPM_KERNEL_CUBIC = 2,     /* cubic B-spline */
+  MPM_KERNEL_UGIMP = 3,     /* undeformed GIMP, closed form (Gao eqs. 5-6, sec. 6.2) */
+} mpm_kernel_kind;
+
+typedef enum mpm_transfer_kind {
+  MPM_TRANSFER_APIC = 0, /* affine PIC (Jiang et al. 2015) */
+  MPM_TRANSFER_FLIP = 1, /* PIC/FLIP blend with ratio flip_alpha (Gao sec. 3.2 step 6) */
+} mpm_transfer_kind;
+
+typedef enum mpm_grid_kind {
+  MPM_GRID_SPARSE = 0, /* paged blocks activated from particles (the production grid) */
+  MPM_GRID_DENSE = 1,  /* full box of nodes (reference implementation and baseline) */
+} mpm_grid_kind;
+
+typedef enum mpm_model_kind {
+  MPM_MODEL_FIXED_COROTATED = 0, /* Stomakhin et al. 2012; Gao sec. 4.1 */
+  MPM_MODEL_NEO_HOOKEAN = 1,     /* compressible neo-Hookean with clamped singular values
+                                    (Zhu sec. 5.3 and 7, Irving et al. 2004) */
+  MPM_MODEL_COUNT
+} mpm_model_kind;
+
+typedef enum mpm_boundary_rule {
+  MPM_BOUNDARY_STICKY = 0,   /* relative velocity set to zero */
+  MPM_BOUNDARY_SLIP = 1,     /* normal relative velocity removed */
+  MPM_BOUNDARY_SEPARATE = 2, /* normal relative velocity removed only when approaching */
+} mpm_boundary_rule;
+
+typedef enum mpm_shape_kind {
+  MPM_SHAPE_BOX = 0,
+  MPM_SHAPE_SPHERE = 1,
+  MPM_SHAPE_CYLINDER = 2,
+  MPM_SHAPE_MESH = 3,      /* closed triangle mesh (bodies only) */
+  MPM_SHAPE_HALFSPACE = 4, /* colliders only */
+} mpm_shape_kind;
+
+typedef struct mpm_material_desc {
+  char name[MPM_NAME_MAX];
+  mpm_model_kind model;
+  double E;          /* Young's modulus, Pa (> 0) */
+  double nu;         /* Poisson's ratio, (-1, 0.5) */
+  double density;    /* kg/m^3 (> 0) */
+  double min_stretch; /* neo-Hookean: singular values clamped below this (Zhu 5.3); (0, 1] */
+} mpm_material_desc;
+
+/* A solid shape in world coordinates. Boxes and cylinders may be rotated about `axis`-free
+ * Euler angles later; for now a box is axis-aligned and a cylinder's axis is any unit vector. */
+typedef struct mpm_shape_desc {
+  mpm_shape_kind kind;
+  double center[3];      /* m */
+  double half_extent[3]; /* box half sizes, m */
+  double radius;         /* sphere and cylinder, m */
+  double axis[3];        /* cylinder axis (unit), or half-space outward normal (unit) */
+  double half_height;    /* cylinder half length along axis, m; <= 0 means infinite */
+  /* mesh bodies: the file, then scale about the mesh's bounding-box centre and a translation
+     that puts that centre at `center` */
+  char mesh_path[MPM_PATH_MAX];
+  double mesh_scale;
+} mpm_shape_desc;
+
+typedef struct mpm_body_desc {
+  char name[MPM_NAME_MAX];
+  mpm_shape_desc shape;
+  int material;               /* index into scene.materials */
+  double velocity[3];         /* initial velocity, m/s */
+  double angular_velocity[3]; /* initial angular velocity about the body's centre, rad/s */
+  double particles_per_cell;  /* along the volume: ppc particles per grid cell (e.g. 8) */
+  double jitter;              /* 0..1 fraction of the lattice spacing */
+  unsigned seed;              /* jitter seed */
+} mpm_body_desc;
+
+typedef struct mpm_keyframe {
+  double time;           /* s */
+  double translation[3]; /* offset of the collider from its rest position, m */
+  double angle;          /* rotation about motion.axis through the collider's centre, rad */
+} mpm_keyframe;
+
+/* Kinematic motion: pose(t) = translation(t) then rotation by angle(t) about `axis` through
+ * the (moving) centre. Without keyframes translation(t) = velocity * t and
+ * angle(t) = angular_speed * t. With keyframes both are piecewise linear and held constant
+ * outside the keyframe span. */
+typedef struct mpm_motion_desc {
+  double velocity[3];     /* m/s */
+  double axis[3];         /* unit rotation axis */
+  double angular_speed;   /* rad/s */
+  int keyframe_count;
+  mpm_keyframe *keyframes; /* owned by the scene; times strictly increasing */
+} mpm_motion_desc;
+
+typedef struct mpm_collider_desc {
+  char name[MPM_NAME_MAX];
+  mpm_shape_desc shape; /* box, sphere, cylinder or half-space (not mesh) */
+  int inside_out;       /* 1: the material is kept inside the shape (containers) */
+  mpm_boundary_rule rule;
+  double friction;      /* Coulomb coefficient >= 0 (slip and separate) */
+  mpm_motion_desc motion;
+} mpm_collider_desc;
+
+typedef struct mpm_output_desc {
+  char directory[MPM_PATH_MAX]; /* default "out"; `mpm run -o` overrides */
+  int vtu;   /* per-frame VTU + PVD index */
+  int ply;   /* per-frame PLY points */
+  int stats; /* stats.csv */
+} mpm_output_desc;
+
+typedef struct mpm_solver_desc {
+  mpm_kernel_kind kernel;
+  mpm_transfer_kind transfer;
+  mpm_grid_kind grid;
+  double flip_alpha;     /* FLIP ratio, [0, 1], default 0.95 */
+  double cfl;            /* (0, 1], default 0.4 */
+  double max_dt;         /* s, upper bound on the step (0 = only CFL and frame) */
+  double gimp_length;    /* uGIMP particle box side L_p, m (0 = dx / cbrt(ppc) of the bodies) */
+} mpm_solver_desc;
+
+typedef struct mpm_scene {
+  char path[MPM_PATH_MAX]; /* the scene file, for messages; mesh paths resolve against it */
+  char name[MPM_NAME_MAX];
+  /* domain */
+  double domain_min[3], domain_max[3]; /* m */
+  double dx;                           /* grid cell size, m */
+  double gravity[3];                   /* m/s^2, default (0, -9.81, 0) */
+  mpm_boundary_rule wall_rule;         /* domain walls */
+  double wall_friction;
+  int wall_cells; /* thickness of the wall band in cells, default 3 */
+  /* time */
+  double end_time; /* s */
+  double fps;      /* frames per second */
+  mpm_solver_desc solver;
+  int material_count, body_count, collider_count;
+  mpm_material_desc *materials;
+  mpm_body_desc *bodies;
+  mpm_collider_desc *colliders;
+  mpm_output_desc output;
+} mpm_scene;
+
+/* Fill every default; arrays empty. */
+void mpm_scene_default(mpm_scene *scene);
+/* Defaults for the parts of a scene (what a loader starts each array entry from). */
+mpm_material_desc mpm_material_desc_default(void);
+mpm_body_desc mpm_body_desc_default(void);
+mpm_collider_desc mpm_collider_desc_default(void);
+/* Free the arrays a scene owns (not the struct). */
+void mpm_scene_free(mpm_scene *scene);
+
+/* Load, parse and validate a JSON scene (scene_json.c). Every error names the file and the
+ * key path (e.g. "bodies[2].material.E") and says what was expected; nothing else happens. */
+mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err);
+mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages,
+                           mpm_scene *scene, mpm_error *err);
+
+/* Lamé parameters from E and nu. */
+void mpm_lame(double E, double nu, double *mu, double *lambda);
+
+#endif

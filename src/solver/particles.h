@@ -1,0 +1,46 @@
+/* particles.h - material points stored as structure of arrays.
+ *
+ * Every component is its own aligned array so that kernels stream and vectorize across
+ * particles. The order of particles changes every step (they are sorted into grid blocks);
+ * `id` is the stable identity written to outputs. */
+#ifndef MPM_SOLVER_PARTICLES_H
+#define MPM_SOLVER_PARTICLES_H
+
+#include "core/real.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct mpm_particles {
+  size_t count, capacity;
+  mpm_real *x[3];  /* position, m */
+  mpm_real *v[3];  /* velocity, m/s */
+  mpm_real *F[9];  /* deformation gradient, row-major components */
+  mpm_real *C[9];  /* APIC affine velocity matrix, 1/s */
+  mpm_real *mass;  /* kg */
+  mpm_real *vol0;  /* initial volume V_p^0, m^3 */
+  int32_t *material;
+  int32_t *body;
+  uint32_t *id;
+} mpm_particles;
+
+/* All real-valued component arrays, for loops that treat them alike (permute, grow). */
+#define MPM_PARTICLE_REAL_ARRAYS 26
+
+int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
+void mpm_particles_free(mpm_particles *p);
+int mpm_particles_reserve(mpm_particles *p, size_t capacity);
+
+/* Append one particle at rest state (F = I, C = 0); returns its index or -1 on OOM. */
+long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3],
+                        mpm_real mass, mpm_real vol0, int32_t material, int32_t body);
+
+/* Pointers to the 26 real arrays, in a fixed order. */
+void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]);
+
+/* Reorder all arrays so that new[i] = old[perm[i]]. scratch holds `count` reals and may be
+ * swapped with an array (so its pointer changes). Parallel over particles. */
+void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,
+                           uint32_t *iscratch);
+
+#endif
