@@ -25,7 +25,7 @@ void assert_close_msg(double a, double b, double tol, const char *what) {
 const char *test_temp_dir(const char *name) {
   static char buf[512];
   snprintf(buf, sizeof buf, "/tmp/mpm-test-%d-%s", (int)getpid(), name);
-  char cmd[600];
+  char cmd[1100];
   snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s'", buf, buf);
   if (system(cmd) != 0) fail_msg("cannot create %s", buf);
   return buf;

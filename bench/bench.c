@@ -1,0 +1,254 @@
+/* bench.c - `mpm bench transfer` and `mpm bench step`: figures printed, never asserted.
+ *
+ * transfer: the benchmark of Gao et al. 2017, Table 1 - dx = 1/128, particles on a 1/256
+ *   lattice filling [1/8, 7/8]^3 (192^3 = 7.08M particles) - P2G and G2P nanoseconds per
+ *   particle (median of repeats) for each weight kernel, sparse and dense grid, at the thread
+ *   counts asked. P2G includes the stress evaluation (neo-Hookean at rest takes its fast path).
+ * step: a falling neo-Hookean block of ~1M particles, 8 per cell, quadratic B-spline, APIC:
+ *   ns per particle-step with the stage breakdown, for 1 and 2 threads, and memory. */
+#include "cli.h"
+#include "core/alloc.h"
+#include "core/parallel.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+static void print_machine(void) {
+  char model[256] = "unknown";
+  FILE *f = fopen("/proc/cpuinfo", "r");
+  if (f) {
+    char line[512];
+    while (fgets(line, sizeof line, f))
+      if (!strncmp(line, "model name", 10)) {
+        char *c = strchr(line, ':');
+        if (c) {
+          snprintf(model, sizeof model, "%s", c + 2);
+          model[strcspn(model, "\n")] = 0;
+        }
+        break;
+      }
+    fclose(f);
+  }
+  printf("machine: %s, %d hardware threads available to OpenMP; real type %s; mpm %s\n", model,
+         mpm_thread_count(), mpm_real_type(), mpm_version());
+}
+
+static double peak_rss_mib(void) {
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_maxrss / 1024.0;
+}
+
+static int parse_threads(const char *s, int *list, int max) {
+  int n = 0;
+  while (s && *s && n < max) {
+    char *end;
+    long v = strtol(s, &end, 10);
+    if (end == s || v < 1 || v > 1024) return -1;
+    list[n++] = (int)v;
+    s = *end == ',' ? end + 1 : end;
+    if (*end && *end != ',') return -1;
+  }
+  return n;
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return x < y ? -1 : x > y;
+}
+
+static double median(double *v, int n) {
+  qsort(v, (size_t)n, sizeof *v, cmp_double);
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* A scene with one box body of neo-Hookean material; caller frees. */
+static void block_scene(mpm_scene *s, double dx, double lo, double hi, double domain,
+                        double ppc, mpm_kernel_kind kernel, mpm_grid_kind grid) {
+  mpm_scene_default(s);
+  snprintf(s->name, sizeof s->name, "bench");
+  for (int d = 0; d < 3; ++d) {
+    s->domain_min[d] = 0;
+    s->domain_max[d] = domain;
+  }
+  s->dx = dx;
+  s->end_time = 1;
+  s->fps = 24;
+  s->solver.kernel = kernel;
+  s->solver.grid = grid;
+  s->material_count = 1;
+  s->materials = calloc(1, sizeof *s->materials);
+  s->materials[0] = mpm_material_desc_default();
+  s->materials[0].model = MPM_MODEL_NEO_HOOKEAN;
+  s->materials[0].E = 1e5;
+  s->materials[0].nu = 0.3;
+  s->materials[0].density = 1000;
+  s->body_count = 1;
+  s->bodies = calloc(1, sizeof *s->bodies);
+  s->bodies[0] = mpm_body_desc_default();
+  s->bodies[0].shape.kind = MPM_SHAPE_BOX;
+  for (int d = 0; d < 3; ++d) {
+    s->bodies[0].shape.center[d] = 0.5 * (lo + hi);
+    s->bodies[0].shape.half_extent[d] = 0.5 * (hi - lo);
+  }
+  s->bodies[0].particles_per_cell = ppc;
+  s->output.vtu = s->output.ply = s->output.stats = 0;
+}
+
+static int bench_transfer(int argc, char **argv) {
+  int threads[16] = {1, 2}, nthreads = 2, repeats = 5;
+  double scale = 1;
+  for (int i = 0; i < argc; ++i) {
+    if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+      nthreads = parse_threads(argv[++i], threads, 16);
+      if (nthreads <= 0) {
+        fprintf(stderr, "mpm bench: --threads expects a list like 1,2\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else if (!strcmp(argv[i], "--repeats")) {
+      if (mpm_cli_parse_int("--repeats", i + 1 < argc ? argv[i + 1] : NULL, 1, 100, &repeats))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--spacing-scale") && i + 1 < argc) {
+      scale = atof(argv[++i]);
+      if (!(scale >= 1 && scale <= 16)) {
+        fprintf(stderr, "mpm bench: --spacing-scale expects a number in [1, 16]\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else {
+      fprintf(stderr, "mpm bench transfer: unknown option '%s'\n", argv[i]);
+      return MPM_EXIT_USAGE;
+    }
+  }
+  print_machine();
+  const double dx = scale / 128.0;
+  printf("transfer benchmark (Gao et al. 2017, Table 1): dx = 1/%g, particles on a 1/%g lattice "
+         "in [1/8, 7/8]^3, median of %d repeats\n",
+         128.0 / scale, 256.0 / scale, repeats);
+  printf("%-10s %-7s %7s %10s %10s %10s %12s\n", "kernel", "grid", "threads", "sort ns/p",
+         "P2G ns/p", "G2P ns/p", "P2G+G2P ns/p");
+  for (int kind = 0; kind < 4; ++kind)
+    for (int grid = 0; grid < 2; ++grid) {
+      mpm_scene s;
+      block_scene(&s, dx, 0.125, 0.875, 1.0, 8, (mpm_kernel_kind)kind, (mpm_grid_kind)grid);
+      s.gravity[1] = 0;
+      mpm_sim *sim = NULL;
+      mpm_error err;
+      if (mpm_sim_create_from_scene(&s, &sim, &err) != MPM_OK) {
+        fprintf(stderr, "mpm bench: %s\n", err.message);
+        mpm_scene_free(&s);
+        return MPM_EXIT_FAILURE;
+      }
+      mpm_scene_free(&s);
+      const double n = (double)sim->particles.count;
+      for (int t = 0; t < nthreads; ++t) {
+        mpm_set_threads(threads[t]);
+        double sort[100], p2g[100], g2p[100];
+        for (int r = 0; r < repeats + 1; ++r) {
+          mpm_stage_times before = sim->times;
+          if (mpm_sim_step(sim, 1e-6) != MPM_OK) {
+            fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+            mpm_sim_destroy(sim);
+            return MPM_EXIT_FAILURE;
+          }
+          if (r == 0) continue; /* warm-up */
+          sort[r - 1] = (sim->times.sort - before.sort) * 1e9 / n;
+          p2g[r - 1] = (sim->times.p2g - before.p2g) * 1e9 / n;
+          g2p[r - 1] = (sim->times.g2p - before.g2p) * 1e9 / n;
+        }
+        double ms = median(sort, repeats), mp = median(p2g, repeats), mg = median(g2p, repeats);
+        printf("%-10s %-7s %7d %10.1f %10.1f %10.1f %12.1f\n",
+               mpm_kernel_name((mpm_kernel_kind)kind), grid ? "dense" : "sparse", threads[t], ms,
+               mp, mg, mp + mg);
+        fflush(stdout);
+      }
+      if (kind == 0 && grid == 0)
+        printf("  (%zu particles; library memory %.1f MiB)\n", sim->particles.count,
+               mpm_alloc_live_bytes() / 1048576.0);
+      mpm_sim_destroy(sim);
+    }
+  printf("peak memory: %.1f MiB (resident set)\n", peak_rss_mib());
+  return MPM_EXIT_OK;
+}
+
+static int bench_step(int argc, char **argv) {
+  int threads[16] = {1, 2}, nthreads = 2, steps = 20, particles = 1000000;
+  for (int i = 0; i < argc; ++i) {
+    if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+      nthreads = parse_threads(argv[++i], threads, 16);
+      if (nthreads <= 0) {
+        fprintf(stderr, "mpm bench: --threads expects a list like 1,2\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else if (!strcmp(argv[i], "--steps")) {
+      if (mpm_cli_parse_int("--steps", i + 1 < argc ? argv[i + 1] : NULL, 1, 100000, &steps))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--particles")) {
+      if (mpm_cli_parse_int("--particles", i + 1 < argc ? argv[i + 1] : NULL, 1000, 100000000,
+                            &particles))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else {
+      fprintf(stderr, "mpm bench step: unknown option '%s'\n", argv[i]);
+      return MPM_EXIT_USAGE;
+    }
+  }
+  print_machine();
+  /* a cube of side L with spacing h = dx/2 (8 per cell) holding ~`particles` points */
+  const double per_side = cbrt((double)particles);
+  const double dx = 0.02, h = dx / 2, side = per_side * h;
+  const double domain = side + 40 * dx;
+  for (int t = 0; t < nthreads; ++t) {
+    mpm_set_threads(threads[t]);
+    mpm_alloc_reset_peak();
+    mpm_scene s;
+    const double lo = 20 * dx, hi = lo + side;
+    block_scene(&s, dx, lo, hi, domain, 8, MPM_KERNEL_QUADRATIC, MPM_GRID_SPARSE);
+    s.bodies[0].shape.center[1] += 10 * dx; /* room to fall */
+    mpm_sim *sim = NULL;
+    mpm_error err;
+    size_t live0 = mpm_alloc_live_bytes();
+    if (mpm_sim_create_from_scene(&s, &sim, &err) != MPM_OK) {
+      fprintf(stderr, "mpm bench: %s\n", err.message);
+      mpm_scene_free(&s);
+      return MPM_EXIT_FAILURE;
+    }
+    mpm_scene_free(&s);
+    const double n = (double)sim->particles.count;
+    for (int w = 0; w < 3; ++w) mpm_sim_step(sim, 1e-3);
+    mpm_stage_times before = sim->times;
+    for (int k = 0; k < steps; ++k)
+      if (mpm_sim_step(sim, 1e-3) != MPM_OK) {
+        fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+        mpm_sim_destroy(sim);
+        return MPM_EXIT_FAILURE;
+      }
+    const double f = 1e9 / (n * steps);
+    printf("step benchmark: %.0f particles, 8 per cell, quadratic, APIC, neo-Hookean, %d threads, "
+           "%d steps\n",
+           n, threads[t], steps);
+    printf("  ns per particle-step: total %.1f = sort %.1f + P2G %.1f + grid %.1f + G2P %.1f\n",
+           (sim->times.total - before.total) * f, (sim->times.sort - before.sort) * f,
+           (sim->times.p2g - before.p2g) * f, (sim->times.grid - before.grid) * f,
+           (sim->times.g2p - before.g2p) * f);
+    printf("  memory: %.1f bytes per particle (library peak %.1f MiB; %zu grid blocks)\n",
+           (double)(mpm_alloc_peak_bytes() - live0) / n, mpm_alloc_peak_bytes() / 1048576.0,
+           sim->sparse.block_count);
+    fflush(stdout);
+    mpm_sim_destroy(sim);
+  }
+  printf("peak memory: %.1f MiB (resident set)\n", peak_rss_mib());
+  return MPM_EXIT_OK;
+}
+
+int mpm_cmd_bench(int argc, char **argv) {
+  if (argc >= 1 && !strcmp(argv[0], "transfer")) return bench_transfer(argc - 1, argv + 1);
+  if (argc >= 1 && !strcmp(argv[0], "step")) return bench_step(argc - 1, argv + 1);
+  fprintf(stderr, "usage: mpm bench transfer|step [options] (see mpm --help)\n");
+  return MPM_EXIT_USAGE;
+}

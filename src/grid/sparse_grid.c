@@ -1,0 +1,221 @@
+/* sparse_grid.c - block hash, per-step activation, particle sort and colouring
+ * (see sparse_grid.h for the design). */
+#include "grid/sparse_grid.h"
+#include "core/alloc.h"
+#include "core/parallel.h"
+
+#include <string.h>
+
+#define EMPTY_KEY UINT64_MAX
+#define COORD_BIAS (1 << 20)
+
+static inline uint64_t block_key(int32_t bx, int32_t by, int32_t bz) {
+  return (uint64_t)(uint32_t)(bx + COORD_BIAS) | ((uint64_t)(uint32_t)(by + COORD_BIAS) << 21) |
+         ((uint64_t)(uint32_t)(bz + COORD_BIAS) << 42);
+}
+
+static inline size_t hash_slot(uint64_t key, size_t mask) {
+  key ^= key >> 31;
+  key *= 0x9E3779B97F4A7C15ull;
+  key ^= key >> 29;
+  return (size_t)key & mask;
+}
+
+void mpm_sparse_grid_init(mpm_sparse_grid *g) { memset(g, 0, sizeof *g); }
+
+void mpm_sparse_grid_free(mpm_sparse_grid *g) {
+  mpm_free(g->keys);
+  mpm_free(g->values);
+  mpm_free(g->coord);
+  mpm_free(g->blocks);
+  mpm_free(g->neighbor);
+  mpm_free(g->run_start);
+  mpm_free(g->color_blocks);
+  mpm_free(g->pkey);
+  mpm_free(g->perm);
+  memset(g, 0, sizeof *g);
+}
+
+size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g) {
+  return g->table_size * (sizeof(uint64_t) + sizeof(int32_t)) +
+         g->block_capacity * (sizeof(mpm_grid_block) + sizeof(int32_t) * 3 + sizeof(int32_t) * 8 +
+                              sizeof(int32_t)) +
+         g->run_capacity * sizeof(uint32_t) + g->particle_capacity * 2 * sizeof(uint32_t);
+}
+
+static int grow_table(mpm_sparse_grid *g, size_t size) {
+  mpm_free(g->keys);
+  mpm_free(g->values);
+  g->keys = mpm_alloc(size * sizeof(uint64_t));
+  g->values = mpm_alloc(size * sizeof(int32_t));
+  if (!g->keys || !g->values) return -1;
+  g->table_size = size;
+  memset(g->keys, 0xFF, size * sizeof(uint64_t));
+  /* re-insert the blocks already active */
+  const size_t mask = size - 1;
+  for (size_t b = 0; b < g->block_count; ++b) {
+    uint64_t key = block_key(g->coord[b][0], g->coord[b][1], g->coord[b][2]);
+    size_t s = hash_slot(key, mask);
+    while (g->keys[s] != EMPTY_KEY) s = (s + 1) & mask;
+    g->keys[s] = key;
+    g->values[s] = (int32_t)b;
+  }
+  return 0;
+}
+
+static int grow_blocks(mpm_sparse_grid *g, size_t cap) {
+  int32_t(*coord)[3] = mpm_alloc(cap * sizeof *coord);
+  int32_t(*nbr)[8] = mpm_alloc(cap * sizeof *nbr);
+  mpm_grid_block *blocks = mpm_alloc(cap * sizeof *blocks);
+  int32_t *colors = mpm_alloc(cap * sizeof *colors);
+  if (!coord || !nbr || !blocks || !colors) {
+    mpm_free(coord);
+    mpm_free(nbr);
+    mpm_free(blocks);
+    mpm_free(colors);
+    return -1;
+  }
+  if (g->block_count) {
+    memcpy(coord, g->coord, g->block_count * sizeof *coord);
+    memcpy(nbr, g->neighbor, g->block_count * sizeof *nbr);
+  }
+  mpm_free(g->coord);
+  mpm_free(g->neighbor);
+  mpm_free(g->blocks);
+  mpm_free(g->color_blocks);
+  g->coord = coord;
+  g->neighbor = nbr;
+  g->blocks = blocks;
+  g->color_blocks = colors;
+  g->block_capacity = cap;
+  return 0;
+}
+
+/* Index of the block with coordinates (bx,by,bz), inserting it if absent; -1 on OOM. */
+static int32_t find_or_insert(mpm_sparse_grid *g, int32_t bx, int32_t by, int32_t bz) {
+  const uint64_t key = block_key(bx, by, bz);
+  size_t mask = g->table_size - 1;
+  size_t s = hash_slot(key, mask);
+  while (g->keys[s] != EMPTY_KEY) {
+    if (g->keys[s] == key) return g->values[s];
+    s = (s + 1) & mask;
+  }
+  if (g->block_count == g->block_capacity &&
+      grow_blocks(g, g->block_capacity ? 2 * g->block_capacity : 1024))
+    return -1;
+  if (2 * (g->block_count + 1) > g->table_size) {
+    if (grow_table(g, 2 * g->table_size)) return -1;
+    mask = g->table_size - 1;
+    s = hash_slot(key, mask);
+    while (g->keys[s] != EMPTY_KEY) s = (s + 1) & mask;
+  }
+  const int32_t b = (int32_t)g->block_count++;
+  g->keys[s] = key;
+  g->values[s] = b;
+  g->coord[b][0] = bx;
+  g->coord[b][1] = by;
+  g->coord[b][2] = bz;
+  return b;
+}
+
+int32_t mpm_sparse_grid_find(const mpm_sparse_grid *g, const int32_t c[3]) {
+  if (!g->table_size) return -1;
+  const uint64_t key = block_key(c[0], c[1], c[2]);
+  const size_t mask = g->table_size - 1;
+  size_t s = hash_slot(key, mask);
+  while (g->keys[s] != EMPTY_KEY) {
+    if (g->keys[s] == key) return g->values[s];
+    s = (s + 1) & mask;
+  }
+  return -1;
+}
+
+int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
+                         int material_count, const mpm_particles *p) {
+  const size_t n = p->count;
+  if (n > g->particle_capacity) {
+    mpm_free(g->pkey);
+    mpm_free(g->perm);
+    g->pkey = mpm_alloc((n + 1) * sizeof(uint32_t));
+    g->perm = mpm_alloc((n + 1) * sizeof(uint32_t));
+    if (!g->pkey || !g->perm) return -1;
+    g->particle_capacity = n;
+  }
+  if (!g->table_size && grow_table(g, 4096)) return -1;
+  memset(g->keys, 0xFF, g->table_size * sizeof(uint64_t));
+  g->block_count = 0;
+  g->material_count = material_count;
+
+  /* 1. owner block of each particle: the block of its stencil's base node. Consecutive
+   *    particles mostly share a block (they were sorted last step), so cache the last one. */
+  const mpm_real inv_dx = k->inv_dx, shift = k->shift;
+  const mpm_real *x0 = p->x[0], *x1 = p->x[1], *x2 = p->x[2];
+  uint64_t last_key = EMPTY_KEY;
+  int32_t last_block = -1;
+  for (size_t i = 0; i < n; ++i) {
+    int32_t bx = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift) >> MPM_BLOCK_BITS;
+    int32_t by = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift) >> MPM_BLOCK_BITS;
+    int32_t bz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift) >> MPM_BLOCK_BITS;
+    uint64_t key = block_key(bx, by, bz);
+    if (key != last_key) {
+      last_block = find_or_insert(g, bx, by, bz);
+      if (last_block < 0) return -1;
+      last_key = key;
+    }
+    g->pkey[i] = (uint32_t)last_block;
+  }
+  g->owner_count = g->block_count;
+
+  /* 2. counting sort by (block, material): stable, so the order is a function of the
+   *    particle order alone and independent of the thread count. */
+  const size_t runs = g->owner_count * (size_t)material_count;
+  if (runs + 1 > g->run_capacity) {
+    mpm_free(g->run_start);
+    g->run_capacity = 2 * (runs + 1);
+    g->run_start = mpm_alloc(g->run_capacity * sizeof(uint32_t));
+    if (!g->run_start) return -1;
+  }
+  uint32_t *rs = g->run_start;
+  memset(rs, 0, (runs + 1) * sizeof(uint32_t));
+  const int32_t *mat = p->material;
+  for (size_t i = 0; i < n; ++i) {
+    uint32_t key = g->pkey[i] * (uint32_t)material_count + (uint32_t)mat[i];
+    g->pkey[i] = key;
+    rs[key + 1]++;
+  }
+  for (size_t r = 0; r < runs; ++r) rs[r + 1] += rs[r];
+  for (size_t i = 0; i < n; ++i) g->perm[rs[g->pkey[i]]++] = (uint32_t)i;
+  for (size_t r = runs; r > 0; --r) rs[r] = rs[r - 1];
+  rs[0] = 0;
+
+  /* 3. activate the 7 forward neighbours of every owner block (its pad) */
+  for (size_t b = 0; b < g->owner_count; ++b) {
+    const int32_t cx = g->coord[b][0], cy = g->coord[b][1], cz = g->coord[b][2];
+    for (int o = 0; o < 8; ++o) {
+      int32_t nb = find_or_insert(g, cx + ((o >> 2) & 1), cy + ((o >> 1) & 1), cz + (o & 1));
+      if (nb < 0) return -1;
+      g->neighbor[b][o] = nb;
+    }
+  }
+
+  /* 4. colour owner blocks by coordinate parity */
+  size_t count[8] = {0};
+  for (size_t b = 0; b < g->owner_count; ++b)
+    count[(g->coord[b][0] & 1) << 2 | (g->coord[b][1] & 1) << 1 | (g->coord[b][2] & 1)]++;
+  g->color_start[0] = 0;
+  for (int c = 0; c < 8; ++c) g->color_start[c + 1] = g->color_start[c] + count[c];
+  size_t cursor[8];
+  for (int c = 0; c < 8; ++c) cursor[c] = g->color_start[c];
+  for (size_t b = 0; b < g->owner_count; ++b) {
+    int c = (g->coord[b][0] & 1) << 2 | (g->coord[b][1] & 1) << 1 | (g->coord[b][2] & 1);
+    g->color_blocks[cursor[c]++] = (int32_t)b;
+  }
+  return 0;
+}
+
+void mpm_sparse_grid_clear(mpm_sparse_grid *g) {
+  const long nb = (long)g->block_count;
+  mpm_grid_block *blocks = g->blocks;
+#pragma omp parallel for schedule(static)
+  for (long b = 0; b < nb; ++b) memset(&blocks[b], 0, sizeof(mpm_grid_block));
+}

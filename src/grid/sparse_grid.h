@@ -1,0 +1,67 @@
+/* sparse_grid.h - the paged sparse grid: 4x4x4-node blocks found through a hash of block
+ * coordinates, activated from particle positions every step and iterated as a list.
+ *
+ * Why a block hash and not SPGrid's virtual-memory mapping: the hash needs no OS tricks (no
+ * reserved terabyte address range, no madvise), works the same on every platform and for
+ * domains of any extent, and its cost is one lookup per block per step, not per node, because
+ * every transfer works on whole blocks (a particle sees its owner block and 7 neighbours
+ * through an 8x8x8 pad). Memory is proportional to the blocks the material touches.
+ *
+ * Per step: mpm_sparse_grid_sort assigns particles to owner blocks (the block of their
+ * stencil's base node), counting-sorts them by (block, material), and activates the forward
+ * neighbours; transfers then run block by block. Owner blocks are split into 8 colours by the
+ * parity of their coordinates: blocks of one colour are two blocks apart, so their pads never
+ * overlap and P2G runs them in parallel with plain stores - no atomics - and a node receives
+ * the colours in a fixed order, so results are bitwise the same for any thread count. */
+#ifndef MPM_GRID_SPARSE_GRID_H
+#define MPM_GRID_SPARSE_GRID_H
+
+#include "grid/grid.h"
+#include "interp/kernel.h"
+#include "solver/particles.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct mpm_sparse_grid {
+  /* hash table: block key -> block index (open addressing, linear probing) */
+  uint64_t *keys;
+  int32_t *values;
+  size_t table_size; /* power of two */
+  /* blocks: [0, owner_count) own particles, the rest are neighbours (halo) */
+  size_t block_count, block_capacity, owner_count;
+  int32_t (*coord)[3];
+  mpm_grid_block *blocks;
+  int32_t (*neighbor)[8]; /* per owner block: the 8 blocks its pad covers */
+  /* particles of owner block b and material m: [run_start[b*nmat+m], run_start[b*nmat+m+1]) */
+  uint32_t *run_start;
+  size_t run_capacity;
+  int material_count;
+  /* owner blocks by colour: color_blocks[color_start[c] .. color_start[c+1]) */
+  int32_t *color_blocks;
+  size_t color_start[9];
+  /* per-particle scratch for sorting */
+  uint32_t *pkey, *perm;
+  size_t particle_capacity;
+} mpm_sparse_grid;
+
+void mpm_sparse_grid_init(mpm_sparse_grid *g);
+void mpm_sparse_grid_free(mpm_sparse_grid *g);
+
+/* Assign particles to owner blocks, sort them by (block, material) into `perm` (particle j of
+ * the sorted order is perm[j]), activate the pads and colour the owner blocks (see the file
+ * comment). The particle arrays are not moved; the caller reorders them now and then with
+ * mpm_particles_permute. Returns 0, or -1 when memory runs out. */
+int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
+                         int material_count, const mpm_particles *p);
+
+/* Zero every channel of every active block (parallel). */
+void mpm_sparse_grid_clear(mpm_sparse_grid *g);
+
+/* Bytes held by the grid (blocks, hash, lists), for memory reports. */
+size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g);
+
+/* Index of the block at block coordinates c, or -1. */
+int32_t mpm_sparse_grid_find(const mpm_sparse_grid *g, const int32_t c[3]);
+
+#endif

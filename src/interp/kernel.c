@@ -1,0 +1,33 @@
+/* kernel.c - kernel construction (the weights themselves are inline in kernel.h). */
+#include "interp/kernel.h"
+
+const char *mpm_kernel_name(mpm_kernel_kind kind) {
+  switch (kind) {
+  case MPM_KERNEL_LINEAR: return "linear";
+  case MPM_KERNEL_QUADRATIC: return "quadratic";
+  case MPM_KERNEL_CUBIC: return "cubic";
+  case MPM_KERNEL_UGIMP: return "ugimp";
+  }
+  return "unknown";
+}
+
+mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_length) {
+  mpm_kernel k = {0};
+  k.kind = kind;
+  k.dx = dx;
+  k.inv_dx = 1 / dx;
+  switch (kind) {
+  case MPM_KERNEL_LINEAR: k.width = 2; k.shift = 0; break;
+  case MPM_KERNEL_QUADRATIC: k.width = 3; k.shift = R_(0.5); break;
+  case MPM_KERNEL_CUBIC: k.width = 4; k.shift = 1; break;
+  case MPM_KERNEL_UGIMP:
+    /* support |x_i - x_p| < dx + L_p/2 <= 1.5 dx: three nodes from floor(x/dx - 1/2) */
+    k.width = 3;
+    k.shift = R_(0.5);
+    k.half_len = gimp_length / (2 * dx);
+    if (!(k.half_len > 0)) k.half_len = R_(0.5);
+    if (k.half_len > R_(0.5)) k.half_len = R_(0.5);
+    break;
+  }
+  return k;
+}

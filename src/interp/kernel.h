@@ -1,0 +1,145 @@
+/* kernel.h - particle-grid weight kernels with gradients, as 1D factors of a tensor stencil.
+ *
+ * Every kernel here is a tensor product of 1D weights, so a particle's stencil is described by
+ * its base node and, per axis, up to 4 weights w, derivatives dw and APIC factors a:
+ *   w_ip = wx[i] wy[j] wz[k],  grad w_ip = (dwx wy wz, wx dwy wz, wx wy dwz).
+ *
+ *  linear     trilinear hat N_i(x_p) (Gao eq. 2), 2 nodes per axis
+ *  quadratic  quadratic B-spline, 3 nodes per axis
+ *  cubic      cubic B-spline, 4 nodes per axis
+ *  ugimp      undeformed GIMP (Gao eqs. 5-6): the hat averaged over the particle's box of side
+ *             L_p <= dx, in closed form. In 1D the average of a hat over [x - L/2, x + L/2] is a
+ *             difference of the hat's antiderivative; the 3D weight of Gao sec. 6.2 is the
+ *             product of three such factors (the box integral of a separable N_i is separable),
+ *             so we never form the per-cell W(a..f) expression of sec. 6.2 explicitly.
+ *             3 nodes per axis; with L_p = dx it equals the quadratic B-spline (Gao sec. 3.3).
+ *
+ * APIC (Jiang et al. 2015) needs D_p = sum_i w_ip (x_i - x_p)(x_i - x_p)^T. For tensor kernels
+ * D_p is diagonal with 1D entries d = sum_i w_i (x_i - x_p)^2, so the APIC factor per node is
+ * a_i = w_i (x_i - x_p) / d (exact for every kernel, which keeps angular momentum exact). For the
+ * linear kernel d = f(1-f) dx^2 vanishes on nodes, and a_i equals dw_i exactly, so dw is used.
+ */
+#ifndef MPM_INTERP_KERNEL_H
+#define MPM_INTERP_KERNEL_H
+
+#include "core/real.h"
+#include "scene/scene.h"
+
+#define MPM_STENCIL_MAX 4
+
+typedef struct mpm_kernel {
+  mpm_kernel_kind kind;
+  int width;          /* nodes per axis: 2, 3 or 4 */
+  mpm_real shift;     /* base = floor(x/dx - shift) */
+  mpm_real dx, inv_dx;
+  mpm_real half_len;  /* uGIMP: L_p / (2 dx), in (0, 1/2] */
+} mpm_kernel;
+
+/* 1D factors of one particle's stencil. */
+typedef struct mpm_stencil {
+  int base[3];
+  mpm_real w[3][MPM_STENCIL_MAX];
+  mpm_real dw[3][MPM_STENCIL_MAX]; /* d w / d x, 1/m */
+  mpm_real a[3][MPM_STENCIL_MAX];  /* APIC factor w (x_i - x_p) / d, 1/m */
+} mpm_stencil;
+
+/* gimp_length: L_p for uGIMP (ignored otherwise); must be in (0, dx]. */
+mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_length);
+
+const char *mpm_kernel_name(mpm_kernel_kind kind);
+
+/* 1D weights for grid coordinate xg = (x - origin) / dx: base node, weights, d/dx and APIC
+ * factors (arrays of kernel width). Inlined into the transfer loops. */
+static inline int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw,
+                                mpm_real *a);
+
+/* Full stencil of a particle at position x (relative to the grid origin, m). */
+static inline void mpm_kernel_stencil(const mpm_kernel *k, const mpm_real x[3], mpm_stencil *s) {
+  for (int d = 0; d < 3; ++d)
+    s->base[d] = mpm_kernel_1d(k, x[d] * k->inv_dx, s->w[d], s->dw[d], s->a[d]);
+}
+
+/* ---- implementation (inline so that the transfer loops see through it) ---- */
+
+/* Antiderivative of the unit hat max(0, 1 - |t|). */
+static inline mpm_real mpm_hat_integral(mpm_real t) {
+  if (t <= -1) return 0;
+  if (t <= 0) return R_(0.5) * (t + 1) * (t + 1);
+  if (t < 1) return 1 - R_(0.5) * (1 - t) * (1 - t);
+  return 1;
+}
+
+static inline mpm_real mpm_hat(mpm_real t) {
+  mpm_real u = 1 - mpm_fabs(t);
+  return u > 0 ? u : 0;
+}
+
+/* APIC factor a_i = w_i (x_i - x_p) / sum_j w_j (x_j - x_p)^2 (see the header comment). */
+static inline void mpm_apic_factors(const int n, const mpm_real *w, mpm_real f, mpm_real inv_dx,
+                                    mpm_real *a) {
+  mpm_real d = 0;
+  for (int i = 0; i < n; ++i) {
+    mpm_real r = (mpm_real)i - f;
+    d += w[i] * r * r;
+  }
+  const mpm_real s = inv_dx / d;
+  for (int i = 0; i < n; ++i) a[i] = w[i] * ((mpm_real)i - f) * s;
+}
+
+static inline int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw,
+                                mpm_real *a) {
+  const mpm_real inv_dx = k->inv_dx;
+  const int base = (int)mpm_floor(xg - k->shift);
+  const mpm_real f = xg - (mpm_real)base; /* distance from the base node, in cells */
+  switch (k->kind) {
+  default: /* MPM_KERNEL_LINEAR */
+    w[0] = 1 - f;
+    w[1] = f;
+    dw[0] = -inv_dx;
+    dw[1] = inv_dx;
+    a[0] = dw[0];
+    a[1] = dw[1];
+    return base;
+  case MPM_KERNEL_QUADRATIC: {
+    /* f in [0.5, 1.5) */
+    mpm_real t0 = R_(1.5) - f, t1 = f - 1, t2 = f - R_(0.5);
+    w[0] = R_(0.5) * t0 * t0;
+    w[1] = R_(0.75) - t1 * t1;
+    w[2] = R_(0.5) * t2 * t2;
+    dw[0] = -t0 * inv_dx;
+    dw[1] = -2 * t1 * inv_dx;
+    dw[2] = t2 * inv_dx;
+    mpm_apic_factors(3, w, f, inv_dx, a);
+    break;
+  }
+  case MPM_KERNEL_CUBIC: {
+    /* f in [1, 2): distances to nodes 0..3 are f, f-1, 2-f, 3-f */
+    mpm_real d0 = f, d1 = f - 1, d2 = 2 - f, d3 = 3 - f;
+    mpm_real u0 = 2 - d0, u3 = 2 - d3;
+    w[0] = u0 * u0 * u0 / 6;
+    w[1] = R_(0.5) * d1 * d1 * d1 - d1 * d1 + R_(2.0) / 3;
+    w[2] = R_(0.5) * d2 * d2 * d2 - d2 * d2 + R_(2.0) / 3;
+    w[3] = u3 * u3 * u3 / 6;
+    dw[0] = -R_(0.5) * u0 * u0 * inv_dx;
+    dw[1] = (R_(1.5) * d1 * d1 - 2 * d1) * inv_dx;
+    dw[2] = -(R_(1.5) * d2 * d2 - 2 * d2) * inv_dx;
+    dw[3] = R_(0.5) * u3 * u3 * inv_dx;
+    mpm_apic_factors(4, w, f, inv_dx, a);
+    break;
+  }
+  case MPM_KERNEL_UGIMP: {
+    /* Gao eq. 5: w_i = (1/L) int_{x-L/2}^{x+L/2} N_i; eq. 6: dw_i = (N_i(x+L/2)-N_i(x-L/2))/L */
+    const mpm_real h = k->half_len, inv_len = 1 / (2 * h);
+    for (int i = 0; i < 3; ++i) {
+      mpm_real t = f - (mpm_real)i;
+      w[i] = (mpm_hat_integral(t + h) - mpm_hat_integral(t - h)) * inv_len;
+      dw[i] = (mpm_hat(t + h) - mpm_hat(t - h)) * inv_len * inv_dx;
+    }
+    mpm_apic_factors(3, w, f, inv_dx, a);
+    break;
+  }
+  }
+  return base;
+}
+
+#endif

@@ -1,0 +1,156 @@
+/* sim.c - building and destroying a simulation, and the public handle's accessors. */
+#include "solver/sim.h"
+#include "core/alloc.h"
+#include "scene/sample.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+double mpm_wall_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static mpm_status oom(mpm_error *err, const char *what) {
+  return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory allocating %s", what);
+}
+
+mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error *err) {
+  *out = NULL;
+  mpm_sim *sim = calloc(1, sizeof *sim);
+  if (!sim) return oom(err, "the simulation");
+  sim->scene = *scene;
+  memset(scene, 0, sizeof *scene); /* the simulation owns the arrays now */
+  const mpm_scene *sc = &sim->scene;
+  mpm_status st = MPM_OK;
+
+  /* materials */
+  sim->material_count = sc->material_count;
+  sim->materials = calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1),
+                          sizeof *sim->materials);
+  if (!sim->materials) { st = oom(err, "materials"); goto fail; }
+  for (int m = 0; m < sc->material_count; ++m)
+    mpm_material_init(&sim->materials[m], &sc->materials[m]);
+
+  /* colliders */
+  sim->collider_count = sc->collider_count;
+  sim->colliders = calloc((size_t)(sc->collider_count + 1), sizeof *sim->colliders);
+  sim->poses = calloc((size_t)(sc->collider_count + 1), sizeof *sim->poses);
+  if (!sim->colliders || !sim->poses) { st = oom(err, "colliders"); goto fail; }
+  for (int c = 0; c < sc->collider_count; ++c)
+    if (mpm_collider_init(&sim->colliders[c], &sc->colliders[c])) {
+      st = oom(err, "collider keyframes");
+      goto fail;
+    }
+
+  /* grid geometry */
+  for (int d = 0; d < 3; ++d) {
+    sim->origin[d] = (mpm_real)sc->domain_min[d];
+    sim->cells[d] = (int)lround((sc->domain_max[d] - sc->domain_min[d]) / sc->dx);
+  }
+  /* particles */
+  if (mpm_particles_init(&sim->particles, 1024)) { st = oom(err, "particles"); goto fail; }
+  for (int b = 0; b < sc->body_count; ++b) {
+    st = mpm_sample_body(sc, b, &sim->particles, err);
+    if (st != MPM_OK) goto fail;
+  }
+  for (size_t i = 0; i < sim->particles.count; ++i) sim->particles.id[i] = (uint32_t)i;
+
+  /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
+  double lp = sc->solver.gimp_length;
+  if (!(lp > 0)) {
+    double ppc = sc->body_count ? sc->bodies[0].particles_per_cell : 8;
+    lp = sc->dx / cbrt(ppc > 1 ? ppc : 1);
+  }
+  sim->kernel = mpm_kernel_make(sc->solver.kernel, (mpm_real)sc->dx, (mpm_real)lp);
+
+  if (sc->solver.grid == MPM_GRID_DENSE) {
+    const int n[3] = {sim->cells[0] + 3, sim->cells[1] + 3, sim->cells[2] + 3};
+    if (mpm_dense_grid_init(&sim->dense, n)) { st = oom(err, "the dense grid"); goto fail; }
+  }
+  mpm_sparse_grid_init(&sim->sparse);
+  sim->reorder_interval = 16;
+
+  /* time */
+  sim->frame_dt = 1.0 / sc->fps;
+  sim->frame_count = (int)ceil(sc->end_time * sc->fps - 1e-9);
+  if (sim->frame_count < 1) sim->frame_count = 1;
+  sim->wave_speed = 0;
+  for (int m = 0; m < sim->material_count; ++m)
+    if (sim->materials[m].wave_speed > sim->wave_speed) sim->wave_speed = sim->materials[m].wave_speed;
+  mpm_real vmax2 = 0;
+  for (size_t i = 0; i < sim->particles.count; ++i) {
+    mpm_real v2 = 0;
+    for (int d = 0; d < 3; ++d) v2 += sim->particles.v[d][i] * sim->particles.v[d][i];
+    if (v2 > vmax2) vmax2 = v2;
+  }
+  sim->max_speed = mpm_sqrt(vmax2);
+  snprintf(sim->output_dir, sizeof sim->output_dir, "%s", sc->output.directory);
+  *out = sim;
+  return MPM_OK;
+fail:
+  mpm_sim_destroy(sim);
+  return st;
+}
+
+mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char *errbuf,
+                                    size_t errlen) {
+  mpm_error err;
+  mpm_error_clear(&err);
+  mpm_scene scene;
+  mpm_status st = mpm_scene_load(scene_path, &scene, &err);
+  if (st == MPM_OK) {
+    st = mpm_sim_create_from_scene(&scene, out, &err);
+    mpm_scene_free(&scene);
+  }
+  if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
+  return st;
+}
+
+void mpm_sim_destroy(mpm_sim *sim) {
+  if (!sim) return;
+  mpm_particles_free(&sim->particles);
+  free(sim->materials);
+  if (sim->colliders)
+    for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);
+  free(sim->colliders);
+  free(sim->poses);
+  mpm_sparse_grid_free(&sim->sparse);
+  mpm_dense_grid_free(&sim->dense);
+  mpm_free(sim->scratch);
+  mpm_free(sim->iscratch);
+  free(sim->frame_times);
+  free(sim->frame_files);
+  free(sim->stats);
+  mpm_scene_free(&sim->scene);
+  free(sim);
+}
+
+const char *mpm_sim_last_error(const mpm_sim *sim) { return sim->error.message; }
+double mpm_sim_time(const mpm_sim *sim) { return sim->time; }
+int64_t mpm_sim_steps(const mpm_sim *sim) { return sim->steps; }
+int mpm_sim_frame(const mpm_sim *sim) { return sim->frame; }
+int mpm_sim_frame_count(const mpm_sim *sim) { return sim->frame_count; }
+
+mpm_particle_view mpm_sim_particles(const mpm_sim *sim) {
+  const mpm_particles *p = &sim->particles;
+  mpm_particle_view v;
+  memset(&v, 0, sizeof v);
+  v.count = p->count;
+  v.real_size = sizeof(mpm_real);
+  for (int d = 0; d < 3; ++d) {
+    v.x[d] = p->x[d];
+    v.v[d] = p->v[d];
+  }
+  for (int c = 0; c < 9; ++c) v.F[c] = p->F[c];
+  v.mass = p->mass;
+  v.volume0 = p->vol0;
+  v.material = p->material;
+  v.body = p->body;
+  v.id = p->id;
+  return v;
+}

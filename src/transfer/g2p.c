@@ -1,0 +1,166 @@
+/* g2p.c - grid-to-particle transfer (Gao sec. 3.2 steps 5-6) on the sparse and dense grids.
+ *
+ * Each particle reads the new (and, for FLIP, old) grid velocity of its stencil and updates
+ * v_p (APIC, or alpha FLIP + (1 - alpha) PIC), C_p, F_p <- (I + dt grad v) F_p and x_p. Particles
+ * are independent, so the loop is parallel and deterministic; the reductions (max speed, first
+ * bad particle) are order-independent. The sparse version first copies the 8 blocks around an
+ * owner block into a pad, so the inner loops index like the dense grid. */
+#include "transfer/transfer.h"
+#include "transfer/transfer_core.h"
+#include "core/parallel.h"
+
+#include <math.h>
+#include <string.h>
+
+#define ALWAYS_INLINE static inline __attribute__((always_inline))
+
+/* Update particle i from grid channels viewed from node org with strides sx, sy.
+ * Returns |v|^2, or -1 when a value is not finite. */
+ALWAYS_INLINE mpm_real update_particle(const int W, const mpm_transfer_ctx *ctx, mpm_particles *p,
+                                       uint32_t i, const mpm_real *const ch[MPM_GRID_CHANNELS],
+                                       const int org[3], long sx, long sy) {
+  const mpm_kernel *k = &ctx->kernel;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC, flip = !apic;
+  mpm_real xr[3] = {p->x[0][i] - ctx->origin[0], p->x[1][i] - ctx->origin[1],
+                    p->x[2][i] - ctx->origin[2]};
+  mpm_stencil s;
+  mpm_kernel_stencil(k, xr, &s);
+  const long off = (long)(s.base[0] - org[0]) * sx + (long)(s.base[1] - org[1]) * sy +
+                   (long)(s.base[2] - org[2]);
+  const mpm_real *at[MPM_GRID_CHANNELS];
+  for (int c = 0; c < MPM_GRID_CHANNELS; ++c) at[c] = ch[c] ? ch[c] + off : NULL;
+  mpm_g2p_gather o;
+  mpm_g2p_particle(W, &s, flip, apic, at, sx, sy, &o);
+
+  const mpm_real dt = ctx->dt;
+  mpm_real v[3];
+  if (apic) {
+    for (int d = 0; d < 3; ++d) v[d] = o.v[d];
+    for (int c = 0; c < 9; ++c) p->C[c][i] = o.B[c];
+  } else {
+    const mpm_real a = ctx->flip_alpha;
+    for (int d = 0; d < 3; ++d) v[d] = a * (p->v[d][i] + o.dv[d]) + (1 - a) * o.v[d];
+  }
+  /* F^{n+1} = (I + dt grad v) F^n  (Gao sec. 3.2 step 5) */
+  mpm_real F[9], Fn[9];
+  for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      Fn[3 * r + c] = F[3 * r + c] + dt * (o.grad[3 * r] * F[c] + o.grad[3 * r + 1] * F[3 + c] +
+                                           o.grad[3 * r + 2] * F[6 + c]);
+  mpm_real check = 0;
+  for (int c = 0; c < 9; ++c) {
+    p->F[c][i] = Fn[c];
+    check += Fn[c];
+  }
+  for (int d = 0; d < 3; ++d) {
+    mpm_real xn = p->x[d][i] + dt * o.v[d];
+    xn = xn < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : xn;
+    xn = xn > ctx->clamp_hi[d] ? ctx->clamp_hi[d] : xn;
+    p->x[d][i] = xn;
+    p->v[d][i] = v[d];
+    check += xn + v[d];
+  }
+  if (!isfinite(check)) return -1;
+  return v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+}
+
+ALWAYS_INLINE void g2p_block(const int W, const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                             mpm_particles *p, int32_t b, mpm_real *max_v2, long *bad) {
+  const int flip = ctx->transfer == MPM_TRANSFER_FLIP;
+  mpm_real pad[6][MPM_PAD_NODES];
+  const mpm_real *ch[MPM_GRID_CHANNELS] = {NULL};
+  /* channels VOLD (1..3) and VNEW (4..6) of the 8 blocks into the pad */
+  for (int o = 0; o < 8; ++o) {
+    const mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
+    const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
+              oz = (o & 1) * MPM_BLOCK;
+    for (int c = flip ? 0 : 3; c < 6; ++c)
+      for (int i = 0; i < MPM_BLOCK; ++i)
+        for (int j = 0; j < MPM_BLOCK; ++j)
+          memcpy(&pad[c][(ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz],
+                 &blk->ch[MPM_CH_VOLD + c][(i * MPM_BLOCK + j) * MPM_BLOCK],
+                 MPM_BLOCK * sizeof(mpm_real));
+  }
+  for (int c = 0; c < 6; ++c)
+    if (flip || c >= 3) ch[MPM_CH_VOLD + c] = pad[c];
+  const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
+                      g->coord[b][2] * MPM_BLOCK};
+  const size_t nm = (size_t)g->material_count;
+  const uint32_t begin = g->run_start[(size_t)b * nm], end = g->run_start[(size_t)(b + 1) * nm];
+  for (uint32_t j = begin; j < end; ++j) {
+    const uint32_t i = g->perm[j];
+    mpm_real v2 = update_particle(W, ctx, p, i, ch, org, MPM_PAD * MPM_PAD, MPM_PAD);
+    if (v2 < 0) {
+      if (*bad < 0 || (long)i < *bad) *bad = (long)i;
+    } else if (v2 > *max_v2) {
+      *max_v2 = v2;
+    }
+  }
+}
+
+mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                              mpm_particles *p) {
+  const int W = ctx->kernel.width;
+  const long nb = (long)g->owner_count;
+  mpm_real max_v2 = 0;
+  long bad = -1;
+#pragma omp parallel
+  {
+    mpm_real my_v2 = 0;
+    long my_bad = -1;
+#pragma omp for schedule(dynamic, 8)
+    for (long b = 0; b < nb; ++b) {
+      switch (W) {
+      case 2: g2p_block(2, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      case 3: g2p_block(3, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      default: g2p_block(4, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      }
+    }
+#pragma omp critical(mpm_g2p_reduce)
+    {
+      if (my_v2 > max_v2) max_v2 = my_v2;
+      if (my_bad >= 0 && (bad < 0 || my_bad < bad)) bad = my_bad;
+    }
+  }
+  mpm_g2p_result r = {mpm_sqrt(max_v2), bad};
+  return r;
+}
+
+mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
+                             mpm_particles *p) {
+  const int W = ctx->kernel.width;
+  const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
+  const int org[3] = {0, 0, 0};
+  const mpm_real *ch[MPM_GRID_CHANNELS];
+  for (int c = 0; c < MPM_GRID_CHANNELS; ++c) ch[c] = g->ch[c];
+  const long n = (long)p->count;
+  mpm_real max_v2 = 0;
+  long bad = -1;
+#pragma omp parallel
+  {
+    mpm_real my_v2 = 0;
+    long my_bad = -1;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      mpm_real v2;
+      switch (W) {
+      case 2: v2 = update_particle(2, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      case 3: v2 = update_particle(3, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      default: v2 = update_particle(4, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      }
+      if (v2 < 0) {
+        if (my_bad < 0 || i < my_bad) my_bad = i;
+      } else if (v2 > my_v2) {
+        my_v2 = v2;
+      }
+    }
+#pragma omp critical(mpm_g2p_reduce_dense)
+    {
+      if (my_v2 > max_v2) max_v2 = my_v2;
+      if (my_bad >= 0 && (bad < 0 || my_bad < bad)) bad = my_bad;
+    }
+  }
+  mpm_g2p_result r = {mpm_sqrt(max_v2), bad};
+  return r;
+}

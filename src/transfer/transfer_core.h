@@ -1,0 +1,109 @@
+/* transfer_core.h - the per-particle bodies of P2G and G2P, shared by the sparse and the dense
+ * grid. A grid is seen through channel pointers already offset to the particle's base node and
+ * the strides of its x and y axes (z is contiguous); the stencil width W is a compile-time
+ * constant at every call site so the node loops unroll. Private to src/transfer. */
+#ifndef MPM_TRANSFER_TRANSFER_CORE_H
+#define MPM_TRANSFER_TRANSFER_CORE_H
+
+#include "grid/grid.h"
+#include "interp/kernel.h"
+
+/* One particle's contribution. f[d] = xg[d] - base[d] (distance from the base node, cells);
+ * mv = m v; mC = m C (APIC, row-major) or NULL; K = -V0 tau (force = K grad w). */
+static inline void mpm_p2g_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
+                                    mpm_real dx, mpm_real m, const mpm_real mv[3],
+                                    const mpm_real *mC, const mpm_real K[9],
+                                    mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy) {
+  for (int i = 0; i < W; ++i) {
+    const mpm_real rx = ((mpm_real)i - f[0]) * dx;
+    for (int j = 0; j < W; ++j) {
+      const mpm_real ry = ((mpm_real)j - f[1]) * dx;
+      const mpm_real wij = s->w[0][i] * s->w[1][j];
+      const mpm_real gx_ij = s->dw[0][i] * s->w[1][j]; /* d/dx part before the z factor */
+      const mpm_real gy_ij = s->w[0][i] * s->dw[1][j];
+      /* momentum carried to this (i,j) column before the z offset */
+      mpm_real px = mv[0], py = mv[1], pz = mv[2];
+      if (mC) {
+        px += mC[0] * rx + mC[1] * ry;
+        py += mC[3] * rx + mC[4] * ry;
+        pz += mC[6] * rx + mC[7] * ry;
+      }
+      const long off = i * sx + j * sy;
+      for (int k = 0; k < W; ++k) {
+        const mpm_real wz = s->w[2][k];
+        const mpm_real w = wij * wz;
+        const mpm_real gx = gx_ij * wz, gy = gy_ij * wz, gz = wij * s->dw[2][k];
+        mpm_real qx = px, qy = py, qz = pz;
+        if (mC) {
+          const mpm_real rz = ((mpm_real)k - f[2]) * dx;
+          qx += mC[2] * rz;
+          qy += mC[5] * rz;
+          qz += mC[8] * rz;
+        }
+        const long n = off + k;
+        ch[MPM_CH_MASS][n] += w * m;
+        ch[MPM_CH_MV + 0][n] += w * qx;
+        ch[MPM_CH_MV + 1][n] += w * qy;
+        ch[MPM_CH_MV + 2][n] += w * qz;
+        ch[MPM_CH_F + 0][n] += K[0] * gx + K[1] * gy + K[2] * gz;
+        ch[MPM_CH_F + 1][n] += K[3] * gx + K[4] * gy + K[5] * gz;
+        ch[MPM_CH_F + 2][n] += K[6] * gx + K[7] * gy + K[8] * gz;
+      }
+    }
+  }
+}
+
+/* Gathered grid quantities at one particle. */
+typedef struct mpm_g2p_gather {
+  mpm_real v[3];      /* PIC velocity sum w v^{n+1} */
+  mpm_real dv[3];     /* FLIP increment sum w (v^{n+1} - v^n) */
+  mpm_real grad[9];   /* sum v^{n+1} grad w^T */
+  mpm_real B[9];      /* APIC: sum v^{n+1} a^T (= B_p D_p^{-1}) */
+} mpm_g2p_gather;
+
+static inline void mpm_g2p_particle(const int W, const mpm_stencil *s, int flip, int apic,
+                                    const mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy,
+                                    mpm_g2p_gather *o) {
+  mpm_real v0 = 0, v1 = 0, v2 = 0, d0 = 0, d1 = 0, d2 = 0;
+  mpm_real G[9] = {0}, B[9] = {0};
+  for (int i = 0; i < W; ++i)
+    for (int j = 0; j < W; ++j) {
+      const mpm_real wij = s->w[0][i] * s->w[1][j];
+      const mpm_real gx_ij = s->dw[0][i] * s->w[1][j], gy_ij = s->w[0][i] * s->dw[1][j];
+      const mpm_real ax_ij = s->a[0][i] * s->w[1][j], ay_ij = s->w[0][i] * s->a[1][j];
+      const long off = i * sx + j * sy;
+      for (int k = 0; k < W; ++k) {
+        const long n = off + k;
+        const mpm_real wz = s->w[2][k];
+        const mpm_real w = wij * wz;
+        const mpm_real ux = ch[MPM_CH_VNEW][n], uy = ch[MPM_CH_VNEW + 1][n],
+                       uz = ch[MPM_CH_VNEW + 2][n];
+        v0 += w * ux;
+        v1 += w * uy;
+        v2 += w * uz;
+        if (flip) {
+          d0 += w * (ux - ch[MPM_CH_VOLD][n]);
+          d1 += w * (uy - ch[MPM_CH_VOLD + 1][n]);
+          d2 += w * (uz - ch[MPM_CH_VOLD + 2][n]);
+        }
+        const mpm_real gx = gx_ij * wz, gy = gy_ij * wz, gz = wij * s->dw[2][k];
+        G[0] += ux * gx; G[1] += ux * gy; G[2] += ux * gz;
+        G[3] += uy * gx; G[4] += uy * gy; G[5] += uy * gz;
+        G[6] += uz * gx; G[7] += uz * gy; G[8] += uz * gz;
+        if (apic) {
+          const mpm_real ax = ax_ij * wz, ay = ay_ij * wz, az = wij * s->a[2][k];
+          B[0] += ux * ax; B[1] += ux * ay; B[2] += ux * az;
+          B[3] += uy * ax; B[4] += uy * ay; B[5] += uy * az;
+          B[6] += uz * ax; B[7] += uz * ay; B[8] += uz * az;
+        }
+      }
+    }
+  o->v[0] = v0; o->v[1] = v1; o->v[2] = v2;
+  o->dv[0] = d0; o->dv[1] = d1; o->dv[2] = d2;
+  for (int c = 0; c < 9; ++c) {
+    o->grad[c] = G[c];
+    o->B[c] = B[c];
+  }
+}
+
+#endif

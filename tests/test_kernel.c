@@ -1,0 +1,140 @@
+/* test_kernel.c - weight kernels against their defining properties (Gao sec. 3.3):
+ * partition of unity, linear reproduction, non-negativity, sum of gradients zero, gradients
+ * equal finite differences of the weights, uGIMP with L_p = dx equals the quadratic B-spline,
+ * and the APIC factors reproduce D_p^{-1} (sum a_i (x_i - x_p) = 1, sum a_i = 0). */
+#include "support.h"
+#include "interp/kernel.h"
+
+#include <math.h>
+
+static const mpm_kernel_kind kinds[] = {MPM_KERNEL_LINEAR, MPM_KERNEL_QUADRATIC,
+                                        MPM_KERNEL_CUBIC, MPM_KERNEL_UGIMP};
+
+/* 3D weight and gradient of stencil node (i,j,k). */
+static double w3(const mpm_stencil *s, int i, int j, int k) {
+  return (double)s->w[0][i] * s->w[1][j] * s->w[2][k];
+}
+
+static void check_kernel(mpm_kernel_kind kind, double gimp_len) {
+  const double dx = 0.037;
+  mpm_kernel k = mpm_kernel_make(kind, (mpm_real)dx, (mpm_real)gimp_len);
+  uint64_t rng = 12345 + (uint64_t)kind;
+  const double tol = TOL(2e-5, 1e-12);
+  for (int trial = 0; trial < 2000; ++trial) {
+    mpm_real x[3];
+    for (int d = 0; d < 3; ++d) x[d] = (mpm_real)test_rand(&rng, 3 * dx, 40 * dx);
+    if (trial < 8) /* exactly on nodes and cell centres too */
+      for (int d = 0; d < 3; ++d) x[d] = (mpm_real)((10 + 0.5 * (trial & 1)) * dx);
+    mpm_stencil s;
+    mpm_kernel_stencil(&k, x, &s);
+    const int W = k.width;
+    double sum = 0, sx[3] = {0, 0, 0}, sg[3] = {0, 0, 0};
+    for (int i = 0; i < W; ++i)
+      for (int j = 0; j < W; ++j)
+        for (int q = 0; q < W; ++q) {
+          double w = w3(&s, i, j, q);
+          assert_true(w >= -1e-7); /* every kernel here is non-negative */
+          sum += w;
+          const int idx[3] = {s.base[0] + i, s.base[1] + j, s.base[2] + q};
+          for (int d = 0; d < 3; ++d) sx[d] += w * idx[d] * dx;
+          sg[0] += (double)s.dw[0][i] * s.w[1][j] * s.w[2][q];
+          sg[1] += (double)s.w[0][i] * s.dw[1][j] * s.w[2][q];
+          sg[2] += (double)s.w[0][i] * s.w[1][j] * s.dw[2][q];
+        }
+    assert_close(sum, 1.0, tol);
+    for (int d = 0; d < 3; ++d) {
+      assert_close(sx[d], (double)x[d], tol * 40 * dx);
+      assert_close(sg[d] * dx, 0.0, tol * 10);
+    }
+    /* 1D APIC factors: sum a_i = 0 and sum a_i (x_i - x_p) = 1 */
+    for (int d = 0; d < 3; ++d) {
+      double sa = 0, sar = 0;
+      for (int i = 0; i < W; ++i) {
+        sa += s.a[d][i];
+        sar += s.a[d][i] * ((s.base[d] + i) * dx - x[d]);
+      }
+      assert_close(sa * dx, 0.0, tol * 50);
+      assert_close(sar, 1.0, tol * 50);
+    }
+  }
+}
+
+static void test_linear(void **state) { (void)state; check_kernel(MPM_KERNEL_LINEAR, 0); }
+static void test_quadratic(void **state) { (void)state; check_kernel(MPM_KERNEL_QUADRATIC, 0); }
+static void test_cubic(void **state) { (void)state; check_kernel(MPM_KERNEL_CUBIC, 0); }
+static void test_ugimp(void **state) {
+  (void)state;
+  check_kernel(MPM_KERNEL_UGIMP, 0.037 * 0.5);
+  check_kernel(MPM_KERNEL_UGIMP, 0.037 * 0.3);
+  check_kernel(MPM_KERNEL_UGIMP, 0.037);
+}
+
+/* Gradients equal central differences of the weights (1D factors, in double builds tight). */
+static void test_gradients_match_finite_differences(void **state) {
+  (void)state;
+  const double dx = 0.1;
+  for (size_t kk = 0; kk < sizeof kinds / sizeof kinds[0]; ++kk) {
+    mpm_kernel k = mpm_kernel_make(kinds[kk], (mpm_real)dx, (mpm_real)(0.6 * dx));
+    uint64_t rng = 99;
+    for (int trial = 0; trial < 500; ++trial) {
+      double x = test_rand(&rng, 1.0, 2.0);
+      const double h = TOL(1e-3, 1e-6) * dx;
+      mpm_real w[4], dw[4], a[4], wp[4], wm[4], scratch[4];
+      int base = mpm_kernel_1d(&k, (mpm_real)(x / dx), w, dw, a);
+      int bp = mpm_kernel_1d(&k, (mpm_real)((x + h) / dx), wp, scratch, a);
+      int bm = mpm_kernel_1d(&k, (mpm_real)((x - h) / dx), wm, scratch, a);
+      if (bp != base || bm != base) continue; /* stencil changes across a cell face */
+      /* the linear kernel's derivative jumps at nodes: skip points within h of a node */
+      for (int i = 0; i < k.width; ++i) {
+        double fd = ((double)wp[i] - wm[i]) / (2 * h);
+        assert_close(fd * dx, (double)dw[i] * dx, TOL(5e-3, 1e-6));
+      }
+    }
+  }
+}
+
+/* Gao sec. 3.3: uGIMP with L_p = dx is exactly the quadratic B-spline. */
+static void test_ugimp_equals_quadratic(void **state) {
+  (void)state;
+  const double dx = 0.05;
+  mpm_kernel q = mpm_kernel_make(MPM_KERNEL_QUADRATIC, (mpm_real)dx, 0);
+  mpm_kernel g = mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)dx);
+  uint64_t rng = 7;
+  for (int trial = 0; trial < 5000; ++trial) {
+    mpm_real x = (mpm_real)(test_rand(&rng, 0.2, 3.0) / dx);
+    mpm_real wq[4], dq[4], aq[4], wg[4], dg[4], ag[4];
+    int bq = mpm_kernel_1d(&q, x, wq, dq, aq);
+    int bg = mpm_kernel_1d(&g, x, wg, dg, ag);
+    assert_int_equal(bq, bg);
+    for (int i = 0; i < 3; ++i) {
+      assert_close(wq[i], wg[i], TOL(2e-6, 1e-14));
+      assert_close(dq[i] * dx, dg[i] * dx, TOL(2e-5, 1e-12));
+      assert_close(aq[i] * dx, ag[i] * dx, TOL(2e-4, 1e-10));
+    }
+  }
+}
+
+/* The quadratic APIC factor is the textbook 4/dx^2 w (x_i - x_p). */
+static void test_quadratic_apic_factor(void **state) {
+  (void)state;
+  const double dx = 0.25;
+  mpm_kernel q = mpm_kernel_make(MPM_KERNEL_QUADRATIC, (mpm_real)dx, 0);
+  mpm_real w[4], dw[4], a[4];
+  double x = 1.37;
+  int base = mpm_kernel_1d(&q, (mpm_real)(x / dx), w, dw, a);
+  for (int i = 0; i < 3; ++i)
+    assert_close(a[i], 4.0 / (dx * dx) * w[i] * ((base + i) * dx - x), TOL(1e-4, 1e-12));
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_linear),
+      cmocka_unit_test(test_quadratic),
+      cmocka_unit_test(test_cubic),
+      cmocka_unit_test(test_ugimp),
+      cmocka_unit_test(test_gradients_match_finite_differences),
+      cmocka_unit_test(test_ugimp_equals_quadratic),
+      cmocka_unit_test(test_quadratic_apic_factor),
+  };
+  return cmocka_run_group_tests_name("kernel", tests, NULL, NULL);
+}
