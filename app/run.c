@@ -47,7 +47,7 @@ int mpm_cmd_check(int argc, char **argv) {
 
 int mpm_cmd_run(int argc, char **argv) {
   const char *scene_path = NULL, *out_dir = NULL;
-  int threads = 0, quiet = 0;
+  int threads = 0, quiet = 0, max_frames = 0;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
       if (i + 1 >= argc) {
@@ -57,6 +57,10 @@ int mpm_cmd_run(int argc, char **argv) {
       out_dir = argv[++i];
     } else if (!strcmp(argv[i], "--threads")) {
       if (mpm_cli_parse_int("--threads", i + 1 < argc ? argv[i + 1] : NULL, 1, 1024, &threads))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--frames")) {
+      if (mpm_cli_parse_int("--frames", i + 1 < argc ? argv[i + 1] : NULL, 1, 1000000, &max_frames))
         return MPM_EXIT_USAGE;
       ++i;
     } else if (!strcmp(argv[i], "--quiet") || !strcmp(argv[i], "-q")) {
@@ -72,7 +76,7 @@ int mpm_cmd_run(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR] [--threads N] [--quiet]\n");
+    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--quiet]\n");
     return MPM_EXIT_USAGE;
   }
   if (threads > 0) mpm_set_threads(threads);
@@ -85,6 +89,7 @@ int mpm_cmd_run(int argc, char **argv) {
     fprintf(stderr, "mpm: %s\n", err.message);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
+  if (max_frames > 0 && max_frames < sim->frame_count) sim->frame_count = max_frames;
   st = mpm_sim_enable_output(sim, out_dir);
   if (st != MPM_OK) {
     fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));

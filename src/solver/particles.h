@@ -16,7 +16,9 @@ typedef struct mpm_particles {
   mpm_real *x[3];  /* position, m */
   mpm_real *v[3];  /* velocity, m/s */
   mpm_real *F[9];  /* deformation gradient, row-major components */
-  mpm_real *C[9];  /* APIC affine velocity matrix, 1/s */
+  mpm_real *B[9];  /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
+                      Storing B rather than C keeps angular momentum exact for every kernel,
+                      including those whose D_p varies with position (linear, uGIMP). */
   mpm_real *mass;  /* kg */
   mpm_real *vol0;  /* initial volume V_p^0, m^3 */
   int32_t *material;
@@ -31,7 +33,7 @@ int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
 void mpm_particles_free(mpm_particles *p);
 int mpm_particles_reserve(mpm_particles *p, size_t capacity);
 
-/* Append one particle at rest state (F = I, C = 0); returns its index or -1 on OOM. */
+/* Append one particle at rest state (F = I, B = 0); returns its index or -1 on OOM. */
 long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3],
                         mpm_real mass, mpm_real vol0, int32_t material, int32_t body);
 

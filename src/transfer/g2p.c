@@ -1,7 +1,7 @@
 /* g2p.c - grid-to-particle transfer (Gao sec. 3.2 steps 5-6) on the sparse and dense grids.
  *
  * Each particle reads the new (and, for FLIP, old) grid velocity of its stencil and updates
- * v_p (APIC, or alpha FLIP + (1 - alpha) PIC), C_p, F_p <- (I + dt grad v) F_p and x_p. Particles
+ * v_p (APIC, or alpha FLIP + (1 - alpha) PIC), APIC's B_p, F_p <- (I + dt grad v) F_p and x_p. Particles
  * are independent, so the loop is parallel and deterministic; the reductions (max speed, first
  * bad particle) are order-independent. The sparse version first copies the 8 blocks around an
  * owner block into a pad, so the inner loops index like the dense grid. */
@@ -29,14 +29,16 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const mpm_transfer_ctx *ctx,
                    (long)(s.base[2] - org[2]);
   const mpm_real *at[MPM_GRID_CHANNELS];
   for (int c = 0; c < MPM_GRID_CHANNELS; ++c) at[c] = ch[c] ? ch[c] + off : NULL;
+  mpm_real f[3];
+  for (int d = 0; d < 3; ++d) f[d] = xr[d] * k->inv_dx - (mpm_real)s.base[d];
   mpm_g2p_gather o;
-  mpm_g2p_particle(W, &s, flip, apic, at, sx, sy, &o);
+  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
 
   const mpm_real dt = ctx->dt;
   mpm_real v[3];
   if (apic) {
     for (int d = 0; d < 3; ++d) v[d] = o.v[d];
-    for (int c = 0; c < 9; ++c) p->C[c][i] = o.B[c];
+    for (int c = 0; c < 9; ++c) p->B[c][i] = o.B[c];
   } else {
     const mpm_real a = ctx->flip_alpha;
     for (int d = 0; d < 3; ++d) v[d] = a * (p->v[d][i] + o.dv[d]) + (1 - a) * o.v[d];

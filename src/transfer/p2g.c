@@ -40,20 +40,18 @@ ALWAYS_INLINE void scatter_chunk(const int W, const mpm_transfer_ctx *ctx, const
                             p->x[2][i] - ctx->origin[2]};
     mpm_stencil s;
     mpm_kernel_stencil(k, xr, &s);
-    mpm_real f[3];
-    for (int d = 0; d < 3; ++d) f[d] = xr[d] * k->inv_dx - (mpm_real)s.base[d];
     const mpm_real m = p->mass[i], mv[3] = {m * p->v[0][i], m * p->v[1][i], m * p->v[2][i]};
-    mpm_real mC[9], K[9];
+    mpm_real mB[9], K[9];
     const mpm_real nv = -p->vol0[i];
     for (int c = 0; c < 9; ++c) {
-      mC[c] = m * p->C[c][i];
+      mB[c] = m * p->B[c][i];
       K[c] = nv * tau[c][q];
     }
     const long off = (long)(s.base[0] - org[0]) * sx + (long)(s.base[1] - org[1]) * sy +
                      (long)(s.base[2] - org[2]);
     mpm_real *at[MPM_GRID_CHANNELS];
     for (int c = 0; c < MPM_GRID_CHANNELS; ++c) at[c] = ch[c] + off;
-    mpm_p2g_particle(W, &s, f, k->dx, m, mv, apic ? mC : NULL, K, at, sx, sy);
+    mpm_p2g_particle(W, &s, m, mv, apic ? mB : NULL, K, at, sx, sy);
   }
 }
 

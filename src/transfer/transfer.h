@@ -2,10 +2,10 @@
  * dense grids, with APIC or the PIC/FLIP blend (Gao sec. 3.2 steps 1, 2, 5, 6).
  *
  * P2G accumulates per node: mass m_i = sum m_p w_ip, momentum sum w_ip m_p (v_p + C_p (x_i -
- * x_p)) (the affine term only with APIC) and force f_i = -sum V_p^0 tau_p grad w_ip with the
+ * x_p)) (the affine term only with APIC; C_p = B_p D_p^{-1}) and force f_i = -sum V_p^0 tau_p grad w_ip with the
  * Kirchhoff stress tau = P F^T, which equals Gao's -sum V^0 J sigma grad w (step 2).
  * G2P gathers the new grid velocity: the PIC velocity, the FLIP increment, the velocity
- * gradient for F^{n+1} = (I + dt grad v) F^n (step 5), APIC's C_p, and advects x_p (step 6). */
+ * gradient for F^{n+1} = (I + dt grad v) F^n (step 5), APIC's B_p, and advects x_p (step 6). */
 #ifndef MPM_TRANSFER_TRANSFER_H
 #define MPM_TRANSFER_TRANSFER_H
 

@@ -8,49 +8,39 @@
 #include "grid/grid.h"
 #include "interp/kernel.h"
 
-/* One particle's contribution. f[d] = xg[d] - base[d] (distance from the base node, cells);
- * mv = m v; mC = m C (APIC, row-major) or NULL; K = -V0 tau (force = K grad w). */
-static inline void mpm_p2g_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
-                                    mpm_real dx, mpm_real m, const mpm_real mv[3],
-                                    const mpm_real *mC, const mpm_real K[9],
+/* One particle's contribution: mass, momentum m v w + (m B) D^{-1} (x_i - x_p) w (APIC, the
+ * D^{-1}(x_i - x_p) w factor is the stencil's `a` vector), and force K grad w with
+ * K = -V0 tau. mB = m B (row-major) or NULL for PIC/FLIP. */
+static inline void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_real m,
+                                    const mpm_real mv[3], const mpm_real *mB, const mpm_real K[9],
                                     mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy) {
-  for (int i = 0; i < W; ++i) {
-    const mpm_real rx = ((mpm_real)i - f[0]) * dx;
+  for (int i = 0; i < W; ++i)
     for (int j = 0; j < W; ++j) {
-      const mpm_real ry = ((mpm_real)j - f[1]) * dx;
       const mpm_real wij = s->w[0][i] * s->w[1][j];
-      const mpm_real gx_ij = s->dw[0][i] * s->w[1][j]; /* d/dx part before the z factor */
-      const mpm_real gy_ij = s->w[0][i] * s->dw[1][j];
-      /* momentum carried to this (i,j) column before the z offset */
-      mpm_real px = mv[0], py = mv[1], pz = mv[2];
-      if (mC) {
-        px += mC[0] * rx + mC[1] * ry;
-        py += mC[3] * rx + mC[4] * ry;
-        pz += mC[6] * rx + mC[7] * ry;
-      }
+      const mpm_real gx_ij = s->dw[0][i] * s->w[1][j], gy_ij = s->w[0][i] * s->dw[1][j];
+      const mpm_real ax_ij = s->a[0][i] * s->w[1][j], ay_ij = s->w[0][i] * s->a[1][j];
       const long off = i * sx + j * sy;
       for (int k = 0; k < W; ++k) {
         const mpm_real wz = s->w[2][k];
         const mpm_real w = wij * wz;
         const mpm_real gx = gx_ij * wz, gy = gy_ij * wz, gz = wij * s->dw[2][k];
-        mpm_real qx = px, qy = py, qz = pz;
-        if (mC) {
-          const mpm_real rz = ((mpm_real)k - f[2]) * dx;
-          qx += mC[2] * rz;
-          qy += mC[5] * rz;
-          qz += mC[8] * rz;
+        mpm_real qx = w * mv[0], qy = w * mv[1], qz = w * mv[2];
+        if (mB) {
+          const mpm_real ax = ax_ij * wz, ay = ay_ij * wz, az = wij * s->a[2][k];
+          qx += mB[0] * ax + mB[1] * ay + mB[2] * az;
+          qy += mB[3] * ax + mB[4] * ay + mB[5] * az;
+          qz += mB[6] * ax + mB[7] * ay + mB[8] * az;
         }
         const long n = off + k;
         ch[MPM_CH_MASS][n] += w * m;
-        ch[MPM_CH_MV + 0][n] += w * qx;
-        ch[MPM_CH_MV + 1][n] += w * qy;
-        ch[MPM_CH_MV + 2][n] += w * qz;
+        ch[MPM_CH_MV + 0][n] += qx;
+        ch[MPM_CH_MV + 1][n] += qy;
+        ch[MPM_CH_MV + 2][n] += qz;
         ch[MPM_CH_F + 0][n] += K[0] * gx + K[1] * gy + K[2] * gz;
         ch[MPM_CH_F + 1][n] += K[3] * gx + K[4] * gy + K[5] * gz;
         ch[MPM_CH_F + 2][n] += K[6] * gx + K[7] * gy + K[8] * gz;
       }
     }
-  }
 }
 
 /* Gathered grid quantities at one particle. */
@@ -58,10 +48,12 @@ typedef struct mpm_g2p_gather {
   mpm_real v[3];      /* PIC velocity sum w v^{n+1} */
   mpm_real dv[3];     /* FLIP increment sum w (v^{n+1} - v^n) */
   mpm_real grad[9];   /* sum v^{n+1} grad w^T */
-  mpm_real B[9];      /* APIC: sum v^{n+1} a^T (= B_p D_p^{-1}) */
+  mpm_real B[9];      /* APIC: B_p = sum w v^{n+1} (x_i - x_p)^T */
 } mpm_g2p_gather;
 
-static inline void mpm_g2p_particle(const int W, const mpm_stencil *s, int flip, int apic,
+/* f = distance of the particle from its base node in cells; dx the cell size. */
+static inline void mpm_g2p_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
+                                    mpm_real dx, int flip, int apic,
                                     const mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy,
                                     mpm_g2p_gather *o) {
   mpm_real v0 = 0, v1 = 0, v2 = 0, d0 = 0, d1 = 0, d2 = 0;
@@ -70,7 +62,7 @@ static inline void mpm_g2p_particle(const int W, const mpm_stencil *s, int flip,
     for (int j = 0; j < W; ++j) {
       const mpm_real wij = s->w[0][i] * s->w[1][j];
       const mpm_real gx_ij = s->dw[0][i] * s->w[1][j], gy_ij = s->w[0][i] * s->dw[1][j];
-      const mpm_real ax_ij = s->a[0][i] * s->w[1][j], ay_ij = s->w[0][i] * s->a[1][j];
+      const mpm_real rx = ((mpm_real)i - f[0]) * dx, ry = ((mpm_real)j - f[1]) * dx;
       const long off = i * sx + j * sy;
       for (int k = 0; k < W; ++k) {
         const long n = off + k;
@@ -91,7 +83,8 @@ static inline void mpm_g2p_particle(const int W, const mpm_stencil *s, int flip,
         G[3] += uy * gx; G[4] += uy * gy; G[5] += uy * gz;
         G[6] += uz * gx; G[7] += uz * gy; G[8] += uz * gz;
         if (apic) {
-          const mpm_real ax = ax_ij * wz, ay = ay_ij * wz, az = wij * s->a[2][k];
+          const mpm_real rz = ((mpm_real)k - f[2]) * dx;
+          const mpm_real ax = w * rx, ay = w * ry, az = w * rz;
           B[0] += ux * ax; B[1] += ux * ay; B[2] += ux * az;
           B[3] += uy * ax; B[4] += uy * ay; B[5] += uy * az;
           B[6] += uz * ax; B[7] += uz * ay; B[8] += uz * az;

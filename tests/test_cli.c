@@ -1,0 +1,201 @@
+/* test_cli.c - the `mpm` program as users run it: exit codes (0 ok, 1 simulation failure,
+ * 2 usage or input error), messages that name the file and key path, `check` writes nothing,
+ * and a short run of an example writes VTU frames, a PVD index and stats. */
+#include "support.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+static char output[65536];
+
+/* Run `mpm ARGS` (stderr merged), keep its output, return its exit code. */
+static int mpm(const char *args) {
+  const char *bin = test_mpm_bin();
+  if (!bin) fail_msg("MPM_BIN is not set (run through ctest)");
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", bin, args);
+  FILE *f = popen(cmd, "r");
+  assert_non_null(f);
+  size_t n = fread(output, 1, sizeof output - 1, f);
+  output[n] = '\0';
+  int status = pclose(f);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+static void expect_output(const char *needle) {
+  if (!strstr(output, needle)) fail_msg("expected '%s' in the output:\n%s", needle, output);
+}
+
+static void write_file(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+}
+
+static int exists(const char *path) {
+  struct stat st;
+  return stat(path, &st) == 0;
+}
+
+static const char *good_scene =
+    "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
+    " \"time\": {\"end\": 0.2, \"fps\": 20},"
+    " \"materials\": [{\"name\": \"jello\", \"model\": \"fixed_corotated\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
+    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], \"half_extent\": [0.1,0.1,0.1]},"
+    "               \"material\": \"jello\"}]}";
+
+static void test_help_and_version(void **state) {
+  (void)state;
+  assert_int_equal(mpm("--version"), 0);
+  expect_output("mpm ");
+  assert_int_equal(mpm("--help"), 0);
+  expect_output("mpm run");
+  assert_int_equal(mpm(""), 2);
+  assert_int_equal(mpm("frobnicate"), 2);
+  expect_output("unknown command");
+  assert_int_equal(mpm("run"), 2);
+  assert_int_equal(mpm("run x.json --threads zero"), 2);
+  expect_output("--threads");
+}
+
+static void test_missing_file(void **state) {
+  (void)state;
+  assert_int_equal(mpm("check /nonexistent/scene.json"), 2);
+  expect_output("/nonexistent/scene.json");
+}
+
+static void test_bad_scenes_exit_2_and_write_nothing(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("cli-bad");
+  char path[600], out[600], args[1400];
+  struct {
+    const char *json, *needle1, *needle2;
+  } cases[] = {
+      {"{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05}, \"time\": {\"end\": 1}, "
+       "\"solver\": {\"kernal\": \"cubic\"}, \"materials\": [], \"bodies\": []}",
+       "solver.kernal", "kernel"},
+      {"{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05}, \"time\": {\"end\": 1},"
+       " \"materials\": [{\"name\": \"j\", \"model\": \"neo_hookean\", \"E\": -5, \"nu\": 0.3, \"density\": 1000}],"
+       " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.5,0.5], \"radius\": 0.1}, \"material\": \"j\"}]}",
+       "materials[0].E", "> 0"},
+      {"{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},\n \"time\": {\"end\": 1,}\n}", "line", "JSON"},
+  };
+  for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+    snprintf(path, sizeof path, "%s/bad%zu.json", dir, c);
+    snprintf(out, sizeof out, "%s/out%zu", dir, c);
+    write_file(path, cases[c].json);
+    snprintf(args, sizeof args, "check '%s'", path);
+    assert_int_equal(mpm(args), 2);
+    expect_output(path);
+    expect_output(cases[c].needle1);
+    expect_output(cases[c].needle2);
+    snprintf(args, sizeof args, "run '%s' -o '%s' --quiet", path, out);
+    assert_int_equal(mpm(args), 2);
+    assert_false(exists(out)); /* nothing simulated or written */
+  }
+}
+
+static void test_check_examples(void **state) {
+  (void)state;
+  const char *examples[] = {"examples/jello_cubes.json", "examples/sphere_bounce.json",
+                            "examples/block_on_cylinder.json", "examples/bunny_drop.json"};
+  for (size_t i = 0; i < sizeof examples / sizeof examples[0]; ++i) {
+    char args[600];
+    snprintf(args, sizeof args, "check %s", examples[i]);
+    if (mpm(args) != 0) fail_msg("%s: %s", examples[i], output);
+    expect_output("ok");
+  }
+}
+
+static long count_occurrences(const char *text, const char *needle) {
+  long n = 0;
+  for (const char *p = strstr(text, needle); p; p = strstr(p + 1, needle)) ++n;
+  return n;
+}
+
+static void test_run_writes_frames(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("cli-run");
+  char scene[600], out[600], args[1400], path[700];
+  snprintf(scene, sizeof scene, "%s/scene.json", dir);
+  snprintf(out, sizeof out, "%s/out", dir);
+  write_file(scene, good_scene);
+  snprintf(args, sizeof args, "run '%s' -o '%s' --threads 2", scene, out);
+  if (mpm(args) != 0) fail_msg("run failed: %s", output);
+  expect_output("frame 4/4"); /* plain progress lines when not on a terminal */
+  for (int f = 0; f <= 4; ++f) {
+    snprintf(path, sizeof path, "%s/frame_%04d.vtu", out, f);
+    if (!exists(path)) fail_msg("missing %s", path);
+  }
+  /* the PVD lists the 5 frames (initial state + 4) */
+  snprintf(path, sizeof path, "%s/frames.pvd", out);
+  FILE *f = fopen(path, "r");
+  assert_non_null(f);
+  char pvd[8192];
+  size_t n = fread(pvd, 1, sizeof pvd - 1, f);
+  pvd[n] = '\0';
+  fclose(f);
+  assert_int_equal(count_occurrences(pvd, "<DataSet"), 5);
+  assert_non_null(strstr(pvd, "frame_0004.vtu"));
+  /* the VTU header announces the particles */
+  snprintf(path, sizeof path, "%s/frame_0004.vtu", out);
+  f = fopen(path, "rb");
+  assert_non_null(f);
+  char head[4096];
+  n = fread(head, 1, sizeof head - 1, f);
+  head[n] = '\0';
+  fclose(f);
+  assert_non_null(strstr(head, "<VTKFile"));
+  assert_non_null(strstr(head, "NumberOfPoints=\"512\""));
+  assert_non_null(strstr(head, "velocity"));
+  /* stats: header + 5 rows */
+  snprintf(path, sizeof path, "%s/stats.csv", out);
+  f = fopen(path, "r");
+  assert_non_null(f);
+  int lines = 0;
+  char line[2048];
+  while (fgets(line, sizeof line, f)) ++lines;
+  fclose(f);
+  assert_int_equal(lines, 6);
+  /* --frames stops early, --quiet prints nothing */
+  snprintf(args, sizeof args, "run '%s' -o '%s/short' --frames 1 --quiet", scene, dir);
+  assert_int_equal(mpm(args), 0);
+  assert_int_equal((int)strlen(output), 0);
+  snprintf(path, sizeof path, "%s/short/frame_0001.vtu", dir);
+  assert_true(exists(path));
+  snprintf(path, sizeof path, "%s/short/frame_0002.vtu", dir);
+  assert_false(exists(path));
+}
+
+static void test_blow_up_is_reported(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("cli-blowup");
+  char scene[600], args[1400];
+  snprintf(scene, sizeof scene, "%s/scene.json", dir);
+  write_file(scene,
+             "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
+             " \"time\": {\"end\": 0.2, \"fps\": 20},"
+             " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
+             " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], \"half_extent\": [0.1,0.1,0.1]},"
+             "               \"material\": \"j\", \"velocity\": [1e200, 0, 0]}]}");
+  snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
+  assert_int_equal(mpm(args), 1);
+  expect_output("blew up at step");
+  expect_output("particle id");
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_help_and_version),
+      cmocka_unit_test(test_missing_file),
+      cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
+      cmocka_unit_test(test_check_examples),
+      cmocka_unit_test(test_run_writes_frames),
+      cmocka_unit_test(test_blow_up_is_reported),
+  };
+  return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
+}
