@@ -48,17 +48,6 @@ mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_leng
 
 const char *mpm_kernel_name(mpm_kernel_kind kind);
 
-/* 1D weights for grid coordinate xg = (x - origin) / dx: base node, weights, d/dx and APIC
- * factors (arrays of kernel width). Inlined into the transfer loops. */
-static inline int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw,
-                                mpm_real *a);
-
-/* Full stencil of a particle at position x (relative to the grid origin, m). */
-static inline void mpm_kernel_stencil(const mpm_kernel *k, const mpm_real x[3], mpm_stencil *s) {
-  for (int d = 0; d < 3; ++d)
-    s->base[d] = mpm_kernel_1d(k, x[d] * k->inv_dx, s->w[d], s->dw[d], s->a[d]);
-}
-
 /* ---- implementation (inline so that the transfer loops see through it) ---- */
 
 /* Antiderivative of the unit hat max(0, 1 - |t|). */
@@ -86,8 +75,11 @@ static inline void mpm_apic_factors(const int n, const mpm_real *w, mpm_real f, 
   for (int i = 0; i < n; ++i) a[i] = w[i] * ((mpm_real)i - f) * s;
 }
 
-static inline int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw,
-                                mpm_real *a) {
+/* 1D weights for grid coordinate xg = (x - origin) / dx: base node, weights, d/dx and APIC
+ * factors (arrays of kernel width). Inlined into the transfer loops. */
+static inline __attribute__((always_inline)) int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg,
+                                                                mpm_real *w, mpm_real *dw,
+                                                                mpm_real *a) {
   const mpm_real inv_dx = k->inv_dx;
   const int base = (int)mpm_floor(xg - k->shift);
   const mpm_real f = xg - (mpm_real)base; /* distance from the base node, in cells */
@@ -140,6 +132,14 @@ static inline int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, m
   }
   }
   return base;
+}
+
+/* Full stencil of a particle at position x (relative to the grid origin, m). */
+static inline __attribute__((always_inline)) void mpm_kernel_stencil(const mpm_kernel *k,
+                                                                     const mpm_real x[3],
+                                                                     mpm_stencil *s) {
+  for (int d = 0; d < 3; ++d)
+    s->base[d] = mpm_kernel_1d(k, x[d] * k->inv_dx, s->w[d], s->dw[d], s->a[d]);
 }
 
 #endif

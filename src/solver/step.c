@@ -60,6 +60,27 @@ mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
   const mpm_scene *sc = &sim->scene;
   double dt = mpm_sim_cfl_dt(sim);
   if (max_dt > 0 && dt > max_dt) dt = max_dt;
+  if (!(dt > 1e-12 * sim->frame_dt) || !isfinite(dt)) {
+    /* name the fastest particle (non-finite speeds count as fastest) */
+    size_t worst = 0;
+    double worst_v2 = -1;
+    for (size_t i = 0; i < p->count; ++i) {
+      double v2 = 0;
+      for (int d = 0; d < 3; ++d) v2 += (double)p->v[d][i] * (double)p->v[d][i];
+      if (!isfinite(v2)) v2 = INFINITY;
+      if (v2 > worst_v2) {
+        worst_v2 = v2;
+        worst = i;
+      }
+    }
+    return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
+                         "simulation blew up at step %lld (t = %.6g s): the time step collapsed to "
+                         "%.3g s because particle id %u (body %d, material %d) moves at %.3g m/s; "
+                         "check initial velocities and material stiffness",
+                         (long long)sim->steps, sim->time, dt, p->count ? p->id[worst] : 0,
+                         p->count ? p->body[worst] : -1, p->count ? p->material[worst] : -1,
+                         sqrt(worst_v2));
+  }
   const double t0 = mpm_wall_seconds();
 
   mpm_transfer_ctx tc;

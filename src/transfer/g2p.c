@@ -6,7 +6,7 @@
  * bad particle) are order-independent. The sparse version first copies the 8 blocks around an
  * owner block into a pad, so the inner loops index like the dense grid. */
 #include "transfer/transfer.h"
-#include "transfer/transfer_core.h"
+#include "transfer/transfer_simd.h"
 #include "core/parallel.h"
 
 #include <math.h>
@@ -16,11 +16,12 @@
 
 /* Update particle i from grid channels viewed from node org with strides sx, sy.
  * Returns |v|^2, or -1 when a value is not finite. */
-ALWAYS_INLINE mpm_real update_particle(const int W, const mpm_transfer_ctx *ctx, mpm_particles *p,
+ALWAYS_INLINE mpm_real update_particle(const int W, const int simd, const int apic,
+                                       const mpm_transfer_ctx *ctx, mpm_particles *p,
                                        uint32_t i, const mpm_real *const ch[MPM_GRID_CHANNELS],
                                        const int org[3], long sx, long sy) {
   const mpm_kernel *k = &ctx->kernel;
-  const int apic = ctx->transfer == MPM_TRANSFER_APIC, flip = !apic;
+  const int flip = !apic;
   mpm_real xr[3] = {p->x[0][i] - ctx->origin[0], p->x[1][i] - ctx->origin[1],
                     p->x[2][i] - ctx->origin[2]};
   mpm_stencil s;
@@ -32,7 +33,10 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const mpm_transfer_ctx *ctx,
   mpm_real f[3];
   for (int d = 0; d < 3; ++d) f[d] = xr[d] * k->inv_dx - (mpm_real)s.base[d];
   mpm_g2p_gather o;
-  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
+  if (simd)
+    mpm_g2p_particle_v4(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
+  else
+    mpm_g2p_particle(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
 
   const mpm_real dt = ctx->dt;
   mpm_real v[3];
@@ -63,14 +67,16 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const mpm_transfer_ctx *ctx,
     p->v[d][i] = v[d];
     check += xn + v[d];
   }
-  if (!isfinite(check)) return -1;
-  return v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  const mpm_real v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  if (!isfinite(check + v2)) return -1; /* includes a speed whose square overflows */
+  return v2;
 }
 
-ALWAYS_INLINE void g2p_block(const int W, const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
-                             mpm_particles *p, int32_t b, mpm_real *max_v2, long *bad) {
-  const int flip = ctx->transfer == MPM_TRANSFER_FLIP;
-  mpm_real pad[6][MPM_PAD_NODES];
+ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
+                             const mpm_sparse_grid *g, mpm_particles *p, int32_t b,
+                             mpm_real *max_v2, long *bad) {
+  const int flip = !apic;
+  mpm_real pad[6][MPM_PAD_NODES] __attribute__((aligned(MPM_ALIGN)));
   const mpm_real *ch[MPM_GRID_CHANNELS] = {NULL};
   /* channels VOLD (1..3) and VNEW (4..6) of the 8 blocks into the pad */
   for (int o = 0; o < 8; ++o) {
@@ -92,7 +98,7 @@ ALWAYS_INLINE void g2p_block(const int W, const mpm_transfer_ctx *ctx, const mpm
   const uint32_t begin = g->run_start[(size_t)b * nm], end = g->run_start[(size_t)(b + 1) * nm];
   for (uint32_t j = begin; j < end; ++j) {
     const uint32_t i = g->perm[j];
-    mpm_real v2 = update_particle(W, ctx, p, i, ch, org, MPM_PAD * MPM_PAD, MPM_PAD);
+    mpm_real v2 = update_particle(W, 1, apic, ctx, p, i, ch, org, MPM_PAD * MPM_PAD, MPM_PAD);
     if (v2 < 0) {
       if (*bad < 0 || (long)i < *bad) *bad = (long)i;
     } else if (v2 > *max_v2) {
@@ -103,7 +109,7 @@ ALWAYS_INLINE void g2p_block(const int W, const mpm_transfer_ctx *ctx, const mpm
 
 mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                               mpm_particles *p) {
-  const int W = ctx->kernel.width;
+  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
   const long nb = (long)g->owner_count;
   mpm_real max_v2 = 0;
   long bad = -1;
@@ -113,10 +119,13 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
     long my_bad = -1;
 #pragma omp for schedule(dynamic, 8)
     for (long b = 0; b < nb; ++b) {
-      switch (W) {
-      case 2: g2p_block(2, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      case 3: g2p_block(3, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      default: g2p_block(4, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      switch (W * 2 + apic) {
+      case 4: g2p_block(2, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      case 5: g2p_block(2, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      case 6: g2p_block(3, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      case 7: g2p_block(3, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      case 8: g2p_block(4, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      default: g2p_block(4, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
       }
     }
 #pragma omp critical(mpm_g2p_reduce)
@@ -131,7 +140,7 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
 
 mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
                              mpm_particles *p) {
-  const int W = ctx->kernel.width;
+  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
   const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
   const int org[3] = {0, 0, 0};
   const mpm_real *ch[MPM_GRID_CHANNELS];
@@ -147,9 +156,9 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
     for (long i = 0; i < n; ++i) {
       mpm_real v2;
       switch (W) {
-      case 2: v2 = update_particle(2, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
-      case 3: v2 = update_particle(3, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
-      default: v2 = update_particle(4, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      case 2: v2 = update_particle(2, 0, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      case 3: v2 = update_particle(3, 0, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      default: v2 = update_particle(4, 0, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
       }
       if (v2 < 0) {
         if (my_bad < 0 || i < my_bad) my_bad = i;

@@ -8,10 +8,12 @@
 #include "grid/grid.h"
 #include "interp/kernel.h"
 
+#define MPM_ALWAYS_INLINE static inline __attribute__((always_inline))
+
 /* One particle's contribution: mass, momentum m v w + (m B) D^{-1} (x_i - x_p) w (APIC, the
  * D^{-1}(x_i - x_p) w factor is the stencil's `a` vector), and force K grad w with
  * K = -V0 tau. mB = m B (row-major) or NULL for PIC/FLIP. */
-static inline void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_real m,
+MPM_ALWAYS_INLINE void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_real m,
                                     const mpm_real mv[3], const mpm_real *mB, const mpm_real K[9],
                                     mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy) {
   for (int i = 0; i < W; ++i)
@@ -52,7 +54,7 @@ typedef struct mpm_g2p_gather {
 } mpm_g2p_gather;
 
 /* f = distance of the particle from its base node in cells; dx the cell size. */
-static inline void mpm_g2p_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
+MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
                                     mpm_real dx, int flip, int apic,
                                     const mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy,
                                     mpm_g2p_gather *o) {

@@ -1,0 +1,250 @@
+/* vtu.c - one frame of particles as a VTK XML UnstructuredGrid (.vtu), binary appended.
+ *
+ * Format: VTK XML file formats, version 1.0 with header_type UInt64 (Kitware, "VTK File
+ * Formats", XML section). Each particle is one VTK_VERTEX cell. The XML header names every
+ * array with an `offset` into a single `<AppendedData encoding="raw">` block that starts after
+ * a `_`; each array there is a UInt64 byte count followed by the raw little-endian values.
+ *
+ * Particles are stored as structure of arrays while VTK wants interleaved tuples (x y z), so
+ * every array is produced by a fill function into one fixed 32 KiB buffer and streamed a chunk
+ * at a time: a million particles need no more memory than that.
+ *
+ * Arrays: FieldData TIME (Float64); Points; PointData id, velocity, mass, volume (= V0 J, the
+ * current volume), J, stress (von Mises, Pa), material, body; Cells connectivity, offsets,
+ * types. Reals are Float32 or Float64 as the build's mpm_real. When fields->J is NULL, J is
+ * det F of each particle; when fields->stress is NULL, stress is written as zero. */
+#include "io/io.h"
+#include "core/alloc.h"
+
+#include <errno.h>
+#include <stdint.h>
+#include <string.h>
+
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "vtu.c writes native byte order and declares LittleEndian; add byte swapping first"
+#endif
+
+#define VTU_REAL_TYPE (sizeof(mpm_real) == 8 ? "Float64" : "Float32")
+#define VTU_CHUNK_BYTES (1 << 15)
+
+/* Fill `n` tuples starting at particle `first` into out (interleaved components). */
+typedef void (*vtu_fill_fn)(const mpm_frame_fields *f, size_t first, size_t n, void *out);
+
+typedef struct vtu_array {
+  const char *section; /* "field", "point", "points", "cells": where the header lists it */
+  const char *name;
+  const char *type;  /* VTK type name */
+  size_t comp_bytes; /* bytes of one component */
+  int comps;
+  int per_particle; /* 1: count tuples, 0: a single tuple (TIME) */
+  vtu_fill_fn fill;
+} vtu_array;
+
+static void fill_time(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  (void)first;
+  (void)n;
+  memcpy(out, &f->time, sizeof f->time);
+}
+
+static void fill_xyz(mpm_real *const *c, size_t first, size_t n, mpm_real *o) {
+  for (size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) o[3 * i + d] = c[d][first + i];
+}
+
+static void fill_points(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  fill_xyz(f->particles->x, first, n, out);
+}
+
+static void fill_velocity(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  fill_xyz(f->particles->v, first, n, out);
+}
+
+static void fill_id(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->id + first, n * sizeof(uint32_t));
+}
+
+static void fill_mass(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->mass + first, n * sizeof(mpm_real));
+}
+
+/* det F, for callers that pass no J */
+static mpm_real det_f(const mpm_particles *p, size_t i) {
+  mpm_real *const *F = p->F;
+  return F[0][i] * (F[4][i] * F[8][i] - F[5][i] * F[7][i]) -
+         F[1][i] * (F[3][i] * F[8][i] - F[5][i] * F[6][i]) +
+         F[2][i] * (F[3][i] * F[7][i] - F[4][i] * F[6][i]);
+}
+
+static void fill_J(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  mpm_real *o = out;
+  if (f->J)
+    memcpy(o, f->J + first, n * sizeof(mpm_real));
+  else
+    for (size_t i = 0; i < n; ++i) o[i] = det_f(f->particles, first + i);
+}
+
+static void fill_volume(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  mpm_real *o = out;
+  fill_J(f, first, n, o);
+  const mpm_real *vol0 = f->particles->vol0 + first;
+  for (size_t i = 0; i < n; ++i) o[i] *= vol0[i];
+}
+
+static void fill_stress(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  if (f->stress)
+    memcpy(out, f->stress + first, n * sizeof(mpm_real));
+  else
+    memset(out, 0, n * sizeof(mpm_real));
+}
+
+static void fill_material(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->material + first, n * sizeof(int32_t));
+}
+
+static void fill_body(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->body + first, n * sizeof(int32_t));
+}
+
+static void fill_connectivity(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  (void)f;
+  int64_t *o = out;
+  for (size_t i = 0; i < n; ++i) o[i] = (int64_t)(first + i);
+}
+
+static void fill_offsets(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  (void)f;
+  int64_t *o = out;
+  for (size_t i = 0; i < n; ++i) o[i] = (int64_t)(first + i + 1);
+}
+
+static void fill_types(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  (void)f;
+  (void)first;
+  memset(out, 1, n); /* VTK_VERTEX = 1 */
+}
+
+/* In order of appearance in the appended block; the header groups them by section. */
+#define VTU_ARRAYS 13
+static const vtu_array vtu_arrays[VTU_ARRAYS] = {
+    {"field", "TIME", "Float64", sizeof(double), 1, 0, fill_time},
+    {"points", "Points", NULL, sizeof(mpm_real), 3, 1, fill_points},
+    {"point", "id", "UInt32", sizeof(uint32_t), 1, 1, fill_id},
+    {"point", "velocity", NULL, sizeof(mpm_real), 3, 1, fill_velocity},
+    {"point", "mass", NULL, sizeof(mpm_real), 1, 1, fill_mass},
+    {"point", "volume", NULL, sizeof(mpm_real), 1, 1, fill_volume},
+    {"point", "J", NULL, sizeof(mpm_real), 1, 1, fill_J},
+    {"point", "stress", NULL, sizeof(mpm_real), 1, 1, fill_stress},
+    {"point", "material", "Int32", sizeof(int32_t), 1, 1, fill_material},
+    {"point", "body", "Int32", sizeof(int32_t), 1, 1, fill_body},
+    {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, fill_connectivity},
+    {"cells", "offsets", "Int64", sizeof(int64_t), 1, 1, fill_offsets},
+    {"cells", "types", "UInt8", sizeof(uint8_t), 1, 1, fill_types},
+};
+
+/* Output stream that remembers the first failure, so that a full disk stops the writer at
+ * once and the message carries the real errno rather than one from a later call. */
+typedef struct vtu_out {
+  FILE *fp;
+  int err; /* errno of the first failed write, 0 while fine */
+} vtu_out;
+
+static void out_bytes(vtu_out *o, const void *p, size_t n) {
+  if (o->err || n == 0) return;
+  errno = 0;
+  if (fwrite(p, 1, n, o->fp) != n) o->err = errno ? errno : EIO;
+}
+
+static void out_text(vtu_out *o, const char *s) {
+  out_bytes(o, s, strlen(s));
+}
+
+static uint64_t array_bytes(const vtu_array *a, size_t count) {
+  return (uint64_t)(a->per_particle ? count : 1) * (uint64_t)a->comps * a->comp_bytes;
+}
+
+/* Header lines of every array of one section. */
+static void header_section(vtu_out *o, const char *section, const uint64_t *offsets,
+                           const char *indent) {
+  char line[320];
+  for (int k = 0; k < VTU_ARRAYS; ++k) {
+    const vtu_array *a = &vtu_arrays[k];
+    if (strcmp(a->section, section) != 0) continue;
+    const char *type = a->type ? a->type : VTU_REAL_TYPE;
+    char comps[48] = "";
+    if (a->comps > 1) snprintf(comps, sizeof comps, " NumberOfComponents=\"%d\"", a->comps);
+    if (!a->per_particle) snprintf(comps, sizeof comps, " NumberOfTuples=\"1\"");
+    snprintf(line, sizeof line,
+             "%s<DataArray type=\"%s\" Name=\"%s\"%s format=\"appended\" offset=\"%llu\"/>\n",
+             indent, type, a->name, comps, (unsigned long long)offsets[k]);
+    out_text(o, line);
+  }
+}
+
+static void write_header(vtu_out *o, size_t count, const uint64_t *offsets) {
+  char line[256];
+  out_text(o, "<?xml version=\"1.0\"?>\n"
+              "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+              "header_type=\"UInt64\">\n"
+              "  <UnstructuredGrid>\n"
+              "    <FieldData>\n");
+  header_section(o, "field", offsets, "      ");
+  out_text(o, "    </FieldData>\n");
+  snprintf(line, sizeof line, "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n", count,
+           count);
+  out_text(o, line);
+  out_text(o, "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n");
+  header_section(o, "point", offsets, "        ");
+  out_text(o, "      </PointData>\n      <Points>\n");
+  header_section(o, "points", offsets, "        ");
+  out_text(o, "      </Points>\n      <Cells>\n");
+  header_section(o, "cells", offsets, "        ");
+  out_text(o, "      </Cells>\n"
+              "    </Piece>\n"
+              "  </UnstructuredGrid>\n"
+              "  <AppendedData encoding=\"raw\">\n"
+              "   _");
+}
+
+/* Byte count, then the values a chunk of tuples at a time through buf (VTU_CHUNK_BYTES). */
+static void write_array(vtu_out *o, const vtu_array *a, const mpm_frame_fields *f, size_t count,
+                        void *buf) {
+  const uint64_t bytes = array_bytes(a, count);
+  out_bytes(o, &bytes, sizeof bytes);
+  const size_t tuples = a->per_particle ? count : 1;
+  const size_t tuple_bytes = (size_t)a->comps * a->comp_bytes;
+  const size_t chunk = VTU_CHUNK_BYTES / tuple_bytes;
+  for (size_t first = 0; first < tuples && !o->err; first += chunk) {
+    const size_t n = tuples - first < chunk ? tuples - first : chunk;
+    a->fill(f, first, n, buf);
+    out_bytes(o, buf, n * tuple_bytes);
+  }
+}
+
+mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err) {
+  const size_t count = f->particles->count;
+  uint64_t offsets[VTU_ARRAYS], at = 0;
+  for (int k = 0; k < VTU_ARRAYS; ++k) {
+    offsets[k] = at;
+    at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], count);
+  }
+
+  /* heap, not stack: the fill functions store reals and integers into it */
+  void *buf = mpm_alloc(VTU_CHUNK_BYTES);
+  if (!buf) return mpm_error_set(err, MPM_ERR_NOMEM, "cannot write '%s': out of memory", path);
+  mpm_atomic_file af;
+  mpm_status st = mpm_atomic_open(&af, path, err);
+  if (st != MPM_OK) {
+    mpm_free(buf);
+    return st;
+  }
+  vtu_out o = {af.fp, 0};
+  write_header(&o, count, offsets);
+  for (int k = 0; k < VTU_ARRAYS && !o.err; ++k) write_array(&o, &vtu_arrays[k], f, count, buf);
+  out_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
+  mpm_free(buf);
+  if (o.err) {
+    mpm_atomic_abort(&af);
+    return mpm_error_set(err, MPM_ERR_IO, "cannot write '%s': %s", path, strerror(o.err));
+  }
+  return mpm_atomic_commit(&af, err);
+}

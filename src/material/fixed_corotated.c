@@ -1,0 +1,123 @@
+/* fixed_corotated.c - the fixed-corotated hyperelastic model.
+ *
+ * Stomakhin, Howes, Schroeder, Teran 2012 ("Energetically consistent invertible elasticity"),
+ * as used by Gao et al. 2017 sec. 4.1:
+ *   Psi(F) = mu ||F - R||_F^2 + lambda/2 (J - 1)^2,   F = R S (polar), J = det F,
+ *   P      = 2 mu (F - R) + lambda (J - 1) cof(F),     cof(F) = J F^{-T},
+ *   tau    = P F^T = 2 mu (F - R) F^T + lambda (J - 1) J I.
+ * R comes from the sign-convention SVD (core/svd3.h), so R is a proper rotation also for
+ * inverted F and every formula holds for singular F (the cofactor needs no inverse).
+ *
+ * dP/dF acting on dF (the implicit solve, Zhu et al. 2017 sec. 6, eqs. 14-15) is the exact
+ * derivative:
+ *   dP = 2 mu (dF - dR) + lambda (cof(F) : dF) cof(F) + lambda (J - 1) dcof(F)[dF],
+ * with dR = U W V^T, W skew, W_ij = (dF^_ij - dF^_ji) / (sigma_i + sigma_j) for dF^ = U^T dF V
+ * (the derivative of the rotation of the polar decomposition; see e.g. Twigg and
+ * Kacic-Alesic 2010 or Stomakhin et al. 2012 sec. 4). sigma_i + sigma_j >= 0 by the SVD
+ * convention and vanishes only where R itself is not differentiable (two singular values of
+ * equal magnitude and opposite sign); there the denominator is clamped to a small positive
+ * value, which bounds the rotational stiffness instead of letting it blow up. No definiteness
+ * projection is applied. */
+#include "material/material.h"
+
+#include "core/mat3.h"
+#include "core/svd3.h"
+
+#include <assert.h>
+
+/* Smallest allowed sigma_i + sigma_j in dR (relative to the largest singular value). */
+#ifdef MPM_USE_DOUBLE
+#define FCR_SUM_FLOOR 1e-8
+#else
+#define FCR_SUM_FLOOR 3e-4f
+#endif
+
+static mpm_real fcr_energy(const mpm_material *m, const mpm_real F[9]) {
+  mpm_real U[9], s[3], V[9];
+  mpm_svd3(F, U, s, V);
+  const mpm_real J = mpm_m3_det(F);
+  const mpm_real a = s[0] - 1, b = s[1] - 1, c = s[2] - 1;
+  return m->mu * (a * a + b * b + c * c) + R_(0.5) * m->lambda * (J - 1) * (J - 1);
+}
+
+static void fcr_pk1(const mpm_material *m, const mpm_real F[9], mpm_real P[9]) {
+  mpm_real R[9], S[9], C[9];
+  mpm_polar3(F, R, S);
+  mpm_m3_cofactor(F, C);
+  const mpm_real J = F[0] * C[0] + F[1] * C[1] + F[2] * C[2];
+  const mpm_real two_mu = 2 * m->mu, lj = m->lambda * (J - 1);
+  for (int i = 0; i < 9; ++i) P[i] = two_mu * (F[i] - R[i]) + lj * C[i];
+}
+
+/* The cofactor entries are C_k = A_a A_b - A_c A_d with these (a, b, c, d) (see mat3.h). */
+static const int COF_IDX[9][4] = {{4, 8, 5, 7}, {5, 6, 3, 8}, {3, 7, 4, 6},
+                                  {2, 7, 1, 8}, {0, 8, 2, 6}, {1, 6, 0, 7},
+                                  {1, 5, 2, 4}, {2, 3, 0, 5}, {0, 4, 1, 3}};
+
+/* dcof(F)[dF]: the directional derivative of the (quadratic) cofactor map. */
+static void cofactor_derivative(const mpm_real F[9], const mpm_real dF[9], mpm_real dC[9]) {
+  for (int k = 0; k < 9; ++k) {
+    const int a = COF_IDX[k][0], b = COF_IDX[k][1], c = COF_IDX[k][2], d = COF_IDX[k][3];
+    dC[k] = dF[a] * F[b] + F[a] * dF[b] - dF[c] * F[d] - F[c] * dF[d];
+  }
+}
+
+static void fcr_dpdf_action(const mpm_material *m, const mpm_real F[9], const mpm_real dF[9],
+                            mpm_real dP[9]) {
+  mpm_real U[9], s[3], V[9];
+  mpm_svd3(F, U, s, V);
+
+  /* dR = U W V^T with W skew from dF^ = U^T dF V */
+  mpm_real T[9], dFh[9];
+  mpm_m3_mul_at(U, dF, T);
+  mpm_m3_mul(T, V, dFh);
+  const mpm_real sum_floor = FCR_SUM_FLOOR * mpm_fmax(s[0], MPM_REAL_EPS);
+  const mpm_real w01 = (dFh[1] - dFh[3]) / mpm_fmax(s[0] + s[1], sum_floor);
+  const mpm_real w02 = (dFh[2] - dFh[6]) / mpm_fmax(s[0] + s[2], sum_floor);
+  const mpm_real w12 = (dFh[5] - dFh[7]) / mpm_fmax(s[1] + s[2], sum_floor);
+  const mpm_real W[9] = {0, w01, w02, -w01, 0, w12, -w02, -w12, 0};
+  mpm_real UW[9], dR[9];
+  mpm_m3_mul(U, W, UW);
+  mpm_m3_mul_bt(UW, V, dR);
+
+  /* volumetric part */
+  mpm_real C[9], dC[9];
+  mpm_m3_cofactor(F, C);
+  cofactor_derivative(F, dF, dC);
+  const mpm_real J = F[0] * C[0] + F[1] * C[1] + F[2] * C[2];
+  const mpm_real dJ = mpm_m3_ddot(C, dF);
+  const mpm_real two_mu = 2 * m->mu, l = m->lambda;
+  for (int i = 0; i < 9; ++i)
+    dP[i] = two_mu * (dF[i] - dR[i]) + l * dJ * C[i] + l * (J - 1) * dC[i];
+}
+
+/* tau = 2 mu (F - R) F^T + lambda (J - 1) J I, with (F - R) F^T = U diag(s (s - 1)) U^T
+ * (F F^T = U S^2 U^T and R F^T = U S U^T), symmetric by construction. */
+static void fcr_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                                mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  assert(n >= 0 && n <= MPM_STRESS_CHUNK);
+  const mpm_real two_mu = 2 * m->mu, l = m->lambda;
+  for (int i = 0; i < n; ++i) {
+    mpm_real Fi[9], U[9], s[3], V[9];
+    for (int c = 0; c < 9; ++c) Fi[c] = F[c][i];
+    mpm_svd3(Fi, U, s, V);
+    const mpm_real J = mpm_m3_det(Fi);
+    const mpm_real d[3] = {two_mu * s[0] * (s[0] - 1), two_mu * s[1] * (s[1] - 1),
+                           two_mu * s[2] * (s[2] - 1)};
+    const mpm_real vol = l * (J - 1) * J;
+    mpm_real T[9];
+    mpm_m3_usvt(U, d, U, T);
+    T[0] += vol;
+    T[4] += vol;
+    T[8] += vol;
+    for (int c = 0; c < 9; ++c) tau[c][i] = T[c];
+  }
+}
+
+const mpm_model mpm_model_fixed_corotated = {
+    .name = "fixed_corotated",
+    .energy = fcr_energy,
+    .pk1 = fcr_pk1,
+    .dpdf_action = fcr_dpdf_action,
+    .kirchhoff_batch = fcr_kirchhoff_batch,
+};

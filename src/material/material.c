@@ -1,0 +1,52 @@
+/* material.c - the model table, materials built from scene descriptions, and the von Mises
+ * equivalent stress used by the writers.
+ *
+ * Lamé parameters from Young's modulus and Poisson's ratio (mu = E / (2 (1 + nu)),
+ * lambda = E nu / ((1 + nu)(1 - 2 nu))); the dilatational wave speed sqrt((lambda + 2 mu) /
+ * rho) bounds the explicit time step (Gao et al. 2017 sec. 3.2, CFL). The models themselves
+ * live in fixed_corotated.c and neo_hookean.c. */
+#include "material/material.h"
+
+#include "core/mat3.h"
+
+const mpm_model *mpm_model_of(mpm_model_kind kind) {
+  switch (kind) {
+  case MPM_MODEL_FIXED_COROTATED:
+    return &mpm_model_fixed_corotated;
+  case MPM_MODEL_NEO_HOOKEAN:
+    return &mpm_model_neo_hookean;
+  default:
+    return NULL;
+  }
+}
+
+void mpm_material_init(mpm_material *m, const mpm_material_desc *d) {
+  /* in double, then rounded once to the real type */
+  const double mu = d->E / (2.0 * (1.0 + d->nu));
+  const double lambda = d->E * d->nu / ((1.0 + d->nu) * (1.0 - 2.0 * d->nu));
+  m->model = mpm_model_of(d->model);
+  m->kind = d->model;
+  m->mu = (mpm_real)mu;
+  m->lambda = (mpm_real)lambda;
+  m->density = (mpm_real)d->density;
+  m->min_stretch = (mpm_real)d->min_stretch;
+  m->wave_speed = (mpm_real)sqrt((lambda + 2.0 * mu) / d->density);
+}
+
+/* sqrt(3/2 s:s) with s the deviatoric part of sigma = tau / J. Von Mises is homogeneous of
+ * degree one, so it is evaluated on tau and divided by |J| (the sign of J does not matter);
+ * J = 0 is replaced by the smallest normal number so the result stays finite-or-inf, never
+ * NaN. Only the symmetric part of tau counts (tau = P F^T is symmetric for isotropic models). */
+mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J) {
+  const mpm_real p = mpm_m3_trace(tau) / 3;
+  const mpm_real d0 = tau[0] - p, d1 = tau[4] - p, d2 = tau[8] - p;
+  const mpm_real s01 = R_(0.5) * (tau[1] + tau[3]), s02 = R_(0.5) * (tau[2] + tau[6]);
+  const mpm_real s12 = R_(0.5) * (tau[5] + tau[7]);
+  const mpm_real ss = d0 * d0 + d1 * d1 + d2 * d2 + 2 * (s01 * s01 + s02 * s02 + s12 * s12);
+#ifdef MPM_USE_DOUBLE
+  const mpm_real jmin = DBL_MIN;
+#else
+  const mpm_real jmin = FLT_MIN;
+#endif
+  return mpm_sqrt(R_(1.5) * ss) / mpm_fmax(mpm_fabs(J), jmin);
+}

@@ -1,0 +1,46 @@
+/* mesh.h - triangle meshes read from OBJ and PLY files, and a point-in-mesh test.
+ *
+ * A mesh is a plain caller-owned struct of vertex and triangle arrays (`_load` / `_free`).
+ * Polygons are fan-triangulated on load. Bodies made from meshes are sampled in
+ * scene/sample.c, which has its own lattice-column accelerator; `mpm_mesh_inside` here is the
+ * single-point reference (generalized winding number, Jacobson et al. 2013), robust to small
+ * holes, O(triangles) per query. */
+#ifndef MPM_SCENE_MESH_H
+#define MPM_SCENE_MESH_H
+
+#include "core/error.h"
+
+typedef struct mpm_mesh {
+  int vertex_count, triangle_count;
+  double *vertices; /* 3 per vertex: x y z, in the file's units */
+  int *triangles;   /* 3 per triangle: zero-based vertex indices */
+} mpm_mesh;
+
+/// Read a triangle mesh; the format is chosen by the extension (.obj or .ply, any case).
+/// OBJ: `v` and `f` records (f accepts i, i/t, i//n, i/t/n and negative indices), everything
+/// else ignored. PLY: ascii, binary_little_endian or binary_big_endian; element `vertex` with
+/// scalar x y z (other properties skipped), element `face` with a list property (the one named
+/// vertex_indices / vertex_index, else the first list). On failure *mesh is empty and err
+/// names the file and the line (OBJ, PLY header and ascii data) or element, and what was
+/// expected. A mesh without triangles is an error (MPM_ERR_PARSE). mesh is owned by the caller.
+mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err);
+
+/// Release the arrays of a mesh and zero it; a zeroed mesh is fine.
+void mpm_mesh_free(mpm_mesh *mesh);
+
+/// Axis-aligned bounding box of all vertices (zeros for a mesh without vertices).
+void mpm_mesh_bounds(const mpm_mesh *mesh, double lo[3], double hi[3]);
+
+/// Number of edges used by exactly one triangle (0 for a closed, watertight mesh).
+/// Allocates a temporary edge list; returns -1 when out of memory.
+long mpm_mesh_boundary_edges(const mpm_mesh *mesh);
+
+/// 1 when p is inside the mesh: |generalized winding number| > 1/2. Exact 0/1 for closed
+/// meshes away from the surface, and a sensible answer for meshes with small holes; the
+/// orientation of the triangles does not matter as long as it is consistent.
+int mpm_mesh_inside(const mpm_mesh *mesh, const double p[3]);
+
+/// The generalized winding number itself (sum of signed solid angles / 4 pi).
+double mpm_mesh_winding_number(const mpm_mesh *mesh, const double p[3]);
+
+#endif
