@@ -29,7 +29,7 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->coord);
   mpm_free(g->blocks);
   mpm_free(g->neighbor);
-  mpm_free(g->run_start);
+  mpm_free(g->cell_start);
   mpm_free(g->color_blocks);
   mpm_free(g->pkey);
   mpm_free(g->perm);
@@ -40,7 +40,7 @@ size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g) {
   return g->table_size * (sizeof(uint64_t) + sizeof(int32_t)) +
          g->block_capacity * (sizeof(mpm_grid_block) + sizeof(int32_t) * 3 + sizeof(int32_t) * 8 +
                               sizeof(int32_t)) +
-         g->run_capacity * sizeof(uint32_t) + g->particle_capacity * 2 * sizeof(uint32_t);
+         g->cell_capacity * sizeof(uint32_t) + g->particle_capacity * 2 * sizeof(uint32_t);
 }
 
 static int grow_table(mpm_sparse_grid *g, size_t size) {
@@ -146,47 +146,51 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   g->block_count = 0;
   g->material_count = material_count;
 
-  /* 1. owner block of each particle: the block of its stencil's base node. Consecutive
-   *    particles mostly share a block (they were sorted last step), so cache the last one. */
+  /* 1. owner block of each particle: the block of its stencil's base node; and the cell of the
+   *    base node within the block. Consecutive particles mostly share a block (they were sorted
+   *    before), so cache the last one. */
   const mpm_real inv_dx = k->inv_dx, shift = k->shift;
   const mpm_real *x0 = p->x[0], *x1 = p->x[1], *x2 = p->x[2];
   uint64_t last_key = EMPTY_KEY;
   int32_t last_block = -1;
   for (size_t i = 0; i < n; ++i) {
-    int32_t bx = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift) >> MPM_BLOCK_BITS;
-    int32_t by = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift) >> MPM_BLOCK_BITS;
-    int32_t bz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift) >> MPM_BLOCK_BITS;
+    const int32_t ix = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift);
+    const int32_t iy = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift);
+    const int32_t iz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift);
+    const int32_t bx = ix >> MPM_BLOCK_BITS, by = iy >> MPM_BLOCK_BITS, bz = iz >> MPM_BLOCK_BITS;
     uint64_t key = block_key(bx, by, bz);
     if (key != last_key) {
       last_block = find_or_insert(g, bx, by, bz);
       if (last_block < 0) return -1;
       last_key = key;
     }
-    g->pkey[i] = (uint32_t)last_block;
+    const uint32_t cell = (uint32_t)((ix & 3) << 4 | (iy & 3) << 2 | (iz & 3));
+    g->pkey[i] = (uint32_t)last_block << 6 | cell;
   }
   g->owner_count = g->block_count;
 
-  /* 2. counting sort by (block, material): stable, so the order is a function of the
+  /* 2. counting sort by (block, material, cell): stable, so the order is a function of the
    *    particle order alone and independent of the thread count. */
-  const size_t runs = g->owner_count * (size_t)material_count;
-  if (runs + 1 > g->run_capacity) {
-    mpm_free(g->run_start);
-    g->run_capacity = 2 * (runs + 1);
-    g->run_start = mpm_alloc(g->run_capacity * sizeof(uint32_t));
-    if (!g->run_start) return -1;
+  const size_t keys = g->owner_count * (size_t)material_count * MPM_BLOCK_NODES;
+  if (keys + 1 > g->cell_capacity) {
+    mpm_free(g->cell_start);
+    g->cell_capacity = 2 * (keys + 1);
+    g->cell_start = mpm_alloc(g->cell_capacity * sizeof(uint32_t));
+    if (!g->cell_start) return -1;
   }
-  uint32_t *rs = g->run_start;
-  memset(rs, 0, (runs + 1) * sizeof(uint32_t));
+  uint32_t *cs = g->cell_start;
+  memset(cs, 0, (keys + 1) * sizeof(uint32_t));
   const int32_t *mat = p->material;
   for (size_t i = 0; i < n; ++i) {
-    uint32_t key = g->pkey[i] * (uint32_t)material_count + (uint32_t)mat[i];
+    const uint32_t b = g->pkey[i] >> 6, cell = g->pkey[i] & 63;
+    const uint32_t key = (b * (uint32_t)material_count + (uint32_t)mat[i]) * MPM_BLOCK_NODES + cell;
     g->pkey[i] = key;
-    rs[key + 1]++;
+    cs[key + 1]++;
   }
-  for (size_t r = 0; r < runs; ++r) rs[r + 1] += rs[r];
-  for (size_t i = 0; i < n; ++i) g->perm[rs[g->pkey[i]]++] = (uint32_t)i;
-  for (size_t r = runs; r > 0; --r) rs[r] = rs[r - 1];
-  rs[0] = 0;
+  for (size_t r = 0; r < keys; ++r) cs[r + 1] += cs[r];
+  for (size_t i = 0; i < n; ++i) g->perm[cs[g->pkey[i]]++] = (uint32_t)i;
+  for (size_t r = keys; r > 0; --r) cs[r] = cs[r - 1];
+  cs[0] = 0;
 
   /* 3. activate the 7 forward neighbours of every owner block (its pad) */
   for (size_t b = 0; b < g->owner_count; ++b) {

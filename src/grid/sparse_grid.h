@@ -8,7 +8,7 @@
  * through an 8x8x8 pad). Memory is proportional to the blocks the material touches.
  *
  * Per step: mpm_sparse_grid_sort assigns particles to owner blocks (the block of their
- * stencil's base node), counting-sorts them by (block, material), and activates the forward
+ * stencil's base node), counting-sorts them by (block, material, cell), and activates the forward
  * neighbours; transfers then run block by block. Owner blocks are split into 8 colours by the
  * parity of their coordinates: blocks of one colour are two blocks apart, so their pads never
  * overlap and P2G runs them in parallel with plain stores - no atomics - and a node receives
@@ -33,9 +33,12 @@ typedef struct mpm_sparse_grid {
   int32_t (*coord)[3];
   mpm_grid_block *blocks;
   int32_t (*neighbor)[8]; /* per owner block: the 8 blocks its pad covers */
-  /* particles of owner block b and material m: [run_start[b*nmat+m], run_start[b*nmat+m+1]) */
-  uint32_t *run_start;
-  size_t run_capacity;
+  /* Particles are sorted by (owner block b, material m, base-node cell c in the block): those
+   * of one (b, m, c) are perm[cell_start[q] .. cell_start[q+1]) with q = (b*nmat + m)*64 + c.
+   * They share their base node, hence their whole stencil of grid nodes, which the transfers
+   * exploit by processing them as SIMD lanes (transfer_lanes.h). */
+  uint32_t *cell_start;
+  size_t cell_capacity;
   int material_count;
   /* owner blocks by colour: color_blocks[color_start[c] .. color_start[c+1]) */
   int32_t *color_blocks;
@@ -48,7 +51,7 @@ typedef struct mpm_sparse_grid {
 void mpm_sparse_grid_init(mpm_sparse_grid *g);
 void mpm_sparse_grid_free(mpm_sparse_grid *g);
 
-/* Assign particles to owner blocks, sort them by (block, material) into `perm` (particle j of
+/* Assign particles to owner blocks, sort them by (block, material, cell) into `perm` (particle j of
  * the sorted order is perm[j]), activate the pads and colour the owner blocks (see the file
  * comment). The particle arrays are not moved; the caller reorders them now and then with
  * mpm_particles_permute. Returns 0, or -1 when memory runs out. */
@@ -60,6 +63,14 @@ void mpm_sparse_grid_clear(mpm_sparse_grid *g);
 
 /* Bytes held by the grid (blocks, hash, lists), for memory reports. */
 size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g);
+
+/* The particles of owner block b and material m: perm[*begin .. *end). */
+static inline void mpm_sparse_grid_run(const mpm_sparse_grid *g, size_t b, int m, uint32_t *begin,
+                                       uint32_t *end) {
+  const size_t q = (b * (size_t)g->material_count + (size_t)m) * MPM_BLOCK_NODES;
+  *begin = g->cell_start[q];
+  *end = g->cell_start[q + MPM_BLOCK_NODES];
+}
 
 /* Index of the block at block coordinates c, or -1. */
 int32_t mpm_sparse_grid_find(const mpm_sparse_grid *g, const int32_t c[3]);

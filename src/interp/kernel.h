@@ -16,8 +16,9 @@
  *
  * APIC (Jiang et al. 2015) needs D_p = sum_i w_ip (x_i - x_p)(x_i - x_p)^T. For tensor kernels
  * D_p is diagonal with 1D entries d = sum_i w_i (x_i - x_p)^2, so the APIC factor per node is
- * a_i = w_i (x_i - x_p) / d (exact for every kernel, which keeps angular momentum exact). For the
- * linear kernel d = f(1-f) dx^2 vanishes on nodes, and a_i equals dw_i exactly, so dw is used.
+ * a_i = w_i (x_i - x_p) / d (exact for every kernel, which keeps angular momentum exact). The
+ * B-splines have constant d (dx^2/4 quadratic, dx^2/3 cubic); uGIMP's varies and is summed. For
+ * the linear kernel d = f(1-f) dx^2 vanishes on nodes, and a_i equals dw_i exactly, so dw is used.
  */
 #ifndef MPM_INTERP_KERNEL_H
 #define MPM_INTERP_KERNEL_H
@@ -101,7 +102,7 @@ static inline __attribute__((always_inline)) int mpm_kernel_1d(const mpm_kernel 
     dw[0] = -t0 * inv_dx;
     dw[1] = -2 * t1 * inv_dx;
     dw[2] = t2 * inv_dx;
-    mpm_apic_factors(3, w, f, inv_dx, a);
+    for (int i = 0; i < 3; ++i) a[i] = 4 * inv_dx * w[i] * ((mpm_real)i - f); /* D = dx^2/4 */
     break;
   }
   case MPM_KERNEL_CUBIC: {
@@ -116,7 +117,7 @@ static inline __attribute__((always_inline)) int mpm_kernel_1d(const mpm_kernel 
     dw[1] = (R_(1.5) * d1 * d1 - 2 * d1) * inv_dx;
     dw[2] = -(R_(1.5) * d2 * d2 - 2 * d2) * inv_dx;
     dw[3] = R_(0.5) * u3 * u3 * inv_dx;
-    mpm_apic_factors(4, w, f, inv_dx, a);
+    for (int i = 0; i < 4; ++i) a[i] = 3 * inv_dx * w[i] * ((mpm_real)i - f); /* D = dx^2/3 */
     break;
   }
   case MPM_KERNEL_UGIMP: {

@@ -4,9 +4,10 @@
  * v_p (APIC, or alpha FLIP + (1 - alpha) PIC), APIC's B_p, F_p <- (I + dt grad v) F_p and x_p. Particles
  * are independent, so the loop is parallel and deterministic; the reductions (max speed, first
  * bad particle) are order-independent. The sparse version first copies the 8 blocks around an
- * owner block into a pad, so the inner loops index like the dense grid. */
+ * owner block into a pad and then takes the particles of one cell as SIMD lanes
+ * (transfer_lanes.h); the dense reference uses the scalar bodies of transfer_core.h. */
 #include "transfer/transfer.h"
-#include "transfer/transfer_simd.h"
+#include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
 
 #include <math.h>
@@ -16,7 +17,7 @@
 
 /* Update particle i from grid channels viewed from node org with strides sx, sy.
  * Returns |v|^2, or -1 when a value is not finite. */
-ALWAYS_INLINE mpm_real update_particle(const int W, const int simd, const int apic,
+ALWAYS_INLINE mpm_real update_particle(const int W, const int apic,
                                        const mpm_transfer_ctx *ctx, mpm_particles *p,
                                        uint32_t i, const mpm_real *const ch[MPM_GRID_CHANNELS],
                                        const int org[3], long sx, long sy) {
@@ -33,10 +34,7 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int simd, const int ap
   mpm_real f[3];
   for (int d = 0; d < 3; ++d) f[d] = xr[d] * k->inv_dx - (mpm_real)s.base[d];
   mpm_g2p_gather o;
-  if (simd)
-    mpm_g2p_particle_v4(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
-  else
-    mpm_g2p_particle(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
+  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
 
   const mpm_real dt = ctx->dt;
   mpm_real v[3];
@@ -72,37 +70,86 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int simd, const int ap
   return v2;
 }
 
+/* Write back a batch's lane results to its n particles: v (APIC or FLIP blend), B, F, x.
+ * Returns through max_v2 / bad like update_particle. */
+ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm_particles *p,
+                                const uint32_t *idx, int n, const mpm_g2p_lanes_out *o,
+                                mpm_real *max_v2, long *bad) {
+  const mpm_real dt = ctx->dt, a = ctx->flip_alpha;
+  /* F^{n+1} = (I + dt grad v) F^n (Gao sec. 3.2 step 5), lane-wise */
+  mpm_vl F[9];
+  for (int c = 0; c < 9; ++c)
+    for (int l = 0; l < MPM_LANES; ++l) F[c][l] = p->F[c][idx[l < n ? l : 0]];
+  mpm_vl Fn[9];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      Fn[3 * r + c] = F[3 * r + c] + dt * (o->grad[3 * r] * F[c] + o->grad[3 * r + 1] * F[3 + c] +
+                                           o->grad[3 * r + 2] * F[6 + c]);
+  for (int l = 0; l < n; ++l) {
+    const uint32_t i = idx[l];
+    mpm_real check = 0, v[3];
+    for (int c = 0; c < 9; ++c) {
+      p->F[c][i] = Fn[c][l];
+      check += Fn[c][l];
+    }
+    for (int d = 0; d < 3; ++d) {
+      v[d] = apic ? o->v[d][l] : a * (p->v[d][i] + o->dv[d][l]) + (1 - a) * o->v[d][l];
+      mpm_real xn = p->x[d][i] + dt * o->v[d][l];
+      xn = xn < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : xn;
+      xn = xn > ctx->clamp_hi[d] ? ctx->clamp_hi[d] : xn;
+      p->x[d][i] = xn;
+      p->v[d][i] = v[d];
+      check += xn;
+    }
+    if (apic)
+      for (int c = 0; c < 9; ++c) p->B[c][i] = o->B[c][l];
+    const mpm_real v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if (!isfinite(check + v2)) {
+      if (*bad < 0 || (long)i < *bad) *bad = (long)i;
+    } else if (v2 > *max_v2) {
+      *max_v2 = v2;
+    }
+  }
+}
+
 ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
                              const mpm_sparse_grid *g, mpm_particles *p, int32_t b,
                              mpm_real *max_v2, long *bad) {
-  const int flip = !apic;
-  mpm_real pad[6][MPM_PAD_NODES] __attribute__((aligned(MPM_ALIGN)));
-  const mpm_real *ch[MPM_GRID_CHANNELS] = {NULL};
-  /* channels VOLD (1..3) and VNEW (4..6) of the 8 blocks into the pad */
+  /* the 8 blocks around the owner block as an AoS pad: v_new xyz, v_old xyz per node */
+  mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
   for (int o = 0; o < 8; ++o) {
     const mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
     const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
               oz = (o & 1) * MPM_BLOCK;
-    for (int c = flip ? 0 : 3; c < 6; ++c)
-      for (int i = 0; i < MPM_BLOCK; ++i)
-        for (int j = 0; j < MPM_BLOCK; ++j)
-          memcpy(&pad[c][(ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz],
-                 &blk->ch[MPM_CH_VOLD + c][(i * MPM_BLOCK + j) * MPM_BLOCK],
-                 MPM_BLOCK * sizeof(mpm_real));
+    for (int i = 0; i < MPM_BLOCK; ++i)
+      for (int j = 0; j < MPM_BLOCK; ++j)
+        for (int k = 0; k < MPM_BLOCK; ++k) {
+          mpm_real *dst = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
+          const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
+          for (int d = 0; d < 3; ++d) {
+            dst[d] = blk->ch[MPM_CH_VNEW + d][n];
+            dst[3 + d] = apic ? 0 : blk->ch[MPM_CH_VOLD + d][n];
+          }
+        }
   }
-  for (int c = 0; c < 6; ++c)
-    if (flip || c >= 3) ch[MPM_CH_VOLD + c] = pad[c];
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
-  const size_t nm = (size_t)g->material_count;
-  const uint32_t begin = g->run_start[(size_t)b * nm], end = g->run_start[(size_t)(b + 1) * nm];
-  for (uint32_t j = begin; j < end; ++j) {
-    const uint32_t i = g->perm[j];
-    mpm_real v2 = update_particle(W, 1, apic, ctx, p, i, ch, org, MPM_PAD * MPM_PAD, MPM_PAD);
-    if (v2 < 0) {
-      if (*bad < 0 || (long)i < *bad) *bad = (long)i;
-    } else if (v2 > *max_v2) {
-      *max_v2 = v2;
+  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
+  const size_t q0 = (size_t)b * (size_t)g->material_count * MPM_BLOCK_NODES;
+  const size_t q1 = q0 + (size_t)g->material_count * MPM_BLOCK_NODES;
+  for (size_t q = q0; q < q1; ++q) {
+    const uint32_t begin = g->cell_start[q], end = g->cell_start[q + 1];
+    for (uint32_t j = begin; j < end; j += MPM_LANES) {
+      const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
+      const uint32_t *idx = g->perm + j;
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, base, &s);
+      const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
+                       (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
+      mpm_g2p_lanes_out o;
+      mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, off, MPM_PAD * MPM_PAD, MPM_PAD, &o);
+      batch_update(apic, ctx, p, idx, n, &o, max_v2, bad);
     }
   }
 }
@@ -156,9 +203,9 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
     for (long i = 0; i < n; ++i) {
       mpm_real v2;
       switch (W) {
-      case 2: v2 = update_particle(2, 0, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
-      case 3: v2 = update_particle(3, 0, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
-      default: v2 = update_particle(4, 0, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      case 2: v2 = update_particle(2, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      case 3: v2 = update_particle(3, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      default: v2 = update_particle(4, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
       }
       if (v2 < 0) {
         if (my_bad < 0 || i < my_bad) my_bad = i;

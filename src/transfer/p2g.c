@@ -2,13 +2,13 @@
  *
  * Stresses are evaluated in chunks of one material (particles are sorted by block and then by
  * material), through the model's batch entry, just before the chunk is scattered. The sparse
- * grid uses the row-vectorized bodies of transfer_simd.h, the dense reference the plain scalar
- * ones of transfer_core.h. Sparse P2G
+ * grid takes the particles of one cell as SIMD lanes (transfer_lanes.h); the dense reference
+ * uses the plain scalar bodies of transfer_core.h. Sparse P2G
  * runs owner blocks of one colour in parallel; each block scatters into a private 8x8x8 pad
  * that is then added to the 8 blocks it covers. No atomics; deterministic for any thread count
  * (see sparse_grid.h). */
 #include "transfer/transfer.h"
-#include "transfer/transfer_simd.h"
+#include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
 
 #include <string.h>
@@ -30,7 +30,7 @@ ALWAYS_INLINE void chunk_stress(const mpm_material *mat, const mpm_particles *p,
 
 /* Scatter particles idx[0..n) with stresses tau into channel arrays viewed from node `org`
  * (global node index of ch[..][0]) with strides sx, sy. */
-ALWAYS_INLINE void scatter_chunk(const int W, const int simd, const int apic,
+ALWAYS_INLINE void scatter_chunk(const int W, const int apic,
                                  const mpm_transfer_ctx *ctx, const mpm_particles *p,
                                  const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK],
                                  mpm_real *const ch[MPM_GRID_CHANNELS], const int org[3], long sx,
@@ -53,15 +53,28 @@ ALWAYS_INLINE void scatter_chunk(const int W, const int simd, const int apic,
                      (long)(s.base[2] - org[2]);
     mpm_real *at[MPM_GRID_CHANNELS];
     for (int c = 0; c < MPM_GRID_CHANNELS; ++c) at[c] = ch[c] + off;
-    if (simd) {
-      /* APIC fuses dt * force into the momentum channel (the grid update needs only the sum) */
-      if (apic)
-        for (int c = 0; c < 9; ++c) K[c] *= ctx->dt;
-      else
-        for (int c = 0; c < 9; ++c) mB[c] = 0;
-      mpm_p2g_particle_v4(W, &s, m, mv, mB, K, apic, at, sx, sy);
-    } else {
-      mpm_p2g_particle(W, &s, m, mv, apic ? mB : NULL, K, at, sx, sy);
+    mpm_p2g_particle(W, &s, m, mv, apic ? mB : NULL, K, at, sx, sy);
+  }
+}
+
+/* Gather the lane inputs of a batch of n particles (lanes >= n contribute nothing). */
+ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int n, mpm_real dt,
+                                const int apic, mpm_real tau[9][MPM_STRESS_CHUNK], mpm_vl *m,
+                                mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
+  const mpm_vl zero = {0};
+  *m = zero;
+  for (int d = 0; d < 3; ++d) mv[d] = zero;
+  for (int c = 0; c < 9; ++c) mB[c] = K[c] = zero;
+  /* APIC folds dt * force into the momentum; PIC/FLIP keeps the force apart */
+  const mpm_real kscale = apic ? dt : 1;
+  for (int l = 0; l < n; ++l) {
+    const uint32_t i = idx[l];
+    const mpm_real mass = p->mass[i], nv = -p->vol0[i] * kscale;
+    (*m)[l] = mass;
+    for (int d = 0; d < 3; ++d) mv[d][l] = mass * p->v[d][i];
+    for (int c = 0; c < 9; ++c) {
+      if (apic) mB[c][l] = mass * p->B[c][i];
+      K[c][l] = nv * tau[c][l];
     }
   }
 }
@@ -70,33 +83,43 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
                              mpm_sparse_grid *g, const mpm_particles *p, int32_t b) {
   /* with APIC the force is fused into the momentum: only mass and momentum are used */
   const int used = apic ? MPM_CH_F : MPM_GRID_CHANNELS;
-  mpm_real pad[MPM_GRID_CHANNELS][MPM_PAD_NODES] __attribute__((aligned(MPM_ALIGN)));
-  memset(pad, 0, (size_t)used * sizeof pad[0]);
-  mpm_real *ch[MPM_GRID_CHANNELS];
-  for (int c = 0; c < MPM_GRID_CHANNELS; ++c) ch[c] = pad[c];
+  mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
+  memset(pad, 0, sizeof pad);
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
+  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
   mpm_real tau[9][MPM_STRESS_CHUNK];
   for (int m = 0; m < nm; ++m) {
-    const uint32_t begin = g->run_start[(size_t)b * nm + m], end = g->run_start[(size_t)b * nm + m + 1];
-    for (uint32_t j = begin; j < end; j += MPM_STRESS_CHUNK) {
-      const int n = (int)(end - j < MPM_STRESS_CHUNK ? end - j : MPM_STRESS_CHUNK);
-      chunk_stress(&ctx->materials[m], p, g->perm + j, n, tau);
-      scatter_chunk(W, 1, apic, ctx, p, g->perm + j, n, tau, ch, org, MPM_PAD * MPM_PAD, MPM_PAD);
+    const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
+    for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
+      const uint32_t begin = g->cell_start[q0 + c], end = g->cell_start[q0 + c + 1];
+      for (uint32_t j = begin; j < end; j += MPM_LANES) {
+        const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
+        const uint32_t *idx = g->perm + j;
+        chunk_stress(&ctx->materials[m], p, idx, n, tau);
+        int base[3];
+        mpm_lane_stencil s;
+        mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, base, &s);
+        mpm_vl mass, mv[3], mB[9], K[9];
+        batch_inputs(p, idx, n, ctx->dt, apic, tau, &mass, mv, mB, K);
+        const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
+                         (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
+        mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, off, MPM_PAD * MPM_PAD, MPM_PAD);
+      }
     }
   }
-  /* add the pad to the 8 blocks it covers */
+  /* add the pad (nodes x 8 channels) to the 8 blocks it covers (channels x nodes) */
   for (int o = 0; o < 8; ++o) {
     mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
     const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
               oz = (o & 1) * MPM_BLOCK;
-    for (int c = 0; c < used; ++c)
-      for (int i = 0; i < MPM_BLOCK; ++i)
-        for (int j = 0; j < MPM_BLOCK; ++j) {
-          const mpm_real *src = &pad[c][(ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz];
-          mpm_real *dst = &blk->ch[c][(i * MPM_BLOCK + j) * MPM_BLOCK];
-          for (int k = 0; k < MPM_BLOCK; ++k) dst[k] += src[k];
+    for (int i = 0; i < MPM_BLOCK; ++i)
+      for (int j = 0; j < MPM_BLOCK; ++j)
+        for (int k = 0; k < MPM_BLOCK; ++k) {
+          const mpm_real *src = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
+          const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
+          for (int c = 0; c < used; ++c) blk->ch[c][n] += src[c];
         }
   }
 }
@@ -137,9 +160,9 @@ void mpm_p2g_dense(const mpm_transfer_ctx *ctx, mpm_dense_grid *g, const mpm_par
     }
     chunk_stress(&ctx->materials[m], p, idx, n, tau);
     switch (W) {
-    case 2: scatter_chunk(2, 0, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
-    case 3: scatter_chunk(3, 0, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
-    default: scatter_chunk(4, 0, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
+    case 2: scatter_chunk(2, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
+    case 3: scatter_chunk(3, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
+    default: scatter_chunk(4, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
     }
     i += (size_t)n;
   }
