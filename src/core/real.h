@@ -23,8 +23,6 @@ typedef double mpm_real;
 #define mpm_sin sin
 #define mpm_cos cos
 #define mpm_atan2 atan2
-#define mpm_fmin fmin
-#define mpm_fmax fmax
 #else
 typedef float mpm_real;
 #define MPM_REAL_EPS FLT_EPSILON
@@ -39,9 +37,12 @@ typedef float mpm_real;
 #define mpm_sin sinf
 #define mpm_cos cosf
 #define mpm_atan2 atan2f
-#define mpm_fmin fminf
-#define mpm_fmax fmaxf
 #endif
+
+/* fmin/fmax with C99 semantics (a NaN argument loses), inlined: the libm calls are not inlined
+ * without -ffast-math and sit in hot loops. */
+static inline mpm_real mpm_fmax(mpm_real a, mpm_real b) { return (a > b || b != b) ? a : b; }
+static inline mpm_real mpm_fmin(mpm_real a, mpm_real b) { return (a < b || b != b) ? a : b; }
 
 /* Alignment of every per-particle and per-block array (one AVX-512 line). */
 #define MPM_ALIGN 64

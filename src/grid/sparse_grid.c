@@ -33,6 +33,8 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->color_blocks);
   mpm_free(g->pkey);
   mpm_free(g->perm);
+  mpm_free(g->pkey64);
+  mpm_free(g->hist);
   memset(g, 0, sizeof *g);
 }
 
@@ -40,7 +42,8 @@ size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g) {
   return g->table_size * (sizeof(uint64_t) + sizeof(int32_t)) +
          g->block_capacity * (sizeof(mpm_grid_block) + sizeof(int32_t) * 3 + sizeof(int32_t) * 8 +
                               sizeof(int32_t)) +
-         g->cell_capacity * sizeof(uint32_t) + g->particle_capacity * 2 * sizeof(uint32_t);
+         (g->cell_capacity + g->hist_capacity) * sizeof(uint32_t) +
+         g->particle_capacity * (2 * sizeof(uint32_t) + sizeof(uint64_t));
 }
 
 static int grow_table(mpm_sparse_grid *g, size_t size) {
@@ -130,15 +133,36 @@ int32_t mpm_sparse_grid_find(const mpm_sparse_grid *g, const int32_t c[3]) {
   return -1;
 }
 
+/* Per-particle packed position key: block coordinates (19 bits each, biased) and the cell of the
+ * base node in its block (6 bits). */
+#define PKEY_BIAS (1 << 18)
+static inline uint64_t particle_key(int32_t ix, int32_t iy, int32_t iz) {
+  const uint64_t bx = (uint64_t)(uint32_t)((ix >> MPM_BLOCK_BITS) + PKEY_BIAS);
+  const uint64_t by = (uint64_t)(uint32_t)((iy >> MPM_BLOCK_BITS) + PKEY_BIAS);
+  const uint64_t bz = (uint64_t)(uint32_t)((iz >> MPM_BLOCK_BITS) + PKEY_BIAS);
+  const uint64_t cell = (uint64_t)((ix & 3) << 4 | (iy & 3) << 2 | (iz & 3));
+  return (bx | by << 19 | bz << 38) << 6 | cell;
+}
+
+static int ensure_u32(uint32_t **a, size_t *cap, size_t need) {
+  if (need <= *cap) return 0;
+  mpm_free(*a);
+  *cap = need + need / 2;
+  *a = mpm_alloc(*cap * sizeof(uint32_t));
+  return *a ? 0 : -1;
+}
+
 int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
                          int material_count, const mpm_particles *p) {
   const size_t n = p->count;
   if (n > g->particle_capacity) {
     mpm_free(g->pkey);
     mpm_free(g->perm);
+    mpm_free(g->pkey64);
     g->pkey = mpm_alloc((n + 1) * sizeof(uint32_t));
     g->perm = mpm_alloc((n + 1) * sizeof(uint32_t));
-    if (!g->pkey || !g->perm) return -1;
+    g->pkey64 = mpm_alloc((n + 1) * sizeof(uint64_t));
+    if (!g->pkey || !g->perm || !g->pkey64) return -1;
     g->particle_capacity = n;
   }
   if (!g->table_size && grow_table(g, 4096)) return -1;
@@ -146,51 +170,73 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   g->block_count = 0;
   g->material_count = material_count;
 
-  /* 1. owner block of each particle: the block of its stencil's base node; and the cell of the
-   *    base node within the block. Consecutive particles mostly share a block (they were sorted
-   *    before), so cache the last one. */
+  /* 1. base node of each particle's stencil -> (owner block, cell in block), in parallel */
   const mpm_real inv_dx = k->inv_dx, shift = k->shift;
   const mpm_real *x0 = p->x[0], *x1 = p->x[1], *x2 = p->x[2];
-  uint64_t last_key = EMPTY_KEY;
-  int32_t last_block = -1;
-  for (size_t i = 0; i < n; ++i) {
+  uint64_t *pk = g->pkey64;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < (long)n; ++i) {
     const int32_t ix = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift);
     const int32_t iy = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift);
     const int32_t iz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift);
-    const int32_t bx = ix >> MPM_BLOCK_BITS, by = iy >> MPM_BLOCK_BITS, bz = iz >> MPM_BLOCK_BITS;
-    uint64_t key = block_key(bx, by, bz);
-    if (key != last_key) {
-      last_block = find_or_insert(g, bx, by, bz);
+    pk[i] = particle_key(ix, iy, iz);
+  }
+  /* 2. block indices through the hash, serially (first-seen order, so deterministic).
+   *    Consecutive particles mostly share a block (they were sorted before): cache the last. */
+  uint64_t last = UINT64_MAX;
+  int32_t last_block = -1;
+  const uint64_t mask19 = (1u << 19) - 1;
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t bk = pk[i] >> 6;
+    if (bk != last) {
+      last_block = find_or_insert(g, (int32_t)(bk & mask19) - PKEY_BIAS,
+                                  (int32_t)((bk >> 19) & mask19) - PKEY_BIAS,
+                                  (int32_t)((bk >> 38) & mask19) - PKEY_BIAS);
       if (last_block < 0) return -1;
-      last_key = key;
+      last = bk;
     }
-    const uint32_t cell = (uint32_t)((ix & 3) << 4 | (iy & 3) << 2 | (iz & 3));
-    g->pkey[i] = (uint32_t)last_block << 6 | cell;
+    g->pkey[i] = (uint32_t)last_block;
   }
   g->owner_count = g->block_count;
+  g->particle_count = n;
 
-  /* 2. counting sort by (block, material, cell): stable, so the order is a function of the
-   *    particle order alone and independent of the thread count. */
+  /* 3. stable counting sort by (block, material, cell), with per-chunk histograms: the result is
+   *    the unique stable order, the same for any number of threads. */
   const size_t keys = g->owner_count * (size_t)material_count * MPM_BLOCK_NODES;
-  if (keys + 1 > g->cell_capacity) {
-    mpm_free(g->cell_start);
-    g->cell_capacity = 2 * (keys + 1);
-    g->cell_start = mpm_alloc(g->cell_capacity * sizeof(uint32_t));
-    if (!g->cell_start) return -1;
-  }
-  uint32_t *cs = g->cell_start;
-  memset(cs, 0, (keys + 1) * sizeof(uint32_t));
+  const int chunks = mpm_thread_count();
+  if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) ||
+      ensure_u32(&g->hist, &g->hist_capacity, keys * (size_t)chunks))
+    return -1;
+  uint32_t *cs = g->cell_start, *hist = g->hist, *pkey = g->pkey;
   const int32_t *mat = p->material;
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t b = g->pkey[i] >> 6, cell = g->pkey[i] & 63;
-    const uint32_t key = (b * (uint32_t)material_count + (uint32_t)mat[i]) * MPM_BLOCK_NODES + cell;
-    g->pkey[i] = key;
-    cs[key + 1]++;
+#pragma omp parallel for schedule(static, 1)
+  for (int t = 0; t < chunks; ++t) {
+    uint32_t *h = hist + (size_t)t * keys;
+    memset(h, 0, keys * sizeof(uint32_t));
+    const size_t lo = n * (size_t)t / (size_t)chunks, hi = n * (size_t)(t + 1) / (size_t)chunks;
+    for (size_t i = lo; i < hi; ++i) {
+      const uint32_t key = (pkey[i] * (uint32_t)material_count + (uint32_t)mat[i]) * MPM_BLOCK_NODES +
+                           (uint32_t)(pk[i] & 63);
+      pkey[i] = key;
+      h[key]++;
+    }
   }
-  for (size_t r = 0; r < keys; ++r) cs[r + 1] += cs[r];
-  for (size_t i = 0; i < n; ++i) g->perm[cs[g->pkey[i]]++] = (uint32_t)i;
-  for (size_t r = keys; r > 0; --r) cs[r] = cs[r - 1];
-  cs[0] = 0;
+  uint32_t run = 0;
+  for (size_t key = 0; key < keys; ++key) {
+    cs[key] = run;
+    for (int t = 0; t < chunks; ++t) {
+      const uint32_t c = hist[(size_t)t * keys + key];
+      hist[(size_t)t * keys + key] = run;
+      run += c;
+    }
+  }
+  cs[keys] = run;
+#pragma omp parallel for schedule(static, 1)
+  for (int t = 0; t < chunks; ++t) {
+    uint32_t *h = hist + (size_t)t * keys;
+    const size_t lo = n * (size_t)t / (size_t)chunks, hi = n * (size_t)(t + 1) / (size_t)chunks;
+    for (size_t i = lo; i < hi; ++i) g->perm[h[pkey[i]]++] = (uint32_t)i;
+  }
 
   /* 3. activate the 7 forward neighbours of every owner block (its pad) */
   for (size_t b = 0; b < g->owner_count; ++b) {

@@ -43,9 +43,13 @@ typedef struct mpm_sparse_grid {
   /* owner blocks by colour: color_blocks[color_start[c] .. color_start[c+1]) */
   int32_t *color_blocks;
   size_t color_start[9];
-  /* per-particle scratch for sorting */
+  /* per-particle scratch for sorting, and per-thread histograms */
+  uint64_t *pkey64;
   uint32_t *pkey, *perm;
+  uint32_t *hist;
+  size_t hist_capacity;
   size_t particle_capacity;
+  size_t particle_count; /* particles sorted by the last mpm_sparse_grid_sort */
 } mpm_sparse_grid;
 
 void mpm_sparse_grid_init(mpm_sparse_grid *g);

@@ -115,8 +115,14 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
 ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
                              const mpm_sparse_grid *g, mpm_particles *p, int32_t b,
                              mpm_real *max_v2, long *bad) {
-  /* the 8 blocks around the owner block as an AoS pad: v_new xyz, v_old xyz per node */
+  /* the 8 blocks around the owner block as an AoS pad: v_new xyz, v_old xyz per node; and the
+     blocks of the next owner block are requested while this one is processed */
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
+  if ((size_t)b + 1 < g->owner_count)
+    for (int o = 0; o < 8; ++o)
+      for (int c = apic ? 3 : 0; c < 6; ++c)
+        for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
+          __builtin_prefetch(&g->blocks[g->neighbor[b + 1][o]].ch[MPM_CH_VOLD + c][q], 0);
   for (int o = 0; o < 8; ++o) {
     const mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
     const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
@@ -142,6 +148,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
     for (uint32_t j = begin; j < end; j += MPM_LANES) {
       const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
       const uint32_t *idx = g->perm + j;
+      if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 1);
       int base[3];
       mpm_lane_stencil s;
       mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, base, &s);

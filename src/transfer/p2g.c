@@ -85,6 +85,11 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
   const int used = apic ? MPM_CH_F : MPM_GRID_CHANNELS;
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
   memset(pad, 0, sizeof pad);
+  /* the 8 blocks are written at the end: ask for them now */
+  for (int o = 0; o < 8; ++o)
+    for (int c = 0; c < used; ++c)
+      for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
+        __builtin_prefetch(&g->blocks[g->neighbor[b][o]].ch[c][q], 1);
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
@@ -97,6 +102,7 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
       for (uint32_t j = begin; j < end; j += MPM_LANES) {
         const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
         const uint32_t *idx = g->perm + j;
+        if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 0);
         chunk_stress(&ctx->materials[m], p, idx, n, tau);
         int base[3];
         mpm_lane_stencil s;
