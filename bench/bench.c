@@ -102,6 +102,7 @@ static void block_scene(mpm_scene *s, double dx, double lo, double hi, double do
 static int bench_transfer(int argc, char **argv) {
   int threads[16] = {1, 2}, nthreads = 2, repeats = 5;
   double scale = 1;
+  const char *only_kernel = NULL, *only_grid = NULL;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
       nthreads = parse_threads(argv[++i], threads, 16);
@@ -113,6 +114,10 @@ static int bench_transfer(int argc, char **argv) {
       if (mpm_cli_parse_int("--repeats", i + 1 < argc ? argv[i + 1] : NULL, 1, 100, &repeats))
         return MPM_EXIT_USAGE;
       ++i;
+    } else if (!strcmp(argv[i], "--kernel") && i + 1 < argc) {
+      only_kernel = argv[++i];
+    } else if (!strcmp(argv[i], "--grid") && i + 1 < argc) {
+      only_grid = argv[++i];
     } else if (!strcmp(argv[i], "--spacing-scale") && i + 1 < argc) {
       scale = atof(argv[++i]);
       if (!(scale >= 1 && scale <= 16)) {
@@ -133,6 +138,8 @@ static int bench_transfer(int argc, char **argv) {
          "P2G ns/p", "G2P ns/p", "P2G+G2P ns/p");
   for (int kind = 0; kind < 4; ++kind)
     for (int grid = 0; grid < 2; ++grid) {
+      if (only_kernel && strcmp(only_kernel, mpm_kernel_name((mpm_kernel_kind)kind))) continue;
+      if (only_grid && strcmp(only_grid, grid ? "dense" : "sparse")) continue;
       mpm_scene s;
       block_scene(&s, dx, 0.125, 0.875, 1.0, 8, (mpm_kernel_kind)kind, (mpm_grid_kind)grid);
       s.gravity[1] = 0;
@@ -166,9 +173,8 @@ static int bench_transfer(int argc, char **argv) {
                mp, mg, mp + mg);
         fflush(stdout);
       }
-      if (kind == 0 && grid == 0)
-        printf("  (%zu particles; library memory %.1f MiB)\n", sim->particles.count,
-               mpm_alloc_live_bytes() / 1048576.0);
+      printf("  (%zu particles; library memory %.1f MiB)\n", sim->particles.count,
+             mpm_alloc_live_bytes() / 1048576.0);
       mpm_sim_destroy(sim);
     }
   printf("peak memory: %.1f MiB (resident set)\n", peak_rss_mib());
@@ -176,7 +182,7 @@ static int bench_transfer(int argc, char **argv) {
 }
 
 static int bench_step(int argc, char **argv) {
-  int threads[16] = {1, 2}, nthreads = 2, steps = 20, particles = 1000000;
+  int threads[16] = {1, 2}, nthreads = 2, steps = 10, repeats = 5, particles = 1000000;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
       nthreads = parse_threads(argv[++i], threads, 16);
@@ -186,6 +192,10 @@ static int bench_step(int argc, char **argv) {
       }
     } else if (!strcmp(argv[i], "--steps")) {
       if (mpm_cli_parse_int("--steps", i + 1 < argc ? argv[i + 1] : NULL, 1, 100000, &steps))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--repeats")) {
+      if (mpm_cli_parse_int("--repeats", i + 1 < argc ? argv[i + 1] : NULL, 1, 100, &repeats))
         return MPM_EXIT_USAGE;
       ++i;
     } else if (!strcmp(argv[i], "--particles")) {
@@ -221,21 +231,28 @@ static int bench_step(int argc, char **argv) {
     mpm_scene_free(&s);
     const double n = (double)sim->particles.count;
     for (int w = 0; w < 3; ++w) mpm_sim_step(sim, 1e-3);
-    mpm_stage_times before = sim->times;
-    for (int k = 0; k < steps; ++k)
-      if (mpm_sim_step(sim, 1e-3) != MPM_OK) {
-        fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
-        mpm_sim_destroy(sim);
-        return MPM_EXIT_FAILURE;
-      }
-    const double f = 1e9 / (n * steps);
+    double total[100], sort[100], p2g[100], grid[100], g2p[100];
+    for (int r = 0; r < repeats; ++r) {
+      mpm_stage_times before = sim->times;
+      for (int k = 0; k < steps; ++k)
+        if (mpm_sim_step(sim, 1e-3) != MPM_OK) {
+          fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+          mpm_sim_destroy(sim);
+          return MPM_EXIT_FAILURE;
+        }
+      const double f = 1e9 / (n * steps);
+      total[r] = (sim->times.total - before.total) * f;
+      sort[r] = (sim->times.sort - before.sort) * f;
+      p2g[r] = (sim->times.p2g - before.p2g) * f;
+      grid[r] = (sim->times.grid - before.grid) * f;
+      g2p[r] = (sim->times.g2p - before.g2p) * f;
+    }
     printf("step benchmark: %.0f particles, 8 per cell, quadratic, APIC, neo-Hookean, %d threads, "
-           "%d steps\n",
-           n, threads[t], steps);
+           "median of %d runs of %d steps\n",
+           n, threads[t], repeats, steps);
     printf("  ns per particle-step: total %.1f = sort %.1f + P2G %.1f + grid %.1f + G2P %.1f\n",
-           (sim->times.total - before.total) * f, (sim->times.sort - before.sort) * f,
-           (sim->times.p2g - before.p2g) * f, (sim->times.grid - before.grid) * f,
-           (sim->times.g2p - before.g2p) * f);
+           median(total, repeats), median(sort, repeats), median(p2g, repeats),
+           median(grid, repeats), median(g2p, repeats));
     printf("  memory: %.1f bytes per particle (library peak %.1f MiB; %zu grid blocks)\n",
            (double)(mpm_alloc_peak_bytes() - live0) / n, mpm_alloc_peak_bytes() / 1048576.0,
            sim->sparse.block_count);

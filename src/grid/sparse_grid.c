@@ -263,9 +263,10 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   return 0;
 }
 
-void mpm_sparse_grid_clear(mpm_sparse_grid *g) {
+void mpm_sparse_grid_clear(mpm_sparse_grid *g, int channels) {
   const long nb = (long)g->block_count;
   mpm_grid_block *blocks = g->blocks;
+  const size_t bytes = (size_t)channels * sizeof blocks[0].ch[0];
 #pragma omp parallel for schedule(static)
-  for (long b = 0; b < nb; ++b) memset(&blocks[b], 0, sizeof(mpm_grid_block));
+  for (long b = 0; b < nb; ++b) memset(blocks[b].ch[0], 0, bytes);
 }

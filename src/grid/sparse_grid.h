@@ -62,8 +62,9 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g);
 int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
                          int material_count, const mpm_particles *p);
 
-/* Zero every channel of every active block (parallel). */
-void mpm_sparse_grid_clear(mpm_sparse_grid *g);
+/* Zero the first `channels` channels of every active block (parallel); the others are left as
+ * they are (APIC uses only mass and momentum, see transfer.h). */
+void mpm_sparse_grid_clear(mpm_sparse_grid *g, int channels);
 
 /* Bytes held by the grid (blocks, hash, lists), for memory reports. */
 size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g);

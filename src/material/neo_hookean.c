@@ -131,27 +131,36 @@ static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *con
                                mpm_real tau[9][MPM_STRESS_CHUNK]) {
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   const mpm_real mu = m->mu, l = m->lambda, c = m->min_stretch;
-  unsigned char slow[MPM_STRESS_CHUNK];
+  /* Written as straight loops over the chunk so that the compiler vectorizes them across
+   * particles; only the logarithm stays a scalar call. */
+  mpm_real J[MPM_STRESS_CHUNK], lnJ[MPM_STRESS_CHUNK];
   int nslow = 0;
   for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], B[9];
-    for (int k = 0; k < 9; ++k) Fi[k] = F[k][i];
-    const mpm_real J = mpm_m3_det(Fi);
-    const int fast = nh_unclamped(Fi, J, c);
-    slow[i] = (unsigned char)!fast;
-    nslow += !fast;
-    mpm_m3_mul_bt(Fi, Fi, B);
-    const mpm_real vol = l * mpm_log(mpm_fmax(J, MPM_REAL_EPS)) - mu;
-    for (int k = 0; k < 9; ++k) tau[k][i] = mu * B[k];
-    tau[0][i] += vol;
-    tau[4][i] += vol;
-    tau[8][i] += vol;
+    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
+                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
+    J[i] = f0 * (f4 * f8 - f5 * f7) - f1 * (f3 * f8 - f5 * f6) + f2 * (f3 * f7 - f4 * f6);
+    const mpm_real ff = f0 * f0 + f1 * f1 + f2 * f2 + f3 * f3 + f4 * f4 + f5 * f5 + f6 * f6 +
+                        f7 * f7 + f8 * f8;
+    nslow += !(J[i] > 0 && 2 * J[i] >= c * ff); /* see nh_unclamped */
+  }
+  for (int i = 0; i < n; ++i) lnJ[i] = mpm_log(mpm_fmax(J[i], MPM_REAL_EPS));
+  for (int i = 0; i < n; ++i) {
+    /* tau = P F^T = mu (F F^T - I) + lambda ln J I */
+    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
+                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
+    const mpm_real vol = l * lnJ[i] - mu;
+    tau[0][i] = mu * (f0 * f0 + f1 * f1 + f2 * f2) + vol;
+    tau[4][i] = mu * (f3 * f3 + f4 * f4 + f5 * f5) + vol;
+    tau[8][i] = mu * (f6 * f6 + f7 * f7 + f8 * f8) + vol;
+    tau[1][i] = tau[3][i] = mu * (f0 * f3 + f1 * f4 + f2 * f5);
+    tau[2][i] = tau[6][i] = mu * (f0 * f6 + f1 * f7 + f2 * f8);
+    tau[5][i] = tau[7][i] = mu * (f3 * f6 + f4 * f7 + f5 * f8);
   }
   if (nslow == 0) return;
   for (int i = 0; i < n; ++i) {
-    if (!slow[i]) continue;
     mpm_real Fi[9], T[9];
     for (int k = 0; k < 9; ++k) Fi[k] = F[k][i];
+    if (nh_unclamped(Fi, J[i], c)) continue;
     nh_diag d;
     nh_diagonalize(m, Fi, &d);
     const mpm_real ps[3] = {d.p[0] * d.s[0], d.p[1] * d.s[1], d.p[2] * d.s[2]};

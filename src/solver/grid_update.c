@@ -44,7 +44,9 @@ void mpm_grid_update_sparse(const mpm_grid_update_ctx *u, mpm_sparse_grid *g) {
       const int idx[3] = {c[0] * MPM_BLOCK + (n >> 4), c[1] * MPM_BLOCK + ((n >> 2) & 3),
                           c[2] * MPM_BLOCK + (n & 3)};
       mpm_real mv[3] = {blk->ch[MPM_CH_MV][n], blk->ch[MPM_CH_MV + 1][n], blk->ch[MPM_CH_MV + 2][n]};
-      mpm_real f[3] = {blk->ch[MPM_CH_F][n], blk->ch[MPM_CH_F + 1][n], blk->ch[MPM_CH_F + 2][n]};
+      mpm_real f[3] = {0, 0, 0};
+      if (!u->force_in_momentum)
+        for (int d = 0; d < 3; ++d) f[d] = blk->ch[MPM_CH_F + d][n];
       mpm_grid_update_node(u, idx, &blk->ch[MPM_CH_MASS][n], mv, f);
       for (int d = 0; d < 3; ++d) {
         blk->ch[MPM_CH_MV + d][n] = mv[d];

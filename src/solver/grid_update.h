@@ -10,6 +10,9 @@
 
 typedef struct mpm_grid_update_ctx {
   mpm_real dt;
+  /* 1 when P2G already added dt * force to the momentum (sparse grid with APIC): the force
+     channels are then not read (they hold the last step's velocities, not zeros) */
+  int force_in_momentum;
   mpm_real gravity[3];
   mpm_real origin[3], dx;
   /* domain walls: a node whose index along axis d is < wall_lo[d] or > wall_hi[d] is in the

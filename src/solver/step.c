@@ -115,7 +115,10 @@ mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
       mpm_particles_permute(p, g->perm, &sim->scratch, sim->iscratch);
       for (size_t j = 0; j < p->count; ++j) g->perm[j] = (uint32_t)j;
     }
-    mpm_sparse_grid_clear(g);
+    /* APIC P2G fuses the force into the momentum and leaves the force channels alone */
+    const int fused = sc->solver.transfer == MPM_TRANSFER_APIC;
+    gu.force_in_momentum = fused;
+    mpm_sparse_grid_clear(g, fused ? MPM_CH_F : MPM_GRID_CHANNELS);
     const double t1 = mpm_wall_seconds();
     mpm_p2g_sparse(&tc, g, p);
     const double t2 = mpm_wall_seconds();

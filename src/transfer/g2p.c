@@ -70,44 +70,42 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int apic,
   return v2;
 }
 
-/* Write back a batch's lane results to its n particles: v (APIC or FLIP blend), B, F, x.
- * Returns through max_v2 / bad like update_particle. */
+/* Write back a batch's lane results to its n particles: v (APIC or FLIP blend), B, F, x; the
+ * largest |v|^2 and the first particle with a non-finite value go to max_v2 and bad. */
 ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm_particles *p,
-                                const uint32_t *idx, int n, const mpm_g2p_lanes_out *o,
-                                mpm_real *max_v2, long *bad) {
+                                const uint32_t *idx, int n, int contiguous,
+                                const mpm_g2p_lanes_out *o, mpm_real *max_v2, long *bad) {
   const mpm_real dt = ctx->dt, a = ctx->flip_alpha;
   /* F^{n+1} = (I + dt grad v) F^n (Gao sec. 3.2 step 5), lane-wise */
-  mpm_vl F[9];
-  for (int c = 0; c < 9; ++c)
-    for (int l = 0; l < MPM_LANES; ++l) F[c][l] = p->F[c][idx[l < n ? l : 0]];
-  mpm_vl Fn[9];
+  mpm_vl F[9], Fn[9];
+  for (int c = 0; c < 9; ++c) F[c] = mpm_lanes_load(p->F[c], idx, n, contiguous);
+  mpm_vl check = {0};
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
+    for (int c = 0; c < 3; ++c) {
       Fn[3 * r + c] = F[3 * r + c] + dt * (o->grad[3 * r] * F[c] + o->grad[3 * r + 1] * F[3 + c] +
                                            o->grad[3 * r + 2] * F[6 + c]);
+      check += Fn[3 * r + c];
+    }
+  for (int c = 0; c < 9; ++c) mpm_lanes_store(p->F[c], idx, n, contiguous, Fn[c]);
+  mpm_vl v2 = {0};
+  for (int d = 0; d < 3; ++d) {
+    mpm_vl v = o->v[d];
+    if (!apic) v = a * (mpm_lanes_load(p->v[d], idx, n, contiguous) + o->dv[d]) + (1 - a) * o->v[d];
+    mpm_vl xn = mpm_lanes_load(p->x[d], idx, n, contiguous) + dt * o->v[d];
+    xn = mpm_vl_min(mpm_vl_max(xn, mpm_vl_splat(ctx->clamp_lo[d])), mpm_vl_splat(ctx->clamp_hi[d]));
+    mpm_lanes_store(p->x[d], idx, n, contiguous, xn);
+    mpm_lanes_store(p->v[d], idx, n, contiguous, v);
+    check += xn;
+    v2 += v * v;
+  }
+  if (apic)
+    for (int c = 0; c < 9; ++c) mpm_lanes_store(p->B[c], idx, n, contiguous, o->B[c]);
+  check += v2;
   for (int l = 0; l < n; ++l) {
-    const uint32_t i = idx[l];
-    mpm_real check = 0, v[3];
-    for (int c = 0; c < 9; ++c) {
-      p->F[c][i] = Fn[c][l];
-      check += Fn[c][l];
-    }
-    for (int d = 0; d < 3; ++d) {
-      v[d] = apic ? o->v[d][l] : a * (p->v[d][i] + o->dv[d][l]) + (1 - a) * o->v[d][l];
-      mpm_real xn = p->x[d][i] + dt * o->v[d][l];
-      xn = xn < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : xn;
-      xn = xn > ctx->clamp_hi[d] ? ctx->clamp_hi[d] : xn;
-      p->x[d][i] = xn;
-      p->v[d][i] = v[d];
-      check += xn;
-    }
-    if (apic)
-      for (int c = 0; c < 9; ++c) p->B[c][i] = o->B[c][l];
-    const mpm_real v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    if (!isfinite(check + v2)) {
-      if (*bad < 0 || (long)i < *bad) *bad = (long)i;
-    } else if (v2 > *max_v2) {
-      *max_v2 = v2;
+    if (!isfinite(check[l])) {
+      if (*bad < 0 || (long)idx[l] < *bad) *bad = (long)idx[l];
+    } else if (v2[l] > *max_v2) {
+      *max_v2 = v2[l];
     }
   }
 }
@@ -149,14 +147,15 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
       const uint32_t *idx = g->perm + j;
       if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 1);
+      const int contiguous = mpm_batch_contiguous(idx, n);
       int base[3];
       mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, base, &s);
+      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
       const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
                        (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
       mpm_g2p_lanes_out o;
       mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, off, MPM_PAD * MPM_PAD, MPM_PAD, &o);
-      batch_update(apic, ctx, p, idx, n, &o, max_v2, bad);
+      batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
     }
   }
 }

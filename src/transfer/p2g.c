@@ -58,24 +58,23 @@ ALWAYS_INLINE void scatter_chunk(const int W, const int apic,
 }
 
 /* Gather the lane inputs of a batch of n particles (lanes >= n contribute nothing). */
-ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int n, mpm_real dt,
-                                const int apic, mpm_real tau[9][MPM_STRESS_CHUNK], mpm_vl *m,
-                                mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
-  const mpm_vl zero = {0};
-  *m = zero;
-  for (int d = 0; d < 3; ++d) mv[d] = zero;
-  for (int c = 0; c < 9; ++c) mB[c] = K[c] = zero;
+ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int n, int contiguous,
+                                mpm_real dt, const int apic, mpm_real tau[9][MPM_STRESS_CHUNK],
+                                mpm_vl *m, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
+  mpm_vl live = {0}; /* 1 for the batch's lanes, 0 for padding */
+  for (int l = 0; l < n; ++l) live[l] = 1;
+  *m = mpm_lanes_load(p->mass, idx, n, contiguous) * live;
   /* APIC folds dt * force into the momentum; PIC/FLIP keeps the force apart */
-  const mpm_real kscale = apic ? dt : 1;
-  for (int l = 0; l < n; ++l) {
-    const uint32_t i = idx[l];
-    const mpm_real mass = p->mass[i], nv = -p->vol0[i] * kscale;
-    (*m)[l] = mass;
-    for (int d = 0; d < 3; ++d) mv[d][l] = mass * p->v[d][i];
-    for (int c = 0; c < 9; ++c) {
-      if (apic) mB[c][l] = mass * p->B[c][i];
-      K[c][l] = nv * tau[c][l];
-    }
+  const mpm_vl nv = mpm_lanes_load(p->vol0, idx, n, contiguous) * live * (apic ? -dt : R_(-1.0));
+  for (int d = 0; d < 3; ++d) mv[d] = *m * mpm_lanes_load(p->v[d], idx, n, contiguous);
+  for (int c = 0; c < 9; ++c) {
+    mB[c] = apic ? *m * mpm_lanes_load(p->B[c], idx, n, contiguous) : (mpm_vl){0};
+    mpm_vl t = {0};
+    if (n == MPM_LANES)
+      __builtin_memcpy(&t, tau[c], sizeof t);
+    else /* lanes >= n of tau were never written: they may hold NaN, and 0 * NaN is NaN */
+      for (int l = 0; l < n; ++l) t[l] = tau[c][l];
+    K[c] = nv * t;
   }
 }
 
@@ -103,12 +102,19 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
         const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
         const uint32_t *idx = g->perm + j;
         if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 0);
-        chunk_stress(&ctx->materials[m], p, idx, n, tau);
+        const int contiguous = mpm_batch_contiguous(idx, n);
+        if (contiguous) { /* the model reads F in place */
+          const mpm_real *Fp[9];
+          for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
+          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp, tau);
+        } else {
+          chunk_stress(&ctx->materials[m], p, idx, n, tau);
+        }
         int base[3];
         mpm_lane_stencil s;
-        mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, base, &s);
+        mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, &s);
         mpm_vl mass, mv[3], mB[9], K[9];
-        batch_inputs(p, idx, n, ctx->dt, apic, tau, &mass, mv, mB, K);
+        batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, &mass, mv, mB, K);
         const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
                          (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
         mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, off, MPM_PAD * MPM_PAD, MPM_PAD);

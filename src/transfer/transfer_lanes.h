@@ -54,6 +54,35 @@ MPM_ALWAYS_INLINE mpm_vl mpm_vl_splat(mpm_real s) {
   return zero + s;
 }
 
+/* A batch is contiguous when its n = MPM_LANES particles are consecutive in memory, which is
+ * the common case right after the particles were reordered into block order; then lanes move
+ * with single vector loads and stores instead of gathers and scatters. */
+MPM_ALWAYS_INLINE int mpm_batch_contiguous(const uint32_t *idx, int n) {
+  return n == MPM_LANES && idx[MPM_LANES - 1] == idx[0] + (MPM_LANES - 1);
+}
+
+/* Lanes of array a at the batch's particles (lanes >= n repeat lane 0). */
+MPM_ALWAYS_INLINE mpm_vl mpm_lanes_load(const mpm_real *a, const uint32_t *idx, int n,
+                                        int contiguous) {
+  mpm_vl v;
+  if (contiguous) {
+    __builtin_memcpy(&v, a + idx[0], sizeof v);
+  } else {
+    for (int l = 0; l < MPM_LANES; ++l) v[l] = a[idx[l < n ? l : 0]];
+  }
+  return v;
+}
+
+/* Store the first n lanes of v to array a at the batch's particles. */
+MPM_ALWAYS_INLINE void mpm_lanes_store(mpm_real *a, const uint32_t *idx, int n, int contiguous,
+                                       mpm_vl v) {
+  if (contiguous) {
+    __builtin_memcpy(a + idx[0], &v, sizeof v);
+  } else {
+    for (int l = 0; l < n; ++l) a[idx[l]] = v[l];
+  }
+}
+
 /* Prefetch particle i's entries of every per-particle array. Transfers touch ~26 arrays per
  * particle; that many concurrent streams is more than the hardware prefetchers follow, so the
  * batch loops ask for the particles two batches ahead. */
@@ -83,17 +112,17 @@ MPM_ALWAYS_INLINE mpm_vl mpm_vl_min(mpm_vl a, mpm_vl b) { return mpm_vl_select(a
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_max(mpm_vl a, mpm_vl b) { return mpm_vl_select(a > b, a, b); }
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_abs(mpm_vl a) { return mpm_vl_max(a, -a); }
 
-/* Stencils of n particles that share their base node (lanes >= n copy lane 0 so that every
+/* Stencils of n particles that share their base node (the APIC factors a only if need_a) (lanes >= n copy lane 0 so that every
  * value stays finite). Because the base is common, the weights are polynomials of the lane's
  * offset f from it and vectorize without branches; uGIMP's hat antiderivative is written with
  * a clamp: H(t) = 1/2 + c - c|c|/2, hat(t) = 1 - |c|, c = clamp(t, -1, 1). */
 MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real *const x[3],
                                              const mpm_real origin[3], const uint32_t *idx, int n,
-                                             int base[3], mpm_lane_stencil *s) {
+                                             int contiguous, const int need_a, int base[3],
+                                             mpm_lane_stencil *s) {
   const mpm_real inv_dx = k->inv_dx;
   for (int d = 0; d < 3; ++d) {
-    mpm_vl xg;
-    for (int l = 0; l < MPM_LANES; ++l) xg[l] = (x[d][idx[l < n ? l : 0]] - origin[d]) * inv_dx;
+    const mpm_vl xg = (mpm_lanes_load(x[d], idx, n, contiguous) - origin[d]) * inv_dx;
     base[d] = (int)mpm_floor(xg[0] - k->shift);
     const mpm_vl f = xg - (mpm_real)base[d];
     s->f[d] = f;
@@ -104,6 +133,7 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
       w[1] = f;
       dw[0] = a[0] = mpm_vl_splat(-inv_dx);
       dw[1] = a[1] = mpm_vl_splat(inv_dx);
+      (void)need_a;
       break;
     case MPM_KERNEL_QUADRATIC: {
       const mpm_vl t0 = R_(1.5) - f, t1 = f - 1, t2 = f - R_(0.5);
@@ -113,7 +143,8 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
       dw[0] = -inv_dx * t0;
       dw[1] = (-2 * inv_dx) * t1;
       dw[2] = inv_dx * t2;
-      for (int q = 0; q < 3; ++q) a[q] = (4 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/4 */
+      if (need_a)
+        for (int q = 0; q < 3; ++q) a[q] = (4 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/4 */
       break;
     }
     case MPM_KERNEL_CUBIC: {
@@ -126,7 +157,8 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
       dw[1] = inv_dx * (R_(1.5) * d1 * d1 - 2 * d1);
       dw[2] = -inv_dx * (R_(1.5) * d2 * d2 - 2 * d2);
       dw[3] = (R_(0.5) * inv_dx) * u3 * u3;
-      for (int q = 0; q < 4; ++q) a[q] = (3 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/3 */
+      if (need_a)
+        for (int q = 0; q < 4; ++q) a[q] = (3 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/3 */
       break;
     }
     case MPM_KERNEL_UGIMP: {
@@ -142,7 +174,8 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
         const mpm_vl r = (mpm_real)q - f;
         dsum += w[q] * r * r;
       }
-      for (int q = 0; q < 3; ++q) a[q] = w[q] * ((mpm_real)q - f) * (inv_dx / dsum);
+      if (need_a)
+        for (int q = 0; q < 3; ++q) a[q] = w[q] * ((mpm_real)q - f) * (inv_dx / dsum);
       break;
     }
     }
