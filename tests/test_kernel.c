@@ -4,6 +4,7 @@
  * and the APIC factors reproduce D_p^{-1} (sum a_i (x_i - x_p) = 1, sum a_i = 0). */
 #include "support.h"
 #include "interp/kernel.h"
+#include "transfer/transfer_lanes.h"
 
 #include <math.h>
 
@@ -126,6 +127,82 @@ static void test_quadratic_apic_factor(void **state) {
     assert_close(a[i], 4.0 / (dx * dx) * w[i] * ((base + i) * dx - x), TOL(1e-4, 1e-12));
 }
 
+/* Reference uGIMP weight in double: the hat's antiderivative differenced (fine in double). */
+static double ugimp_ref(double f, int i, double h) {
+  double hi = f - i + h, lo = f - i - h;
+  double H[2];
+  double t[2] = {lo, hi};
+  for (int q = 0; q < 2; ++q) {
+    double x = t[q];
+    H[q] = x <= -1 ? 0 : x <= 0 ? 0.5 * (x + 1) * (x + 1) : x < 1 ? 1 - 0.5 * (1 - x) * (1 - x) : 1;
+  }
+  return (H[1] - H[0]) / (2 * h);
+}
+
+/* Weights near the edge of uGIMP's support must stay accurate (and never negative) in float:
+ * particles on a lattice of spacing dx/2 with L_p = dx/2 put box edges exactly on nodes, and
+ * round-off moves them by ~1e-4 cells, where a difference of antiderivatives near 1 has no
+ * correct digit left. That once gave nodes tiny negative masses and blew simulations up. */
+static void test_ugimp_edge_weights_accurate(void **state) {
+  (void)state;
+  const double dx = 0.015, h = 0.25;
+  mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)(dx / 2));
+  uint64_t rng = 3;
+  double worst = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double lattice = (20 + (trial % 40)) * 0.5 + 0.25;
+    const double xg = lattice + test_rand(&rng, -2e-4, 2e-4);
+    mpm_real w[4], dw[4], a[4];
+    const int base = mpm_kernel_1d(&k, (mpm_real)xg, w, dw, a);
+    const double f = (double)(mpm_real)xg - base;
+    for (int i = 0; i < 3; ++i) {
+      const double ref = ugimp_ref(f, i, h);
+      assert_true(w[i] >= 0);
+      const double err = fabs(w[i] - ref) / (ref + TOL(1e-4, 1e-8));
+      if (err > worst) worst = err;
+    }
+  }
+  print_message("uGIMP edge weights: worst error relative to (w + floor) %.3g\n", worst);
+  assert_true(worst < TOL(2e-6, 1e-7)); /* in double the reference itself limits the check */
+}
+
+/* The SIMD lane stencils of the sparse transfers equal the scalar kernel of the dense grid. */
+static void test_lane_stencils_match_scalar(void **state) {
+  (void)state;
+  const double dx = 0.02;
+  for (size_t kk = 0; kk < sizeof kinds / sizeof kinds[0]; ++kk) {
+    mpm_kernel k = mpm_kernel_make(kinds[kk], (mpm_real)dx, (mpm_real)(0.4 * dx));
+    uint64_t rng = 11 + kk;
+    for (int trial = 0; trial < 200; ++trial) {
+      /* 8 particles in one base cell: choose the cell, then offsets inside it */
+      mpm_real xs[3][MPM_LANES];
+      uint32_t idx[MPM_LANES];
+      for (int l = 0; l < MPM_LANES; ++l) {
+        idx[l] = (uint32_t)l;
+        for (int d = 0; d < 3; ++d)
+          xs[d][l] = (mpm_real)((10 + d + k.shift + test_rand(&rng, 0.01, 0.99)) * dx);
+      }
+      const mpm_real *x[3] = {xs[0], xs[1], xs[2]};
+      const mpm_real origin[3] = {0, 0, 0};
+      const int n = 1 + trial % MPM_LANES;
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(&k, x, origin, idx, n, trial % 2, 1, base, &s);
+      for (int l = 0; l < n; ++l)
+        for (int d = 0; d < 3; ++d) {
+          mpm_real w[4], dw[4], a[4];
+          const int b = mpm_kernel_1d(&k, xs[d][l] / (mpm_real)dx, w, dw, a);
+          assert_int_equal(b, base[d]);
+          for (int q = 0; q < k.width; ++q) {
+            assert_close(s.w[d][q][l], w[q], TOL(2e-6, 1e-13));
+            assert_close(s.dw[d][q][l] * dx, dw[q] * dx, TOL(2e-5, 1e-12));
+            assert_close(s.a[d][q][l] * dx, a[q] * dx, TOL(2e-4, 1e-11));
+          }
+        }
+    }
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_linear),
@@ -135,6 +212,8 @@ int main(void) {
       cmocka_unit_test(test_gradients_match_finite_differences),
       cmocka_unit_test(test_ugimp_equals_quadratic),
       cmocka_unit_test(test_quadratic_apic_factor),
+      cmocka_unit_test(test_ugimp_edge_weights_accurate),
+      cmocka_unit_test(test_lane_stencils_match_scalar),
   };
   return cmocka_run_group_tests_name("kernel", tests, NULL, NULL);
 }

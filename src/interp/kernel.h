@@ -51,12 +51,22 @@ const char *mpm_kernel_name(mpm_kernel_kind kind);
 
 /* ---- implementation (inline so that the transfer loops see through it) ---- */
 
-/* Antiderivative of the unit hat max(0, 1 - |t|). */
-static inline mpm_real mpm_hat_integral(mpm_real t) {
-  if (t <= -1) return 0;
-  if (t <= 0) return R_(0.5) * (t + 1) * (t + 1);
-  if (t < 1) return 1 - R_(0.5) * (1 - t) * (1 - t);
-  return 1;
+/* Integral of the unit hat max(0, 1 - |s|) beyond |t| (towards the nearer end of its support):
+ * U(t) = (1 - min(|t|, 1))^2 / 2. */
+static inline mpm_real mpm_hat_tail(mpm_real t) {
+  mpm_real u = 1 - mpm_fabs(t);
+  u = u > 0 ? u : 0;
+  return R_(0.5) * u * u;
+}
+
+/* Integral of the unit hat over [a, b], a <= b, written with tails so that a weight near the
+ * edge of the support is a difference of two small numbers, never of two numbers near 1: the
+ * plain antiderivative H(b) - H(a) loses every digit there in float and can even turn a tiny
+ * weight negative, which then gives a node a tiny negative mass and an enormous velocity. */
+static inline mpm_real mpm_hat_integral(mpm_real a, mpm_real b) {
+  if (a >= 0) return mpm_hat_tail(a) - mpm_hat_tail(b);
+  if (b <= 0) return mpm_hat_tail(b) - mpm_hat_tail(a);
+  return 1 - mpm_hat_tail(a) - mpm_hat_tail(b);
 }
 
 static inline mpm_real mpm_hat(mpm_real t) {
@@ -125,7 +135,7 @@ static inline __attribute__((always_inline)) int mpm_kernel_1d(const mpm_kernel 
     const mpm_real h = k->half_len, inv_len = 1 / (2 * h);
     for (int i = 0; i < 3; ++i) {
       mpm_real t = f - (mpm_real)i;
-      w[i] = (mpm_hat_integral(t + h) - mpm_hat_integral(t - h)) * inv_len;
+      w[i] = mpm_hat_integral(t - h, t + h) * inv_len;
       dw[i] = (mpm_hat(t + h) - mpm_hat(t - h)) * inv_len * inv_dx;
     }
     mpm_apic_factors(3, w, f, inv_dx, a);

@@ -114,8 +114,7 @@ MPM_ALWAYS_INLINE mpm_vl mpm_vl_abs(mpm_vl a) { return mpm_vl_max(a, -a); }
 
 /* Stencils of n particles that share their base node (the APIC factors a only if need_a) (lanes >= n copy lane 0 so that every
  * value stays finite). Because the base is common, the weights are polynomials of the lane's
- * offset f from it and vectorize without branches; uGIMP's hat antiderivative is written with
- * a clamp: H(t) = 1/2 + c - c|c|/2, hat(t) = 1 - |c|, c = clamp(t, -1, 1). */
+ * offset f from it and vectorize without branches (uGIMP's piecewise integrals become selects). */
 MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real *const x[3],
                                              const mpm_real origin[3], const uint32_t *idx, int n,
                                              int contiguous, const int need_a, int base[3],
@@ -162,15 +161,20 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
       break;
     }
     case MPM_KERNEL_UGIMP: {
+      /* the hat integrated over [t - h, t + h] in tail form, as mpm_hat_integral */
       const mpm_real h = k->half_len, inv_len = 1 / (2 * h);
-      const mpm_vl one = mpm_vl_splat(1), mone = mpm_vl_splat(-1);
+      const mpm_vl zero = {0};
       mpm_vl dsum = {0};
       for (int q = 0; q < 3; ++q) {
-        const mpm_vl cp = mpm_vl_min(mpm_vl_max(f - (mpm_real)q + h, mone), one);
-        const mpm_vl cm = mpm_vl_min(mpm_vl_max(f - (mpm_real)q - h, mone), one);
-        const mpm_vl acp = mpm_vl_abs(cp), acm = mpm_vl_abs(cm);
-        w[q] = ((cp - cm) - R_(0.5) * (cp * acp - cm * acm)) * inv_len; /* the 1/2 cancels */
-        dw[q] = (acm - acp) * (inv_len * inv_dx);
+        const mpm_vl lo = f - (mpm_real)q - h, hi = f - (mpm_real)q + h;
+        const mpm_vl ulo = mpm_vl_max(1 - mpm_vl_abs(lo), zero);
+        const mpm_vl uhi = mpm_vl_max(1 - mpm_vl_abs(hi), zero);
+        const mpm_vl tlo = R_(0.5) * ulo * ulo, thi = R_(0.5) * uhi * uhi;
+        const mpm_vl inside = 1 - tlo - thi;
+        const mpm_vl integral =
+            mpm_vl_select(lo >= 0, tlo - thi, mpm_vl_select(hi <= 0, thi - tlo, inside));
+        w[q] = integral * inv_len;
+        dw[q] = (uhi - ulo) * (inv_len * inv_dx);
         const mpm_vl r = (mpm_real)q - f;
         dsum += w[q] * r * r;
       }
