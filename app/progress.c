@@ -20,8 +20,10 @@ static void format_eta(double s, char *buf, size_t n) {
     return;
   }
   long t = (long)(s + 0.5);
-  if (t >= 3600) snprintf(buf, n, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  else snprintf(buf, n, "%ld:%02ld", t / 60, t % 60);
+  if (t >= 3600)
+    snprintf(buf, n, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  else
+    snprintf(buf, n, "%ld:%02ld", t / 60, t % 60);
 }
 
 void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t steps,
@@ -39,8 +41,8 @@ void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t st
     char bar[64];
     for (int i = 0; i < width; ++i) bar[i] = i < fill ? '#' : '.';
     bar[width] = '\0';
-    fprintf(stderr, "\r[%s] frame %d/%d  t=%.4g s  %.0f steps/s  ETA %s  %zu particles\033[K",
-            bar, frame, p->frames, sim_time, rate, eta_s, particles);
+    fprintf(stderr, "\r[%s] frame %d/%d  t=%.4g s  %.0f steps/s  ETA %s  %zu particles\033[K", bar,
+            frame, p->frames, sim_time, rate, eta_s, particles);
     fflush(stderr);
     p->drawn = 1;
   } else {

@@ -97,8 +97,9 @@ int mpm_cmd_run(int argc, char **argv) {
     return MPM_EXIT_FAILURE;
   }
   mpm_progress pr;
-  mpm_progress_begin(&pr, quiet ? MPM_PROGRESS_QUIET
-                                : (isatty(STDERR_FILENO) ? MPM_PROGRESS_BAR : MPM_PROGRESS_LINES),
+  mpm_progress_begin(&pr,
+                     quiet ? MPM_PROGRESS_QUIET
+                           : (isatty(STDERR_FILENO) ? MPM_PROGRESS_BAR : MPM_PROGRESS_LINES),
                      sim->frame_count, sim->particles.count);
   if (!quiet)
     fprintf(stderr, "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d threads, %s)\n",
@@ -118,7 +119,8 @@ int mpm_cmd_run(int argc, char **argv) {
   if (code == MPM_EXIT_OK) {
     mpm_progress_end(&pr);
     if (!quiet)
-      fprintf(stderr, "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/frames.pvd in ParaView\n",
+      fprintf(stderr,
+              "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/frames.pvd in ParaView\n",
               sim->frame, (long long)sim->steps, pr.elapsed, sim->output_dir);
   }
   mpm_sim_destroy(sim);

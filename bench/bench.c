@@ -67,8 +67,8 @@ static double median(double *v, int n) {
 }
 
 /* A scene with one box body of neo-Hookean material; caller frees. */
-static void block_scene(mpm_scene *s, double dx, double lo, double hi, double domain,
-                        double ppc, mpm_kernel_kind kernel, mpm_grid_kind grid) {
+static void block_scene(mpm_scene *s, double dx, double lo, double hi, double domain, double ppc,
+                        mpm_kernel_kind kernel, mpm_grid_kind grid) {
   mpm_scene_default(s);
   snprintf(s->name, sizeof s->name, "bench");
   for (int d = 0; d < 3; ++d) {

@@ -31,4 +31,6 @@ const char *test_temp_dir(const char *name) {
   return buf;
 }
 
-const char *test_mpm_bin(void) { return getenv("MPM_BIN"); }
+const char *test_mpm_bin(void) {
+  return getenv("MPM_BIN");
+}

@@ -22,7 +22,8 @@ double test_rand(uint64_t *state, double lo, double hi);
 
 /* |a - b| <= tol, with a message naming what was compared. */
 void assert_close_msg(double a, double b, double tol, const char *what);
-#define assert_close(a, b, tol) assert_close_msg((double)(a), (double)(b), (double)(tol), #a " ~ " #b)
+#define assert_close(a, b, tol)                                                                    \
+  assert_close_msg((double)(a), (double)(b), (double)(tol), #a " ~ " #b)
 
 /* A fresh empty directory under /tmp for a test's files; returns a static buffer. */
 const char *test_temp_dir(const char *name);

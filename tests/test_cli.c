@@ -41,12 +41,13 @@ static int exists(const char *path) {
   return stat(path, &st) == 0;
 }
 
-static const char *good_scene =
-    "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
-    " \"time\": {\"end\": 0.2, \"fps\": 20},"
-    " \"materials\": [{\"name\": \"jello\", \"model\": \"fixed_corotated\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
-    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], \"half_extent\": [0.1,0.1,0.1]},"
-    "               \"material\": \"jello\"}]}";
+static const char *good_scene = "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
+                                " \"time\": {\"end\": 0.2, \"fps\": 20},"
+                                " \"materials\": [{\"name\": \"jello\", \"model\": "
+                                "\"fixed_corotated\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
+                                " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": "
+                                "[0.5,0.5,0.5], \"half_extent\": [0.1,0.1,0.1]},"
+                                "               \"material\": \"jello\"}]}";
 
 static void test_help_and_version(void **state) {
   (void)state;
@@ -79,10 +80,14 @@ static void test_bad_scenes_exit_2_and_write_nothing(void **state) {
        "\"solver\": {\"kernal\": \"cubic\"}, \"materials\": [], \"bodies\": []}",
        "solver.kernal", "kernel"},
       {"{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05}, \"time\": {\"end\": 1},"
-       " \"materials\": [{\"name\": \"j\", \"model\": \"neo_hookean\", \"E\": -5, \"nu\": 0.3, \"density\": 1000}],"
-       " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.5,0.5], \"radius\": 0.1}, \"material\": \"j\"}]}",
+       " \"materials\": [{\"name\": \"j\", \"model\": \"neo_hookean\", \"E\": -5, \"nu\": 0.3, "
+       "\"density\": 1000}],"
+       " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.5,0.5], \"radius\": "
+       "0.1}, \"material\": \"j\"}]}",
        "materials[0].E", "> 0"},
-      {"{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},\n \"time\": {\"end\": 1,}\n}", "line", "JSON"},
+      {"{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},\n \"time\": {\"end\": "
+       "1,}\n}",
+       "line", "JSON"},
   };
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
     snprintf(path, sizeof path, "%s/bad%zu.json", dir, c);
@@ -176,12 +181,13 @@ static void test_blow_up_is_reported(void **state) {
   const char *dir = test_temp_dir("cli-blowup");
   char scene[600], args[1400];
   snprintf(scene, sizeof scene, "%s/scene.json", dir);
-  write_file(scene,
-             "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
-             " \"time\": {\"end\": 0.2, \"fps\": 20},"
-             " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
-             " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], \"half_extent\": [0.1,0.1,0.1]},"
-             "               \"material\": \"j\", \"velocity\": [1e200, 0, 0]}]}");
+  write_file(scene, "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
+                    " \"time\": {\"end\": 0.2, \"fps\": 20},"
+                    " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": "
+                    "1e4, \"nu\": 0.3, \"density\": 1000}],"
+                    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
+                    "\"half_extent\": [0.1,0.1,0.1]},"
+                    "               \"material\": \"j\", \"velocity\": [1e200, 0, 0]}]}");
   snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
   assert_int_equal(mpm(args), 1);
   expect_output("blew up at step");

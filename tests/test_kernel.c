@@ -8,8 +8,8 @@
 
 #include <math.h>
 
-static const mpm_kernel_kind kinds[] = {MPM_KERNEL_LINEAR, MPM_KERNEL_QUADRATIC,
-                                        MPM_KERNEL_CUBIC, MPM_KERNEL_UGIMP};
+static const mpm_kernel_kind kinds[] = {MPM_KERNEL_LINEAR, MPM_KERNEL_QUADRATIC, MPM_KERNEL_CUBIC,
+                                        MPM_KERNEL_UGIMP};
 
 /* 3D weight and gradient of stencil node (i,j,k). */
 static double w3(const mpm_stencil *s, int i, int j, int k) {
@@ -60,9 +60,18 @@ static void check_kernel(mpm_kernel_kind kind, double gimp_len) {
   }
 }
 
-static void test_linear(void **state) { (void)state; check_kernel(MPM_KERNEL_LINEAR, 0); }
-static void test_quadratic(void **state) { (void)state; check_kernel(MPM_KERNEL_QUADRATIC, 0); }
-static void test_cubic(void **state) { (void)state; check_kernel(MPM_KERNEL_CUBIC, 0); }
+static void test_linear(void **state) {
+  (void)state;
+  check_kernel(MPM_KERNEL_LINEAR, 0);
+}
+static void test_quadratic(void **state) {
+  (void)state;
+  check_kernel(MPM_KERNEL_QUADRATIC, 0);
+}
+static void test_cubic(void **state) {
+  (void)state;
+  check_kernel(MPM_KERNEL_CUBIC, 0);
+}
 static void test_ugimp(void **state) {
   (void)state;
   check_kernel(MPM_KERNEL_UGIMP, 0.037 * 0.5);

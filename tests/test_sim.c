@@ -16,7 +16,8 @@ static mpm_sim *sim_from_json(const char *json) {
   mpm_scene scene;
   mpm_error err;
   mpm_error_clear(&err);
-  if (mpm_scene_parse(json, "test.json", &scene, &err) != MPM_OK) fail_msg("scene: %s", err.message);
+  if (mpm_scene_parse(json, "test.json", &scene, &err) != MPM_OK)
+    fail_msg("scene: %s", err.message);
   mpm_sim *sim = NULL;
   if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("sim: %s", err.message);
   mpm_scene_free(&scene);
@@ -31,21 +32,30 @@ static void run_steps(mpm_sim *sim, int n, double dt) {
 /* Two spinning jello cubes flying at each other, far from walls, no gravity. */
 static const char *collide_scene(const char *kernel, const char *transfer, const char *grid) {
   static char buf[2048];
-  snprintf(buf, sizeof buf,
-           "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04},"
-           " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
-           " \"solver\": {\"kernel\": \"%s\", \"transfer\": \"%s\", \"grid\": \"%s\", \"cfl\": 0.4},"
-           " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 2e4, \"nu\": 0.3, \"density\": 1000},"
-           "                 {\"name\": \"n\", \"model\": \"neo_hookean\", \"E\": 3e4, \"nu\": 0.25, \"density\": 800}],"
-           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.38,0.47,0.5], \"half_extent\": [0.08,0.08,0.08]},"
-           "               \"material\": \"j\", \"velocity\": [1.5,0.2,0], \"angular_velocity\": [0,1,4]},"
-           "              {\"shape\": {\"type\": \"sphere\", \"center\": [0.62,0.53,0.5], \"radius\": 0.08},"
-           "               \"material\": \"n\", \"velocity\": [-1.5,-0.2,0.1], \"angular_velocity\": [2,0,-4]}]}",
-           kernel, transfer, grid);
+  snprintf(
+      buf, sizeof buf,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04},"
+      " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
+      " \"solver\": {\"kernel\": \"%s\", \"transfer\": \"%s\", \"grid\": \"%s\", \"cfl\": 0.4},"
+      " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 2e4, \"nu\": 0.3, "
+      "\"density\": 1000},"
+      "                 {\"name\": \"n\", \"model\": \"neo_hookean\", \"E\": 3e4, \"nu\": 0.25, "
+      "\"density\": 800}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.38,0.47,0.5], \"half_extent\": "
+      "[0.08,0.08,0.08]},"
+      "               \"material\": \"j\", \"velocity\": [1.5,0.2,0], \"angular_velocity\": "
+      "[0,1,4]},"
+      "              {\"shape\": {\"type\": \"sphere\", \"center\": [0.62,0.53,0.5], \"radius\": "
+      "0.08},"
+      "               \"material\": \"n\", \"velocity\": [-1.5,-0.2,0.1], \"angular_velocity\": "
+      "[2,0,-4]}]}",
+      kernel, transfer, grid);
   return buf;
 }
 
-static double rel(double a, double b, double scale) { return fabs(a - b) / scale; }
+static double rel(double a, double b, double scale) {
+  return fabs(a - b) / scale;
+}
 
 /* Total particle mass, summed in stable-id order so that reordering cannot change rounding. */
 static double total_mass_by_id(const mpm_sim *sim) {
@@ -72,7 +82,8 @@ static void check_conservation(const char *kernel, const char *transfer, int che
   const double tol = TOL(2e-5, 1e-11);
   for (int k = 0; k < 3; ++k) {
     if (rel(d0.momentum[k], d1.momentum[k], pscale) > tol)
-      fail_msg("%s/%s: momentum[%d] %.10g -> %.10g", kernel, transfer, k, d0.momentum[k], d1.momentum[k]);
+      fail_msg("%s/%s: momentum[%d] %.10g -> %.10g", kernel, transfer, k, d0.momentum[k],
+               d1.momentum[k]);
     if (check_angular && rel(d0.angular_momentum[k], d1.angular_momentum[k], lscale) > tol)
       fail_msg("%s/%s: angular momentum[%d] %.10g -> %.10g", kernel, transfer, k,
                d0.angular_momentum[k], d1.angular_momentum[k]);
@@ -107,7 +118,8 @@ static void test_grid_mass(void **state) {
     for (size_t i = 0; i < sim->particles.count; ++i) particle_mass += sim->particles.mass[i];
     if (g == 0) {
       for (size_t b = 0; b < sim->sparse.block_count; ++b)
-        for (int n = 0; n < MPM_BLOCK_NODES; ++n) grid_mass += sim->sparse.blocks[b].ch[MPM_CH_MASS][n];
+        for (int n = 0; n < MPM_BLOCK_NODES; ++n)
+          grid_mass += sim->sparse.blocks[b].ch[MPM_CH_MASS][n];
     } else {
       for (size_t n = 0; n < sim->dense.count; ++n) grid_mass += sim->dense.ch[MPM_CH_MASS][n];
     }
@@ -123,8 +135,10 @@ static void test_free_fall(void **state) {
   mpm_sim *sim = sim_from_json(
       "{\"domain\": {\"min\": [0,0,0], \"max\": [1,2,1], \"dx\": 0.05}, \"gravity\": [0,-9.81,0],"
       " \"time\": {\"end\": 0.4, \"fps\": 10},"
-      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3, \"density\": 1000}],"
-      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,1.6,0.5], \"half_extent\": [0.1,0.1,0.1]},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3, "
+      "\"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,1.6,0.5], \"half_extent\": "
+      "[0.1,0.1,0.1]},"
       "               \"material\": \"m\"}]}");
   const double g = 9.81, dt = 1e-3;
   const int n = 400;
@@ -152,21 +166,25 @@ static void test_free_fall(void **state) {
 /* A block resting on a floor settles: total energy never grows over 2 s. */
 static void test_resting_block_no_energy_growth(void **state) {
   (void)state;
-  mpm_sim *sim = sim_from_json(
-      "{\"domain\": {\"min\": [0,0,0], \"max\": [0.8,0.8,0.8], \"dx\": 0.04}, \"gravity\": [0,-9.81,0],"
-      " \"time\": {\"end\": 2.0, \"fps\": 20},"
-      " \"materials\": [{\"name\": \"m\", \"model\": \"fixed_corotated\", \"E\": 2e4, \"nu\": 0.3, \"density\": 1000}],"
-      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.4,0.25,0.4], \"half_extent\": [0.12,0.08,0.12]},"
-      "               \"material\": \"m\"}],"
-      " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0,0.16,0], \"normal\": [0,1,0]},"
-      "                  \"rule\": \"sticky\"}]}");
+  mpm_sim *sim = sim_from_json("{\"domain\": {\"min\": [0,0,0], \"max\": [0.8,0.8,0.8], \"dx\": "
+                               "0.04}, \"gravity\": [0,-9.81,0],"
+                               " \"time\": {\"end\": 2.0, \"fps\": 20},"
+                               " \"materials\": [{\"name\": \"m\", \"model\": \"fixed_corotated\", "
+                               "\"E\": 2e4, \"nu\": 0.3, \"density\": 1000}],"
+                               " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": "
+                               "[0.4,0.25,0.4], \"half_extent\": [0.12,0.08,0.12]},"
+                               "               \"material\": \"m\"}],"
+                               " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": "
+                               "[0,0.16,0], \"normal\": [0,1,0]},"
+                               "                  \"rule\": \"sticky\"}]}");
   const double g = 9.81;
   double e0 = -1, emax = 0, elast = 0;
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
     assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
     mpm_diagnostics d = mpm_sim_diagnostics(sim);
     double pot = 0;
-    for (size_t i = 0; i < sim->particles.count; ++i) pot += sim->particles.mass[i] * g * sim->particles.x[1][i];
+    for (size_t i = 0; i < sim->particles.count; ++i)
+      pot += sim->particles.mass[i] * g * sim->particles.x[1][i];
     double e = d.kinetic + d.elastic + pot;
     if (e0 < 0) e0 = e;
     if (e > emax) emax = e;
@@ -249,8 +267,10 @@ static void test_ugimp_lattice_body_stays_finite(void **state) {
   mpm_sim *sim = sim_from_json(
       "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.015}, \"time\": {\"end\": 1},"
       " \"solver\": {\"kernel\": \"ugimp\", \"transfer\": \"flip\"},"
-      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 3e4, \"nu\": 0.3, \"density\": 1000}],"
-      " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.55,0.5], \"radius\": 0.1},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 3e4, \"nu\": 0.3, "
+      "\"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.55,0.5], \"radius\": "
+      "0.1},"
       "               \"material\": \"m\", \"angular_velocity\": [0,2,0]}]}");
   run_steps(sim, 20, 2.5e-4);
   mpm_diagnostics d = mpm_sim_diagnostics(sim);

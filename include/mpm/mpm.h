@@ -66,15 +66,15 @@ int mpm_sim_frame_count(const mpm_sim *sim);
 /// engine's real type (float or double, see real_size).
 typedef struct mpm_particle_view {
   size_t count;
-  size_t real_size;       /* sizeof the real type: 4 or 8 */
-  const void *x[3];       /* position, m */
-  const void *v[3];       /* velocity, m/s */
-  const void *F[9];       /* deformation gradient, row-major */
-  const void *mass;       /* kg */
-  const void *volume0;    /* initial volume, m^3 */
+  size_t real_size;    /* sizeof the real type: 4 or 8 */
+  const void *x[3];    /* position, m */
+  const void *v[3];    /* velocity, m/s */
+  const void *F[9];    /* deformation gradient, row-major */
+  const void *mass;    /* kg */
+  const void *volume0; /* initial volume, m^3 */
   const int32_t *material;
   const int32_t *body;
-  const uint32_t *id;     /* stable particle id */
+  const uint32_t *id; /* stable particle id */
 } mpm_particle_view;
 
 mpm_particle_view mpm_sim_particles(const mpm_sim *sim);

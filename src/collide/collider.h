@@ -18,10 +18,10 @@ typedef struct mpm_collider {
 /* The collider's pose at one time, evaluated once per step and then used for every node. */
 typedef struct mpm_collider_pose {
   const mpm_collider *collider;
-  mpm_real center[3];  /* current centre, m */
-  mpm_real R[9];       /* current rotation (local -> world) */
-  mpm_real velocity[3];/* translational velocity of the centre, m/s */
-  mpm_real omega[3];   /* angular velocity, rad/s */
+  mpm_real center[3];   /* current centre, m */
+  mpm_real R[9];        /* current rotation (local -> world) */
+  mpm_real velocity[3]; /* translational velocity of the centre, m/s */
+  mpm_real omega[3];    /* angular velocity, rad/s */
 } mpm_collider_pose;
 
 int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d); /* 0, or -1 on OOM */

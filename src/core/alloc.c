@@ -70,6 +70,12 @@ void mpm_free(void *p) {
   free(h.raw);
 }
 
-size_t mpm_alloc_live_bytes(void) { return atomic_load(&live_bytes); }
-size_t mpm_alloc_peak_bytes(void) { return atomic_load(&peak_bytes); }
-void mpm_alloc_reset_peak(void) { atomic_store(&peak_bytes, atomic_load(&live_bytes)); }
+size_t mpm_alloc_live_bytes(void) {
+  return atomic_load(&live_bytes);
+}
+size_t mpm_alloc_peak_bytes(void) {
+  return atomic_load(&peak_bytes);
+}
+void mpm_alloc_reset_peak(void) {
+  atomic_store(&peak_bytes, atomic_load(&live_bytes));
+}

@@ -24,12 +24,18 @@ void mpm_error_clear(mpm_error *err) {
 
 const char *mpm_status_string(mpm_status s) {
   switch (s) {
-  case MPM_OK: return "ok";
-  case MPM_ERR_IO: return "i/o error";
-  case MPM_ERR_PARSE: return "parse error";
-  case MPM_ERR_INVALID: return "invalid input";
-  case MPM_ERR_NOMEM: return "out of memory";
-  case MPM_ERR_UNSTABLE: return "simulation unstable";
+  case MPM_OK:
+    return "ok";
+  case MPM_ERR_IO:
+    return "i/o error";
+  case MPM_ERR_PARSE:
+    return "parse error";
+  case MPM_ERR_INVALID:
+    return "invalid input";
+  case MPM_ERR_NOMEM:
+    return "out of memory";
+  case MPM_ERR_UNSTABLE:
+    return "simulation unstable";
   }
   return "unknown status";
 }

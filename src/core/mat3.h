@@ -84,7 +84,9 @@ static inline mpm_real mpm_m3_ddot(const mpm_real A[9], const mpm_real B[9]) {
   return s;
 }
 
-static inline mpm_real mpm_m3_trace(const mpm_real A[9]) { return A[0] + A[4] + A[8]; }
+static inline mpm_real mpm_m3_trace(const mpm_real A[9]) {
+  return A[0] + A[4] + A[8];
+}
 
 /* U diag(s) V^T */
 static inline void mpm_m3_usvt(const mpm_real U[9], const mpm_real s[3], const mpm_real V[9],
@@ -105,7 +107,9 @@ static inline void mpm_v3_cross(const mpm_real a[3], const mpm_real b[3], mpm_re
   c[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-static inline mpm_real mpm_v3_norm(const mpm_real a[3]) { return mpm_sqrt(mpm_v3_dot(a, a)); }
+static inline mpm_real mpm_v3_norm(const mpm_real a[3]) {
+  return mpm_sqrt(mpm_v3_dot(a, a));
+}
 
 /* Rotation matrix for angle theta (rad) about the unit axis a (Rodrigues). */
 static inline void mpm_m3_axis_angle(const mpm_real a[3], mpm_real theta, mpm_real R[9]) {

@@ -4,13 +4,25 @@
 
 #ifdef _OPENMP
 #include <omp.h>
-static inline int mpm_thread_count(void) { return omp_get_max_threads(); }
-static inline int mpm_thread_id(void) { return omp_get_thread_num(); }
-static inline void mpm_set_threads(int n) { if (n > 0) omp_set_num_threads(n); }
+static inline int mpm_thread_count(void) {
+  return omp_get_max_threads();
+}
+static inline int mpm_thread_id(void) {
+  return omp_get_thread_num();
+}
+static inline void mpm_set_threads(int n) {
+  if (n > 0) omp_set_num_threads(n);
+}
 #else
-static inline int mpm_thread_count(void) { return 1; }
-static inline int mpm_thread_id(void) { return 0; }
-static inline void mpm_set_threads(int n) { (void)n; }
+static inline int mpm_thread_count(void) {
+  return 1;
+}
+static inline int mpm_thread_id(void) {
+  return 0;
+}
+static inline void mpm_set_threads(int n) {
+  (void)n;
+}
 #endif
 
 #endif

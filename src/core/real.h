@@ -41,8 +41,12 @@ typedef float mpm_real;
 
 /* fmin/fmax with C99 semantics (a NaN argument loses), inlined: the libm calls are not inlined
  * without -ffast-math and sit in hot loops. */
-static inline mpm_real mpm_fmax(mpm_real a, mpm_real b) { return (a > b || b != b) ? a : b; }
-static inline mpm_real mpm_fmin(mpm_real a, mpm_real b) { return (a < b || b != b) ? a : b; }
+static inline mpm_real mpm_fmax(mpm_real a, mpm_real b) {
+  return (a > b || b != b) ? a : b;
+}
+static inline mpm_real mpm_fmin(mpm_real a, mpm_real b) {
+  return (a < b || b != b) ? a : b;
+}
 
 /* Alignment of every per-particle and per-block array (one AVX-512 line). */
 #define MPM_ALIGN 64

@@ -9,8 +9,8 @@
 #include <stddef.h>
 
 typedef struct mpm_dense_grid {
-  int n[3];       /* nodes per axis */
-  size_t count;   /* n[0] n[1] n[2] */
+  int n[3];                        /* nodes per axis */
+  size_t count;                    /* n[0] n[1] n[2] */
   mpm_real *ch[MPM_GRID_CHANNELS]; /* node (i,j,k) at (i n[1] + j) n[2] + k */
 } mpm_dense_grid;
 

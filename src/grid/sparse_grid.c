@@ -21,7 +21,9 @@ static inline size_t hash_slot(uint64_t key, size_t mask) {
   return (size_t)key & mask;
 }
 
-void mpm_sparse_grid_init(mpm_sparse_grid *g) { memset(g, 0, sizeof *g); }
+void mpm_sparse_grid_init(mpm_sparse_grid *g) {
+  memset(g, 0, sizeof *g);
+}
 
 void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->keys);
@@ -215,8 +217,9 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
     memset(h, 0, keys * sizeof(uint32_t));
     const size_t lo = n * (size_t)t / (size_t)chunks, hi = n * (size_t)(t + 1) / (size_t)chunks;
     for (size_t i = lo; i < hi; ++i) {
-      const uint32_t key = (pkey[i] * (uint32_t)material_count + (uint32_t)mat[i]) * MPM_BLOCK_NODES +
-                           (uint32_t)(pk[i] & 63);
+      const uint32_t key =
+          (pkey[i] * (uint32_t)material_count + (uint32_t)mat[i]) * MPM_BLOCK_NODES +
+          (uint32_t)(pk[i] & 63);
       pkey[i] = key;
       h[key]++;
     }

@@ -3,10 +3,14 @@
 
 const char *mpm_kernel_name(mpm_kernel_kind kind) {
   switch (kind) {
-  case MPM_KERNEL_LINEAR: return "linear";
-  case MPM_KERNEL_QUADRATIC: return "quadratic";
-  case MPM_KERNEL_CUBIC: return "cubic";
-  case MPM_KERNEL_UGIMP: return "ugimp";
+  case MPM_KERNEL_LINEAR:
+    return "linear";
+  case MPM_KERNEL_QUADRATIC:
+    return "quadratic";
+  case MPM_KERNEL_CUBIC:
+    return "cubic";
+  case MPM_KERNEL_UGIMP:
+    return "ugimp";
   }
   return "unknown";
 }
@@ -17,9 +21,18 @@ mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_leng
   k.dx = dx;
   k.inv_dx = 1 / dx;
   switch (kind) {
-  case MPM_KERNEL_LINEAR: k.width = 2; k.shift = 0; break;
-  case MPM_KERNEL_QUADRATIC: k.width = 3; k.shift = R_(0.5); break;
-  case MPM_KERNEL_CUBIC: k.width = 4; k.shift = 1; break;
+  case MPM_KERNEL_LINEAR:
+    k.width = 2;
+    k.shift = 0;
+    break;
+  case MPM_KERNEL_QUADRATIC:
+    k.width = 3;
+    k.shift = R_(0.5);
+    break;
+  case MPM_KERNEL_CUBIC:
+    k.width = 4;
+    k.shift = 1;
+    break;
   case MPM_KERNEL_UGIMP:
     /* support |x_i - x_p| < dx + L_p/2 <= 1.5 dx: three nodes from floor(x/dx - 1/2) */
     k.width = 3;

@@ -30,10 +30,10 @@
 
 typedef struct mpm_kernel {
   mpm_kernel_kind kind;
-  int width;          /* nodes per axis: 2, 3 or 4 */
-  mpm_real shift;     /* base = floor(x/dx - shift) */
+  int width;      /* nodes per axis: 2, 3 or 4 */
+  mpm_real shift; /* base = floor(x/dx - shift) */
   mpm_real dx, inv_dx;
-  mpm_real half_len;  /* uGIMP: L_p / (2 dx), in (0, 1/2] */
+  mpm_real half_len; /* uGIMP: L_p / (2 dx), in (0, 1/2] */
 } mpm_kernel;
 
 /* 1D factors of one particle's stencil. */
@@ -88,9 +88,8 @@ static inline void mpm_apic_factors(const int n, const mpm_real *w, mpm_real f, 
 
 /* 1D weights for grid coordinate xg = (x - origin) / dx: base node, weights, d/dx and APIC
  * factors (arrays of kernel width). Inlined into the transfer loops. */
-static inline __attribute__((always_inline)) int mpm_kernel_1d(const mpm_kernel *k, mpm_real xg,
-                                                                mpm_real *w, mpm_real *dw,
-                                                                mpm_real *a) {
+static inline __attribute__((always_inline)) int
+mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_real *a) {
   const mpm_real inv_dx = k->inv_dx;
   const int base = (int)mpm_floor(xg - k->shift);
   const mpm_real f = xg - (mpm_real)base; /* distance from the base node, in cells */
@@ -146,9 +145,8 @@ static inline __attribute__((always_inline)) int mpm_kernel_1d(const mpm_kernel 
 }
 
 /* Full stencil of a particle at position x (relative to the grid origin, m). */
-static inline __attribute__((always_inline)) void mpm_kernel_stencil(const mpm_kernel *k,
-                                                                     const mpm_real x[3],
-                                                                     mpm_stencil *s) {
+static inline __attribute__((always_inline)) void
+mpm_kernel_stencil(const mpm_kernel *k, const mpm_real x[3], mpm_stencil *s) {
   for (int d = 0; d < 3; ++d)
     s->base[d] = mpm_kernel_1d(k, x[d] * k->inv_dx, s->w[d], s->dw[d], s->a[d]);
 }

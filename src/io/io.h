@@ -30,9 +30,9 @@ mpm_status mpm_make_dirs(const char *path, mpm_error *err);
 /* ---- per-particle fields written with a frame ---- */
 typedef struct mpm_frame_fields {
   const mpm_particles *particles;
-  const mpm_real *J;           /* det F per particle */
-  const mpm_real *stress;      /* von Mises stress per particle, Pa */
-  double time;                 /* s */
+  const mpm_real *J;      /* det F per particle */
+  const mpm_real *stress; /* von Mises stress per particle, Pa */
+  double time;            /* s */
 } mpm_frame_fields;
 
 /* VTK UnstructuredGrid, one vertex cell per particle, binary appended raw data with
@@ -42,8 +42,8 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
 
 /* ParaView collection listing the frame files written so far (file names relative to the
  * PVD's directory). */
-mpm_status mpm_write_pvd(const char *path, int count, const double *times,
-                         const char *const *files, mpm_error *err);
+mpm_status mpm_write_pvd(const char *path, int count, const double *times, const char *const *files,
+                         mpm_error *err);
 
 /* Binary little-endian PLY point cloud: x y z, vx vy vz, and id. */
 mpm_status mpm_write_ply_points(const char *path, const mpm_frame_fields *f, mpm_error *err);

@@ -19,10 +19,10 @@ typedef struct mpm_model mpm_model;
 typedef struct mpm_material {
   const mpm_model *model;
   mpm_model_kind kind;
-  mpm_real mu, lambda;   /* Lamé parameters, Pa */
-  mpm_real density;      /* kg/m^3 */
-  mpm_real min_stretch;  /* neo-Hookean singular-value clamp (Zhu sec. 5.3) */
-  mpm_real wave_speed;   /* sqrt((lambda + 2 mu) / density), m/s: the CFL bound */
+  mpm_real mu, lambda;  /* Lamé parameters, Pa */
+  mpm_real density;     /* kg/m^3 */
+  mpm_real min_stretch; /* neo-Hookean singular-value clamp (Zhu sec. 5.3) */
+  mpm_real wave_speed;  /* sqrt((lambda + 2 mu) / density), m/s: the CFL bound */
 } mpm_material;
 
 struct mpm_model {

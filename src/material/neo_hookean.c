@@ -139,8 +139,8 @@ static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *con
     const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
                    f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
     J[i] = f0 * (f4 * f8 - f5 * f7) - f1 * (f3 * f8 - f5 * f6) + f2 * (f3 * f7 - f4 * f6);
-    const mpm_real ff = f0 * f0 + f1 * f1 + f2 * f2 + f3 * f3 + f4 * f4 + f5 * f5 + f6 * f6 +
-                        f7 * f7 + f8 * f8;
+    const mpm_real ff =
+        f0 * f0 + f1 * f1 + f2 * f2 + f3 * f3 + f4 * f4 + f5 * f5 + f6 * f6 + f7 * f7 + f8 * f8;
     nslow += !(J[i] > 0 && 2 * J[i] >= c * ff); /* see nh_unclamped */
   }
   for (int i = 0; i < n; ++i) lnJ[i] = mpm_log(mpm_fmax(J[i], MPM_REAL_EPS));

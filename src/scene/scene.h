@@ -55,9 +55,9 @@ typedef enum mpm_shape_kind {
 typedef struct mpm_material_desc {
   char name[MPM_NAME_MAX];
   mpm_model_kind model;
-  double E;          /* Young's modulus, Pa (> 0) */
-  double nu;         /* Poisson's ratio, (-1, 0.5) */
-  double density;    /* kg/m^3 (> 0) */
+  double E;           /* Young's modulus, Pa (> 0) */
+  double nu;          /* Poisson's ratio, (-1, 0.5) */
+  double density;     /* kg/m^3 (> 0) */
   double min_stretch; /* neo-Hookean: singular values clamped below this (Zhu 5.3); (0, 1] */
 } mpm_material_desc;
 
@@ -98,9 +98,9 @@ typedef struct mpm_keyframe {
  * angle(t) = angular_speed * t. With keyframes both are piecewise linear and held constant
  * outside the keyframe span. */
 typedef struct mpm_motion_desc {
-  double velocity[3];     /* m/s */
-  double axis[3];         /* unit rotation axis */
-  double angular_speed;   /* rad/s */
+  double velocity[3];   /* m/s */
+  double axis[3];       /* unit rotation axis */
+  double angular_speed; /* rad/s */
   int keyframe_count;
   mpm_keyframe *keyframes; /* owned by the scene; times strictly increasing */
 } mpm_motion_desc;
@@ -110,25 +110,25 @@ typedef struct mpm_collider_desc {
   mpm_shape_desc shape; /* box, sphere, cylinder or half-space (not mesh) */
   int inside_out;       /* 1: the material is kept inside the shape (containers) */
   mpm_boundary_rule rule;
-  double friction;      /* Coulomb coefficient >= 0 (slip and separate) */
+  double friction; /* Coulomb coefficient >= 0 (slip and separate) */
   mpm_motion_desc motion;
 } mpm_collider_desc;
 
 typedef struct mpm_output_desc {
   char directory[MPM_PATH_MAX]; /* default "out"; `mpm run -o` overrides */
-  int vtu;   /* per-frame VTU + PVD index */
-  int ply;   /* per-frame PLY points */
-  int stats; /* stats.csv */
+  int vtu;                      /* per-frame VTU + PVD index */
+  int ply;                      /* per-frame PLY points */
+  int stats;                    /* stats.csv */
 } mpm_output_desc;
 
 typedef struct mpm_solver_desc {
   mpm_kernel_kind kernel;
   mpm_transfer_kind transfer;
   mpm_grid_kind grid;
-  double flip_alpha;     /* FLIP ratio, [0, 1], default 0.95 */
-  double cfl;            /* (0, 1], default 0.4 */
-  double max_dt;         /* s, upper bound on the step (0 = only CFL and frame) */
-  double gimp_length;    /* uGIMP particle box side L_p, m (0 = dx / cbrt(ppc) of the bodies) */
+  double flip_alpha;  /* FLIP ratio, [0, 1], default 0.95 */
+  double cfl;         /* (0, 1], default 0.4 */
+  double max_dt;      /* s, upper bound on the step (0 = only CFL and frame) */
+  double gimp_length; /* uGIMP particle box side L_p, m (0 = dx / cbrt(ppc) of the bodies) */
 } mpm_solver_desc;
 
 typedef struct mpm_scene {
@@ -164,8 +164,8 @@ void mpm_scene_free(mpm_scene *scene);
 /* Load, parse and validate a JSON scene (scene_json.c). Every error names the file and the
  * key path (e.g. "bodies[2].material.E") and says what was expected; nothing else happens. */
 mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err);
-mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages,
-                           mpm_scene *scene, mpm_error *err);
+mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages, mpm_scene *scene,
+                           mpm_error *err);
 
 /* Lamé parameters from E and nu. */
 void mpm_lame(double E, double nu, double *mu, double *lambda);

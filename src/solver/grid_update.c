@@ -43,7 +43,8 @@ void mpm_grid_update_sparse(const mpm_grid_update_ctx *u, mpm_sparse_grid *g) {
     for (int n = 0; n < MPM_BLOCK_NODES; ++n) {
       const int idx[3] = {c[0] * MPM_BLOCK + (n >> 4), c[1] * MPM_BLOCK + ((n >> 2) & 3),
                           c[2] * MPM_BLOCK + (n & 3)};
-      mpm_real mv[3] = {blk->ch[MPM_CH_MV][n], blk->ch[MPM_CH_MV + 1][n], blk->ch[MPM_CH_MV + 2][n]};
+      mpm_real mv[3] = {blk->ch[MPM_CH_MV][n], blk->ch[MPM_CH_MV + 1][n],
+                        blk->ch[MPM_CH_MV + 2][n]};
       mpm_real f[3] = {0, 0, 0};
       if (!u->force_in_momentum)
         for (int d = 0; d < 3; ++d) f[d] = blk->ch[MPM_CH_F + d][n];

@@ -53,8 +53,8 @@ void mpm_particles_free(mpm_particles *p) {
   memset(p, 0, sizeof *p);
 }
 
-long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3],
-                        mpm_real mass, mpm_real vol0, int32_t material, int32_t body) {
+long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3], mpm_real mass,
+                        mpm_real vol0, int32_t material, int32_t body) {
   if (p->count == p->capacity && mpm_particles_reserve(p, p->capacity * 2)) return -1;
   size_t i = p->count++;
   for (int d = 0; d < 3; ++d) {

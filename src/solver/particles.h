@@ -13,14 +13,14 @@
 
 typedef struct mpm_particles {
   size_t count, capacity;
-  mpm_real *x[3];  /* position, m */
-  mpm_real *v[3];  /* velocity, m/s */
-  mpm_real *F[9];  /* deformation gradient, row-major components */
-  mpm_real *B[9];  /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
-                      Storing B rather than C keeps angular momentum exact for every kernel,
-                      including those whose D_p varies with position (linear, uGIMP). */
-  mpm_real *mass;  /* kg */
-  mpm_real *vol0;  /* initial volume V_p^0, m^3 */
+  mpm_real *x[3]; /* position, m */
+  mpm_real *v[3]; /* velocity, m/s */
+  mpm_real *F[9]; /* deformation gradient, row-major components */
+  mpm_real *B[9]; /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
+                     Storing B rather than C keeps angular momentum exact for every kernel,
+                     including those whose D_p varies with position (linear, uGIMP). */
+  mpm_real *mass; /* kg */
+  mpm_real *vol0; /* initial volume V_p^0, m^3 */
   int32_t *material;
   int32_t *body;
   uint32_t *id;
@@ -34,8 +34,8 @@ void mpm_particles_free(mpm_particles *p);
 int mpm_particles_reserve(mpm_particles *p, size_t capacity);
 
 /* Append one particle at rest state (F = I, B = 0); returns its index or -1 on OOM. */
-long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3],
-                        mpm_real mass, mpm_real vol0, int32_t material, int32_t body);
+long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3], mpm_real mass,
+                        mpm_real vol0, int32_t material, int32_t body);
 
 /* Pointers to the 26 real arrays, in a fixed order. */
 void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]);

@@ -30,9 +30,12 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
 
   /* materials */
   sim->material_count = sc->material_count;
-  sim->materials = calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1),
-                          sizeof *sim->materials);
-  if (!sim->materials) { st = oom(err, "materials"); goto fail; }
+  sim->materials =
+      calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof *sim->materials);
+  if (!sim->materials) {
+    st = oom(err, "materials");
+    goto fail;
+  }
   for (int m = 0; m < sc->material_count; ++m)
     mpm_material_init(&sim->materials[m], &sc->materials[m]);
 
@@ -40,7 +43,10 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   sim->collider_count = sc->collider_count;
   sim->colliders = calloc((size_t)(sc->collider_count + 1), sizeof *sim->colliders);
   sim->poses = calloc((size_t)(sc->collider_count + 1), sizeof *sim->poses);
-  if (!sim->colliders || !sim->poses) { st = oom(err, "colliders"); goto fail; }
+  if (!sim->colliders || !sim->poses) {
+    st = oom(err, "colliders");
+    goto fail;
+  }
   for (int c = 0; c < sc->collider_count; ++c)
     if (mpm_collider_init(&sim->colliders[c], &sc->colliders[c])) {
       st = oom(err, "collider keyframes");
@@ -53,7 +59,10 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     sim->cells[d] = (int)lround((sc->domain_max[d] - sc->domain_min[d]) / sc->dx);
   }
   /* particles */
-  if (mpm_particles_init(&sim->particles, 1024)) { st = oom(err, "particles"); goto fail; }
+  if (mpm_particles_init(&sim->particles, 1024)) {
+    st = oom(err, "particles");
+    goto fail;
+  }
   for (int b = 0; b < sc->body_count; ++b) {
     st = mpm_sample_body(sc, b, &sim->particles, err);
     if (st != MPM_OK) goto fail;
@@ -70,7 +79,10 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
 
   if (sc->solver.grid == MPM_GRID_DENSE) {
     const int n[3] = {sim->cells[0] + 3, sim->cells[1] + 3, sim->cells[2] + 3};
-    if (mpm_dense_grid_init(&sim->dense, n)) { st = oom(err, "the dense grid"); goto fail; }
+    if (mpm_dense_grid_init(&sim->dense, n)) {
+      st = oom(err, "the dense grid");
+      goto fail;
+    }
   }
   mpm_sparse_grid_init(&sim->sparse);
   sim->reorder_interval = 16;
@@ -81,7 +93,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   if (sim->frame_count < 1) sim->frame_count = 1;
   sim->wave_speed = 0;
   for (int m = 0; m < sim->material_count; ++m)
-    if (sim->materials[m].wave_speed > sim->wave_speed) sim->wave_speed = sim->materials[m].wave_speed;
+    if (sim->materials[m].wave_speed > sim->wave_speed)
+      sim->wave_speed = sim->materials[m].wave_speed;
   mpm_real vmax2 = 0;
   for (size_t i = 0; i < sim->particles.count; ++i) {
     mpm_real v2 = 0;
@@ -130,11 +143,21 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim);
 }
 
-const char *mpm_sim_last_error(const mpm_sim *sim) { return sim->error.message; }
-double mpm_sim_time(const mpm_sim *sim) { return sim->time; }
-int64_t mpm_sim_steps(const mpm_sim *sim) { return sim->steps; }
-int mpm_sim_frame(const mpm_sim *sim) { return sim->frame; }
-int mpm_sim_frame_count(const mpm_sim *sim) { return sim->frame_count; }
+const char *mpm_sim_last_error(const mpm_sim *sim) {
+  return sim->error.message;
+}
+double mpm_sim_time(const mpm_sim *sim) {
+  return sim->time;
+}
+int64_t mpm_sim_steps(const mpm_sim *sim) {
+  return sim->steps;
+}
+int mpm_sim_frame(const mpm_sim *sim) {
+  return sim->frame;
+}
+int mpm_sim_frame_count(const mpm_sim *sim) {
+  return sim->frame_count;
+}
 
 mpm_particle_view mpm_sim_particles(const mpm_sim *sim) {
   const mpm_particles *p = &sim->particles;

@@ -31,13 +31,13 @@ struct mpm_sim {
   int collider_count;
   mpm_kernel kernel;
   mpm_real origin[3];
-  int cells[3];            /* grid cells per axis over the domain */
+  int cells[3]; /* grid cells per axis over the domain */
   mpm_sparse_grid sparse;
   mpm_dense_grid dense;
-  mpm_real *scratch;       /* per-particle buffers for the periodic reorder */
+  mpm_real *scratch; /* per-particle buffers for the periodic reorder */
   uint32_t *iscratch;
   size_t scratch_capacity;
-  int reorder_interval;    /* physically reorder particles every this many steps */
+  int reorder_interval; /* physically reorder particles every this many steps */
   /* time */
   double time, frame_dt, last_dt;
   int64_t steps;

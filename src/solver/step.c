@@ -106,7 +106,8 @@ mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
   if (sc->solver.grid == MPM_GRID_SPARSE) {
     mpm_sparse_grid *g = &sim->sparse;
     if (mpm_sparse_grid_sort(g, &sim->kernel, sim->origin, sim->material_count, p))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory sorting %zu particles into grid blocks",
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory sorting %zu particles into grid blocks",
                            (long long)sim->steps, p->count);
     if (sim->steps % sim->reorder_interval == 0) {
       /* move particles into block order now and then, so transfers stream through memory */
@@ -151,19 +152,21 @@ mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
   sim->max_speed = r.max_speed;
   if (r.bad_particle >= 0) {
     const long i = r.bad_particle;
-    return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
-                         "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): particle id %u "
-                         "(body %d, material %d) has a non-finite %s; try a smaller solver.cfl or "
-                         "solver.max_dt, or a finer domain.dx",
-                         (long long)sim->steps, sim->time, dt, p->id[i], p->body[i],
-                         p->material[i], bad_quantity(p, i));
+    return mpm_error_set(
+        &sim->error, MPM_ERR_UNSTABLE,
+        "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): particle id %u "
+        "(body %d, material %d) has a non-finite %s; try a smaller solver.cfl or "
+        "solver.max_dt, or a finer domain.dx",
+        (long long)sim->steps, sim->time, dt, p->id[i], p->body[i], p->material[i],
+        bad_quantity(p, i));
   }
   return MPM_OK;
 }
 
 mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   if (sim->frame >= sim->frame_count)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "the simulation already reached its end time");
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "the simulation already reached its end time");
   sim->frame_wall_start = mpm_wall_seconds();
   double end = (sim->frame + 1) * sim->frame_dt;
   if (end > sim->scene.end_time) end = sim->scene.end_time;
@@ -171,8 +174,10 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   while (sim->time < end - 1e-12 * (1 + end)) {
     double remaining = end - sim->time;
     double dt = mpm_sim_cfl_dt(sim);
-    if (dt >= remaining) dt = remaining;
-    else if (dt > 0.5 * remaining) dt = 0.5 * remaining;
+    if (dt >= remaining)
+      dt = remaining;
+    else if (dt > 0.5 * remaining)
+      dt = 0.5 * remaining;
     mpm_status st = mpm_sim_step(sim, dt);
     if (st != MPM_OK) return st;
   }

@@ -1,9 +1,9 @@
 /* g2p.c - grid-to-particle transfer (Gao sec. 3.2 steps 5-6) on the sparse and dense grids.
  *
  * Each particle reads the new (and, for FLIP, old) grid velocity of its stencil and updates
- * v_p (APIC, or alpha FLIP + (1 - alpha) PIC), APIC's B_p, F_p <- (I + dt grad v) F_p and x_p. Particles
- * are independent, so the loop is parallel and deterministic; the reductions (max speed, first
- * bad particle) are order-independent. The sparse version first copies the 8 blocks around an
+ * v_p (APIC, or alpha FLIP + (1 - alpha) PIC), APIC's B_p, F_p <- (I + dt grad v) F_p and x_p.
+ * Particles are independent, so the loop is parallel and deterministic; the reductions (max speed,
+ * first bad particle) are order-independent. The sparse version first copies the 8 blocks around an
  * owner block into a pad and then takes the particles of one cell as SIMD lanes
  * (transfer_lanes.h); the dense reference uses the scalar bodies of transfer_core.h. */
 #include "transfer/transfer.h"
@@ -17,9 +17,9 @@
 
 /* Update particle i from grid channels viewed from node org with strides sx, sy.
  * Returns |v|^2, or -1 when a value is not finite. */
-ALWAYS_INLINE mpm_real update_particle(const int W, const int apic,
-                                       const mpm_transfer_ctx *ctx, mpm_particles *p,
-                                       uint32_t i, const mpm_real *const ch[MPM_GRID_CHANNELS],
+ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_transfer_ctx *ctx,
+                                       mpm_particles *p, uint32_t i,
+                                       const mpm_real *const ch[MPM_GRID_CHANNELS],
                                        const int org[3], long sx, long sy) {
   const mpm_kernel *k = &ctx->kernel;
   const int flip = !apic;
@@ -173,12 +173,24 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
 #pragma omp for schedule(dynamic, 8)
     for (long b = 0; b < nb; ++b) {
       switch (W * 2 + apic) {
-      case 4: g2p_block(2, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      case 5: g2p_block(2, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      case 6: g2p_block(3, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      case 7: g2p_block(3, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      case 8: g2p_block(4, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
-      default: g2p_block(4, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad); break;
+      case 4:
+        g2p_block(2, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        break;
+      case 5:
+        g2p_block(2, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        break;
+      case 6:
+        g2p_block(3, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        break;
+      case 7:
+        g2p_block(3, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        break;
+      case 8:
+        g2p_block(4, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        break;
+      default:
+        g2p_block(4, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        break;
       }
     }
 #pragma omp critical(mpm_g2p_reduce)
@@ -209,9 +221,15 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
     for (long i = 0; i < n; ++i) {
       mpm_real v2;
       switch (W) {
-      case 2: v2 = update_particle(2, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
-      case 3: v2 = update_particle(3, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
-      default: v2 = update_particle(4, apic, ctx, p, (uint32_t)i, ch, org, sx, sy); break;
+      case 2:
+        v2 = update_particle(2, apic, ctx, p, (uint32_t)i, ch, org, sx, sy);
+        break;
+      case 3:
+        v2 = update_particle(3, apic, ctx, p, (uint32_t)i, ch, org, sx, sy);
+        break;
+      default:
+        v2 = update_particle(4, apic, ctx, p, (uint32_t)i, ch, org, sx, sy);
+        break;
       }
       if (v2 < 0) {
         if (my_bad < 0 || i < my_bad) my_bad = i;

@@ -30,9 +30,9 @@ ALWAYS_INLINE void chunk_stress(const mpm_material *mat, const mpm_particles *p,
 
 /* Scatter particles idx[0..n) with stresses tau into channel arrays viewed from node `org`
  * (global node index of ch[..][0]) with strides sx, sy. */
-ALWAYS_INLINE void scatter_chunk(const int W, const int apic,
-                                 const mpm_transfer_ctx *ctx, const mpm_particles *p,
-                                 const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK],
+ALWAYS_INLINE void scatter_chunk(const int W, const int apic, const mpm_transfer_ctx *ctx,
+                                 const mpm_particles *p, const uint32_t *idx, int n,
+                                 mpm_real tau[9][MPM_STRESS_CHUNK],
                                  mpm_real *const ch[MPM_GRID_CHANNELS], const int org[3], long sx,
                                  long sy) {
   const mpm_kernel *k = &ctx->kernel;
@@ -129,7 +129,8 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
     for (int i = 0; i < MPM_BLOCK; ++i)
       for (int j = 0; j < MPM_BLOCK; ++j)
         for (int k = 0; k < MPM_BLOCK; ++k) {
-          const mpm_real *src = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
+          const mpm_real *src =
+              &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
           const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
           for (int c = 0; c < used; ++c) blk->ch[c][n] += src[c];
         }
@@ -144,12 +145,24 @@ void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, mpm_sparse_grid *g, const mpm_p
     for (long q = begin; q < end; ++q) {
       const int32_t b = g->color_blocks[q];
       switch (W * 2 + apic) {
-      case 4: p2g_block(2, 0, ctx, g, p, b); break;
-      case 5: p2g_block(2, 1, ctx, g, p, b); break;
-      case 6: p2g_block(3, 0, ctx, g, p, b); break;
-      case 7: p2g_block(3, 1, ctx, g, p, b); break;
-      case 8: p2g_block(4, 0, ctx, g, p, b); break;
-      default: p2g_block(4, 1, ctx, g, p, b); break;
+      case 4:
+        p2g_block(2, 0, ctx, g, p, b);
+        break;
+      case 5:
+        p2g_block(2, 1, ctx, g, p, b);
+        break;
+      case 6:
+        p2g_block(3, 0, ctx, g, p, b);
+        break;
+      case 7:
+        p2g_block(3, 1, ctx, g, p, b);
+        break;
+      case 8:
+        p2g_block(4, 0, ctx, g, p, b);
+        break;
+      default:
+        p2g_block(4, 1, ctx, g, p, b);
+        break;
       }
     }
   }
@@ -172,9 +185,15 @@ void mpm_p2g_dense(const mpm_transfer_ctx *ctx, mpm_dense_grid *g, const mpm_par
     }
     chunk_stress(&ctx->materials[m], p, idx, n, tau);
     switch (W) {
-    case 2: scatter_chunk(2, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
-    case 3: scatter_chunk(3, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
-    default: scatter_chunk(4, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy); break;
+    case 2:
+      scatter_chunk(2, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy);
+      break;
+    case 3:
+      scatter_chunk(3, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy);
+      break;
+    default:
+      scatter_chunk(4, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy);
+      break;
     }
     i += (size_t)n;
   }

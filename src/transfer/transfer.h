@@ -2,8 +2,8 @@
  * dense grids, with APIC or the PIC/FLIP blend (Gao sec. 3.2 steps 1, 2, 5, 6).
  *
  * P2G accumulates per node: mass m_i = sum m_p w_ip, momentum sum w_ip m_p (v_p + C_p (x_i -
- * x_p)) (the affine term only with APIC; C_p = B_p D_p^{-1}) and force f_i = -sum V_p^0 tau_p grad w_ip with the
- * Kirchhoff stress tau = P F^T, which equals Gao's -sum V^0 J sigma grad w (step 2).
+ * x_p)) (the affine term only with APIC; C_p = B_p D_p^{-1}) and force f_i = -sum V_p^0 tau_p grad
+ * w_ip with the Kirchhoff stress tau = P F^T, which equals Gao's -sum V^0 J sigma grad w (step 2).
  * G2P gathers the new grid velocity: the PIC velocity, the FLIP increment, the velocity
  * gradient for F^{n+1} = (I + dt grad v) F^n (step 5), APIC's B_p, and advects x_p (step 6). */
 #ifndef MPM_TRANSFER_TRANSFER_H
@@ -17,8 +17,8 @@
 
 typedef struct mpm_transfer_ctx {
   mpm_kernel kernel;
-  mpm_real origin[3];      /* grid node (0,0,0), m */
-  mpm_real dt;             /* s */
+  mpm_real origin[3]; /* grid node (0,0,0), m */
+  mpm_real dt;        /* s */
   mpm_transfer_kind transfer;
   mpm_real flip_alpha;
   const mpm_material *materials;
@@ -28,8 +28,8 @@ typedef struct mpm_transfer_ctx {
 
 /* What G2P reports back for the next step and for blow-up detection. */
 typedef struct mpm_g2p_result {
-  mpm_real max_speed;    /* max |v_p|, m/s */
-  long bad_particle;     /* index of a particle with a non-finite value, or -1 */
+  mpm_real max_speed; /* max |v_p|, m/s */
+  long bad_particle;  /* index of a particle with a non-finite value, or -1 */
 } mpm_g2p_result;
 
 /* Sparse grid: particles visited in the order g->perm computed by mpm_sparse_grid_sort. */

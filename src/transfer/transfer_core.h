@@ -14,8 +14,9 @@
  * D^{-1}(x_i - x_p) w factor is the stencil's `a` vector), and force K grad w with
  * K = -V0 tau. mB = m B (row-major) or NULL for PIC/FLIP. */
 MPM_ALWAYS_INLINE void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_real m,
-                                    const mpm_real mv[3], const mpm_real *mB, const mpm_real K[9],
-                                    mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy) {
+                                        const mpm_real mv[3], const mpm_real *mB,
+                                        const mpm_real K[9], mpm_real *const ch[MPM_GRID_CHANNELS],
+                                        long sx, long sy) {
   for (int i = 0; i < W; ++i)
     for (int j = 0; j < W; ++j) {
       const mpm_real wij = s->w[0][i] * s->w[1][j];
@@ -47,17 +48,17 @@ MPM_ALWAYS_INLINE void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_r
 
 /* Gathered grid quantities at one particle. */
 typedef struct mpm_g2p_gather {
-  mpm_real v[3];      /* PIC velocity sum w v^{n+1} */
-  mpm_real dv[3];     /* FLIP increment sum w (v^{n+1} - v^n) */
-  mpm_real grad[9];   /* sum v^{n+1} grad w^T */
-  mpm_real B[9];      /* APIC: B_p = sum w v^{n+1} (x_i - x_p)^T */
+  mpm_real v[3];    /* PIC velocity sum w v^{n+1} */
+  mpm_real dv[3];   /* FLIP increment sum w (v^{n+1} - v^n) */
+  mpm_real grad[9]; /* sum v^{n+1} grad w^T */
+  mpm_real B[9];    /* APIC: B_p = sum w v^{n+1} (x_i - x_p)^T */
 } mpm_g2p_gather;
 
 /* f = distance of the particle from its base node in cells; dx the cell size. */
 MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
-                                    mpm_real dx, int flip, int apic,
-                                    const mpm_real *const ch[MPM_GRID_CHANNELS], long sx, long sy,
-                                    mpm_g2p_gather *o) {
+                                        mpm_real dx, int flip, int apic,
+                                        const mpm_real *const ch[MPM_GRID_CHANNELS], long sx,
+                                        long sy, mpm_g2p_gather *o) {
   mpm_real v0 = 0, v1 = 0, v2 = 0, d0 = 0, d1 = 0, d2 = 0;
   mpm_real G[9] = {0}, B[9] = {0};
   for (int i = 0; i < W; ++i)
@@ -81,20 +82,36 @@ MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const
           d2 += w * (uz - ch[MPM_CH_VOLD + 2][n]);
         }
         const mpm_real gx = gx_ij * wz, gy = gy_ij * wz, gz = wij * s->dw[2][k];
-        G[0] += ux * gx; G[1] += ux * gy; G[2] += ux * gz;
-        G[3] += uy * gx; G[4] += uy * gy; G[5] += uy * gz;
-        G[6] += uz * gx; G[7] += uz * gy; G[8] += uz * gz;
+        G[0] += ux * gx;
+        G[1] += ux * gy;
+        G[2] += ux * gz;
+        G[3] += uy * gx;
+        G[4] += uy * gy;
+        G[5] += uy * gz;
+        G[6] += uz * gx;
+        G[7] += uz * gy;
+        G[8] += uz * gz;
         if (apic) {
           const mpm_real rz = ((mpm_real)k - f[2]) * dx;
           const mpm_real ax = w * rx, ay = w * ry, az = w * rz;
-          B[0] += ux * ax; B[1] += ux * ay; B[2] += ux * az;
-          B[3] += uy * ax; B[4] += uy * ay; B[5] += uy * az;
-          B[6] += uz * ax; B[7] += uz * ay; B[8] += uz * az;
+          B[0] += ux * ax;
+          B[1] += ux * ay;
+          B[2] += ux * az;
+          B[3] += uy * ax;
+          B[4] += uy * ay;
+          B[5] += uy * az;
+          B[6] += uz * ax;
+          B[7] += uz * ay;
+          B[8] += uz * az;
         }
       }
     }
-  o->v[0] = v0; o->v[1] = v1; o->v[2] = v2;
-  o->dv[0] = d0; o->dv[1] = d1; o->dv[2] = d2;
+  o->v[0] = v0;
+  o->v[1] = v1;
+  o->v[2] = v2;
+  o->dv[0] = d0;
+  o->dv[1] = d1;
+  o->dv[2] = d2;
   for (int c = 0; c < 9; ++c) {
     o->grad[c] = G[c];
     o->B[c] = B[c];

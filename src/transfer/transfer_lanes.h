@@ -108,13 +108,20 @@ typedef struct mpm_lane_stencil {
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_select(mpm_vl_index mask, mpm_vl a, mpm_vl b) {
   return (mpm_vl)(((mpm_vl_index)a & mask) | ((mpm_vl_index)b & ~mask));
 }
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_min(mpm_vl a, mpm_vl b) { return mpm_vl_select(a < b, a, b); }
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_max(mpm_vl a, mpm_vl b) { return mpm_vl_select(a > b, a, b); }
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_abs(mpm_vl a) { return mpm_vl_max(a, -a); }
+MPM_ALWAYS_INLINE mpm_vl mpm_vl_min(mpm_vl a, mpm_vl b) {
+  return mpm_vl_select(a < b, a, b);
+}
+MPM_ALWAYS_INLINE mpm_vl mpm_vl_max(mpm_vl a, mpm_vl b) {
+  return mpm_vl_select(a > b, a, b);
+}
+MPM_ALWAYS_INLINE mpm_vl mpm_vl_abs(mpm_vl a) {
+  return mpm_vl_max(a, -a);
+}
 
-/* Stencils of n particles that share their base node (the APIC factors a only if need_a) (lanes >= n copy lane 0 so that every
- * value stays finite). Because the base is common, the weights are polynomials of the lane's
- * offset f from it and vectorize without branches (uGIMP's piecewise integrals become selects). */
+/* Stencils of n particles that share their base node (the APIC factors a only if need_a) (lanes >=
+ * n copy lane 0 so that every value stays finite). Because the base is common, the weights are
+ * polynomials of the lane's offset f from it and vectorize without branches (uGIMP's piecewise
+ * integrals become selects). */
 MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real *const x[3],
                                              const mpm_real origin[3], const uint32_t *idx, int n,
                                              int contiguous, const int need_a, int base[3],
@@ -191,8 +198,7 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
  * K[9] (dt K when fused). fused = APIC: force folded into the momentum channel. */
 MPM_ALWAYS_INLINE void mpm_p2g_lanes(const int W, const int fused, const mpm_lane_stencil *s,
                                      mpm_vl m, const mpm_vl mv[3], const mpm_vl mB[9],
-                                     const mpm_vl K[9], mpm_real *pad, long off, long sx,
-                                     long sy) {
+                                     const mpm_vl K[9], mpm_real *pad, long off, long sx, long sy) {
   mpm_vl X[3][MPM_STENCIL_MAX], Y[3][MPM_STENCIL_MAX], Z[3][MPM_STENCIL_MAX];
   mpm_vl FX[3][MPM_STENCIL_MAX], FY[3][MPM_STENCIL_MAX], FZ[3][MPM_STENCIL_MAX];
   for (int d = 0; d < 3; ++d)
@@ -271,8 +277,10 @@ MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane
           const mpm_vl u = mpm_vl_splat(node[d]);
           Z0[d] += s->w[2][k] * u;
           Z1[d] += s->dw[2][k] * u;
-          if (apic) Z2[d] += rw[2][k] * u;
-          else ZD[d] += s->w[2][k] * (u - node[3 + d]);
+          if (apic)
+            Z2[d] += rw[2][k] * u;
+          else
+            ZD[d] += s->w[2][k] * (u - node[3 + d]);
         }
       }
       for (int d = 0; d < 3; ++d) {
