@@ -51,27 +51,22 @@ const char *mpm_kernel_name(mpm_kernel_kind kind);
 
 /* ---- implementation (inline so that the transfer loops see through it) ---- */
 
-/* Integral of the unit hat max(0, 1 - |s|) beyond |t| (towards the nearer end of its support):
- * U(t) = (1 - min(|t|, 1))^2 / 2. */
-static inline mpm_real mpm_hat_tail(mpm_real t) {
-  mpm_real u = 1 - mpm_fabs(t);
-  u = u > 0 ? u : 0;
-  return R_(0.5) * u * u;
-}
-
-/* Integral of the unit hat over [a, b], a <= b, written with tails so that a weight near the
- * edge of the support is a difference of two small numbers, never of two numbers near 1: the
- * plain antiderivative H(b) - H(a) loses every digit there in float and can even turn a tiny
- * weight negative, which then gives a node a tiny negative mass and an enormous velocity. */
-static inline mpm_real mpm_hat_integral(mpm_real a, mpm_real b) {
-  if (a >= 0) return mpm_hat_tail(a) - mpm_hat_tail(b);
-  if (b <= 0) return mpm_hat_tail(b) - mpm_hat_tail(a);
-  return 1 - mpm_hat_tail(a) - mpm_hat_tail(b);
-}
-
-static inline mpm_real mpm_hat(mpm_real t) {
-  mpm_real u = 1 - mpm_fabs(t);
-  return u > 0 ? u : 0;
+/* uGIMP weight of an outer stencil node and its derivative with respect to the node distance
+ * d in [1/2, 3/2] (cells), for a particle box of half width h <= 1/2 (Gao eq. 5 in 1D):
+ * the hat 1 - d integrated over [d - h, d + h] / 2h. With x = 1 - d: w = x while the whole box
+ * lies inside the hat's support (x >= h), else w = (x + h)^2 / 4h. Written so that a weight
+ * near the edge of the support is the square of a small number, never a difference of
+ * numbers near 1: the latter loses every digit in float and can turn a tiny weight negative,
+ * which gives a node a tiny negative mass and an enormous velocity. */
+static inline mpm_real mpm_ugimp_outer(mpm_real d, mpm_real h, mpm_real *dw_dd) {
+  const mpm_real x = 1 - d;
+  if (x >= h) {
+    *dw_dd = -1;
+    return x;
+  }
+  const mpm_real q = x + h > 0 ? x + h : 0;
+  *dw_dd = -q / (2 * h);
+  return q * q / (4 * h);
 }
 
 /* APIC factor a_i = w_i (x_i - x_p) / sum_j w_j (x_j - x_p)^2 (see the header comment). */
@@ -130,13 +125,16 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
     break;
   }
   case MPM_KERNEL_UGIMP: {
-    /* Gao eq. 5: w_i = (1/L) int_{x-L/2}^{x+L/2} N_i; eq. 6: dw_i = (N_i(x+L/2)-N_i(x-L/2))/L */
-    const mpm_real h = k->half_len, inv_len = 1 / (2 * h);
-    for (int i = 0; i < 3; ++i) {
-      mpm_real t = f - (mpm_real)i;
-      w[i] = mpm_hat_integral(t - h, t + h) * inv_len;
-      dw[i] = (mpm_hat(t + h) - mpm_hat(t - h)) * inv_len * inv_dx;
-    }
+    /* Gao eqs. 5-6 in 1D. The support |x_i - x_p| < dx + L_p/2 <= 1.5 dx covers three nodes;
+       the outer two in closed form, the middle one by partition of unity. */
+    const mpm_real h = k->half_len;
+    mpm_real g0, g2;
+    w[0] = mpm_ugimp_outer(f, h, &g0);
+    w[2] = mpm_ugimp_outer(2 - f, h, &g2);
+    w[1] = 1 - w[0] - w[2];
+    dw[0] = g0 * inv_dx;  /* d(distance)/dx = +1 for node 0 */
+    dw[2] = -g2 * inv_dx; /* and -1 for node 2 */
+    dw[1] = -dw[0] - dw[2];
     mpm_apic_factors(3, w, f, inv_dx, a);
     break;
   }

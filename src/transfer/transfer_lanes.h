@@ -168,20 +168,20 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
       break;
     }
     case MPM_KERNEL_UGIMP: {
-      /* the hat integrated over [t - h, t + h] in tail form, as mpm_hat_integral */
-      const mpm_real h = k->half_len, inv_len = 1 / (2 * h);
-      const mpm_vl zero = {0};
+      /* see mpm_ugimp_outer in kernel.h: outer nodes in closed form, the middle one by
+         partition of unity */
+      const mpm_real h = k->half_len, inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
+      const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
+      const mpm_vl x0 = 1 - f, x2 = f - 1; /* 1 - distance to nodes 0 and 2 */
+      const mpm_vl q0 = mpm_vl_max(x0 + h, zero), q2 = mpm_vl_max(x2 + h, zero);
+      w[0] = mpm_vl_select(x0 >= hv, x0, q0 * q0 * inv_4h);
+      w[2] = mpm_vl_select(x2 >= hv, x2, q2 * q2 * inv_4h);
+      w[1] = 1 - w[0] - w[2];
+      dw[0] = mpm_vl_select(x0 >= hv, mpm_vl_splat(-inv_dx), q0 * (-inv_2h * inv_dx));
+      dw[2] = mpm_vl_select(x2 >= hv, mpm_vl_splat(inv_dx), q2 * (inv_2h * inv_dx));
+      dw[1] = -dw[0] - dw[2];
       mpm_vl dsum = {0};
       for (int q = 0; q < 3; ++q) {
-        const mpm_vl lo = f - (mpm_real)q - h, hi = f - (mpm_real)q + h;
-        const mpm_vl ulo = mpm_vl_max(1 - mpm_vl_abs(lo), zero);
-        const mpm_vl uhi = mpm_vl_max(1 - mpm_vl_abs(hi), zero);
-        const mpm_vl tlo = R_(0.5) * ulo * ulo, thi = R_(0.5) * uhi * uhi;
-        const mpm_vl inside = 1 - tlo - thi;
-        const mpm_vl integral =
-            mpm_vl_select(lo >= 0, tlo - thi, mpm_vl_select(hi <= 0, thi - tlo, inside));
-        w[q] = integral * inv_len;
-        dw[q] = (uhi - ulo) * (inv_len * inv_dx);
         const mpm_vl r = (mpm_real)q - f;
         dsum += w[q] * r * r;
       }
