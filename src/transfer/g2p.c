@@ -125,9 +125,11 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
     const mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
     const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
               oz = (o & 1) * MPM_BLOCK;
-    for (int i = 0; i < MPM_BLOCK; ++i)
-      for (int j = 0; j < MPM_BLOCK; ++j)
-        for (int k = 0; k < MPM_BLOCK; ++k) {
+    /* stencils reach only W - 1 nodes into the forward blocks */
+    const int ni = ox ? W - 1 : MPM_BLOCK, nj = oy ? W - 1 : MPM_BLOCK, nk = oz ? W - 1 : MPM_BLOCK;
+    for (int i = 0; i < ni; ++i)
+      for (int j = 0; j < nj; ++j)
+        for (int k = 0; k < nk; ++k) {
           mpm_real *dst = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
           const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
           for (int d = 0; d < 3; ++d) {
