@@ -37,6 +37,7 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->perm);
   mpm_free(g->pkey64);
   mpm_free(g->hist);
+  mpm_free(g->run_index);
   memset(g, 0, sizeof *g);
 }
 
@@ -146,6 +147,9 @@ static inline uint64_t particle_key(int32_t ix, int32_t iy, int32_t iz) {
   return (bx | by << 19 | bz << 38) << 6 | cell;
 }
 
+/* Chunks of the parallel passes: one per thread, at most this many. */
+#define MPM_MAX_CHUNKS 256
+
 static int ensure_u32(uint32_t **a, size_t *cap, size_t need) {
   if (need <= *cap) return 0;
   mpm_free(*a);
@@ -183,21 +187,52 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
     const int32_t iz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift);
     pk[i] = particle_key(ix, iy, iz);
   }
-  /* 2. block indices through the hash, serially (first-seen order, so deterministic).
-   *    Consecutive particles mostly share a block (they were sorted before): cache the last. */
-  uint64_t last = UINT64_MAX;
-  int32_t last_block = -1;
+  /* 2. block indices through the hash. Particles come mostly in runs of one block (they were
+   *    sorted before), so only run starts are looked up: the runs are found in parallel, looked
+   *    up serially in particle order (first-seen order: deterministic for any thread count),
+   *    and the indices are spread over the runs in parallel again. */
+  const int threads = mpm_thread_count();
+  const int nch = threads < MPM_MAX_CHUNKS ? threads : MPM_MAX_CHUNKS;
+  size_t run_count[MPM_MAX_CHUNKS + 1] = {0};
+#pragma omp parallel for schedule(static, 1)
+  for (int t = 0; t < nch; ++t) {
+    const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
+    size_t c = 0;
+    for (size_t i = lo; i < hi; ++i) c += i == lo || (pk[i] >> 6) != (pk[i - 1] >> 6);
+    run_count[t + 1] = c;
+  }
+  for (int t = 0; t < nch; ++t) run_count[t + 1] += run_count[t];
+  if (ensure_u32(&g->run_index, &g->run_capacity, run_count[nch] + 1)) return -1;
+  uint32_t *runs = g->run_index;
+#pragma omp parallel for schedule(static, 1)
+  for (int t = 0; t < nch; ++t) {
+    const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
+    size_t r = run_count[t];
+    for (size_t i = lo; i < hi; ++i)
+      if (i == lo || (pk[i] >> 6) != (pk[i - 1] >> 6)) runs[r++] = (uint32_t)i;
+  }
   const uint64_t mask19 = (1u << 19) - 1;
-  for (size_t i = 0; i < n; ++i) {
-    const uint64_t bk = pk[i] >> 6;
-    if (bk != last) {
-      last_block = find_or_insert(g, (int32_t)(bk & mask19) - PKEY_BIAS,
-                                  (int32_t)((bk >> 19) & mask19) - PKEY_BIAS,
-                                  (int32_t)((bk >> 38) & mask19) - PKEY_BIAS);
-      if (last_block < 0) return -1;
-      last = bk;
+  for (size_t r = 0; r < run_count[nch]; ++r) {
+    const uint64_t bk = pk[runs[r]] >> 6;
+    const int32_t b = find_or_insert(g, (int32_t)(bk & mask19) - PKEY_BIAS,
+                                     (int32_t)((bk >> 19) & mask19) - PKEY_BIAS,
+                                     (int32_t)((bk >> 38) & mask19) - PKEY_BIAS);
+    if (b < 0) return -1;
+    g->pkey[runs[r]] = (uint32_t)b;
+  }
+  uint32_t *pkey = g->pkey;
+#pragma omp parallel for schedule(static, 1)
+  for (int t = 0; t < nch; ++t) {
+    const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
+    size_t r = run_count[t];
+    uint32_t cur = 0;
+    for (size_t i = lo; i < hi; ++i) {
+      if (r < run_count[t + 1] && runs[r] == i) {
+        cur = pkey[i];
+        ++r;
+      }
+      pkey[i] = cur;
     }
-    g->pkey[i] = (uint32_t)last_block;
   }
   g->owner_count = g->block_count;
   g->particle_count = n;
@@ -205,17 +240,16 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   /* 3. stable counting sort by (block, material, cell), with per-chunk histograms: the result is
    *    the unique stable order, the same for any number of threads. */
   const size_t keys = g->owner_count * (size_t)material_count * MPM_BLOCK_NODES;
-  const int chunks = mpm_thread_count();
   if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) ||
-      ensure_u32(&g->hist, &g->hist_capacity, keys * (size_t)chunks))
+      ensure_u32(&g->hist, &g->hist_capacity, keys * (size_t)nch))
     return -1;
-  uint32_t *cs = g->cell_start, *hist = g->hist, *pkey = g->pkey;
+  uint32_t *cs = g->cell_start, *hist = g->hist;
   const int32_t *mat = p->material;
 #pragma omp parallel for schedule(static, 1)
-  for (int t = 0; t < chunks; ++t) {
+  for (int t = 0; t < nch; ++t) {
     uint32_t *h = hist + (size_t)t * keys;
     memset(h, 0, keys * sizeof(uint32_t));
-    const size_t lo = n * (size_t)t / (size_t)chunks, hi = n * (size_t)(t + 1) / (size_t)chunks;
+    const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
     for (size_t i = lo; i < hi; ++i) {
       const uint32_t key =
           (pkey[i] * (uint32_t)material_count + (uint32_t)mat[i]) * MPM_BLOCK_NODES +
@@ -227,7 +261,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   uint32_t run = 0;
   for (size_t key = 0; key < keys; ++key) {
     cs[key] = run;
-    for (int t = 0; t < chunks; ++t) {
+    for (int t = 0; t < nch; ++t) {
       const uint32_t c = hist[(size_t)t * keys + key];
       hist[(size_t)t * keys + key] = run;
       run += c;
@@ -235,9 +269,9 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   }
   cs[keys] = run;
 #pragma omp parallel for schedule(static, 1)
-  for (int t = 0; t < chunks; ++t) {
+  for (int t = 0; t < nch; ++t) {
     uint32_t *h = hist + (size_t)t * keys;
-    const size_t lo = n * (size_t)t / (size_t)chunks, hi = n * (size_t)(t + 1) / (size_t)chunks;
+    const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
     for (size_t i = lo; i < hi; ++i) g->perm[h[pkey[i]]++] = (uint32_t)i;
   }
 

@@ -48,6 +48,8 @@ typedef struct mpm_sparse_grid {
   uint32_t *pkey, *perm;
   uint32_t *hist;
   size_t hist_capacity;
+  uint32_t *run_index; /* starts of runs of particles in one block */
+  size_t run_capacity;
   size_t particle_capacity;
   size_t particle_count; /* particles sorted by the last mpm_sparse_grid_sort */
 } mpm_sparse_grid;
