@@ -2,12 +2,14 @@
 JOBS ?= 2
 BUILD ?= build
 BUILD_DOUBLE ?= build-double
+BUILD_SANITIZE ?= build-sanitize
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
 DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev
 
-.PHONY: all deps build build-double demo test test-float test-double bench clean format
+.PHONY: all deps build build-double build-sanitize demo test test-float test-double \
+	test-sanitize bench clean format
 
 all: build
 
@@ -30,17 +32,26 @@ build-double: deps
 	cmake -S . -B $(BUILD_DOUBLE) -DCMAKE_BUILD_TYPE=Release -DMPM_DOUBLE=ON $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD_DOUBLE) -j $(JOBS)
 
+# AddressSanitizer + UndefinedBehaviorSanitizer build of the library and tests
+build-sanitize: deps
+	cmake -S . -B $(BUILD_SANITIZE) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_SANITIZE=ON $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD_SANITIZE) -j $(JOBS)
+
 demo: build
 	./$(BUILD)/mpm run $(DEMO_SCENE) -o out
 
-# The whole suite, in the default float build and in the double build.
-test: test-float test-double
+# The whole suite: the default float build, the double build, and float under ASan + UBSan.
+test: test-float test-double test-sanitize
 
 test-float: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-double: build-double
 	cd $(BUILD_DOUBLE) && ctest --output-on-failure -j $(JOBS)
+
+test-sanitize: build-sanitize
+	cd $(BUILD_SANITIZE) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+	  ctest --output-on-failure -j $(JOBS)
 
 bench: build
 	./$(BUILD)/mpm bench step
@@ -50,4 +61,4 @@ format:
 	clang-format -i $$(git ls-files '*.c' '*.h')
 
 clean:
-	rm -rf $(BUILD) $(BUILD_DOUBLE) out
+	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) out
