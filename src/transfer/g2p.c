@@ -130,11 +130,12 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
     for (int i = 0; i < ni; ++i)
       for (int j = 0; j < nj; ++j)
         for (int k = 0; k < nk; ++k) {
-          mpm_real *dst = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
+          mpm_real *dst = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) *
+                               MPM_PAD_STRIDE(apic)];
           const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
           for (int d = 0; d < 3; ++d) {
             dst[d] = blk->ch[MPM_CH_VNEW + d][n];
-            dst[3 + d] = apic ? 0 : blk->ch[MPM_CH_VOLD + d][n];
+            if (!apic) dst[3 + d] = blk->ch[MPM_CH_VOLD + d][n];
           }
         }
   }

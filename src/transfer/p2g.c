@@ -82,8 +82,9 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
                              mpm_sparse_grid *g, const mpm_particles *p, int32_t b) {
   /* with APIC the force is fused into the momentum: only mass and momentum are used */
   const int used = apic ? MPM_CH_F : MPM_GRID_CHANNELS;
+  const int stride = MPM_PAD_STRIDE(apic);
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
-  memset(pad, 0, sizeof pad);
+  memset(pad, 0, (size_t)MPM_PAD_NODES * (size_t)stride * sizeof(mpm_real));
   /* the 8 blocks are written at the end: ask for them now */
   for (int o = 0; o < 8; ++o)
     for (int c = 0; c < used; ++c)
@@ -132,7 +133,7 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
       for (int j = 0; j < nj; ++j)
         for (int k = 0; k < nk; ++k) {
           const mpm_real *src =
-              &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * 8];
+              &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * stride];
           const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
           for (int c = 0; c < used; ++c) blk->ch[c][n] += src[c];
         }

@@ -24,6 +24,11 @@
 
 #define MPM_LANES 8
 typedef mpm_real mpm_vl __attribute__((vector_size(MPM_LANES * sizeof(mpm_real))));
+typedef mpm_real mpm_vq __attribute__((vector_size(4 * sizeof(mpm_real))));
+
+/* Reals per node in the AoS pads: APIC needs 4 (mass, momentum / velocity), PIC/FLIP 8 (mass,
+ * momentum, force / new and old velocity). */
+#define MPM_PAD_STRIDE(apic) ((apic) ? 4 : 8)
 #ifdef MPM_USE_DOUBLE
 typedef int64_t mpm_vl_index __attribute__((vector_size(MPM_LANES * sizeof(int64_t))));
 #else
@@ -194,8 +199,8 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
 }
 
 /* P2G of one batch into an AoS pad (8 reals per node: mass, momentum or p, force, unused).
- * node(i,j,k) is at pad[(off + i*sx + j*sy + k) * 8]. Lane inputs: m, mv[3], mB[9] (APIC),
- * K[9] (dt K when fused). fused = APIC: force folded into the momentum channel. */
+ * node(i,j,k) is at pad[(off + i*sx + j*sy + k) * MPM_PAD_STRIDE(fused)]. Lane inputs: m, mv[3],
+ * mB[9] (APIC), K[9] (dt K when fused). fused = APIC: force folded into the momentum channel. */
 MPM_ALWAYS_INLINE void mpm_p2g_lanes(const int W, const int fused, const mpm_lane_stencil *s,
                                      mpm_vl m, const mpm_vl mv[3], const mpm_vl mB[9],
                                      const mpm_vl K[9], mpm_real *pad, long off, long sx, long sy) {
@@ -225,14 +230,19 @@ MPM_ALWAYS_INLINE void mpm_p2g_lanes(const int W, const int fused, const mpm_lan
       }
       for (int k = 0; k < W; ++k) {
         const mpm_vl wz = s->w[2][k];
-        mpm_real *node = pad + (off + i * sx + j * sy + k) * 8;
-        mpm_vl node_v;
-        __builtin_memcpy(&node_v, node, sizeof node_v);
+        mpm_real *node = pad + (off + i * sx + j * sy + k) * MPM_PAD_STRIDE(fused);
         if (fused) {
           mpm_vl c[4] = {mwxy * wz, wz * U[0] + wxy * Z[0][k], wz * U[1] + wxy * Z[1][k],
                          wz * U[2] + wxy * Z[2][k]};
-          node_v += mpm_vl_sum4(c);
+          const mpm_vl sum = mpm_vl_sum4(c);
+          mpm_vq node_q, sum_q;
+          __builtin_memcpy(&node_q, node, sizeof node_q);
+          __builtin_memcpy(&sum_q, &sum, sizeof sum_q); /* lanes 0..3 */
+          node_q += sum_q;
+          __builtin_memcpy(node, &node_q, sizeof node_q);
         } else {
+          mpm_vl node_v;
+          __builtin_memcpy(&node_v, node, sizeof node_v);
           const mpm_vl zero = {0};
           mpm_vl c[8] = {mwxy * wz,
                          wz * U[0],
@@ -243,8 +253,8 @@ MPM_ALWAYS_INLINE void mpm_p2g_lanes(const int W, const int fused, const mpm_lan
                          wz * UF[2] + wxy * FZ[2][k],
                          zero};
           node_v += mpm_vl_sum8(c);
+          __builtin_memcpy(node, &node_v, sizeof node_v);
         }
-        __builtin_memcpy(node, &node_v, sizeof node_v);
       }
     }
   }
@@ -255,7 +265,7 @@ typedef struct mpm_g2p_lanes_out {
   mpm_vl v[3], dv[3], grad[9], B[9];
 } mpm_g2p_lanes_out;
 
-/* G2P of one batch from an AoS pad (8 reals per node: v_new xyz, v_old xyz, unused). */
+/* G2P of one batch from an AoS pad (per node: v_new xyz, then for FLIP v_old xyz). */
 MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane_stencil *s,
                                      mpm_real dx, const mpm_real *pad, long off, long sx, long sy,
                                      mpm_g2p_lanes_out *o) {
@@ -272,7 +282,7 @@ MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane
       mpm_vl Z0[3], Z1[3], Z2[3], ZD[3];
       for (int d = 0; d < 3; ++d) Z0[d] = Z1[d] = Z2[d] = ZD[d] = zero;
       for (int k = 0; k < W; ++k) {
-        const mpm_real *node = pad + (off + i * sx + j * sy + k) * 8;
+        const mpm_real *node = pad + (off + i * sx + j * sy + k) * MPM_PAD_STRIDE(apic);
         for (int d = 0; d < 3; ++d) {
           const mpm_vl u = mpm_vl_splat(node[d]);
           Z0[d] += s->w[2][k] * u;
