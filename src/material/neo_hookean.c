@@ -34,6 +34,7 @@
 #include "material/material.h"
 
 #include "core/mat3.h"
+#include "core/vecmath.h"
 #include "core/svd3.h"
 
 #include <assert.h>
@@ -132,7 +133,7 @@ static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *con
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   const mpm_real mu = m->mu, l = m->lambda, c = m->min_stretch;
   /* Written as straight loops over the chunk so that the compiler vectorizes them across
-   * particles; only the logarithm stays a scalar call. */
+   * particles, the logarithm included (core/vecmath.h). */
   mpm_real J[MPM_STRESS_CHUNK], lnJ[MPM_STRESS_CHUNK];
   int nslow = 0;
   for (int i = 0; i < n; ++i) {
@@ -143,7 +144,9 @@ static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *con
         f0 * f0 + f1 * f1 + f2 * f2 + f3 * f3 + f4 * f4 + f5 * f5 + f6 * f6 + f7 * f7 + f8 * f8;
     nslow += !(J[i] > 0 && 2 * J[i] >= c * ff); /* see nh_unclamped */
   }
-  for (int i = 0; i < n; ++i) lnJ[i] = mpm_log(mpm_fmax(J[i], MPM_REAL_EPS));
+  mpm_real Jc[MPM_STRESS_CHUNK];
+  for (int i = 0; i < n; ++i) Jc[i] = mpm_fmax(J[i], MPM_REAL_EPS);
+  mpm_log_array(n, Jc, lnJ);
   for (int i = 0; i < n; ++i) {
     /* tau = P F^T = mu (F F^T - I) + lambda ln J I */
     const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
