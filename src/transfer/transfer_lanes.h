@@ -190,8 +190,10 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
         const mpm_vl r = (mpm_real)q - f;
         dsum += w[q] * r * r;
       }
-      if (need_a)
-        for (int q = 0; q < 3; ++q) a[q] = w[q] * ((mpm_real)q - f) * (inv_dx / dsum);
+      if (need_a) {
+        const mpm_vl sc = inv_dx / dsum;
+        for (int q = 0; q < 3; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
+      }
       break;
     }
     }
