@@ -176,6 +176,37 @@ static void test_run_writes_frames(void **state) {
   assert_false(exists(path));
 }
 
+/* The default demo scene, for two frames: a VTU per frame, listed in the PVD. */
+static void test_run_example_scene(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("cli-example");
+  char args[1400], path[700];
+  snprintf(args, sizeof args, "run examples/jello_cubes.json -o '%s/out' --frames 2 --quiet", dir);
+  if (mpm(args) != 0) fail_msg("run failed: %s", output);
+  for (int f = 0; f <= 2; ++f) {
+    snprintf(path, sizeof path, "%s/out/frame_%04d.vtu", dir, f);
+    if (!exists(path)) fail_msg("missing %s", path);
+    snprintf(path, sizeof path, "%s/out/frame_%04d.ply", dir, f);
+    if (!exists(path)) fail_msg("missing %s", path);
+  }
+  snprintf(path, sizeof path, "%s/out/frames.pvd", dir);
+  FILE *f = fopen(path, "r");
+  assert_non_null(f);
+  char pvd[8192];
+  size_t n = fread(pvd, 1, sizeof pvd - 1, f);
+  pvd[n] = '\0';
+  fclose(f);
+  assert_int_equal(count_occurrences(pvd, "<DataSet"), 3);
+  snprintf(path, sizeof path, "%s/out/frame_0002.vtu", dir);
+  f = fopen(path, "rb");
+  assert_non_null(f);
+  char head[4096];
+  n = fread(head, 1, sizeof head - 1, f);
+  head[n] = '\0';
+  fclose(f);
+  assert_non_null(strstr(head, "NumberOfPoints=\"16000\""));
+}
+
 static void test_blow_up_is_reported(void **state) {
   (void)state;
   const char *dir = test_temp_dir("cli-blowup");
@@ -201,6 +232,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_run_writes_frames),
+      cmocka_unit_test(test_run_example_scene),
       cmocka_unit_test(test_blow_up_is_reported),
   };
   return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
