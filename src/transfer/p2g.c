@@ -140,6 +140,63 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
   }
 }
 
+/* APIC P2G of one owner block: lanes are accumulated per node over the whole block (a compact
+ * (W+3)^3 region of nodes, the base cells plus the stencil reach) and summed once at the end. */
+#define LANE_PAD_SIDE_MAX (MPM_BLOCK + MPM_STENCIL_MAX - 1)
+ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_sparse_grid *g,
+                                  const mpm_particles *p, int32_t b) {
+  const int S = MPM_BLOCK + W - 1;
+  mpm_vl acc[LANE_PAD_SIDE_MAX * LANE_PAD_SIDE_MAX * LANE_PAD_SIDE_MAX][4]
+      __attribute__((aligned(MPM_ALIGN)));
+  memset(acc, 0, (size_t)(S * S * S) * sizeof acc[0]);
+  for (int o = 0; o < 8; ++o)
+    for (int c = 0; c < MPM_CH_F; ++c)
+      for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
+        __builtin_prefetch(&g->blocks[g->neighbor[b][o]].ch[c][q], 1);
+  const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
+                      g->coord[b][2] * MPM_BLOCK};
+  const int nm = g->material_count;
+  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
+  mpm_real tau[9][MPM_STRESS_CHUNK];
+  for (int m = 0; m < nm; ++m) {
+    const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
+    for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
+      const uint32_t begin = g->cell_start[q0 + c], end = g->cell_start[q0 + c + 1];
+      for (uint32_t j = begin; j < end; j += MPM_LANES) {
+        const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
+        const uint32_t *idx = g->perm + j;
+        if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 0);
+        const int contiguous = mpm_batch_contiguous(idx, n);
+        if (contiguous) { /* the model reads F in place */
+          const mpm_real *Fp[9];
+          for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
+          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp, tau);
+        } else {
+          chunk_stress(&ctx->materials[m], p, idx, n, tau);
+        }
+        int base[3];
+        mpm_lane_stencil s;
+        mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 1, base, &s);
+        mpm_vl mass, mv[3], mB[9], K[9];
+        batch_inputs(p, idx, n, contiguous, ctx->dt, 1, tau, &mass, mv, mB, K);
+        const long off =
+            ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
+        mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
+      }
+    }
+  }
+  /* sum the lanes of every node once and add mass and momentum to the 8 blocks */
+  for (int i = 0; i < S; ++i)
+    for (int j = 0; j < S; ++j)
+      for (int k = 0; k < S; ++k) {
+        const mpm_vl sum = mpm_vl_sum4(acc[(i * S + j) * S + k]);
+        const int o = (i >= MPM_BLOCK) << 2 | (j >= MPM_BLOCK) << 1 | (k >= MPM_BLOCK);
+        mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
+        const int n = ((i & 3) * MPM_BLOCK + (j & 3)) * MPM_BLOCK + (k & 3);
+        for (int c = 0; c < MPM_CH_F; ++c) blk->ch[c][n] += sum[c];
+      }
+}
+
 void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, mpm_sparse_grid *g, const mpm_particles *p) {
   const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
   for (int color = 0; color < 8; ++color) {
@@ -152,19 +209,19 @@ void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, mpm_sparse_grid *g, const mpm_p
         p2g_block(2, 0, ctx, g, p, b);
         break;
       case 5:
-        p2g_block(2, 1, ctx, g, p, b);
+        p2g_block_apic(2, ctx, g, p, b);
         break;
       case 6:
         p2g_block(3, 0, ctx, g, p, b);
         break;
       case 7:
-        p2g_block(3, 1, ctx, g, p, b);
+        p2g_block_apic(3, ctx, g, p, b);
         break;
       case 8:
         p2g_block(4, 0, ctx, g, p, b);
         break;
       default:
-        p2g_block(4, 1, ctx, g, p, b);
+        p2g_block_apic(4, ctx, g, p, b);
         break;
       }
     }

@@ -262,6 +262,36 @@ MPM_ALWAYS_INLINE void mpm_p2g_lanes(const int W, const int fused, const mpm_lan
   }
 }
 
+/* APIC P2G of one batch accumulated lane by lane: acc[node][0] gathers mass, acc[node][1..3]
+ * the momentum p = m v + dt f, each still as 8 lanes; node(i,j,k) = off + i*sx + j*sy + k. The
+ * lanes are summed once per node when the block is done, instead of once per node per batch.
+ * mB = m B, K = dt (-V0 tau). */
+MPM_ALWAYS_INLINE void mpm_p2g_lanes_acc(const int W, const mpm_lane_stencil *s, mpm_vl m,
+                                         const mpm_vl mv[3], const mpm_vl mB[9], const mpm_vl K[9],
+                                         mpm_vl (*acc)[4], long off, long sx, long sy) {
+  mpm_vl X[3][MPM_STENCIL_MAX], Y[3][MPM_STENCIL_MAX], Z[3][MPM_STENCIL_MAX];
+  for (int d = 0; d < 3; ++d)
+    for (int q = 0; q < W; ++q) {
+      X[d][q] = mv[d] * s->w[0][q] + mB[3 * d] * s->a[0][q] + K[3 * d] * s->dw[0][q];
+      Y[d][q] = mB[3 * d + 1] * s->a[1][q] + K[3 * d + 1] * s->dw[1][q];
+      Z[d][q] = mB[3 * d + 2] * s->a[2][q] + K[3 * d + 2] * s->dw[2][q];
+    }
+  for (int i = 0; i < W; ++i) {
+    const mpm_vl wx = s->w[0][i], mwx = m * wx;
+    for (int j = 0; j < W; ++j) {
+      const mpm_vl wy = s->w[1][j], wxy = wx * wy, mwxy = mwx * wy;
+      mpm_vl U[3];
+      for (int d = 0; d < 3; ++d) U[d] = wy * X[d][i] + wx * Y[d][j];
+      for (int k = 0; k < W; ++k) {
+        const mpm_vl wz = s->w[2][k];
+        mpm_vl *node = acc[off + i * sx + j * sy + k];
+        node[0] += mwxy * wz;
+        for (int d = 0; d < 3; ++d) node[1 + d] += wz * U[d] + wxy * Z[d][k];
+      }
+    }
+  }
+}
+
 /* Lane results of G2P. */
 typedef struct mpm_g2p_lanes_out {
   mpm_vl v[3], dv[3], grad[9], B[9];
