@@ -139,10 +139,11 @@ int32_t mpm_sparse_grid_find(const mpm_sparse_grid *g, const int32_t c[3]) {
 /* Per-particle packed position key: block coordinates (19 bits each, biased) and the cell of the
  * base node in its block (6 bits). */
 #define PKEY_BIAS (1 << 18)
-static inline uint64_t particle_key(int32_t ix, int32_t iy, int32_t iz) {
-  const uint64_t bx = (uint64_t)(uint32_t)((ix >> MPM_BLOCK_BITS) + PKEY_BIAS);
-  const uint64_t by = (uint64_t)(uint32_t)((iy >> MPM_BLOCK_BITS) + PKEY_BIAS);
-  const uint64_t bz = (uint64_t)(uint32_t)((iz >> MPM_BLOCK_BITS) + PKEY_BIAS);
+static inline uint64_t particle_key(int64_t ix, int64_t iy, int64_t iz) {
+  /* all in 64-bit integers so that the loop calling this vectorizes */
+  const uint64_t bx = (uint64_t)((ix >> MPM_BLOCK_BITS) + PKEY_BIAS);
+  const uint64_t by = (uint64_t)((iy >> MPM_BLOCK_BITS) + PKEY_BIAS);
+  const uint64_t bz = (uint64_t)((iz >> MPM_BLOCK_BITS) + PKEY_BIAS);
   const uint64_t cell = (uint64_t)((ix & 3) << 4 | (iy & 3) << 2 | (iz & 3));
   return (bx | by << 19 | bz << 38) << 6 | cell;
 }
@@ -182,6 +183,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   uint64_t *pk = g->pkey64;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < (long)n; ++i) {
+    /* int32 first: that conversion vectorizes, the direct one to int64 does not */
     const int32_t ix = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift);
     const int32_t iy = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift);
     const int32_t iz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift);
