@@ -275,7 +275,7 @@ static void test_rest_state(void **state) {
         Fc[c][0] = F[c];
         Fp[c] = Fc[c];
       }
-      m->model->kirchhoff_batch(m, 1, Fp, tau);
+      m->model->kirchhoff_batch(m, 1, Fp, NULL, tau);
       for (int c = 0; c < 9; ++c) assert_close(tau[c][0] / scale, 0, TOL(2e-6, 1e-14));
       /* the tangent at rest is the linear-elasticity one: a pure rotation rate dF = W F
        * (W skew) produces no stress change */
@@ -535,7 +535,7 @@ static void check_batch(const mpm_material *m, uint64_t *rng, int n, int mode) {
   }
   for (int c = 0; c < 9; ++c)
     for (int i = 0; i < MPM_STRESS_CHUNK; ++i) tau[c][i] = (mpm_real)1e30; /* poison */
-  m->model->kirchhoff_batch(m, n, Fp, tau);
+  m->model->kirchhoff_batch(m, n, Fp, NULL, tau);
   for (int i = 0; i < n; ++i) {
     mpm_real F[9], P[9], T[9];
     double Te[9];

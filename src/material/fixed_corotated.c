@@ -94,7 +94,9 @@ static void fcr_dpdf_action(const mpm_material *m, const mpm_real F[9], const mp
 /* tau = 2 mu (F - R) F^T + lambda (J - 1) J I, with (F - R) F^T = U diag(s (s - 1)) U^T
  * (F F^T = U S^2 U^T and R F^T = U S U^T), symmetric by construction. */
 static void fcr_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                               const mpm_real *plastic,
                                 mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  (void)plastic; /* elastic: no plastic state */
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   const mpm_real two_mu = 2 * m->mu, l = m->lambda;
   for (int i = 0; i < n; ++i) {
@@ -120,4 +122,6 @@ const mpm_model mpm_model_fixed_corotated = {
     .pk1 = fcr_pk1,
     .dpdf_action = fcr_dpdf_action,
     .kirchhoff_batch = fcr_kirchhoff_batch,
+    .return_map = NULL,
+    .plastic_initial = 1,
 };

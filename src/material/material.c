@@ -50,3 +50,8 @@ mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J) {
 #endif
   return mpm_sqrt(R_(1.5) * ss) / mpm_fmax(mpm_fabs(J), jmin);
 }
+
+mpm_material mpm_material_at(const mpm_material *m, mpm_real plastic) {
+  (void)plastic; /* hardening models (snow) scale the moduli here */
+  return *m;
+}

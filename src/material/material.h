@@ -23,6 +23,11 @@ typedef struct mpm_material {
   mpm_real density;     /* kg/m^3 */
   mpm_real min_stretch; /* neo-Hookean singular-value clamp (Zhu sec. 5.3) */
   mpm_real wave_speed;  /* sqrt((lambda + 2 mu) / density), m/s: the CFL bound */
+  /* plasticity parameters, converted from the scene (unused by elastic models) */
+  mpm_real friction_angle;              /* Drucker-Prager, rad */
+  mpm_real cohesion;                    /* Drucker-Prager, Pa */
+  mpm_real yield_stress;                /* von Mises, Pa */
+  mpm_real theta_c, theta_s, hardening; /* snow (Stomakhin et al. 2013) */
 } mpm_material;
 
 struct mpm_model {
@@ -34,10 +39,17 @@ struct mpm_model {
   /* dP = (dP/dF) : dF, the action of the stress derivative on a direction (Zhu sec. 6). */
   void (*dpdf_action)(const mpm_material *m, const mpm_real F[9], const mpm_real dF[9],
                       mpm_real dP[9]);
-  /* Batch: for n <= MPM_STRESS_CHUNK particles whose F components start at F[0..8][0],
-   * write the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */
+  /* Batch: for n <= MPM_STRESS_CHUNK particles whose F components start at F[0..8][0] and
+   * whose plastic state starts at plastic[0] (NULL: every particle at plastic_initial), write
+   * the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */
   void (*kirchhoff_batch)(const mpm_material *m, int n, const mpm_real *const F[9],
-                          mpm_real tau[9][MPM_STRESS_CHUNK]);
+                          const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]);
+  /* Plastic models: project the trial elastic F of n particles (components F[0..8][0..n))
+   * back to the yield surface in place and update their plastic state (Gao sec. 4.2). NULL
+   * for purely elastic models. */
+  void (*return_map)(const mpm_material *m, int n, mpm_real *const F[9], mpm_real *plastic);
+  /* The plastic state of a particle at rest (J_p = 1 for snow; unused state is 1 too). */
+  mpm_real plastic_initial;
 };
 
 extern const mpm_model mpm_model_fixed_corotated;
@@ -48,6 +60,11 @@ const mpm_model *mpm_model_of(mpm_model_kind kind);
 
 /* Build the solver's material from a scene description (Lamé parameters, wave speed). */
 void mpm_material_init(mpm_material *m, const mpm_material_desc *d);
+
+/* The material as one particle with plastic state `plastic` sees it: hardening models (snow)
+ * scale their moduli, every other model returns *m. For the per-particle entries (energy,
+ * pk1, dpdf_action), which take no plastic state. */
+mpm_material mpm_material_at(const mpm_material *m, mpm_real plastic);
 
 /* Von Mises equivalent of the Cauchy stress sigma = tau / J, Pa (a scalar for outputs). */
 mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J);

@@ -129,7 +129,9 @@ static void nh_dpdf_action(const mpm_material *m, const mpm_real F[9], const mpm
  * tau = mu (F F^T - I) + lambda ln J I for every particle, then the few particles that may be
  * clamped are redone in the diagonal space, tau = U diag(p_i s_i) U^T (= P F^T). */
 static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                               const mpm_real *plastic,
                                mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  (void)plastic; /* elastic: no plastic state */
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   const mpm_real mu = m->mu, l = m->lambda, c = m->min_stretch;
   /* Written as straight loops over the chunk so that the compiler vectorizes them across
@@ -178,4 +180,6 @@ const mpm_model mpm_model_neo_hookean = {
     .pk1 = nh_pk1,
     .dpdf_action = nh_dpdf_action,
     .kirchhoff_batch = nh_kirchhoff_batch,
+    .return_map = NULL,
+    .plastic_initial = 1,
 };

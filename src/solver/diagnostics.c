@@ -31,7 +31,8 @@ mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim) {
       out.angular_momentum[1] += m * (B[2] - B[6]);
       out.angular_momentum[2] += m * (B[3] - B[1]);
     }
-    const mpm_material *mat = &sim->materials[p->material[i]];
+    const mpm_material at = mpm_material_at(&sim->materials[p->material[i]], p->plastic[i]);
+    const mpm_material *mat = &at;
     mpm_real F[9];
     for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
     out.elastic += (double)p->vol0[i] * (double)mat->model->energy(mat, F);

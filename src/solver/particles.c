@@ -11,6 +11,7 @@ void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_
   for (int d = 0; d < 3; ++d) arrays[k++] = &p->v[d];
   for (int d = 0; d < 9; ++d) arrays[k++] = &p->F[d];
   for (int d = 0; d < 9; ++d) arrays[k++] = &p->B[d];
+  arrays[k++] = &p->plastic;
   arrays[k++] = &p->mass;
   arrays[k++] = &p->vol0;
 }
@@ -65,6 +66,7 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
     p->F[d][i] = (d % 4 == 0) ? 1 : 0;
     p->B[d][i] = 0;
   }
+  p->plastic[i] = 1;
   p->mass[i] = mass;
   p->vol0[i] = vol0;
   p->material[i] = material;

@@ -19,7 +19,8 @@ typedef struct mpm_particles {
   mpm_real *B[9]; /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
                      Storing B rather than C keeps angular momentum exact for every kernel,
                      including those whose D_p varies with position (linear, uGIMP). */
-  mpm_real *mass; /* kg */
+  mpm_real *plastic; /* plastic state of the material's model (snow: J_p), 1 at rest */
+  mpm_real *mass;    /* kg */
   mpm_real *vol0; /* initial volume V_p^0, m^3 */
   int32_t *material;
   int32_t *body;
@@ -27,7 +28,7 @@ typedef struct mpm_particles {
 } mpm_particles;
 
 /* All real-valued component arrays, for loops that treat them alike (permute, grow). */
-#define MPM_PARTICLE_REAL_ARRAYS 26
+#define MPM_PARTICLE_REAL_ARRAYS 27
 
 int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
 void mpm_particles_free(mpm_particles *p);
@@ -37,7 +38,7 @@ int mpm_particles_reserve(mpm_particles *p, size_t capacity);
 long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3], mpm_real mass,
                         mpm_real vol0, int32_t material, int32_t body);
 
-/* Pointers to the 26 real arrays, in a fixed order. */
+/* Pointers to the 27 real arrays, in a fixed order. */
 void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]);
 
 /* Reorder all arrays so that new[i] = old[perm[i]]. scratch holds `count` reals and may be

@@ -67,7 +67,10 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     st = mpm_sample_body(sc, b, &sim->particles, err);
     if (st != MPM_OK) goto fail;
   }
-  for (size_t i = 0; i < sim->particles.count; ++i) sim->particles.id[i] = (uint32_t)i;
+  for (size_t i = 0; i < sim->particles.count; ++i) {
+    sim->particles.id[i] = (uint32_t)i;
+    sim->particles.plastic[i] = sim->materials[sim->particles.material[i]].model->plastic_initial;
+  }
 
   /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
   double lp = sc->solver.gimp_length;

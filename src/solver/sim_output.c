@@ -44,8 +44,8 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     for (long i = 0; i < n; ++i) {
       mpm_real F[9], P[9], tau[9];
       for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
-      const mpm_material *mat = &sim->materials[p->material[i]];
-      mat->model->pk1(mat, F, P);
+      const mpm_material mat = mpm_material_at(&sim->materials[p->material[i]], p->plastic[i]);
+      mat.model->pk1(&mat, F, P);
       mpm_m3_mul_bt(P, F, tau);
       J[i] = mpm_m3_det(F);
       stress[i] = mpm_von_mises(tau, J[i]);

@@ -110,6 +110,29 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
   }
 }
 
+/* Plasticity (Gao sec. 4.2): project the new F of a batch of one material back onto its yield
+ * surface, in place when the batch is contiguous, through a small buffer otherwise. */
+static void batch_return_map(const mpm_material *mat, mpm_particles *p, const uint32_t *idx, int n,
+                             int contiguous) {
+  if (contiguous) {
+    mpm_real *F[9];
+    for (int c = 0; c < 9; ++c) F[c] = p->F[c] + idx[0];
+    mat->model->return_map(mat, n, F, p->plastic + idx[0]);
+    return;
+  }
+  mpm_real Fbuf[9][MPM_LANES], plastic[MPM_LANES];
+  mpm_real *F[9];
+  for (int c = 0; c < 9; ++c) {
+    for (int l = 0; l < n; ++l) Fbuf[c][l] = p->F[c][idx[l]];
+    F[c] = Fbuf[c];
+  }
+  for (int l = 0; l < n; ++l) plastic[l] = p->plastic[idx[l]];
+  mat->model->return_map(mat, n, F, plastic);
+  for (int c = 0; c < 9; ++c)
+    for (int l = 0; l < n; ++l) p->F[c][idx[l]] = Fbuf[c][l];
+  for (int l = 0; l < n; ++l) p->plastic[idx[l]] = plastic[l];
+}
+
 ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
                              const mpm_sparse_grid *g, mpm_particles *p, int32_t b,
                              mpm_real *max_v2, long *bad) {
@@ -159,6 +182,8 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       mpm_g2p_lanes_out o;
       mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, off, MPM_PAD * MPM_PAD, MPM_PAD, &o);
       batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
+      const mpm_material *mat = &ctx->materials[(q - q0) / MPM_BLOCK_NODES];
+      if (mat->model->return_map) batch_return_map(mat, p, idx, n, contiguous);
     }
   }
 }
@@ -244,6 +269,21 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
     {
       if (my_v2 > max_v2) max_v2 = my_v2;
       if (my_bad >= 0 && (bad < 0 || my_bad < bad)) bad = my_bad;
+    }
+  }
+  /* plasticity on chunks of consecutive particles of one material */
+  const long chunks = (n + MPM_LANES - 1) / MPM_LANES;
+#pragma omp parallel for schedule(static)
+  for (long c = 0; c < chunks; ++c) {
+    const long begin = c * MPM_LANES, end = begin + MPM_LANES < n ? begin + MPM_LANES : n;
+    long i = begin;
+    while (i < end) {
+      const int32_t m = p->material[i];
+      uint32_t idx[MPM_LANES];
+      int k = 0;
+      while (i < end && p->material[i] == m) idx[k++] = (uint32_t)i++;
+      const mpm_material *mat = &ctx->materials[m];
+      if (mat->model->return_map) batch_return_map(mat, p, idx, k, 0);
     }
   }
   mpm_g2p_result r = {mpm_sqrt(max_v2), bad};

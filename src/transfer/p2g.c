@@ -18,14 +18,15 @@
 /* Kirchhoff stresses of particles idx[0..n) (all of material `mat`) into tau. */
 ALWAYS_INLINE void chunk_stress(const mpm_material *mat, const mpm_particles *p,
                                 const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK]) {
-  mpm_real Fbuf[9][MPM_STRESS_CHUNK];
+  mpm_real Fbuf[9][MPM_STRESS_CHUNK], plastic[MPM_STRESS_CHUNK];
   const mpm_real *Fp[9];
   for (int c = 0; c < 9; ++c) {
     const mpm_real *src = p->F[c];
     for (int q = 0; q < n; ++q) Fbuf[c][q] = src[idx[q]];
     Fp[c] = Fbuf[c];
   }
-  mat->model->kirchhoff_batch(mat, n, Fp, tau);
+  for (int q = 0; q < n; ++q) plastic[q] = p->plastic[idx[q]];
+  mat->model->kirchhoff_batch(mat, n, Fp, plastic, tau);
 }
 
 /* Scatter particles idx[0..n) with stresses tau into channel arrays viewed from node `org`
@@ -107,7 +108,8 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
         if (contiguous) { /* the model reads F in place */
           const mpm_real *Fp[9];
           for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
-          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp, tau);
+          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp,
+                                                   p->plastic + idx[0], tau);
         } else {
           chunk_stress(&ctx->materials[m], p, idx, n, tau);
         }
@@ -170,7 +172,8 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
         if (contiguous) { /* the model reads F in place */
           const mpm_real *Fp[9];
           for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
-          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp, tau);
+          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp,
+                                                   p->plastic + idx[0], tau);
         } else {
           chunk_stress(&ctx->materials[m], p, idx, n, tau);
         }
