@@ -39,6 +39,10 @@ struct mpm_model {
   /* dP = (dP/dF) : dF, the action of the stress derivative on a direction (Zhu sec. 6). */
   void (*dpdf_action)(const mpm_material *m, const mpm_real F[9], const mpm_real dF[9],
                       mpm_real dP[9]);
+  /* The same with the Hessian made positive semi-definite in the diagonal (SVD) space (Teran
+   * et al. 2005; Zhu eqs. 16 and 19), for the implicit solve. NULL until a model provides it. */
+  void (*dpdf_action_definite)(const mpm_material *m, const mpm_real F[9], const mpm_real dF[9],
+                               mpm_real dP[9]);
   /* Batch: for n <= MPM_STRESS_CHUNK particles whose F components start at F[0..8][0] and
    * whose plastic state starts at plastic[0] (NULL: every particle at plastic_initial), write
    * the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */
@@ -54,6 +58,10 @@ struct mpm_model {
 
 extern const mpm_model mpm_model_fixed_corotated;
 extern const mpm_model mpm_model_neo_hookean;
+extern const mpm_model mpm_model_hencky_stvk;
+extern const mpm_model mpm_model_drucker_prager;
+extern const mpm_model mpm_model_von_mises;
+extern const mpm_model mpm_model_snow;
 
 /* Table lookup by kind; NULL for an unknown kind. */
 const mpm_model *mpm_model_of(mpm_model_kind kind);

@@ -35,6 +35,11 @@ typedef enum mpm_model_kind {
   MPM_MODEL_FIXED_COROTATED = 0, /* Stomakhin et al. 2012; Gao sec. 4.1 */
   MPM_MODEL_NEO_HOOKEAN = 1,     /* compressible neo-Hookean with clamped singular values
                                     (Zhu sec. 5.3 and 7, Irving et al. 2004) */
+  MPM_MODEL_HENCKY_STVK = 2,     /* St. Venant-Kirchhoff in Hencky strain (Gao eq. 7) */
+  MPM_MODEL_DRUCKER_PRAGER = 3,  /* Hencky elasticity + Drucker-Prager sand (Klar et al. 2016,
+                                    volume correction of Tampubolon et al. 2017; Gao 4.2.1) */
+  MPM_MODEL_VON_MISES = 4,       /* Hencky elasticity + von Mises plasticity (Gao 4.2.2) */
+  MPM_MODEL_SNOW = 5,            /* fixed-corotated + snow plasticity (Stomakhin et al. 2013) */
   MPM_MODEL_COUNT
 } mpm_model_kind;
 
@@ -59,6 +64,12 @@ typedef struct mpm_material_desc {
   double nu;          /* Poisson's ratio, (-1, 0.5) */
   double density;     /* kg/m^3 (> 0) */
   double min_stretch; /* neo-Hookean: singular values clamped below this (Zhu 5.3); (0, 1] */
+  double friction_angle; /* Drucker-Prager: degrees, [0, 90); default 30 */
+  double cohesion;       /* Drucker-Prager: Pa, >= 0; default 0 (dry sand) */
+  double yield_stress;   /* von Mises: Pa, > 0 */
+  double theta_c;        /* snow: critical compression, (0, 1); default 2.5e-2 */
+  double theta_s;        /* snow: critical stretch, > 0; default 7.5e-3 */
+  double hardening;      /* snow: hardening coefficient xi, >= 0; default 10 */
 } mpm_material_desc;
 
 /* A solid shape in world coordinates. Boxes and cylinders may be rotated about `axis`-free
