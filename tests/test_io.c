@@ -317,7 +317,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
   const size_t rs = sizeof(mpm_real);
   assert_int_equal(v.points, (long)n);
   assert_int_equal(v.cells, (long)n);
-  assert_int_equal(v.narrays, 13);
+  assert_int_equal(v.narrays, 14);
 
   const parsed_array *t = find_array(&v, "TIME", "FieldData", "Float64", 1, 1, 8);
   double tv;
@@ -331,6 +331,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
   const parsed_array *vol = find_array(&v, "volume", "PointData", real_type(), 1, n, rs);
   const parsed_array *jj = find_array(&v, "J", "PointData", real_type(), 1, n, rs);
   const parsed_array *sig = find_array(&v, "stress", "PointData", real_type(), 1, n, rs);
+  const parsed_array *pl = find_array(&v, "plastic", "PointData", real_type(), 1, n, rs);
   const parsed_array *mat = find_array(&v, "material", "PointData", "Int32", 1, n, 4);
   const parsed_array *body = find_array(&v, "body", "PointData", "Int32", 1, n, 4);
   const parsed_array *conn = find_array(&v, "connectivity", "Cells", "Int64", 1, n, 8);
@@ -350,6 +351,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
     assert_close_msg(real_at(vol, i), (double)p->vol0[i] * real_at(jj, i),
                      TOL(1e-6, 1e-14) * (double)p->vol0[i], "volume = V0 J");
     assert_true(real_at(sig, i) == (stress ? stress[i] : 0));
+    assert_true(real_at(pl, i) == p->plastic[i]);
     assert_int_equal(i32_at(mat, i), p->material[i]);
     assert_int_equal(i32_at(body, i), p->body[i]);
     assert_int_equal(i64_at(conn, i), (int64_t)i);

@@ -37,7 +37,7 @@ typedef struct mpm_frame_fields {
 
 /* VTK UnstructuredGrid, one vertex cell per particle, binary appended raw data with
  * Float32/Float64 per the real type: points; point data id, velocity, mass, volume (current,
- * V0 J), J, stress, material, body. */
+ * V0 J), J, stress, plastic (the model's plastic state), material, body. */
 mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err);
 
 /* ParaView collection listing the frame files written so far (file names relative to the

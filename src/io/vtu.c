@@ -10,7 +10,8 @@
  * at a time: a million particles need no more memory than that.
  *
  * Arrays: FieldData TIME (Float64); Points; PointData id, velocity, mass, volume (= V0 J, the
- * current volume), J, stress (von Mises, Pa), material, body; Cells connectivity, offsets,
+ * current volume), J, stress (von Mises, Pa), plastic (the model's plastic state: snow J_p,
+ * Drucker-Prager's volume correction), material, body; Cells connectivity, offsets,
  * types. Reals are Float32 or Float64 as the build's mpm_real. When fields->J is NULL, J is
  * det F of each particle; when fields->stress is NULL, stress is written as zero. */
 #include "io/io.h"
@@ -97,6 +98,10 @@ static void fill_stress(const mpm_frame_fields *f, size_t first, size_t n, void 
     memset(out, 0, n * sizeof(mpm_real));
 }
 
+static void fill_plastic(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->plastic + first, n * sizeof(mpm_real));
+}
+
 static void fill_material(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
   memcpy(out, f->particles->material + first, n * sizeof(int32_t));
 }
@@ -124,7 +129,7 @@ static void fill_types(const mpm_frame_fields *f, size_t first, size_t n, void *
 }
 
 /* In order of appearance in the appended block; the header groups them by section. */
-#define VTU_ARRAYS 13
+#define VTU_ARRAYS 14
 static const vtu_array vtu_arrays[VTU_ARRAYS] = {
     {"field", "TIME", "Float64", sizeof(double), 1, 0, fill_time},
     {"points", "Points", NULL, sizeof(mpm_real), 3, 1, fill_points},
@@ -134,6 +139,7 @@ static const vtu_array vtu_arrays[VTU_ARRAYS] = {
     {"point", "volume", NULL, sizeof(mpm_real), 1, 1, fill_volume},
     {"point", "J", NULL, sizeof(mpm_real), 1, 1, fill_J},
     {"point", "stress", NULL, sizeof(mpm_real), 1, 1, fill_stress},
+    {"point", "plastic", NULL, sizeof(mpm_real), 1, 1, fill_plastic},
     {"point", "material", "Int32", sizeof(int32_t), 1, 1, fill_material},
     {"point", "body", "Int32", sizeof(int32_t), 1, 1, fill_body},
     {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, fill_connectivity},
