@@ -6,7 +6,7 @@ BUILD_SANITIZE ?= build-sanitize
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
-DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev
+DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev
 
 .PHONY: all deps build build-double build-sanitize demo test test-float test-double \
 	test-sanitize bench clean format

@@ -22,6 +22,9 @@ static void usage(FILE *out) {
           "      Gao et al. 2017 Table 1 transfer benchmark (P2G and G2P ns per particle)\n"
           "  mpm bench step [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
           "      full explicit steps of a falling neo-Hookean block (ns per particle-step)\n"
+          "  mpm bench stress [--particles N] [--threads LIST] [--repeats N]\n"
+          "      each material model's batch stress and return map (ns per particle), and\n"
+          "      ns per 3x3 SVD (mpm_svd3)\n"
           "  mpm --help | --version\n"
           "\n"
           "exit codes: 0 success, 1 simulation failure, 2 usage or input error\n",

@@ -1,11 +1,14 @@
-/* bench.c - `mpm bench transfer` and `mpm bench step`: figures printed, never asserted.
+/* bench.c - `mpm bench transfer`, `step` and `stress`: figures printed, never asserted.
  *
  * transfer: the benchmark of Gao et al. 2017, Table 1 - dx = 1/128, particles on a 1/256
  *   lattice filling [1/8, 7/8]^3 (192^3 = 7.08M particles) - P2G and G2P nanoseconds per
  *   particle (median of repeats) for each weight kernel, sparse and dense grid, at the thread
  *   counts asked. P2G includes the stress evaluation (neo-Hookean at rest takes its fast path).
  * step: a falling neo-Hookean block of ~1M particles, 8 per cell, quadratic B-spline, APIC:
- *   ns per particle-step with the stage breakdown, for 1 and 2 threads, and memory. */
+ *   ns per particle-step with the stage breakdown, for 1 and 2 threads, and memory.
+ * stress: per-model batch stress and return map, and the SVD (bench_stress.c). */
+#include "bench.h"
+#include "bench_util.h"
 #include "cli.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
@@ -15,56 +18,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
-
-static void print_machine(void) {
-  char model[256] = "unknown";
-  FILE *f = fopen("/proc/cpuinfo", "r");
-  if (f) {
-    char line[512];
-    while (fgets(line, sizeof line, f))
-      if (!strncmp(line, "model name", 10)) {
-        char *c = strchr(line, ':');
-        if (c) {
-          snprintf(model, sizeof model, "%s", c + 2);
-          model[strcspn(model, "\n")] = 0;
-        }
-        break;
-      }
-    fclose(f);
-  }
-  printf("machine: %s, %d hardware threads available to OpenMP; real type %s; mpm %s\n", model,
-         mpm_thread_count(), mpm_real_type(), mpm_version());
-}
-
-static double peak_rss_mib(void) {
-  struct rusage ru;
-  getrusage(RUSAGE_SELF, &ru);
-  return ru.ru_maxrss / 1024.0;
-}
-
-static int parse_threads(const char *s, int *list, int max) {
-  int n = 0;
-  while (s && *s && n < max) {
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (end == s || v < 1 || v > 1024) return -1;
-    list[n++] = (int)v;
-    s = *end == ',' ? end + 1 : end;
-    if (*end && *end != ',') return -1;
-  }
-  return n;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n) {
-  qsort(v, (size_t)n, sizeof *v, cmp_double);
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* A scene with one box body of neo-Hookean material; caller frees. */
 static void block_scene(mpm_scene *s, double dx, double lo, double hi, double domain, double ppc,
@@ -105,7 +58,7 @@ static int bench_transfer(int argc, char **argv) {
   const char *only_kernel = NULL, *only_grid = NULL;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-      nthreads = parse_threads(argv[++i], threads, 16);
+      nthreads = bench_parse_threads(argv[++i], threads, 16);
       if (nthreads <= 0) {
         fprintf(stderr, "mpm bench: --threads expects a list like 1,2\n");
         return MPM_EXIT_USAGE;
@@ -129,7 +82,7 @@ static int bench_transfer(int argc, char **argv) {
       return MPM_EXIT_USAGE;
     }
   }
-  print_machine();
+  bench_print_machine();
   const double dx = scale / 128.0;
   printf("transfer benchmark (Gao et al. 2017, Table 1): dx = 1/%g, particles on a 1/%g lattice "
          "in [1/8, 7/8]^3, median of %d repeats\n",
@@ -167,7 +120,8 @@ static int bench_transfer(int argc, char **argv) {
           p2g[r - 1] = (sim->times.p2g - before.p2g) * 1e9 / n;
           g2p[r - 1] = (sim->times.g2p - before.g2p) * 1e9 / n;
         }
-        double ms = median(sort, repeats), mp = median(p2g, repeats), mg = median(g2p, repeats);
+        double ms = bench_median(sort, repeats), mp = bench_median(p2g, repeats);
+        double mg = bench_median(g2p, repeats);
         printf("%-10s %-7s %7d %10.1f %10.1f %10.1f %12.1f\n",
                mpm_kernel_name((mpm_kernel_kind)kind), grid ? "dense" : "sparse", threads[t], ms,
                mp, mg, mp + mg);
@@ -177,7 +131,7 @@ static int bench_transfer(int argc, char **argv) {
              mpm_alloc_live_bytes() / 1048576.0);
       mpm_sim_destroy(sim);
     }
-  printf("peak memory: %.1f MiB (resident set)\n", peak_rss_mib());
+  printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());
   return MPM_EXIT_OK;
 }
 
@@ -185,7 +139,7 @@ static int bench_step(int argc, char **argv) {
   int threads[16] = {1, 2}, nthreads = 2, steps = 10, repeats = 5, particles = 1000000;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
-      nthreads = parse_threads(argv[++i], threads, 16);
+      nthreads = bench_parse_threads(argv[++i], threads, 16);
       if (nthreads <= 0) {
         fprintf(stderr, "mpm bench: --threads expects a list like 1,2\n");
         return MPM_EXIT_USAGE;
@@ -208,7 +162,7 @@ static int bench_step(int argc, char **argv) {
       return MPM_EXIT_USAGE;
     }
   }
-  print_machine();
+  bench_print_machine();
   /* a cube of side L with spacing h = dx/2 (8 per cell) holding ~`particles` points */
   const double per_side = cbrt((double)particles);
   const double dx = 0.02, h = dx / 2, side = per_side * h;
@@ -251,21 +205,22 @@ static int bench_step(int argc, char **argv) {
            "median of %d runs of %d steps\n",
            n, threads[t], repeats, steps);
     printf("  ns per particle-step: total %.1f = sort %.1f + P2G %.1f + grid %.1f + G2P %.1f\n",
-           median(total, repeats), median(sort, repeats), median(p2g, repeats),
-           median(grid, repeats), median(g2p, repeats));
+           bench_median(total, repeats), bench_median(sort, repeats), bench_median(p2g, repeats),
+           bench_median(grid, repeats), bench_median(g2p, repeats));
     printf("  memory: %.1f bytes per particle (library peak %.1f MiB; %zu grid blocks)\n",
            (double)(mpm_alloc_peak_bytes() - live0) / n, mpm_alloc_peak_bytes() / 1048576.0,
            sim->sparse.block_count);
     fflush(stdout);
     mpm_sim_destroy(sim);
   }
-  printf("peak memory: %.1f MiB (resident set)\n", peak_rss_mib());
+  printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());
   return MPM_EXIT_OK;
 }
 
 int mpm_cmd_bench(int argc, char **argv) {
   if (argc >= 1 && !strcmp(argv[0], "transfer")) return bench_transfer(argc - 1, argv + 1);
   if (argc >= 1 && !strcmp(argv[0], "step")) return bench_step(argc - 1, argv + 1);
-  fprintf(stderr, "usage: mpm bench transfer|step [options] (see mpm --help)\n");
+  if (argc >= 1 && !strcmp(argv[0], "stress")) return mpm_bench_stress(argc - 1, argv + 1);
+  fprintf(stderr, "usage: mpm bench transfer|step|stress [options] (see mpm --help)\n");
   return MPM_EXIT_USAGE;
 }

@@ -1,0 +1,9 @@
+/* bench.h - the benchmarks behind `mpm bench` that live outside bench.c. */
+#ifndef MPM_BENCH_H
+#define MPM_BENCH_H
+
+/* `mpm bench stress`: ns per particle of each constitutive model's batch stress and return
+ * map, and ns per mpm_svd3 call (bench_stress.c). argv holds the options after "stress". */
+int mpm_bench_stress(int argc, char **argv);
+
+#endif

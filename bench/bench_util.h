@@ -1,0 +1,17 @@
+/* bench_util.h - helpers shared by the benchmarks (bench.c, bench_stress.c). */
+#ifndef MPM_BENCH_UTIL_H
+#define MPM_BENCH_UTIL_H
+
+/* One line: CPU model, OpenMP threads available, real type, version. */
+void bench_print_machine(void);
+
+/* Peak resident set of the process, MiB. */
+double bench_peak_rss_mib(void);
+
+/* Parse a thread list like "1,2" into list (at most max entries); the count, or -1 if invalid. */
+int bench_parse_threads(const char *s, int *list, int max);
+
+/* Median of v[0..n) (sorts v in place). */
+double bench_median(double *v, int n);
+
+#endif
