@@ -172,7 +172,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
     for (uint32_t j = begin; j < end; j += MPM_LANES) {
       const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
       const uint32_t *idx = g->perm + j;
-      if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 1);
+      if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 1);
       const int contiguous = mpm_batch_contiguous(idx, n);
       int base[3];
       mpm_lane_stencil s;

@@ -103,7 +103,7 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
       for (uint32_t j = begin; j < end; j += MPM_LANES) {
         const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
         const uint32_t *idx = g->perm + j;
-        if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 0);
+        if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
         const int contiguous = mpm_batch_contiguous(idx, n);
         if (contiguous) { /* the model reads F in place */
           const mpm_real *Fp[9];
@@ -167,7 +167,7 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
       for (uint32_t j = begin; j < end; j += MPM_LANES) {
         const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
         const uint32_t *idx = g->perm + j;
-        if (j + 2 * MPM_LANES < g->particle_count) mpm_prefetch_particle(p, idx[2 * MPM_LANES], 0);
+        if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
         const int contiguous = mpm_batch_contiguous(idx, n);
         if (contiguous) { /* the model reads F in place */
           const mpm_real *Fp[9];

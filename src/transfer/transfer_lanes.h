@@ -88,21 +88,24 @@ MPM_ALWAYS_INLINE void mpm_lanes_store(mpm_real *a, const uint32_t *idx, int n, 
   }
 }
 
-/* Prefetch particle i's entries of every per-particle array. Transfers touch ~26 arrays per
+/* Prefetch particle i's entries of every per-particle array. Transfers touch ~27 arrays per
  * particle; that many concurrent streams is more than the hardware prefetchers follow, so the
- * batch loops ask for the particles two batches ahead. */
-MPM_ALWAYS_INLINE void mpm_prefetch_particle(const mpm_particles *p, uint32_t i, int write) {
-  for (int d = 0; d < 3; ++d) {
-    __builtin_prefetch(p->x[d] + i, write);
-    __builtin_prefetch(p->v[d] + i, write);
-  }
-  for (int c = 0; c < 9; ++c) {
-    __builtin_prefetch(p->F[c] + i, write);
-    __builtin_prefetch(p->B[c] + i, write);
-  }
-  __builtin_prefetch(p->mass + i, 0);
-  __builtin_prefetch(p->vol0 + i, 0);
-}
+ * batch loops ask for the particles two batches ahead. RW is 0 (read) or 1 (write): a macro,
+ * because __builtin_prefetch needs a constant even in unoptimized builds. */
+#define MPM_PREFETCH_PARTICLE(p, i, RW)                                                           \
+  do {                                                                                            \
+    for (int d_ = 0; d_ < 3; ++d_) {                                                              \
+      __builtin_prefetch((p)->x[d_] + (i), RW);                                                   \
+      __builtin_prefetch((p)->v[d_] + (i), RW);                                                   \
+    }                                                                                             \
+    for (int c_ = 0; c_ < 9; ++c_) {                                                              \
+      __builtin_prefetch((p)->F[c_] + (i), RW);                                                   \
+      __builtin_prefetch((p)->B[c_] + (i), RW);                                                   \
+    }                                                                                             \
+    __builtin_prefetch((p)->plastic + (i), RW);                                                   \
+    __builtin_prefetch((p)->mass + (i), 0);                                                       \
+    __builtin_prefetch((p)->vol0 + (i), 0);                                                       \
+  } while (0)
 
 /* Per-lane stencil factors of a batch: [axis][node][lane]. */
 typedef struct mpm_lane_stencil {
