@@ -13,6 +13,8 @@
  *  - the clamped and unclamped paths agree at the threshold (continuity) and the fast path
  *    agrees with the SVD path; inverted, flat and zero F give finite output;
  *  - kirchhoff_batch equals pk1 F^T on chunks of 64 (and 37) particles;
+ *  - dpdf_action_definite (Teran et al. 2005) equals the eigenvalue-clamped 9x9 matrix of
+ *    dpdf_action, is symmetric semi-definite, and is dpdf_action where that is definite;
  *  - rest state F = I (and any rotation) has zero energy and stress;
  *  - Lamé parameters and wave speed; von Mises of hydrostatic and uniaxial stresses.
  * The worst errors are printed. */
@@ -33,7 +35,7 @@ static const double TOL_EXACT = TOL(2e-5, 1e-11); /* against closed forms */
 typedef struct worst {
   double fcr_p_fd, fcr_dp_fd, fcr_p_exact;
   double nh_p_fd, nh_dp_fd, nh_p_exact, nh_clamp_p, nh_clamp_dp, nh_clamp_dir, nh_psi_exact;
-  double batch, continuity;
+  double batch, continuity, definite;
 } worst;
 static worst W;
 
@@ -592,6 +594,146 @@ static void test_von_mises(void **state) {
   }
 }
 
+/* Eigen-decomposition A = Q diag(eig) Q^T of a symmetric n x n matrix (n <= 9) by cyclic
+ * Jacobi, in double; Q may be NULL. */
+static void jacobi_eigv(int n, const double *A, double *eig, double *Q) {
+  double a[81], q[81];
+  memcpy(a, A, sizeof(double) * (size_t)(n * n));
+  for (int i = 0; i < n * n; ++i) q[i] = i % (n + 1) == 0;
+  for (int sweep = 0; sweep < 60; ++sweep) {
+    double off = 0, tot = 0;
+    for (int p = 0; p < n; ++p)
+      for (int r = 0; r < n; ++r) {
+        tot += a[p * n + r] * a[p * n + r];
+        if (p != r) off += a[p * n + r] * a[p * n + r];
+      }
+    if (off <= 1e-30 * tot) break;
+    for (int p = 0; p < n; ++p)
+      for (int r = p + 1; r < n; ++r) {
+        const double apr = a[p * n + r];
+        if (apr == 0) continue;
+        const double th = (a[r * n + r] - a[p * n + p]) / (2 * apr);
+        const double t = (th >= 0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1));
+        const double c = 1 / sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < n; ++k) {
+          const double akp = a[k * n + p], akr = a[k * n + r];
+          a[k * n + p] = c * akp - s * akr;
+          a[k * n + r] = s * akp + c * akr;
+          const double qkp = q[k * n + p], qkr = q[k * n + r];
+          q[k * n + p] = c * qkp - s * qkr;
+          q[k * n + r] = s * qkp + c * qkr;
+        }
+        for (int k = 0; k < n; ++k) {
+          const double apk = a[p * n + k], ark = a[r * n + k];
+          a[p * n + k] = c * apk - s * ark;
+          a[r * n + k] = s * apk + c * ark;
+        }
+      }
+  }
+  for (int i = 0; i < n; ++i) eig[i] = a[i * n + i];
+  if (Q) memcpy(Q, q, sizeof(double) * (size_t)(n * n));
+}
+
+static void jacobi_eig(int n, const double *A, double *eig) {
+  jacobi_eigv(n, A, eig, NULL);
+}
+
+/* The nearest (Frobenius) positive semi-definite matrix to a symmetric 9x9 K: eigenvalues
+ * clamped at 0. Since F -> U^T F V is orthogonal on R^9 and block-diagonalizes the Hessian of
+ * an isotropic energy, this equals the blockwise projection of Teran et al. 2005. */
+static void psd_project9(const double K[81], double Kp[81]) {
+  double eig[9], Q[81];
+  jacobi_eigv(9, K, eig, Q);
+  for (int a = 0; a < 9; ++a)
+    for (int b = 0; b < 9; ++b) {
+      double acc = 0;
+      for (int k = 0; k < 9; ++k) acc += Q[9 * a + k] * fmax(eig[k], 0) * Q[9 * b + k];
+      Kp[9 * a + b] = acc;
+    }
+}
+
+/* The definiteness fix (Teran et al. 2005; Zhu eqs. 16, 19): the 9x9 matrix of
+ * dpdf_action_definite on the basis directions equals the eigenvalue-clamped (nearest
+ * semi-definite) 9x9 matrix of dpdf_action, is symmetric and semi-definite, and equals
+ * dpdf_action where that is already positive definite. Compressed, clamped (neo-Hookean),
+ * stretched and inverted F; indefinite Hessians must occur among them. */
+static void test_definite(void **state) {
+  (void)state;
+  uint64_t rng = 28;
+  const mpm_material mats[2] = {make(MPM_MODEL_FIXED_COROTATED, 3.0, 0.3, 1000, 0.3),
+                                make(MPM_MODEL_NEO_HOOKEAN, 3.0, 0.3, 1000, 0.3)};
+  for (int k = 0; k < 2; ++k) {
+    const mpm_material *m = &mats[k];
+    int indefinite = 0, definite = 0;
+    for (int t = 0; t < 1500; ++t) {
+      double s[3], Q1[9], Q2[9], Fd[9];
+      switch (t % 4) {
+      case 0:
+        sorted_sigma(&rng, 0.9, 1.1, s);
+        break;
+      case 1:
+        sorted_sigma(&rng, 0.05, 0.7, s);
+        break;
+      case 2:
+        sorted_sigma(&rng, 1.2, 3.0, s);
+        break;
+      default:
+        sorted_sigma(&rng, 0.2, 2.0, s);
+        s[2] = -test_rand(&rng, 0.01, s[1]);
+        break;
+      }
+      rand_rotation(&rng, Q1);
+      rand_rotation(&rng, Q2);
+      compose(Q1, s, Q2, Fd);
+      mpm_real F[9], Kr[81];
+      to_real(Fd, F, NULL);
+      double K[81], K0[81], Kp[81], eig[9];
+      for (int b = 0; b < 9; ++b) {
+        mpm_real e[9] = {0}, dP[9], dP0[9];
+        e[b] = 1;
+        m->model->dpdf_action_definite(m, F, e, dP);
+        m->model->dpdf_action(m, F, e, dP0);
+        for (int a = 0; a < 9; ++a) {
+          K[9 * a + b] = dP[a];
+          K0[9 * a + b] = dP0[a];
+        }
+      }
+      const double sc = fmax(maxabs(K0, 81), (double)(m->mu + m->lambda));
+      for (int a = 0; a < 9; ++a)
+        for (int b = 0; b < a; ++b) {
+          check_err(fabs(K[9 * a + b] - K[9 * b + a]) / sc, TOL(1e-5, 1e-12), NULL,
+                    "definite action symmetric", t);
+          K0[9 * a + b] = K0[9 * b + a] = 0.5 * (K0[9 * a + b] + K0[9 * b + a]);
+        }
+      psd_project9(K0, Kp);
+      for (int i = 0; i < 81; ++i) Kr[i] = (mpm_real)K[i];
+      check_err(rel_err(Kr, Kp, 81, sc), TOL(5e-5, 1e-10), &W.definite, "definite = PSD(K)", t);
+      for (int a = 0; a < 9; ++a) /* symmetrize for the eigen-solve */
+        for (int b = 0; b < a; ++b)
+          K[9 * a + b] = K[9 * b + a] = 0.5 * (K[9 * a + b] + K[9 * b + a]);
+      jacobi_eig(9, K, eig);
+      for (int i = 0; i < 9; ++i)
+        check_err(fmax(-eig[i], 0) / sc, TOL(2e-5, 1e-11), &W.definite, "semi-definite", t);
+      jacobi_eig(9, K0, eig);
+      double mn = eig[0];
+      for (int i = 1; i < 9; ++i) mn = fmin(mn, eig[i]);
+      if (mn < -1e-3 * sc) ++indefinite;
+      if (mn > 1e-3 * sc) {
+        ++definite;
+        double K0r[81];
+        for (int b = 0; b < 9; ++b) {
+          mpm_real e[9] = {0}, dP0[9];
+          e[b] = 1;
+          m->model->dpdf_action(m, F, e, dP0);
+          for (int a = 0; a < 9; ++a) K0r[9 * a + b] = dP0[a];
+        }
+        check_err(rel_err(Kr, K0r, 81, sc), TOL(2e-5, 1e-11), &W.definite, "definite = plain", t);
+      }
+    }
+    assert_true(indefinite > 50 && definite > 50);
+  }
+}
+
 static void test_report(void **state) {
   (void)state;
   print_message("materials (%s), worst relative errors:\n"
@@ -600,10 +742,11 @@ static void test_report(void **state) {
                 "fast vs SVD path %.3g\n"
                 "  neo-Hookean clamped: P %.3g, Psi %.3g, dP vs eq. 16 %.3g, dPsi along clamped "
                 "direction %.3g, threshold %.3g\n"
-                "  kirchhoff_batch vs pk1 F^T %.3g\n",
+                "  kirchhoff_batch vs pk1 F^T %.3g\n"
+                "  definiteness fix vs eigenvalue-clamped 9x9 / semi-definite / plain %.3g\n",
                 MPM_REAL_NAME, W.fcr_p_fd, W.fcr_dp_fd, W.fcr_p_exact, W.nh_p_fd, W.nh_dp_fd,
                 W.nh_p_exact, W.nh_clamp_p, W.nh_psi_exact, W.nh_clamp_dp, W.nh_clamp_dir,
-                W.continuity, W.batch);
+                W.continuity, W.batch, W.definite);
 }
 
 int main(void) {
@@ -616,6 +759,7 @@ int main(void) {
       cmocka_unit_test(test_neo_hookean_threshold),
       cmocka_unit_test(test_kirchhoff_batch),
       cmocka_unit_test(test_von_mises),
+      cmocka_unit_test(test_definite),
       cmocka_unit_test(test_report),
   };
   return cmocka_run_group_tests_name("material", tests, NULL, NULL);

@@ -16,9 +16,16 @@
  * Kacic-Alesic 2010 or Stomakhin et al. 2012 sec. 4). sigma_i + sigma_j >= 0 by the SVD
  * convention and vanishes only where R itself is not differentiable (two singular values of
  * equal magnitude and opposite sign); there the denominator is clamped to a small positive
- * value, which bounds the rotational stiffness instead of letting it blow up. No definiteness
- * projection is applied. */
+ * value, which bounds the rotational stiffness instead of letting it blow up.
+ *
+ * dpdf_action_definite (Teran et al. 2005; Zhu eqs. 16, 19): the same derivative in the
+ * diagonal space (material/isotropic.h) with psi(s) = mu sum (s_i - 1)^2 + lambda/2 (J - 1)^2,
+ *   A_ii = 2 mu + lambda (J/s_i)^2,  A_ij = lambda (J/s_i)(J/s_j) + lambda (J - 1) s_k,
+ *   l_sym = 2 mu - lambda (J - 1) s_k,  l_skew = 2 mu - 4 mu / (s_i + s_j) + lambda (J - 1) s_k
+ * ({i, j, k} = {0, 1, 2}; J/s_i is the product of the other two), each block projected to
+ * positive semi-definite. The s_i + s_j floor is the one above. */
 #include "material/material.h"
+#include "material/isotropic.h"
 
 #include "core/mat3.h"
 #include "core/svd3.h"
@@ -91,11 +98,33 @@ static void fcr_dpdf_action(const mpm_material *m, const mpm_real F[9], const mp
     dP[i] = two_mu * (dF[i] - dR[i]) + l * dJ * C[i] + l * (J - 1) * dC[i];
 }
 
+static void fcr_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
+                                     const mpm_real dF[9], mpm_real dP[9]) {
+  mpm_iso_hessian H;
+  mpm_real s[3];
+  mpm_svd3(F, H.U, s, H.V);
+  const mpm_real two_mu = 2 * m->mu, l = m->lambda;
+  const mpm_real J = s[0] * s[1] * s[2];
+  const mpm_real Js[3] = {s[1] * s[2], s[0] * s[2], s[0] * s[1]};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      H.A[3 * i + j] =
+          i == j ? two_mu + l * Js[i] * Js[i] : l * Js[i] * Js[j] + l * (J - 1) * s[3 - i - j];
+  const mpm_real sum_floor = FCR_SUM_FLOOR * mpm_fmax(s[0], MPM_REAL_EPS);
+  for (int k = 0; k < 3; ++k) {
+    const int i = MPM_ISO_PAIR[k][0], j = MPM_ISO_PAIR[k][1];
+    const mpm_real vk = l * (J - 1) * s[3 - i - j];
+    H.lsym[k] = two_mu - vk;
+    H.lskew[k] = two_mu - 2 * two_mu / mpm_fmax(s[i] + s[j], sum_floor) + vk;
+  }
+  mpm_iso_make_definite(&H);
+  mpm_iso_action(&H, dF, dP);
+}
+
 /* tau = 2 mu (F - R) F^T + lambda (J - 1) J I, with (F - R) F^T = U diag(s (s - 1)) U^T
  * (F F^T = U S^2 U^T and R F^T = U S U^T), symmetric by construction. */
 static void fcr_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
-                               const mpm_real *plastic,
-                                mpm_real tau[9][MPM_STRESS_CHUNK]) {
+                                const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   (void)plastic; /* elastic: no plastic state */
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   const mpm_real two_mu = 2 * m->mu, l = m->lambda;
@@ -121,6 +150,7 @@ const mpm_model mpm_model_fixed_corotated = {
     .energy = fcr_energy,
     .pk1 = fcr_pk1,
     .dpdf_action = fcr_dpdf_action,
+    .dpdf_action_definite = fcr_dpdf_action_definite,
     .kirchhoff_batch = fcr_kirchhoff_batch,
     .return_map = NULL,
     .plastic_initial = 1,

@@ -4,8 +4,11 @@
  * Lamé parameters from Young's modulus and Poisson's ratio (mu = E / (2 (1 + nu)),
  * lambda = E nu / ((1 + nu)(1 - 2 nu))); the dilatational wave speed sqrt((lambda + 2 mu) /
  * rho) bounds the explicit time step (Gao et al. 2017 sec. 3.2, CFL). The models themselves
- * live in fixed_corotated.c and neo_hookean.c. */
+ * live in one file each (fixed_corotated.c, neo_hookean.c, hencky_stvk.c, drucker_prager.c,
+ * von_mises.c, snow.c). Scene units are converted here: the friction angle from degrees to
+ * radians; cohesion and yield stress stay in Pa. */
 #include "material/material.h"
+#include "material/snow.h"
 
 #include "core/mat3.h"
 
@@ -15,6 +18,14 @@ const mpm_model *mpm_model_of(mpm_model_kind kind) {
     return &mpm_model_fixed_corotated;
   case MPM_MODEL_NEO_HOOKEAN:
     return &mpm_model_neo_hookean;
+  case MPM_MODEL_HENCKY_STVK:
+    return &mpm_model_hencky_stvk;
+  case MPM_MODEL_DRUCKER_PRAGER:
+    return &mpm_model_drucker_prager;
+  case MPM_MODEL_VON_MISES:
+    return &mpm_model_von_mises;
+  case MPM_MODEL_SNOW:
+    return &mpm_model_snow;
   default:
     return NULL;
   }
@@ -31,6 +42,12 @@ void mpm_material_init(mpm_material *m, const mpm_material_desc *d) {
   m->density = (mpm_real)d->density;
   m->min_stretch = (mpm_real)d->min_stretch;
   m->wave_speed = (mpm_real)sqrt((lambda + 2.0 * mu) / d->density);
+  m->friction_angle = (mpm_real)(d->friction_angle * (3.14159265358979323846 / 180.0));
+  m->cohesion = (mpm_real)d->cohesion;
+  m->yield_stress = (mpm_real)d->yield_stress;
+  m->theta_c = (mpm_real)d->theta_c;
+  m->theta_s = (mpm_real)d->theta_s;
+  m->hardening = (mpm_real)d->hardening;
 }
 
 /* sqrt(3/2 s:s) with s the deviatoric part of sigma = tau / J. Von Mises is homogeneous of
@@ -51,7 +68,15 @@ mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J) {
   return mpm_sqrt(R_(1.5) * ss) / mpm_fmax(mpm_fabs(J), jmin);
 }
 
+/* Snow (Stomakhin et al. 2013 eq. 3): mu and lambda scaled by exp(xi (1 - Jp)), and the wave
+ * speed with them (by the square root). Every other model: *m. */
 mpm_material mpm_material_at(const mpm_material *m, mpm_real plastic) {
-  (void)plastic; /* hardening models (snow) scale the moduli here */
-  return *m;
+  mpm_material r = *m;
+  if (m->kind == MPM_MODEL_SNOW) {
+    const mpm_real h = mpm_snow_hardening(m, plastic);
+    r.mu *= h;
+    r.lambda *= h;
+    r.wave_speed *= mpm_sqrt(h);
+  }
+  return r;
 }

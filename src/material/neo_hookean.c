@@ -30,8 +30,16 @@
  *    diagonal space. By isotropy this is the exact Hessian of the unclamped energy at
  *    F_c = U diag(c) V^T: symmetric, finite (c_i >= c > 0), and equal to the unclamped
  *    derivative at the threshold. It is not the derivative of the clamped P (which is not
- *    symmetric and has zero stiffness along clamped directions). */
+ *    symmetric and has zero stiffness along clamped directions).
+ *
+ * dpdf_action_definite (Teran et al. 2005; Zhu eqs. 16, 19): the same Hessian at the clamped
+ * diagonal c in the diagonal space (material/isotropic.h), psi(c) as above,
+ *   A_ii = mu + (mu - lambda ln J^ + lambda) / c_i^2,  A_ij = lambda / (c_i c_j),
+ *   l_sym = mu + (mu - lambda ln J^) / (c_i c_j),  l_skew = mu + (lambda ln J^ - mu) / (c_i c_j),
+ * each block projected to positive semi-definite (c_i is floored at MPM_REAL_EPS should
+ * min_stretch be 0). */
 #include "material/material.h"
+#include "material/isotropic.h"
 
 #include "core/mat3.h"
 #include "core/vecmath.h"
@@ -125,12 +133,32 @@ static void nh_dpdf_action(const mpm_material *m, const mpm_real F[9], const mpm
   mpm_m3_mul_bt(T, d.V, dP);
 }
 
+static void nh_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
+                                    const mpm_real dF[9], mpm_real dP[9]) {
+  mpm_iso_hessian H;
+  mpm_real s[3], c[3];
+  mpm_svd3(F, H.U, s, H.V);
+  const mpm_real cmin = mpm_fmax(m->min_stretch, MPM_REAL_EPS);
+  for (int i = 0; i < 3; ++i) c[i] = mpm_fmax(s[i], cmin);
+  const mpm_real lnJ = mpm_log(c[0] * c[1] * c[2]);
+  const mpm_real mu = m->mu, l = m->lambda;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      H.A[3 * i + j] = i == j ? mu + (mu - l * lnJ + l) / (c[i] * c[i]) : l / (c[i] * c[j]);
+  for (int k = 0; k < 3; ++k) {
+    const mpm_real cc = c[MPM_ISO_PAIR[k][0]] * c[MPM_ISO_PAIR[k][1]];
+    H.lsym[k] = mu + (mu - l * lnJ) / cc;
+    H.lskew[k] = mu + (l * lnJ - mu) / cc;
+  }
+  mpm_iso_make_definite(&H);
+  mpm_iso_action(&H, dF, dP);
+}
+
 /* Two passes so that the common case stays a branch-free loop: the closed form
  * tau = mu (F F^T - I) + lambda ln J I for every particle, then the few particles that may be
  * clamped are redone in the diagonal space, tau = U diag(p_i s_i) U^T (= P F^T). */
 static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
-                               const mpm_real *plastic,
-                               mpm_real tau[9][MPM_STRESS_CHUNK]) {
+                               const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   (void)plastic; /* elastic: no plastic state */
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   const mpm_real mu = m->mu, l = m->lambda, c = m->min_stretch;
@@ -179,6 +207,7 @@ const mpm_model mpm_model_neo_hookean = {
     .energy = nh_energy,
     .pk1 = nh_pk1,
     .dpdf_action = nh_dpdf_action,
+    .dpdf_action_definite = nh_dpdf_action_definite,
     .kirchhoff_batch = nh_kirchhoff_batch,
     .return_map = NULL,
     .plastic_initial = 1,

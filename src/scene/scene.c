@@ -27,6 +27,12 @@ mpm_material_desc mpm_material_desc_default(void) {
   m.nu = 0.3;
   m.density = 1000.0;
   m.min_stretch = 0.2;
+  m.friction_angle = 30.0; /* degrees */
+  m.cohesion = 0.0;
+  m.yield_stress = 0.0; /* no default: required for von_mises */
+  m.theta_c = 2.5e-2;   /* Stomakhin et al. 2013 */
+  m.theta_s = 7.5e-3;
+  m.hardening = 10.0;
   return m;
 }
 

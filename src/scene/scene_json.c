@@ -3,9 +3,10 @@
  *
  * The format is documented key by key in docs/scene-format.md. Checking is strict: unknown
  * and duplicate keys, wrong types, out-of-range and non-finite numbers, unknown enum values
- * and material names, bodies that leave the usable domain and unreadable mesh files are all
- * errors whose message starts with the file and the key path ("bodies[2].material.E") and
- * says what was expected and what was found. The typed getters live in json_check.c.
+ * and material names, material keys of another model (they would have no effect), bodies that
+ * leave the usable domain and unreadable mesh files are all errors whose message starts with
+ * the file and the key path ("bodies[2].material.E") and says what was expected and what was
+ * found. The typed getters live in json_check.c.
  * On any error the scene is left empty (arrays freed, defaults filled). */
 #include "scene/json_check.h"
 #include "scene/mesh.h"
@@ -30,8 +31,9 @@ static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
 static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha",  "cfl",
                                           "max_dt", "grid",     "gimp_length", NULL};
-static const char *const MATERIAL_KEYS[] = {"name",    "model",       "E", "nu",
-                                            "density", "min_stretch", NULL};
+static const char *const MATERIAL_KEYS[] = {
+    "name",     "model",        "E",       "nu",      "density",   "min_stretch", "friction_angle",
+    "cohesion", "yield_stress", "theta_c", "theta_s", "hardening", NULL};
 static const char *const BODY_KEYS[] = {
     "name",   "shape", "material", "velocity", "angular_velocity", "particles_per_cell",
     "jitter", "seed",  NULL};
@@ -53,7 +55,10 @@ static const char *const RULE_NAMES[] = {"sticky", "slip", "separate", NULL};
 static const char *const KERNEL_NAMES[] = {"linear", "quadratic", "cubic", "ugimp", NULL};
 static const char *const TRANSFER_NAMES[] = {"apic", "flip", NULL};
 static const char *const GRID_NAMES[] = {"sparse", "dense", NULL};
-static const char *const MODEL_NAMES[] = {"fixed_corotated", "neo_hookean", NULL};
+static const char *const MODEL_NAMES[] = {
+    "fixed_corotated", "neo_hookean", "hencky_stvk", "drucker_prager", "von_mises", "snow", NULL};
+_Static_assert(sizeof MODEL_NAMES / sizeof MODEL_NAMES[0] == MPM_MODEL_COUNT + 1,
+               "MODEL_NAMES must name every mpm_model_kind, in order");
 static const char *const BODY_SHAPE_NAMES[] = {"box", "sphere", "cylinder", "mesh", NULL};
 static const mpm_shape_kind BODY_SHAPE_KINDS[] = {MPM_SHAPE_BOX, MPM_SHAPE_SPHERE,
                                                   MPM_SHAPE_CYLINDER, MPM_SHAPE_MESH};
@@ -268,6 +273,53 @@ static int parse_output(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
 
 /* ---- materials ------------------------------------------------------------------------ */
 
+#define MODEL_BIT(kind) (1u << (unsigned)(kind))
+
+/* Material keys that only some models use, and which models (MODEL_BIT mask). Giving one to
+ * another model is an error: the value would be ignored while the user believes it acts. */
+typedef struct model_key {
+  const char *key;
+  unsigned models;
+} model_key;
+
+static const model_key MODEL_ONLY_KEYS[] = {
+    {"min_stretch", MODEL_BIT(MPM_MODEL_NEO_HOOKEAN)},
+    {"friction_angle", MODEL_BIT(MPM_MODEL_DRUCKER_PRAGER)},
+    {"cohesion", MODEL_BIT(MPM_MODEL_DRUCKER_PRAGER)},
+    {"yield_stress", MODEL_BIT(MPM_MODEL_VON_MISES)},
+    {"theta_c", MODEL_BIT(MPM_MODEL_SNOW)},
+    {"theta_s", MODEL_BIT(MPM_MODEL_SNOW)},
+    {"hardening", MODEL_BIT(MPM_MODEL_SNOW)},
+};
+
+/* Every model-specific key of the material object at the current path must apply to `model`;
+ * the first one (in file order) that does not is reported with the models it applies to. */
+static int check_model_keys(mpm_json_ctx *c, const cJSON *node, int model) {
+  const size_t count = sizeof MODEL_ONLY_KEYS / sizeof MODEL_ONLY_KEYS[0];
+  for (const cJSON *ch = node->child; ch; ch = ch->next) {
+    const model_key *mk = NULL;
+    for (size_t k = 0; k < count && ch->string; ++k)
+      if (strcmp(MODEL_ONLY_KEYS[k].key, ch->string) == 0) mk = &MODEL_ONLY_KEYS[k];
+    if (!mk || (mk->models & MODEL_BIT(model))) continue;
+    char list[200];
+    size_t o = 0;
+    int n = 0;
+    list[0] = '\0';
+    for (int i = 0; MODEL_NAMES[i]; ++i) {
+      if (!(mk->models & MODEL_BIT(i))) continue;
+      int w = snprintf(list + o, sizeof list - o, "%s%s", n ? ", " : "", MODEL_NAMES[i]);
+      if (w < 0 || (size_t)w >= sizeof list - o) break;
+      o += (size_t)w;
+      ++n;
+    }
+    return mpm_json_fail_at(c, mk->key, MPM_ERR_INVALID,
+                            "applies only to model%s %s, not to '%s' (it would have no effect); "
+                            "remove it or change 'model'",
+                            n > 1 ? "s" : "", list, MODEL_NAMES[model]);
+  }
+  return 0;
+}
+
 /* One material object at the current path. */
 static int parse_material(mpm_json_ctx *c, const cJSON *node, int name_required,
                           mpm_material_desc *m) {
@@ -276,12 +328,30 @@ static int parse_material(mpm_json_ctx *c, const cJSON *node, int name_required,
       mpm_json_check_keys(c, node, MATERIAL_KEYS, NULL) < 0 ||
       mpm_json_string(c, node, "name", name_required, m->name, sizeof m->name) < 0 ||
       mpm_json_enum(c, node, "model", 1, MODEL_NAMES, &model) < 0 ||
+      check_model_keys(c, node, model) < 0 ||
       mpm_json_number(c, node, "E", 1, mpm_json_gt(0, "Pa"), &m->E) < 0 ||
       mpm_json_number(c, node, "nu", 1, mpm_json_in('(', -1, 0.5, ')', NULL), &m->nu) < 0 ||
       mpm_json_number(c, node, "density", 1, mpm_json_gt(0, "kg/m^3"), &m->density) < 0 ||
       mpm_json_number(c, node, "min_stretch", 0, mpm_json_in('(', 0, 1, ']', NULL),
-                      &m->min_stretch) < 0)
+                      &m->min_stretch) < 0 ||
+      mpm_json_number(c, node, "friction_angle", 0, mpm_json_in('[', 0, 90, ')', "degrees"),
+                      &m->friction_angle) < 0 ||
+      mpm_json_number(c, node, "cohesion", 0, mpm_json_ge(0, "Pa"), &m->cohesion) < 0 ||
+      mpm_json_number(c, node, "theta_c", 0, mpm_json_in('(', 0, 1, ')', "critical compression"),
+                      &m->theta_c) < 0 ||
+      mpm_json_number(c, node, "theta_s", 0, mpm_json_gt(0, "critical stretch"), &m->theta_s) < 0 ||
+      mpm_json_number(c, node, "hardening", 0, mpm_json_ge(0, "hardening coefficient"),
+                      &m->hardening) < 0)
     return -1;
+  const mpm_json_range yield = mpm_json_gt(0, "Pa");
+  int has_yield = mpm_json_number(c, node, "yield_stress", 0, yield, &m->yield_stress);
+  if (has_yield < 0) return -1;
+  if (!has_yield && model == MPM_MODEL_VON_MISES) {
+    char want[128];
+    return mpm_json_fail_at(c, "yield_stress", MPM_ERR_INVALID,
+                            "required for model 'von_mises'; expected %s",
+                            mpm_json_describe_range(&yield, 0, want, sizeof want));
+  }
   m->model = (mpm_model_kind)model;
   return 0;
 }
