@@ -9,7 +9,8 @@
 #include <stdlib.h>
 
 /* Slope angle (degrees) of the settled pile: the top surface height over radial distance from
- * the pile axis, fitted by least squares between 15% and 85% of the pile radius (the 90th percentile distance). */
+ * the pile axis, fitted by least squares between 15% and 85% of the pile radius (the 90th
+ * percentile distance). */
 static int cmp_double(const void *a, const void *b) {
   const double x = *(const double *)a, y = *(const double *)b;
   return x < y ? -1 : x > y;

@@ -60,10 +60,10 @@ typedef enum mpm_shape_kind {
 typedef struct mpm_material_desc {
   char name[MPM_NAME_MAX];
   mpm_model_kind model;
-  double E;           /* Young's modulus, Pa (> 0) */
-  double nu;          /* Poisson's ratio, (-1, 0.5) */
-  double density;     /* kg/m^3 (> 0) */
-  double min_stretch; /* neo-Hookean: singular values clamped below this (Zhu 5.3); (0, 1] */
+  double E;              /* Young's modulus, Pa (> 0) */
+  double nu;             /* Poisson's ratio, (-1, 0.5) */
+  double density;        /* kg/m^3 (> 0) */
+  double min_stretch;    /* neo-Hookean: singular values clamped below this (Zhu 5.3); (0, 1] */
   double friction_angle; /* Drucker-Prager: degrees, [0, 90); default 30 */
   double cohesion;       /* Drucker-Prager: Pa, >= 0; default 0 (dry sand) */
   double yield_stress;   /* von Mises: Pa, > 0 */

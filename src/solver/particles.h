@@ -13,15 +13,15 @@
 
 typedef struct mpm_particles {
   size_t count, capacity;
-  mpm_real *x[3]; /* position, m */
-  mpm_real *v[3]; /* velocity, m/s */
-  mpm_real *F[9]; /* deformation gradient, row-major components */
-  mpm_real *B[9]; /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
-                     Storing B rather than C keeps angular momentum exact for every kernel,
-                     including those whose D_p varies with position (linear, uGIMP). */
+  mpm_real *x[3];    /* position, m */
+  mpm_real *v[3];    /* velocity, m/s */
+  mpm_real *F[9];    /* deformation gradient, row-major components */
+  mpm_real *B[9];    /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
+                        Storing B rather than C keeps angular momentum exact for every kernel,
+                        including those whose D_p varies with position (linear, uGIMP). */
   mpm_real *plastic; /* plastic state of the material's model (snow: J_p), 1 at rest */
   mpm_real *mass;    /* kg */
-  mpm_real *vol0; /* initial volume V_p^0, m^3 */
+  mpm_real *vol0;    /* initial volume V_p^0, m^3 */
   int32_t *material;
   int32_t *body;
   uint32_t *id;

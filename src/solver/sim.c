@@ -39,7 +39,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   for (int m = 0; m < sc->material_count; ++m) {
     mpm_material_init(&sim->materials[m], &sc->materials[m]);
     if (!sim->materials[m].model) {
-      st = mpm_error_set(err, MPM_ERR_INVALID, "%s: materials[%d] ('%s'): model %d is not available in this build",
+      st = mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: materials[%d] ('%s'): model %d is not available in this build",
                          sc->path, m, sc->materials[m].name, (int)sc->materials[m].model);
       goto fail;
     }

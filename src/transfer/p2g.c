@@ -79,6 +79,26 @@ ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int
   }
 }
 
+/* Everything P2G needs of a batch of n particles of one material: their stresses, lane
+ * stencils (with APIC factors when apic) and lane inputs (see batch_inputs). */
+ALWAYS_INLINE void batch_prepare(const int apic, const mpm_transfer_ctx *ctx,
+                                 const mpm_particles *p, const mpm_material *mat,
+                                 const uint32_t *idx, int n, int base[3], mpm_lane_stencil *s,
+                                 mpm_vl *mass, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
+  mpm_real tau[9][MPM_STRESS_CHUNK];
+  const int contiguous = mpm_batch_contiguous(idx, n);
+  if (contiguous) { /* the model reads F in place */
+    const mpm_real *Fp[9];
+    for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
+    mat->model->kirchhoff_batch(mat, n, Fp, p->plastic + idx[0], tau);
+  } else {
+    chunk_stress(mat, p, idx, n, tau);
+  }
+  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
+  mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, s);
+  batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, mass, mv, mB, K);
+}
+
 ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
                              mpm_sparse_grid *g, const mpm_particles *p, int32_t b) {
   /* with APIC the force is fused into the momentum: only mass and momentum are used */
@@ -94,8 +114,6 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
-  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
-  mpm_real tau[9][MPM_STRESS_CHUNK];
   for (int m = 0; m < nm; ++m) {
     const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
     for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
@@ -104,20 +122,10 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
         const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
         const uint32_t *idx = g->perm + j;
         if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
-        const int contiguous = mpm_batch_contiguous(idx, n);
-        if (contiguous) { /* the model reads F in place */
-          const mpm_real *Fp[9];
-          for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
-          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp,
-                                                   p->plastic + idx[0], tau);
-        } else {
-          chunk_stress(&ctx->materials[m], p, idx, n, tau);
-        }
         int base[3];
         mpm_lane_stencil s;
-        mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, &s);
         mpm_vl mass, mv[3], mB[9], K[9];
-        batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, &mass, mv, mB, K);
+        batch_prepare(apic, ctx, p, &ctx->materials[m], idx, n, base, &s, &mass, mv, mB, K);
         const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
                          (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
         mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, off, MPM_PAD * MPM_PAD, MPM_PAD);
@@ -158,8 +166,6 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
-  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
-  mpm_real tau[9][MPM_STRESS_CHUNK];
   for (int m = 0; m < nm; ++m) {
     const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
     for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
@@ -168,20 +174,10 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
         const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
         const uint32_t *idx = g->perm + j;
         if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
-        const int contiguous = mpm_batch_contiguous(idx, n);
-        if (contiguous) { /* the model reads F in place */
-          const mpm_real *Fp[9];
-          for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
-          ctx->materials[m].model->kirchhoff_batch(&ctx->materials[m], n, Fp,
-                                                   p->plastic + idx[0], tau);
-        } else {
-          chunk_stress(&ctx->materials[m], p, idx, n, tau);
-        }
         int base[3];
         mpm_lane_stencil s;
-        mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 1, base, &s);
         mpm_vl mass, mv[3], mB[9], K[9];
-        batch_inputs(p, idx, n, contiguous, ctx->dt, 1, tau, &mass, mv, mB, K);
+        batch_prepare(1, ctx, p, &ctx->materials[m], idx, n, base, &s, &mass, mv, mB, K);
         const long off =
             ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
         mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);

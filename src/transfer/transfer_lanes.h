@@ -92,19 +92,19 @@ MPM_ALWAYS_INLINE void mpm_lanes_store(mpm_real *a, const uint32_t *idx, int n, 
  * particle; that many concurrent streams is more than the hardware prefetchers follow, so the
  * batch loops ask for the particles two batches ahead. RW is 0 (read) or 1 (write): a macro,
  * because __builtin_prefetch needs a constant even in unoptimized builds. */
-#define MPM_PREFETCH_PARTICLE(p, i, RW)                                                           \
-  do {                                                                                            \
-    for (int d_ = 0; d_ < 3; ++d_) {                                                              \
-      __builtin_prefetch((p)->x[d_] + (i), RW);                                                   \
-      __builtin_prefetch((p)->v[d_] + (i), RW);                                                   \
-    }                                                                                             \
-    for (int c_ = 0; c_ < 9; ++c_) {                                                              \
-      __builtin_prefetch((p)->F[c_] + (i), RW);                                                   \
-      __builtin_prefetch((p)->B[c_] + (i), RW);                                                   \
-    }                                                                                             \
-    __builtin_prefetch((p)->plastic + (i), RW);                                                   \
-    __builtin_prefetch((p)->mass + (i), 0);                                                       \
-    __builtin_prefetch((p)->vol0 + (i), 0);                                                       \
+#define MPM_PREFETCH_PARTICLE(p, i, RW)                                                            \
+  do {                                                                                             \
+    for (int d_ = 0; d_ < 3; ++d_) {                                                               \
+      __builtin_prefetch((p)->x[d_] + (i), RW);                                                    \
+      __builtin_prefetch((p)->v[d_] + (i), RW);                                                    \
+    }                                                                                              \
+    for (int c_ = 0; c_ < 9; ++c_) {                                                               \
+      __builtin_prefetch((p)->F[c_] + (i), RW);                                                    \
+      __builtin_prefetch((p)->B[c_] + (i), RW);                                                    \
+    }                                                                                              \
+    __builtin_prefetch((p)->plastic + (i), RW);                                                    \
+    __builtin_prefetch((p)->mass + (i), 0);                                                        \
+    __builtin_prefetch((p)->vol0 + (i), 0);                                                        \
   } while (0)
 
 /* Per-lane stencil factors of a batch: [axis][node][lane]. */
