@@ -160,6 +160,34 @@ static double time_svd(mpm_real *const F[9], long n, double *sink) {
   return t1 - t0;
 }
 
+/* Seconds for mpm_svd3_batch over all particles, in chunks of MPM_STRESS_CHUNK (U, V and
+ * sigma written to stack buffers, as a stress kernel would keep them). */
+static double time_svd_batch(mpm_real *const F[9], long n, double *sink) {
+  const long chunks = (n + MPM_STRESS_CHUNK - 1) / MPM_STRESS_CHUNK;
+  double acc = 0;
+  const double t0 = mpm_wall_seconds();
+#pragma omp parallel for schedule(static) reduction(+ : acc)
+  for (long c = 0; c < chunks; ++c) {
+    const long base = c * MPM_STRESS_CHUNK;
+    const int k = (int)(n - base < MPM_STRESS_CHUNK ? n - base : MPM_STRESS_CHUNK);
+    _Alignas(MPM_ALIGN) mpm_real U[9][MPM_STRESS_CHUNK], V[9][MPM_STRESS_CHUNK],
+        s[3][MPM_STRESS_CHUNK];
+    const mpm_real *Fc[9];
+    mpm_real *Up[9], *Vp[9], *sp[3];
+    for (int q = 0; q < 9; ++q) {
+      Fc[q] = F[q] + base;
+      Up[q] = U[q];
+      Vp[q] = V[q];
+    }
+    for (int q = 0; q < 3; ++q) sp[q] = s[q];
+    mpm_svd3_batch(k, Fc, Up, sp, Vp);
+    acc += (double)s[2][0] + (double)U[0][k - 1] + (double)V[8][0];
+  }
+  const double t1 = mpm_wall_seconds();
+  *sink += acc;
+  return t1 - t0;
+}
+
 static void copy_state(mpm_real *const F[9], const mpm_real *plastic, mpm_real *const Fw[9],
                        mpm_real *pw, long n) {
   for (int q = 0; q < 9; ++q) memcpy(Fw[q], F[q], (size_t)n * sizeof(mpm_real));
@@ -251,14 +279,18 @@ int mpm_bench_stress(int argc, char **argv) {
       fflush(stdout);
     }
   }
-  printf("mpm_svd3: one 3x3 SVD per particle, F gathered from the component arrays; wall time / "
-         "calls (with several threads the throughput figure)\n");
+  printf("SVD: one 3x3 SVD per particle; mpm_svd3 on F gathered from the component arrays, "
+         "mpm_svd3_batch on the arrays in chunks; wall time / calls (with several threads the "
+         "throughput figure)\n");
   printf("%-18s %7s %12s\n", "", "threads", "ns/call");
   for (int t = 0; t < nthreads; ++t) {
     mpm_set_threads(threads[t]);
     time_svd(F, n, &sink); /* warm-up */
     for (int r = 0; r < repeats; ++r) tim[r] = time_svd(F, n, &sink) * 1e9 / n;
     printf("%-18s %7d %12.1f\n", "mpm_svd3", threads[t], bench_median(tim, repeats));
+    time_svd_batch(F, n, &sink); /* warm-up */
+    for (int r = 0; r < repeats; ++r) tim[r] = time_svd_batch(F, n, &sink) * 1e9 / n;
+    printf("%-18s %7d %12.1f\n", "mpm_svd3_batch", threads[t], bench_median(tim, repeats));
     fflush(stdout);
   }
   g_sink = sink;

@@ -1,5 +1,6 @@
 /* support.c - shared helpers for the cmocka test programs. */
 #include "support.h"
+#include "core/svd3.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -33,4 +34,33 @@ const char *test_temp_dir(const char *name) {
 
 const char *test_mpm_bin(void) {
   return getenv("MPM_BIN");
+}
+
+const char *const test_svd_path_name[TEST_SVD_PATHS] = {"mpm_svd3", "mpm_svd3_batch"};
+
+void test_svd_path(int path, const mpm_real F[9], mpm_real U[9], mpm_real s[3], mpm_real V[9]) {
+  if (path == TEST_SVD_SCALAR) {
+    mpm_svd3(F, U, s, V);
+    return;
+  }
+  enum { N = 64 }; /* more than one SIMD batch */
+  static uint64_t rng = 77;
+  mpm_real Fb[9][N], Ub[9][N], sb[3][N], Vb[9][N];
+  const int lane = (int)test_rand(&rng, 0, N);
+  for (int c = 0; c < 9; ++c)
+    for (int l = 0; l < N; ++l) Fb[c][l] = l == lane ? F[c] : (mpm_real)test_rand(&rng, -2, 2);
+  const mpm_real *Fp[9];
+  mpm_real *Up[9], *Vp[9], *sp[3];
+  for (int c = 0; c < 9; ++c) {
+    Fp[c] = Fb[c];
+    Up[c] = Ub[c];
+    Vp[c] = Vb[c];
+  }
+  for (int c = 0; c < 3; ++c) sp[c] = sb[c];
+  mpm_svd3_batch(N, Fp, Up, sp, Vp);
+  for (int c = 0; c < 9; ++c) {
+    U[c] = Ub[c][lane];
+    V[c] = Vb[c][lane];
+  }
+  for (int c = 0; c < 3; ++c) s[c] = sb[c][lane];
 }

@@ -31,4 +31,11 @@ const char *test_temp_dir(const char *name);
 /* Path of the mpm program (from MPM_BIN, set by ctest) or NULL. */
 const char *test_mpm_bin(void);
 
+/* The two implementations of the 3x3 SVD (core/svd3.h): the scalar mpm_svd3 and the SIMD
+ * mpm_svd3_batch the stress kernels use. For the batch, F goes into a random lane of a full
+ * batch whose other lanes hold random matrices (lane independence, full-vector code). */
+enum { TEST_SVD_SCALAR, TEST_SVD_BATCH, TEST_SVD_PATHS };
+extern const char *const test_svd_path_name[TEST_SVD_PATHS];
+void test_svd_path(int path, const mpm_real F[9], mpm_real U[9], mpm_real s[3], mpm_real V[9]);
+
 #endif

@@ -579,7 +579,9 @@ static void test_von_mises_map(void **state) {
     const double n0 = dev_norm(e0), n1 = dev_norm(e1);
     check_err(fmax(n1 - radius, 0) / radius, TOL(2e-4, 1e-10), &W.vm_radius, "VM radius", t);
     const double tr0 = e0[0] + e0[1] + e0[2], tr1 = e1[0] + e1[1] + e1[2];
-    check_err(fabs(tr1 - tr0), TOL(2e-6, 1e-13), &W.vm_trace, "VM keeps tr(eps)", t);
+    /* float: three logs of singular values each good to a few eps, the array exponential and
+     * the rounding of the new F: about 30 eps in all */
+    check_err(fabs(tr1 - tr0), TOL(4e-6, 1e-13), &W.vm_trace, "VM keeps tr(eps)", t);
     assert_close(fabs(det1), fabs(det0), TOL(1e-5, 1e-12));
     if (n0 < radius * (1 - TOL(1e-4, 1e-10))) {
       ++inside;

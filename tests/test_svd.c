@@ -1,4 +1,5 @@
-/* test_svd.c - the 3x3 SVD and polar decomposition (src/core/svd3.c, McAdams et al. 2011)
+/* test_svd.c - the 3x3 SVD and polar decomposition (src/core/svd3.c, McAdams et al. 2011) and
+ * the SIMD batch SVD (core/svd3_lanes.h), each checked on every matrix below,
  * against independent truth: matrices built in double as Q1 diag(s) Q2^T from known singular
  * values s and random rotations, so the expected sigma (with the sign convention of Irving et
  * al. 2004 / Zhu et al. 2017 sec. 5.3) is known exactly. Families: random well-conditioned,
@@ -97,44 +98,50 @@ static void check(const double F64[9], const double *known, const char *what) {
     F[i] = (mpm_real)F64[i];
     Fd[i] = F[i];
   }
-  mpm_svd3(F, U, s, V);
   const double nf = fro(Fd);
-  double Ud[9], Vd[9], sd[3] = {s[0], s[1], s[2]}, G[9], D[9];
-  for (int i = 0; i < 9; ++i) {
-    Ud[i] = U[i];
-    Vd[i] = V[i];
-  }
-  compose(Ud, sd, Vd, G);
-  for (int i = 0; i < 9; ++i) D[i] = G[i] - Fd[i];
-  const double recon = nf > 0 ? fro(D) / nf : fro(D);
-  const double ortho = fmax(ortho_err(U), ortho_err(V));
-  const double det = fmax(fabs(ddet(Ud) - 1), fabs(ddet(Vd) - 1));
-  for (int i = 0; i < 3; ++i) assert_true(isfinite(s[i]));
-  if (recon > tol_recon || ortho > tol_ortho || det > 2 * tol_ortho)
-    fail_msg("%s: recon %.3g ortho %.3g det %.3g (sigma %.9g %.9g %.9g)", what, recon, ortho, det,
-             (double)s[0], (double)s[1], (double)s[2]);
-  g_worst.recon = fmax(g_worst.recon, recon);
-  g_worst.ortho = fmax(g_worst.ortho, ortho);
-  g_worst.det = fmax(g_worst.det, det);
-  g_worst.count++;
+  /* both implementations: the scalar mpm_svd3 and the SIMD batch (support.h) */
+  for (int path = 0; path < TEST_SVD_PATHS; ++path) {
+    test_svd_path(path, F, U, s, V);
+    double Ud[9], Vd[9], sd[3] = {s[0], s[1], s[2]}, G[9], D[9];
+    for (int i = 0; i < 9; ++i) {
+      Ud[i] = U[i];
+      Vd[i] = V[i];
+    }
+    compose(Ud, sd, Vd, G);
+    for (int i = 0; i < 9; ++i) D[i] = G[i] - Fd[i];
+    const double recon = nf > 0 ? fro(D) / nf : fro(D);
+    const double ortho = fmax(ortho_err(U), ortho_err(V));
+    const double det = fmax(fabs(ddet(Ud) - 1), fabs(ddet(Vd) - 1));
+    for (int i = 0; i < 3; ++i) assert_true(isfinite(s[i]));
+    if (recon > tol_recon || ortho > tol_ortho || det > 2 * tol_ortho)
+      fail_msg("%s [%s]: recon %.3g ortho %.3g det %.3g (sigma %.9g %.9g %.9g)", what,
+               test_svd_path_name[path], recon, ortho, det, (double)s[0], (double)s[1],
+               (double)s[2]);
+    g_worst.recon = fmax(g_worst.recon, recon);
+    g_worst.ortho = fmax(g_worst.ortho, ortho);
+    g_worst.det = fmax(g_worst.det, det);
+    g_worst.count++;
 
-  /* ordering (exact, no tolerance) */
-  if (!(s[0] >= s[1] && s[1] >= fabs((double)s[2])))
-    fail_msg("%s: order violated: %.9g %.9g %.9g", what, (double)s[0], (double)s[1], (double)s[2]);
-  /* sign rule wherever det F is clearly away from zero in this precision */
-  const double dF = ddet(Fd);
-  if (fabs(dF) > TOL(1e-4, 1e-10) * nf * nf * nf) {
-    if ((s[2] < 0) != (dF < 0))
-      fail_msg("%s: sign rule: det F %.3g but sigma2 %.3g", what, dF, (double)s[2]);
-  }
-  if (known) {
-    const double smax = fmax(fabs(known[0]), 1e-300);
-    for (int i = 0; i < 3; ++i) {
-      const double e = fabs(s[i] - known[i]) / smax;
-      if (e > tol_sigma)
-        fail_msg("%s: sigma[%d] = %.12g, expected %.12g (rel. err %.3g)", what, i, (double)s[i],
-                 known[i], e);
-      g_worst.sigma = fmax(g_worst.sigma, e);
+    /* ordering (exact, no tolerance) */
+    if (!(s[0] >= s[1] && s[1] >= fabs((double)s[2])))
+      fail_msg("%s [%s]: order violated: %.9g %.9g %.9g", what, test_svd_path_name[path],
+               (double)s[0], (double)s[1], (double)s[2]);
+    /* sign rule wherever det F is clearly away from zero in this precision */
+    const double dF = ddet(Fd);
+    if (fabs(dF) > TOL(1e-4, 1e-10) * nf * nf * nf) {
+      if ((s[2] < 0) != (dF < 0))
+        fail_msg("%s [%s]: sign rule: det F %.3g but sigma2 %.3g", what, test_svd_path_name[path],
+                 dF, (double)s[2]);
+    }
+    if (known) {
+      const double smax = fmax(fabs(known[0]), 1e-300);
+      for (int i = 0; i < 3; ++i) {
+        const double e = fabs(s[i] - known[i]) / smax;
+        if (e > tol_sigma)
+          fail_msg("%s [%s]: sigma[%d] = %.12g, expected %.12g (rel. err %.3g)", what,
+                   test_svd_path_name[path], i, (double)s[i], known[i], e);
+        g_worst.sigma = fmax(g_worst.sigma, e);
+      }
     }
   }
 
@@ -310,6 +317,60 @@ static void test_diagonal(void **state) {
   }
 }
 
+/* The batch on every count of matrices (partial SIMD batches, more than one batch, none) agrees
+ * with the scalar SVD particle by particle, and a non-finite matrix in one lane leaves the
+ * other lanes' results unchanged. */
+static void test_batch_counts_and_lanes(void **state) {
+  (void)state;
+  enum { NMAX = 100 };
+  static mpm_real F[9][NMAX], U[9][NMAX], V[9][NMAX], S[3][NMAX];
+  const mpm_real *Fp[9];
+  mpm_real *Up[9], *Vp[9], *Sp[3];
+  for (int c = 0; c < 9; ++c) {
+    Fp[c] = F[c];
+    Up[c] = U[c];
+    Vp[c] = V[c];
+  }
+  for (int c = 0; c < 3; ++c) Sp[c] = S[c];
+  uint64_t rng = 31;
+  const int counts[] = {0, 1, 3, 7, 8, 9, 31, 32, 33, 63, 64, 65, NMAX};
+  for (size_t t = 0; t < sizeof counts / sizeof counts[0]; ++t) {
+    const int n = counts[t];
+    for (int c = 0; c < 9; ++c)
+      for (int i = 0; i < NMAX; ++i) F[c][i] = (mpm_real)test_rand(&rng, -2, 2);
+    for (int c = 0; c < 3; ++c)
+      for (int i = 0; i < NMAX; ++i) S[c][i] = -7; /* beyond n: must stay untouched */
+    mpm_svd3_batch(n, Fp, Up, Sp, Vp);
+    for (int i = 0; i < NMAX; ++i) {
+      if (i >= n) {
+        assert_true(S[0][i] == -7 && S[2][i] == -7);
+        continue;
+      }
+      mpm_real Fi[9], Ui[9], si[3], Vi[9];
+      for (int c = 0; c < 9; ++c) Fi[c] = F[c][i];
+      mpm_svd3(Fi, Ui, si, Vi);
+      double nf = 0;
+      for (int c = 0; c < 9; ++c) nf += (double)Fi[c] * Fi[c];
+      nf = sqrt(nf);
+      for (int c = 0; c < 3; ++c) assert_close(S[c][i], si[c], TOL(4e-6, 4e-15) * nf);
+    }
+  }
+  /* lane independence: a NaN matrix among finite ones */
+  for (int c = 0; c < 9; ++c)
+    for (int i = 0; i < 16; ++i) F[c][i] = (mpm_real)test_rand(&rng, -2, 2);
+  mpm_svd3_batch(16, Fp, Up, Sp, Vp);
+  mpm_real ref[3][16];
+  for (int c = 0; c < 3; ++c)
+    for (int i = 0; i < 16; ++i) ref[c][i] = S[c][i];
+  F[4][5] = (mpm_real)NAN;
+  mpm_svd3_batch(16, Fp, Up, Sp, Vp);
+  for (int i = 0; i < 16; ++i)
+    for (int c = 0; c < 3; ++c) {
+      if (i == 5) continue;
+      if (S[c][i] != ref[c][i]) fail_msg("lane %d changed by a NaN in lane 5", i);
+    }
+}
+
 static void test_report(void **state) {
   (void)state;
   print_message("svd3 (%s, %ld decompositions): worst reconstruction %.3g, orthogonality %.3g, "
@@ -337,7 +398,8 @@ int main(void) {
       cmocka_unit_test(test_random_entries), cmocka_unit_test(test_near_singular),
       cmocka_unit_test(test_rank_deficient), cmocka_unit_test(test_repeated),
       cmocka_unit_test(test_inverted),       cmocka_unit_test(test_zero),
-      cmocka_unit_test(test_diagonal),       cmocka_unit_test(test_report),
+      cmocka_unit_test(test_diagonal),       cmocka_unit_test(test_batch_counts_and_lanes),
+      cmocka_unit_test(test_report),
   };
   return cmocka_run_group_tests_name("svd3", tests, NULL, NULL);
 }

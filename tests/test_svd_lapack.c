@@ -1,4 +1,5 @@
-/* test_svd_lapack.c - mpm_svd3 (src/core/svd3.c) against LAPACK's dgesvd (Debian liblapacke)
+/* test_svd_lapack.c - mpm_svd3 (src/core/svd3.c) and its lane version mpm_svd3_batch
+ * (core/svd3_lanes.h) against LAPACK's dgesvd (Debian liblapacke)
  * as an independent reference, on many matrices of each class: random (entries and
  * Q1 diag(s) Q2^T), near-singular (one sigma ~1e-6), rank-deficient, repeated singular values,
  * inverted (det F < 0), diagonal (signed, permuted) and F = 0.
@@ -46,11 +47,10 @@ enum {
   C_ZERO,
   C_COUNT
 };
-static stats g_stats[C_COUNT] = {
-    {.name = "random"},   {.name = "near-singular"}, {.name = "rank-deficient"},
-    {.name = "repeated"}, {.name = "inverted"},      {.name = "diagonal"},
-    {.name = "F = 0"},
-};
+static const char *const CLASS_NAME[C_COUNT] = {
+    "random", "near-singular", "rank-deficient", "repeated", "inverted", "diagonal", "F = 0"};
+/* per path (support.h: the scalar and the SIMD batch SVD) and class */
+static stats g_stats[TEST_SVD_PATHS][C_COUNT];
 
 /* ---- double-precision helpers (independent of the library) --------------------------- */
 
@@ -124,11 +124,13 @@ static void column(const double Q[9], int c, double v[3]) {
 
 /* ---- the comparison ------------------------------------------------------------------- */
 
-static void check(const double F64[9], int cls, const char *what) {
+static void check_path(int path, const double F64[9], int cls, const char *what_in) {
+  char what[200]; /* failure messages name the path */
+  snprintf(what, sizeof what, "%s [%s]", what_in, test_svd_path_name[path]);
   /* the same tolerances as tests/test_svd.c for mpm's own properties */
   const double tol = TOL(4e-6, 4e-15);
   const double tol_lapack = 1e-13; /* LAPACK in double, whatever the build's real type */
-  stats *st = &g_stats[cls];
+  stats *st = &g_stats[path][cls];
 
   /* the matrix both decompose: F rounded to mpm_real, exactly representable in double */
   mpm_real F[9], U[9], s[3], V[9];
@@ -137,7 +139,7 @@ static void check(const double F64[9], int cls, const char *what) {
     F[i] = (mpm_real)F64[i];
     Fd[i] = (double)F[i];
   }
-  mpm_svd3(F, U, s, V);
+  test_svd_path(path, F, U, s, V);
   double Um[9], Vm[9], sm[3];
   for (int i = 0; i < 9; ++i) {
     Um[i] = U[i];
@@ -235,6 +237,10 @@ static void check(const double F64[9], int cls, const char *what) {
   st->ortho_mpm = fmax(st->ortho_mpm, om);
   st->ortho_lapack = fmax(st->ortho_lapack, ol);
   st->count++;
+}
+
+static void check(const double F64[9], int cls, const char *what) {
+  for (int path = 0; path < TEST_SVD_PATHS; ++path) check_path(path, F64, cls, what);
 }
 
 /* Q1 diag(s) Q2^T with random rotations, for given s (any signs, any order). */
@@ -354,37 +360,41 @@ static void test_zero(void **state) {
   const double Z[9] = {0};
   check(Z, C_ZERO, "F = 0");
   mpm_real F[9] = {0}, U[9], s[3], V[9];
-  mpm_svd3(F, U, s, V);
-  for (int i = 0; i < 3; ++i) assert_true(s[i] == 0);
+  for (int path = 0; path < TEST_SVD_PATHS; ++path) {
+    test_svd_path(path, F, U, s, V);
+    for (int i = 0; i < 3; ++i) assert_true(s[i] == 0);
+  }
 }
 
 static void test_report(void **state) {
   (void)state;
-  stats all = {.name = "all"};
-  print_message("mpm_svd3 (%s) vs LAPACKE_dgesvd (double); sigma and vector errors relative to "
-                "||F||_2, reconstruction relative to ||F||_F\n",
-                MPM_REAL_NAME);
-  print_message("%-15s %6s %10s %11s %11s %11s %11s %10s %12s\n", "class", "count", "sigma",
-                "recon mpm", "recon LAPACK", "ortho mpm", "ortho LAPACK", "vectors", "vec*gap/|F|");
-  for (int c = 0; c < C_COUNT; ++c) {
-    const stats *st = &g_stats[c];
-    print_message("%-15s %6ld %10.3g %11.3g %11.3g %11.3g %11.3g %10.3g %12.3g\n", st->name,
-                  st->count, st->sigma, st->recon_mpm, st->recon_lapack, st->ortho_mpm,
-                  st->ortho_lapack, st->vec, st->vec_scaled);
-    all.count += st->count;
-    all.sigma = fmax(all.sigma, st->sigma);
-    all.recon_mpm = fmax(all.recon_mpm, st->recon_mpm);
-    all.recon_lapack = fmax(all.recon_lapack, st->recon_lapack);
-    all.ortho_mpm = fmax(all.ortho_mpm, st->ortho_mpm);
-    all.ortho_lapack = fmax(all.ortho_lapack, st->ortho_lapack);
-    all.vec = fmax(all.vec, st->vec);
-    all.vec_scaled = fmax(all.vec_scaled, st->vec_scaled);
+  for (int path = 0; path < TEST_SVD_PATHS; ++path) {
+    stats all = {.name = "all"};
+    print_message("%s (%s) vs LAPACKE_dgesvd (double); sigma and vector errors relative to "
+                  "||F||_2, reconstruction relative to ||F||_F\n",
+                  test_svd_path_name[path], MPM_REAL_NAME);
+    print_message("%-15s %6s %10s %11s %11s %11s %11s %10s %12s\n", "class", "count", "sigma",
+                  "recon mpm", "recon LAPACK", "ortho mpm", "ortho LAPACK", "vectors",
+                  "vec*gap/|F|");
+    for (int c = 0; c < C_COUNT; ++c) {
+      const stats *st = &g_stats[path][c];
+      print_message("%-15s %6ld %10.3g %11.3g %11.3g %11.3g %11.3g %10.3g %12.3g\n", CLASS_NAME[c],
+                    st->count, st->sigma, st->recon_mpm, st->recon_lapack, st->ortho_mpm,
+                    st->ortho_lapack, st->vec, st->vec_scaled);
+      all.count += st->count;
+      all.sigma = fmax(all.sigma, st->sigma);
+      all.recon_mpm = fmax(all.recon_mpm, st->recon_mpm);
+      all.recon_lapack = fmax(all.recon_lapack, st->recon_lapack);
+      all.ortho_mpm = fmax(all.ortho_mpm, st->ortho_mpm);
+      all.ortho_lapack = fmax(all.ortho_lapack, st->ortho_lapack);
+      all.vec = fmax(all.vec, st->vec);
+      all.vec_scaled = fmax(all.vec_scaled, st->vec_scaled);
+      assert_true(st->count > 0); /* every class ran on every path */
+    }
+    print_message("%-15s %6ld %10.3g %11.3g %11.3g %11.3g %11.3g %10.3g %12.3g\n", all.name,
+                  all.count, all.sigma, all.recon_mpm, all.recon_lapack, all.ortho_mpm,
+                  all.ortho_lapack, all.vec, all.vec_scaled);
   }
-  print_message("%-15s %6ld %10.3g %11.3g %11.3g %11.3g %11.3g %10.3g %12.3g\n", all.name,
-                all.count, all.sigma, all.recon_mpm, all.recon_lapack, all.ortho_mpm,
-                all.ortho_lapack, all.vec, all.vec_scaled);
-  /* every class ran */
-  for (int c = 0; c < C_COUNT; ++c) assert_true(g_stats[c].count > 0);
 }
 
 int main(void) {

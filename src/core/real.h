@@ -39,6 +39,9 @@ typedef float mpm_real;
 #define mpm_atan2 atan2f
 #endif
 
+/* Forced inlining for the small helpers of hot loops. */
+#define MPM_ALWAYS_INLINE static inline __attribute__((always_inline))
+
 /* fmin/fmax with C99 semantics (a NaN argument loses), inlined: the libm calls are not inlined
  * without -ffast-math and sit in hot loops. */
 static inline mpm_real mpm_fmax(mpm_real a, mpm_real b) {

@@ -20,4 +20,10 @@ void mpm_svd3(const mpm_real F[9], mpm_real U[9], mpm_real sigma[3], mpm_real V[
  * symmetric (indefinite when F is inverted), from mpm_svd3. */
 void mpm_polar3(const mpm_real F[9], mpm_real R[9], mpm_real S[9]);
 
+/* mpm_svd3 of n matrices stored by component (F[c][i]: entry c of matrix i, likewise U, V and
+ * sigma), computed MPM_LANES at a time (core/svd3_lanes.h). Agrees with mpm_svd3 to rounding.
+ * The arrays need no alignment; outputs must not alias inputs. */
+void mpm_svd3_batch(int n, const mpm_real *const F[9], mpm_real *const U[9],
+                    mpm_real *const sigma[3], mpm_real *const V[9]);
+
 #endif

@@ -33,8 +33,8 @@
  * det F^E > 0. */
 #include "material/hencky.h"
 
-#include "core/mat3.h"
-#include "core/svd3.h"
+#include "core/vecmath.h"
+#include "material/chunk_svd.h"
 
 #include <math.h>
 
@@ -61,45 +61,53 @@ static dp_params dp_params_of(const mpm_material *m) {
   return p;
 }
 
-static void dp_write(mpm_real *const F[9], int i, const mpm_real U[9], const mpm_real e[3],
-                     const mpm_real V[9]) {
-  const mpm_real s[3] = {mpm_exp(e[0]), mpm_exp(e[1]), mpm_exp(e[2])};
-  mpm_real Fn[9];
-  mpm_m3_usvt(U, s, V, Fn);
-  for (int c = 0; c < 9; ++c) F[c][i] = Fn[c];
-}
-
+/* Over a chunk: the SVDs in one SIMD batch, the Hencky strains by one array logarithm, the
+ * projection below per particle (cheap scalar logic with the case split), then one array
+ * exponential for the particles whose F changes. Particles that stay inside the cone with no
+ * stored separation keep F bitwise. */
 static void dp_return_map(const mpm_material *m, int n, mpm_real *const F[9], mpm_real *plastic) {
   const dp_params p = dp_params_of(m);
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, (const mpm_real *const *)F, &d);
+  mpm_real e[3][MPM_STRESS_CHUNK], en[3][MPM_STRESS_CHUNK], sn[3][MPM_STRESS_CHUNK];
+  int write[MPM_STRESS_CHUNK];
+  for (int k = 0; k < 3; ++k) {
+    mpm_real c[MPM_STRESS_CHUNK]; /* |sigma| clamped to the floor */
+    for (int i = 0; i < n; ++i) c[i] = mpm_fmax(mpm_fabs(d.s[k][i]), MPM_HENCKY_FLOOR);
+    mpm_log_array(n, c, e[k]);
+  }
   for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], U[9], s[3], V[9], e[3];
-    for (int c = 0; c < 9; ++c) Fi[c] = F[c][i];
-    mpm_svd3(Fi, U, s, V);
-    for (int k = 0; k < 3; ++k) e[k] = mpm_log(mpm_fmax(mpm_fabs(s[k]), MPM_HENCKY_FLOOR));
+    mpm_real ei[3] = {e[0][i], e[1][i], e[2][i]};
     const mpm_real v = plastic[i];
-    const mpm_real teff = e[0] + e[1] + e[2] + v;
+    const mpm_real teff = ei[0] + ei[1] + ei[2] + v;
+    write[i] = 1;
     if (teff >= p.tip) { /* case 1: the tip */
-      const mpm_real et[3] = {p.tip / 3, p.tip / 3, p.tip / 3};
-      dp_write(F, i, U, et, V);
+      for (int k = 0; k < 3; ++k) en[k][i] = p.tip / 3;
       plastic[i] = teff - p.tip;
       continue;
     }
     if (v != 0) { /* spend the stored separation */
-      for (int k = 0; k < 3; ++k) e[k] += v / 3;
+      for (int k = 0; k < 3; ++k) ei[k] += v / 3;
       plastic[i] = 0;
     }
     const mpm_real mean = teff / 3;
-    const mpm_real dev[3] = {e[0] - mean, e[1] - mean, e[2] - mean};
+    const mpm_real dev[3] = {ei[0] - mean, ei[1] - mean, ei[2] - mean};
     const mpm_real nd = mpm_sqrt(dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]);
     const mpm_real dgamma = nd + p.cone * teff - p.shift;
     if (dgamma <= 0 || !(nd > 0)) { /* inside the cone */
-      if (v != 0) dp_write(F, i, U, e, V);
+      write[i] = v != 0;
+      for (int k = 0; k < 3; ++k) en[k][i] = ei[k];
       continue;
     }
     const mpm_real f = dgamma / nd;
-    for (int k = 0; k < 3; ++k) e[k] -= f * dev[k];
-    dp_write(F, i, U, e, V);
+    for (int k = 0; k < 3; ++k) en[k][i] = ei[k] - f * dev[k];
   }
+  for (int k = 0; k < 3; ++k) mpm_exp_array(n, en[k], sn[k]);
+  for (int i = 0; i < n; ++i)
+    if (write[i]) {
+      const mpm_real si[3] = {sn[0][i], sn[1][i], sn[2][i]};
+      mpm_chunk_svd_write_F(&d, i, si, F);
+    }
 }
 
 const mpm_model mpm_model_drucker_prager = {

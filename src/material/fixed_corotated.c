@@ -25,7 +25,9 @@
  * ({i, j, k} = {0, 1, 2}; J/s_i is the product of the other two), each block projected to
  * positive semi-definite. The s_i + s_j floor is the one above. */
 #include "material/material.h"
+#include "material/chunk_svd.h"
 #include "material/isotropic.h"
+#include "material/snow.h"
 
 #include "core/mat3.h"
 #include "core/svd3.h"
@@ -122,27 +124,39 @@ static void fcr_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
 }
 
 /* tau = 2 mu (F - R) F^T + lambda (J - 1) J I, with (F - R) F^T = U diag(s (s - 1)) U^T
- * (F F^T = U S^2 U^T and R F^T = U S U^T), symmetric by construction. */
+ * (F F^T = U S^2 U^T and R F^T = U S U^T), symmetric by construction; J = det F from F's
+ * entries (more accurate near J = 1 than the product of the singular values). The SVDs of the chunk
+ * come from one SIMD batch (chunk_svd.h); the rest is a unit-stride loop over particles, which the
+ * compiler vectorizes. */
+void mpm_fcr_kirchhoff_scaled(const mpm_material *m, int n, const mpm_real *const F[9],
+                              const mpm_real *scale, mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, F, &d);
+  const mpm_real two_mu = 2 * m->mu, l = m->lambda;
+  const mpm_real(*U)[MPM_STRESS_CHUNK] = d.U;
+  for (int i = 0; i < n; ++i) {
+    const mpm_real k = scale ? scale[i] : 1;
+    const mpm_real s0 = d.s[0][i], s1 = d.s[1][i], s2 = d.s[2][i];
+    const mpm_real J = F[0][i] * (F[4][i] * F[8][i] - F[5][i] * F[7][i]) -
+                       F[1][i] * (F[3][i] * F[8][i] - F[5][i] * F[6][i]) +
+                       F[2][i] * (F[3][i] * F[7][i] - F[4][i] * F[6][i]);
+    const mpm_real mk = two_mu * k;
+    const mpm_real d0 = mk * s0 * (s0 - 1), d1 = mk * s1 * (s1 - 1), d2 = mk * s2 * (s2 - 1);
+    const mpm_real vol = l * k * (J - 1) * J;
+    for (int r = 0; r < 3; ++r)
+      for (int q = r; q < 3; ++q) {
+        const mpm_real t = U[3 * r][i] * d0 * U[3 * q][i] + U[3 * r + 1][i] * d1 * U[3 * q + 1][i] +
+                           U[3 * r + 2][i] * d2 * U[3 * q + 2][i] + (r == q ? vol : 0);
+        tau[3 * r + q][i] = t;
+        tau[3 * q + r][i] = t;
+      }
+  }
+}
+
 static void fcr_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
                                 const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   (void)plastic; /* elastic: no plastic state */
-  assert(n >= 0 && n <= MPM_STRESS_CHUNK);
-  const mpm_real two_mu = 2 * m->mu, l = m->lambda;
-  for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], U[9], s[3], V[9];
-    for (int c = 0; c < 9; ++c) Fi[c] = F[c][i];
-    mpm_svd3(Fi, U, s, V);
-    const mpm_real J = mpm_m3_det(Fi);
-    const mpm_real d[3] = {two_mu * s[0] * (s[0] - 1), two_mu * s[1] * (s[1] - 1),
-                           two_mu * s[2] * (s[2] - 1)};
-    const mpm_real vol = l * (J - 1) * J;
-    mpm_real T[9];
-    mpm_m3_usvt(U, d, U, T);
-    T[0] += vol;
-    T[4] += vol;
-    T[8] += vol;
-    for (int c = 0; c < 9; ++c) tau[c][i] = T[c];
-  }
+  mpm_fcr_kirchhoff_scaled(m, n, F, NULL, tau);
 }
 
 const mpm_model mpm_model_fixed_corotated = {

@@ -4,6 +4,7 @@
  * stress derivative are written out in hencky.h; the diagonal-space derivative and its
  * definiteness fix (Teran et al. 2005) in isotropic.h. */
 #include "material/hencky.h"
+#include "material/chunk_svd.h"
 
 #include "core/mat3.h"
 #include "core/svd3.h"
@@ -96,18 +97,15 @@ void mpm_hencky_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *co
                                 const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   (void)plastic; /* the elasticity does not depend on the plastic state */
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
-  mpm_real U[9][MPM_STRESS_CHUNK], a[3][MPM_STRESS_CHUNK];
-  mpm_real c[3 * MPM_STRESS_CHUNK], e[3 * MPM_STRESS_CHUNK];
-  for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], Ui[9], s[3], Vi[9];
-    for (int k = 0; k < 9; ++k) Fi[k] = F[k][i];
-    mpm_svd3(Fi, Ui, s, Vi);
-    for (int k = 0; k < 9; ++k) U[k][i] = Ui[k];
-    for (int k = 0; k < 3; ++k) {
-      a[k][i] = mpm_fabs(s[k]);
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, F, &d);
+  const mpm_real(*U)[MPM_STRESS_CHUNK] = d.U;
+  mpm_real a[3][MPM_STRESS_CHUNK], c[3 * MPM_STRESS_CHUNK], e[3 * MPM_STRESS_CHUNK];
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < n; ++i) {
+      a[k][i] = mpm_fabs(d.s[k][i]);
       c[k * MPM_STRESS_CHUNK + i] = mpm_fmax(a[k][i], MPM_HENCKY_FLOOR);
     }
-  }
   for (int k = 0; k < 3; ++k) mpm_log_array(n, c + k * MPM_STRESS_CHUNK, e + k * MPM_STRESS_CHUNK);
   const mpm_real mu2 = 2 * m->mu, l = m->lambda;
   const mpm_real *e0 = e, *e1 = e + MPM_STRESS_CHUNK, *e2 = e + 2 * MPM_STRESS_CHUNK;

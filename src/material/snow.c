@@ -17,8 +17,7 @@
  * step, grows at most by exp(0.9 xi)); where this clamp acts J is not preserved. */
 #include "material/snow.h"
 
-#include "core/mat3.h"
-#include "core/svd3.h"
+#include "material/chunk_svd.h"
 
 #include <assert.h>
 
@@ -52,32 +51,24 @@ static void snow_dpdf_action_definite(const mpm_material *m, const mpm_real F[9]
 static void snow_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
                                  const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
-  mpm_real scale[MPM_STRESS_CHUNK];
-  for (int i = 0; i < n; ++i) scale[i] = plastic ? mpm_snow_hardening(m, plastic[i]) : 1;
-  for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], U[9], s[3], V[9];
-    for (int c = 0; c < 9; ++c) Fi[c] = F[c][i];
-    mpm_svd3(Fi, U, s, V);
-    const mpm_real two_mu = 2 * m->mu * scale[i], l = m->lambda * scale[i];
-    const mpm_real J = mpm_m3_det(Fi);
-    const mpm_real d[3] = {two_mu * s[0] * (s[0] - 1), two_mu * s[1] * (s[1] - 1),
-                           two_mu * s[2] * (s[2] - 1)};
-    const mpm_real vol = l * (J - 1) * J;
-    mpm_real T[9];
-    mpm_m3_usvt(U, d, U, T);
-    T[0] += vol;
-    T[4] += vol;
-    T[8] += vol;
-    for (int c = 0; c < 9; ++c) tau[c][i] = T[c];
+  if (!plastic) {
+    mpm_fcr_kirchhoff_scaled(m, n, F, NULL, tau);
+    return;
   }
+  mpm_real scale[MPM_STRESS_CHUNK];
+  for (int i = 0; i < n; ++i) scale[i] = mpm_snow_hardening(m, plastic[i]);
+  mpm_fcr_kirchhoff_scaled(m, n, F, scale, tau);
 }
 
+/* Clamp the singular values to [1 - theta_c, 1 + theta_s] (Stomakhin et al. 2013 sec. 7);
+ * particles already inside keep F and Jp bitwise. */
 static void snow_return_map(const mpm_material *m, int n, mpm_real *const F[9], mpm_real *plastic) {
   const mpm_real lo = 1 - m->theta_c, hi = 1 + m->theta_s;
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, (const mpm_real *const *)F, &d);
   for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], U[9], s[3], V[9], c[3];
-    for (int k = 0; k < 9; ++k) Fi[k] = F[k][i];
-    mpm_svd3(Fi, U, s, V);
+    const mpm_real s[3] = {d.s[0][i], d.s[1][i], d.s[2][i]};
+    mpm_real c[3];
     int changed = 0;
     for (int k = 0; k < 3; ++k) {
       c[k] = mpm_fmin(mpm_fmax(s[k], lo), hi);
@@ -86,12 +77,9 @@ static void snow_return_map(const mpm_material *m, int n, mpm_real *const F[9], 
     if (!changed) continue; /* elastic: F and Jp untouched */
     const mpm_real ratio = mpm_fabs(s[0] * s[1] * s[2]) / (c[0] * c[1] * c[2]);
     plastic[i] = mpm_fmin(mpm_fmax(plastic[i] * ratio, SNOW_JP_MIN), SNOW_JP_MAX);
-    mpm_real Fn[9];
-    mpm_m3_usvt(U, c, V, Fn);
-    for (int k = 0; k < 9; ++k) F[k][i] = Fn[k];
+    mpm_chunk_svd_write_F(&d, i, c, F);
   }
 }
-
 const mpm_model mpm_model_snow = {
     .name = "snow",
     .energy = snow_energy,

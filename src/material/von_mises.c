@@ -11,28 +11,37 @@
  * and left untouched (plastic_initial = 1). Inside the cylinder F is not written. */
 #include "material/hencky.h"
 
-#include "core/mat3.h"
-#include "core/svd3.h"
+#include "core/vecmath.h"
+#include "material/chunk_svd.h"
 
+/* In passes over the chunk as in drucker_prager.c: SVDs, array logarithm, the radial return
+ * per particle, array exponential, write-back of the particles that yielded. */
 static void vm_return_map(const mpm_material *m, int n, mpm_real *const F[9], mpm_real *plastic) {
   (void)plastic;
   const mpm_real radius = m->yield_stress / (2 * m->mu);
-  for (int i = 0; i < n; ++i) {
-    mpm_real Fi[9], U[9], s[3], V[9], e[3];
-    for (int c = 0; c < 9; ++c) Fi[c] = F[c][i];
-    mpm_svd3(Fi, U, s, V);
-    for (int k = 0; k < 3; ++k) e[k] = mpm_log(mpm_fmax(mpm_fabs(s[k]), MPM_HENCKY_FLOOR));
-    const mpm_real mean = (e[0] + e[1] + e[2]) / 3;
-    const mpm_real dev[3] = {e[0] - mean, e[1] - mean, e[2] - mean};
-    const mpm_real nd = mpm_sqrt(dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]);
-    if (!(nd > radius)) continue; /* elastic */
-    const mpm_real f = (nd - radius) / nd;
-    const mpm_real sn[3] = {mpm_exp(e[0] - f * dev[0]), mpm_exp(e[1] - f * dev[1]),
-                            mpm_exp(e[2] - f * dev[2])};
-    mpm_real Fn[9];
-    mpm_m3_usvt(U, sn, V, Fn);
-    for (int c = 0; c < 9; ++c) F[c][i] = Fn[c];
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, (const mpm_real *const *)F, &d);
+  mpm_real e[3][MPM_STRESS_CHUNK], sn[3][MPM_STRESS_CHUNK];
+  int write[MPM_STRESS_CHUNK];
+  for (int k = 0; k < 3; ++k) {
+    mpm_real c[MPM_STRESS_CHUNK]; /* |sigma| clamped to the floor */
+    for (int i = 0; i < n; ++i) c[i] = mpm_fmax(mpm_fabs(d.s[k][i]), MPM_HENCKY_FLOOR);
+    mpm_log_array(n, c, e[k]);
   }
+  for (int i = 0; i < n; ++i) {
+    const mpm_real mean = (e[0][i] + e[1][i] + e[2][i]) / 3;
+    const mpm_real dev[3] = {e[0][i] - mean, e[1][i] - mean, e[2][i] - mean};
+    const mpm_real nd = mpm_sqrt(dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]);
+    write[i] = nd > radius;
+    const mpm_real f = write[i] ? (nd - radius) / nd : 0; /* elastic: unchanged */
+    for (int k = 0; k < 3; ++k) e[k][i] -= f * dev[k];
+  }
+  for (int k = 0; k < 3; ++k) mpm_exp_array(n, e[k], sn[k]);
+  for (int i = 0; i < n; ++i)
+    if (write[i]) {
+      const mpm_real si[3] = {sn[0][i], sn[1][i], sn[2][i]};
+      mpm_chunk_svd_write_F(&d, i, si, F);
+    }
 }
 
 const mpm_model mpm_model_von_mises = {

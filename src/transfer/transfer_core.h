@@ -8,8 +8,6 @@
 #include "grid/grid.h"
 #include "interp/kernel.h"
 
-#define MPM_ALWAYS_INLINE static inline __attribute__((always_inline))
-
 /* One particle's contribution: mass, momentum m v w + (m B) D^{-1} (x_i - x_p) w (APIC, the
  * D^{-1}(x_i - x_p) w factor is the stencil's `a` vector), and force K grad w with
  * K = -V0 tau. mB = m B (row-major) or NULL for PIC/FLIP. */

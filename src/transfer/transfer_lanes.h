@@ -11,29 +11,22 @@
  *     Z_d = (mB)_d2 az + dt K_d2 dwz   (K = -V0 tau; a = D^{-1}(x_i - x_p) w per axis)
  *   G2P: sum over k, then j, then i, of the node velocity against w, dw and w r per axis.
  *
- * Written with GCC vector extensions (no intrinsics): 8 lanes of the real type, which the
- * compiler maps to AVX/AVX-512 or splits. The dense reference grid keeps the plain scalar
- * bodies of transfer_core.h, and the tests compare the two. */
+ * Lanes are core/lanes.h vectors (GCC vector extensions, no intrinsics). The dense reference
+ * grid keeps the plain scalar bodies of transfer_core.h, and the tests compare the two. */
 #ifndef MPM_TRANSFER_TRANSFER_LANES_H
 #define MPM_TRANSFER_TRANSFER_LANES_H
 
+#include "core/lanes.h"
 #include "transfer/transfer_core.h"
 #include "solver/particles.h"
 
 #include <stdint.h>
 
-#define MPM_LANES 8
-typedef mpm_real mpm_vl __attribute__((vector_size(MPM_LANES * sizeof(mpm_real))));
 typedef mpm_real mpm_vq __attribute__((vector_size(4 * sizeof(mpm_real))));
 
 /* Reals per node in the AoS pads: APIC needs 4 (mass, momentum / velocity), PIC/FLIP 8 (mass,
  * momentum, force / new and old velocity). */
 #define MPM_PAD_STRIDE(apic) ((apic) ? 4 : 8)
-#ifdef MPM_USE_DOUBLE
-typedef int64_t mpm_vl_index __attribute__((vector_size(MPM_LANES * sizeof(int64_t))));
-#else
-typedef int32_t mpm_vl_index __attribute__((vector_size(MPM_LANES * sizeof(int32_t))));
-#endif
 
 /* Pairwise lane sums of two vectors: (a0+a1, a2+a3, a4+a5, a6+a7, b0+b1, ..., b6+b7). */
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_pair(mpm_vl a, mpm_vl b) {
@@ -52,11 +45,6 @@ MPM_ALWAYS_INLINE mpm_vl mpm_vl_sum8(const mpm_vl v[8]) {
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_sum4(const mpm_vl v[4]) {
   const mpm_vl zero = {0};
   return mpm_vl_pair(mpm_vl_pair(mpm_vl_pair(v[0], v[1]), mpm_vl_pair(v[2], v[3])), zero);
-}
-
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_splat(mpm_real s) {
-  const mpm_vl zero = {0};
-  return zero + s;
 }
 
 /* A batch is contiguous when its n = MPM_LANES particles are consecutive in memory, which is
@@ -112,19 +100,6 @@ typedef struct mpm_lane_stencil {
   mpm_vl w[3][MPM_STENCIL_MAX], dw[3][MPM_STENCIL_MAX], a[3][MPM_STENCIL_MAX];
   mpm_vl f[3]; /* distance from the base node, cells */
 } mpm_lane_stencil;
-
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_select(mpm_vl_index mask, mpm_vl a, mpm_vl b) {
-  return (mpm_vl)(((mpm_vl_index)a & mask) | ((mpm_vl_index)b & ~mask));
-}
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_min(mpm_vl a, mpm_vl b) {
-  return mpm_vl_select(a < b, a, b);
-}
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_max(mpm_vl a, mpm_vl b) {
-  return mpm_vl_select(a > b, a, b);
-}
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_abs(mpm_vl a) {
-  return mpm_vl_max(a, -a);
-}
 
 /* Stencils of n particles that share their base node (the APIC factors a only if need_a) (lanes >=
  * n copy lane 0 so that every value stays finite). Because the base is common, the weights are
