@@ -46,4 +46,29 @@ static inline void mpm_chunk_svd_write_F(const mpm_chunk_svd *d, int i, const mp
                         d->U[3 * r + 2][i] * sn[2] * d->V[3 * c + 2][i];
 }
 
+/* tau[.][i] = U_i diag(dg[0][i], dg[1][i], dg[2][i]) U_i^T + iso[i] I for the chunk's n
+ * particles: the Kirchhoff stress of an isotropic model from its principal values. Each of the
+ * six distinct entries is written out, so the loop over particles vectorizes. */
+static inline void mpm_chunk_svd_tau(int n, const mpm_chunk_svd *d,
+                                     const mpm_real dg[3][MPM_STRESS_CHUNK],
+                                     const mpm_real iso[MPM_STRESS_CHUNK],
+                                     mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  const mpm_real(*U)[MPM_STRESS_CHUNK] = d->U;
+#define MPM_UDU(r, q)                                                                              \
+  (U[3 * r][i] * dg[0][i] * U[3 * q][i] + U[3 * r + 1][i] * dg[1][i] * U[3 * q + 1][i] +           \
+   U[3 * r + 2][i] * dg[2][i] * U[3 * q + 2][i])
+  for (int i = 0; i < n; ++i) {
+    const mpm_real t00 = MPM_UDU(0, 0) + iso[i], t11 = MPM_UDU(1, 1) + iso[i];
+    const mpm_real t22 = MPM_UDU(2, 2) + iso[i];
+    const mpm_real t01 = MPM_UDU(0, 1), t02 = MPM_UDU(0, 2), t12 = MPM_UDU(1, 2);
+    tau[0][i] = t00;
+    tau[4][i] = t11;
+    tau[8][i] = t22;
+    tau[1][i] = tau[3][i] = t01;
+    tau[2][i] = tau[6][i] = t02;
+    tau[5][i] = tau[7][i] = t12;
+  }
+#undef MPM_UDU
+}
+
 #endif

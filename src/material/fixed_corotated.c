@@ -133,24 +133,20 @@ void mpm_fcr_kirchhoff_scaled(const mpm_material *m, int n, const mpm_real *cons
   mpm_chunk_svd d;
   mpm_chunk_svd_compute(n, F, &d);
   const mpm_real two_mu = 2 * m->mu, l = m->lambda;
-  const mpm_real(*U)[MPM_STRESS_CHUNK] = d.U;
+  mpm_real dg[3][MPM_STRESS_CHUNK], iso[MPM_STRESS_CHUNK], ones[MPM_STRESS_CHUNK];
+  if (!scale) {
+    for (int i = 0; i < n; ++i) ones[i] = 1;
+    scale = ones;
+  }
   for (int i = 0; i < n; ++i) {
-    const mpm_real k = scale ? scale[i] : 1;
-    const mpm_real s0 = d.s[0][i], s1 = d.s[1][i], s2 = d.s[2][i];
     const mpm_real J = F[0][i] * (F[4][i] * F[8][i] - F[5][i] * F[7][i]) -
                        F[1][i] * (F[3][i] * F[8][i] - F[5][i] * F[6][i]) +
                        F[2][i] * (F[3][i] * F[7][i] - F[4][i] * F[6][i]);
-    const mpm_real mk = two_mu * k;
-    const mpm_real d0 = mk * s0 * (s0 - 1), d1 = mk * s1 * (s1 - 1), d2 = mk * s2 * (s2 - 1);
-    const mpm_real vol = l * k * (J - 1) * J;
-    for (int r = 0; r < 3; ++r)
-      for (int q = r; q < 3; ++q) {
-        const mpm_real t = U[3 * r][i] * d0 * U[3 * q][i] + U[3 * r + 1][i] * d1 * U[3 * q + 1][i] +
-                           U[3 * r + 2][i] * d2 * U[3 * q + 2][i] + (r == q ? vol : 0);
-        tau[3 * r + q][i] = t;
-        tau[3 * q + r][i] = t;
-      }
+    const mpm_real mk = two_mu * scale[i];
+    for (int k = 0; k < 3; ++k) dg[k][i] = mk * d.s[k][i] * (d.s[k][i] - 1);
+    iso[i] = l * scale[i] * (J - 1) * J;
   }
+  mpm_chunk_svd_tau(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, iso, tau);
 }
 
 static void fcr_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],

@@ -99,7 +99,6 @@ void mpm_hencky_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *co
   assert(n >= 0 && n <= MPM_STRESS_CHUNK);
   mpm_chunk_svd d;
   mpm_chunk_svd_compute(n, F, &d);
-  const mpm_real(*U)[MPM_STRESS_CHUNK] = d.U;
   mpm_real a[3][MPM_STRESS_CHUNK], c[3 * MPM_STRESS_CHUNK], e[3 * MPM_STRESS_CHUNK];
   for (int k = 0; k < 3; ++k)
     for (int i = 0; i < n; ++i) {
@@ -110,19 +109,15 @@ void mpm_hencky_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *co
   const mpm_real mu2 = 2 * m->mu, l = m->lambda;
   const mpm_real *e0 = e, *e1 = e + MPM_STRESS_CHUNK, *e2 = e + 2 * MPM_STRESS_CHUNK;
   const mpm_real *c0 = c, *c1 = c + MPM_STRESS_CHUNK, *c2 = c + 2 * MPM_STRESS_CHUNK;
+  mpm_real dg[3][MPM_STRESS_CHUNK], iso[MPM_STRESS_CHUNK];
   for (int i = 0; i < n; ++i) {
     const mpm_real lt = l * (e0[i] + e1[i] + e2[i]);
-    const mpm_real d0 = (mu2 * e0[i] + lt) * (a[0][i] / c0[i]);
-    const mpm_real d1 = (mu2 * e1[i] + lt) * (a[1][i] / c1[i]);
-    const mpm_real d2 = (mu2 * e2[i] + lt) * (a[2][i] / c2[i]);
-    for (int r = 0; r < 3; ++r)
-      for (int q = r; q < 3; ++q) {
-        const mpm_real t = U[3 * r][i] * d0 * U[3 * q][i] + U[3 * r + 1][i] * d1 * U[3 * q + 1][i] +
-                           U[3 * r + 2][i] * d2 * U[3 * q + 2][i];
-        tau[3 * r + q][i] = t;
-        tau[3 * q + r][i] = t;
-      }
+    dg[0][i] = (mu2 * e0[i] + lt) * (a[0][i] / c0[i]);
+    dg[1][i] = (mu2 * e1[i] + lt) * (a[1][i] / c1[i]);
+    dg[2][i] = (mu2 * e2[i] + lt) * (a[2][i] / c2[i]);
+    iso[i] = 0;
   }
+  mpm_chunk_svd_tau(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, iso, tau);
 }
 
 const mpm_model mpm_model_hencky_stvk = {
