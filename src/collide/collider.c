@@ -125,6 +125,59 @@ static mpm_real sdf_halfspace(const mpm_shape_desc *s, const mpm_real p[3], mpm_
   return mpm_v3_dot(p, n);
 }
 
+/* Solid of revolution about the unit axis a through the centre. In the (radial rho, axial h)
+ * half-plane the solid is the polygon closed by the profile polyline (first and last points on
+ * the axis) and the axis. The axis is a line of symmetry, not a surface, so the distance is to
+ * the profile's segments only; inside or outside by the crossing rule (a ray towards +rho,
+ * which the closing axis edge at rho = 0 never meets). The normal is the nearest segment's
+ * outward normal where the nearest point is inside that segment (exactly the gradient there,
+ * and free of the rounding of a short difference vector near the surface), and the direction
+ * from the nearest vertex otherwise. */
+static mpm_real sdf_revolve(const mpm_shape_desc *s, const mpm_real p[3], mpm_real n[3]) {
+  const mpm_real a[3] = {(mpm_real)s->axis[0], (mpm_real)s->axis[1], (mpm_real)s->axis[2]};
+  const mpm_real h = mpm_v3_dot(p, a);
+  mpm_real er[3] = {p[0] - h * a[0], p[1] - h * a[1], p[2] - h * a[2]};
+  const mpm_real rho = mpm_v3_norm(er);
+  if (rho > 0) {
+    const mpm_real inv = 1 / rho;
+    for (int d = 0; d < 3; ++d) er[d] *= inv;
+  } else {
+    perpendicular(a, er);
+  }
+  mpm_real best = MPM_REAL_MAX, qr = 0, qh = 0, tr = 0, th = 0, area2 = 0;
+  int inside = 0, at_vertex = 0;
+  for (int k = 0; k + 1 < s->profile_count; ++k) {
+    const mpm_real ar = (mpm_real)s->profile[k][0], ah = (mpm_real)s->profile[k][1];
+    const mpm_real br = (mpm_real)s->profile[k + 1][0], bh = (mpm_real)s->profile[k + 1][1];
+    const mpm_real dr = br - ar, dh = bh - ah, len2 = dr * dr + dh * dh;
+    area2 += ar * bh - br * ah;
+    const mpm_real t0 = len2 > 0 ? ((rho - ar) * dr + (h - ah) * dh) / len2 : 0;
+    const mpm_real t = mpm_fmin(mpm_fmax(t0, 0), 1);
+    const mpm_real cr = ar + t * dr, ch = ah + t * dh;
+    const mpm_real d2 = (rho - cr) * (rho - cr) + (h - ch) * (h - ch);
+    if (d2 < best) {
+      best = d2, qr = cr, qh = ch, tr = dr, th = dh;
+      at_vertex = t != t0;
+    }
+    if ((ah > h) != (bh > h)) {
+      const mpm_real cross = ar + (h - ah) * dr / dh;
+      if (rho < cross) inside = !inside;
+    }
+  }
+  const mpm_real dist = mpm_sqrt(best);
+  /* the outward normal of the nearest segment: (dh, -dr) for a counter-clockwise polygon (the
+     closing axis edge adds nothing to the signed area, both its ends having radius 0) */
+  const mpm_real len = mpm_sqrt(tr * tr + th * th), o = area2 >= 0 ? 1 : -1;
+  mpm_real nr = len > 0 ? o * th / len : 1, nh = len > 0 ? -o * tr / len : 0;
+  if (at_vertex && dist > MPM_REAL_EPS * (mpm_fabs(rho) + mpm_fabs(h))) {
+    const mpm_real sgn = inside ? -1 : 1;
+    nr = sgn * (rho - qr) / dist;
+    nh = sgn * (h - qh) / dist;
+  }
+  for (int d = 0; d < 3; ++d) n[d] = nr * er[d] + nh * a[d];
+  return inside ? -dist : dist;
+}
+
 /* ---- world-frame queries -------------------------------------------------------------- */
 
 mpm_real mpm_collider_phi(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real n[3]) {
@@ -146,8 +199,11 @@ mpm_real mpm_collider_phi(const mpm_collider_pose *pose, const mpm_real x[3], mp
   case MPM_SHAPE_HALFSPACE:
     phi = sdf_halfspace(&d->shape, p, nl);
     break;
+  case MPM_SHAPE_REVOLVE:
+    phi = sdf_revolve(&d->shape, p, nl);
+    break;
   default: /* meshes are bodies only; the loader rejects them here */
-    assert(0 && "collider shape must be box, sphere, cylinder or half-space");
+    assert(0 && "collider shape must be box, sphere, cylinder, half-space or revolve");
     nl[0] = 1, nl[1] = nl[2] = 0;
     phi = MPM_REAL_MAX;
     break;

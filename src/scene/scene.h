@@ -55,7 +55,11 @@ typedef enum mpm_shape_kind {
   MPM_SHAPE_CYLINDER = 2,
   MPM_SHAPE_MESH = 3,      /* closed triangle mesh (bodies only) */
   MPM_SHAPE_HALFSPACE = 4, /* colliders only */
+  MPM_SHAPE_REVOLVE = 5,   /* solid of revolution of a profile polyline (colliders only) */
 } mpm_shape_kind;
+
+/* Most points of a revolve profile. */
+#define MPM_PROFILE_MAX 32
 
 typedef struct mpm_material_desc {
   char name[MPM_NAME_MAX];
@@ -79,12 +83,17 @@ typedef struct mpm_shape_desc {
   double center[3];      /* m */
   double half_extent[3]; /* box half sizes, m */
   double radius;         /* sphere and cylinder, m */
-  double axis[3];        /* cylinder axis (unit), or half-space outward normal (unit) */
+  double axis[3];        /* cylinder or revolve axis (unit), or half-space outward normal */
   double half_height;    /* cylinder half length along axis, m; <= 0 means infinite */
   /* mesh bodies: the file, then scale about the mesh's bounding-box centre and a translation
      that puts that centre at `center` */
   char mesh_path[MPM_PATH_MAX];
   double mesh_scale;
+  /* revolve: points (radius, height along axis from center), m, from the axis back to the
+     axis (first and last radius 0); the solid is the region the polyline encloses with the
+     axis, turned about it */
+  double profile[MPM_PROFILE_MAX][2];
+  int profile_count;
 } mpm_shape_desc;
 
 typedef struct mpm_body_desc {

@@ -110,17 +110,20 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
   }
 }
 
-/* Plasticity (Gao sec. 4.2): project the new F of a batch of one material back onto its yield
- * surface, in place when the batch is contiguous, through a small buffer otherwise. */
-static void batch_return_map(const mpm_material *mat, mpm_particles *p, const uint32_t *idx, int n,
-                             int contiguous) {
+/* Plasticity (Gao sec. 4.2): project the new F of n <= MPM_STRESS_CHUNK particles of one
+ * material back onto its yield surface, in place when they are consecutive in memory, through
+ * a small buffer otherwise. */
+static void chunk_return_map(const mpm_material *mat, mpm_particles *p, const uint32_t *idx,
+                             int n) {
+  int contiguous = 1;
+  for (int q = 1; q < n; ++q) contiguous &= idx[q] == idx[0] + (uint32_t)q;
   if (contiguous) {
     mpm_real *F[9];
     for (int c = 0; c < 9; ++c) F[c] = p->F[c] + idx[0];
     mat->model->return_map(mat, n, F, p->plastic + idx[0]);
     return;
   }
-  mpm_real Fbuf[9][MPM_LANES], plastic[MPM_LANES];
+  mpm_real Fbuf[9][MPM_STRESS_CHUNK], plastic[MPM_STRESS_CHUNK];
   mpm_real *F[9];
   for (int c = 0; c < 9; ++c) {
     for (int l = 0; l < n; ++l) Fbuf[c][l] = p->F[c][idx[l]];
@@ -131,6 +134,17 @@ static void batch_return_map(const mpm_material *mat, mpm_particles *p, const ui
   for (int c = 0; c < 9; ++c)
     for (int l = 0; l < n; ++l) p->F[c][idx[l]] = Fbuf[c][l];
   for (int l = 0; l < n; ++l) p->plastic[idx[l]] = plastic[l];
+}
+
+/* The return map of the particles at perm positions [begin, end) (one block and material),
+ * after all of their F are updated, in chunks of MPM_STRESS_CHUNK: the model's SIMD SVD needs
+ * more particles than the up to MPM_LANES of one cell. */
+static void range_return_map(const mpm_material *mat, mpm_particles *p, const uint32_t *perm,
+                             uint32_t begin, uint32_t end) {
+  for (uint32_t j = begin; j < end; j += MPM_STRESS_CHUNK) {
+    const int n = (int)(end - j < MPM_STRESS_CHUNK ? end - j : MPM_STRESS_CHUNK);
+    chunk_return_map(mat, p, perm + j, n);
+  }
 }
 
 ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
@@ -169,6 +183,8 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
   const size_t q1 = q0 + (size_t)g->material_count * MPM_BLOCK_NODES;
   for (size_t q = q0; q < q1; ++q) {
     const uint32_t begin = g->cell_start[q], end = g->cell_start[q + 1];
+    const size_t cell = (q - q0) % MPM_BLOCK_NODES;
+    const mpm_material *mat = &ctx->materials[(q - q0) / MPM_BLOCK_NODES];
     for (uint32_t j = begin; j < end; j += MPM_LANES) {
       const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
       const uint32_t *idx = g->perm + j;
@@ -182,9 +198,10 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       mpm_g2p_lanes_out o;
       mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, off, MPM_PAD * MPM_PAD, MPM_PAD, &o);
       batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
-      const mpm_material *mat = &ctx->materials[(q - q0) / MPM_BLOCK_NODES];
-      if (mat->model->return_map) batch_return_map(mat, p, idx, n, contiguous);
     }
+    if (cell == MPM_BLOCK_NODES - 1 && mat->model->return_map) /* the material's last cell */
+      range_return_map(mat, p, g->perm, g->cell_start[q + 1 - MPM_BLOCK_NODES],
+                       g->cell_start[q + 1]);
   }
 }
 
@@ -272,18 +289,19 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
     }
   }
   /* plasticity on chunks of consecutive particles of one material */
-  const long chunks = (n + MPM_LANES - 1) / MPM_LANES;
+  const long chunks = (n + MPM_STRESS_CHUNK - 1) / MPM_STRESS_CHUNK;
 #pragma omp parallel for schedule(static)
   for (long c = 0; c < chunks; ++c) {
-    const long begin = c * MPM_LANES, end = begin + MPM_LANES < n ? begin + MPM_LANES : n;
+    const long begin = c * MPM_STRESS_CHUNK;
+    const long end = begin + MPM_STRESS_CHUNK < n ? begin + MPM_STRESS_CHUNK : n;
     long i = begin;
     while (i < end) {
       const int32_t m = p->material[i];
-      uint32_t idx[MPM_LANES];
+      uint32_t idx[MPM_STRESS_CHUNK];
       int k = 0;
       while (i < end && p->material[i] == m) idx[k++] = (uint32_t)i++;
       const mpm_material *mat = &ctx->materials[m];
-      if (mat->model->return_map) batch_return_map(mat, p, idx, k, 0);
+      if (mat->model->return_map) chunk_return_map(mat, p, idx, k);
     }
   }
   mpm_g2p_result r = {mpm_sqrt(max_v2), bad};

@@ -1,7 +1,8 @@
 /* p2g.c - particle-to-grid transfer (Gao sec. 3.2 steps 1-2) on the sparse and dense grids.
  *
  * Stresses are evaluated in chunks of one material (particles are sorted by block and then by
- * material), through the model's batch entry, just before the chunk is scattered. The sparse
+ * material), through the model's batch entry, a window ahead of the batches that scatter them
+ * (stress_window). The sparse
  * grid takes the particles of one cell as SIMD lanes (transfer_lanes.h); the dense reference
  * uses the plain scalar bodies of transfer_core.h. Sparse P2G
  * runs owner blocks of one colour in parallel; each block scatters into a private 8x8x8 pad
@@ -60,7 +61,7 @@ ALWAYS_INLINE void scatter_chunk(const int W, const int apic, const mpm_transfer
 
 /* Gather the lane inputs of a batch of n particles (lanes >= n contribute nothing). */
 ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int n, int contiguous,
-                                mpm_real dt, const int apic, mpm_real tau[9][MPM_STRESS_CHUNK],
+                                mpm_real dt, const int apic, const mpm_real *const tau[9],
                                 mpm_vl *m, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
   mpm_vl live = {0}; /* 1 for the batch's lanes, 0 for padding */
   for (int l = 0; l < n; ++l) live[l] = 1;
@@ -79,21 +80,51 @@ ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int
   }
 }
 
-/* Everything P2G needs of a batch of n particles of one material: their stresses, lane
- * stencils (with APIC factors when apic) and lane inputs (see batch_inputs). */
+/* Stresses of the particles of one block and material, evaluated ahead in windows of up to
+ * STRESS_WINDOW consecutive positions of the particle order (perm): the model's batch entry
+ * then sees chunks of MPM_STRESS_CHUNK particles instead of the up to MPM_LANES of one cell,
+ * which its SIMD SVD (core/svd3_lanes.h) needs to fill its vectors. */
+#define STRESS_WINDOW (4 * MPM_STRESS_CHUNK)
+typedef struct stress_window {
+  uint32_t begin, count; /* perm positions [begin, begin + count) */
+  mpm_real tau[9][STRESS_WINDOW];
+} stress_window;
+
+/* Make positions [j, j + n) of perm available in w; `end` is the end of the material's range
+ * of positions in this block (a window never reaches past it). A batch that straddles the end
+ * of the window starts the next one, so at most MPM_LANES - 1 stresses per window are
+ * evaluated twice. */
+static void stress_window_need(stress_window *w, const mpm_material *mat, const mpm_particles *p,
+                               const uint32_t *perm, uint32_t j, int n, uint32_t end) {
+  if (j >= w->begin && j + (uint32_t)n <= w->begin + w->count) return;
+  w->begin = j;
+  w->count = end - j < STRESS_WINDOW ? end - j : STRESS_WINDOW;
+  for (uint32_t k0 = 0; k0 < w->count; k0 += MPM_STRESS_CHUNK) {
+    const int k = (int)(w->count - k0 < MPM_STRESS_CHUNK ? w->count - k0 : MPM_STRESS_CHUNK);
+    const uint32_t *idx = perm + j + k0;
+    int contiguous = 1; /* positions of several cells: check every one */
+    for (int q = 1; q < k; ++q) contiguous &= idx[q] == idx[0] + (uint32_t)q;
+    mpm_real tau[9][MPM_STRESS_CHUNK];
+    if (contiguous) { /* the model reads F in place */
+      const mpm_real *Fp[9];
+      for (int c = 0; c < 9; ++c) Fp[c] = p->F[c] + idx[0];
+      mat->model->kirchhoff_batch(mat, k, Fp, p->plastic + idx[0], tau);
+    } else {
+      chunk_stress(mat, p, idx, k, tau);
+    }
+    for (int c = 0; c < 9; ++c) memcpy(&w->tau[c][k0], tau[c], (size_t)k * sizeof(mpm_real));
+  }
+}
+
+/* Everything P2G needs of a batch of n particles at perm position j: lane stencils (with APIC
+ * factors when apic) and lane inputs (see batch_inputs), the stresses taken from the window. */
 ALWAYS_INLINE void batch_prepare(const int apic, const mpm_transfer_ctx *ctx,
-                                 const mpm_particles *p, const mpm_material *mat,
+                                 const mpm_particles *p, const stress_window *w, uint32_t j,
                                  const uint32_t *idx, int n, int base[3], mpm_lane_stencil *s,
                                  mpm_vl *mass, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
-  mpm_real tau[9][MPM_STRESS_CHUNK];
   const int contiguous = mpm_batch_contiguous(idx, n);
-  if (contiguous) { /* the model reads F in place */
-    const mpm_real *Fp[9];
-    for (int q = 0; q < 9; ++q) Fp[q] = p->F[q] + idx[0];
-    mat->model->kirchhoff_batch(mat, n, Fp, p->plastic + idx[0], tau);
-  } else {
-    chunk_stress(mat, p, idx, n, tau);
-  }
+  const mpm_real *tau[9];
+  for (int c = 0; c < 9; ++c) tau[c] = w->tau[c] + (j - w->begin);
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
   mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, s);
   batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, mass, mv, mB, K);
@@ -114,8 +145,11 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
+  stress_window w;
   for (int m = 0; m < nm; ++m) {
     const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
+    const uint32_t range_end = g->cell_start[q0 + MPM_BLOCK_NODES];
+    w.begin = w.count = 0;
     for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
       const uint32_t begin = g->cell_start[q0 + c], end = g->cell_start[q0 + c + 1];
       for (uint32_t j = begin; j < end; j += MPM_LANES) {
@@ -125,7 +159,8 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
         int base[3];
         mpm_lane_stencil s;
         mpm_vl mass, mv[3], mB[9], K[9];
-        batch_prepare(apic, ctx, p, &ctx->materials[m], idx, n, base, &s, &mass, mv, mB, K);
+        stress_window_need(&w, &ctx->materials[m], p, g->perm, j, n, range_end);
+        batch_prepare(apic, ctx, p, &w, j, idx, n, base, &s, &mass, mv, mB, K);
         const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
                          (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
         mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, off, MPM_PAD * MPM_PAD, MPM_PAD);
@@ -166,8 +201,11 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
+  stress_window w;
   for (int m = 0; m < nm; ++m) {
     const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
+    const uint32_t range_end = g->cell_start[q0 + MPM_BLOCK_NODES];
+    w.begin = w.count = 0;
     for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
       const uint32_t begin = g->cell_start[q0 + c], end = g->cell_start[q0 + c + 1];
       for (uint32_t j = begin; j < end; j += MPM_LANES) {
@@ -177,7 +215,8 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
         int base[3];
         mpm_lane_stencil s;
         mpm_vl mass, mv[3], mB[9], K[9];
-        batch_prepare(1, ctx, p, &ctx->materials[m], idx, n, base, &s, &mass, mv, mB, K);
+        stress_window_need(&w, &ctx->materials[m], p, g->perm, j, n, range_end);
+        batch_prepare(1, ctx, p, &w, j, idx, n, base, &s, &mass, mv, mB, K);
         const long off =
             ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
         mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);

@@ -1,0 +1,43 @@
+/* scene_json_parts.h - what the parts of the JSON scene parser share: scene_json.c (entry
+ * points, top level, domain, time, solver, output), scene_json_material.c (materials) and
+ * scene_json_shape.c (shapes, bodies, colliders).
+ *
+ * Each parse function reads its key of `root` (or of `body`) at the current key path of the
+ * context, fills the scene and returns 0, or writes the error and returns -1; on an error
+ * the caller empties the scene. Internal to src/scene; not part of the public API. */
+#ifndef MPM_SCENE_JSON_PARTS_H
+#define MPM_SCENE_JSON_PARTS_H
+
+#include "scene/json_check.h"
+#include "scene/scene.h"
+
+#include <cjson/cJSON.h>
+
+/* Boundary rule spellings, in the order of mpm_boundary_rule (scene.h); NULL-terminated. */
+extern const char *const mpm_sj_rule_names[];
+/* 'x', 'y', 'z': axis names for messages. */
+extern const char mpm_sj_axis_name[3];
+
+/* ---- helpers (scene_json.c) ------------------------------------------------------------ */
+
+/* "out of memory allocating <what>"; returns -1. */
+int mpm_sj_fail_nomem(mpm_json_ctx *c, const char *what);
+/* The array at obj[key] (required or not); 0 absent, 1 present, -1 wrong type. */
+int mpm_sj_get_array(mpm_json_ctx *c, const cJSON *obj, const char *key, int required,
+                     const char *what, const cJSON **out);
+
+/* ---- materials (scene_json_material.c) ------------------------------------------------- */
+
+/* root.materials; leaves room in s->materials for one inline material per body. Runs
+ * before mpm_sj_parse_bodies. */
+int mpm_sj_parse_materials(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
+/* body.material: a name among materials[] (the first `named` entries) or an inline object. */
+int mpm_sj_parse_body_material(mpm_json_ctx *c, const cJSON *body, int named, mpm_scene *s,
+                               mpm_body_desc *b);
+
+/* ---- bodies and colliders (scene_json_shape.c) ----------------------------------------- */
+
+int mpm_sj_parse_bodies(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
+int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
+
+#endif
