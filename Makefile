@@ -6,7 +6,8 @@ BUILD_SANITIZE ?= build-sanitize
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
-DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev
+DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng-dev zlib1g-dev \
+	gnuplot-nox python3-vtk9
 
 .PHONY: all deps build build-double build-sanitize demo test test-float test-double \
 	test-sanitize bench clean format

@@ -1,4 +1,4 @@
-/* main.c - the `mpm` command line program: dispatch to run, check and bench. */
+/* main.c - the `mpm` command line program: dispatch to run, check, bench, render and plot. */
 #include "cli.h"
 #include "mpm/mpm.h"
 
@@ -12,9 +12,10 @@ static void usage(FILE *out) {
           "mpm %s - Material Point Method simulation engine (%s build)\n"
           "\n"
           "usage:\n"
-          "  mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--quiet]\n"
-          "      simulate the scene, writing frames (VTU + PVD, PLY, stats.csv) to DIR\n"
-          "      (default: the scene's output.directory); --frames stops after N frames\n"
+          "  mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--render] [--quiet]\n"
+          "      simulate the scene, writing frames (VTU + PVD, PLY, stats.csv) and a copy of\n"
+          "      the scene (scene.json) to DIR (default: the scene's output.directory);\n"
+          "      --frames stops after N frames; --render then runs `mpm render DIR`\n"
           "  mpm check SCENE.json\n"
           "      validate a scene only: nothing is simulated or written\n"
           "  mpm bench transfer [--threads LIST] [--repeats N] [--kernel K] [--grid G]\n"
@@ -25,6 +26,12 @@ static void usage(FILE *out) {
           "  mpm bench stress [--particles N] [--threads LIST] [--repeats N]\n"
           "      each material model's batch stress and return map (ns per particle), and\n"
           "      ns per 3x3 SVD (mpm_svd3)\n"
+          "  mpm render OUTDIR [--field F] [--size WxH] [--colormap C] [--every N] [--movie]\n"
+          "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed);\n"
+          "      F: velocity (default), J, stress, plastic, material, body\n"
+          "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
+          "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
+          "      to OUTDIR/plots/*.png with gnuplot\n"
           "  mpm --help | --version\n"
           "\n"
           "exit codes: 0 success, 1 simulation failure, 2 usage or input error\n",
@@ -64,6 +71,8 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "run")) return mpm_cmd_run(argc - 2, argv + 2);
   if (!strcmp(cmd, "check")) return mpm_cmd_check(argc - 2, argv + 2);
   if (!strcmp(cmd, "bench")) return mpm_cmd_bench(argc - 2, argv + 2);
+  if (!strcmp(cmd, "render")) return mpm_cmd_render(argc - 2, argv + 2);
+  if (!strcmp(cmd, "plot")) return mpm_cmd_plot(argc - 2, argv + 2);
   fprintf(stderr, "mpm: unknown command '%s' (try 'mpm --help')\n", cmd);
   return MPM_EXIT_USAGE;
 }

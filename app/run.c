@@ -2,6 +2,7 @@
  * with a progress display, write the outputs. */
 #include "cli.h"
 #include "progress.h"
+#include "scene_copy.h"
 #include "core/parallel.h"
 #include "solver/sim.h"
 
@@ -47,7 +48,7 @@ int mpm_cmd_check(int argc, char **argv) {
 
 int mpm_cmd_run(int argc, char **argv) {
   const char *scene_path = NULL, *out_dir = NULL;
-  int threads = 0, quiet = 0, max_frames = 0;
+  int threads = 0, quiet = 0, max_frames = 0, render = 0;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
       if (i + 1 >= argc) {
@@ -65,6 +66,8 @@ int mpm_cmd_run(int argc, char **argv) {
       ++i;
     } else if (!strcmp(argv[i], "--quiet") || !strcmp(argv[i], "-q")) {
       quiet = 1;
+    } else if (!strcmp(argv[i], "--render")) {
+      render = 1;
     } else if (argv[i][0] == '-') {
       fprintf(stderr, "mpm run: unknown option '%s' (try 'mpm --help')\n", argv[i]);
       return MPM_EXIT_USAGE;
@@ -76,7 +79,8 @@ int mpm_cmd_run(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--quiet]\n");
+    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--render] "
+                    "[--quiet]\n");
     return MPM_EXIT_USAGE;
   }
   if (threads > 0) mpm_set_threads(threads);
@@ -91,8 +95,9 @@ int mpm_cmd_run(int argc, char **argv) {
   }
   if (max_frames > 0 && max_frames < sim->frame_count) sim->frame_count = max_frames;
   st = mpm_sim_enable_output(sim, out_dir);
+  if (st == MPM_OK) st = mpm_write_scene_copy(scene_path, &sim->scene, sim->output_dir, &err);
   if (st != MPM_OK) {
-    fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
+    fprintf(stderr, "mpm: %s\n", err.message[0] ? err.message : mpm_sim_last_error(sim));
     mpm_sim_destroy(sim);
     return MPM_EXIT_FAILURE;
   }
@@ -122,6 +127,14 @@ int mpm_cmd_run(int argc, char **argv) {
       fprintf(stderr,
               "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/frames.pvd in ParaView\n",
               sim->frame, (long long)sim->steps, pr.elapsed, sim->output_dir);
+  }
+  if (code == MPM_EXIT_OK && render) { /* pictures of every frame: `mpm render DIR` */
+    char dir[MPM_PATH_MAX];
+    snprintf(dir, sizeof dir, "%s", sim->output_dir);
+    mpm_sim_destroy(sim);
+    char quiet_flag[] = "--quiet";
+    char *rargv[] = {dir, quiet ? quiet_flag : NULL, NULL};
+    return mpm_cmd_render(quiet ? 2 : 1, rargv);
   }
   mpm_sim_destroy(sim);
   return code;

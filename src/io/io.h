@@ -65,4 +65,29 @@ typedef struct mpm_stats_row {
 mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row *rows,
                                mpm_error *err);
 
+/* ---- reading frames back (vtu_read.c) ------------------------------------------------- */
+
+#define MPM_VTU_NAME_MAX 32
+#define MPM_VTU_ARRAYS_MAX 16
+
+/* One array of a frame, converted to float: point_count tuples of `components` values. */
+typedef struct mpm_vtu_array {
+  char name[MPM_VTU_NAME_MAX];
+  int components;
+  float *data;
+} mpm_vtu_array;
+
+typedef struct mpm_vtu_frame {
+  long point_count;
+  double time; /* the TIME field, s */
+  int array_count;
+  mpm_vtu_array arrays[MPM_VTU_ARRAYS_MAX]; /* "Points" and the point data by name */
+} mpm_vtu_frame;
+
+/* Read a frame written by mpm_write_vtu. Errors name the file and the array. */
+mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err);
+/* The array called `name`, or NULL. */
+const mpm_vtu_array *mpm_vtu_frame_array(const mpm_vtu_frame *f, const char *name);
+void mpm_vtu_frame_free(mpm_vtu_frame *f);
+
 #endif

@@ -1,0 +1,201 @@
+/* draw.c - the background (sky, ground, colliders) and the particle splats. */
+#include "render/render.h"
+#include "core/parallel.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TRACE_STEPS 160
+#define TRACE_EPS_REL 1e-3 /* hit tolerance, relative to the domain size */
+
+/* Direction of the ray through the centre of pixel (px, py). */
+static void pixel_ray(const mpm_camera *cam, int px, int py, double dir[3]) {
+  const double sx = (px + 0.5 - 0.5 * cam->width) / cam->focal;
+  const double sy = (py + 0.5 - 0.5 * cam->height) / cam->focal;
+  double n = 0;
+  for (int d = 0; d < 3; ++d) {
+    dir[d] = cam->forward[d] + sx * cam->right[d] - sy * cam->up[d];
+    n += dir[d] * dir[d];
+  }
+  n = 1 / sqrt(n);
+  for (int d = 0; d < 3; ++d) dir[d] *= n;
+}
+
+static double phi_at(const mpm_collider_pose *pose, const double x[3], double n[3]) {
+  const mpm_real xr[3] = {(mpm_real)x[0], (mpm_real)x[1], (mpm_real)x[2]};
+  mpm_real nr[3];
+  const double phi = (double)mpm_collider_phi(pose, xr, nr);
+  for (int d = 0; d < 3; ++d) n[d] = nr[d];
+  return phi;
+}
+
+/* Distance along the ray to the collider's surface (its far wall for a container, which the
+ * camera sees from outside), or INFINITY. The level sets are exact distances or bounds of
+ * them, so sphere tracing cannot step through a surface. */
+static double trace(const mpm_collider_pose *pose, const double eye[3], const double dir[3],
+                    double t_max, double eps, double n_hit[3]) {
+  double x[3], n[3], t = 0;
+  for (int d = 0; d < 3; ++d) x[d] = eye[d];
+  double phi = phi_at(pose, x, n);
+  int steps = 0;
+  if (phi < 0) {
+    if (!pose->collider->desc.inside_out) return INFINITY;  /* the camera is inside the solid */
+    while (phi < 0 && steps++ < TRACE_STEPS && t < t_max) { /* enter the container */
+      t += fmax(-phi, eps);
+      for (int d = 0; d < 3; ++d) x[d] = eye[d] + t * dir[d];
+      phi = phi_at(pose, x, n);
+    }
+  }
+  /* a container's wall where the ray came in is not drawn: look for a surface only after the
+     ray has been clearly inside the free region */
+  int armed = !pose->collider->desc.inside_out || t == 0;
+  while (steps++ < TRACE_STEPS && t < t_max) {
+    if (phi > 2 * eps) armed = 1;
+    if (armed && phi < eps) {
+      memcpy(n_hit, n, sizeof n);
+      return t;
+    }
+    t += fmax(phi, eps);
+    for (int d = 0; d < 3; ++d) x[d] = eye[d] + t * dir[d];
+    phi = phi_at(pose, x, n);
+  }
+  return INFINITY;
+}
+
+/* A floor collider (a half-space facing up) is drawn as the ground plane instead. */
+static int is_floor(const mpm_collider_pose *pose) {
+  const mpm_collider_desc *d = &pose->collider->desc;
+  return d->shape.kind == MPM_SHAPE_HALFSPACE && !d->inside_out && d->shape.axis[1] > 0.99;
+}
+
+void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y,
+                           const double lo[3], const double hi[3],
+                           const mpm_collider_pose *colliders, int collider_count) {
+  const int w = img->width, h = img->height;
+  double size = 0;
+  for (int d = 0; d < 3; ++d) size = fmax(size, hi[d] - lo[d]);
+  const double eps = TRACE_EPS_REL * size, far = 20 * size;
+  const double cell = size / 16; /* ground checker */
+  const double light[3] = {0.35, 0.85, 0.4};
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int py = 0; py < h; ++py)
+    for (int px = 0; px < w; ++px) {
+      double dir[3];
+      pixel_ray(cam, px, py, dir);
+      /* sky: a soft vertical gradient */
+      const double up = 0.5 * (dir[1] + 1);
+      float rgb[3] = {(float)(0.55 + 0.25 * up), (float)(0.6 + 0.25 * up),
+                      (float)(0.68 + 0.25 * up)};
+      double best = INFINITY;
+      /* ground plane */
+      if (dir[1] < -1e-9) {
+        const double t = (floor_y - cam->eye[1]) / dir[1];
+        if (t > 0 && t < far) {
+          const double x = cam->eye[0] + t * dir[0], z = cam->eye[2] + t * dir[2];
+          const int inside = x >= lo[0] && x <= hi[0] && z >= lo[2] && z <= hi[2];
+          const int check = ((int)floor(x / cell) + (int)floor(z / cell)) & 1;
+          const float g = inside ? (check ? 0.62f : 0.52f) : 0.42f;
+          const float fog = (float)exp(-t / (6 * size));
+          for (int c = 0; c < 3; ++c) rgb[c] = fog * g + (1 - fog) * rgb[c];
+          best = t;
+        }
+      }
+      /* colliders */
+      for (int k = 0; k < collider_count; ++k) {
+        if (is_floor(&colliders[k])) continue;
+        double n[3];
+        const double t = trace(&colliders[k], cam->eye, dir, fmin(best, far), eps, n);
+        if (t < best) {
+          best = t;
+          double ndl = 0, ndv = 0;
+          for (int d = 0; d < 3; ++d) {
+            ndl += n[d] * light[d];
+            ndv -= n[d] * dir[d];
+          }
+          const double side = ndv < 0 ? -1 : 1; /* a far wall is seen from behind its normal */
+          const float shade = (float)(0.35 + 0.55 * fmax(0, side * ndl));
+          const float base[3] = {0.55f, 0.6f, 0.7f};
+          for (int c = 0; c < 3; ++c) rgb[c] = shade * base[c];
+        }
+      }
+      const size_t i = (size_t)py * (size_t)w + (size_t)px;
+      memcpy(img->rgb + 3 * i, rgb, sizeof rgb);
+      double z = 0;
+      for (int d = 0; d < 3; ++d) z += dir[d] * cam->forward[d];
+      img->depth[i] = isfinite(best) ? (float)(best * z) : INFINITY;
+    }
+}
+
+/* One particle into a colour and depth buffer. */
+static void splat(int w, int h, float *rgb, float *depth, const mpm_camera *cam, const float p[3],
+                  float r, const float col[3]) {
+  double rel[3], x = 0, y = 0, z = 0;
+  for (int d = 0; d < 3; ++d) rel[d] = p[d] - cam->eye[d];
+  for (int d = 0; d < 3; ++d) {
+    x += rel[d] * cam->right[d];
+    y += rel[d] * cam->up[d];
+    z += rel[d] * cam->forward[d];
+  }
+  if (z <= r) return; /* behind or around the eye */
+  const double cx = 0.5 * w + cam->focal * x / z, cy = 0.5 * h - cam->focal * y / z;
+  const double rp = fmax(cam->focal * r / z, 0.5);
+  const int x0 = (int)floor(cx - rp), x1 = (int)ceil(cx + rp);
+  const int y0 = (int)floor(cy - rp), y1 = (int)ceil(cy + rp);
+  if (x1 < 0 || y1 < 0 || x0 >= w || y0 >= h) return;
+  /* light from the upper left, towards the viewer (camera space: x right, y up, z to eye) */
+  const double L[3] = {-0.42, 0.62, 0.66};
+  for (int py = y0 < 0 ? 0 : y0; py <= y1 && py < h; ++py)
+    for (int px = x0 < 0 ? 0 : x0; px <= x1 && px < w; ++px) {
+      const double dx = (px + 0.5 - cx) / rp, dy = (py + 0.5 - cy) / rp;
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > 1) continue;
+      const double nz = sqrt(1 - d2);
+      const float dep = (float)(z - r * nz);
+      const size_t i = (size_t)py * (size_t)w + (size_t)px;
+      if (dep >= depth[i]) continue;
+      depth[i] = dep;
+      const double ndl = dx * L[0] - dy * L[1] + nz * L[2];
+      const float shade = (float)(0.3 + 0.7 * fmax(0, ndl));
+      for (int c = 0; c < 3; ++c) rgb[3 * i + c] = shade * col[c];
+    }
+}
+
+mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n, const float *xyz,
+                                const float *radius, float radius_all, const float *rgb,
+                                mpm_error *err) {
+  const int w = img->width, h = img->height, T = mpm_thread_count();
+  const size_t pixels = (size_t)w * (size_t)h;
+  float *bufs = malloc((size_t)T * pixels * 4 * sizeof(float));
+  if (!bufs) return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for %d render buffers", T);
+#pragma omp parallel num_threads(T)
+  {
+    const int t = mpm_thread_id();
+    float *col = bufs + (size_t)t * pixels * 4, *dep = col + 3 * pixels;
+    for (size_t i = 0; i < pixels; ++i) dep[i] = img->depth[i]; /* the background occludes */
+    /* contiguous particle ranges per thread: the merge below is then independent of
+       scheduling, and ties in depth go to the lower thread, i.e. the lower particle range */
+    const size_t a = n * (size_t)t / (size_t)T, b = n * (size_t)(t + 1) / (size_t)T;
+    for (size_t p = a; p < b; ++p)
+      splat(w, h, col, dep, cam, xyz + 3 * p, radius ? radius[p] : radius_all, rgb + 3 * p);
+#pragma omp barrier
+#pragma omp for schedule(static)
+    for (size_t i = 0; i < pixels; ++i) {
+      float best = img->depth[i];
+      int who = -1;
+      for (int k = 0; k < T; ++k) {
+        const float dk = bufs[(size_t)k * pixels * 4 + 3 * pixels + i];
+        if (dk < best) {
+          best = dk;
+          who = k;
+        }
+      }
+      if (who >= 0) {
+        memcpy(img->rgb + 3 * i, bufs + (size_t)who * pixels * 4 + 3 * i, 3 * sizeof(float));
+        img->depth[i] = best;
+      }
+    }
+  }
+  free(bufs);
+  return MPM_OK;
+}

@@ -1,0 +1,69 @@
+/* render.h - a software renderer for particle frames: no GPU, no display.
+ *
+ * A frame is drawn in three passes into a float RGB image with a depth buffer:
+ *   1. the background: a vertical sky gradient, a checkered ground plane at the domain floor,
+ *      and the scene's colliders found by sphere tracing their level sets (collide/collider.h);
+ *      containers (inside-out colliders) show their far wall, so what they hold stays visible;
+ *   2. the particles as shaded sphere impostors (a disc per particle whose depth and normal
+ *      are those of the sphere), depth-tested against each other and the background;
+ *   3. tone mapping to 8-bit sRGB and a PNG written atomically with libpng (render_png.c).
+ * Particles are spread over threads, each with its own colour and depth buffer, merged by
+ * depth at the end, so the image does not depend on the thread count. */
+#ifndef MPM_RENDER_RENDER_H
+#define MPM_RENDER_RENDER_H
+
+#include "collide/collider.h"
+#include "core/error.h"
+
+#include <stddef.h>
+
+typedef struct mpm_image {
+  int width, height;
+  float *rgb;   /* width * height * 3, linear */
+  float *depth; /* distance along the view axis; INFINITY where nothing is */
+} mpm_image;
+
+mpm_status mpm_image_init(mpm_image *img, int width, int height, mpm_error *err);
+void mpm_image_free(mpm_image *img);
+
+/* Write img as an 8-bit sRGB PNG, atomically (a temporary file renamed). */
+mpm_status mpm_image_write_png(const mpm_image *img, const char *path, mpm_error *err);
+
+/* Pinhole camera looking from eye to target with +y up (unless the view is vertical). */
+typedef struct mpm_camera {
+  double eye[3], target[3];
+  double fov_deg; /* vertical field of view */
+  /* derived by mpm_camera_setup */
+  double right[3], up[3], forward[3];
+  double focal; /* pixels per unit at distance 1 */
+  int width, height;
+} mpm_camera;
+
+void mpm_camera_setup(mpm_camera *cam, int width, int height);
+
+/* A camera that frames the box [lo, hi] from the front-right and above. */
+mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int width, int height);
+
+/* Colour maps: t in [0, 1] (clamped) to linear RGB. */
+typedef enum mpm_colormap {
+  MPM_CMAP_VIRIDIS = 0, /* perceptually uniform, for magnitudes */
+  MPM_CMAP_COOLWARM,    /* diverging, for signed quantities such as J - 1 */
+  MPM_CMAP_CATEGORY,    /* distinct colours for integer labels (material, body) */
+} mpm_colormap;
+
+void mpm_colormap_eval(mpm_colormap map, double t, float rgb[3]);
+/* The map of a name (viridis, coolwarm, category); -1 for an unknown one. */
+int mpm_colormap_of(const char *name);
+
+/* Pass 1. floor_y: height of the ground plane (the domain floor); colliders may be NULL. */
+void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y,
+                           const double domain_lo[3], const double domain_hi[3],
+                           const mpm_collider_pose *colliders, int collider_count);
+
+/* Pass 2. Particle i at xyz[3i..3i+2] with radius radius[i] (or `radius_all` when radius is
+ * NULL) and linear colour rgb[3i..3i+2]. */
+mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n, const float *xyz,
+                                const float *radius, float radius_all, const float *rgb,
+                                mpm_error *err);
+
+#endif

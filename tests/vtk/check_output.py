@@ -1,0 +1,494 @@
+#!/usr/bin/python3
+"""check_output.py - read the engine's frames back with VTK's own reader and cross-check them.
+
+Runs `mpm run SCENE -o TMP --frames N --quiet` for each scene given and then checks, frame by
+frame, that what ParaView would load is what the engine computed:
+
+  frames.pvd  parsed with xml.etree (VTK 9.1 has no PVD reader outside ParaView): one DataSet
+              per frame, every file present, timesteps strictly increasing, one row per
+              DataSet in stats.csv with the same frame number.
+  frame_NNNN.vtu
+              read with vtkXMLUnstructuredGridReader; any message the reader prints is a
+              failure. Points = cells = stats.csv `particles`; every cell a VTK_VERTEX with
+              the point of its own index; the arrays are exactly FieldData TIME (Float64) and
+              PointData id (UInt32), velocity (3 comps), mass, volume, J, stress, plastic
+              (the build's real, Float32 or Float64 as read from the Points) and material,
+              body (Int32). Values: TIME equals the PVD timestep and stats.csv time as written
+              (%.9g or exact); all reals finite; mass, volume, J > 0; stress >= 0; ids unique
+              and the same set in every frame; body indices 0..bodies-1, one material per body
+              and, for bodies naming a material of the scene's list, that material's index.
+  frame_NNNN.ply
+              an independent writer (src/io/ply_points.c), parsed with the struct module:
+              positions, velocities and ids equal the VTU's exactly, particle by particle.
+  stats.csv   sum(mass) within 1e-6 relative; 0.5 sum(m |v|^2) from the VTU arrays within
+              1e-4 relative; sum(m v) within 1e-6 of sum(m |v|).
+
+Run with Debian's interpreter, which has python3-vtk9 (a pyenv `python3` on PATH has no vtk):
+
+  /usr/bin/python3 tests/vtk/check_output.py --mpm build/mpm --frames 2 \
+      examples/jello_cubes.json examples/snowball.json
+
+Exit status: 0 when every check passes; 1 with one line naming the scene, file, frame and
+array of the first mismatch (or a missing vtk module, or a failed run); 2 for usage errors.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+try:
+    from vtkmodules.vtkCommonCore import (VTK_DOUBLE, VTK_FLOAT, VTK_INT, VTK_UNSIGNED_INT,
+                                          vtkLogger, vtkOutputWindow, vtkStringOutputWindow,
+                                          vtkVersion)
+    from vtkmodules.vtkCommonDataModel import VTK_VERTEX
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+except ImportError as e:
+    print("check_output.py: FAIL: cannot import VTK in %s (%s); install it with "
+          "`apt-get install python3-vtk9` and run this script with /usr/bin/python3"
+          % (sys.executable, e), file=sys.stderr)
+    sys.exit(1)
+
+# VTK XML type names as the writer declares them -> the VTK type the reader must create.
+VTK_TYPES = {"Float32": VTK_FLOAT, "Float64": VTK_DOUBLE, "UInt32": VTK_UNSIGNED_INT,
+             "Int32": VTK_INT}
+REAL = "real"  # placeholder for the build's real type, Float32 or Float64
+
+# name -> (components, type), as src/io/vtu.c writes them
+FIELD_ARRAYS = {"TIME": (1, "Float64")}
+POINT_ARRAYS = {"id": (1, "UInt32"), "velocity": (3, REAL), "mass": (1, REAL),
+                "volume": (1, REAL), "J": (1, REAL), "stress": (1, REAL),
+                "plastic": (1, REAL), "material": (1, "Int32"), "body": (1, "Int32")}
+PLY_PROPERTIES = ["x", "y", "z", "vx", "vy", "vz", "id"]
+PLY_STRUCT = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i",
+              "uint": "I", "float": "f", "double": "d", "int32": "i", "uint32": "I",
+              "float32": "f", "float64": "d"}
+
+MASS_RTOL = 1e-6
+KINETIC_RTOL = 1e-4
+MOMENTUM_RTOL = 1e-6
+
+
+class Mismatch(Exception):
+    """One failed check: where (scene, file, frame, array) and what."""
+
+    def __init__(self, where, what):
+        super().__init__("%s: %s" % (where, what))
+
+
+class Where:
+    """The location a message names: scene, file, frame, array."""
+
+    def __init__(self, scene, path, frame=None):
+        self.scene, self.path, self.frame = scene, path, frame
+
+    def fail(self, array, what):
+        parts = [self.scene, os.path.basename(self.path)]
+        if self.frame is not None:
+            parts.append("frame %d" % self.frame)
+        if array:
+            parts.append("array '%s'" % array)
+        raise Mismatch(": ".join(parts), what)
+
+
+def rel_close(a, b, rtol):
+    return abs(a - b) <= rtol * max(abs(a), abs(b))
+
+
+def same_as_written(text, value):
+    """True when `text` (a %.9g or round-trip rendering) is what a writer prints for value."""
+    t = float(text)
+    return t == value or t == float("%.9g" % value)
+
+
+# ---- the run ------------------------------------------------------------------------------
+
+def run_scene(mpm, scene, outdir, frames):
+    cmd = [mpm, "run", scene, "-o", outdir, "--frames", str(frames), "--quiet"]
+    proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if proc.returncode != 0:
+        tail = "\n".join(proc.stdout.strip().splitlines()[-20:])
+        raise Mismatch(scene, "`%s` exited with %d:\n%s" % (" ".join(cmd), proc.returncode, tail))
+
+
+# ---- frames.pvd and stats.csv -------------------------------------------------------------
+
+def read_pvd(where, path):
+    """[(timestep text, file path)] of the Collection, in file order."""
+    if not os.path.isfile(path):
+        where.fail(None, "missing")
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as e:
+        where.fail(None, "not well-formed XML: %s" % e)
+    if root.tag != "VTKFile" or root.get("type") != "Collection":
+        where.fail(None, "root is <%s type=%r>, expected <VTKFile type=\"Collection\">"
+                   % (root.tag, root.get("type")))
+    coll = root.find("Collection")
+    if coll is None:
+        where.fail(None, "no <Collection> element")
+    entries = []
+    for k, ds in enumerate(coll.findall("DataSet")):
+        step, file = ds.get("timestep"), ds.get("file")
+        if step is None or file is None:
+            where.fail(None, "DataSet %d lacks timestep or file" % k)
+        full = os.path.join(os.path.dirname(path), file)
+        if not os.path.isfile(full):
+            where.fail(None, "DataSet %d names '%s', which does not exist" % (k, file))
+        if entries and not float(step) > float(entries[-1][0]):
+            where.fail(None, "DataSet %d timestep %s does not increase (previous %s)"
+                       % (k, step, entries[-1][0]))
+        entries.append((step, full))
+    return entries
+
+
+def read_stats(where, path):
+    """{frame: row dict with the text of every column}."""
+    if not os.path.isfile(path):
+        where.fail(None, "missing")
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    need = {"frame", "time", "kinetic_energy", "momentum_x", "momentum_y", "momentum_z",
+            "mass", "particles"}
+    if not rows:
+        where.fail(None, "no rows")
+    missing = need - set(rows[0])
+    if missing:
+        where.fail(None, "header lacks %s" % ", ".join(sorted(missing)))
+    return {int(r["frame"]): r for r in rows}
+
+
+# ---- frame_NNNN.ply -----------------------------------------------------------------------
+
+def read_ply(where, path):
+    """(real type name 'float'/'double', comment time text or None, {property: values})."""
+    if not os.path.isfile(path):
+        where.fail(None, "missing")
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.find(b"end_header\n")
+    if not data.startswith(b"ply\n") or end < 0:
+        where.fail(None, "not a PLY file (no 'ply' magic or 'end_header')")
+    header = data[:end].decode("ascii").splitlines()
+    body = data[end + len(b"end_header\n"):]
+    if "format binary_little_endian 1.0" not in header:
+        where.fail(None, "not binary_little_endian 1.0")
+    count, props, comment_time, elements = None, [], None, 0
+    for line in header[1:]:
+        w = line.split()
+        if w[0] == "element":
+            elements += 1
+            if w[1] != "vertex":
+                where.fail(None, "unexpected element '%s'" % w[1])
+            count = int(w[2])
+        elif w[0] == "property":
+            if w[1] == "list" or w[1] not in PLY_STRUCT:
+                where.fail(None, "unsupported property '%s'" % line)
+            props.append((w[2], w[1]))
+        elif w[0] == "comment":
+            m = re.search(r"time (\S+) s", line)
+            comment_time = m.group(1) if m else comment_time
+    if elements != 1 or count is None:
+        where.fail(None, "expected exactly one 'element vertex'")
+    names = [p[0] for p in props]
+    if names != PLY_PROPERTIES:
+        where.fail(None, "properties %s, expected %s" % (names, PLY_PROPERTIES))
+    fmt = "<" + "".join(PLY_STRUCT[t] for _, t in props)
+    size = struct.calcsize(fmt)
+    if len(body) != count * size:
+        where.fail(None, "%d bytes of vertex data, expected %d x %d" % (len(body), count, size))
+    cols = list(zip(*struct.iter_unpack(fmt, body))) if count else [()] * len(props)
+    real = props[0][1]
+    if any(t != real for _, t in props[:6]) or real not in ("float", "double"):
+        where.fail(None, "x..vz are not all float or all double")
+    return real, comment_time, {n: list(c) for n, c in zip(names, cols)}
+
+
+# ---- frame_NNNN.vtu -----------------------------------------------------------------------
+
+class VtkMessages:
+    """Collects everything VTK would print, so that any reader warning or error fails."""
+
+    def __init__(self):
+        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+        self.window = vtkStringOutputWindow()
+        vtkOutputWindow.SetInstance(self.window)
+        self.seen = 0
+
+    def new(self):
+        text = self.window.GetOutput() or ""
+        fresh, self.seen = text[self.seen:], len(text)
+        return "\n".join(line for line in fresh.splitlines() if line.strip())
+
+
+def values(arr):
+    """A VTK data array's values as a flat list of Python numbers (exact widening)."""
+    mv = memoryview(arr)
+    return mv.cast("B").cast(mv.format).tolist() if mv.ndim > 1 else mv.tolist()
+
+
+def read_vtu(where, path, messages):
+    if not os.path.isfile(path):
+        where.fail(None, "missing")
+    reader = vtkXMLUnstructuredGridReader()
+    if not reader.CanReadFile(path):
+        where.fail(None, "vtkXMLUnstructuredGridReader cannot read it: %s" % messages.new())
+    reader.SetFileName(path)
+    reader.Update()
+    said = messages.new()
+    if said:
+        where.fail(None, "VTK reader reported:\n%s" % said)
+    return reader.GetOutput()
+
+
+def check_arrays(where, data, expected, real, n, kind):
+    """Names, components, types and tuple counts of one attribute block; {name: array}."""
+    got = {data.GetArrayName(i): data.GetAbstractArray(i)
+           for i in range(data.GetNumberOfArrays())}
+    if set(got) != set(expected):
+        missing, extra = set(expected) - set(got), set(got) - set(expected)
+        where.fail(None, "%s arrays are %s; missing %s, unexpected %s"
+                   % (kind, sorted(got), sorted(missing) or "none", sorted(extra) or "none"))
+    for name, (comps, type_name) in expected.items():
+        a = got[name]
+        type_name = real if type_name == REAL else type_name
+        if a.GetNumberOfComponents() != comps:
+            where.fail(name, "%d components, expected %d" % (a.GetNumberOfComponents(), comps))
+        if a.GetDataType() != VTK_TYPES[type_name]:
+            where.fail(name, "type %s, expected %s" % (a.GetDataTypeAsString(), type_name))
+        if a.GetNumberOfTuples() != n:
+            where.fail(name, "%d tuples, expected %d" % (a.GetNumberOfTuples(), n))
+    return got
+
+
+def first_difference(a, b):
+    for i, (x, y) in enumerate(zip(a, b)):
+        if x != y:
+            return i
+    return None if len(a) == len(b) else min(len(a), len(b))
+
+
+def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
+    """Every check of one frame; returns (real type, sorted ids)."""
+    n = grid.GetNumberOfPoints()
+    particles = int(stats["particles"])
+    if n != particles:
+        where.fail("Points", "%d points, stats.csv says %d particles" % (n, particles))
+    if grid.GetNumberOfCells() != particles:
+        where.fail("types", "%d cells, stats.csv says %d particles"
+                   % (grid.GetNumberOfCells(), particles))
+
+    # the build's real type, from the Points, the same in every frame and in the PLY
+    pts = grid.GetPoints().GetData()
+    real = {VTK_FLOAT: "Float32", VTK_DOUBLE: "Float64"}.get(pts.GetDataType())
+    if real is None:
+        where.fail("Points", "type %s, expected Float32 or Float64" % pts.GetDataTypeAsString())
+    if real_seen and real != real_seen:
+        where.fail("Points", "type %s, but earlier frames are %s" % (real, real_seen))
+    if pts.GetNumberOfComponents() != 3:
+        where.fail("Points", "%d components, expected 3" % pts.GetNumberOfComponents())
+    ply_real, ply_time, ply_cols = ply
+    if {"float": "Float32", "double": "Float64"}[ply_real] != real:
+        where.fail("Points", "type %s, but the PLY stores %s" % (real, ply_real))
+
+    # cells: vertex i holds point i
+    types = bytes(memoryview(grid.GetCellTypesArray()).cast("B"))
+    if types != bytes([VTK_VERTEX]) * n:
+        bad = next(i for i, t in enumerate(types) if t != VTK_VERTEX) if len(types) == n else -1
+        where.fail("types", "cell %d is not VTK_VERTEX (%d)" % (bad, VTK_VERTEX))
+    cells = grid.GetCells()
+    if values(cells.GetConnectivityArray()) != list(range(n)):
+        where.fail("connectivity", "vertex i does not hold point i")
+    if values(cells.GetOffsetsArray()) != list(range(n + 1)):
+        where.fail("offsets", "not 0, 1, ..., %d" % n)
+
+    # arrays: names, components, types
+    fd = check_arrays(where, grid.GetFieldData(), FIELD_ARRAYS, real, 1, "FieldData")
+    pd = check_arrays(where, grid.GetPointData(), POINT_ARRAYS, real, n, "PointData")
+    active = grid.GetPointData().GetScalars(), grid.GetPointData().GetVectors()
+    if active[0] is None or active[0].GetName() != "stress":
+        where.fail("stress", "not the active scalars (PointData Scalars=\"stress\")")
+    if active[1] is None or active[1].GetName() != "velocity":
+        where.fail("velocity", "not the active vectors (PointData Vectors=\"velocity\")")
+
+    # TIME = PVD timestep = stats.csv time (= PLY comment time)
+    t = fd["TIME"].GetValue(0)
+    for source, text in (("frames.pvd timestep", pvd_step), ("stats.csv time", stats["time"]),
+                         ("PLY comment time", ply_time)):
+        if text is not None and not same_as_written(text, t):
+            where.fail("TIME", "%.17g, but %s is %s" % (t, source, text))
+
+    x, v = values(pts), values(pd["velocity"])
+    ids = values(pd["id"])
+    m = values(pd["mass"])
+    reals = {"Points": x, "velocity": v, "mass": m}
+    for name in ("volume", "J", "stress", "plastic"):
+        reals[name] = values(pd[name])
+    for name, vals in reals.items():
+        bad = next((i for i, y in enumerate(vals) if not math.isfinite(y)), None)
+        if bad is not None:
+            comps = 3 if name in ("Points", "velocity") else 1
+            where.fail(name, "value %r of particle %d is not finite" % (vals[bad], bad // comps))
+    for name, ok, rule in (("mass", lambda y: y > 0, "> 0"), ("volume", lambda y: y > 0, "> 0"),
+                           ("J", lambda y: y > 0, "> 0"), ("stress", lambda y: y >= 0, ">= 0")):
+        bad = next((i for i, y in enumerate(reals[name]) if not ok(y)), None)
+        if bad is not None:
+            where.fail(name, "particle %d (id %d) has %r, expected %s"
+                       % (bad, ids[bad], reals[name][bad], rule))
+
+    # PLY (independent writer): the same floats, bit for bit, and the same ids
+    for name, col, comps, k in (("Points", "x", 3, 0), ("Points", "y", 3, 1),
+                                ("Points", "z", 3, 2), ("velocity", "vx", 3, 0),
+                                ("velocity", "vy", 3, 1), ("velocity", "vz", 3, 2),
+                                ("id", "id", 1, 0)):
+        mine = (x if name == "Points" else v if name == "velocity" else ids)[k::comps]
+        i = first_difference(mine, ply_cols[col])
+        if i is not None:
+            theirs = ply_cols[col][i] if i < len(ply_cols[col]) else "nothing"
+            where.fail(name, "particle %d: VTU %s, PLY %s %s"
+                       % (i, mine[i] if i < len(mine) else "nothing", col, theirs))
+
+    if len(set(ids)) != n:
+        where.fail("id", "ids are not unique")
+
+    # material and body against the scene
+    mat, body = values(pd["material"]), values(pd["body"])
+    if scene_info is not None:
+        bodies, named = scene_info
+        body_mat = {}
+        for i, (b, mt) in enumerate(zip(body, mat)):
+            if not 0 <= b < len(bodies):
+                where.fail("body", "particle %d has body %d, the scene has %d"
+                           % (i, b, len(bodies)))
+            if body_mat.setdefault(b, mt) != mt:
+                where.fail("material", "body %d has particles of materials %d and %d"
+                           % (b, body_mat[b], mt))
+        if len(body_mat) != len(bodies):
+            where.fail("body", "bodies %s have no particles"
+                       % sorted(set(range(len(bodies))) - set(body_mat)))
+        for b, mt in body_mat.items():
+            want = named.get(bodies[b].get("material")) if isinstance(
+                bodies[b].get("material"), str) else None
+            if want is not None and mt != want:
+                where.fail("material", "body %d ('%s') has material %d, the scene's '%s' is %d"
+                           % (b, bodies[b].get("name", ""), mt, bodies[b]["material"], want))
+    elif any(y < 0 for y in mat + body):
+        where.fail("material", "negative material or body index")
+
+    # stats.csv: mass, kinetic energy, momentum, recomputed in double from the VTU arrays
+    mass = math.fsum(m)
+    ke = 0.5 * math.fsum(mi * (v[3 * i] ** 2 + v[3 * i + 1] ** 2 + v[3 * i + 2] ** 2)
+                         for i, mi in enumerate(m))
+    if not rel_close(mass, float(stats["mass"]), MASS_RTOL):
+        where.fail("mass", "sum %.17g, stats.csv mass %s (rtol %g)" % (mass, stats["mass"],
+                                                                         MASS_RTOL))
+    if not rel_close(ke, float(stats["kinetic_energy"]), KINETIC_RTOL):
+        where.fail("velocity", "0.5 sum m|v|^2 = %.9g, stats.csv kinetic_energy %s (rtol %g)"
+                   % (ke, stats["kinetic_energy"], KINETIC_RTOL))
+    scale = math.fsum(mi * math.sqrt(v[3 * i] ** 2 + v[3 * i + 1] ** 2 + v[3 * i + 2] ** 2)
+                      for i, mi in enumerate(m))
+    for d, axis in enumerate("xyz"):
+        p = math.fsum(mi * v[3 * i + d] for i, mi in enumerate(m))
+        if abs(p - float(stats["momentum_" + axis])) > MOMENTUM_RTOL * scale:
+            where.fail("velocity", "sum m v_%s = %.17g, stats.csv momentum_%s %s (tol %g)"
+                       % (axis, p, axis, stats["momentum_" + axis], MOMENTUM_RTOL * scale))
+    return real, sorted(ids)
+
+
+# ---- one scene ----------------------------------------------------------------------------
+
+def scene_bodies(path):
+    """(bodies, {material name: index}) from the scene JSON, or None when it cannot be read."""
+    try:
+        with open(path) as f:
+            s = json.load(f)
+        bodies = s["bodies"]
+        named = {mt["name"]: k for k, mt in enumerate(s.get("materials", []))
+                 if isinstance(mt, dict) and "name" in mt}
+        return (bodies, named) if isinstance(bodies, list) else None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def check_scene(mpm, scene, outdir, frames, messages):
+    name = os.path.splitext(os.path.basename(scene))[0]
+    t0 = time.monotonic()
+    run_scene(mpm, scene, outdir, frames)
+    t1 = time.monotonic()
+    entries = read_pvd(Where(name, "frames.pvd"), os.path.join(outdir, "frames.pvd"))
+    stats = read_stats(Where(name, "stats.csv"), os.path.join(outdir, "stats.csv"))
+    if len(entries) != frames + 1:
+        Where(name, "frames.pvd").fail(None, "%d DataSets, expected %d (frame 0 and --frames %d)"
+                                       % (len(entries), frames + 1, frames))
+    if sorted(stats) != list(range(len(entries))):
+        Where(name, "stats.csv").fail(None, "frames %s, expected 0..%d"
+                                      % (sorted(stats), len(entries) - 1))
+    info = scene_bodies(scene)
+    real, ids0, n = None, None, 0
+    for k, (step, vtu) in enumerate(entries):
+        m = re.fullmatch(r"frame_(\d+)\.vtu", os.path.basename(vtu))
+        if not m or int(m.group(1)) != k:
+            Where(name, "frames.pvd").fail(None, "DataSet %d is '%s', expected frame_%04d.vtu"
+                                           % (k, os.path.basename(vtu), k))
+        where = Where(name, vtu, k)
+        grid = read_vtu(where, vtu, messages)
+        ply_path = vtu[:-4] + ".ply"
+        ply = read_ply(Where(name, ply_path, k), ply_path)
+        real, ids = check_frame(where, grid, ply, step, stats[k], info, real)
+        if ids0 is not None and ids != ids0:
+            where.fail("id", "the set of ids differs from frame 0's")
+        ids0, n = ids, len(ids)
+    t2 = time.monotonic()
+    bodies = "%d bodies" % len(info[0]) if info else "bodies not checked (scene unreadable)"
+    print("%s: %d frames x %d particles, %s, %s; run %.1f s, check %.1f s: ok"
+          % (name, len(entries), n, real, bodies, t1 - t0, t2 - t1))
+    return len(entries)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mpm", required=True, help="the mpm program (build/mpm)")
+    ap.add_argument("--frames", type=int, default=2, help="frames to run per scene (default 2)")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="write each scene's output to DIR/<scene> and keep it")
+    ap.add_argument("scenes", nargs="+", help="scene JSON files")
+    args = ap.parse_args()
+    if args.frames < 1:
+        ap.error("--frames must be >= 1")
+    mpm = os.path.abspath(args.mpm)
+    if not os.access(mpm, os.X_OK):
+        ap.error("--mpm %s is not an executable" % args.mpm)
+
+    messages = VtkMessages()
+    base = args.keep or tempfile.mkdtemp(prefix="mpm-vtk-check-")
+    total = 0
+    try:
+        for scene in args.scenes:
+            out = os.path.join(base, os.path.splitext(os.path.basename(scene))[0])
+            if os.path.isdir(out):
+                shutil.rmtree(out)
+            total += check_scene(mpm, scene, out, args.frames, messages)
+    except Mismatch as e:
+        print("check_output.py: FAIL: %s" % e, file=sys.stderr)
+        if args.keep:
+            print("check_output.py: output kept in %s" % base, file=sys.stderr)
+        return 1
+    finally:
+        if not args.keep:
+            shutil.rmtree(base, ignore_errors=True)
+    print("vtk_reader_check: %d scenes, %d frames read back with VTK %s: all checks passed"
+          % (len(args.scenes), total, vtkVersion.GetVTKVersion()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
