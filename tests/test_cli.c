@@ -2,44 +2,13 @@
  * 2 usage or input error), messages that name the file and key path, `check` writes nothing,
  * and a short run of an example writes VTU frames, a PVD index and stats. */
 #include "support.h"
+#include "cli_support.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-
-static char output[65536];
-
-/* Run `mpm ARGS` (stderr merged), keep its output, return its exit code. */
-static int mpm(const char *args) {
-  const char *bin = test_mpm_bin();
-  if (!bin) fail_msg("MPM_BIN is not set (run through ctest)");
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", bin, args);
-  FILE *f = popen(cmd, "r");
-  assert_non_null(f);
-  size_t n = fread(output, 1, sizeof output - 1, f);
-  output[n] = '\0';
-  int status = pclose(f);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-static void expect_output(const char *needle) {
-  if (!strstr(output, needle)) fail_msg("expected '%s' in the output:\n%s", needle, output);
-}
-
-static void write_file(const char *path, const char *text) {
-  FILE *f = fopen(path, "w");
-  assert_non_null(f);
-  fputs(text, f);
-  fclose(f);
-}
-
-static int exists(const char *path) {
-  struct stat st;
-  return stat(path, &st) == 0;
-}
 
 static const char *good_scene = "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
                                 " \"time\": {\"end\": 0.2, \"fps\": 20},"

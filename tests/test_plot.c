@@ -4,6 +4,7 @@
  * fails (its messages shown, earlier plots kept, no temporaries left), usage errors.
  * The parts that need gnuplot are skipped, with a message, where it is not installed. */
 #include "support.h"
+#include "cli_support.h"
 
 #include <dirent.h>
 #include <stdio.h>
@@ -12,8 +13,6 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
-static char output[65536];
-
 static const char *const png_files[] = {"energy.png", "momentum.png",        "angular_momentum.png",
                                         "dt.png",     "steps_per_frame.png", "wall_per_frame.png"};
 enum { PNG_COUNT = sizeof png_files / sizeof png_files[0] };
@@ -21,41 +20,6 @@ enum { PNG_COUNT = sizeof png_files / sizeof png_files[0] };
 static const char stats_header[] =
     "frame,time,steps,dt,kinetic_energy,elastic_energy,momentum_x,momentum_y,momentum_z,"
     "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds\n";
-
-/* Run `ENV 'mpm' ARGS` (stderr merged) through the shell, keep its output, return its exit
- * code; env is a prefix such as "PATH=/x" or "". */
-static int mpm_env(const char *env, const char *args) {
-  const char *bin = test_mpm_bin();
-  if (!bin) fail_msg("MPM_BIN is not set (run through ctest)");
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "%s '%s' %s 2>&1", env, bin, args);
-  FILE *f = popen(cmd, "r");
-  assert_non_null(f);
-  size_t n = fread(output, 1, sizeof output - 1, f);
-  output[n] = '\0';
-  int status = pclose(f);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-static int mpm(const char *args) {
-  return mpm_env("", args);
-}
-
-static void expect_output(const char *needle) {
-  if (!strstr(output, needle)) fail_msg("expected '%s' in the output:\n%s", needle, output);
-}
-
-static void write_file(const char *path, const char *text) {
-  FILE *f = fopen(path, "w");
-  assert_non_null(f);
-  fputs(text, f);
-  fclose(f);
-}
-
-static int exists(const char *path) {
-  struct stat st;
-  return stat(path, &st) == 0;
-}
 
 static int have_gnuplot(void) {
   if (system("command -v gnuplot >/dev/null 2>&1") == 0) return 1;

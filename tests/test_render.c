@@ -5,6 +5,7 @@
  * folders are clear errors with exit code 2 and nothing written. Images are read back with
  * libpng, independently of the writer's encoder settings. */
 #include "support.h"
+#include "cli_support.h"
 #include "render/render.h"
 
 #include <png.h>
@@ -13,26 +14,6 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-
-static char output[65536];
-
-static int mpm(const char *args) {
-  const char *bin = test_mpm_bin();
-  if (!bin) fail_msg("MPM_BIN is not set (run through ctest)");
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", bin, args);
-  FILE *f = popen(cmd, "r");
-  assert_non_null(f);
-  size_t n = fread(output, 1, sizeof output - 1, f);
-  output[n] = '\0';
-  int status = pclose(f);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-static int exists(const char *path) {
-  struct stat st;
-  return stat(path, &st) == 0;
-}
 
 typedef struct rgb_image {
   int w, h;
