@@ -4,7 +4,8 @@
  * Frames are read back from OUTDIR/frame_NNNN.vtu; the domain and the colliders come from
  * OUTDIR/scene.json, which `mpm run` writes (or --scene). The colour range of a field is fixed
  * for the whole sequence (from a sample of up to 12 frames, 2nd to 98th percentile) so that
- * colours mean the same in every picture. The camera frames the domain. */
+ * colours mean the same in every picture. The camera is the scene's (key `camera`) or frames
+ * the domain. */
 #include "cli.h"
 #include "core/parallel.h"
 #include "io/io.h"
@@ -333,6 +334,12 @@ int mpm_cmd_render(int argc, char **argv) {
           floor_y = fmax(floor_y, s->center[1]);
       }
       cam = mpm_camera_frame_box(lo, hi, o.width, o.height);
+      if (have_scene && scene.camera.set) { /* the scene's own view */
+        memcpy(cam.eye, scene.camera.eye, sizeof cam.eye);
+        memcpy(cam.target, scene.camera.target, sizeof cam.target);
+        cam.fov_deg = scene.camera.fov;
+        mpm_camera_setup(&cam, o.width, o.height);
+      }
     }
     free(xyz), free(rad), free(rgb), free(val);
     xyz = malloc((3 * n + 1) * sizeof *xyz);

@@ -147,6 +147,31 @@ static void test_camera_and_splat(void **state) {
   assert_int_equal(mpm_colormap_of("rainbow"), -1);
 }
 
+/* The scene's camera: looking straight at the box from +z, the box fills the middle of the
+ * picture and the corners show the sky. */
+static void test_scene_camera(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("render-camera");
+  char scene[600], args[1400], png[700];
+  snprintf(scene, sizeof scene, "%s/scene_in.json", dir);
+  char *json = malloc(strlen(scene_json) + 200);
+  assert_non_null(json);
+  strcpy(json, scene_json);
+  json[strlen(json) - 1] = 0; /* drop the closing brace */
+  strcat(json, ", \"camera\": {\"eye\": [0.5, 0.5, 2.0], \"target\": [0.5, 0.5, 0.5], "
+               "\"fov\": 20}}");
+  write_file(scene, json);
+  free(json);
+  snprintf(args, sizeof args, "run '%s' -o '%s/out' --frames 1 --quiet --render", scene, dir);
+  if (mpm(args) != 0) fail_msg("mpm run --render failed:\n%s", output);
+  snprintf(png, sizeof png, "%s/out/render/frame_0000.png", dir);
+  rgb_image a = read_png(png);
+  assert_int_equal(a.w, 1280); /* the default size */
+  assert_false(greyish(&a, a.w / 2, a.h / 2));
+  assert_true(greyish(&a, 2, 2) && greyish(&a, a.w - 3, 2));
+  free(a.px);
+}
+
 static void test_errors(void **state) {
   (void)state;
   const char *dir = test_temp_dir("render-errors");
@@ -175,8 +200,8 @@ static void test_errors(void **state) {
 }
 
 int main(void) {
-  const struct CMUnitTest tests[] = {cmocka_unit_test(test_render_frames),
-                                     cmocka_unit_test(test_camera_and_splat),
-                                     cmocka_unit_test(test_errors)};
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_render_frames), cmocka_unit_test(test_camera_and_splat),
+      cmocka_unit_test(test_scene_camera), cmocka_unit_test(test_errors)};
   return cmocka_run_group_tests_name("render", tests, NULL, NULL);
 }

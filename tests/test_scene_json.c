@@ -531,15 +531,45 @@ static void test_load_files(void **state) {
   assert_non_null(strstr(err.message, "solver.cfl: expected a number in (0, 1], got 2"));
 }
 
+/* camera: the view of `mpm render` */
+static void test_camera(void **state) {
+  (void)state;
+  mpm_scene s;
+  parse_ok(SCENE_WITH(", 'camera': {'eye': [2, 1, 3], 'target': [0.5, 0.4, 0.5], 'fov': 40}"), &s);
+  assert_int_equal(s.camera.set, 1);
+  assert_true(s.camera.eye[2] == 3 && s.camera.target[1] == 0.4 && s.camera.fov == 40);
+  mpm_scene_free(&s);
+  parse_ok(SCENE_WITH(""), &s);
+  assert_int_equal(s.camera.set, 0); /* the renderer frames the domain */
+  assert_true(s.camera.fov == 35);
+  mpm_scene_free(&s);
+  expect_error(SCENE_WITH(", 'camera': {'eye': [1, 1, 1], 'target': [1, 1, 1]}"), MPM_ERR_INVALID,
+               "camera.target: expected a point other than the eye", NULL);
+  expect_error(SCENE_WITH(", 'camera': {'eye': [1, 1, 1], 'target': [0, 0, 0], 'fov': 180}"),
+               MPM_ERR_INVALID, "camera.fov: expected a number in (1, 170)", NULL);
+  expect_error(SCENE_WITH(", 'camera': {'target': [0, 0, 0]}"), MPM_ERR_INVALID,
+               "camera: missing required key 'eye'", NULL);
+  expect_error(SCENE_WITH(", 'camera': {'eye': [1, 1, 1], 'target': [0, 0, 0], 'up': [0, 1, 0]}"),
+               MPM_ERR_INVALID, "camera.up: unknown key; allowed keys: eye, target, fov", NULL);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_full_scene),         cmocka_unit_test(test_minimal_scene_defaults),
-      cmocka_unit_test(test_resolution_sets_dx), cmocka_unit_test(test_syntax_errors),
-      cmocka_unit_test(test_unknown_keys),       cmocka_unit_test(test_missing_keys),
-      cmocka_unit_test(test_wrong_types),        cmocka_unit_test(test_out_of_range),
-      cmocka_unit_test(test_domain_errors),      cmocka_unit_test(test_non_finite),
-      cmocka_unit_test(test_duplicate_keys),     cmocka_unit_test(test_enum_errors),
-      cmocka_unit_test(test_did_you_mean),       cmocka_unit_test(test_load_files),
+      cmocka_unit_test(test_full_scene),
+      cmocka_unit_test(test_minimal_scene_defaults),
+      cmocka_unit_test(test_resolution_sets_dx),
+      cmocka_unit_test(test_syntax_errors),
+      cmocka_unit_test(test_unknown_keys),
+      cmocka_unit_test(test_missing_keys),
+      cmocka_unit_test(test_wrong_types),
+      cmocka_unit_test(test_out_of_range),
+      cmocka_unit_test(test_domain_errors),
+      cmocka_unit_test(test_non_finite),
+      cmocka_unit_test(test_duplicate_keys),
+      cmocka_unit_test(test_enum_errors),
+      cmocka_unit_test(test_did_you_mean),
+      cmocka_unit_test(test_load_files),
+      cmocka_unit_test(test_camera),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

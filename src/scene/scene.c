@@ -86,6 +86,8 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->output.vtu = 1;
   scene->output.ply = 0;
   scene->output.stats = 1;
+  scene->camera.set = 0;
+  scene->camera.fov = 35;
 }
 
 void mpm_scene_free(mpm_scene *scene) {

@@ -141,6 +141,13 @@ typedef struct mpm_output_desc {
   int stats;                    /* stats.csv */
 } mpm_output_desc;
 
+/* The view `mpm render` uses (the renderer frames the domain when the scene has none). */
+typedef struct mpm_camera_desc {
+  int set;                  /* 1 when the scene gives a camera */
+  double eye[3], target[3]; /* m */
+  double fov;               /* vertical field of view, degrees, in (1, 170); default 35 */
+} mpm_camera_desc;
+
 typedef struct mpm_solver_desc {
   mpm_kernel_kind kernel;
   mpm_transfer_kind transfer;
@@ -170,6 +177,7 @@ typedef struct mpm_scene {
   mpm_body_desc *bodies;
   mpm_collider_desc *colliders;
   mpm_output_desc output;
+  mpm_camera_desc camera;
 } mpm_scene;
 
 /* Fill every default; arrays empty. */

@@ -29,14 +29,16 @@
 /* The simulation keeps per-frame records. */
 #define MAX_FRAMES 10000000.0
 
-static const char *const TOP_KEYS[] = {"name",      "domain", "gravity",   "time",   "solver",
-                                       "materials", "bodies", "colliders", "output", NULL};
+static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
+                                       "solver", "materials", "bodies",  "colliders",
+                                       "output", "camera",    NULL};
 static const char *const DOMAIN_KEYS[] = {"min", "max", "dx", "resolution", "walls", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
 static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha",  "cfl",
                                           "max_dt", "grid",     "gimp_length", NULL};
 static const char *const OUTPUT_KEYS[] = {"directory", "vtu", "ply", "stats", NULL};
+static const char *const CAMERA_KEYS[] = {"eye", "target", "fov", NULL};
 
 /* Enum spellings, in the order of the enum values of scene.h. */
 const char *const mpm_sj_rule_names[] = {"sticky", "slip", "separate", NULL};
@@ -230,6 +232,27 @@ static int parse_output(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   return 0;
 }
 
+/* camera: {"eye": [x, y, z], "target": [x, y, z], "fov": degrees} for `mpm render`. */
+static int parse_camera(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
+  const cJSON *o = mpm_json_get(root, "camera");
+  if (!o) return 0;
+  size_t old = mpm_json_push_key(c, "camera");
+  mpm_camera_desc *cam = &s->camera;
+  if (mpm_json_expect_object(c, o, "an object with keys eye, target, fov") < 0 ||
+      mpm_json_check_keys(c, o, CAMERA_KEYS, NULL) < 0 ||
+      mpm_json_vec3(c, o, "eye", 1, mpm_json_any("m"), cam->eye) < 0 ||
+      mpm_json_vec3(c, o, "target", 1, mpm_json_any("m"), cam->target) < 0 ||
+      mpm_json_number(c, o, "fov", 0, mpm_json_in('(', 1, 170, ')', "degrees"), &cam->fov) < 0)
+    return -1;
+  if (cam->eye[0] == cam->target[0] && cam->eye[1] == cam->target[1] &&
+      cam->eye[2] == cam->target[2])
+    return mpm_json_fail_at(c, "target", MPM_ERR_INVALID,
+                            "expected a point other than the eye (the camera needs a direction)");
+  cam->set = 1;
+  mpm_json_pop(c, old);
+  return 0;
+}
+
 /* ---- the whole file ------------------------------------------------------------------- */
 
 /* Default name: the file name without directory and extension. */
@@ -255,7 +278,8 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_vec3(c, root, "gravity", 0, mpm_json_any("m/s^2"), s->gravity) < 0 ||
       parse_time(c, root, s) < 0 || parse_solver(c, root, s) < 0 ||
       mpm_sj_parse_materials(c, root, s) < 0 || mpm_sj_parse_bodies(c, root, s) < 0 ||
-      mpm_sj_parse_colliders(c, root, s) < 0 || parse_output(c, root, s) < 0)
+      mpm_sj_parse_colliders(c, root, s) < 0 || parse_output(c, root, s) < 0 ||
+      parse_camera(c, root, s) < 0)
     return -1;
   return 0;
 }
