@@ -39,9 +39,10 @@ int mpm_cmd_check(int argc, char **argv) {
     fprintf(stderr, "mpm: %s\n", err.message);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
-  printf("%s: ok (%zu particles, %d materials, %d colliders, dx = %g m, %d frames)\n", argv[0],
-         sim->particles.count, sim->material_count, sim->collider_count, sim->scene.dx,
-         sim->frame_count);
+  printf("%s: ok (%zu particles, %d materials, %d colliders, dx = %g m, %d frames, about %.0f "
+         "MiB)\n",
+         argv[0], sim->particles.count, sim->material_count, sim->collider_count, sim->scene.dx,
+         sim->frame_count, mpm_scene_memory_estimate(&sim->scene, NULL) / (1024.0 * 1024.0));
   mpm_sim_destroy(sim);
   return MPM_EXIT_OK;
 }

@@ -194,8 +194,37 @@ static void test_blow_up_is_reported(void **state) {
   expect_output("particle id");
 }
 
+/* A scene that needs more memory than the process may use is refused before anything is
+ * allocated or written, with the estimate (MPM_MEMORY_LIMIT stands in for a small machine). */
+static void test_memory_refusal(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("memory");
+  char scene[600], args[1400], out[700];
+  snprintf(scene, sizeof scene, "%s/s.json", dir);
+  write_file(scene, good_scene);
+  snprintf(args, sizeof args, "check '%s'", scene);
+  assert_int_equal(mpm(args), 0);
+  expect_output("MiB)");
+  snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
+  assert_int_equal(mpm_env("MPM_MEMORY_LIMIT=1M", args), 2);
+  expect_output("s.json: the scene needs about");
+  expect_output("this machine has 0.0 GiB available; use a larger dx");
+  snprintf(out, sizeof out, "%s/out", dir);
+  assert_false(exists(out));
+  /* a 1 m cube at dx = 2 mm: a billion particles, more than any machine here */
+  write_file(scene, "{\"domain\": {\"min\": [0,0,0], \"max\": [1.2,1.2,1.2], \"dx\": 0.002},"
+                    " \"time\": {\"end\": 0.1}, \"materials\": [{\"name\": \"j\", \"model\": "
+                    "\"neo_hookean\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
+                    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.6,0.6,0.6],"
+                    " \"half_extent\": [0.5,0.5,0.5]}, \"material\": \"j\"}]}");
+  snprintf(args, sizeof args, "check '%s'", scene);
+  assert_int_equal(mpm(args), 2);
+  expect_output("1e+09 particles");
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_memory_refusal),
       cmocka_unit_test(test_help_and_version),
       cmocka_unit_test(test_missing_file),
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),

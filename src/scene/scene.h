@@ -89,6 +89,7 @@ typedef struct mpm_shape_desc {
      that puts that centre at `center` */
   char mesh_path[MPM_PATH_MAX];
   double mesh_scale;
+  double bounds_lo[3], bounds_hi[3]; /* bodies: the shape's bounding box, set by the loader */
   /* revolve: points (radius, height along axis from center), m, from the axis back to the
      axis (first and last radius 0); the solid is the region the polyline encloses with the
      axis, turned about it */

@@ -338,6 +338,8 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   } else {
     shape_bounds(&b->shape, lo, hi);
   }
+  memcpy(b->shape.bounds_lo, lo, sizeof b->shape.bounds_lo);
+  memcpy(b->shape.bounds_hi, hi, sizeof b->shape.bounds_hi);
   return check_inside(c, s, lo, hi, note);
 }
 

@@ -26,7 +26,9 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   sim->scene = *scene;
   memset(scene, 0, sizeof *scene); /* the simulation owns the arrays now */
   const mpm_scene *sc = &sim->scene;
-  mpm_status st = MPM_OK;
+  /* refuse a scene the machine cannot hold before allocating anything for it */
+  mpm_status st = mpm_scene_check_memory(sc, err);
+  if (st != MPM_OK) goto fail;
 
   /* materials */
   sim->material_count = sc->material_count;

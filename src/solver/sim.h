@@ -62,6 +62,14 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
 /* Turn per-frame writing on into `dir` (created if missing) and write frame 0. */
 mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
 
+/* Memory (memory_estimate.c): the bytes a scene will need (its expected particle count in
+ * *particles when not NULL), the memory this process may use (MPM_MEMORY_LIMIT, else the
+ * machine's available memory), and the check mpm_sim_create_from_scene makes before it
+ * allocates anything: MPM_ERR_INVALID with the estimate when the scene does not fit. */
+double mpm_scene_memory_estimate(const mpm_scene *scene, double *particles);
+double mpm_available_memory(void);
+mpm_status mpm_scene_check_memory(const mpm_scene *scene, mpm_error *err);
+
 /* The time step the CFL condition allows now (before clipping to the frame end). */
 double mpm_sim_cfl_dt(const mpm_sim *sim);
 
