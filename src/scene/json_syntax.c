@@ -71,6 +71,9 @@ static int scan_string(scan *sc) {
             sc->pos += (size_t)k;
             return fail(sc, "four hex digits after \\u", NULL);
           }
+        if (!strncmp(sc->s + sc->pos + 1, "0000", 4)) /* cJSON would cut the string there */
+          return fail(sc, "a character other than \\u0000 (NUL)",
+                      " (strings cannot contain NUL; it would silently cut them short)");
         sc->pos += 5;
         continue;
       }

@@ -475,6 +475,11 @@ static mpm_status ply_header(const char *name, char *text, size_t len, ply_eleme
       if (*format < 0)
         return mpm_error_set(err, MPM_ERR_PARSE, "%s:%ld: 'end_header' before any 'format' line",
                              name, lineno);
+      for (int k = 0; k < *el_count; ++k) /* items without properties carry nothing to read */
+        if (els[k].prop_count == 0 && els[k].count > 0)
+          return mpm_error_set(err, MPM_ERR_PARSE,
+                               "%s: element '%s' declares %ld items but no properties", name,
+                               els[k].name, els[k].count);
       *data = line;
       *lines = lineno;
       return MPM_OK;

@@ -26,6 +26,8 @@
 
 /* Grid coordinates must stay well inside the sparse grid's block keys and an int. */
 #define MAX_CELLS_PER_AXIS (1 << 20)
+/* A scene is a small text: anything larger is a mistake (a mesh or a device given as scene). */
+#define SCENE_MAX_BYTES (64 << 20)
 /* The simulation keeps per-frame records. */
 #define MAX_FRAMES 10000000.0
 
@@ -343,10 +345,20 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
     }
     errno = 0;
     size_t got = fread(buf + len, 1, cap - 1 - len, f);
+    const int has_nul = memchr(buf + len, '\0', got) != NULL;
     len += got;
     if (got == 0) {
       if (ferror(f)) read_errno = errno ? errno : EIO;
       break;
+    }
+    if (has_nul) break; /* binary data (or /dev/zero): reported below, with its position */
+    if (len > SCENE_MAX_BYTES) {
+      free(buf);
+      fclose(f);
+      return mpm_error_set(err, MPM_ERR_INVALID,
+                           "%s: the scene file is larger than %d MiB; expected a JSON scene (mesh "
+                           "data belongs in mesh files)",
+                           path, SCENE_MAX_BYTES >> 20);
     }
   }
   fclose(f);

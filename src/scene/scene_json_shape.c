@@ -87,9 +87,40 @@ static int mesh_bounds(mpm_json_ctx *c, mpm_shape_desc *sh, double lo[3], double
   if (st != MPM_OK)
     return mpm_json_fail_at(c, "file", st, "cannot use mesh file '%s': %s", sh->mesh_path,
                             merr.message);
+  /* a body must enclose a volume: the mesh must be closed (every edge shared by two
+     triangles) and its triangles must span a volume, or inside and outside mean nothing */
+  const long open_edges = mpm_mesh_boundary_edges(&mesh);
+  double area = 0, volume = 0;
+  for (int t = 0; t < mesh.triangle_count; ++t) {
+    const double *a = mesh.vertices + 3 * mesh.triangles[3 * t];
+    const double *b = mesh.vertices + 3 * mesh.triangles[3 * t + 1];
+    const double *q = mesh.vertices + 3 * mesh.triangles[3 * t + 2];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double v[3] = {q[0] - a[0], q[1] - a[1], q[2] - a[2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                         u[0] * v[1] - u[1] * v[0]};
+    area += 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    volume += (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / 6; /* divergence theorem */
+  }
   double mlo[3], mhi[3];
   mpm_mesh_bounds(&mesh, mlo, mhi);
+  const int triangles = mesh.triangle_count;
   mpm_mesh_free(&mesh);
+  const double box = (mhi[0] - mlo[0]) * (mhi[1] - mlo[1]) * (mhi[2] - mlo[2]);
+  if (open_edges > 0)
+    return mpm_json_fail_at(c, "file", MPM_ERR_INVALID,
+                            "mesh file '%s' is not closed: %ld edges belong to one triangle only "
+                            "(a body needs a watertight mesh to tell inside from outside)",
+                            sh->mesh_path, open_edges);
+  if (!(area > 0))
+    return mpm_json_fail_at(c, "file", MPM_ERR_INVALID,
+                            "mesh file '%s' has no triangle of nonzero area (%d triangles)",
+                            sh->mesh_path, triangles);
+  if (!(fabs(volume) > 1e-9 * box) || !(box > 0))
+    return mpm_json_fail_at(c, "file", MPM_ERR_INVALID,
+                            "mesh file '%s' encloses no volume (it is flat or its triangles "
+                            "cancel out)",
+                            sh->mesh_path);
   char ex[3][40], sc[40];
   for (int d = 0; d < 3; ++d) mpm_json_format_short(mhi[d] - mlo[d], ex[d], sizeof ex[d]);
   snprintf(note, note_cap, " (the mesh is %s x %s x %s in file units, times scale %s)", ex[0],
@@ -158,7 +189,8 @@ static int parse_profile(mpm_json_ctx *c, const cJSON *shape, mpm_shape_desc *sh
   sh->profile_count = n;
   for (int a = 0; a + 1 < n; ++a)
     for (int b = a + 2; b + 1 < n; ++b) {
-      if (a == 0 && b == n - 2) continue; /* first and last segments share the axis closure */
+      if (a == 0 && b == n - 2 && sh->profile[0][1] == sh->profile[n - 1][1])
+        continue; /* first and last segments end at the same point on the axis */
       if (segments_meet(sh->profile[a], sh->profile[a + 1], sh->profile[b], sh->profile[b + 1]))
         return mpm_json_fail(c, MPM_ERR_INVALID,
                              "expected a simple outline, but segment %d-%d meets segment %d-%d", a,

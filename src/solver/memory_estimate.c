@@ -1,6 +1,7 @@
 /* memory_estimate.c - how much memory a scene will need, and whether the machine has it, so
  * that a scene too large for the machine is refused before anything is allocated. */
 #include "solver/sim.h"
+#include "grid/grid.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -39,11 +40,20 @@ static double body_particles(const mpm_scene *s, int b) {
   return v / (s->dx * s->dx * s->dx) * body->particles_per_cell;
 }
 
+/* Nodes of the dense reference grid (solver.grid = dense), 0 for the sparse grid. */
+static double dense_nodes(const mpm_scene *s) {
+  if (s->solver.grid != MPM_GRID_DENSE) return 0;
+  double n = 1;
+  for (int d = 0; d < 3; ++d) n *= (s->domain_max[d] - s->domain_min[d]) / s->dx + 4;
+  return n;
+}
+
 double mpm_scene_memory_estimate(const mpm_scene *s, double *particles) {
   double n = 0;
   for (int b = 0; b < s->body_count; ++b) n += body_particles(s, b);
   if (particles) *particles = n;
-  return n * BYTES_PER_PARTICLE + 64.0 * 1024 * 1024; /* plus the program itself */
+  return n * BYTES_PER_PARTICLE + dense_nodes(s) * MPM_GRID_CHANNELS * sizeof(mpm_real) +
+         64.0 * 1024 * 1024; /* plus the program itself */
 }
 
 /* MPM_MEMORY_LIMIT (bytes, with an optional K, M or G suffix) if set, else MemAvailable from
@@ -77,12 +87,17 @@ mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
   const double need = mpm_scene_memory_estimate(s, &n), have = mpm_available_memory();
   if (have > 0 && need > have) {
     const double gib = 1024.0 * 1024 * 1024;
+    const double dense = dense_nodes(s);
+    char grid[160] = "";
+    if (dense > 0)
+      snprintf(grid, sizeof grid, ", and a dense grid (solver.grid) of %.3g nodes: %.3g GiB", dense,
+               dense * MPM_GRID_CHANNELS * sizeof(mpm_real) / gib);
     return mpm_error_set(err, MPM_ERR_INVALID,
-                         "%s: the scene needs about %.1f GiB (%.3g particles at about %.0f bytes "
-                         "each) but this machine has %.1f GiB available; use a larger dx, fewer "
-                         "particles_per_cell or smaller bodies",
-                         s->path[0] ? s->path : "scene", need / gib, n, BYTES_PER_PARTICLE,
-                         have / gib);
+                         "%s: the scene needs about %.3g GiB (%.3g particles at about %.0f bytes "
+                         "each%s) but this machine has %.1f GiB available; use a larger dx, fewer "
+                         "particles_per_cell or smaller bodies%s",
+                         s->path[0] ? s->path : "scene", need / gib, n, BYTES_PER_PARTICLE, grid,
+                         have / gib, dense > 0 ? ", or the sparse grid" : "");
   }
   return MPM_OK;
 }

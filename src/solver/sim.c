@@ -19,6 +19,36 @@ static mpm_status oom(mpm_error *err, const char *what) {
   return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory allocating %s", what);
 }
 
+/* More steps than this in one frame means the run would not finish in any useful time. */
+#define MAX_STEPS_PER_FRAME 1e7
+
+/* A scene whose CFL step (from the stiffest material's wave speed) or solver.max_dt makes a
+ * frame take more than MAX_STEPS_PER_FRAME steps is refused, naming what sets the step: such
+ * a run would look like a hang. Particle speeds only shorten the step further. */
+static mpm_status check_steps_per_frame(const mpm_sim *sim, mpm_error *err) {
+  const mpm_scene *sc = &sim->scene;
+  double c = 0;
+  int stiff = -1;
+  for (int m = 0; m < sim->material_count; ++m)
+    if (sim->materials[m].wave_speed > c) c = sim->materials[m].wave_speed, stiff = m;
+  const double dt_cfl = c > 0 ? sc->solver.cfl * sc->dx / c : INFINITY;
+  const double dt = sc->solver.max_dt > 0 ? fmin(dt_cfl, sc->solver.max_dt) : dt_cfl;
+  const double steps = 1.0 / (sc->fps * dt);
+  if (!(steps > MAX_STEPS_PER_FRAME)) return MPM_OK;
+  if (sc->solver.max_dt > 0 && sc->solver.max_dt <= dt_cfl)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: solver.max_dt = %g s makes %.3g steps per frame (at %g frames per "
+                         "second); expected at most %g: raise solver.max_dt",
+                         sc->path, sc->solver.max_dt, steps, sc->fps, MAX_STEPS_PER_FRAME);
+  return mpm_error_set(err, MPM_ERR_INVALID,
+                       "%s: materials[%d] ('%s'): E = %g Pa and density %g kg/m^3 give a wave "
+                       "speed of %.3g m/s, so the CFL step is %.3g s and a frame takes %.3g "
+                       "steps; expected at most %g: lower E, raise the density or dx, or lower "
+                       "the frame rate",
+                       sc->path, stiff, sc->materials[stiff].name, sc->materials[stiff].E,
+                       sc->materials[stiff].density, c, dt_cfl, steps, MAX_STEPS_PER_FRAME);
+}
+
 mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error *err) {
   *out = NULL;
   mpm_sim *sim = calloc(1, sizeof *sim);
@@ -47,6 +77,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       goto fail;
     }
   }
+  st = check_steps_per_frame(sim, err);
+  if (st != MPM_OK) goto fail;
 
   /* colliders */
   sim->collider_count = sc->collider_count;
