@@ -103,41 +103,57 @@ static mpm_material bench_material(mpm_model_kind kind) {
   return m;
 }
 
-/* Seconds for one kirchhoff_batch pass over all particles; *sink keeps the result alive. */
-static double time_stress(const mpm_material *m, mpm_real *const F[9], const mpm_real *plastic,
-                          long n, double *sink) {
-  const long chunks = (n + MPM_STRESS_CHUNK - 1) / MPM_STRESS_CHUNK;
-  double acc = 0;
-  const double t0 = mpm_wall_seconds();
-#pragma omp parallel for schedule(static) reduction(+ : acc)
-  for (long c = 0; c < chunks; ++c) {
-    const long base = c * MPM_STRESS_CHUNK;
-    const int k = (int)(n - base < MPM_STRESS_CHUNK ? n - base : MPM_STRESS_CHUNK);
-    _Alignas(MPM_ALIGN) mpm_real tau[9][MPM_STRESS_CHUNK];
-    const mpm_real *Fc[9];
-    for (int q = 0; q < 9; ++q) Fc[q] = F[q] + base;
-    m->model->kirchhoff_batch(m, k, Fc, plastic + base, tau);
-    acc += (double)tau[0][0] + (double)tau[8][k - 1];
-  }
-  const double t1 = mpm_wall_seconds();
-  *sink += acc;
-  return t1 - t0;
+/* What a timed pass works on: the material, the arrays, and (return maps) their copies. */
+typedef struct pass_ctx {
+  const mpm_material *m;
+  mpm_real *const *F; /* 9 component arrays */
+  mpm_real *plastic;
+} pass_ctx;
+
+/* One chunk of k particles from `base`; returns a value that depends on the result. */
+typedef double (*chunk_fn)(const pass_ctx *p, long base, int k);
+
+static double chunk_stress(const pass_ctx *p, long base, int k) {
+  _Alignas(MPM_ALIGN) mpm_real tau[9][MPM_STRESS_CHUNK];
+  const mpm_real *Fc[9];
+  for (int q = 0; q < 9; ++q) Fc[q] = p->F[q] + base;
+  p->m->model->kirchhoff_batch(p->m, k, Fc, p->plastic + base, tau);
+  return (double)tau[0][0] + (double)tau[8][k - 1];
 }
 
-/* Seconds for one return_map pass over all particles (in place on Fw and pw). */
-static double time_return_map(const mpm_material *m, mpm_real *const Fw[9], mpm_real *pw, long n,
-                              double *sink) {
+static double chunk_return_map(const pass_ctx *p, long base, int k) {
+  mpm_real *Fc[9];
+  for (int q = 0; q < 9; ++q) Fc[q] = p->F[q] + base;
+  p->m->model->return_map(p->m, k, Fc, p->plastic + base);
+  return (double)p->plastic[base];
+}
+
+/* U, V and sigma written to stack buffers, as a stress kernel would keep them. */
+static double chunk_svd_batch(const pass_ctx *p, long base, int k) {
+  _Alignas(MPM_ALIGN) mpm_real U[9][MPM_STRESS_CHUNK], V[9][MPM_STRESS_CHUNK],
+      s[3][MPM_STRESS_CHUNK];
+  const mpm_real *Fc[9];
+  mpm_real *Up[9], *Vp[9], *sp[3];
+  for (int q = 0; q < 9; ++q) {
+    Fc[q] = p->F[q] + base;
+    Up[q] = U[q];
+    Vp[q] = V[q];
+  }
+  for (int q = 0; q < 3; ++q) sp[q] = s[q];
+  mpm_svd3_batch(k, Fc, Up, sp, Vp);
+  return (double)s[2][0] + (double)U[0][k - 1] + (double)V[8][0];
+}
+
+/* Seconds for one pass of `fn` over n particles in chunks of MPM_STRESS_CHUNK spread over the
+ * threads; *sink keeps the results alive. */
+static double time_chunks(chunk_fn fn, const pass_ctx *p, long n, double *sink) {
   const long chunks = (n + MPM_STRESS_CHUNK - 1) / MPM_STRESS_CHUNK;
   double acc = 0;
   const double t0 = mpm_wall_seconds();
 #pragma omp parallel for schedule(static) reduction(+ : acc)
   for (long c = 0; c < chunks; ++c) {
     const long base = c * MPM_STRESS_CHUNK;
-    const int k = (int)(n - base < MPM_STRESS_CHUNK ? n - base : MPM_STRESS_CHUNK);
-    mpm_real *Fc[9];
-    for (int q = 0; q < 9; ++q) Fc[q] = Fw[q] + base;
-    m->model->return_map(m, k, Fc, pw + base);
-    acc += (double)pw[base];
+    acc += fn(p, base, (int)(n - base < MPM_STRESS_CHUNK ? n - base : MPM_STRESS_CHUNK));
   }
   const double t1 = mpm_wall_seconds();
   *sink += acc;
@@ -154,34 +170,6 @@ static double time_svd(mpm_real *const F[9], long n, double *sink) {
     for (int q = 0; q < 9; ++q) A[q] = F[q][i];
     mpm_svd3(A, U, s, V);
     acc += (double)s[2] + (double)U[0] + (double)V[8];
-  }
-  const double t1 = mpm_wall_seconds();
-  *sink += acc;
-  return t1 - t0;
-}
-
-/* Seconds for mpm_svd3_batch over all particles, in chunks of MPM_STRESS_CHUNK (U, V and
- * sigma written to stack buffers, as a stress kernel would keep them). */
-static double time_svd_batch(mpm_real *const F[9], long n, double *sink) {
-  const long chunks = (n + MPM_STRESS_CHUNK - 1) / MPM_STRESS_CHUNK;
-  double acc = 0;
-  const double t0 = mpm_wall_seconds();
-#pragma omp parallel for schedule(static) reduction(+ : acc)
-  for (long c = 0; c < chunks; ++c) {
-    const long base = c * MPM_STRESS_CHUNK;
-    const int k = (int)(n - base < MPM_STRESS_CHUNK ? n - base : MPM_STRESS_CHUNK);
-    _Alignas(MPM_ALIGN) mpm_real U[9][MPM_STRESS_CHUNK], V[9][MPM_STRESS_CHUNK],
-        s[3][MPM_STRESS_CHUNK];
-    const mpm_real *Fc[9];
-    mpm_real *Up[9], *Vp[9], *sp[3];
-    for (int q = 0; q < 9; ++q) {
-      Fc[q] = F[q] + base;
-      Up[q] = U[q];
-      Vp[q] = V[q];
-    }
-    for (int q = 0; q < 3; ++q) sp[q] = s[q];
-    mpm_svd3_batch(k, Fc, Up, sp, Vp);
-    acc += (double)s[2][0] + (double)U[0][k - 1] + (double)V[8][0];
   }
   const double t1 = mpm_wall_seconds();
   *sink += acc;
@@ -263,14 +251,16 @@ int mpm_bench_stress(int argc, char **argv) {
     for (long i = 0; i < n; ++i) plastic[i] = model->plastic_initial;
     for (int t = 0; t < nthreads; ++t) {
       mpm_set_threads(threads[t]);
-      time_stress(&m, F, plastic, n, &sink); /* warm-up */
-      for (int r = 0; r < repeats; ++r) tim[r] = time_stress(&m, F, plastic, n, &sink) * 1e9 / n;
+      const pass_ctx stress = {&m, F, plastic}, rmap = {&m, Fw, pw};
+      time_chunks(chunk_stress, &stress, n, &sink); /* warm-up */
+      for (int r = 0; r < repeats; ++r)
+        tim[r] = time_chunks(chunk_stress, &stress, n, &sink) * 1e9 / n;
       const double stress_ns = bench_median(tim, repeats);
       char rm[32] = "-";
       if (model->return_map) {
         for (int r = -1; r < repeats; ++r) { /* r = -1: warm-up */
           copy_state(F, plastic, Fw, pw, n);
-          const double s = time_return_map(&m, Fw, pw, n, &sink) * 1e9 / n;
+          const double s = time_chunks(chunk_return_map, &rmap, n, &sink) * 1e9 / n;
           if (r >= 0) tim[r] = s;
         }
         snprintf(rm, sizeof rm, "%.1f", bench_median(tim, repeats));
@@ -288,8 +278,10 @@ int mpm_bench_stress(int argc, char **argv) {
     time_svd(F, n, &sink); /* warm-up */
     for (int r = 0; r < repeats; ++r) tim[r] = time_svd(F, n, &sink) * 1e9 / n;
     printf("%-18s %7d %12.1f\n", "mpm_svd3", threads[t], bench_median(tim, repeats));
-    time_svd_batch(F, n, &sink); /* warm-up */
-    for (int r = 0; r < repeats; ++r) tim[r] = time_svd_batch(F, n, &sink) * 1e9 / n;
+    const pass_ctx svd = {NULL, F, NULL};
+    time_chunks(chunk_svd_batch, &svd, n, &sink); /* warm-up */
+    for (int r = 0; r < repeats; ++r)
+      tim[r] = time_chunks(chunk_svd_batch, &svd, n, &sink) * 1e9 / n;
     printf("%-18s %7d %12.1f\n", "mpm_svd3_batch", threads[t], bench_median(tim, repeats));
     fflush(stdout);
   }

@@ -42,7 +42,7 @@ mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int widt
   const double half_v = 0.5 * cam.fov_deg * 3.14159265358979323846 / 180;
   const double half_h = atan(tan(half_v) * width / height);
   const double dist = 0.85 * r / sin(fmin(half_v, half_h)); /* a box fills less than its sphere */
-  double dir[3] = {0.55, 0.5, 1.0}; /* front right, above */
+  double dir[3] = {0.55, 0.5, 1.0};                         /* front right, above */
   normalize(dir);
   for (int d = 0; d < 3; ++d) {
     cam.target[d] = c[d];
