@@ -7,7 +7,7 @@ DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
 DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng-dev zlib1g-dev \
-	gnuplot-nox python3-vtk9
+	libhdf5-dev gnuplot-nox python3-vtk9
 
 .PHONY: all deps build build-double build-sanitize demo test test-float test-double \
 	test-sanitize bench clean format valgrind

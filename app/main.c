@@ -12,10 +12,13 @@ static void usage(FILE *out) {
           "mpm %s - Material Point Method simulation engine (%s build)\n"
           "\n"
           "usage:\n"
-          "  mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--render] [--quiet]\n"
-          "      simulate the scene, writing frames (VTU + PVD, PLY, stats.csv) and a copy of\n"
-          "      the scene (scene.json) to DIR (default: the scene's output.directory);\n"
-          "      --frames stops after N frames; --render then runs `mpm render DIR`\n"
+          "  mpm run SCENE.json [-o DIR | --resume DIR] [--threads N] [--frames N] [--render]\n"
+          "          [--quiet]\n"
+          "      simulate the scene, writing frames (VTU + PVD, PLY, stats.csv), checkpoints\n"
+          "      (checkpoint_*.h5) and a copy of the scene (scene.json) to DIR (default: the\n"
+          "      scene's output.directory); --resume continues the run in DIR from its newest\n"
+          "      checkpoint; --frames stops after N frames; --render then runs `mpm render DIR`;\n"
+          "      Ctrl-C or SIGTERM writes a checkpoint and stops (exit 130 or 143)\n"
           "  mpm check SCENE.json\n"
           "      validate a scene only: nothing is simulated or written\n"
           "  mpm bench transfer [--threads LIST] [--repeats N] [--kernel K] [--grid G]\n"
@@ -34,7 +37,8 @@ static void usage(FILE *out) {
           "      to OUTDIR/plots/*.png with gnuplot\n"
           "  mpm --help | --version\n"
           "\n"
-          "exit codes: 0 success, 1 simulation failure, 2 usage or input error\n",
+          "exit codes: 0 success, 1 simulation failure, 2 usage or input error,\n"
+          "            128 + N stopped by signal N after writing a checkpoint\n",
           mpm_version(), mpm_real_type());
 }
 

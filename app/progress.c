@@ -11,6 +11,8 @@ void mpm_progress_begin(mpm_progress *p, mpm_progress_mode mode, int frames, siz
   p->start = p->last_time = mpm_wall_seconds();
   p->elapsed = 0;
   p->last_steps = 0;
+  p->first_frame = 0;
+  p->first_steps = 0;
   p->drawn = 0;
 }
 
@@ -31,8 +33,9 @@ void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t st
   const double now = mpm_wall_seconds();
   p->elapsed = now - p->start;
   if (p->mode == MPM_PROGRESS_QUIET) return;
-  const double rate = p->elapsed > 0 ? (double)steps / p->elapsed : 0;
-  const double eta = frame > 0 ? p->elapsed / frame * (p->frames - frame) : -1;
+  const double rate = p->elapsed > 0 ? (double)(steps - p->first_steps) / p->elapsed : 0;
+  const int done = frame - p->first_frame;
+  const double eta = done > 0 ? p->elapsed / done * (p->frames - frame) : -1;
   char eta_s[32];
   format_eta(eta, eta_s, sizeof eta_s);
   if (p->mode == MPM_PROGRESS_BAR) {

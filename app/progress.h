@@ -11,6 +11,8 @@ typedef enum { MPM_PROGRESS_QUIET, MPM_PROGRESS_LINES, MPM_PROGRESS_BAR } mpm_pr
 typedef struct mpm_progress {
   mpm_progress_mode mode;
   int frames;
+  int first_frame;     /* frame the run started (or resumed) from */
+  int64_t first_steps; /* steps taken before it */
   double start, elapsed;
   int64_t last_steps;
   double last_time;

@@ -1,14 +1,36 @@
 /* run.c - `mpm run` and `mpm check`: load and validate a scene, simulate it frame by frame
  * with a progress display, write the outputs. */
+#define _POSIX_C_SOURCE 200809L
+
 #include "cli.h"
 #include "progress.h"
 #include "scene_copy.h"
 #include "core/parallel.h"
 #include "solver/sim.h"
 
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
+
+/* The signal that asked the run to stop (SIGINT, SIGTERM), or 0. The handler only records it;
+ * the frame loop sees it between two steps, writes a checkpoint and exits. A second signal
+ * gets the default action (SA_RESETHAND): the atomic writes keep everything on disk whole. */
+static volatile int stop_signal;
+
+static void on_stop_signal(int sig) {
+  stop_signal = sig;
+}
+
+static void catch_stop_signals(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_stop_signal;
+  sa.sa_flags = SA_RESETHAND;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
 
 static mpm_status load(const char *path, mpm_sim **sim, mpm_error *err) {
   mpm_scene scene;
@@ -47,8 +69,26 @@ int mpm_cmd_check(int argc, char **argv) {
   return MPM_EXIT_OK;
 }
 
+/* After a stop signal: checkpoint the state between the two steps where the run stopped and say
+ * how to continue. Exit status 128 + the signal, as shells report a signal's end. */
+static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
+  char path[MPM_PATH_MAX + 32];
+  const char *name = sig == SIGTERM ? "SIGTERM" : "SIGINT";
+  if (mpm_sim_write_checkpoint(sim, path, sizeof path) != MPM_OK) {
+    fprintf(stderr, "mpm: stopped by %s at step %lld, but the checkpoint failed: %s\n", name,
+            (long long)sim->steps, mpm_sim_last_error(sim));
+    return MPM_EXIT_FAILURE;
+  }
+  fprintf(stderr,
+          "mpm: stopped by %s at step %lld (t = %.6g s, %d of %d frames done); checkpoint %s\n"
+          "mpm: continue with: mpm run %s --resume %s\n",
+          name, (long long)sim->steps, sim->time, sim->frame, sim->frame_count, path, scene_path,
+          sim->output_dir);
+  return 128 + sig;
+}
+
 int mpm_cmd_run(int argc, char **argv) {
-  const char *scene_path = NULL, *out_dir = NULL;
+  const char *scene_path = NULL, *out_dir = NULL, *resume_dir = NULL;
   int threads = 0, quiet = 0, max_frames = 0, render = 0;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
@@ -57,6 +97,12 @@ int mpm_cmd_run(int argc, char **argv) {
         return MPM_EXIT_USAGE;
       }
       out_dir = argv[++i];
+    } else if (!strcmp(argv[i], "--resume")) {
+      if (i + 1 >= argc) {
+        fprintf(stderr, "mpm run: --resume needs the output directory of the run to continue\n");
+        return MPM_EXIT_USAGE;
+      }
+      resume_dir = argv[++i];
     } else if (!strcmp(argv[i], "--threads")) {
       if (mpm_cli_parse_int("--threads", i + 1 < argc ? argv[i + 1] : NULL, 1, 1024, &threads))
         return MPM_EXIT_USAGE;
@@ -80,8 +126,13 @@ int mpm_cmd_run(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR] [--threads N] [--frames N] [--render] "
-                    "[--quiet]\n");
+    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR | --resume DIR] [--threads N] [--frames N] "
+                    "[--render] [--quiet]\n");
+    return MPM_EXIT_USAGE;
+  }
+  if (resume_dir && out_dir && strcmp(resume_dir, out_dir) != 0) {
+    fprintf(stderr, "mpm run: --resume %s continues in that directory; -o %s cannot move it\n",
+            resume_dir, out_dir);
     return MPM_EXIT_USAGE;
   }
   if (threads > 0) mpm_set_threads(threads);
@@ -95,18 +146,37 @@ int mpm_cmd_run(int argc, char **argv) {
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
   if (max_frames > 0 && max_frames < sim->frame_count) sim->frame_count = max_frames;
-  st = mpm_sim_enable_output(sim, out_dir);
-  if (st == MPM_OK) st = mpm_write_scene_copy(scene_path, &sim->scene, sim->output_dir, &err);
-  if (st != MPM_OK) {
-    fprintf(stderr, "mpm: %s\n", err.message[0] ? err.message : mpm_sim_last_error(sim));
-    mpm_sim_destroy(sim);
-    return MPM_EXIT_FAILURE;
+  char checkpoint[MPM_PATH_MAX + 32] = "";
+  if (resume_dir) {
+    st = mpm_sim_resume(sim, resume_dir, checkpoint, sizeof checkpoint);
+    if (st != MPM_OK) {
+      fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
+      mpm_sim_destroy(sim);
+      return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
+    }
+  } else {
+    st = mpm_sim_enable_output(sim, out_dir);
+    if (st == MPM_OK) st = mpm_write_scene_copy(scene_path, &sim->scene, sim->output_dir, &err);
+    if (st != MPM_OK) {
+      fprintf(stderr, "mpm: %s\n", err.message[0] ? err.message : mpm_sim_last_error(sim));
+      mpm_sim_destroy(sim);
+      return MPM_EXIT_FAILURE;
+    }
   }
+  stop_signal = 0;
+  catch_stop_signals();
+  mpm_sim_set_interrupt(sim, &stop_signal);
   mpm_progress pr;
   mpm_progress_begin(&pr,
                      quiet ? MPM_PROGRESS_QUIET
                            : (isatty(STDERR_FILENO) ? MPM_PROGRESS_BAR : MPM_PROGRESS_LINES),
                      sim->frame_count, sim->particles.count);
+  pr.first_frame = sim->frame;
+  pr.first_steps = sim->steps;
+  if (!quiet && resume_dir)
+    fprintf(stderr, "mpm: resuming %s from %s: frame %d of %d, t = %.6g s, step %lld\n",
+            scene_path, checkpoint, sim->frame, sim->frame_count, sim->time,
+            (long long)sim->steps);
   if (!quiet)
     fprintf(stderr, "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d threads, %s)\n",
             scene_path, sim->particles.count, sim->scene.dx, sim->frame_count, sim->output_dir,
@@ -114,9 +184,18 @@ int mpm_cmd_run(int argc, char **argv) {
   int code = MPM_EXIT_OK;
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
     st = mpm_sim_advance_frame(sim);
+    if (st == MPM_ERR_INTERRUPTED) {
+      mpm_progress_end(&pr);
+      code = interrupted(sim, scene_path, stop_signal);
+      break;
+    }
     if (st != MPM_OK) {
       mpm_progress_end(&pr);
       fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
+      if (sim->frame > 0 || sim->written_frames > 0)
+        fprintf(stderr, "mpm: the frames up to frame_%04d are complete%s%s\n",
+                sim->written_frames - 1, sim->last_checkpoint[0] ? "; the last checkpoint is " : "",
+                sim->last_checkpoint);
       code = MPM_EXIT_FAILURE;
       break;
     }

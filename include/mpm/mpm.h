@@ -25,6 +25,7 @@ typedef enum mpm_status {
   MPM_ERR_INVALID = 3,  /* a value is out of range or a key is unknown */
   MPM_ERR_NOMEM = 4,    /* an allocation failed */
   MPM_ERR_UNSTABLE = 5, /* the simulation produced a non-finite or runaway value */
+  MPM_ERR_INTERRUPTED = 6, /* the caller's interrupt flag was raised (between two steps) */
 } mpm_status;
 
 /// Human-readable name of a status ("ok", "parse error", ...). Static storage.
@@ -60,6 +61,20 @@ double mpm_sim_time(const mpm_sim *sim);
 int64_t mpm_sim_steps(const mpm_sim *sim);
 int mpm_sim_frame(const mpm_sim *sim);
 int mpm_sim_frame_count(const mpm_sim *sim);
+
+/// Checkpoints (HDF5, see docs/scene-format.md "Checkpoints"). Write the complete state into
+/// the output directory as checkpoint_<steps>.h5, atomically, keeping the two newest; the
+/// path written is copied to `path` (of `cap` bytes, may be NULL). Needs output enabled.
+mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap);
+/// Replace the state of a freshly created simulation with the newest valid checkpoint in
+/// `dir` (older ones are tried when the newest is damaged) and continue writing frames there.
+/// The scene must be the one the checkpoint was written from. The checkpoint used is copied
+/// to `path` (may be NULL). The run then continues bit-identically to an uninterrupted one.
+mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap);
+/// Stop between two steps when *flag becomes nonzero (set it from a signal handler):
+/// mpm_sim_advance_frame then returns MPM_ERR_INTERRUPTED with the state consistent, ready
+/// for mpm_sim_write_checkpoint. NULL removes the flag.
+void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag);
 
 /// Read-only view of the particles, valid until the next call that advances sim.
 /// Components are separate arrays (structure of arrays) of `count` entries each, in the

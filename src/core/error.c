@@ -36,6 +36,8 @@ const char *mpm_status_string(mpm_status s) {
     return "out of memory";
   case MPM_ERR_UNSTABLE:
     return "simulation unstable";
+  case MPM_ERR_INTERRUPTED:
+    return "interrupted";
   }
   return "unknown status";
 }

@@ -82,10 +82,13 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->solver.cfl = 0.4;
   scene->solver.max_dt = 0.0;
   scene->solver.gimp_length = 0.0;
+  scene->solver.on_instability = MPM_INSTABILITY_STOP;
+  scene->solver.max_retries = 8;
   snprintf(scene->output.directory, sizeof scene->output.directory, "out");
   scene->output.vtu = 1;
   scene->output.ply = 0;
   scene->output.stats = 1;
+  scene->output.checkpoint_every = 10;
   scene->camera.set = 0;
   scene->camera.fov = 35;
 }

@@ -10,6 +10,7 @@
 #include "core/error.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
 #define MPM_NAME_MAX 64
 #define MPM_PATH_MAX 1024
@@ -140,6 +141,7 @@ typedef struct mpm_output_desc {
   int vtu;                      /* per-frame VTU + PVD index */
   int ply;                      /* per-frame PLY points */
   int stats;                    /* stats.csv */
+  int checkpoint_every;         /* HDF5 checkpoint every this many frames; 0 = only on a signal */
 } mpm_output_desc;
 
 /* The view `mpm render` uses (the renderer frames the domain when the scene has none). */
@@ -149,6 +151,13 @@ typedef struct mpm_camera_desc {
   double fov;               /* vertical field of view, degrees, in (1, 170); default 35 */
 } mpm_camera_desc;
 
+/* What a step that goes unstable (non-finite state, a particle leaving the domain, a CFL
+ * violation, an inversion the model cannot take) does. */
+typedef enum mpm_instability_action {
+  MPM_INSTABILITY_STOP = 0,  /* stop the run with a diagnostic */
+  MPM_INSTABILITY_RETRY = 1, /* redo the step from its start with half the dt */
+} mpm_instability_action;
+
 typedef struct mpm_solver_desc {
   mpm_kernel_kind kernel;
   mpm_transfer_kind transfer;
@@ -157,10 +166,13 @@ typedef struct mpm_solver_desc {
   double cfl;         /* (0, 1], default 0.4 */
   double max_dt;      /* s, upper bound on the step (0 = only CFL and frame) */
   double gimp_length; /* uGIMP particle box side L_p, m (0 = dx / cbrt(ppc) of the bodies) */
+  mpm_instability_action on_instability; /* stop (default) or retry the step with a smaller dt */
+  int max_retries;                       /* halvings of dt tried for one step, default 8 */
 } mpm_solver_desc;
 
 typedef struct mpm_scene {
   char path[MPM_PATH_MAX]; /* the scene file, for messages; mesh paths resolve against it */
+  uint64_t source_hash;    /* FNV-1a of the scene text: a checkpoint resumes only the same scene */
   char name[MPM_NAME_MAX];
   /* domain */
   double domain_min[3], domain_max[3]; /* m */

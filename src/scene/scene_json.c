@@ -13,6 +13,7 @@
  * domain, time, solver and output objects, and the tables and helpers the other parts share;
  * materials are checked in scene_json_material.c, shapes, bodies and colliders in
  * scene_json_shape.c (shared declarations: scene_json_parts.h). */
+#include "core/hash.h"
 #include "scene/json_check.h"
 #include "scene/scene.h"
 #include "scene/scene_json_parts.h"
@@ -37,9 +38,12 @@ static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
 static const char *const DOMAIN_KEYS[] = {"min", "max", "dx", "resolution", "walls", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
-static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha",  "cfl",
-                                          "max_dt", "grid",     "gimp_length", NULL};
-static const char *const OUTPUT_KEYS[] = {"directory", "vtu", "ply", "stats", NULL};
+static const char *const SOLVER_KEYS[] = {"kernel",      "transfer",       "flip_alpha",
+                                          "cfl",         "max_dt",         "grid",
+                                          "gimp_length", "on_instability", "max_retries",
+                                          NULL};
+static const char *const OUTPUT_KEYS[] = {"directory", "vtu", "ply", "stats", "checkpoint_every",
+                                          NULL};
 static const char *const CAMERA_KEYS[] = {"eye", "target", "fov", NULL};
 
 /* Enum spellings, in the order of the enum values of scene.h. */
@@ -47,6 +51,7 @@ const char *const mpm_sj_rule_names[] = {"sticky", "slip", "separate", NULL};
 static const char *const KERNEL_NAMES[] = {"linear", "quadratic", "cubic", "ugimp", NULL};
 static const char *const TRANSFER_NAMES[] = {"apic", "flip", NULL};
 static const char *const GRID_NAMES[] = {"sparse", "dense", NULL};
+static const char *const INSTABILITY_NAMES[] = {"stop", "retry", NULL};
 
 const char mpm_sj_axis_name[3] = {'x', 'y', 'z'};
 
@@ -199,6 +204,8 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   size_t old = mpm_json_push_key(c, "solver");
   mpm_solver_desc *d = &s->solver;
   int kernel = (int)d->kernel, transfer = (int)d->transfer, grid = (int)d->grid;
+  int on_instability = (int)d->on_instability;
+  long long retries = d->max_retries;
   if (mpm_json_expect_object(c, sv, "an object of solver options") < 0 ||
       mpm_json_check_keys(c, sv, SOLVER_KEYS, NULL) < 0 ||
       mpm_json_enum(c, sv, "kernel", 0, KERNEL_NAMES, &kernel) < 0 ||
@@ -210,8 +217,13 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_enum(c, sv, "grid", 0, GRID_NAMES, &grid) < 0 ||
       mpm_json_number(c, sv, "gimp_length", 0,
                       mpm_json_in('[', 0, s->dx, ']', "m, at most dx; 0 = automatic"),
-                      &d->gimp_length) < 0)
+                      &d->gimp_length) < 0 ||
+      mpm_json_enum(c, sv, "on_instability", 0, INSTABILITY_NAMES, &on_instability) < 0 ||
+      mpm_json_integer(c, sv, "max_retries", 0, mpm_json_in('[', 1, 30, ']', "halvings of dt"),
+                       &retries) < 0)
     return -1;
+  d->max_retries = (int)retries;
+  d->on_instability = (mpm_instability_action)on_instability;
   d->kernel = (mpm_kernel_kind)kernel;
   d->transfer = (mpm_transfer_kind)transfer;
   d->grid = (mpm_grid_kind)grid;
@@ -223,13 +235,18 @@ static int parse_output(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   const cJSON *o = mpm_json_get(root, "output");
   if (!o) return 0;
   size_t old = mpm_json_push_key(c, "output");
-  if (mpm_json_expect_object(c, o, "an object with keys directory, vtu, ply, stats") < 0 ||
+  long long every = s->output.checkpoint_every;
+  if (mpm_json_expect_object(c, o, "an object with keys directory, vtu, ply, stats, checkpoint_every") < 0 ||
       mpm_json_check_keys(c, o, OUTPUT_KEYS, NULL) < 0 ||
       mpm_json_string(c, o, "directory", 0, s->output.directory, sizeof s->output.directory) < 0 ||
       mpm_json_bool(c, o, "vtu", 0, &s->output.vtu) < 0 ||
       mpm_json_bool(c, o, "ply", 0, &s->output.ply) < 0 ||
-      mpm_json_bool(c, o, "stats", 0, &s->output.stats) < 0)
+      mpm_json_bool(c, o, "stats", 0, &s->output.stats) < 0 ||
+      mpm_json_integer(c, o, "checkpoint_every", 0,
+                       mpm_json_in('[', 0, 1000000, ']', "frames, 0 = only on a signal"),
+                       &every) < 0)
     return -1;
+  s->output.checkpoint_every = (int)every;
   mpm_json_pop(c, old);
   return 0;
 }
@@ -295,6 +312,7 @@ mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages,
   mpm_json_ctx_init(&ctx, file, &local);
   mpm_scene_default(scene);
   if (!json_text) json_text = "";
+  scene->source_hash = mpm_fnv1a64(json_text, strlen(json_text));
   if (strlen(file) >= sizeof scene->path) {
     mpm_error_set(&local, MPM_ERR_INVALID, "%.100s...: the scene path is longer than %d bytes",
                   file, MPM_PATH_MAX - 1);

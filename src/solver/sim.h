@@ -52,6 +52,12 @@ struct mpm_sim {
   char (*frame_files)[64];
   mpm_stats_row *stats;
   double frame_wall_start;
+  /* robustness (guard.c, sim_checkpoint.c) */
+  int dt_level;                 /* dt is halved this many times after an unstable step */
+  long long retries;            /* steps redone with a smaller dt, over the run */
+  mpm_particles backup;         /* the particles at the start of a step (retry mode) */
+  const volatile int *interrupt;
+  char last_checkpoint[MPM_PATH_MAX + 32];
   mpm_error error;
 };
 
@@ -79,6 +85,15 @@ typedef struct mpm_diagnostics {
   double momentum[3], angular_momentum[3]; /* about the origin; APIC affine part included */
 } mpm_diagnostics;
 mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim);
+
+/* One step with the instability guards (guard.c): the raw step (step.c), then a scan for
+ * non-finite values, particles leaving the domain, CFL violations and inversions the model
+ * cannot take; with solver.on_instability = "retry" an unstable step is undone and redone with
+ * half the dt, up to solver.max_retries times. */
+mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt);
+
+/* Output bookkeeping for frame_count + 1 records (sim_output.c). */
+mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);
 
 /* Write the current state as the next frame (VTU, PLY, PVD, stats) into the output dir. */
 mpm_status mpm_sim_write_frame(mpm_sim *sim);

@@ -8,16 +8,24 @@
 #include <stdlib.h>
 #include <string.h>
 
+mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
+  free(sim->frame_times);
+  free(sim->frame_files);
+  free(sim->stats);
+  const size_t n = (size_t)(records > sim->frame_count + 1 ? records : sim->frame_count + 1);
+  sim->frame_times = calloc(n, sizeof *sim->frame_times);
+  sim->frame_files = calloc(n, sizeof *sim->frame_files);
+  sim->stats = calloc(n, sizeof *sim->stats);
+  if (!sim->frame_times || !sim->frame_files || !sim->stats)
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for output bookkeeping");
+  return MPM_OK;
+}
+
 mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   if (dir) snprintf(sim->output_dir, sizeof sim->output_dir, "%s", dir);
   mpm_status st = mpm_make_dirs(sim->output_dir, &sim->error);
+  if (st == MPM_OK) st = mpm_sim_alloc_output(sim, 0);
   if (st != MPM_OK) return st;
-  const int n = sim->frame_count + 1;
-  sim->frame_times = calloc((size_t)n, sizeof *sim->frame_times);
-  sim->frame_files = calloc((size_t)n, sizeof *sim->frame_files);
-  sim->stats = calloc((size_t)n, sizeof *sim->stats);
-  if (!sim->frame_times || !sim->frame_files || !sim->stats)
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for output bookkeeping");
   sim->output_enabled = 1;
   sim->frame_wall_start = mpm_wall_seconds();
   return mpm_sim_write_frame(sim);

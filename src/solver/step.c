@@ -55,7 +55,7 @@ static const char *bad_quantity(const mpm_particles *p, long i) {
   return "deformation gradient";
 }
 
-mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
+mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   mpm_particles *p = &sim->particles;
   const mpm_scene *sc = &sim->scene;
   double dt = mpm_sim_cfl_dt(sim);
@@ -172,8 +172,14 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   if (end > sim->scene.end_time) end = sim->scene.end_time;
   /* steps land exactly on the frame time; a tiny remainder is merged into the last step */
   while (sim->time < end - 1e-12 * (1 + end)) {
+    /* only between two steps: the state is whole, a checkpoint of it resumes exactly */
+    if (sim->interrupt && *sim->interrupt)
+      return mpm_error_set(&sim->error, MPM_ERR_INTERRUPTED,
+                           "interrupted at step %lld (t = %.6g s, frame %d of %d)",
+                           (long long)sim->steps, sim->time, sim->frame, sim->frame_count);
     double remaining = end - sim->time;
-    double dt = mpm_sim_cfl_dt(sim);
+    /* after an unstable step the retry guard runs on halved steps for a while */
+    double dt = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
     if (dt >= remaining)
       dt = remaining;
     else if (dt > 0.5 * remaining)
@@ -183,6 +189,11 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   }
   sim->time = end;
   sim->frame++;
-  if (sim->output_enabled) return mpm_sim_write_frame(sim);
-  return MPM_OK;
+  if (sim->dt_level > 0) sim->dt_level--; /* one halving is given back per calm frame */
+  if (!sim->output_enabled) return MPM_OK;
+  mpm_status st = mpm_sim_write_frame(sim);
+  const int every = sim->scene.output.checkpoint_every;
+  if (st == MPM_OK && every > 0 && sim->frame % every == 0 && sim->frame < sim->frame_count)
+    st = mpm_sim_write_checkpoint(sim, NULL, 0);
+  return st;
 }

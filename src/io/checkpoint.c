@@ -1,0 +1,448 @@
+/* checkpoint.c - HDF5 checkpoints (see checkpoint.h for what they hold and why).
+ *
+ * Layout, all at the root of the file:
+ *   attributes  format ("mpm checkpoint"), version, real_bytes, scene_hash, time, last_dt,
+ *               max_speed, steps, frame, written_frames, dt_level, threads, particle_count,
+ *               records
+ *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
+ *               particle_material [n], particle_body [n], particle_id [n],
+ *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][16]
+ * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
+ * must exist with the right class and shape, each dataset must have exactly the dimensions
+ * the attributes announce, counts are bounded by the file's size before anything is
+ * allocated, and every real must be finite. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "io/checkpoint.h"
+#include "core/alloc.h"
+#include "scene/scene.h"
+
+#include <hdf5.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define FORMAT_NAME "mpm checkpoint"
+#define STATS_COLUMNS 16
+#define CHUNK_ELEMENTS 65536
+#define MAX_RECORDS 10000001
+
+/* HDF5 prints its error stack on stderr by default; our messages say what went wrong. */
+static void quiet_hdf5(void) {
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+
+static hid_t real_type(void) {
+  return sizeof(mpm_real) == sizeof(double) ? H5T_NATIVE_DOUBLE : H5T_NATIVE_FLOAT;
+}
+
+/* ---- writing -------------------------------------------------------------------------- */
+
+static int put_attr(hid_t file, const char *name, hid_t type, const void *value) {
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = space < 0 ? -1 : H5Acreate2(file, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+  int rc = (a < 0 || H5Awrite(a, type, value) < 0) ? -1 : 0;
+  if (a >= 0) H5Aclose(a);
+  if (space >= 0) H5Sclose(space);
+  return rc;
+}
+
+static int put_format(hid_t file) {
+  hid_t t = H5Tcopy(H5T_C_S1);
+  if (t < 0) return -1;
+  int rc = H5Tset_size(t, sizeof FORMAT_NAME) < 0 ? -1 : put_attr(file, "format", t, FORMAT_NAME);
+  H5Tclose(t);
+  return rc;
+}
+
+/* A chunked, checksummed dataset of rank 1 or 2 (rows x cols; rank 1 when rows == 0). The data
+ * are `rows` separate arrays of `cols` elements (rank 2) or one array (rank 1). */
+static int put_dataset(hid_t file, const char *name, hid_t type, hsize_t rows, hsize_t cols,
+                       const void *const *row_data) {
+  const int rank = rows ? 2 : 1;
+  hsize_t dims[2] = {rows ? rows : cols, cols};
+  hsize_t chunk[2] = {1, cols < CHUNK_ELEMENTS ? (cols ? cols : 1) : CHUNK_ELEMENTS};
+  if (rank == 1) chunk[0] = chunk[1];
+  hid_t space = H5Screate_simple(rank, dims, NULL);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  int rc = -1;
+  hid_t ds = -1;
+  if (space < 0 || dcpl < 0 || H5Pset_chunk(dcpl, rank, chunk) < 0 || H5Pset_fletcher32(dcpl) < 0)
+    goto done;
+  ds = H5Dcreate2(file, name, type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  if (ds < 0) goto done;
+  if (rank == 1) {
+    rc = (cols == 0 || H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, row_data[0]) >= 0) ? 0
+                                                                                            : -1;
+    goto done;
+  }
+  rc = 0;
+  for (hsize_t r = 0; r < rows && rc == 0 && cols > 0; ++r) {
+    hsize_t start[2] = {r, 0}, count[2] = {1, cols};
+    hid_t mem = H5Screate_simple(1, &cols, NULL);
+    if (mem < 0 || H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
+        H5Dwrite(ds, type, mem, space, H5P_DEFAULT, row_data[r]) < 0)
+      rc = -1;
+    if (mem >= 0) H5Sclose(mem);
+  }
+done:
+  if (ds >= 0) H5Dclose(ds);
+  if (dcpl >= 0) H5Pclose(dcpl);
+  if (space >= 0) H5Sclose(space);
+  return rc;
+}
+
+static void stats_to_row(const mpm_stats_row *s, double out[STATS_COLUMNS]) {
+  const double v[STATS_COLUMNS] = {s->frame,
+                                   s->time,
+                                   s->dt,
+                                   (double)s->steps,
+                                   s->kinetic,
+                                   s->elastic,
+                                   s->momentum[0],
+                                   s->momentum[1],
+                                   s->momentum[2],
+                                   s->angular_momentum[0],
+                                   s->angular_momentum[1],
+                                   s->angular_momentum[2],
+                                   s->mass,
+                                   s->wall_seconds,
+                                   (double)s->particles,
+                                   0};
+  memcpy(out, v, sizeof v);
+}
+
+static void row_to_stats(const double v[STATS_COLUMNS], mpm_stats_row *s) {
+  s->frame = (int)v[0];
+  s->time = v[1];
+  s->dt = v[2];
+  s->steps = (long long)v[3];
+  s->kinetic = v[4];
+  s->elastic = v[5];
+  for (int k = 0; k < 3; ++k) {
+    s->momentum[k] = v[6 + k];
+    s->angular_momentum[k] = v[9 + k];
+  }
+  s->mass = v[12];
+  s->wall_seconds = v[13];
+  s->particles = (size_t)v[14];
+}
+
+static int write_contents(hid_t f, const mpm_checkpoint *c) {
+  const int version = MPM_CHECKPOINT_VERSION, real_bytes = (int)sizeof(mpm_real);
+  const uint64_t n = c->particles.count;
+  if (put_format(f) || put_attr(f, "version", H5T_NATIVE_INT, &version) ||
+      put_attr(f, "real_bytes", H5T_NATIVE_INT, &real_bytes) ||
+      put_attr(f, "scene_hash", H5T_NATIVE_UINT64, &c->scene_hash) ||
+      put_attr(f, "time", H5T_NATIVE_DOUBLE, &c->time) ||
+      put_attr(f, "last_dt", H5T_NATIVE_DOUBLE, &c->last_dt) ||
+      put_attr(f, "max_speed", H5T_NATIVE_DOUBLE, &c->max_speed) ||
+      put_attr(f, "steps", H5T_NATIVE_INT64, &c->steps) ||
+      put_attr(f, "frame", H5T_NATIVE_INT, &c->frame) ||
+      put_attr(f, "written_frames", H5T_NATIVE_INT, &c->written_frames) ||
+      put_attr(f, "dt_level", H5T_NATIVE_INT, &c->dt_level) ||
+      put_attr(f, "threads", H5T_NATIVE_INT, &c->threads) ||
+      put_attr(f, "particle_count", H5T_NATIVE_UINT64, &n) ||
+      put_attr(f, "records", H5T_NATIVE_INT, &c->records))
+    return -1;
+  mpm_particles *p = (mpm_particles *)&c->particles; /* the array table only reads pointers */
+  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(p, arrays);
+  const void *rows[MPM_PARTICLE_REAL_ARRAYS];
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *arrays[k];
+  const void *material = p->material, *body = p->body, *id = p->id;
+  if (put_dataset(f, "particle_reals", real_type(), MPM_PARTICLE_REAL_ARRAYS, n, rows) ||
+      put_dataset(f, "particle_material", H5T_NATIVE_INT32, 0, n, &material) ||
+      put_dataset(f, "particle_body", H5T_NATIVE_INT32, 0, n, &body) ||
+      put_dataset(f, "particle_id", H5T_NATIVE_UINT32, 0, n, &id))
+    return -1;
+  const hsize_t r = (hsize_t)c->records;
+  double *stats = malloc((r ? r : 1) * STATS_COLUMNS * sizeof *stats);
+  const void **srows = malloc((r ? r : 1) * sizeof *srows);
+  const void **frows = malloc((r ? r : 1) * sizeof *frows);
+  int rc = -1;
+  if (stats && srows && frows) {
+    for (hsize_t i = 0; i < r; ++i) {
+      stats_to_row(&c->stats[i], stats + i * STATS_COLUMNS);
+      srows[i] = stats + i * STATS_COLUMNS;
+      frows[i] = c->frame_files[i];
+    }
+    const void *times = c->frame_times;
+    rc = put_dataset(f, "frame_times", H5T_NATIVE_DOUBLE, 0, r, &times);
+    if (!rc && r) rc = put_dataset(f, "frame_files", H5T_NATIVE_UINT8, r, MPM_FRAME_NAME_MAX, frows);
+    if (!rc && r) rc = put_dataset(f, "stats", H5T_NATIVE_DOUBLE, r, STATS_COLUMNS, srows);
+  }
+  free(stats);
+  free(srows);
+  free(frows);
+  return rc;
+}
+
+mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_error *err) {
+  quiet_hdf5();
+  char temp[MPM_PATH_MAX + 64];
+  const char *slash = strrchr(path, '/');
+  const int dir_len = slash ? (int)(slash - path + 1) : 0;
+  const int len = snprintf(temp, sizeof temp, "%.*s.%s.tmp.%ld", dir_len, path,
+                           slash ? slash + 1 : path, (long)getpid());
+  if (len < 0 || (size_t)len >= sizeof temp)
+    return mpm_error_set(err, MPM_ERR_IO, "cannot write checkpoint '%s': path too long", path);
+  hid_t f = H5Fcreate(temp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (f < 0)
+    return mpm_error_set(err, MPM_ERR_IO, "cannot create checkpoint '%s' (temporary '%s')", path,
+                         temp);
+  const int failed = write_contents(f, c);
+  /* closing flushes: a full disk shows up here as much as in the writes */
+  const int close_failed = H5Fclose(f) < 0;
+  if (failed || close_failed) {
+    remove(temp);
+    return mpm_error_set(err, MPM_ERR_IO,
+                         "cannot write checkpoint '%s': HDF5 %s failed (disk full or not "
+                         "writable?); the previous checkpoint is kept",
+                         path, failed ? "write" : "close");
+  }
+  if (rename(temp, path) != 0) {
+    remove(temp);
+    return mpm_error_set(err, MPM_ERR_IO, "cannot write checkpoint '%s': rename failed", path);
+  }
+  return MPM_OK;
+}
+
+/* ---- reading -------------------------------------------------------------------------- */
+
+typedef struct reader {
+  const char *path;
+  hid_t file;
+  hsize_t file_bytes;
+  mpm_error *err;
+} reader;
+
+static int bad(reader *r, const char *fmt, const char *name) {
+  char what[256];
+  snprintf(what, sizeof what, fmt, name);
+  mpm_error_set(r->err, MPM_ERR_PARSE, "%s: not a usable mpm checkpoint: %s", r->path, what);
+  return -1;
+}
+
+/* A scalar attribute of the given class, read as `mem_type`. */
+static int get_attr(reader *r, const char *name, H5T_class_t cls, hid_t mem_type, void *out) {
+  if (H5Aexists(r->file, name) <= 0) return bad(r, "attribute '%s' is missing", name);
+  hid_t a = H5Aopen(r->file, name, H5P_DEFAULT);
+  if (a < 0) return bad(r, "attribute '%s' cannot be opened", name);
+  hid_t space = H5Aget_space(a), type = H5Aget_type(a);
+  int rc = 0;
+  if (space < 0 || type < 0 || H5Sget_simple_extent_type(space) != H5S_SCALAR ||
+      H5Tget_class(type) != cls)
+    rc = bad(r, "attribute '%s' has the wrong type or shape", name);
+  else if (H5Aread(a, mem_type, out) < 0)
+    rc = bad(r, "attribute '%s' cannot be read", name);
+  if (type >= 0) H5Tclose(type);
+  if (space >= 0) H5Sclose(space);
+  H5Aclose(a);
+  return rc;
+}
+
+static int check_format(reader *r) {
+  if (H5Aexists(r->file, "format") <= 0) return bad(r, "attribute '%s' is missing", "format");
+  hid_t a = H5Aopen(r->file, "format", H5P_DEFAULT);
+  if (a < 0) return bad(r, "attribute '%s' cannot be opened", "format");
+  hid_t type = H5Aget_type(a), space = H5Aget_space(a);
+  int rc = -1;
+  char text[sizeof FORMAT_NAME] = {0};
+  if (type >= 0 && space >= 0 && H5Tget_class(type) == H5T_STRING &&
+      H5Tis_variable_str(type) == 0 && H5Tget_size(type) == sizeof FORMAT_NAME &&
+      H5Sget_simple_extent_type(space) == H5S_SCALAR) {
+    hid_t mem = H5Tcopy(H5T_C_S1);
+    if (mem >= 0 && H5Tset_size(mem, sizeof FORMAT_NAME) >= 0 && H5Aread(a, mem, text) >= 0 &&
+        memcmp(text, FORMAT_NAME, sizeof FORMAT_NAME) == 0)
+      rc = 0;
+    if (mem >= 0) H5Tclose(mem);
+  }
+  if (type >= 0) H5Tclose(type);
+  if (space >= 0) H5Sclose(space);
+  H5Aclose(a);
+  return rc ? bad(r, "%s", "the 'format' attribute does not say \"" FORMAT_NAME "\"") : 0;
+}
+
+/* Open dataset `name`, check its class, element size, rank and dimensions (rows == 0: rank 1
+ * of cols), and read it row by row into row_data[] as mem_type. */
+static int get_dataset(reader *r, const char *name, H5T_class_t cls, size_t elem, hid_t mem_type,
+                       hsize_t rows, hsize_t cols, void *const *row_data) {
+  if (H5Lexists(r->file, name, H5P_DEFAULT) <= 0) return bad(r, "dataset '%s' is missing", name);
+  hid_t ds = H5Dopen2(r->file, name, H5P_DEFAULT);
+  if (ds < 0) return bad(r, "dataset '%s' cannot be opened", name);
+  hid_t type = H5Dget_type(ds), space = H5Dget_space(ds);
+  int rc = 0;
+  hsize_t dims[2] = {0, 0};
+  const int rank = rows ? 2 : 1;
+  if (type < 0 || space < 0 || H5Tget_class(type) != cls || H5Tget_size(type) != elem ||
+      H5Sget_simple_extent_ndims(space) != rank ||
+      H5Sget_simple_extent_dims(space, dims, NULL) != rank ||
+      dims[0] != (rows ? rows : cols) || (rank == 2 && dims[1] != cols)) {
+    rc = bad(r, "dataset '%s' has the wrong type or dimensions", name);
+    goto done;
+  }
+  for (hsize_t i = 0; i < (rows ? rows : 1) && cols > 0; ++i) {
+    hsize_t start[2] = {i, 0}, count[2] = {1, cols};
+    hid_t mem = H5Screate_simple(1, &cols, NULL);
+    const int sel = rank == 1 ? 0 : H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL);
+    const int ok = mem >= 0 && sel >= 0 &&
+                   H5Dread(ds, mem_type, mem, rank == 1 ? H5S_ALL : space, H5P_DEFAULT,
+                           row_data[i]) >= 0;
+    if (mem >= 0) H5Sclose(mem);
+    if (!ok) {
+      rc = bad(r, "dataset '%s' cannot be read (damaged: its checksum does not match?)", name);
+      break;
+    }
+  }
+done:
+  if (type >= 0) H5Tclose(type);
+  if (space >= 0) H5Sclose(space);
+  H5Dclose(ds);
+  return rc;
+}
+
+static int read_contents(reader *r, mpm_checkpoint *c) {
+  if (check_format(r)) return -1;
+  int version = 0, real_bytes = 0;
+  if (get_attr(r, "version", H5T_INTEGER, H5T_NATIVE_INT, &version)) return -1;
+  if (version != MPM_CHECKPOINT_VERSION) {
+    mpm_error_set(r->err, MPM_ERR_PARSE,
+                  "%s: checkpoint format version %d; this build reads version %d", r->path,
+                  version, MPM_CHECKPOINT_VERSION);
+    return -1;
+  }
+  if (get_attr(r, "real_bytes", H5T_INTEGER, H5T_NATIVE_INT, &real_bytes)) return -1;
+  if (real_bytes != (int)sizeof(mpm_real)) {
+    mpm_error_set(r->err, MPM_ERR_INVALID,
+                  "%s: the checkpoint was written by a %s build and this is a %s build; resume "
+                  "it with the same build",
+                  r->path, real_bytes == 8 ? "double" : real_bytes == 4 ? "float" : "foreign",
+                  sizeof(mpm_real) == 8 ? "double" : "float");
+    return -1;
+  }
+  uint64_t n = 0;
+  if (get_attr(r, "scene_hash", H5T_INTEGER, H5T_NATIVE_UINT64, &c->scene_hash) ||
+      get_attr(r, "time", H5T_FLOAT, H5T_NATIVE_DOUBLE, &c->time) ||
+      get_attr(r, "last_dt", H5T_FLOAT, H5T_NATIVE_DOUBLE, &c->last_dt) ||
+      get_attr(r, "max_speed", H5T_FLOAT, H5T_NATIVE_DOUBLE, &c->max_speed) ||
+      get_attr(r, "steps", H5T_INTEGER, H5T_NATIVE_INT64, &c->steps) ||
+      get_attr(r, "frame", H5T_INTEGER, H5T_NATIVE_INT, &c->frame) ||
+      get_attr(r, "written_frames", H5T_INTEGER, H5T_NATIVE_INT, &c->written_frames) ||
+      get_attr(r, "dt_level", H5T_INTEGER, H5T_NATIVE_INT, &c->dt_level) ||
+      get_attr(r, "threads", H5T_INTEGER, H5T_NATIVE_INT, &c->threads) ||
+      get_attr(r, "particle_count", H5T_INTEGER, H5T_NATIVE_UINT64, &n) ||
+      get_attr(r, "records", H5T_INTEGER, H5T_NATIVE_INT, &c->records))
+    return -1;
+  if (!isfinite(c->time) || c->time < 0 || !isfinite(c->last_dt) || c->last_dt < 0 ||
+      !isfinite(c->max_speed) || c->max_speed < 0 || c->steps < 0 || c->frame < 0 ||
+      c->written_frames < 0 || c->dt_level < 0 || c->dt_level > 64)
+    return bad(r, "%s", "time, step or frame counters out of range");
+  /* every particle takes at least its reals in the file: a larger count is a lie */
+  if (n > UINT32_MAX || n * MPM_PARTICLE_REAL_ARRAYS * sizeof(mpm_real) > r->file_bytes)
+    return bad(r, "%s", "'particle_count' is larger than the file can hold");
+  if (c->records < 0 || c->records >= MAX_RECORDS ||
+      (uint64_t)c->records * (STATS_COLUMNS + 1) * sizeof(double) > r->file_bytes ||
+      c->written_frames != c->records)
+    return bad(r, "%s", "'records' is out of range or differs from 'written_frames'");
+
+  if (mpm_particles_init(&c->particles, (size_t)n)) {
+    mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %llu particles", r->path,
+                  (unsigned long long)n);
+    return -1;
+  }
+  mpm_particles *p = &c->particles;
+  p->count = (size_t)n;
+  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(p, arrays);
+  void *rows[MPM_PARTICLE_REAL_ARRAYS];
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *arrays[k];
+  void *material = p->material, *body = p->body, *id = p->id;
+  if (get_dataset(r, "particle_reals", H5T_FLOAT, sizeof(mpm_real), real_type(),
+                  MPM_PARTICLE_REAL_ARRAYS, n, rows) ||
+      get_dataset(r, "particle_material", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, n, &material) ||
+      get_dataset(r, "particle_body", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, n, &body) ||
+      get_dataset(r, "particle_id", H5T_INTEGER, 4, H5T_NATIVE_UINT32, 0, n, &id))
+    return -1;
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
+    for (size_t i = 0; i < p->count; ++i)
+      if (!isfinite((*arrays[k])[i])) return bad(r, "%s", "a particle value is not finite");
+
+  const size_t rc = (size_t)(c->records ? c->records : 1);
+  c->frame_times = calloc(rc, sizeof *c->frame_times);
+  c->frame_files = calloc(rc, sizeof *c->frame_files);
+  c->stats = calloc(rc, sizeof *c->stats);
+  double *stats = malloc(rc * STATS_COLUMNS * sizeof *stats);
+  void **srows = malloc(rc * sizeof *srows), **frows = malloc(rc * sizeof *frows);
+  int status = -1;
+  if (!c->frame_times || !c->frame_files || !c->stats || !stats || !srows || !frows) {
+    mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %d frame records", r->path,
+                  c->records);
+    goto done;
+  }
+  for (int i = 0; i < c->records; ++i) {
+    srows[i] = stats + (size_t)i * STATS_COLUMNS;
+    frows[i] = c->frame_files[i];
+  }
+  void *times = c->frame_times;
+  if (get_dataset(r, "frame_times", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, 0, (hsize_t)c->records,
+                  &times))
+    goto done;
+  if (c->records &&
+      (get_dataset(r, "frame_files", H5T_INTEGER, 1, H5T_NATIVE_UINT8, (hsize_t)c->records,
+                   MPM_FRAME_NAME_MAX, frows) ||
+       get_dataset(r, "stats", H5T_FLOAT, 8,
+                   H5T_NATIVE_DOUBLE, (hsize_t)c->records, STATS_COLUMNS, srows)))
+    goto done;
+  for (int i = 0; i < c->records; ++i) {
+    c->frame_files[i][MPM_FRAME_NAME_MAX - 1] = '\0';
+    for (int k = 0; k < STATS_COLUMNS; ++k)
+      if (!isfinite(stats[(size_t)i * STATS_COLUMNS + k])) {
+        bad(r, "%s", "a stats record is not finite");
+        goto done;
+      }
+    row_to_stats(stats + (size_t)i * STATS_COLUMNS, &c->stats[i]);
+    if (!isfinite(c->frame_times[i])) {
+      bad(r, "%s", "a frame time is not finite");
+      goto done;
+    }
+  }
+  status = 0;
+done:
+  free(stats);
+  free(srows);
+  free(frows);
+  return status;
+}
+
+mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *err) {
+  quiet_hdf5();
+  memset(c, 0, sizeof *c);
+  if (access(path, R_OK) != 0)
+    return mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the checkpoint", path);
+  if (H5Fis_hdf5(path) <= 0)
+    return mpm_error_set(err, MPM_ERR_PARSE, "%s: not an HDF5 file (not a checkpoint)", path);
+  reader r = {path, -1, 0, err};
+  r.file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (r.file < 0)
+    return mpm_error_set(err, MPM_ERR_PARSE, "%s: HDF5 cannot open the file (damaged?)", path);
+  if (H5Fget_filesize(r.file, &r.file_bytes) < 0) r.file_bytes = 0;
+  const int failed = read_contents(&r, c);
+  H5Fclose(r.file);
+  if (failed) {
+    const mpm_status st = err ? err->status : MPM_ERR_PARSE;
+    mpm_checkpoint_free(c);
+    return st != MPM_OK ? st : MPM_ERR_PARSE;
+  }
+  return MPM_OK;
+}
+
+void mpm_checkpoint_free(mpm_checkpoint *c) {
+  mpm_particles_free(&c->particles);
+  free(c->frame_times);
+  free(c->frame_files);
+  free(c->stats);
+  memset(c, 0, sizeof *c);
+}

@@ -1,0 +1,52 @@
+/* checkpoint.h - the complete state of a run in one HDF5 file, written atomically and read
+ * back with every dimension, type and count checked.
+ *
+ * What a run needs to continue bit for bit: the particles (every array, in their current
+ * memory order, because the order decides the order of floating-point sums), time, step,
+ * frame counters, the last dt and the speed that sets the next one, the dt back-off of the
+ * retry guard, the fingerprint of the scene, and the per-frame records the outputs are
+ * rebuilt from (frame times and names for the PVD, stats rows for stats.csv). Colliders move
+ * as pure functions of time and the sampling's random jitter is spent at creation, so time
+ * is their whole state. Every dataset carries a Fletcher-32 checksum: a damaged file is
+ * refused instead of resumed. */
+#ifndef MPM_IO_CHECKPOINT_H
+#define MPM_IO_CHECKPOINT_H
+
+#include "core/error.h"
+#include "io/io.h"
+#include "solver/particles.h"
+
+#include <stdint.h>
+
+#define MPM_CHECKPOINT_VERSION 1
+#define MPM_FRAME_NAME_MAX 64
+
+typedef struct mpm_checkpoint {
+  uint64_t scene_hash; /* FNV-1a of the scene text */
+  double time, last_dt;
+  double max_speed; /* fastest particle after the last step, m/s */
+  int64_t steps;
+  int frame;          /* frames completed */
+  int written_frames; /* frames written (frame 0 included) */
+  int dt_level;       /* the retry guard's current halvings of dt */
+  int threads;        /* threads of the run that wrote it (informative) */
+  mpm_particles particles;
+  /* per-frame records, `records` of them (= written_frames) */
+  int records;
+  double *frame_times;
+  char (*frame_files)[MPM_FRAME_NAME_MAX];
+  mpm_stats_row *stats;
+} mpm_checkpoint;
+
+/* Write *c to `path` atomically (a temporary in the same directory, renamed when complete).
+ * On failure the old file at `path` is untouched and err names the file and what failed. */
+mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_error *err);
+
+/* Read a checkpoint. *c is filled (particles and records allocated; release them with
+ * mpm_checkpoint_free) or, on any failure, left empty with err naming the file and the
+ * dataset or attribute that is missing, damaged or inconsistent. */
+mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *err);
+
+void mpm_checkpoint_free(mpm_checkpoint *c);
+
+#endif

@@ -1,0 +1,217 @@
+/* sim_checkpoint.c - a simulation's checkpoints: written into the output directory as
+ * checkpoint_<steps>.h5 (zero-padded, so names sort by step), the two newest kept; resumed
+ * from the newest one that reads back whole, for the same scene only.
+ *
+ * The particles are saved in their memory order: P2G sums each node's contributions in the
+ * order of the sorted particles, and the sort is stable, so the order is part of the state
+ * that makes a resumed run bit-identical to an uninterrupted one (tests/test_checkpoint.c). */
+#define _POSIX_C_SOURCE 200809L
+
+#include "core/parallel.h"
+#include "io/checkpoint.h"
+#include "solver/sim.h"
+
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define KEEP_CHECKPOINTS 2
+#define NAME_DIGITS 12
+
+void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag) {
+  sim->interrupt = flag;
+}
+
+/* 1 when `name` is checkpoint_<12 digits>.h5 */
+static int is_checkpoint_name(const char *name) {
+  if (strncmp(name, "checkpoint_", 11) != 0) return 0;
+  for (int i = 0; i < NAME_DIGITS; ++i)
+    if (name[11 + i] < '0' || name[11 + i] > '9') return 0;
+  return strcmp(name + 11 + NAME_DIGITS, ".h5") == 0;
+}
+
+static int by_name_descending(const void *a, const void *b) {
+  return -strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* The checkpoint names in dir, newest first (caller frees each and the array); -1 when the
+ * directory cannot be read. */
+static int list_checkpoints(const char *dir, char ***out) {
+  *out = NULL;
+  DIR *d = opendir(dir);
+  if (!d) return -1;
+  int n = 0, cap = 0;
+  char **names = NULL;
+  for (struct dirent *e; (e = readdir(d));) {
+    if (!is_checkpoint_name(e->d_name)) continue;
+    if (n == cap) {
+      cap = cap ? 2 * cap : 8;
+      char **bigger = realloc(names, (size_t)cap * sizeof *names);
+      if (!bigger) break;
+      names = bigger;
+    }
+    if (!(names[n] = strdup(e->d_name))) break;
+    ++n;
+  }
+  closedir(d);
+  if (n) qsort(names, (size_t)n, sizeof *names, by_name_descending);
+  *out = names;
+  return n;
+}
+
+static void free_names(char **names, int n) {
+  for (int i = 0; i < n; ++i) free(names[i]);
+  free(names);
+}
+
+mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
+  if (!sim->output_enabled)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "a checkpoint needs an output directory (enable output first)");
+  mpm_checkpoint c;
+  memset(&c, 0, sizeof c);
+  c.scene_hash = sim->scene.source_hash;
+  c.time = sim->time;
+  c.last_dt = sim->last_dt;
+  c.max_speed = (double)sim->max_speed;
+  c.steps = sim->steps;
+  c.frame = sim->frame;
+  c.written_frames = sim->written_frames;
+  c.dt_level = sim->dt_level;
+  c.threads = mpm_thread_count();
+  c.particles = sim->particles; /* borrowed, not freed */
+  c.records = sim->written_frames;
+  c.frame_times = sim->frame_times;
+  c.frame_files = sim->frame_files;
+  c.stats = sim->stats;
+  char file[MPM_PATH_MAX + 32];
+  snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->output_dir, NAME_DIGITS,
+           (long long)sim->steps);
+  mpm_status st = mpm_checkpoint_write(file, &c, &sim->error);
+  if (st != MPM_OK) return st;
+  snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
+  if (path && cap) snprintf(path, cap, "%s", file);
+  /* keep the newest few: one may be damaged later, the run can fall back on the one before */
+  char **names;
+  const int n = list_checkpoints(sim->output_dir, &names);
+  for (int i = KEEP_CHECKPOINTS; i < n; ++i) {
+    char old[MPM_PATH_MAX + 32];
+    snprintf(old, sizeof old, "%s/%s", sim->output_dir, names[i]);
+    remove(old);
+  }
+  if (n > 0) free_names(names, n);
+  return MPM_OK;
+}
+
+/* Check a checkpoint that read back whole against this simulation's scene. */
+static mpm_status check_fits(const mpm_sim *sim, const mpm_checkpoint *c, const char *file,
+                             mpm_error *err) {
+  if (c->scene_hash != sim->scene.source_hash)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s was written from another scene than %s (or from an earlier version "
+                         "of it): resume with the scene the run started with, or start a new run "
+                         "in another output directory",
+                         file, sim->scene.path);
+  if (c->written_frames != c->frame + 1 || c->frame > sim->frame_count ||
+      c->time > sim->scene.end_time * (1 + 1e-12))
+    return mpm_error_set(err, MPM_ERR_PARSE,
+                         "%s: frame %d, %d frames written and t = %g s do not fit the scene's %d "
+                         "frames to %g s",
+                         file, c->frame, c->written_frames, c->time, sim->frame_count,
+                         sim->scene.end_time);
+  const mpm_particles *p = &c->particles;
+  for (size_t i = 0; i < p->count; ++i)
+    if (p->material[i] < 0 || p->material[i] >= sim->material_count || p->body[i] < 0 ||
+        p->body[i] >= sim->scene.body_count || !(p->mass[i] > 0) || !(p->vol0[i] > 0))
+      return mpm_error_set(err, MPM_ERR_PARSE,
+                           "%s: particle %zu has material %d, body %d, mass %g, volume %g; the "
+                           "scene has %d materials and %d bodies",
+                           file, i, p->material[i], p->body[i], (double)p->mass[i],
+                           (double)p->vol0[i], sim->material_count, sim->scene.body_count);
+  return MPM_OK;
+}
+
+/* Take over the checkpoint's state (its particles and records are moved into sim). */
+static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
+  mpm_status st = mpm_sim_alloc_output(sim, c->records);
+  if (st != MPM_OK) return st;
+  mpm_particles_free(&sim->particles);
+  sim->particles = c->particles;
+  memset(&c->particles, 0, sizeof c->particles);
+  sim->time = c->time;
+  sim->last_dt = c->last_dt;
+  sim->max_speed = (mpm_real)c->max_speed;
+  sim->steps = c->steps;
+  sim->frame = c->frame;
+  sim->written_frames = c->written_frames;
+  sim->dt_level = c->dt_level;
+  for (int i = 0; i < c->records; ++i) {
+    sim->frame_times[i] = c->frame_times[i];
+    memcpy(sim->frame_files[i], c->frame_files[i], sizeof sim->frame_files[i]);
+    sim->stats[i] = c->stats[i];
+  }
+  sim->output_enabled = 1;
+  sim->frame_wall_start = mpm_wall_seconds();
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap) {
+  if (strlen(dir) >= sizeof sim->output_dir)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
+  char **names;
+  const int n = list_checkpoints(dir, &names);
+  if (n < 0)
+    return mpm_error_set(&sim->error, MPM_ERR_IO, "%s: cannot read the output directory", dir);
+  if (n == 0) {
+    free(names);
+    return mpm_error_set(&sim->error, MPM_ERR_IO,
+                         "%s: no checkpoint to resume from (checkpoint_*.h5); runs write one every "
+                         "output.checkpoint_every frames and when stopped by Ctrl-C or SIGTERM",
+                         dir);
+  }
+  mpm_status st = MPM_ERR_PARSE;
+  mpm_error first;
+  mpm_error_clear(&first);
+  int used = -1;
+  for (int i = 0; i < n && used < 0; ++i) {
+    char file[MPM_PATH_MAX + 32];
+    snprintf(file, sizeof file, "%s/%s", dir, names[i]);
+    mpm_checkpoint c;
+    mpm_error e;
+    mpm_error_clear(&e);
+    st = mpm_checkpoint_read(file, &c, &e);
+    if (st == MPM_OK) st = check_fits(sim, &c, file, &e);
+    if (st == MPM_OK) {
+      st = install(sim, &c);
+      if (st == MPM_OK) {
+        used = i;
+        snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
+        snprintf(sim->output_dir, sizeof sim->output_dir, "%s", dir);
+      }
+    }
+    mpm_checkpoint_free(&c);
+    if (st == MPM_ERR_INVALID || st == MPM_ERR_NOMEM) { /* another scene: no older one fits */
+      sim->error = e;
+      free_names(names, n);
+      return st;
+    }
+    if (st != MPM_OK && first.status == MPM_OK) first = e;
+  }
+  if (used < 0) {
+    free_names(names, n);
+    return mpm_error_set(&sim->error, st, "no usable checkpoint in %s (%d tried); the newest: %s",
+                         dir, n, first.message);
+  }
+  /* newer checkpoints that did not read back are set aside, so that the next pruning and the
+   * next resume see only good ones */
+  for (int i = 0; i < used; ++i) {
+    char from[MPM_PATH_MAX + 32], to[MPM_PATH_MAX + 48];
+    snprintf(from, sizeof from, "%s/%s", dir, names[i]);
+    snprintf(to, sizeof to, "%s/%s.damaged", dir, names[i]);
+    rename(from, to);
+  }
+  if (path && cap) snprintf(path, cap, "%s", sim->last_checkpoint);
+  free_names(names, n);
+  return MPM_OK;
+}
