@@ -180,34 +180,50 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
   return rc;
 }
 
+/* The file is built in memory (HDF5's core driver, no backing store) and then written with the
+ * engine's atomic writer: HDF5 never touches the disk on this path, so a full disk or a file
+ * size limit is one checked stdio error that leaves the old checkpoint in place, and never an
+ * HDF5 file handle left half-closed. */
 mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_error *err) {
   quiet_hdf5();
-  char temp[MPM_PATH_MAX + 64];
-  const char *slash = strrchr(path, '/');
-  const int dir_len = slash ? (int)(slash - path + 1) : 0;
-  const int len = snprintf(temp, sizeof temp, "%.*s.%s.tmp.%ld", dir_len, path,
-                           slash ? slash + 1 : path, (long)getpid());
-  if (len < 0 || (size_t)len >= sizeof temp)
-    return mpm_error_set(err, MPM_ERR_IO, "cannot write checkpoint '%s': path too long", path);
-  hid_t f = H5Fcreate(temp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (fapl < 0 || H5Pset_fapl_core(fapl, (size_t)1 << 20, 0) < 0) {
+    if (fapl >= 0) H5Pclose(fapl);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "cannot write checkpoint '%s': HDF5 set-up failed",
+                         path);
+  }
+  hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  H5Pclose(fapl);
   if (f < 0)
-    return mpm_error_set(err, MPM_ERR_IO, "cannot create checkpoint '%s' (temporary '%s')", path,
-                         temp);
-  const int failed = write_contents(f, c);
-  /* closing flushes: a full disk shows up here as much as in the writes */
-  const int close_failed = H5Fclose(f) < 0;
-  if (failed || close_failed) {
-    remove(temp);
-    return mpm_error_set(err, MPM_ERR_IO,
-                         "cannot write checkpoint '%s': HDF5 %s failed (disk full or not "
-                         "writable?); the previous checkpoint is kept",
-                         path, failed ? "write" : "close");
+    return mpm_error_set(err, MPM_ERR_NOMEM, "cannot write checkpoint '%s': HDF5 create failed",
+                         path);
+  int failed = write_contents(f, c) || H5Fflush(f, H5F_SCOPE_GLOBAL) < 0;
+  ssize_t size = failed ? -1 : H5Fget_file_image(f, NULL, 0);
+  void *image = size > 0 ? malloc((size_t)size) : NULL;
+  if (!image || H5Fget_file_image(f, image, (size_t)size) != size) failed = 1;
+  H5Fclose(f);
+  if (failed) {
+    free(image);
+    return mpm_error_set(err, MPM_ERR_NOMEM,
+                         "cannot write checkpoint '%s': out of memory building it; the previous "
+                         "checkpoint is kept",
+                         path);
   }
-  if (rename(temp, path) != 0) {
-    remove(temp);
-    return mpm_error_set(err, MPM_ERR_IO, "cannot write checkpoint '%s': rename failed", path);
+  mpm_atomic_file af;
+  mpm_status st = mpm_atomic_open(&af, path, err);
+  if (st == MPM_OK) {
+    /* a short write sets the stream's error flag, which the commit reports */
+    const size_t wrote = fwrite(image, 1, (size_t)size, af.fp);
+    (void)wrote;
+    st = mpm_atomic_commit(&af, err);
   }
-  return MPM_OK;
+  free(image);
+  if (st != MPM_OK && err) {
+    char msg[sizeof err->message];
+    snprintf(msg, sizeof msg, "%s", err->message);
+    mpm_error_set(err, st, "%s; the previous checkpoint is kept", msg);
+  }
+  return st;
 }
 
 /* ---- reading -------------------------------------------------------------------------- */
