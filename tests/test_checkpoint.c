@@ -196,7 +196,7 @@ static void test_checkpoint_round_trip(void **state) {
   snprintf(bad, sizeof bad, "%s/bad.h5", dir);
   write_file(bad, "this is not HDF5\n");
   assert_int_equal(mpm_checkpoint_read(bad, &c, &err), MPM_ERR_PARSE);
-  assert_non_null(strstr(err.message, "not an HDF5 file"));
+  assert_non_null(strstr(err.message, "not an mpm checkpoint"));
   FILE *in = fopen(path, "rb");
   const long n = file_size(path);
   char *bytes = malloc((size_t)n);

@@ -3,7 +3,8 @@
  * Layout, all at the root of the file:
  *   attributes  format ("mpm checkpoint"), version, real_bytes, scene_hash, time, last_dt,
  *               max_speed, steps, frame, written_frames, dt_level, threads, particle_count,
- *               records
+ *               records, checksum (FNV-1a over all the others), content_checksum (over
+ *               every array and record as read back)
  *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
  *               particle_material [n], particle_body [n], particle_id [n],
  *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][16]
@@ -15,6 +16,7 @@
 
 #include "io/checkpoint.h"
 #include "core/alloc.h"
+#include "core/hash.h"
 #include "scene/scene.h"
 
 #include <hdf5.h>
@@ -31,7 +33,7 @@
 
 /* HDF5 prints its error stack on stderr by default; our messages say what went wrong. */
 static void quiet_hdf5(void) {
-  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+  if (!getenv("MPM_HDF5_DEBUG")) H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
 }
 
 static hid_t real_type(void) {
@@ -130,6 +132,39 @@ static void row_to_stats(const double v[STATS_COLUMNS], mpm_stats_row *s) {
   s->particles = (size_t)v[14];
 }
 
+/* Datasets carry Fletcher-32 checksums; the scalar attributes are covered by this one. */
+static uint64_t attributes_checksum(const mpm_checkpoint *c, uint64_t n) {
+  const double d[3] = {c->time, c->last_dt, c->max_speed};
+  const int64_t i[8] = {c->steps,    c->frame,   c->written_frames, c->dt_level,
+                        c->threads, c->records, (int64_t)n,         (int64_t)sizeof(mpm_real)};
+  uint64_t h[3] = {c->scene_hash, mpm_fnv1a64(d, sizeof d), mpm_fnv1a64(i, sizeof i)};
+  return mpm_fnv1a64(h, sizeof h);
+}
+
+/* Every array and record, as the reader will hold them: a chunk index damaged in a way HDF5
+ * does not notice (a chunk read back as fill values) shows up here. */
+static uint64_t content_checksum(const mpm_checkpoint *c) {
+  mpm_particles *p = (mpm_particles *)&c->particles;
+  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(p, a);
+  const size_t n = p->count;
+  uint64_t h = 0x6d706d636b707421ull;
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
+    h = mpm_hash64_words(*a[k], n * sizeof(mpm_real), h);
+  h = mpm_hash64_words(p->material, n * sizeof *p->material, h);
+  h = mpm_hash64_words(p->body, n * sizeof *p->body, h);
+  h = mpm_hash64_words(p->id, n * sizeof *p->id, h);
+  const size_t r = (size_t)c->records;
+  h = mpm_hash64_words(c->frame_times, r * sizeof *c->frame_times, h);
+  h = mpm_hash64_words(c->frame_files, r * sizeof *c->frame_files, h);
+  for (size_t i = 0; i < r; ++i) {
+    double row[STATS_COLUMNS];
+    stats_to_row(&c->stats[i], row);
+    h = mpm_hash64_words(row, sizeof row, h);
+  }
+  return h;
+}
+
 static int write_contents(hid_t f, const mpm_checkpoint *c) {
   const int version = MPM_CHECKPOINT_VERSION, real_bytes = (int)sizeof(mpm_real);
   const uint64_t n = c->particles.count;
@@ -146,6 +181,10 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       put_attr(f, "threads", H5T_NATIVE_INT, &c->threads) ||
       put_attr(f, "particle_count", H5T_NATIVE_UINT64, &n) ||
       put_attr(f, "records", H5T_NATIVE_INT, &c->records))
+    return -1;
+  const uint64_t sum = attributes_checksum(c, n), content = content_checksum(c);
+  if (put_attr(f, "checksum", H5T_NATIVE_UINT64, &sum) ||
+      put_attr(f, "content_checksum", H5T_NATIVE_UINT64, &content))
     return -1;
   mpm_particles *p = (mpm_particles *)&c->particles; /* the array table only reads pointers */
   mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
@@ -180,6 +219,34 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
   return rc;
 }
 
+/* ---- the guard header -----------------------------------------------------------------
+ * The first HEADER_BYTES of the file are HDF5's user block, which HDF5 leaves to the
+ * application: the magic, the format version, the file's size and a digest of everything
+ * after the header, little-endian. The reader checks them before HDF5 parses a byte, so a
+ * truncated or damaged file is refused by this code rather than handed to the HDF5 parser
+ * (HDF5 1.10 can crash on a damaged file). */
+#define HEADER_BYTES 512
+static const char MAGIC[8] = {'M', 'P', 'M', 'C', 'K', 'P', 'T', '\n'};
+
+static void put_u64(unsigned char *b, uint64_t v) {
+  for (int i = 0; i < 8; ++i) b[i] = (unsigned char)(v >> (8 * i));
+}
+static uint64_t get_u64(const unsigned char *b) {
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v |= (uint64_t)b[i] << (8 * i);
+  return v;
+}
+static uint64_t image_digest(const unsigned char *image, size_t size) {
+  return mpm_hash64_words(image + HEADER_BYTES, size - HEADER_BYTES, 0x636b707464696721ull);
+}
+static void put_header(unsigned char *b, size_t size) {
+  memset(b, 0, HEADER_BYTES);
+  memcpy(b, MAGIC, 8);
+  put_u64(b + 8, MPM_CHECKPOINT_VERSION);
+  put_u64(b + 16, size);
+  put_u64(b + 24, image_digest(b, size));
+}
+
 /* The file is built in memory (HDF5's core driver, no backing store) and then written with the
  * engine's atomic writer: HDF5 never touches the disk on this path, so a full disk or a file
  * size limit is one checked stdio error that leaves the old checkpoint in place, and never an
@@ -192,15 +259,26 @@ mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_e
     return mpm_error_set(err, MPM_ERR_NOMEM, "cannot write checkpoint '%s': HDF5 set-up failed",
                          path);
   }
-  hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  hid_t fcpl = H5Pcreate(H5P_FILE_CREATE);
+  if (fcpl < 0 || H5Pset_userblock(fcpl, HEADER_BYTES) < 0) {
+    if (fcpl >= 0) H5Pclose(fcpl);
+    H5Pclose(fapl);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "cannot write checkpoint '%s': HDF5 set-up failed",
+                         path);
+  }
+  hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, fcpl, fapl);
+  H5Pclose(fcpl);
   H5Pclose(fapl);
   if (f < 0)
     return mpm_error_set(err, MPM_ERR_NOMEM, "cannot write checkpoint '%s': HDF5 create failed",
                          path);
   int failed = write_contents(f, c) || H5Fflush(f, H5F_SCOPE_GLOBAL) < 0;
-  ssize_t size = failed ? -1 : H5Fget_file_image(f, NULL, 0);
-  void *image = size > 0 ? malloc((size_t)size) : NULL;
-  if (!image || H5Fget_file_image(f, image, (size_t)size) != size) failed = 1;
+  /* the image HDF5 hands out leaves the user block out: it goes in front of it */
+  const ssize_t hdf5_size = failed ? -1 : H5Fget_file_image(f, NULL, 0);
+  const ssize_t size = hdf5_size > 0 ? hdf5_size + HEADER_BYTES : -1;
+  unsigned char *image = size > 0 ? malloc((size_t)size) : NULL;
+  if (!image || H5Fget_file_image(f, image + HEADER_BYTES, (size_t)hdf5_size) != hdf5_size)
+    failed = 1;
   H5Fclose(f);
   if (failed) {
     free(image);
@@ -209,6 +287,7 @@ mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_e
                          "checkpoint is kept",
                          path);
   }
+  put_header(image, (size_t)size);
   mpm_atomic_file af;
   mpm_status st = mpm_atomic_open(&af, path, err);
   if (st == MPM_OK) {
@@ -352,6 +431,12 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       get_attr(r, "particle_count", H5T_INTEGER, H5T_NATIVE_UINT64, &n) ||
       get_attr(r, "records", H5T_INTEGER, H5T_NATIVE_INT, &c->records))
     return -1;
+  uint64_t sum = 0, content = 0;
+  if (get_attr(r, "checksum", H5T_INTEGER, H5T_NATIVE_UINT64, &sum) ||
+      get_attr(r, "content_checksum", H5T_INTEGER, H5T_NATIVE_UINT64, &content))
+    return -1;
+  if (sum != attributes_checksum(c, n))
+    return bad(r, "%s", "the attributes do not match their checksum (damaged)");
   if (!isfinite(c->time) || c->time < 0 || !isfinite(c->last_dt) || c->last_dt < 0 ||
       !isfinite(c->max_speed) || c->max_speed < 0 || c->steps < 0 || c->frame < 0 ||
       c->written_frames < 0 || c->dt_level < 0 || c->dt_level > 64)
@@ -425,6 +510,10 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       goto done;
     }
   }
+  if (content != content_checksum(c)) {
+    bad(r, "%s", "the data do not match their checksum (damaged)");
+    goto done;
+  }
   status = 0;
 done:
   free(stats);
@@ -433,22 +522,72 @@ done:
   return status;
 }
 
+/* The whole file, checked against its header; NULL with err set when it is not whole. */
+static unsigned char *read_checked(const char *path, size_t *size, mpm_error *err) {
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the checkpoint", path);
+    return NULL;
+  }
+  unsigned char head[HEADER_BYTES];
+  const size_t got = fread(head, 1, sizeof head, f);
+  long end = -1;
+  if (fseek(f, 0, SEEK_END) == 0) end = ftell(f);
+  unsigned char *image = NULL;
+  if (got < 8 || memcmp(head, MAGIC, 8) != 0) {
+    mpm_error_set(err, MPM_ERR_PARSE, "%s: not an mpm checkpoint (%s)", path,
+                  got >= 4 && !memcmp(head, "\x89HDF", 4) ? "an HDF5 file without the mpm header"
+                                                           : "no mpm checkpoint header");
+  } else if (got < sizeof head || get_u64(head + 8) != MPM_CHECKPOINT_VERSION) {
+    mpm_error_set(err, MPM_ERR_PARSE,
+                  "%s: checkpoint format version %llu; this build reads version %d", path,
+                  got < sizeof head ? 0ull : (unsigned long long)get_u64(head + 8),
+                  MPM_CHECKPOINT_VERSION);
+  } else if (end < 0 || (uint64_t)end != get_u64(head + 16)) {
+    mpm_error_set(err, MPM_ERR_PARSE,
+                  "%s: the checkpoint is %ld bytes but its header says %llu (truncated or "
+                  "appended to)",
+                  path, end, (unsigned long long)get_u64(head + 16));
+  } else if (!(image = malloc((size_t)end))) {
+    mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory reading %ld bytes", path, end);
+  } else if (fseek(f, 0, SEEK_SET) != 0 || fread(image, 1, (size_t)end, f) != (size_t)end) {
+    mpm_error_set(err, MPM_ERR_IO, "%s: read error", path);
+    free(image);
+    image = NULL;
+  } else if (image_digest(image, (size_t)end) != get_u64(head + 24)) {
+    mpm_error_set(err, MPM_ERR_PARSE, "%s: the checkpoint is damaged (its checksum does not match)",
+                  path);
+    free(image);
+    image = NULL;
+  }
+  fclose(f);
+  *size = image ? (size_t)end : 0;
+  return image;
+}
+
 mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *err) {
   quiet_hdf5();
   memset(c, 0, sizeof *c);
-  if (access(path, R_OK) != 0)
-    return mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the checkpoint", path);
-  if (H5Fis_hdf5(path) <= 0)
-    return mpm_error_set(err, MPM_ERR_PARSE, "%s: not an HDF5 file (not a checkpoint)", path);
-  reader r = {path, -1, 0, err};
-  r.file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  mpm_error local;
+  if (!err) err = &local;
+  size_t size = 0;
+  unsigned char *image = read_checked(path, &size, err);
+  if (!image) return err->status;
+  /* HDF5 opens the image from memory (core driver, which copies it) */
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  const int ok = fapl >= 0 && H5Pset_fapl_core(fapl, (size_t)1 << 20, 0) >= 0 &&
+                 H5Pset_file_image(fapl, image, size) >= 0;
+  free(image);
+  reader r = {path, -1, (hsize_t)size, err};
+  /* the core driver refuses a name that exists on disk when it opens an image */
+  if (ok) r.file = H5Fopen("/proc/self/mpm-checkpoint-image", H5F_ACC_RDONLY, fapl);
+  if (fapl >= 0) H5Pclose(fapl);
   if (r.file < 0)
-    return mpm_error_set(err, MPM_ERR_PARSE, "%s: HDF5 cannot open the file (damaged?)", path);
-  if (H5Fget_filesize(r.file, &r.file_bytes) < 0) r.file_bytes = 0;
+    return mpm_error_set(err, MPM_ERR_PARSE, "%s: HDF5 cannot open the checkpoint", path);
   const int failed = read_contents(&r, c);
   H5Fclose(r.file);
   if (failed) {
-    const mpm_status st = err ? err->status : MPM_ERR_PARSE;
+    const mpm_status st = err->status;
     mpm_checkpoint_free(c);
     return st != MPM_OK ? st : MPM_ERR_PARSE;
   }
