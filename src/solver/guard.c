@@ -124,6 +124,11 @@ static mpm_status report(mpm_sim *sim, const guard_hit *h, double dt) {
   return MPM_OK;
 }
 
+mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
+  const guard_hit h = scan(sim, dt);
+  return h.kind == GUARD_NONE ? MPM_OK : report(sim, &h, dt);
+}
+
 /* Save or restore what a step changes (the particles and the clock). */
 static int save_state(mpm_sim *sim) {
   mpm_particles *src = &sim->particles, *dst = &sim->backup;
@@ -159,11 +164,7 @@ mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
                            "out of memory saving the state of step %lld for a retry",
                            (long long)sim->steps);
     mpm_status st = mpm_sim_raw_step(sim, dt_cap);
-    guard_hit h = {GUARD_NONE, -1, 0};
-    if (st == MPM_OK) {
-      h = scan(sim, sim->last_dt);
-      if (h.kind != GUARD_NONE) st = report(sim, &h, sim->last_dt);
-    }
+    if (st == MPM_OK) st = mpm_sim_guard_check(sim, sim->last_dt);
     if (st != MPM_ERR_UNSTABLE || !retry) return st;
     if (sim->dt_level >= sim->scene.solver.max_retries) {
       char msg[sizeof sim->error.message];

@@ -91,6 +91,9 @@ mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim);
  * cannot take; with solver.on_instability = "retry" an unstable step is undone and redone with
  * half the dt, up to solver.max_retries times. */
 mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt);
+/* The guards' scan alone, for the state after a step of dt: MPM_ERR_UNSTABLE with the
+ * diagnostic in sim->error, or MPM_OK. */
+mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
 
 /* Output bookkeeping for frame_count + 1 records (sim_output.c). */
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);

@@ -1,0 +1,170 @@
+/* test_guard.c - the instability guards and the retry with a smaller dt: a CFL violation, a
+ * particle leaving the domain and an inversion the model cannot evaluate each stop the step
+ * with the step, time, particle id, body, material and quantity named; in retry mode the CFL
+ * case is undone and redone with halved steps until it is stable, and gives up after
+ * solver.max_retries halvings; the scene keys are checked. */
+#include "support.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* A jello block (E = 1e4 Pa: wave speed 3.7 m/s, dt = 4.4 ms at dx = 4 cm). */
+static const char *BLOCK =
+    "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04},\n"
+    " \"time\": {\"end\": 0.1, \"fps\": 10},\n"
+    " \"solver\": {\"on_instability\": \"%s\", \"max_retries\": %d},\n"
+    " \"materials\": [{\"name\": \"jello\", \"model\": \"%s\", \"E\": 1e4, \"nu\": 0.3, "
+    "\"density\": 1000}],\n"
+    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.3,0.5,0.5], "
+    "\"half_extent\": [0.08,0.08,0.08]}, \"material\": \"jello\"}]}\n";
+
+static mpm_sim *block(const char *action, int retries, const char *model) {
+  char text[2048];
+  snprintf(text, sizeof text, BLOCK, action, retries, model);
+  mpm_scene scene;
+  mpm_error err;
+  if (mpm_scene_parse(text, "block.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_scene_free(&scene);
+  return sim;
+}
+
+/* Every particle at 50 m/s along x while the solver still believes they are at rest: the
+ * next dt is chosen for the wave speed alone and the block moves 5 cells in it. */
+static void launch(mpm_sim *sim) {
+  for (size_t i = 0; i < sim->particles.count; ++i) sim->particles.v[0][i] = 50;
+  sim->max_speed = 0;
+}
+
+static void expect_message(const mpm_sim *sim, const char *needle) {
+  if (!strstr(mpm_sim_last_error(sim), needle))
+    fail_msg("expected '%s' in: %s", needle, mpm_sim_last_error(sim));
+}
+
+static void test_cfl_violation_stops(void **state) {
+  (void)state;
+  mpm_sim *sim = block("stop", 8, "fixed_corotated");
+  launch(sim);
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
+  expect_message(sim, "violated the CFL condition");
+  expect_message(sim, "at step 1 ");
+  expect_message(sim, "particle id ");
+  expect_message(sim, "material 0 'jello'");
+  expect_message(sim, "cells in one step");
+  mpm_sim_destroy(sim);
+}
+
+static void test_retry_halves_dt_until_stable(void **state) {
+  (void)state;
+  mpm_sim *sim = block("retry", 8, "fixed_corotated");
+  launch(sim);
+  const double dt_cfl = mpm_sim_cfl_dt(sim);
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
+  /* 50 m/s needs dt <= dx / 50 = 0.8 ms: three halvings of 4.4 ms */
+  assert_int_equal(sim->dt_level, 3);
+  assert_int_equal(sim->retries, 3);
+  assert_int_equal(sim->steps, 1);
+  assert_close(sim->last_dt, dt_cfl / 8, 1e-9);
+  assert_close(sim->time, dt_cfl / 8, 1e-9);
+  for (size_t i = 0; i < sim->particles.count; ++i) {
+    assert_true(isfinite(sim->particles.x[0][i]));
+    assert_true(sim->particles.v[0][i] * sim->last_dt <= 0.04);
+  }
+  /* the rest of the frame runs on (now CFL-bounded) steps; a halving is given back */
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  assert_int_equal(sim->dt_level, 2);
+  mpm_sim_destroy(sim);
+}
+
+static void test_retry_gives_up(void **state) {
+  (void)state;
+  mpm_sim *sim = block("retry", 2, "fixed_corotated");
+  launch(sim);
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
+  expect_message(sim, "violated the CFL condition");
+  expect_message(sim, "after halving dt 2 times");
+  assert_int_equal(sim->steps, 1);
+  mpm_sim_destroy(sim);
+}
+
+static void test_particle_leaving_domain(void **state) {
+  (void)state;
+  mpm_sim *sim = block("stop", 8, "fixed_corotated");
+  /* particle 7 on the G2P clamp at the floor: it went through the whole wall band */
+  sim->particles.x[1][7] = (mpm_real)(sim->scene.domain_min[1] + sim->scene.dx);
+  const unsigned moved = sim->particles.id[7]; /* the step reorders the particles */
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
+  expect_message(sim, "left the domain");
+  char id[64];
+  snprintf(id, sizeof id, "particle id %u ", moved);
+  expect_message(sim, id);
+  mpm_sim_destroy(sim);
+}
+
+static void test_inversion_model_cannot_take(void **state) {
+  (void)state;
+  mpm_sim *sim = block("stop", 8, "neo_hookean");
+  assert_int_equal(mpm_sim_guard_check(sim, 1e-3), MPM_OK);
+  /* inverted F: fine with the min_stretch clamp (scene default 0.2), not without it */
+  sim->particles.F[0][11] = -1;
+  assert_int_equal(mpm_sim_guard_check(sim, 1e-3), MPM_OK);
+  sim->materials[0].min_stretch = 0;
+  assert_int_equal(mpm_sim_guard_check(sim, 1e-3), MPM_ERR_UNSTABLE);
+  expect_message(sim, "inverted deformation gradient (det F = -1)");
+  expect_message(sim, "min_stretch");
+  char id[64];
+  snprintf(id, sizeof id, "particle id %u ", sim->particles.id[11]);
+  expect_message(sim, id);
+  mpm_sim_destroy(sim);
+}
+
+static void test_guard_scene_keys(void **state) {
+  (void)state;
+  const char *base =
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.1},"
+      " \"time\": {\"end\": 1, \"fps\": 10},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"fixed_corotated\", \"E\": 1e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.5,0.5], "
+      "\"radius\": 0.2}, \"material\": \"m\"}], %s}";
+  const struct {
+    const char *extra, *message;
+  } bad[] = {
+      {"\"solver\": {\"on_instability\": \"ignore\"}", "solver.on_instability"},
+      {"\"solver\": {\"max_retries\": 0}", "solver.max_retries"},
+      {"\"output\": {\"checkpoint_every\": -1}", "output.checkpoint_every"},
+      {"\"output\": {\"checkpoint_every\": 2.5}", "output.checkpoint_every"},
+  };
+  char text[2048];
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    mpm_scene scene;
+    mpm_error err;
+    snprintf(text, sizeof text, base, bad[k].extra);
+    assert_int_not_equal(mpm_scene_parse(text, "s.json", &scene, &err), MPM_OK);
+    if (!strstr(err.message, bad[k].message))
+      fail_msg("expected '%s' in: %s", bad[k].message, err.message);
+  }
+  mpm_scene scene;
+  mpm_error err;
+  snprintf(text, sizeof text, base, "\"output\": {\"checkpoint_every\": 0}");
+  assert_int_equal(mpm_scene_parse(text, "s.json", &scene, &err), MPM_OK);
+  assert_int_equal(scene.output.checkpoint_every, 0);
+  assert_int_equal(scene.solver.on_instability, MPM_INSTABILITY_STOP);
+  assert_int_equal(scene.solver.max_retries, 8);
+  mpm_scene_free(&scene);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_cfl_violation_stops),
+      cmocka_unit_test(test_retry_halves_dt_until_stable),
+      cmocka_unit_test(test_retry_gives_up),
+      cmocka_unit_test(test_particle_leaving_domain),
+      cmocka_unit_test(test_inversion_model_cannot_take),
+      cmocka_unit_test(test_guard_scene_keys),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
