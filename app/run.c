@@ -69,6 +69,14 @@ int mpm_cmd_check(int argc, char **argv) {
   return MPM_EXIT_OK;
 }
 
+/* 1 when the newest checkpoint written is of the current step already. */
+static int checkpoint_is_current(const mpm_sim *sim) {
+  char name[64];
+  snprintf(name, sizeof name, "checkpoint_%012lld.h5", (long long)sim->steps);
+  const char *slash = strrchr(sim->last_checkpoint, '/');
+  return !strcmp(slash ? slash + 1 : sim->last_checkpoint, name);
+}
+
 /* After a stop signal: checkpoint the state between the two steps where the run stopped and say
  * how to continue. Exit status 128 + the signal, as shells report a signal's end. */
 static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
@@ -200,6 +208,14 @@ int mpm_cmd_run(int argc, char **argv) {
       break;
     }
     mpm_progress_update(&pr, sim->frame, sim->time, sim->steps, sim->particles.count);
+  }
+  /* stopped short of the scene's end by --frames: leave a checkpoint to continue from */
+  if (code == MPM_EXIT_OK && sim->time < sim->scene.end_time * (1 - 1e-12) &&
+      !checkpoint_is_current(sim)) {
+    if (mpm_sim_write_checkpoint(sim, checkpoint, sizeof checkpoint) != MPM_OK) {
+      fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
+      code = MPM_EXIT_FAILURE;
+    }
   }
   if (code == MPM_EXIT_OK) {
     mpm_progress_end(&pr);

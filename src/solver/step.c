@@ -193,7 +193,8 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   if (!sim->output_enabled) return MPM_OK;
   mpm_status st = mpm_sim_write_frame(sim);
   const int every = sim->scene.output.checkpoint_every;
-  if (st == MPM_OK && every > 0 && sim->frame % every == 0 && sim->frame < sim->frame_count)
+  if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
+      sim->time < sim->scene.end_time * (1 - 1e-12))
     st = mpm_sim_write_checkpoint(sim, NULL, 0);
   return st;
 }
