@@ -29,6 +29,8 @@ static void usage(FILE *out) {
           "  mpm bench stress [--particles N] [--threads LIST] [--repeats N]\n"
           "      each material model's batch stress and return map (ns per particle), and\n"
           "      ns per 3x3 SVD (mpm_svd3)\n"
+          "  mpm bench checkpoint [--particles N] [--repeats N] [--dir DIR]\n"
+          "      checkpoint write/read/resume seconds and MB/s, cost of the guards per step\n"
           "  mpm render OUTDIR [--field F] [--size WxH] [--colormap C] [--every N] [--movie]\n"
           "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed);\n"
           "      F: velocity (default), J, stress, plastic, material, body\n"

@@ -6,4 +6,8 @@
  * map, and ns per mpm_svd3 call (bench_stress.c). argv holds the options after "stress". */
 int mpm_bench_stress(int argc, char **argv);
 
+/* `mpm bench checkpoint`: checkpoint write, read and resume times and sizes, and the per-step
+ * cost of the instability guards and of retry mode (bench_checkpoint.c). */
+int mpm_bench_checkpoint(int argc, char **argv);
+
 #endif

@@ -65,7 +65,9 @@ static int put_dataset(hid_t file, const char *name, hid_t type, hsize_t rows, h
                        const void *const *row_data) {
   const int rank = rows ? 2 : 1;
   hsize_t dims[2] = {rows ? rows : cols, cols};
-  hsize_t chunk[2] = {1, cols < CHUNK_ELEMENTS ? (cols ? cols : 1) : CHUNK_ELEMENTS};
+  /* equal chunks of at most CHUNK_ELEMENTS: a last chunk that is mostly empty is stored whole */
+  const hsize_t pieces = (cols + CHUNK_ELEMENTS - 1) / CHUNK_ELEMENTS;
+  hsize_t chunk[2] = {1, cols ? (cols + pieces - 1) / pieces : 1};
   if (rank == 1) chunk[0] = chunk[1];
   hid_t space = H5Screate_simple(rank, dims, NULL);
   hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
