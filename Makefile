@@ -3,20 +3,35 @@ JOBS ?= 2
 BUILD ?= build
 BUILD_DOUBLE ?= build-double
 BUILD_SANITIZE ?= build-sanitize
+BUILD_FUZZ ?= build-fuzz
+FUZZ_SECONDS ?= 60
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
 DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng-dev zlib1g-dev \
-	libhdf5-dev gnuplot-nox python3-vtk9
+	libhdf5-dev gnuplot-nox python3-vtk9 valgrind
+# clang and its runtime (libFuzzer, sanitizers): only `make fuzz` and `make test-fuzz` need them
+FUZZ_DEB_PACKAGES = clang libclang-rt-14-dev
 
 .PHONY: all deps build build-double build-sanitize demo test test-float test-double \
-	test-sanitize bench clean format valgrind
+	test-sanitize bench clean format valgrind deps-fuzz build-fuzz fuzz test-fuzz
 
 all: build
 
 # Install the Debian packages the build needs, only when one is missing.
 deps:
 	@missing=""; for p in $(DEB_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  if [ "$$(id -u)" != 0 ]; then SUDO=sudo; fi; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
+	fi
+
+# The same for the fuzzing tool chain.
+deps-fuzz: deps
+	@missing=""; for p in $(FUZZ_DEB_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
@@ -38,11 +53,18 @@ build-sanitize: deps
 	cmake -S . -B $(BUILD_SANITIZE) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_SANITIZE=ON $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD_SANITIZE) -j $(JOBS)
 
+# libFuzzer targets (fuzz/): clang, ASan + UBSan + coverage, no OpenMP, no tests
+build-fuzz: deps-fuzz
+	cmake -S . -B $(BUILD_FUZZ) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=Debug -DMPM_FUZZ=ON \
+	  -DMPM_OPENMP=OFF -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD_FUZZ) -j $(JOBS) --target fuzz_scene fuzz_obj fuzz_ply fuzz_checkpoint
+
 demo: build
 	./$(BUILD)/mpm run $(DEMO_SCENE) -o out
 
-# The whole suite: the default float build, the double build, and float under ASan + UBSan.
-test: test-float test-double test-sanitize
+# The whole suite: the default float build, the double build, float under ASan + UBSan, and
+# a short fuzz run of the scene, mesh and checkpoint readers, and the valgrind run below.
+test: test-float test-double test-sanitize test-fuzz valgrind
 
 test-float: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
@@ -54,18 +76,30 @@ test-sanitize: build-sanitize
 	cd $(BUILD_SANITIZE) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)
 
+# Fuzz the scene parser, the OBJ and PLY readers and the checkpoint reader for FUZZ_SECONDS each (fuzz/run.sh):
+# executions per target are printed; a crash, leak, sanitizer report or timeout fails, with
+# the input under $(BUILD_FUZZ)/artifacts/. The working corpus is $(BUILD_FUZZ)/corpus/.
+fuzz: build-fuzz
+	fuzz/run.sh $(BUILD_FUZZ) $(FUZZ_SECONDS)
+
+test-fuzz: build-fuzz
+	fuzz/run.sh $(BUILD_FUZZ) 15
+
 # valgrind (Debian's valgrind) on a small scene with two materials (Drucker-Prager through the
-# SIMD SVD, fixed-corotated), a revolve container and a sphere, then `mpm render`: no invalid
-# access and no leak, or the target fails. -march=x86-64-v3: valgrind knows no AVX-512.
+# SIMD SVD, fixed-corotated), a revolve container and a sphere: one frame with a checkpoint,
+# then resumed from it to the end and rendered: no invalid access and no leak, or the target
+# fails. -march=x86-64-v3: valgrind knows no AVX-512.
 valgrind: deps
-	@command -v valgrind >/dev/null || { echo "install it with: apt-get install valgrind"; exit 1; }
 	cmake -S . -B build-valgrind -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_ARCH=x86-64-v3 \
 	  -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
 	cmake --build build-valgrind -j $(JOBS) --target mpm
 	rm -rf build-valgrind/out
 	valgrind --error-exitcode=3 --leak-check=full --errors-for-leak-kinds=definite,indirect \
 	  ./build-valgrind/mpm run tests/valgrind/tiny_scene.json -o build-valgrind/out --threads 1 \
-	  --quiet --render
+	  --quiet --frames 1
+	valgrind --error-exitcode=3 --leak-check=full --errors-for-leak-kinds=definite,indirect \
+	  ./build-valgrind/mpm run tests/valgrind/tiny_scene.json --resume build-valgrind/out \
+	  --threads 1 --quiet --render
 
 bench: build
 	./$(BUILD)/mpm bench step
@@ -75,4 +109,4 @@ format:
 	clang-format -i $$(git ls-files '*.c' '*.h')
 
 clean:
-	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) out
+	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) $(BUILD_FUZZ) out

@@ -1,6 +1,7 @@
-/* test_sample.c - mesh readers (OBJ, PLY ascii and binary), the point-in-mesh test and body
- * sampling: volumes against analytic values, masses, lattice alignment, jitter, rigid
- * rotation, mesh bodies against the equivalent box, the bunny, and error messages. */
+/* test_sample.c - mesh readers (OBJ, PLY ascii and binary; files and buffers), the
+ * point-in-mesh test and body sampling: volumes against analytic values, masses, lattice
+ * alignment, jitter, rigid rotation, mesh bodies against the equivalent box, the bunny, and
+ * error messages. */
 #include "support.h"
 
 #include "scene/mesh.h"
@@ -587,6 +588,9 @@ static void test_malformed_files(void **state) {
   expect_parse_error(dir, "word.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n",
                      "word.obj:4:", "'x' is not an index");
   expect_parse_error(dir, "empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "empty.obj", "no faces");
+  /* found by fuzz_obj: -LONG_MIN overflowed in the range check (UBSan) */
+  expect_parse_error(dir, "min.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n",
+                     "min.obj:4:", "face index -9223372036854775808 out of range (-3..-1");
 
   const char *head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                      "property float y\nproperty float z\nelement face 1\n"
@@ -621,6 +625,74 @@ static void test_malformed_files(void **state) {
   assert_contains(err.message, "/nonexistent/cube.obj");
 }
 
+/* Allocate exactly n bytes holding text (no NUL after them), so that AddressSanitizer sees a
+ * parser that reads past the end of its input. */
+static char *exact_copy(const char *text, size_t n) {
+  char *p = malloc(n ? n : 1);
+  assert_non_null(p);
+  memcpy(p, text, n);
+  return p;
+}
+
+/* mpm_mesh_parse: the in-memory reader behind mpm_mesh_load (and the fuzz targets). */
+static void test_parse_from_memory(void **state) {
+  (void)state;
+  mpm_mesh mesh, ref;
+  mpm_error err;
+  /* an OBJ without a final newline or NUL: one triangle */
+  const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3";
+  char *buf = exact_copy(obj, sizeof obj - 1);
+  assert_int_equal(mpm_mesh_parse(buf, sizeof obj - 1, MPM_MESH_OBJ, "mem.obj", &mesh, &err),
+                   MPM_OK);
+  assert_int_equal(mesh.vertex_count, 3);
+  assert_int_equal(mesh.triangle_count, 1);
+  assert_true(mesh.vertices[3] == 1 && mesh.triangles[2] == 2);
+  mpm_mesh_free(&mesh);
+  free(buf);
+
+  /* a binary PLY file's bytes give the mesh mpm_mesh_load reads from the file */
+  const char *dir = test_temp_dir("sample-memory");
+  char path[600];
+  snprintf(path, sizeof path, "%s/cube_be.ply", dir);
+  write_cube_ply_binary(path, 1, 0);
+  FILE *fp = fopen(path, "rb");
+  assert_non_null(fp);
+  char bytes[4096];
+  size_t n = fread(bytes, 1, sizeof bytes, fp);
+  fclose(fp);
+  assert_true(n > 0 && n < sizeof bytes);
+  buf = exact_copy(bytes, n);
+  assert_int_equal(mpm_mesh_parse(buf, n, MPM_MESH_PLY, NULL, &mesh, &err), MPM_OK);
+  free(buf);
+  assert_int_equal(mpm_mesh_load(path, &ref, &err), MPM_OK);
+  assert_int_equal(mesh.vertex_count, ref.vertex_count);
+  assert_int_equal(mesh.triangle_count, ref.triangle_count);
+  assert_memory_equal(mesh.vertices, ref.vertices, 3 * sizeof(double) * (size_t)ref.vertex_count);
+  assert_memory_equal(mesh.triangles, ref.triangles, 3 * sizeof(int) * (size_t)ref.triangle_count);
+  mpm_mesh_free(&mesh);
+  mpm_mesh_free(&ref);
+
+  /* messages name path_for_messages, or "<mesh>" */
+  const char bad[] = "v 0 0 0\nf 1 1 9\n";
+  assert_int_equal(mpm_mesh_parse(bad, sizeof bad - 1, MPM_MESH_OBJ, "mem.obj", &mesh, &err),
+                   MPM_ERR_PARSE);
+  assert_contains(err.message, "mem.obj:2: face index 9 out of range (1..1)");
+  assert_null(mesh.vertices);
+  assert_int_equal(mpm_mesh_parse(bad, sizeof bad - 1, MPM_MESH_OBJ, NULL, &mesh, &err),
+                   MPM_ERR_PARSE);
+  assert_contains(err.message, "<mesh>:2:");
+  assert_int_equal(mpm_mesh_parse("", 0, MPM_MESH_PLY, "mem.ply", &mesh, &err), MPM_ERR_PARSE);
+  assert_contains(err.message, "mem.ply:0: header ends without 'end_header'");
+
+  /* found by fuzz_obj: a NUL byte made the parsing pass see more vertices than the counting
+     pass had allocated for (a heap overflow); OBJ is text, so a NUL is refused */
+  const char nul[] = "v 0 0 0\n\0v 1 0 0\n\0v 0 1 0\n\0v 0 0 1\n\0v 1 1 1\nf 1 2 3\n";
+  assert_int_equal(mpm_mesh_parse(nul, sizeof nul - 1, MPM_MESH_OBJ, "nul.obj", &mesh, &err),
+                   MPM_ERR_PARSE);
+  assert_contains(err.message, "nul.obj:2: expected OBJ text, got a NUL byte");
+  assert_null(mesh.vertices);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_box_counts_mass_alignment),
@@ -635,6 +707,7 @@ int main(void) {
       cmocka_unit_test(test_torus_inside),
       cmocka_unit_test(test_bunny),
       cmocka_unit_test(test_malformed_files),
+      cmocka_unit_test(test_parse_from_memory),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

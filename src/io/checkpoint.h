@@ -47,6 +47,14 @@ mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_e
  * dataset or attribute that is missing, damaged or inconsistent. */
 mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *err);
 
+/* The same from the file's bytes in memory (path only names it in messages). */
+mpm_status mpm_checkpoint_parse(const void *data, size_t size, const char *path,
+                                mpm_checkpoint *c, mpm_error *err);
+
+/* Write the guard header (magic, version, size, digest) into the first 512 bytes of a
+ * checkpoint image of `size` bytes, as the writer does; for tools and the fuzz target. */
+void mpm_checkpoint_seal(void *image, size_t size);
+
 void mpm_checkpoint_free(mpm_checkpoint *c);
 
 #endif

@@ -108,6 +108,16 @@ static int token_len(const char *s) {
  * parses. Negative indices count back from the vertices read so far (OBJ rule). */
 static mpm_status obj_parse(const char *path, char *text, size_t len, mpm_mesh *m, mpm_error *err) {
   const char *name = path; /* messages name the file as the caller gave it */
+  /* text, not binary: the counting pass splits lines at '\n' only and the parsing pass also
+     at a NUL, so a NUL byte would let the second find more vertices than the first counted */
+  const char *nul = memchr(text, '\0', len);
+  if (nul) {
+    long line = 1;
+    for (const char *q = text; q < nul; ++q) line += *q == '\n';
+    return mpm_error_set(err, MPM_ERR_PARSE,
+                         "%s:%ld: expected OBJ text, got a NUL byte (is this a binary file?)", name,
+                         line);
+  }
   long total_v = 0;
   for (char *line = text; line < text + len;) {
     char *nl = memchr(line, '\n', (size_t)(text + len - line));
@@ -168,7 +178,7 @@ static mpm_status obj_parse(const char *path, char *text, size_t len, mpm_mesh *
         long idx;
         if (n > 0 && errno == 0 && n <= total_v) {
           idx = n - 1;
-        } else if (n < 0 && errno == 0 && -n <= nv) {
+        } else if (n < 0 && errno == 0 && n >= -nv) { /* not -n: n may be LONG_MIN */
           idx = nv + n;
         } else if (n == 0) {
           st = mpm_error_set(err, MPM_ERR_PARSE,
@@ -638,6 +648,16 @@ static int ends_with_ci(const char *s, const char *suffix) {
   return 1;
 }
 
+/* Parse text[0, len) (NUL at text[len]; the parsers write into it) and free it. */
+static mpm_status parse_text(char *text, size_t len, mpm_mesh_format format, const char *name,
+                             mpm_mesh *mesh, mpm_error *err) {
+  mpm_status st = format == MPM_MESH_OBJ ? obj_parse(name, text, len, mesh, err)
+                                         : ply_parse(name, text, len, mesh, err);
+  mpm_free(text);
+  if (st != MPM_OK) mpm_mesh_free(mesh);
+  return st;
+}
+
 mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err) {
   memset(mesh, 0, sizeof *mesh);
   int is_obj = ends_with_ci(path, ".obj"), is_ply = ends_with_ci(path, ".ply");
@@ -648,10 +668,21 @@ mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err) {
   size_t len = 0;
   mpm_status st = read_whole_file(path, &text, &len, err);
   if (st != MPM_OK) return st;
-  st = is_obj ? obj_parse(path, text, len, mesh, err) : ply_parse(path, text, len, mesh, err);
-  mpm_free(text);
-  if (st != MPM_OK) mpm_mesh_free(mesh);
-  return st;
+  return parse_text(text, len, is_obj ? MPM_MESH_OBJ : MPM_MESH_PLY, path, mesh, err);
+}
+
+mpm_status mpm_mesh_parse(const char *data, size_t len, mpm_mesh_format format,
+                          const char *path_for_messages, mpm_mesh *mesh, mpm_error *err) {
+  const char *name = path_for_messages ? path_for_messages : "<mesh>";
+  memset(mesh, 0, sizeof *mesh);
+  if (format != MPM_MESH_OBJ && format != MPM_MESH_PLY)
+    return mpm_error_set(err, MPM_ERR_INVALID, "%s: unknown mesh format %d", name, (int)format);
+  if (len == SIZE_MAX) return oom(err, name);
+  char *text = mpm_alloc(len + 1);
+  if (!text) return oom(err, name);
+  if (len) memcpy(text, data, len);
+  text[len] = '\0';
+  return parse_text(text, len, format, name, mesh, err);
 }
 
 void mpm_mesh_free(mpm_mesh *mesh) {

@@ -10,6 +10,8 @@
 
 #include "core/error.h"
 
+#include <stddef.h>
+
 typedef struct mpm_mesh {
   int vertex_count, triangle_count;
   double *vertices; /* 3 per vertex: x y z, in the file's units */
@@ -24,6 +26,19 @@ typedef struct mpm_mesh {
 /// names the file and the line (OBJ, PLY header and ascii data) or element, and what was
 /// expected. A mesh without triangles is an error (MPM_ERR_PARSE). mesh is owned by the caller.
 mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err);
+
+/// The file formats mpm_mesh_parse reads.
+typedef enum mpm_mesh_format {
+  MPM_MESH_OBJ = 0,
+  MPM_MESH_PLY = 1,
+} mpm_mesh_format;
+
+/// Parse a mesh from memory: data[0, len) holds the bytes of an OBJ or PLY file (it need not
+/// be NUL-terminated; it is copied, not kept). Messages name path_for_messages (NULL:
+/// "<mesh>") where mpm_mesh_load names the file; otherwise the same contract as
+/// mpm_mesh_load, which reads the file and calls this parser.
+mpm_status mpm_mesh_parse(const char *data, size_t len, mpm_mesh_format format,
+                          const char *path_for_messages, mpm_mesh *mesh, mpm_error *err);
 
 /// Release the arrays of a mesh and zero it; a zeroed mesh is fine.
 void mpm_mesh_free(mpm_mesh *mesh);

@@ -1,4 +1,6 @@
 /* sim.c - building and destroying a simulation, and the public handle's accessors. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+
 #include "solver/sim.h"
 #include "core/alloc.h"
 #include "scene/sample.h"
@@ -171,6 +173,7 @@ mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char 
 void mpm_sim_destroy(mpm_sim *sim) {
   if (!sim) return;
   mpm_particles_free(&sim->particles);
+  mpm_particles_free(&sim->backup);
   free(sim->materials);
   if (sim->colliders)
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);

@@ -30,8 +30,13 @@ typedef mpm_real mpm_vq __attribute__((vector_size(4 * sizeof(mpm_real))));
 
 /* Pairwise lane sums of two vectors: (a0+a1, a2+a3, a4+a5, a6+a7, b0+b1, ..., b6+b7). */
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_pair(mpm_vl a, mpm_vl b) {
+#if defined(__clang__) /* clang has no __builtin_shuffle (the fuzz build, fuzz/, uses clang) */
+  return __builtin_shufflevector(a, b, 0, 2, 4, 6, 8, 10, 12, 14) +
+         __builtin_shufflevector(a, b, 1, 3, 5, 7, 9, 11, 13, 15);
+#else
   const mpm_vl_index even = {0, 2, 4, 6, 8, 10, 12, 14}, odd = {1, 3, 5, 7, 9, 11, 13, 15};
   return __builtin_shuffle(a, b, even) + __builtin_shuffle(a, b, odd);
+#endif
 }
 
 /* Lane sums of 8 vectors, as one vector: (sum v0, sum v1, ..., sum v7). */
