@@ -302,6 +302,11 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   return 0;
 }
 
+int32_t mpm_sparse_grid_touch(mpm_sparse_grid *g, const int32_t c[3]) {
+  if (!g->table_size && grow_table(g, 4096)) return -1;
+  return find_or_insert(g, c[0], c[1], c[2]);
+}
+
 void mpm_sparse_grid_clear(mpm_sparse_grid *g, int channels) {
   const long nb = (long)g->block_count;
   mpm_grid_block *blocks = g->blocks;

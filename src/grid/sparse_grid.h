@@ -79,6 +79,11 @@ static inline void mpm_sparse_grid_run(const mpm_sparse_grid *g, size_t b, int m
   *end = g->cell_start[q + MPM_BLOCK_NODES];
 }
 
+/* Index of the block at block coordinates c, activated (as a halo block, after the owner
+ * blocks of the last sort) when it was not active; -1 when out of memory. For point sets that
+ * are not sorted but scatter into the grid, such as Zhu's domain corners. */
+int32_t mpm_sparse_grid_touch(mpm_sparse_grid *g, const int32_t c[3]);
+
 /* Index of the block at block coordinates c, or -1. */
 int32_t mpm_sparse_grid_find(const mpm_sparse_grid *g, const int32_t c[3]);
 

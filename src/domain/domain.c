@@ -1,0 +1,349 @@
+/* domain.c - building particle domains from a body's lattice, their weights, switching them
+ * off (see domain.h). */
+#include "domain/domain.h"
+#include "core/alloc.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void mpm_domain_set_init(mpm_domain_set *s) {
+  memset(s, 0, sizeof *s);
+  mpm_particles_init(&s->particles, 16);
+}
+
+/* The real-valued corner arrays, for loops that treat them alike (grow, free). */
+static void corner_arrays(mpm_domain_set *s, mpm_real **out[19]) {
+  int k = 0;
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cX[d];
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cx[d];
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cv[d];
+  out[k++] = &s->cm;
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cp[d];
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cf[d];
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cvg[d];
+}
+#define CORNER_REAL_ARRAYS 19
+
+void mpm_domain_set_free(mpm_domain_set *s) {
+  mpm_particles_free(&s->particles);
+  free(s->corner);
+  free(s->w);
+  free(s->g);
+  free(s->active);
+  mpm_real **a[CORNER_REAL_ARRAYS];
+  corner_arrays(s, a);
+  for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) mpm_free(*a[k]);
+  free(s->adj_start);
+  free(s->adj);
+  free(s->cblock);
+  free(s->cbase);
+  memset(s, 0, sizeof *s);
+}
+
+/* ---- weights ------------------------------------------------------------------------ */
+
+int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORNERS],
+                       double g[MPM_HEX_CORNERS][3], double *volume) {
+  /* 2-point Gauss rule per axis: +-1/sqrt(3), weight 1 */
+  const double q = 1 / sqrt(3.0);
+  double V = 0;
+  memset(w, 0, MPM_HEX_CORNERS * sizeof w[0]);
+  memset(g, 0, MPM_HEX_CORNERS * sizeof g[0]);
+  for (int gp = 0; gp < 8; ++gp) {
+    const double xi[3] = {(gp & 1) ? q : -q, (gp & 2) ? q : -q, (gp & 4) ? q : -q};
+    double N[MPM_HEX_CORNERS], dN[MPM_HEX_CORNERS][3];
+    mpm_hex_shape(xi, N, dN);
+    /* J[r][c] = dX_r / dxi_c */
+    double J[3][3] = {{0}};
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) J[r][c] += X[a][r] * dN[a][c];
+    const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                       J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                       J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    if (!(det > 0)) return -1;
+    /* grad_X N = J^-T grad_xi N, and J^-T = cof(J) / det: det dV folds the division away */
+    double cof[3][3];
+    cof[0][0] = J[1][1] * J[2][2] - J[1][2] * J[2][1];
+    cof[0][1] = J[1][2] * J[2][0] - J[1][0] * J[2][2];
+    cof[0][2] = J[1][0] * J[2][1] - J[1][1] * J[2][0];
+    cof[1][0] = J[0][2] * J[2][1] - J[0][1] * J[2][2];
+    cof[1][1] = J[0][0] * J[2][2] - J[0][2] * J[2][0];
+    cof[1][2] = J[0][1] * J[2][0] - J[0][0] * J[2][1];
+    cof[2][0] = J[0][1] * J[1][2] - J[0][2] * J[1][1];
+    cof[2][1] = J[0][2] * J[1][0] - J[0][0] * J[1][2];
+    cof[2][2] = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    V += det;
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      w[a] += N[a] * det;
+      for (int r = 0; r < 3; ++r)
+        g[a][r] += cof[r][0] * dN[a][0] + cof[r][1] * dN[a][1] + cof[r][2] * dN[a][2];
+    }
+  }
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+    w[a] /= V;
+    for (int r = 0; r < 3; ++r) g[a][r] /= V;
+  }
+  *volume = V;
+  return 0;
+}
+
+/* ---- building from a lattice ---------------------------------------------------------- */
+
+static int grow(void **ptr, size_t old_n, size_t new_n, size_t elem, int aligned) {
+  void *q = aligned ? mpm_alloc(new_n * elem) : malloc(new_n * elem);
+  if (!q) return -1;
+  if (*ptr && old_n) memcpy(q, *ptr, old_n * elem);
+  if (aligned)
+    mpm_free(*ptr);
+  else
+    free(*ptr);
+  *ptr = q;
+  return 0;
+}
+
+static int reserve_corners(mpm_domain_set *s, size_t need) {
+  if (need <= s->corner_capacity) return 0;
+  size_t cap = s->corner_capacity ? s->corner_capacity : 1024;
+  while (cap < need) cap *= 2;
+  mpm_real **a[CORNER_REAL_ARRAYS];
+  corner_arrays(s, a);
+  for (int k = 0; k < CORNER_REAL_ARRAYS; ++k)
+    if (grow((void **)a[k], s->corner_count, cap, sizeof(mpm_real), 1)) return -1;
+  if (grow((void **)&s->cblock, 0, cap, sizeof *s->cblock, 0) ||
+      grow((void **)&s->cbase, 0, cap, sizeof *s->cbase, 0))
+    return -1;
+  s->corner_capacity = cap;
+  return 0;
+}
+
+static int reserve_particles(mpm_domain_set *s, size_t need) {
+  const size_t old = s->particles.capacity;
+  if (need <= old && s->corner) return 0;
+  size_t cap = old > 16 ? old : 16;
+  while (cap < need) cap *= 2;
+  if (mpm_particles_reserve(&s->particles, cap)) return -1;
+  const size_t n = s->particles.count;
+  if (grow((void **)&s->corner, n, cap, sizeof *s->corner, 0) ||
+      grow((void **)&s->w, n, cap, sizeof *s->w, 0) ||
+      grow((void **)&s->g, n, cap, sizeof *s->g, 0) ||
+      grow((void **)&s->active, n, cap, sizeof *s->active, 0))
+    return -1;
+  return 0;
+}
+
+/* Open-addressing map from lattice vertex (3 x 21 bits) to corner index. */
+typedef struct vertex_map {
+  uint64_t *keys;
+  uint32_t *values;
+  size_t mask;
+} vertex_map;
+
+static uint64_t vertex_key(const int64_t v[3]) {
+  const uint64_t b = 1u << 20;
+  return ((uint64_t)(v[0] + (int64_t)b) << 42) | ((uint64_t)(v[1] + (int64_t)b) << 21) |
+         (uint64_t)(v[2] + (int64_t)b);
+}
+
+static uint32_t *vertex_slot(vertex_map *m, uint64_t key, int *found) {
+  size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & m->mask;
+  while (m->keys[i] != UINT64_MAX && m->keys[i] != key) i = (i + 1) & m->mask;
+  *found = m->keys[i] == key;
+  m->keys[i] = key;
+  return &m->values[i];
+}
+
+/* Rebuild the corner -> particle-slot adjacency (CSR) over the active particles. */
+static int build_adjacency(mpm_domain_set *s) {
+  free(s->adj_start);
+  free(s->adj);
+  s->adj_start = calloc(s->corner_count + 1, sizeof *s->adj_start);
+  s->adj = malloc((s->particles.count * MPM_HEX_CORNERS + 1) * sizeof *s->adj);
+  if (!s->adj_start || !s->adj) return -1;
+  for (size_t p = 0; p < s->particles.count; ++p)
+    if (s->active[p])
+      for (int a = 0; a < MPM_HEX_CORNERS; ++a) s->adj_start[s->corner[p][a] + 1]++;
+  for (size_t c = 0; c < s->corner_count; ++c) s->adj_start[c + 1] += s->adj_start[c];
+  uint32_t *fill = malloc((s->corner_count + 1) * sizeof *fill);
+  if (!fill) return -1;
+  memcpy(fill, s->adj_start, (s->corner_count + 1) * sizeof *fill);
+  for (size_t p = 0; p < s->particles.count; ++p)
+    if (s->active[p])
+      for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+        s->adj[fill[s->corner[p][a]]++] = (uint32_t)(p * MPM_HEX_CORNERS + (size_t)a);
+  free(fill);
+  return 0;
+}
+
+mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_t first,
+                                      const double lattice_origin[3], double h,
+                                      const char *body_name, mpm_error *err) {
+  const size_t n = p->count - first;
+  if (reserve_particles(s, s->particles.count + n) ||
+      reserve_corners(s, s->corner_count + 2 * n + 64))
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
+                         body_name);
+  vertex_map m;
+  size_t size = 64;
+  while (size < 16 * n) size *= 2;
+  m.keys = malloc(size * sizeof *m.keys);
+  m.values = malloc(size * sizeof *m.values);
+  m.mask = size - 1;
+  if (!m.keys || !m.values) {
+    free(m.keys);
+    free(m.values);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
+                         body_name);
+  }
+  memset(m.keys, 0xFF, size * sizeof *m.keys);
+  mpm_status st = MPM_OK;
+  mpm_particles *dp = &s->particles;
+  for (size_t i = first; i < p->count && st == MPM_OK; ++i) {
+    int64_t k[3] = {0, 0, 0};
+    for (int d = 0; d < 3; ++d) {
+      const double u = ((double)p->x[d][i] - lattice_origin[d]) / h - 0.5;
+      k[d] = (int64_t)llround(u);
+      if (fabs(u - (double)k[d]) > 1e-3) {
+        st = mpm_error_set(err, MPM_ERR_INVALID,
+                           "%s: particle domains need particles on the body's lattice (jitter "
+                           "0); a particle is %.3g spacings off it",
+                           body_name, fabs(u - (double)k[d]));
+        break;
+      }
+    }
+    if (st != MPM_OK) break;
+    if (reserve_corners(s, s->corner_count + MPM_HEX_CORNERS)) {
+      st = mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s",
+                         body_name);
+      break;
+    }
+    const size_t q = dp->count;
+    double X[MPM_HEX_CORNERS][3];
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const int64_t v[3] = {k[0] + ((a >> 0) & 1), k[1] + ((a >> 1) & 1), k[2] + ((a >> 2) & 1)};
+      for (int d = 0; d < 3; ++d) X[a][d] = lattice_origin[d] + (double)v[d] * h;
+      int found;
+      uint32_t *slot = vertex_slot(&m, vertex_key(v), &found);
+      if (!found) {
+        const size_t c = s->corner_count++;
+        *slot = (uint32_t)c;
+        for (int d = 0; d < 3; ++d) {
+          s->cX[d][c] = s->cx[d][c] = (mpm_real)X[a][d];
+          s->cv[d][c] = p->v[d][i]; /* the body's initial velocity field at the vertex, below */
+        }
+      }
+      s->corner[q][a] = *slot;
+    }
+    double w[MPM_HEX_CORNERS], g[MPM_HEX_CORNERS][3], V;
+    mpm_domain_weights(X, w, g, &V); /* a lattice cube: never degenerate */
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      s->w[q][a] = (mpm_real)w[a];
+      for (int d = 0; d < 3; ++d) s->g[q][a][d] = (mpm_real)g[a][d];
+    }
+    /* move the particle's state over */
+    mpm_real pos[3], vel[3];
+    for (int d = 0; d < 3; ++d) {
+      pos[d] = p->x[d][i];
+      vel[d] = p->v[d][i];
+    }
+    mpm_particles_push(dp, pos, vel, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
+    for (int c = 0; c < 9; ++c) dp->F[c][q] = p->F[c][i];
+    dp->plastic[q] = p->plastic[i];
+    dp->id[q] = p->id[i];
+    s->active[q] = 1;
+    s->active_count++;
+  }
+  free(m.keys);
+  free(m.values);
+  if (st != MPM_OK) return st;
+  p->count = first; /* the body's particles now live in the domain set */
+  if (build_adjacency(s))
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s",
+                         body_name);
+  /* corner velocities: the least-squares affine fit v0 + A (x - c) of the body's particle
+   * velocities, evaluated at the corners. The sampler's fields (uniform, rigid rotation) are
+   * affine, so the fit is exact and v_p = sum_a omega_ap v_a gives them back at the particles. */
+  const size_t q0 = dp->count - n;
+  double c[3] = {0, 0, 0}, v0[3] = {0, 0, 0}, C[3][3] = {{0}}, M[3][3] = {{0}};
+  for (size_t q = q0; q < dp->count; ++q)
+    for (int d = 0; d < 3; ++d) {
+      c[d] += (double)dp->x[d][q] / (double)n;
+      v0[d] += (double)dp->v[d][q] / (double)n;
+    }
+  for (size_t q = q0; q < dp->count; ++q)
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) {
+        const double dt = (double)dp->x[t][q] - c[t];
+        C[r][t] += ((double)dp->x[r][q] - c[r]) * dt;
+        M[r][t] += ((double)dp->v[r][q] - v0[r]) * dt;
+      }
+  const double det = C[0][0] * (C[1][1] * C[2][2] - C[1][2] * C[2][1]) -
+                     C[0][1] * (C[1][0] * C[2][2] - C[1][2] * C[2][0]) +
+                     C[0][2] * (C[1][0] * C[2][1] - C[1][1] * C[2][0]);
+  double A[3][3] = {{0}};
+  const double scale = C[0][0] + C[1][1] + C[2][2];
+  if (det > 1e-12 * scale * scale * scale) {
+    double Ci[3][3]; /* symmetric inverse by cofactors */
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) {
+        const int r1 = (t + 1) % 3, r2 = (t + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+        Ci[r][t] = (C[r1][c1] * C[r2][c2] - C[r1][c2] * C[r2][c1]) / det;
+      }
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t)
+        for (int u = 0; u < 3; ++u) A[r][t] += M[r][u] * Ci[u][t];
+  }
+  for (size_t k = 0; k < s->corner_count; ++k) {
+    if (s->adj_start[k] == s->adj_start[k + 1]) continue;
+    const uint32_t first_slot = s->adj[s->adj_start[k]] / MPM_HEX_CORNERS;
+    if (first_slot < q0) continue; /* a corner of an earlier body */
+    for (int r = 0; r < 3; ++r) {
+      double v = v0[r];
+      for (int t = 0; t < 3; ++t) v += A[r][t] * ((double)s->cX[t][k] - c[t]);
+      s->cv[r][k] = (mpm_real)v;
+    }
+  }
+  mpm_domain_set_sync_particles(s);
+  return MPM_OK;
+}
+
+void mpm_domain_set_sync_particles(mpm_domain_set *s) {
+  mpm_particles *p = &s->particles;
+  const long n = (long)p->count;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    if (!s->active[i]) continue;
+    mpm_real x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const uint32_t c = s->corner[i][a];
+      const mpm_real w = s->w[i][a];
+      for (int d = 0; d < 3; ++d) {
+        x[d] += w * s->cx[d][c];
+        v[d] += w * s->cv[d][c];
+      }
+    }
+    for (int d = 0; d < 3; ++d) {
+      p->x[d][i] = x[d];
+      p->v[d][i] = v[d];
+    }
+  }
+}
+
+int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
+  if (i >= s->particles.count || !s->active[i]) return 0;
+  const mpm_particles *p = &s->particles;
+  mpm_real x[3], v[3];
+  for (int d = 0; d < 3; ++d) {
+    x[d] = p->x[d][i];
+    v[d] = p->v[d][i];
+  }
+  const long j = mpm_particles_push(to, x, v, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
+  if (j < 0) return -1;
+  for (int c = 0; c < 9; ++c) to->F[c][j] = p->F[c][i];
+  to->plastic[j] = p->plastic[i];
+  to->id[j] = p->id[i];
+  s->active[i] = 0;
+  s->active_count--;
+  return build_adjacency(s);
+}

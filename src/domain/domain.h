@@ -1,0 +1,73 @@
+/* domain.h - Zhu et al. 2017's particle domains (sec. 4): every particle of a domain body owns
+ * a hexahedron whose 8 corners it shares with its lattice neighbours, and talks to the grid
+ * only through those corners.
+ *
+ * The domain particles are kept apart from the standard material points (their own
+ * mpm_particles, never reordered, so that corner connectivity stays put) and carry the same
+ * state: position, velocity, F, plastic state, mass, V0, material, body, id. Corners are
+ * first-class data with their own positions and velocities: a corner is the unknown the
+ * enrichment and the implicit solve of a later issue will add to the DOF set.
+ *
+ * Per particle, precomputed in the reference configuration by Gauss quadrature:
+ *   w[p][a] = omega_ap = (1/V_p^0) int N_a dOmega                        (Zhu eq. 6)
+ *   g[p][a] = (1/V_p^0) int grad_X N_a dOmega, so that
+ *             grad_X omega_ip = sum_a omega_i(x_a) g[p][a]               (Zhu eq. 5)
+ * A particle switched off (Zhu sec. 7, topology change) leaves the set: it is copied into the
+ * standard particles, and its slot stays as an inactive entry whose corners it no longer
+ * touches. */
+#ifndef MPM_DOMAIN_DOMAIN_H
+#define MPM_DOMAIN_DOMAIN_H
+
+#include "core/error.h"
+#include "domain/hex.h"
+#include "solver/particles.h"
+
+#include <stdint.h>
+
+typedef struct mpm_domain_set {
+  mpm_particles particles;                /* the domain particles */
+  uint32_t (*corner)[MPM_HEX_CORNERS];    /* corner indices of each particle's hexahedron */
+  mpm_real (*w)[MPM_HEX_CORNERS];         /* omega_ap (Zhu eq. 6) */
+  mpm_real (*g)[MPM_HEX_CORNERS][3];      /* reference gradient averages (Zhu eq. 5), 1/m */
+  uint8_t *active;                        /* 0 once switched off */
+  size_t active_count;
+  /* corners */
+  size_t corner_count, corner_capacity;
+  mpm_real *cX[3]; /* reference position, m */
+  mpm_real *cx[3]; /* current position, m */
+  mpm_real *cv[3]; /* velocity, m/s (hybrid PIC/FLIP of the grid's) */
+  /* per step: rasterized mass, momentum and force; the grid (PIC) velocity at the corner */
+  mpm_real *cm, *cp[3], *cf[3], *cvg[3];
+  /* corner -> particle slots (p * 8 + a), CSR, for race-free particle -> corner gathers */
+  uint32_t *adj_start, *adj;
+  /* per step, per corner: the 8 sparse-grid blocks around its stencil's base node */
+  int32_t (*cblock)[8];
+  int32_t (*cbase)[3];
+} mpm_domain_set;
+
+void mpm_domain_set_init(mpm_domain_set *s);
+void mpm_domain_set_free(mpm_domain_set *s);
+
+/* omega_ap and the reference gradient averages of the hexahedron with reference corners X
+ * (in corner order, hex.h), by 2x2x2 Gauss quadrature (exact for trilinear hexahedra), and
+ * its volume. Returns -1 when the hexahedron is inverted or flat at a quadrature point. */
+int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORNERS],
+                       double g[MPM_HEX_CORNERS][3], double *volume);
+
+/* Turn particles [first, p->count) of p, which must lie on a lattice of spacing h whose points
+ * are lattice_origin + (k + 1/2) h (the body sampler's, without jitter), into domain
+ * particles: they are moved out of p into s, each gets the lattice cell around it as its
+ * hexahedron, and corners are shared between neighbours. Errors name the body. */
+mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_t first,
+                                      const double lattice_origin[3], double h,
+                                      const char *body_name, mpm_error *err);
+
+/* Position and velocity of every active domain particle from its corners:
+ * x_p = sum_a omega_ap x_a, v_p = sum_a omega_ap v_a (Zhu sec. 4). */
+void mpm_domain_set_sync_particles(mpm_domain_set *s);
+
+/* Switch the domain of particle i off: its state is appended to `to` as a standard material
+ * point (APIC affine moment zero) and the slot becomes inactive. Returns 0, -1 on OOM. */
+int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
+
+#endif

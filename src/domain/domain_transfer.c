@@ -1,0 +1,198 @@
+/* domain_transfer.c - two-step particle -> corner -> grid transfers and back (see
+ * domain_transfer.h). */
+#include "domain/domain_transfer.h"
+#include "core/mat3.h"
+
+#include <math.h>
+#include <string.h>
+
+int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
+                        const mpm_real origin[3]) {
+  for (size_t c = 0; c < s->corner_count; ++c) {
+    if (s->adj_start[c] == s->adj_start[c + 1]) continue; /* no active particle uses it */
+    const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
+                            s->cx[2][c] - origin[2]};
+    mpm_stencil st;
+    mpm_kernel_stencil(k, xr, &st);
+    int32_t *blocks = s->cblock[c];
+    for (int d = 0; d < 3; ++d) s->cbase[c][d] = st.base[d];
+    for (int o = 0; o < 8; ++o) {
+      const int32_t bc[3] = {(st.base[0] >> MPM_BLOCK_BITS) + ((o >> 2) & 1),
+                             (st.base[1] >> MPM_BLOCK_BITS) + ((o >> 1) & 1),
+                             (st.base[2] >> MPM_BLOCK_BITS) + (o & 1)};
+      blocks[o] = mpm_sparse_grid_touch(g, bc);
+      if (blocks[o] < 0) return -1;
+    }
+  }
+  return 0;
+}
+
+/* The channel values of node base + (i, j, k) of corner c. */
+static inline mpm_real *node_channel(mpm_grid_block *blocks, const int32_t cblock[8],
+                                     const int32_t base[3], int i, int j, int k, int ch) {
+  const int n[3] = {base[0] + i, base[1] + j, base[2] + k};
+  const int o = (((n[0] >> MPM_BLOCK_BITS) - (base[0] >> MPM_BLOCK_BITS)) << 2) |
+                (((n[1] >> MPM_BLOCK_BITS) - (base[1] >> MPM_BLOCK_BITS)) << 1) |
+                ((n[2] >> MPM_BLOCK_BITS) - (base[2] >> MPM_BLOCK_BITS));
+  const int local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
+  return &blocks[cblock[o]].ch[ch][local];
+}
+
+void mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g) {
+  const mpm_particles *p = &s->particles;
+  const long nc = (long)s->corner_count;
+  /* 1. particle -> corner, gathered per corner (each corner sums its <= 8 particle slots in
+   *    slot order: no races, the same sums for any thread count) */
+#pragma omp parallel for schedule(static)
+  for (long c = 0; c < nc; ++c) {
+    double m = 0, mv[3] = {0, 0, 0}, f[3] = {0, 0, 0};
+    for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
+      const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
+      const double w = s->w[q][a];
+      const double mq = p->mass[q];
+      m += w * mq;
+      for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
+      /* f_a = -V0 P g_ap (Zhu eq. 8 with eq. 5) */
+      mpm_real F[9], P[9];
+      for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
+      const mpm_material mat = mpm_material_at(&ctx->materials[p->material[q]], p->plastic[q]);
+      mat.model->pk1(&mat, F, P);
+      const mpm_real *gq = s->g[q][a];
+      for (int d = 0; d < 3; ++d)
+        f[d] -= (double)p->vol0[q] * (P[3 * d] * gq[0] + P[3 * d + 1] * gq[1] + P[3 * d + 2] * gq[2]);
+    }
+    s->cm[c] = (mpm_real)m;
+    for (int d = 0; d < 3; ++d) {
+      s->cp[d][c] = (mpm_real)mv[d];
+      s->cf[d][c] = (mpm_real)f[d];
+    }
+  }
+  /* 2. corner -> grid, serial in corner order */
+  const mpm_kernel *k = &ctx->kernel;
+  const int W = k->width;
+  for (long c = 0; c < nc; ++c) {
+    if (s->adj_start[c] == s->adj_start[c + 1]) continue;
+    const mpm_real xr[3] = {s->cx[0][c] - ctx->origin[0], s->cx[1][c] - ctx->origin[1],
+                            s->cx[2][c] - ctx->origin[2]};
+    mpm_stencil st;
+    mpm_kernel_stencil(k, xr, &st);
+    for (int i = 0; i < W; ++i)
+      for (int j = 0; j < W; ++j)
+        for (int l = 0; l < W; ++l) {
+          const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
+          if (w == 0) continue;
+          *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l, MPM_CH_MASS) += w * s->cm[c];
+          for (int d = 0; d < 3; ++d) {
+            *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l, MPM_CH_MV + d) +=
+                w * s->cp[d][c];
+            *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l, MPM_CH_F + d) +=
+                w * s->cf[d][c];
+          }
+        }
+  }
+}
+
+void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
+  mpm_real gradv[9] = {0}; /* grad_X v = sum_i v_i grad_X omega_ip^T = sum_a v^g_a g_ap^T */
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+    const uint32_t c = s->corner[q][a];
+    const mpm_real *ga = s->g[q][a];
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) gradv[3 * r + t] += s->cvg[r][c] * ga[t];
+  }
+  for (int e = 0; e < 9; ++e) s->particles.F[e][q] += dt * gradv[e];
+}
+
+mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
+                              const mpm_sparse_grid *g, const mpm_collider_pose *poses,
+                              int collider_count) {
+  const mpm_kernel *k = &ctx->kernel;
+  const int W = k->width;
+  const long nc = (long)s->corner_count;
+  const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
+  /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
+  mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
+#pragma omp parallel for schedule(static) reduction(max : max_v2)
+  for (long c = 0; c < nc; ++c) {
+    if (s->adj_start[c] == s->adj_start[c + 1]) continue;
+    const mpm_real xr[3] = {s->cx[0][c] - ctx->origin[0], s->cx[1][c] - ctx->origin[1],
+                            s->cx[2][c] - ctx->origin[2]};
+    mpm_stencil st;
+    mpm_kernel_stencil(k, xr, &st);
+    mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
+    for (int i = 0; i < W; ++i)
+      for (int j = 0; j < W; ++j)
+        for (int l = 0; l < W; ++l) {
+          const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
+          if (w == 0) continue;
+          for (int d = 0; d < 3; ++d) {
+            const mpm_real vn = *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l,
+                                              MPM_CH_VNEW + d);
+            const mpm_real vo = *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l,
+                                              MPM_CH_VOLD + d);
+            vnew[d] += w * vn;
+            dv[d] += w * (vn - vo);
+          }
+        }
+    mpm_real v[3];
+    for (int d = 0; d < 3; ++d) {
+      s->cvg[d][c] = vnew[d];
+      v[d] = alpha * (s->cv[d][c] + dv[d]) + (1 - alpha) * vnew[d];
+    }
+    /* colliders on the corners (Zhu sec. 7, Algorithm 1 line 24): the corner velocity obeys
+     * the boundary rule, and the particles take their velocities from the corners, which
+     * applies the collision impulse to them. The corner moves with the grid velocity (which
+     * the grid update already made obey the colliders), as F does: F stays the gradient of
+     * the corner positions (F = sum_a x_a g_ap^T) */
+    const mpm_real vg[3] = {vnew[0], vnew[1], vnew[2]};
+    const mpm_real xn[3] = {s->cx[0][c], s->cx[1][c], s->cx[2][c]};
+    for (int q = 0; q < collider_count; ++q) mpm_collider_apply(&poses[q], xn, v);
+    const mpm_real vg2 = vg[0] * vg[0] + vg[1] * vg[1] + vg[2] * vg[2];
+    if (vg2 > max_v2) max_v2 = vg2;
+    for (int d = 0; d < 3; ++d) {
+      s->cv[d][c] = v[d];
+      mpm_real x = s->cx[d][c] + dt * vg[d]; /* Zhu eq. 9 */
+      x = x < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : x;
+      s->cx[d][c] = x > ctx->clamp_hi[d] ? ctx->clamp_hi[d] : x;
+    }
+  }
+  /* 2. particles: F from the grid velocities at the corners (Zhu eq. 7), the return map of
+   *    plastic models, then position and velocity from the corners */
+  mpm_particles *p = &s->particles;
+  const long n = (long)p->count;
+  long bad = -1;
+#pragma omp parallel for schedule(static) reduction(max : max_v2)
+  for (long q = 0; q < n; ++q) {
+    if (!s->active[q]) continue;
+    mpm_domain_update_F(s, (size_t)q, dt);
+    mpm_real *F[9];
+    for (int e = 0; e < 9; ++e) F[e] = p->F[e] + q;
+    const mpm_material *mat = &ctx->materials[p->material[q]];
+    if (mat->model->return_map) mat->model->return_map(mat, 1, F, p->plastic + q);
+    mpm_real x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const uint32_t c = s->corner[q][a];
+      const mpm_real w = s->w[q][a];
+      for (int d = 0; d < 3; ++d) {
+        x[d] += w * s->cx[d][c];
+        v[d] += w * s->cv[d][c];
+      }
+    }
+    mpm_real check = 0, v2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      p->x[d][q] = x[d];
+      p->v[d][q] = v[d];
+      check += x[d];
+      v2 += v[d] * v[d];
+    }
+    for (int e = 0; e < 9; ++e) check += *F[e];
+    if (!isfinite(check + v2)) {
+#pragma omp critical(mpm_domain_bad)
+      if (bad < 0 || q < bad) bad = q;
+    } else if (v2 > max_v2) {
+      max_v2 = v2;
+    }
+  }
+  mpm_g2p_result r = {mpm_sqrt(max_v2), bad};
+  return r;
+}

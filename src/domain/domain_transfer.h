@@ -1,0 +1,41 @@
+/* domain_transfer.h - the two-step transfers of particle domains (Zhu et al. 2017, sec. 4 and
+ * Algorithm 1 without enrichment) on the sparse grid:
+ *   P2G  particle -> corner:  m_a = sum_p omega_ap m_p,  p_a = sum_p omega_ap m_p v_p,
+ *                             f_a = -sum_p V_p^0 P_p g_ap        (Zhu eq. 8 through eq. 5)
+ *        corner -> grid:      m_i += omega_i(x_a) m_a, and so on
+ *   G2P  grid -> corner:      v^g_a = sum_i omega_i(x_a) v_i^{n+1}, and the hybrid PIC/FLIP
+ *                             corner velocity; colliders on the corners (Zhu sec. 7)
+ *        particle:            F_p += dt sum_a v^g_a g_ap^T           (Zhu eq. 7)
+ *        corner:              x_a += dt v^g_a                        (Zhu eq. 9)
+ *        particle:            x_p = sum_a omega_ap x_a, v_p = sum_a omega_ap v_a
+ * omega_i is the engine's kernel given (Zhu's linear hat by default). The particle -> corner
+ * gathers go through the corner adjacency (race-free, deterministic); corner -> grid is one
+ * serial pass in corner order (deterministic). */
+#ifndef MPM_DOMAIN_DOMAIN_TRANSFER_H
+#define MPM_DOMAIN_DOMAIN_TRANSFER_H
+
+#include "collide/collider.h"
+#include "domain/domain.h"
+#include "grid/sparse_grid.h"
+#include "transfer/transfer.h"
+
+/* Activate the sparse-grid blocks of every corner's stencil (after mpm_sparse_grid_sort of the
+ * standard particles, before the grid is cleared). Returns 0, or -1 when out of memory. */
+int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
+                        const mpm_real origin[3]);
+
+/* Rasterize the domain particles to their corners and the corners to the grid's mass,
+ * momentum and force channels (ctx: kernel, origin, materials). */
+void mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g);
+
+/* After the grid update (channels hold v^n and v^{n+1}): update corners and particles.
+ * poses: colliders at the end of the step (count of them). */
+mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
+                              const mpm_sparse_grid *g, const mpm_collider_pose *poses,
+                              int collider_count);
+
+/* F_p^{n+1} = F_p^n + dt grad_X v (Zhu eq. 7) of particle q from the grid velocities at its
+ * corners (s->cvg), as mpm_domain_g2p does it; exposed for tests. */
+void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt);
+
+#endif

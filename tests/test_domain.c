@@ -1,0 +1,423 @@
+/* test_domain.c - Zhu et al. 2017's particle domains against independent truth: the weights
+ * omega_ap (eq. 6) and their gradient averages (eq. 5) by partition of unity, linear
+ * reproduction and a fine quadrature of the definitions; the two-step weights against the
+ * directly integrated omega_ip; domains built from a body's lattice (shared corners, initial
+ * velocity field reproduced); F from the reference-configuration update (eq. 7) exact for an
+ * affine corner motion; mass and momentum conserved through the two-step transfers. */
+#include "support.h"
+#include "domain/domain.h"
+#include "domain/domain_transfer.h"
+#include "scene/sample.h"
+#include "solver/grid_update.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* 4-point Gauss-Legendre rule on [-1, 1]: exact to degree 7, so exact for every integrand here
+ * (trilinear shape functions times the Jacobian determinant or its cofactors), and not the
+ * 2-point rule the code under test uses. */
+static const double GAUSS4_X[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                                   0.8611363115940526};
+static const double GAUSS4_W[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                                   0.3478548451374538};
+
+/* A hexahedron: the cube [0, h]^3 with its corners moved by up to `wobble` h at random. */
+static void random_hex(uint64_t *rng, double h, double wobble, double X[8][3]) {
+  for (int a = 0; a < 8; ++a)
+    for (int d = 0; d < 3; ++d)
+      X[a][d] = (((a >> d) & 1) ? h : 0) + test_rand(rng, -wobble, wobble) * h;
+}
+
+/* X(xi) and det dX/dxi of a trilinear hexahedron. */
+static double map_point(const double X[8][3], const double xi[3], double x[3], double N[8],
+                        double dN[8][3]) {
+  mpm_hex_shape(xi, N, dN);
+  double J[3][3] = {{0}};
+  for (int d = 0; d < 3; ++d) x[d] = 0;
+  for (int a = 0; a < 8; ++a)
+    for (int r = 0; r < 3; ++r) {
+      x[r] += N[a] * X[a][r];
+      for (int c = 0; c < 3; ++c) J[r][c] += X[a][r] * dN[a][c];
+    }
+  return J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+         J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+         J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+}
+
+/* inv = (dX/dxi)^-1 at a point with shape derivatives dN; returns det. */
+static double inverse_jacobian(const double X[8][3], const double dN[8][3], double inv[3][3]) {
+  double J[3][3] = {{0}};
+  for (int a = 0; a < 8; ++a)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) J[r][c] += X[a][r] * dN[a][c];
+  const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
+                     J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
+                     J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+  inv[0][0] = (J[1][1] * J[2][2] - J[1][2] * J[2][1]) / det;
+  inv[0][1] = (J[0][2] * J[2][1] - J[0][1] * J[2][2]) / det;
+  inv[0][2] = (J[0][1] * J[1][2] - J[0][2] * J[1][1]) / det;
+  inv[1][0] = (J[1][2] * J[2][0] - J[1][0] * J[2][2]) / det;
+  inv[1][1] = (J[0][0] * J[2][2] - J[0][2] * J[2][0]) / det;
+  inv[1][2] = (J[0][2] * J[1][0] - J[0][0] * J[1][2]) / det;
+  inv[2][0] = (J[1][0] * J[2][1] - J[1][1] * J[2][0]) / det;
+  inv[2][1] = (J[0][1] * J[2][0] - J[0][0] * J[2][1]) / det;
+  inv[2][2] = (J[0][0] * J[1][1] - J[0][1] * J[1][0]) / det;
+  return det;
+}
+
+static void test_weights_cube(void **state) {
+  (void)state;
+  double X[8][3], w[8], g[8][3], V;
+  uint64_t rng = 1;
+  random_hex(&rng, 0.1, 0, X);
+  assert_int_equal(mpm_domain_weights(X, w, g, &V), 0);
+  assert_close(V, 1e-3, 1e-15);
+  for (int a = 0; a < 8; ++a) {
+    assert_close(w[a], 0.125, 1e-15);
+    /* average of dN_a/dX_d over the cube: +-1/(4 h) */
+    for (int d = 0; d < 3; ++d) assert_close(g[a][d], (((a >> d) & 1) ? 1 : -1) / 0.4, 1e-12);
+  }
+}
+
+/* Partition of unity, linear reproduction and the definitions, on distorted hexahedra. */
+static void test_weights_distorted(void **state) {
+  (void)state;
+  uint64_t rng = 12345;
+  for (int trial = 0; trial < 20; ++trial) {
+    double X[8][3], w[8], g[8][3], V;
+    random_hex(&rng, 0.05, 0.2, X);
+    assert_int_equal(mpm_domain_weights(X, w, g, &V), 0);
+    double sw = 0, sg[3] = {0, 0, 0}, XG[3][3] = {{0}};
+    for (int a = 0; a < 8; ++a) {
+      sw += w[a];
+      for (int r = 0; r < 3; ++r) {
+        sg[r] += g[a][r];
+        for (int c = 0; c < 3; ++c) XG[r][c] += X[a][r] * g[a][c];
+      }
+    }
+    assert_close(sw, 1, 1e-14);
+    for (int r = 0; r < 3; ++r) {
+      assert_close(sg[r] * 0.05, 0, 1e-13);
+      for (int c = 0; c < 3; ++c) assert_close(XG[r][c], r == c, 1e-13);
+    }
+    /* the definitions by the 4^3 Gauss rule in xi: V, int N_a / V, int grad N_a / V and the
+     * centroid (linear reproduction: sum_a omega_ap X_a is the centroid of the domain) */
+    const int M = 4;
+    double Vq = 0, wq[8] = {0}, gq[8][3] = {{0}}, cq[3] = {0, 0, 0};
+    for (int i = 0; i < M; ++i)
+      for (int j = 0; j < M; ++j)
+        for (int k = 0; k < M; ++k) {
+          const double xi[3] = {GAUSS4_X[i], GAUSS4_X[j], GAUSS4_X[k]};
+          double x[3], N[8], dN[8][3];
+          const double det = map_point(X, xi, x, N, dN);
+          const double dv = det * GAUSS4_W[i] * GAUSS4_W[j] * GAUSS4_W[k];
+          double inv[3][3]; /* grad_X N = J^-T grad_xi N */
+          inverse_jacobian(X, dN, inv);
+          Vq += dv;
+          for (int d = 0; d < 3; ++d) cq[d] += x[d] * dv;
+          for (int a = 0; a < 8; ++a) {
+            wq[a] += N[a] * dv;
+            for (int d = 0; d < 3; ++d) /* dN/dX_d = sum_c dN/dxi_c dxi_c/dX_d */
+              gq[a][d] += (dN[a][0] * inv[0][d] + dN[a][1] * inv[1][d] + dN[a][2] * inv[2][d]) * dv;
+          }
+        }
+    assert_close(V, Vq, 1e-12 * Vq);
+    double c[3] = {0, 0, 0};
+    for (int a = 0; a < 8; ++a) {
+      assert_close(w[a], wq[a] / Vq, 1e-13);
+      for (int d = 0; d < 3; ++d) {
+        assert_close(g[a][d], gq[a][d] / Vq, 1e-12 * (fabs(g[a][d]) + 1));
+        c[d] += w[a] * X[a][d];
+      }
+    }
+    for (int d = 0; d < 3; ++d) assert_close(c[d], cq[d] / Vq, 1e-14);
+  }
+  /* an inverted hexahedron is refused */
+  double X[8][3], w[8], g[8][3], V;
+  random_hex(&rng, 0.05, 0, X);
+  for (int a = 0; a < 8; ++a) X[a][0] = -X[a][0];
+  assert_int_equal(mpm_domain_weights(X, w, g, &V), -1);
+}
+
+/* Linear hat weight of node i (index) at x, grid spacing dx (Zhu eqs. 2-3). */
+static double hat(const int i[3], const double x[3], double dx) {
+  double w = 1;
+  for (int d = 0; d < 3; ++d) {
+    const double r = fabs(x[d] / dx - i[d]);
+    w *= r < 1 ? 1 - r : 0;
+  }
+  return w;
+}
+
+/* omega_ip = sum_a omega_ap omega_i(x_a) and its gradient (eq. 5) against the integral of
+ * omega_i^*(X) = sum_a N_a(X) omega_i(x_a) over the reference domain (eq. 4), done directly. */
+static void test_two_step_equals_direct(void **state) {
+  (void)state;
+  uint64_t rng = 777;
+  const double dx = 0.1;
+  for (int trial = 0; trial < 5; ++trial) {
+    double X[8][3], x[8][3], w[8], g[8][3], V;
+    random_hex(&rng, 0.04, 0.15, X);
+    for (int a = 0; a < 8; ++a) /* deformed corners: shifted into the grid and distorted */
+      for (int d = 0; d < 3; ++d) x[a][d] = 0.23 + 1.3 * X[a][d] + test_rand(&rng, -0.01, 0.01);
+    mpm_domain_weights(X, w, g, &V);
+    for (int i0 = 1; i0 <= 3; ++i0)
+      for (int i1 = 1; i1 <= 3; ++i1)
+        for (int i2 = 1; i2 <= 3; ++i2) {
+          const int node[3] = {i0, i1, i2};
+          double two = 0, two_g[3] = {0, 0, 0};
+          for (int a = 0; a < 8; ++a) {
+            const double wa = hat(node, x[a], dx);
+            two += w[a] * wa;
+            for (int d = 0; d < 3; ++d) two_g[d] += wa * g[a][d];
+          }
+          const int M = 4;
+          double direct = 0, direct_g[3] = {0, 0, 0}, vol = 0;
+          for (int i = 0; i < M; ++i)
+            for (int j = 0; j < M; ++j)
+              for (int k = 0; k < M; ++k) {
+                const double xi[3] = {GAUSS4_X[i], GAUSS4_X[j], GAUSS4_X[k]};
+                double p[3], N[8], dN[8][3];
+                const double det = map_point(X, xi, p, N, dN);
+                const double dv = det * GAUSS4_W[i] * GAUSS4_W[j] * GAUSS4_W[k];
+                double star = 0, dstar[3] = {0, 0, 0}; /* omega_i^* and d/dxi of it */
+                for (int a = 0; a < 8; ++a) {
+                  const double wa = hat(node, x[a], dx);
+                  star += N[a] * wa;
+                  for (int c = 0; c < 3; ++c) dstar[c] += dN[a][c] * wa;
+                }
+                double inv[3][3];
+                inverse_jacobian(X, dN, inv);
+                for (int d = 0; d < 3; ++d)
+                  direct_g[d] +=
+                      (dstar[0] * inv[0][d] + dstar[1] * inv[1][d] + dstar[2] * inv[2][d]) * dv;
+                direct += star * dv;
+                vol += dv;
+              }
+          assert_close(two, direct / vol, 1e-13);
+          for (int d = 0; d < 3; ++d)
+            assert_close(two_g[d], direct_g[d] / vol, 1e-12 * (fabs(two_g[d]) + 1));
+        }
+  }
+}
+
+/* F = sum_a x_a g_ap^T after eq. 7 when the corners move affinely, x = A X + b. */
+static void test_affine_motion_exact_F(void **state) {
+  (void)state;
+  mpm_domain_set s;
+  mpm_domain_set_init(&s);
+  mpm_particles p;
+  mpm_particles_init(&p, 64);
+  const double h = 0.05, origin[3] = {0, 0, 0};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j)
+      for (int k = 0; k < 2; ++k) {
+        const mpm_real x[3] = {(mpm_real)((i + 0.5) * h + 0.2), (mpm_real)((j + 0.5) * h + 0.2),
+                               (mpm_real)((k + 0.5) * h + 0.2)};
+        const mpm_real v[3] = {0, 0, 0};
+        mpm_particles_push(&p, x, v, 1, (mpm_real)(h * h * h), 0, 0);
+      }
+  mpm_error err;
+  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, origin, h, "bodies[0]", &err), MPM_OK);
+  assert_int_equal(p.count, 0);
+  assert_int_equal(s.particles.count, 12);
+  assert_int_equal(s.corner_count, 4 * 3 * 3); /* (3+1)(2+1)(2+1) shared corners */
+  const double A[3][3] = {{1.3, 0.2, -0.1}, {-0.15, 0.7, 0.05}, {0.1, 0.3, 0.9}};
+  const double b[3] = {0.01, -0.02, 0.03}, dt = 1e-3;
+  for (size_t c = 0; c < s.corner_count; ++c)
+    for (int r = 0; r < 3; ++r) {
+      double xn = b[r];
+      for (int t = 0; t < 3; ++t) xn += A[r][t] * s.cX[t][c];
+      s.cvg[r][c] = (mpm_real)((xn - s.cX[r][c]) / dt);
+    }
+  for (size_t q = 0; q < s.particles.count; ++q) {
+    mpm_domain_update_F(&s, q, (mpm_real)dt);
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t)
+        assert_close(s.particles.F[3 * r + t][q], A[r][t], TOL(2e-3, 1e-11));
+  }
+  mpm_particles_free(&p);
+  mpm_domain_set_free(&s);
+}
+
+/* A sphere body with a rigid rotation: corners shared, particles reproduced by their corners,
+ * the rotation field carried over exactly; a body off the lattice is refused. */
+static void test_build_from_body(void **state) {
+  (void)state;
+  const char *text =
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
+      " \"time\": {\"end\": 1, \"fps\": 10},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"fixed_corotated\", \"E\": 1e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.5,0.5], "
+      "\"radius\": 0.12}, \"material\": \"m\", \"jitter\": %s, \"velocity\": [0.1,0,0],"
+      " \"angular_velocity\": [0,0,2]}]}";
+  char buf[1024];
+  snprintf(buf, sizeof buf, text, "0");
+  mpm_scene scene;
+  mpm_error err;
+  assert_int_equal(mpm_scene_parse(buf, "s.json", &scene, &err), MPM_OK);
+  mpm_particles p;
+  mpm_particles_init(&p, 64);
+  assert_int_equal(mpm_sample_body(&scene, 0, &p, &err), MPM_OK);
+  const size_t n = p.count;
+  mpm_particles ref;
+  mpm_particles_init(&ref, n);
+  for (size_t i = 0; i < n; ++i) {
+    const mpm_real x[3] = {p.x[0][i], p.x[1][i], p.x[2][i]};
+    const mpm_real v[3] = {p.v[0][i], p.v[1][i], p.v[2][i]};
+    mpm_particles_push(&ref, x, v, p.mass[i], p.vol0[i], 0, 0);
+  }
+  mpm_domain_set s;
+  mpm_domain_set_init(&s);
+  const double h = mpm_sample_spacing(&scene, 0);
+  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, scene.domain_min, h, "bodies[0]", &err),
+                   MPM_OK);
+  assert_int_equal(s.particles.count, n);
+  assert_true(s.corner_count < 2 * n); /* shared: about one corner per particle */
+  size_t shared8 = 0;
+  for (size_t c = 0; c < s.corner_count; ++c) shared8 += s.adj_start[c + 1] - s.adj_start[c] == 8;
+  assert_true(shared8 > n / 3);
+  for (size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) {
+      assert_close(s.particles.x[d][i], ref.x[d][i], TOL(1e-6, 1e-14));
+      assert_close(s.particles.v[d][i], ref.v[d][i], TOL(1e-6, 1e-13));
+    }
+  mpm_domain_set_free(&s);
+  mpm_scene_free(&scene);
+
+  snprintf(buf, sizeof buf, text, "0.5");
+  assert_int_equal(mpm_scene_parse(buf, "s.json", &scene, &err), MPM_OK);
+  p.count = 0;
+  assert_int_equal(mpm_sample_body(&scene, 0, &p, &err), MPM_OK);
+  mpm_domain_set_init(&s);
+  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, scene.domain_min, h, "bodies[0]", &err),
+                   MPM_ERR_INVALID);
+  assert_non_null(strstr(err.message, "jitter"));
+  mpm_domain_set_free(&s);
+  mpm_scene_free(&scene);
+  mpm_particles_free(&p);
+  mpm_particles_free(&ref);
+}
+
+/* Mass, momentum and (zero) total internal force through particle -> corner -> grid, and
+ * momentum back through grid -> corner -> particle, for a randomly deformed, moving block. */
+static void run_conservation(mpm_kernel_kind kind) {
+  mpm_domain_set s;
+  mpm_domain_set_init(&s);
+  mpm_particles p;
+  mpm_particles_init(&p, 64);
+  const double h = 0.025, dx = 0.05, origin[3] = {0, 0, 0};
+  uint64_t rng = 99;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 5; ++j)
+      for (int k = 0; k < 4; ++k) {
+        const mpm_real x[3] = {(mpm_real)((i + 0.5) * h + 0.3), (mpm_real)((j + 0.5) * h + 0.3),
+                               (mpm_real)((k + 0.5) * h + 0.3)};
+        const mpm_real v[3] = {0, 0, 0};
+        mpm_particles_push(&p, x, v, (mpm_real)test_rand(&rng, 0.5, 1.5), (mpm_real)(h * h * h),
+                           0, 0);
+      }
+  mpm_error err;
+  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, origin, h, "b", &err), MPM_OK);
+  for (size_t c = 0; c < s.corner_count; ++c)
+    for (int d = 0; d < 3; ++d) {
+      s.cv[d][c] = (mpm_real)test_rand(&rng, -1, 1);
+      s.cx[d][c] += (mpm_real)test_rand(&rng, -0.2, 0.2) * (mpm_real)h;
+    }
+  mpm_domain_set_sync_particles(&s);
+  for (size_t q = 0; q < s.particles.count; ++q)
+    for (int e = 0; e < 9; ++e) s.particles.F[e][q] += (mpm_real)test_rand(&rng, -0.2, 0.2);
+
+  mpm_material_desc md = mpm_material_desc_default();
+  md.model = MPM_MODEL_FIXED_COROTATED;
+  md.E = 1e5;
+  mpm_material mat;
+  mpm_material_init(&mat, &md);
+  mpm_transfer_ctx ctx;
+  memset(&ctx, 0, sizeof ctx);
+  ctx.kernel = mpm_kernel_make(kind, (mpm_real)dx, (mpm_real)dx);
+  ctx.dt = (mpm_real)1e-3;
+  ctx.flip_alpha = (mpm_real)0.95;
+  ctx.materials = &mat;
+  ctx.material_count = 1;
+  for (int d = 0; d < 3; ++d) {
+    ctx.clamp_lo[d] = -10;
+    ctx.clamp_hi[d] = 10;
+  }
+  mpm_sparse_grid g;
+  mpm_sparse_grid_init(&g);
+  mpm_particles none;
+  mpm_particles_init(&none, 16);
+  assert_int_equal(mpm_sparse_grid_sort(&g, &ctx.kernel, ctx.origin, 1, &none), 0);
+  assert_int_equal(mpm_domain_activate(&s, &g, &ctx.kernel, ctx.origin), 0);
+  mpm_sparse_grid_clear(&g, MPM_GRID_CHANNELS);
+  mpm_domain_p2g(&ctx, &s, &g);
+
+  double m_p = 0, P_p[3] = {0, 0, 0};
+  for (size_t q = 0; q < s.particles.count; ++q) {
+    m_p += s.particles.mass[q];
+    for (int d = 0; d < 3; ++d) P_p[d] += (double)s.particles.mass[q] * s.particles.v[d][q];
+  }
+  double m_g = 0, P_g[3] = {0, 0, 0}, f_g[3] = {0, 0, 0}, f_abs = 0;
+  for (size_t b = 0; b < g.block_count; ++b)
+    for (int n = 0; n < MPM_BLOCK_NODES; ++n) {
+      m_g += g.blocks[b].ch[MPM_CH_MASS][n];
+      for (int d = 0; d < 3; ++d) {
+        P_g[d] += g.blocks[b].ch[MPM_CH_MV + d][n];
+        f_g[d] += g.blocks[b].ch[MPM_CH_F + d][n];
+        f_abs += fabs(g.blocks[b].ch[MPM_CH_F + d][n]);
+      }
+    }
+  assert_close(m_g, m_p, TOL(1e-5, 1e-13) * m_p);
+  for (int d = 0; d < 3; ++d) {
+    assert_close(P_g[d], P_p[d], TOL(1e-5, 1e-13) * m_p);
+    assert_close(f_g[d], 0, TOL(1e-5, 1e-13) * f_abs);
+  }
+  assert_true(f_abs > 0);
+
+  /* grid update without gravity or walls, then back */
+  mpm_grid_update_ctx gu;
+  memset(&gu, 0, sizeof gu);
+  gu.dt = ctx.dt;
+  gu.dx = (mpm_real)dx;
+  for (int d = 0; d < 3; ++d) {
+    gu.wall_lo[d] = -1000000;
+    gu.wall_hi[d] = 1000000;
+  }
+  mpm_grid_update_sparse(&gu, &g);
+  mpm_g2p_result r = mpm_domain_g2p(&ctx, &s, &g, NULL, 0);
+  assert_true(r.bad_particle < 0);
+  double P_after[3] = {0, 0, 0};
+  for (size_t q = 0; q < s.particles.count; ++q)
+    for (int d = 0; d < 3; ++d) P_after[d] += (double)s.particles.mass[q] * s.particles.v[d][q];
+  for (int d = 0; d < 3; ++d) assert_close(P_after[d], P_p[d], TOL(1e-4, 1e-12) * m_p);
+
+  mpm_sparse_grid_free(&g);
+  mpm_particles_free(&none);
+  mpm_particles_free(&p);
+  mpm_domain_set_free(&s);
+}
+
+static void test_conservation_linear(void **state) {
+  (void)state;
+  run_conservation(MPM_KERNEL_LINEAR);
+}
+static void test_conservation_quadratic(void **state) {
+  (void)state;
+  run_conservation(MPM_KERNEL_QUADRATIC);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_weights_cube),
+      cmocka_unit_test(test_weights_distorted),
+      cmocka_unit_test(test_two_step_equals_direct),
+      cmocka_unit_test(test_affine_motion_exact_F),
+      cmocka_unit_test(test_build_from_body),
+      cmocka_unit_test(test_conservation_linear),
+      cmocka_unit_test(test_conservation_quadratic),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
