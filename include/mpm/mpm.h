@@ -76,6 +76,12 @@ mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap)
 /// for mpm_sim_write_checkpoint. NULL removes the flag.
 void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag);
 
+/// Particle domains (Zhu et al. 2017): switch off the domains of every domain particle inside
+/// the box [lo, hi] (m), now; they continue as standard material points (for topology change
+/// such as melting or cutting). The number switched off goes to *count (may be NULL).
+mpm_status mpm_sim_release_domains(mpm_sim *sim, const double lo[3], const double hi[3],
+                                   size_t *count);
+
 /// Read-only view of the particles, valid until the next call that advances sim.
 /// Components are separate arrays (structure of arrays) of `count` entries each, in the
 /// engine's real type (float or double, see real_size).

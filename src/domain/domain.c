@@ -345,5 +345,9 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
   to->id[j] = p->id[i];
   s->active[i] = 0;
   s->active_count--;
+  return 0;
+}
+
+int mpm_domain_set_rebuild(mpm_domain_set *s) {
   return build_adjacency(s);
 }

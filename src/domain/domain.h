@@ -67,7 +67,11 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
 void mpm_domain_set_sync_particles(mpm_domain_set *s);
 
 /* Switch the domain of particle i off: its state is appended to `to` as a standard material
- * point (APIC affine moment zero) and the slot becomes inactive. Returns 0, -1 on OOM. */
+ * point (APIC affine moment zero) and the slot becomes inactive. Returns 0, -1 on OOM. Call
+ * mpm_domain_set_rebuild once after a batch of releases. */
 int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
+
+/* Rebuild the corner adjacency over the active particles. Returns 0, -1 on OOM. */
+int mpm_domain_set_rebuild(mpm_domain_set *s);
 
 #endif

@@ -48,6 +48,11 @@ mpm_status mpm_write_pvd(const char *path, int count, const double *times, const
 /* Binary little-endian PLY point cloud: x y z, vx vy vz, and id. */
 mpm_status mpm_write_ply_points(const char *path, const mpm_frame_fields *f, mpm_error *err);
 
+/* The particle domains of a frame as hexahedral cells over their corners (vtu_domains.c). */
+struct mpm_domain_set;
+mpm_status mpm_write_domain_vtu(const char *path, const struct mpm_domain_set *s, double time,
+                                mpm_error *err);
+
 /* ---- stats CSV ---- */
 typedef struct mpm_stats_row {
   int frame;

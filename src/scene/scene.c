@@ -84,6 +84,7 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->solver.gimp_length = 0.0;
   scene->solver.on_instability = MPM_INSTABILITY_STOP;
   scene->solver.max_retries = 8;
+  scene->solver.domain_kernel = MPM_KERNEL_LINEAR;
   snprintf(scene->output.directory, sizeof scene->output.directory, "out");
   scene->output.vtu = 1;
   scene->output.ply = 0;

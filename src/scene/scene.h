@@ -98,6 +98,14 @@ typedef struct mpm_shape_desc {
   int profile_count;
 } mpm_shape_desc;
 
+/* Particle domains switched off (Zhu sec. 7): from `time` on, every domain particle of the body
+ * inside the box [min, max] continues as a standard material point. */
+typedef struct mpm_domain_release {
+  double time;             /* s */
+  double min[3], max[3];   /* m */
+} mpm_domain_release;
+#define MPM_MAX_RELEASES 16
+
 typedef struct mpm_body_desc {
   char name[MPM_NAME_MAX];
   mpm_shape_desc shape;
@@ -107,6 +115,9 @@ typedef struct mpm_body_desc {
   double particles_per_cell;  /* along the volume: ppc particles per grid cell (e.g. 8) */
   double jitter;              /* 0..1 fraction of the lattice spacing */
   unsigned seed;              /* jitter seed */
+  int domains;                /* 1: particle domains (Zhu et al. 2017 sec. 4); needs jitter 0 */
+  int release_count;
+  mpm_domain_release release[MPM_MAX_RELEASES];
 } mpm_body_desc;
 
 typedef struct mpm_keyframe {
@@ -168,6 +179,8 @@ typedef struct mpm_solver_desc {
   double gimp_length; /* uGIMP particle box side L_p, m (0 = dx / cbrt(ppc) of the bodies) */
   mpm_instability_action on_instability; /* stop (default) or retry the step with a smaller dt */
   int max_retries;                       /* halvings of dt tried for one step, default 8 */
+  mpm_kernel_kind domain_kernel;         /* corner <-> grid weights: linear (Zhu eq. 2, default),
+                                            quadratic or cubic */
 } mpm_solver_desc;
 
 typedef struct mpm_scene {

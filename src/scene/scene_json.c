@@ -41,7 +41,7 @@ static const char *const TIME_KEYS[] = {"end", "fps", NULL};
 static const char *const SOLVER_KEYS[] = {"kernel",      "transfer",       "flip_alpha",
                                           "cfl",         "max_dt",         "grid",
                                           "gimp_length", "on_instability", "max_retries",
-                                          NULL};
+                                          "domain_kernel", NULL};
 static const char *const OUTPUT_KEYS[] = {"directory", "vtu", "ply", "stats", "checkpoint_every",
                                           NULL};
 static const char *const CAMERA_KEYS[] = {"eye", "target", "fov", NULL};
@@ -52,6 +52,7 @@ static const char *const KERNEL_NAMES[] = {"linear", "quadratic", "cubic", "ugim
 static const char *const TRANSFER_NAMES[] = {"apic", "flip", NULL};
 static const char *const GRID_NAMES[] = {"sparse", "dense", NULL};
 static const char *const INSTABILITY_NAMES[] = {"stop", "retry", NULL};
+static const char *const DOMAIN_KERNEL_NAMES[] = {"linear", "quadratic", "cubic", NULL};
 
 const char mpm_sj_axis_name[3] = {'x', 'y', 'z'};
 
@@ -206,6 +207,7 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   int kernel = (int)d->kernel, transfer = (int)d->transfer, grid = (int)d->grid;
   int on_instability = (int)d->on_instability;
   long long retries = d->max_retries;
+  int domain_kernel = (int)d->domain_kernel;
   if (mpm_json_expect_object(c, sv, "an object of solver options") < 0 ||
       mpm_json_check_keys(c, sv, SOLVER_KEYS, NULL) < 0 ||
       mpm_json_enum(c, sv, "kernel", 0, KERNEL_NAMES, &kernel) < 0 ||
@@ -220,9 +222,11 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
                       &d->gimp_length) < 0 ||
       mpm_json_enum(c, sv, "on_instability", 0, INSTABILITY_NAMES, &on_instability) < 0 ||
       mpm_json_integer(c, sv, "max_retries", 0, mpm_json_in('[', 1, 30, ']', "halvings of dt"),
-                       &retries) < 0)
+                       &retries) < 0 ||
+      mpm_json_enum(c, sv, "domain_kernel", 0, DOMAIN_KERNEL_NAMES, &domain_kernel) < 0)
     return -1;
   d->max_retries = (int)retries;
+  d->domain_kernel = (mpm_kernel_kind)domain_kernel;
   d->on_instability = (mpm_instability_action)on_instability;
   d->kernel = (mpm_kernel_kind)kernel;
   d->transfer = (mpm_transfer_kind)transfer;

@@ -18,7 +18,8 @@
 
 static const char *const BODY_KEYS[] = {
     "name",   "shape", "material", "velocity", "angular_velocity", "particles_per_cell",
-    "jitter", "seed",  NULL};
+    "jitter", "seed",  "domains",  "domain_release",   NULL};
+static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", NULL};
 static const char *const MOTION_KEYS[] = {"velocity", "axis", "angular_speed", "keyframes", NULL};
@@ -339,6 +340,42 @@ static int check_inside(mpm_json_ctx *c, const mpm_scene *s, const double lo[3],
 
 /* ---- bodies --------------------------------------------------------------------------- */
 
+/* domain_release: [{"time": s, "min": [x, y, z], "max": [x, y, z]}, ...] */
+static int parse_releases(mpm_json_ctx *c, const cJSON *node, mpm_body_desc *b) {
+  const cJSON *arr = NULL;
+  const int has = mpm_sj_get_array(c, node, "domain_release", 0,
+                                   "an array of {time, min, max} objects", &arr);
+  if (has <= 0) return has;
+  if (!b->domains)
+    return mpm_json_fail_at(c, "domain_release", MPM_ERR_INVALID,
+                            "applies only to a body with \"domains\": true");
+  const int n = cJSON_GetArraySize(arr);
+  if (n > MPM_MAX_RELEASES)
+    return mpm_json_fail_at(c, "domain_release", MPM_ERR_INVALID,
+                            "expected at most %d entries, got %d", MPM_MAX_RELEASES, n);
+  size_t old = mpm_json_push_key(c, "domain_release");
+  int i = 0;
+  for (const cJSON *e = arr->child; e; e = e->next, ++i) {
+    size_t o2 = mpm_json_push_index(c, i);
+    mpm_domain_release *r = &b->release[i];
+    if (mpm_json_expect_object(c, e, "an object with keys time, min, max") < 0 ||
+        mpm_json_check_keys(c, e, RELEASE_KEYS, NULL) < 0 ||
+        mpm_json_number(c, e, "time", 1, mpm_json_ge(0, "s"), &r->time) < 0 ||
+        mpm_json_vec3(c, e, "min", 1, mpm_json_any("m"), r->min) < 0 ||
+        mpm_json_vec3(c, e, "max", 1, mpm_json_any("m"), r->max) < 0)
+      return -1;
+    for (int d = 0; d < 3; ++d)
+      if (!(r->max[d] > r->min[d]))
+        return mpm_json_fail_at(c, "max", MPM_ERR_INVALID,
+                                "expected max[%d] > min[%d] = %g, got %g", d, d, r->min[d],
+                                r->max[d]);
+    b->release_count = i + 1;
+    mpm_json_pop(c, o2);
+  }
+  mpm_json_pop(c, old);
+  return 0;
+}
+
 static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, mpm_scene *s,
                       mpm_body_desc *b) {
   if (mpm_json_expect_object(c, node, "a body object") < 0 ||
@@ -361,6 +398,21 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
       mpm_json_integer(c, node, "seed", 0, mpm_json_in('[', 0, 4294967295.0, ']', NULL), &seed) < 0)
     return -1;
   b->seed = (unsigned)seed;
+  if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 ||
+      parse_releases(c, node, b) < 0)
+    return -1;
+  if (b->domains && b->jitter != 0)
+    return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,
+                            "expected 0 with \"domains\": true (particle domains are the cells "
+                            "of the body's lattice), got %g",
+                            b->jitter);
+  if (b->domains && s->solver.grid != MPM_GRID_SPARSE)
+    return mpm_json_fail_at(c, "domains", MPM_ERR_INVALID,
+                            "particle domains need solver.grid \"sparse\"");
+  if (b->domains && s->solver.on_instability == MPM_INSTABILITY_RETRY)
+    return mpm_json_fail_at(c, "domains", MPM_ERR_INVALID,
+                            "particle domains cannot yet be combined with solver.on_instability "
+                            "\"retry\"; use \"stop\"");
   double lo[3], hi[3];
   char note[200] = "";
   if (b->shape.kind == MPM_SHAPE_MESH) {

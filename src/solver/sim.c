@@ -106,13 +106,24 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     st = oom(err, "particles");
     goto fail;
   }
+  mpm_domain_set_init(&sim->domains);
+  uint32_t next_id = 0;
   for (int b = 0; b < sc->body_count; ++b) {
+    const size_t first = sim->particles.count;
     st = mpm_sample_body(sc, b, &sim->particles, err);
     if (st != MPM_OK) goto fail;
-  }
-  for (size_t i = 0; i < sim->particles.count; ++i) {
-    sim->particles.id[i] = (uint32_t)i;
-    sim->particles.plastic[i] = sim->materials[sim->particles.material[i]].model->plastic_initial;
+    for (size_t i = first; i < sim->particles.count; ++i) {
+      sim->particles.id[i] = next_id++;
+      sim->particles.plastic[i] =
+          sim->materials[sim->particles.material[i]].model->plastic_initial;
+    }
+    if (sc->bodies[b].domains) { /* the body's particles move into the domain set */
+      char name[MPM_NAME_MAX + 64];
+      snprintf(name, sizeof name, "%s: bodies[%d] (\"%s\")", sc->path, b, sc->bodies[b].name);
+      st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->domain_min,
+                                      mpm_sample_spacing(sc, b), name, err);
+      if (st != MPM_OK) goto fail;
+    }
   }
 
   /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
@@ -122,6 +133,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     lp = sc->dx / cbrt(ppc > 1 ? ppc : 1);
   }
   sim->kernel = mpm_kernel_make(sc->solver.kernel, (mpm_real)sc->dx, (mpm_real)lp);
+  sim->domain_kernel = mpm_kernel_make(sc->solver.domain_kernel, (mpm_real)sc->dx, (mpm_real)sc->dx);
 
   if (sc->solver.grid == MPM_GRID_DENSE) {
     const int n[3] = {sim->cells[0] + 3, sim->cells[1] + 3, sim->cells[2] + 3};
@@ -147,12 +159,61 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     for (int d = 0; d < 3; ++d) v2 += sim->particles.v[d][i] * sim->particles.v[d][i];
     if (v2 > vmax2) vmax2 = v2;
   }
+  for (size_t i = 0; i < sim->domains.particles.count; ++i) {
+    mpm_real v2 = 0;
+    for (int d = 0; d < 3; ++d) v2 += sim->domains.particles.v[d][i] * sim->domains.particles.v[d][i];
+    if (v2 > vmax2) vmax2 = v2;
+  }
   sim->max_speed = mpm_sqrt(vmax2);
   snprintf(sim->output_dir, sizeof sim->output_dir, "%s", sc->output.directory);
   *out = sim;
   return MPM_OK;
 fail:
   mpm_sim_destroy(sim);
+  return st;
+}
+
+/* Release the active domain particles inside [lo, hi] whose body allows it at this time
+ * (body < 0: any body, no time condition); the count released goes to *count. */
+static mpm_status release_box(mpm_sim *sim, int body, const double lo[3], const double hi[3],
+                              size_t *count) {
+  mpm_domain_set *s = &sim->domains;
+  for (size_t i = 0; i < s->particles.count; ++i) {
+    if (!s->active[i] || (body >= 0 && s->particles.body[i] != body)) continue;
+    int inside = 1;
+    for (int d = 0; d < 3; ++d)
+      inside &= s->particles.x[d][i] >= lo[d] && s->particles.x[d][i] <= hi[d];
+    if (!inside) continue;
+    if (mpm_domain_set_release(s, i, &sim->particles))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory switching domains off");
+    ++*count;
+  }
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim) {
+  if (!sim->domains.active_count) return MPM_OK;
+  size_t released = 0;
+  for (int b = 0; b < sim->scene.body_count; ++b) {
+    const mpm_body_desc *body = &sim->scene.bodies[b];
+    for (int r = 0; r < body->release_count; ++r)
+      if (sim->time >= body->release[r].time) {
+        mpm_status st = release_box(sim, b, body->release[r].min, body->release[r].max, &released);
+        if (st != MPM_OK) return st;
+      }
+  }
+  if (released && mpm_domain_set_rebuild(&sim->domains))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory switching domains off");
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_release_domains(mpm_sim *sim, const double lo[3], const double hi[3],
+                                   size_t *count) {
+  size_t released = 0;
+  mpm_status st = release_box(sim, -1, lo, hi, &released);
+  if (st == MPM_OK && released && mpm_domain_set_rebuild(&sim->domains))
+    st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory switching domains off");
+  if (count) *count = released;
   return st;
 }
 
@@ -174,6 +235,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   if (!sim) return;
   mpm_particles_free(&sim->particles);
   mpm_particles_free(&sim->backup);
+  mpm_domain_set_free(&sim->domains);
   free(sim->materials);
   if (sim->colliders)
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);

@@ -5,6 +5,7 @@
 #define MPM_SOLVER_SIM_H
 
 #include "collide/collider.h"
+#include "domain/domain.h"
 #include "grid/dense_grid.h"
 #include "grid/sparse_grid.h"
 #include "interp/kernel.h"
@@ -30,6 +31,9 @@ struct mpm_sim {
   mpm_collider_pose *poses;
   int collider_count;
   mpm_kernel kernel;
+  /* Zhu's particle domains: the domain particles, their corners, and the corner kernel */
+  mpm_domain_set domains;
+  mpm_kernel domain_kernel;
   mpm_real origin[3];
   int cells[3]; /* grid cells per axis over the domain */
   mpm_sparse_grid sparse;
@@ -97,6 +101,10 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
 
 /* Output bookkeeping for frame_count + 1 records (sim_output.c). */
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);
+
+/* Switch off the domains the scene's domain_release boxes name for the current time (sim.c);
+ * run before every step. */
+mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim);
 
 /* Write the current state as the next frame (VTU, PLY, PVD, stats) into the output dir. */
 mpm_status mpm_sim_write_frame(mpm_sim *sim);

@@ -31,8 +31,36 @@ mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   return mpm_sim_write_frame(sim);
 }
 
+/* The standard and the active domain particles in one set, for the frame files. */
+static int combine_particles(const mpm_sim *sim, mpm_particles *all) {
+  const mpm_particles *a = &sim->particles, *d = &sim->domains.particles;
+  if (mpm_particles_init(all, a->count + sim->domains.active_count + 1)) return -1;
+  for (int pass = 0; pass < 2; ++pass) {
+    const mpm_particles *p = pass ? d : a;
+    for (size_t i = 0; i < p->count; ++i) {
+      if (pass && !sim->domains.active[i]) continue;
+      const mpm_real x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+      const mpm_real v[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
+      const long j = mpm_particles_push(all, x, v, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
+      for (int c = 0; c < 9; ++c) {
+        all->F[c][j] = p->F[c][i];
+        all->B[c][j] = p->B[c][i];
+      }
+      all->plastic[j] = p->plastic[i];
+      all->id[j] = p->id[i];
+    }
+  }
+  return 0;
+}
+
 mpm_status mpm_sim_write_frame(mpm_sim *sim) {
-  const mpm_particles *p = &sim->particles;
+  mpm_particles combined;
+  memset(&combined, 0, sizeof combined);
+  const int has_domains = sim->domains.particles.count > 0;
+  if (has_domains && combine_particles(sim, &combined))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d",
+                         sim->written_frames);
+  const mpm_particles *p = has_domains ? &combined : &sim->particles;
   const mpm_output_desc *o = &sim->scene.output;
   const int frame = sim->written_frames;
   if (frame > sim->frame_count)
@@ -72,6 +100,11 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
     if (st != MPM_OK) goto done;
   }
+  if (o->vtu && has_domains) {
+    snprintf(path, sizeof path, "%s/domains_%04d.vtu", sim->output_dir, frame);
+    st = mpm_write_domain_vtu(path, &sim->domains, sim->time, &sim->error);
+    if (st != MPM_OK) goto done;
+  }
   if (o->ply) {
     snprintf(path, sizeof path, "%s/frame_%04d.ply", sim->output_dir, frame);
     st = mpm_write_ply_points(path, &ff, &sim->error);
@@ -99,6 +132,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   }
   sim->written_frames++;
 done:
+  mpm_particles_free(&combined);
   mpm_free(J);
   mpm_free(stress);
   return st;

@@ -7,6 +7,7 @@
 #include "solver/sim.h"
 #include "solver/grid_update.h"
 #include "core/alloc.h"
+#include "domain/domain_transfer.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -81,6 +82,7 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
                          p->count ? p->body[worst] : -1, p->count ? p->material[worst] : -1,
                          sqrt(worst_v2));
   }
+  if (mpm_sim_apply_domain_releases(sim) != MPM_OK) return sim->error.status;
   const double t0 = mpm_wall_seconds();
 
   mpm_transfer_ctx tc;
@@ -116,16 +118,44 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
       mpm_particles_permute(p, g->perm, &sim->scratch, sim->iscratch);
       for (size_t j = 0; j < p->count; ++j) g->perm[j] = (uint32_t)j;
     }
-    /* APIC P2G fuses the force into the momentum and leaves the force channels alone */
-    const int fused = sc->solver.transfer == MPM_TRANSFER_APIC;
+    /* APIC P2G fuses the force into the momentum and leaves the force channels alone. Domain
+     * corners bring their force in the force channels (their FLIP update needs the grid's
+     * velocity before the force), so with domains every channel is cleared and read. */
+    const int domains = sim->domains.active_count > 0;
+    const int fused = sc->solver.transfer == MPM_TRANSFER_APIC && !domains;
     gu.force_in_momentum = fused;
+    if (domains && mpm_domain_activate(&sim->domains, g, &sim->domain_kernel, sim->origin))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory activating the grid around domain corners",
+                           (long long)sim->steps);
     mpm_sparse_grid_clear(g, fused ? MPM_CH_F : MPM_GRID_CHANNELS);
+    mpm_transfer_ctx dtc = tc;
+    dtc.kernel = sim->domain_kernel;
     const double t1 = mpm_wall_seconds();
     mpm_p2g_sparse(&tc, g, p);
+    if (domains) mpm_domain_p2g(&dtc, &sim->domains, g);
     const double t2 = mpm_wall_seconds();
     mpm_grid_update_sparse(&gu, g);
     const double t3 = mpm_wall_seconds();
     r = mpm_g2p_sparse(&tc, g, p);
+    if (domains) {
+      const mpm_g2p_result rd =
+          mpm_domain_g2p(&dtc, &sim->domains, g, sim->poses, sim->collider_count);
+      if (rd.max_speed > r.max_speed) r.max_speed = rd.max_speed;
+      if (rd.bad_particle >= 0 && r.bad_particle < 0) {
+        const mpm_particles *dp = &sim->domains.particles;
+        const long i = rd.bad_particle;
+        sim->time += dt;
+        sim->steps++;
+        return mpm_error_set(
+            &sim->error, MPM_ERR_UNSTABLE,
+            "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): domain particle id %u "
+            "(body %d, material %d) has a non-finite %s; try a smaller solver.cfl or "
+            "solver.max_dt, or a finer domain.dx",
+            (long long)sim->steps, sim->time, dt, dp->id[i], dp->body[i], dp->material[i],
+            bad_quantity(dp, i));
+      }
+    }
     const double t4 = mpm_wall_seconds();
     sim->times.sort += t1 - t0;
     sim->times.p2g += t2 - t1;

@@ -1,0 +1,166 @@
+/* test_domain_sim.c - particle domains in the simulation: a bar stretched to three times its
+ * length by two sticky grips stays connected with domains and tears apart as standard
+ * material points (the largest gap between initially neighbouring particles is printed for
+ * both); mass is conserved; the domains can be switched off from the scene (by box and time)
+ * and from the API, after which the particles go on as standard material points. */
+#include "support.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *BAR =
+    "{\"domain\": {\"min\": [0, 0.3, 0.3], \"max\": [1.6, 0.7, 0.7], \"dx\": 0.04},"
+    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 2.0, \"fps\": 4},"
+    " \"materials\": [{\"name\": \"rubber\", \"model\": \"neo_hookean\", \"E\": 2e4, \"nu\": 0.3, "
+    "\"density\": 1000}],"
+    " \"bodies\": [{\"name\": \"bar\", \"shape\": {\"type\": \"box\", \"center\": [0.8, 0.5, 0.5], "
+    "\"half_extent\": [0.2, 0.04, 0.04]}, \"material\": \"rubber\", \"particles_per_cell\": 8, "
+    "\"domains\": %s %s}],"
+    " \"colliders\": ["
+    "   {\"shape\": {\"type\": \"box\", \"center\": [0.6, 0.5, 0.5], \"half_extent\": [0.05, 0.08, "
+    "0.08]}, \"rule\": \"sticky\", \"motion\": {\"velocity\": [-0.2, 0, 0]}},"
+    "   {\"shape\": {\"type\": \"box\", \"center\": [1.0, 0.5, 0.5], \"half_extent\": [0.05, 0.08, "
+    "0.08]}, \"rule\": \"sticky\", \"motion\": {\"velocity\": [0.2, 0, 0]}}]}";
+
+static mpm_sim *bar(const char *domains, const char *extra) {
+  char text[4096];
+  snprintf(text, sizeof text, BAR, domains, extra);
+  mpm_scene scene;
+  mpm_error err;
+  if (mpm_scene_parse(text, "bar.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_scene_free(&scene);
+  return sim;
+}
+
+/* Positions of all particles (standard and domain) by id. */
+static size_t positions(const mpm_sim *sim, double (*x)[3], size_t cap) {
+  size_t n = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const mpm_particles *p = pass ? &sim->domains.particles : &sim->particles;
+    for (size_t i = 0; i < p->count; ++i) {
+      if (pass && !sim->domains.active[i]) continue;
+      assert_true(p->id[i] < cap);
+      for (int d = 0; d < 3; ++d) x[p->id[i]][d] = p->x[d][i];
+      ++n;
+    }
+  }
+  return n;
+}
+
+/* The largest distance now between particles that started one lattice spacing h apart. */
+static double largest_gap(const double (*x0)[3], const double (*x1)[3], size_t n, double h) {
+  double worst = 0;
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      double d0 = 0, d1 = 0;
+      for (int d = 0; d < 3; ++d) {
+        d0 += (x0[i][d] - x0[j][d]) * (x0[i][d] - x0[j][d]);
+        d1 += (x1[i][d] - x1[j][d]) * (x1[i][d] - x1[j][d]);
+      }
+      if (d0 < 1.01 * h * h && d1 > worst) worst = d1;
+    }
+  return sqrt(worst);
+}
+
+static double stretch_gap(const char *domains, double *length) {
+  mpm_sim *sim = bar(domains, "");
+  const size_t cap = sim->particles.count + sim->domains.particles.count;
+  double(*x0)[3] = calloc(cap, sizeof *x0), (*x1)[3] = calloc(cap, sizeof *x1);
+  const size_t n = positions(sim, x0, cap);
+  const double mass0 = mpm_sim_diagnostics(sim).mass;
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  assert_int_equal(positions(sim, x1, cap), n);
+  assert_close(mpm_sim_diagnostics(sim).mass, mass0, 1e-6 * mass0);
+  const double h = 0.02; /* dx / cbrt(8) */
+  const double gap = largest_gap((const double(*)[3])x0, (const double(*)[3])x1, n, h);
+  double lo = 1e9, hi = -1e9;
+  for (size_t i = 0; i < n; ++i) {
+    lo = fmin(lo, x1[i][0]);
+    hi = fmax(hi, x1[i][0]);
+  }
+  *length = hi - lo;
+  printf("bar stretched by 0.8 m (%s): %zu particles, extent %.3f m, largest gap between "
+         "initial neighbours %.4f m = %.1f spacings\n",
+         domains[0] == 't' ? "particle domains" : "standard material points", n, *length, gap,
+         gap / h);
+  free(x0);
+  free(x1);
+  mpm_sim_destroy(sim);
+  return gap;
+}
+
+static void test_stretched_bar(void **state) {
+  (void)state;
+  double len_dom, len_std;
+  const double gap_dom = stretch_gap("true", &len_dom);
+  const double gap_std = stretch_gap("false", &len_std);
+  /* the grips pulled the bar to about three times its 0.4 m: a uniform stretch puts initial
+   * neighbours 3 spacings (0.06 m) apart; with domains nothing opens much wider than that,
+   * standard material points tear */
+  assert_true(len_dom > 1.1);
+  assert_true(gap_dom < 0.15);
+  assert_true(gap_std > 2 * gap_dom);
+}
+
+static void test_release_from_scene_and_api(void **state) {
+  (void)state;
+  /* the right half of the bar is released at t = 0.25 s */
+  mpm_sim *sim = bar("true", ", \"domain_release\": [{\"time\": 0.25, \"min\": [0.8, 0, 0], "
+                             "\"max\": [2, 1, 1]}]");
+  const size_t n = sim->domains.active_count;
+  assert_int_equal(sim->particles.count, 0);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK); /* to t = 0.25 */
+  assert_int_equal(sim->domains.active_count, n);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  assert_true(sim->domains.active_count > n / 3 && sim->domains.active_count < 2 * n / 3);
+  assert_int_equal(sim->particles.count + sim->domains.active_count, n);
+  /* the rest through the API */
+  const double lo[3] = {-1, -1, -1}, hi[3] = {3, 3, 3};
+  size_t count = 0;
+  assert_int_equal(mpm_sim_release_domains(sim, lo, hi, &count), MPM_OK);
+  assert_int_equal(sim->domains.active_count, 0);
+  assert_int_equal(sim->particles.count, n);
+  assert_true(count > 0);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  mpm_sim_destroy(sim);
+}
+
+static void test_domain_scene_keys(void **state) {
+  (void)state;
+  const struct {
+    const char *domains, *extra, *message;
+  } bad[] = {
+      {"true", ", \"jitter\": 0.2", "bodies[0].jitter: expected 0 with \"domains\": true"},
+      {"false", ", \"domain_release\": [{\"time\": 1, \"min\": [0,0,0], \"max\": [1,1,1]}]",
+       "applies only to a body with \"domains\": true"},
+      {"true", ", \"domain_release\": [{\"time\": 1, \"min\": [0,0,0], \"max\": [1,0,1]}]",
+       "domain_release[0].max"},
+      {"true", ", \"domain_release\": [{\"min\": [0,0,0], \"max\": [1,1,1]}]",
+       "domain_release[0]"},
+      {"1", "", "bodies[0].domains"},
+  };
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    char text[4096];
+    snprintf(text, sizeof text, BAR, bad[k].domains, bad[k].extra);
+    mpm_scene scene;
+    mpm_error err;
+    assert_int_not_equal(mpm_scene_parse(text, "bar.json", &scene, &err), MPM_OK);
+    if (!strstr(err.message, bad[k].message))
+      fail_msg("expected '%s' in: %s", bad[k].message, err.message);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_stretched_bar),
+      cmocka_unit_test(test_release_from_scene_and_api),
+      cmocka_unit_test(test_domain_scene_keys),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
