@@ -89,7 +89,7 @@ static int same_file(const char *a, const char *b) {
 /* The frame files of two runs are byte-identical, frames [0, frames]. */
 static void assert_same_frames(const char *dir_a, const char *dir_b, int frames) {
   for (int f = 0; f <= frames; ++f) {
-    char a[512], b[512];
+    char a[1024], b[1024];
     snprintf(a, sizeof a, "%s/frame_%04d.vtu", dir_a, f);
     snprintf(b, sizeof b, "%s/frame_%04d.vtu", dir_b, f);
     if (!same_file(a, b)) fail_msg("%s and %s differ", a, b);
@@ -425,6 +425,44 @@ static void test_resume_fallbacks_and_refusals(void **state) {
   assert_int_equal(mpm(args), 2);
 }
 
+/* Particle domains (Zhu et al.) are part of the state: a bar with domains, half of them
+ * switched off during the run, resumed from a checkpoint ends with the same frames and domain
+ * meshes as an uninterrupted run. */
+static void test_resume_with_domains(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("checkpoint_domains");
+  char scene[512], args[2100];
+  snprintf(scene, sizeof scene, "%s/bar.json", dir);
+  write_file(scene,
+             "{\"domain\": {\"min\": [0, 0.3, 0.3], \"max\": [1.6, 0.7, 0.7], \"dx\": 0.04},"
+             " \"gravity\": [0, 0, 0], \"time\": {\"end\": 1.0, \"fps\": 8},"
+             " \"output\": {\"checkpoint_every\": 3},"
+             " \"materials\": [{\"name\": \"rubber\", \"model\": \"neo_hookean\", \"E\": "
+             "2e4, \"nu\": 0.3, \"density\": 1000}],"
+             " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.8, 0.5, 0.5], "
+             "\"half_extent\": [0.2, 0.04, 0.04]}, \"material\": \"rubber\", \"domains\": true,"
+             " \"domain_release\": [{\"time\": 0.5, \"min\": [0.9, 0, 0], \"max\": [2, 1, 1]}]}],"
+             " \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": [0.6, 0.5, 0.5], "
+             "\"half_extent\": [0.05, 0.08, 0.08]}, \"rule\": \"sticky\", \"motion\": "
+             "{\"velocity\": [-0.2, 0, 0]}}]}");
+  snprintf(args, sizeof args, "run '%s' --quiet -o '%s/full'", scene, dir);
+  assert_int_equal(mpm(args), 0);
+  snprintf(args, sizeof args, "run '%s' --quiet -o '%s/part' --frames 5", scene, dir);
+  assert_int_equal(mpm(args), 0);
+  snprintf(args, sizeof args, "run '%s' --quiet --resume '%s/part'", scene, dir);
+  assert_int_equal(mpm(args), 0);
+  char full[600], part[600];
+  snprintf(full, sizeof full, "%s/full", dir);
+  snprintf(part, sizeof part, "%s/part", dir);
+  assert_same_frames(full, part, 8);
+  for (int f = 0; f <= 8; ++f) {
+    char a[700], b[700];
+    snprintf(a, sizeof a, "%s/domains_%04d.vtu", full, f);
+    snprintf(b, sizeof b, "%s/domains_%04d.vtu", part, f);
+    if (!same_file(a, b)) fail_msg("%s and %s differ", a, b);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resume_is_bit_identical),
@@ -434,6 +472,7 @@ int main(void) {
       cmocka_unit_test(test_sigterm_checkpoints),
       cmocka_unit_test(test_sigkill_at_random_moments),
       cmocka_unit_test(test_resume_fallbacks_and_refusals),
+      cmocka_unit_test(test_resume_with_domains),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -133,6 +133,15 @@ static int reserve_particles(mpm_domain_set *s, size_t need) {
   return 0;
 }
 
+int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
+  mpm_domain_set_init(s);
+  if (reserve_particles(s, particles ? particles : 1) || reserve_corners(s, corners ? corners : 1))
+    return -1;
+  s->particles.count = particles;
+  s->corner_count = corners;
+  return 0;
+}
+
 /* Open-addressing map from lattice vertex (3 x 21 bits) to corner index. */
 typedef struct vertex_map {
   uint64_t *keys;

@@ -48,6 +48,11 @@ typedef struct mpm_domain_set {
 void mpm_domain_set_init(mpm_domain_set *s);
 void mpm_domain_set_free(mpm_domain_set *s);
 
+/* An empty set with room for, and counts of, `particles` domain particles and `corners`
+ * corners, their values to be filled in (checkpoint reading); call mpm_domain_set_rebuild
+ * after filling corner and active. Returns 0, -1 on OOM. */
+int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners);
+
 /* omega_ap and the reference gradient averages of the hexahedron with reference corners X
  * (in corner order, hex.h), by 2x2x2 Gauss quadrature (exact for trilinear hexahedra), and
  * its volume. Returns -1 when the hexahedron is inverted or flat at a quadrature point. */

@@ -7,7 +7,11 @@
  *               every array and record as read back)
  *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
  *               particle_material [n], particle_body [n], particle_id [n],
- *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][16]
+ *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][16];
+ *               with particle domains (attributes domain_particles nd, domain_corners nc):
+ *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active
+ *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
+ *               corner_reals [9][nc] (reference position, position, velocity)
  * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
  * must exist with the right class and shape, each dataset must have exactly the dimensions
  * the attributes announce, counts are bounded by the file's size before anything is
@@ -78,8 +82,8 @@ static int put_dataset(hid_t file, const char *name, hid_t type, hsize_t rows, h
   ds = H5Dcreate2(file, name, type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
   if (ds < 0) goto done;
   if (rank == 1) {
-    rc = (cols == 0 || H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, row_data[0]) >= 0) ? 0
-                                                                                            : -1;
+    rc =
+        (cols == 0 || H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, row_data[0]) >= 0) ? 0 : -1;
     goto done;
   }
   rc = 0;
@@ -137,8 +141,8 @@ static void row_to_stats(const double v[STATS_COLUMNS], mpm_stats_row *s) {
 /* Datasets carry Fletcher-32 checksums; the scalar attributes are covered by this one. */
 static uint64_t attributes_checksum(const mpm_checkpoint *c, uint64_t n) {
   const double d[3] = {c->time, c->last_dt, c->max_speed};
-  const int64_t i[8] = {c->steps,    c->frame,   c->written_frames, c->dt_level,
-                        c->threads, c->records, (int64_t)n,         (int64_t)sizeof(mpm_real)};
+  const int64_t i[8] = {c->steps,   c->frame,   c->written_frames, c->dt_level,
+                        c->threads, c->records, (int64_t)n,        (int64_t)sizeof(mpm_real)};
   uint64_t h[3] = {c->scene_hash, mpm_fnv1a64(d, sizeof d), mpm_fnv1a64(i, sizeof i)};
   return mpm_fnv1a64(h, sizeof h);
 }
@@ -156,6 +160,28 @@ static uint64_t content_checksum(const mpm_checkpoint *c) {
   h = mpm_hash64_words(p->material, n * sizeof *p->material, h);
   h = mpm_hash64_words(p->body, n * sizeof *p->body, h);
   h = mpm_hash64_words(p->id, n * sizeof *p->id, h);
+  const mpm_domain_set *ds = &c->domains;
+  const uint64_t counts[2] = {ds->particles.count, ds->corner_count};
+  h = mpm_hash64_words(counts, sizeof counts, h);
+  if (ds->particles.count) {
+    const size_t nd = ds->particles.count, nc = ds->corner_count;
+    mpm_real **da[MPM_PARTICLE_REAL_ARRAYS];
+    mpm_particles_real_arrays((mpm_particles *)&ds->particles, da);
+    for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
+      h = mpm_hash64_words(*da[k], nd * sizeof(mpm_real), h);
+    h = mpm_hash64_words(ds->particles.material, nd * 4, h);
+    h = mpm_hash64_words(ds->particles.body, nd * 4, h);
+    h = mpm_hash64_words(ds->particles.id, nd * 4, h);
+    h = mpm_hash64_words(ds->corner, nd * sizeof *ds->corner, h);
+    h = mpm_hash64_words(ds->w, nd * sizeof *ds->w, h);
+    h = mpm_hash64_words(ds->g, nd * sizeof *ds->g, h);
+    h = mpm_hash64_words(ds->active, nd, h);
+    for (int d = 0; d < 3; ++d) {
+      h = mpm_hash64_words(ds->cX[d], nc * sizeof(mpm_real), h);
+      h = mpm_hash64_words(ds->cx[d], nc * sizeof(mpm_real), h);
+      h = mpm_hash64_words(ds->cv[d], nc * sizeof(mpm_real), h);
+    }
+  }
   const size_t r = (size_t)c->records;
   h = mpm_hash64_words(c->frame_times, r * sizeof *c->frame_times, h);
   h = mpm_hash64_words(c->frame_files, r * sizeof *c->frame_files, h);
@@ -165,6 +191,54 @@ static uint64_t content_checksum(const mpm_checkpoint *c) {
     h = mpm_hash64_words(row, sizeof row, h);
   }
   return h;
+}
+
+/* Rows of a domain set's per-particle tables, structure of arrays for the file: corner slot a
+ * of every particle (8 rows), omega_ap (8 rows) then g_ap (24 rows). */
+#define DOMAIN_WEIGHT_ROWS 32
+#define CORNER_REAL_ROWS 9
+
+static int write_domains(hid_t f, const mpm_domain_set *s) {
+  const uint64_t nd = s->particles.count, nc = s->corner_count;
+  if (put_attr(f, "domain_particles", H5T_NATIVE_UINT64, &nd) ||
+      put_attr(f, "domain_corners", H5T_NATIVE_UINT64, &nc))
+    return -1;
+  if (!nd) return 0;
+  mpm_real **da[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays((mpm_particles *)&s->particles, da);
+  const void *rows[MPM_PARTICLE_REAL_ARRAYS];
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *da[k];
+  const void *material = s->particles.material, *body = s->particles.body, *id = s->particles.id,
+             *active = s->active;
+  uint32_t *corner = malloc(nd * MPM_HEX_CORNERS * sizeof *corner);
+  mpm_real *weights = malloc(nd * DOMAIN_WEIGHT_ROWS * sizeof *weights);
+  int rc = -1;
+  if (corner && weights) {
+    const void *crows[MPM_HEX_CORNERS], *wrows[DOMAIN_WEIGHT_ROWS];
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) crows[a] = corner + a * nd;
+    for (int k = 0; k < DOMAIN_WEIGHT_ROWS; ++k) wrows[k] = weights + k * nd;
+    for (uint64_t i = 0; i < nd; ++i)
+      for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+        corner[a * nd + i] = s->corner[i][a];
+        weights[a * nd + i] = s->w[i][a];
+        for (int d = 0; d < 3; ++d) weights[(8 + 3 * a + d) * nd + i] = s->g[i][a][d];
+      }
+    const void *cr[CORNER_REAL_ROWS] = {s->cX[0], s->cX[1], s->cX[2], s->cx[0], s->cx[1],
+                                        s->cx[2], s->cv[0], s->cv[1], s->cv[2]};
+    rc = put_dataset(f, "domain_reals", real_type(), MPM_PARTICLE_REAL_ARRAYS, nd, rows) ||
+                 put_dataset(f, "domain_material", H5T_NATIVE_INT32, 0, nd, &material) ||
+                 put_dataset(f, "domain_body", H5T_NATIVE_INT32, 0, nd, &body) ||
+                 put_dataset(f, "domain_id", H5T_NATIVE_UINT32, 0, nd, &id) ||
+                 put_dataset(f, "domain_active", H5T_NATIVE_UINT8, 0, nd, &active) ||
+                 put_dataset(f, "domain_corner", H5T_NATIVE_UINT32, MPM_HEX_CORNERS, nd, crows) ||
+                 put_dataset(f, "domain_weights", real_type(), DOMAIN_WEIGHT_ROWS, nd, wrows) ||
+                 put_dataset(f, "corner_reals", real_type(), CORNER_REAL_ROWS, nc, cr)
+             ? -1
+             : 0;
+  }
+  free(corner);
+  free(weights);
+  return rc;
 }
 
 static int write_contents(hid_t f, const mpm_checkpoint *c) {
@@ -197,7 +271,7 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
   if (put_dataset(f, "particle_reals", real_type(), MPM_PARTICLE_REAL_ARRAYS, n, rows) ||
       put_dataset(f, "particle_material", H5T_NATIVE_INT32, 0, n, &material) ||
       put_dataset(f, "particle_body", H5T_NATIVE_INT32, 0, n, &body) ||
-      put_dataset(f, "particle_id", H5T_NATIVE_UINT32, 0, n, &id))
+      put_dataset(f, "particle_id", H5T_NATIVE_UINT32, 0, n, &id) || write_domains(f, &c->domains))
     return -1;
   const hsize_t r = (hsize_t)c->records;
   double *stats = malloc((r ? r : 1) * STATS_COLUMNS * sizeof *stats);
@@ -212,7 +286,8 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
     }
     const void *times = c->frame_times;
     rc = put_dataset(f, "frame_times", H5T_NATIVE_DOUBLE, 0, r, &times);
-    if (!rc && r) rc = put_dataset(f, "frame_files", H5T_NATIVE_UINT8, r, MPM_FRAME_NAME_MAX, frows);
+    if (!rc && r)
+      rc = put_dataset(f, "frame_files", H5T_NATIVE_UINT8, r, MPM_FRAME_NAME_MAX, frows);
     if (!rc && r) rc = put_dataset(f, "stats", H5T_NATIVE_DOUBLE, r, STATS_COLUMNS, srows);
   }
   free(stats);
@@ -384,8 +459,8 @@ static int get_dataset(reader *r, const char *name, H5T_class_t cls, size_t elem
   const int rank = rows ? 2 : 1;
   if (type < 0 || space < 0 || H5Tget_class(type) != cls || H5Tget_size(type) != elem ||
       H5Sget_simple_extent_ndims(space) != rank ||
-      H5Sget_simple_extent_dims(space, dims, NULL) != rank ||
-      dims[0] != (rows ? rows : cols) || (rank == 2 && dims[1] != cols)) {
+      H5Sget_simple_extent_dims(space, dims, NULL) != rank || dims[0] != (rows ? rows : cols) ||
+      (rank == 2 && dims[1] != cols)) {
     rc = bad(r, "dataset '%s' has the wrong type or dimensions", name);
     goto done;
   }
@@ -398,10 +473,10 @@ static int get_dataset(reader *r, const char *name, H5T_class_t cls, size_t elem
   if (storage_ok) {
     unsigned flags = 0, config = 0;
     size_t nelmts = 0;
-    storage_ok = H5Pget_filter2(dcpl, 0, &flags, &nelmts, NULL, 0, NULL, &config) ==
-                     H5Z_FILTER_FLETCHER32 &&
-                 cdims[0] >= 1 && cdims[0] <= CHUNK_ELEMENTS &&
-                 (rank == 1 || (cdims[1] >= 1 && cdims[1] <= CHUNK_ELEMENTS && cdims[0] == 1));
+    storage_ok =
+        H5Pget_filter2(dcpl, 0, &flags, &nelmts, NULL, 0, NULL, &config) == H5Z_FILTER_FLETCHER32 &&
+        cdims[0] >= 1 && cdims[0] <= CHUNK_ELEMENTS &&
+        (rank == 1 || (cdims[1] >= 1 && cdims[1] <= CHUNK_ELEMENTS && cdims[0] == 1));
   }
   if (dcpl >= 0) H5Pclose(dcpl);
   /* every stored chunk no larger than its data and its checksum, and inside the file */
@@ -413,8 +488,8 @@ static int get_dataset(reader *r, const char *name, H5T_class_t cls, size_t elem
     unsigned mask = 0;
     haddr_t addr = 0;
     hsize_t bytes = 0;
-    if (H5Dget_chunk_info(ds, space, i, offset, &mask, &addr, &bytes) < 0 ||
-        bytes > chunk_bytes || addr > r->file_bytes || bytes > r->file_bytes - addr) {
+    if (H5Dget_chunk_info(ds, space, i, offset, &mask, &addr, &bytes) < 0 || bytes > chunk_bytes ||
+        addr > r->file_bytes || bytes > r->file_bytes - addr) {
       storage_ok = 0;
     }
   }
@@ -425,10 +500,11 @@ static int get_dataset(reader *r, const char *name, H5T_class_t cls, size_t elem
   for (hsize_t i = 0; i < (rows ? rows : 1) && cols > 0; ++i) {
     hsize_t start[2] = {i, 0}, count[2] = {1, cols};
     hid_t mem = H5Screate_simple(1, &cols, NULL);
-    const int sel = rank == 1 ? 0 : H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL);
-    const int ok = mem >= 0 && sel >= 0 &&
-                   H5Dread(ds, mem_type, mem, rank == 1 ? H5S_ALL : space, H5P_DEFAULT,
-                           row_data[i]) >= 0;
+    const int sel =
+        rank == 1 ? 0 : H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL);
+    const int ok =
+        mem >= 0 && sel >= 0 &&
+        H5Dread(ds, mem_type, mem, rank == 1 ? H5S_ALL : space, H5P_DEFAULT, row_data[i]) >= 0;
     if (mem >= 0) H5Sclose(mem);
     if (!ok) {
       rc = bad(r, "dataset '%s' cannot be read (damaged: its checksum does not match?)", name);
@@ -442,14 +518,101 @@ done:
   return rc;
 }
 
+/* The particle domains, when the checkpoint has them. */
+static int read_domains(reader *r, mpm_checkpoint *c) {
+  uint64_t nd = 0, nc = 0;
+  if (get_attr(r, "domain_particles", H5T_INTEGER, H5T_NATIVE_UINT64, &nd) ||
+      get_attr(r, "domain_corners", H5T_INTEGER, H5T_NATIVE_UINT64, &nc))
+    return -1;
+  if (!nd && !nc) return 0;
+  if (nd > UINT32_MAX || nc > MPM_HEX_CORNERS * nd ||
+      nd * MPM_PARTICLE_REAL_ARRAYS * sizeof(mpm_real) > r->file_bytes ||
+      nc * CORNER_REAL_ROWS * sizeof(mpm_real) > r->file_bytes)
+    return bad(r, "%s", "'domain_particles' or 'domain_corners' is larger than the file can hold");
+  mpm_domain_set *s = &c->domains;
+  uint32_t *corner = malloc(nd * MPM_HEX_CORNERS * sizeof *corner);
+  mpm_real *weights = malloc(nd * DOMAIN_WEIGHT_ROWS * sizeof *weights);
+  int rc = -1;
+  if (!corner || !weights || mpm_domain_set_alloc(s, (size_t)nd, (size_t)nc)) {
+    mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %llu particle domains", r->path,
+                  (unsigned long long)nd);
+    goto done;
+  }
+  mpm_real **da[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(&s->particles, da);
+  void *rows[MPM_PARTICLE_REAL_ARRAYS], *crows[MPM_HEX_CORNERS], *wrows[DOMAIN_WEIGHT_ROWS];
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *da[k];
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a) crows[a] = corner + a * nd;
+  for (int k = 0; k < DOMAIN_WEIGHT_ROWS; ++k) wrows[k] = weights + k * nd;
+  void *material = s->particles.material, *body = s->particles.body, *id = s->particles.id,
+       *active = s->active;
+  void *cr[CORNER_REAL_ROWS] = {s->cX[0], s->cX[1], s->cX[2], s->cx[0], s->cx[1],
+                                s->cx[2], s->cv[0], s->cv[1], s->cv[2]};
+  const size_t R = sizeof(mpm_real);
+  if (get_dataset(r, "domain_reals", H5T_FLOAT, R, real_type(), MPM_PARTICLE_REAL_ARRAYS, nd,
+                  rows) ||
+      get_dataset(r, "domain_material", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, nd, &material) ||
+      get_dataset(r, "domain_body", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, nd, &body) ||
+      get_dataset(r, "domain_id", H5T_INTEGER, 4, H5T_NATIVE_UINT32, 0, nd, &id) ||
+      get_dataset(r, "domain_active", H5T_INTEGER, 1, H5T_NATIVE_UINT8, 0, nd, &active) ||
+      get_dataset(r, "domain_corner", H5T_INTEGER, 4, H5T_NATIVE_UINT32, MPM_HEX_CORNERS, nd,
+                  crows) ||
+      get_dataset(r, "domain_weights", H5T_FLOAT, R, real_type(), DOMAIN_WEIGHT_ROWS, nd, wrows) ||
+      get_dataset(r, "corner_reals", H5T_FLOAT, R, real_type(), CORNER_REAL_ROWS, nc, cr))
+    goto done;
+  s->active_count = 0;
+  for (uint64_t i = 0; i < nd; ++i) {
+    if (s->active[i] > 1) {
+      bad(r, "%s", "a domain's active flag is neither 0 nor 1");
+      goto done;
+    }
+    s->active_count += s->active[i];
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      s->corner[i][a] = corner[a * nd + i];
+      if (s->corner[i][a] >= nc) {
+        bad(r, "%s", "a domain names a corner that does not exist");
+        goto done;
+      }
+      s->w[i][a] = weights[a * nd + i];
+      for (int d = 0; d < 3; ++d) s->g[i][a][d] = weights[(8 + 3 * a + d) * nd + i];
+    }
+  }
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
+    for (uint64_t i = 0; i < nd; ++i)
+      if (!isfinite((*da[k])[i])) {
+        bad(r, "%s", "a domain particle value is not finite");
+        goto done;
+      }
+  for (uint64_t i = 0; i < nd * DOMAIN_WEIGHT_ROWS; ++i)
+    if (!isfinite(weights[i])) {
+      bad(r, "%s", "a domain weight is not finite");
+      goto done;
+    }
+  for (int k = 0; k < CORNER_REAL_ROWS; ++k)
+    for (uint64_t i = 0; i < nc; ++i)
+      if (!isfinite(((mpm_real *)cr[k])[i])) {
+        bad(r, "%s", "a corner value is not finite");
+        goto done;
+      }
+  if (mpm_domain_set_rebuild(s)) {
+    mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the domain corners", r->path);
+    goto done;
+  }
+  rc = 0;
+done:
+  free(corner);
+  free(weights);
+  return rc;
+}
+
 static int read_contents(reader *r, mpm_checkpoint *c) {
   if (check_format(r)) return -1;
   int version = 0, real_bytes = 0;
   if (get_attr(r, "version", H5T_INTEGER, H5T_NATIVE_INT, &version)) return -1;
   if (version != MPM_CHECKPOINT_VERSION) {
     mpm_error_set(r->err, MPM_ERR_PARSE,
-                  "%s: checkpoint format version %d; this build reads version %d", r->path,
-                  version, MPM_CHECKPOINT_VERSION);
+                  "%s: checkpoint format version %d; this build reads version %d", r->path, version,
+                  MPM_CHECKPOINT_VERSION);
     return -1;
   }
   if (get_attr(r, "real_bytes", H5T_INTEGER, H5T_NATIVE_INT, &real_bytes)) return -1;
@@ -457,7 +620,10 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
     mpm_error_set(r->err, MPM_ERR_INVALID,
                   "%s: the checkpoint was written by a %s build and this is a %s build; resume "
                   "it with the same build",
-                  r->path, real_bytes == 8 ? "double" : real_bytes == 4 ? "float" : "foreign",
+                  r->path,
+                  real_bytes == 8   ? "double"
+                  : real_bytes == 4 ? "float"
+                                    : "foreign",
                   sizeof(mpm_real) == 8 ? "double" : "float");
     return -1;
   }
@@ -513,6 +679,7 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
     for (size_t i = 0; i < p->count; ++i)
       if (!isfinite((*arrays[k])[i])) return bad(r, "%s", "a particle value is not finite");
+  if (read_domains(r, c)) return -1;
 
   const size_t rc = (size_t)(c->records ? c->records : 1);
   c->frame_times = calloc(rc, sizeof *c->frame_times);
@@ -534,11 +701,10 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
   if (get_dataset(r, "frame_times", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, 0, (hsize_t)c->records,
                   &times))
     goto done;
-  if (c->records &&
-      (get_dataset(r, "frame_files", H5T_INTEGER, 1, H5T_NATIVE_UINT8, (hsize_t)c->records,
-                   MPM_FRAME_NAME_MAX, frows) ||
-       get_dataset(r, "stats", H5T_FLOAT, 8,
-                   H5T_NATIVE_DOUBLE, (hsize_t)c->records, STATS_COLUMNS, srows)))
+  if (c->records && (get_dataset(r, "frame_files", H5T_INTEGER, 1, H5T_NATIVE_UINT8,
+                                 (hsize_t)c->records, MPM_FRAME_NAME_MAX, frows) ||
+                     get_dataset(r, "stats", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, (hsize_t)c->records,
+                                 STATS_COLUMNS, srows)))
     goto done;
   for (int i = 0; i < c->records; ++i) {
     c->frame_files[i][MPM_FRAME_NAME_MAX - 1] = '\0';
@@ -601,14 +767,13 @@ static int check_header(const unsigned char *b, size_t size, const char *path, m
   if (size < 8 || memcmp(b, MAGIC, 8) != 0) {
     mpm_error_set(err, MPM_ERR_PARSE, "%s: not an mpm checkpoint (%s)", path,
                   size >= 4 && !memcmp(b, "\x89HDF", 4) ? "an HDF5 file without the mpm header"
-                                                       : "no mpm checkpoint header");
+                                                        : "no mpm checkpoint header");
     return -1;
   }
   if (size < HEADER_BYTES || get_u64(b + 8) != MPM_CHECKPOINT_VERSION) {
-    mpm_error_set(err, MPM_ERR_PARSE,
-                  "%s: checkpoint format version %llu; this build reads version %d", path,
-                  size < HEADER_BYTES ? 0ull : (unsigned long long)get_u64(b + 8),
-                  MPM_CHECKPOINT_VERSION);
+    mpm_error_set(
+        err, MPM_ERR_PARSE, "%s: checkpoint format version %llu; this build reads version %d", path,
+        size < HEADER_BYTES ? 0ull : (unsigned long long)get_u64(b + 8), MPM_CHECKPOINT_VERSION);
     return -1;
   }
   if ((uint64_t)size != get_u64(b + 16)) {
@@ -632,8 +797,8 @@ void mpm_checkpoint_seal(void *image, size_t size) {
   if (size >= HEADER_BYTES) put_header(image, size);
 }
 
-mpm_status mpm_checkpoint_parse(const void *data, size_t size, const char *path,
-                                mpm_checkpoint *c, mpm_error *err) {
+mpm_status mpm_checkpoint_parse(const void *data, size_t size, const char *path, mpm_checkpoint *c,
+                                mpm_error *err) {
   quiet_hdf5();
   memset(c, 0, sizeof *c);
   mpm_error local;
@@ -673,6 +838,7 @@ mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *e
 
 void mpm_checkpoint_free(mpm_checkpoint *c) {
   mpm_particles_free(&c->particles);
+  mpm_domain_set_free(&c->domains);
   free(c->frame_times);
   free(c->frame_files);
   free(c->stats);

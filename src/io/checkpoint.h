@@ -4,7 +4,9 @@
  * What a run needs to continue bit for bit: the particles (every array, in their current
  * memory order, because the order decides the order of floating-point sums), time, step,
  * frame counters, the last dt and the speed that sets the next one, the dt back-off of the
- * retry guard, the fingerprint of the scene, and the per-frame records the outputs are
+ * retry guard, the fingerprint of the scene, the particle domains (their particles, corner
+ * indices, weights, active flags, and the corners' reference and current positions and
+ * velocities), and the per-frame records the outputs are
  * rebuilt from (frame times and names for the PVD, stats rows for stats.csv). Colliders move
  * as pure functions of time and the sampling's random jitter is spent at creation, so time
  * is their whole state. Every dataset carries a Fletcher-32 checksum: a damaged file is
@@ -13,6 +15,7 @@
 #define MPM_IO_CHECKPOINT_H
 
 #include "core/error.h"
+#include "domain/domain.h"
 #include "io/io.h"
 #include "solver/particles.h"
 
@@ -31,6 +34,7 @@ typedef struct mpm_checkpoint {
   int dt_level;       /* the retry guard's current halvings of dt */
   int threads;        /* threads of the run that wrote it (informative) */
   mpm_particles particles;
+  mpm_domain_set domains; /* Zhu's particle domains: particles, corners, weights, active */
   /* per-frame records, `records` of them (= written_frames) */
   int records;
   double *frame_times;

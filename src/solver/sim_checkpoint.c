@@ -81,6 +81,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   c.dt_level = sim->dt_level;
   c.threads = mpm_thread_count();
   c.particles = sim->particles; /* borrowed, not freed */
+  c.domains = sim->domains;
   c.records = sim->written_frames;
   c.frame_times = sim->frame_times;
   c.frame_files = sim->frame_files;
@@ -120,15 +121,17 @@ static mpm_status check_fits(const mpm_sim *sim, const mpm_checkpoint *c, const 
                          "frames to %g s",
                          file, c->frame, c->written_frames, c->time, sim->frame_count,
                          sim->scene.end_time);
-  const mpm_particles *p = &c->particles;
-  for (size_t i = 0; i < p->count; ++i)
-    if (p->material[i] < 0 || p->material[i] >= sim->material_count || p->body[i] < 0 ||
-        p->body[i] >= sim->scene.body_count || !(p->mass[i] > 0) || !(p->vol0[i] > 0))
-      return mpm_error_set(err, MPM_ERR_PARSE,
-                           "%s: particle %zu has material %d, body %d, mass %g, volume %g; the "
-                           "scene has %d materials and %d bodies",
-                           file, i, p->material[i], p->body[i], (double)p->mass[i],
-                           (double)p->vol0[i], sim->material_count, sim->scene.body_count);
+  for (int pass = 0; pass < 2; ++pass) {
+    const mpm_particles *p = pass ? &c->domains.particles : &c->particles;
+    for (size_t i = 0; i < p->count; ++i)
+      if (p->material[i] < 0 || p->material[i] >= sim->material_count || p->body[i] < 0 ||
+          p->body[i] >= sim->scene.body_count || !(p->mass[i] > 0) || !(p->vol0[i] > 0))
+        return mpm_error_set(err, MPM_ERR_PARSE,
+                             "%s: particle %zu has material %d, body %d, mass %g, volume %g; the "
+                             "scene has %d materials and %d bodies",
+                             file, i, p->material[i], p->body[i], (double)p->mass[i],
+                             (double)p->vol0[i], sim->material_count, sim->scene.body_count);
+  }
   return MPM_OK;
 }
 
@@ -139,6 +142,9 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   mpm_particles_free(&sim->particles);
   sim->particles = c->particles;
   memset(&c->particles, 0, sizeof c->particles);
+  mpm_domain_set_free(&sim->domains);
+  sim->domains = c->domains;
+  memset(&c->domains, 0, sizeof c->domains);
   sim->time = c->time;
   sim->last_dt = c->last_dt;
   sim->max_speed = (mpm_real)c->max_speed;
