@@ -61,9 +61,10 @@ int mpm_cmd_check(int argc, char **argv) {
     fprintf(stderr, "mpm: %s\n", err.message);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
-  printf("%s: ok (%zu particles, %d materials, %d colliders, dx = %g m, %d frames, about %.0f "
-         "MiB)\n",
-         argv[0], sim->particles.count, sim->material_count, sim->collider_count, sim->scene.dx,
+  printf("%s: ok (%zu particles, %zu of them with domains, %d materials, %d colliders, dx = %g "
+         "m, %d frames, about %.0f MiB)\n",
+         argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
+         sim->material_count, sim->collider_count, sim->scene.dx,
          sim->frame_count, mpm_scene_memory_estimate(&sim->scene, NULL) / (1024.0 * 1024.0));
   mpm_sim_destroy(sim);
   return MPM_EXIT_OK;
@@ -187,7 +188,7 @@ int mpm_cmd_run(int argc, char **argv) {
             (long long)sim->steps);
   if (!quiet)
     fprintf(stderr, "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d threads, %s)\n",
-            scene_path, sim->particles.count, sim->scene.dx, sim->frame_count, sim->output_dir,
+            scene_path, sim->particles.count + sim->domains.active_count, sim->scene.dx, sim->frame_count, sim->output_dir,
             mpm_thread_count(), mpm_real_type());
   int code = MPM_EXIT_OK;
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {

@@ -343,6 +343,23 @@ static mpm_status shape_prepare(const mpm_scene *scene, int bi, shape_ctx *sc, d
   }
 }
 
+mpm_status mpm_sample_body_mesh(const mpm_scene *scene, int bi, mpm_mesh *out, mpm_error *err) {
+  memset(out, 0, sizeof *out);
+  shape_ctx sc;
+  memset(&sc, 0, sizeof sc);
+  sc.s = &scene->bodies[bi].shape;
+  if (sc.s->kind != MPM_SHAPE_MESH)
+    return mpm_error_set(err, MPM_ERR_INVALID, "bodies[%d] is not made from a mesh", bi);
+  double lo[3], hi[3];
+  mpm_status st = shape_prepare(scene, bi, &sc, lo, hi, err);
+  if (st != MPM_OK) {
+    mpm_mesh_free(&sc.mesh);
+    return st;
+  }
+  *out = sc.mesh;
+  return MPM_OK;
+}
+
 /* ---- sampling ------------------------------------------------------------------------- */
 
 /* splitmix64 (Steele, Lea and Flood 2014): uniform in [0, 1). */

@@ -8,6 +8,7 @@
 #define MPM_SCENE_SAMPLE_H
 
 #include "core/error.h"
+#include "scene/mesh.h"
 #include "scene/scene.h"
 #include "solver/particles.h"
 
@@ -34,5 +35,10 @@ double mpm_sample_spacing(const mpm_scene *scene, int body_index);
 /// (MPM_ERR_IO / MPM_ERR_PARSE, naming the mesh file and line). body_index must be valid.
 mpm_status mpm_sample_body(const mpm_scene *scene, int body_index, mpm_particles *p,
                            mpm_error *err);
+
+/// The triangle mesh of a mesh body, in world coordinates (scaled and placed as the sampler
+/// places it). The caller frees it with mpm_mesh_free.
+mpm_status mpm_sample_body_mesh(const mpm_scene *scene, int body_index, mpm_mesh *mesh,
+                                mpm_error *err);
 
 #endif

@@ -120,9 +120,28 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     if (sc->bodies[b].domains) { /* the body's particles move into the domain set */
       char name[MPM_NAME_MAX + 64];
       snprintf(name, sizeof name, "%s: bodies[%d] (\"%s\")", sc->path, b, sc->bodies[b].name);
-      st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->domain_min,
-                                      mpm_sample_spacing(sc, b), name, err);
+      const size_t dfirst = sim->domains.particles.count;
+      const double h = mpm_sample_spacing(sc, b);
+      st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->domain_min, h,
+                                      name, err);
       if (st != MPM_OK) goto fail;
+      if (sc->bodies[b].shape.kind == MPM_SHAPE_MESH) { /* keep the mesh, embedded */
+        mpm_embedded_surface *grown =
+            realloc(sim->surfaces, (size_t)(sim->surface_count + 1) * sizeof *grown);
+        if (!grown) {
+          st = oom(err, "embedded surfaces");
+          goto fail;
+        }
+        sim->surfaces = grown;
+        mpm_mesh mesh;
+        st = mpm_sample_body_mesh(sc, b, &mesh, err);
+        if (st == MPM_OK)
+          st = mpm_embed_surface(&sim->surfaces[sim->surface_count], b, &mesh, &sim->domains,
+                                 dfirst, sc->domain_min, h, err);
+        mpm_mesh_free(&mesh);
+        if (st != MPM_OK) goto fail;
+        sim->surface_count++;
+      }
     }
   }
 
@@ -236,6 +255,8 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_particles_free(&sim->particles);
   mpm_particles_free(&sim->backup);
   mpm_domain_set_free(&sim->domains);
+  for (int i = 0; i < sim->surface_count; ++i) mpm_embedded_surface_free(&sim->surfaces[i]);
+  free(sim->surfaces);
   free(sim->materials);
   if (sim->colliders)
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);

@@ -6,6 +6,7 @@
 
 #include "collide/collider.h"
 #include "domain/domain.h"
+#include "domain/embed.h"
 #include "grid/dense_grid.h"
 #include "grid/sparse_grid.h"
 #include "interp/kernel.h"
@@ -34,6 +35,8 @@ struct mpm_sim {
   /* Zhu's particle domains: the domain particles, their corners, and the corner kernel */
   mpm_domain_set domains;
   mpm_kernel domain_kernel;
+  mpm_embedded_surface *surfaces; /* meshes of mesh bodies with domains (Zhu sec. 4.1) */
+  int surface_count;
   mpm_real origin[3];
   int cells[3]; /* grid cells per axis over the domain */
   mpm_sparse_grid sparse;

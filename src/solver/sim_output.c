@@ -105,6 +105,23 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     st = mpm_write_domain_vtu(path, &sim->domains, sim->time, &sim->error);
     if (st != MPM_OK) goto done;
   }
+  for (int k = 0; k < sim->surface_count; ++k) { /* embedded surfaces (Zhu sec. 4.1) */
+    const mpm_embedded_surface *e = &sim->surfaces[k];
+    double *x = malloc(3 * (size_t)(e->vertex_count + 1) * sizeof *x);
+    if (!x) {
+      st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
+      goto done;
+    }
+    mpm_embedded_positions(e, &sim->domains, x);
+    snprintf(path, sizeof path, "%s/surface_body%d_%04d.obj", sim->output_dir, e->body, frame);
+    st = mpm_write_surface_obj(path, e, x, &sim->error);
+    if (st == MPM_OK) {
+      snprintf(path, sizeof path, "%s/surface_body%d_%04d.ply", sim->output_dir, e->body, frame);
+      st = mpm_write_surface_ply(path, e, x, &sim->error);
+    }
+    free(x);
+    if (st != MPM_OK) goto done;
+  }
   if (o->ply) {
     snprintf(path, sizeof path, "%s/frame_%04d.ply", sim->output_dir, frame);
     st = mpm_write_ply_points(path, &ff, &sim->error);

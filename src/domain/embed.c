@@ -1,0 +1,176 @@
+/* embed.c - embedded surface meshes (see embed.h). */
+#include "domain/embed.h"
+#include "core/alloc.h"
+#include "io/io.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* lattice cell -> domain particle, open addressing */
+typedef struct cell_map {
+  uint64_t *keys;
+  uint32_t *values;
+  size_t mask;
+} cell_map;
+
+static uint64_t cell_key(const int64_t k[3]) {
+  const int64_t b = 1 << 20;
+  return ((uint64_t)(k[0] + b) << 42) | ((uint64_t)(k[1] + b) << 21) | (uint64_t)(k[2] + b);
+}
+
+static size_t cell_slot(const cell_map *m, uint64_t key) {
+  size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & m->mask;
+  while (m->keys[i] != UINT64_MAX && m->keys[i] != key) i = (i + 1) & m->mask;
+  return i;
+}
+
+mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
+                             const mpm_domain_set *s, size_t first, const double origin[3],
+                             double h, mpm_error *err) {
+  memset(e, 0, sizeof *e);
+  const size_t n = s->particles.count - first;
+  if (!n) return mpm_error_set(err, MPM_ERR_INVALID, "no domain to embed the surface in");
+  cell_map m;
+  size_t size = 64;
+  while (size < 4 * n) size *= 2;
+  m.keys = malloc(size * sizeof *m.keys);
+  m.values = malloc(size * sizeof *m.values);
+  m.mask = size - 1;
+  const int nv = mesh->vertex_count;
+  e->domain = malloc((size_t)(nv ? nv : 1) * sizeof *e->domain);
+  e->xi = malloc((size_t)(nv ? nv : 1) * sizeof *e->xi);
+  e->rest = malloc((size_t)(nv ? nv : 1) * sizeof *e->rest);
+  if (!m.keys || !m.values || !e->domain || !e->xi || !e->rest) {
+    free(m.keys);
+    free(m.values);
+    mpm_embedded_surface_free(e);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory embedding a surface mesh");
+  }
+  memset(m.keys, 0xFF, size * sizeof *m.keys);
+  /* the particles' cells: from their reference positions, the centres of their corners */
+  for (size_t q = first; q < s->particles.count; ++q) {
+    int64_t k[3];
+    for (int d = 0; d < 3; ++d) {
+      double c = 0;
+      for (int a = 0; a < MPM_HEX_CORNERS; ++a) c += s->cX[d][s->corner[q][a]];
+      k[d] = (int64_t)floor((c / MPM_HEX_CORNERS - origin[d]) / h);
+    }
+    const uint64_t key = cell_key(k);
+    const size_t i = cell_slot(&m, key);
+    m.keys[i] = key;
+    m.values[i] = (uint32_t)q;
+  }
+  for (int v = 0; v < nv; ++v) {
+    const double *X = mesh->vertices + 3 * v;
+    int64_t k[3];
+    for (int d = 0; d < 3; ++d) k[d] = (int64_t)floor((X[d] - origin[d]) / h);
+    /* the domain containing the vertex, else the nearest one in growing shells of cells */
+    long best = -1;
+    double best_d2 = INFINITY;
+    for (int r = 0; r <= 3 && best < 0; ++r)
+      for (int64_t a = -r; a <= r; ++a)
+        for (int64_t b = -r; b <= r; ++b)
+          for (int64_t c = -r; c <= r; ++c) {
+            if (llabs(a) != r && llabs(b) != r && llabs(c) != r) continue; /* the shell only */
+            const int64_t kk[3] = {k[0] + a, k[1] + b, k[2] + c};
+            const uint64_t key = cell_key(kk);
+            const size_t i = cell_slot(&m, key);
+            if (m.keys[i] != key) continue;
+            double d2 = 0;
+            for (int d = 0; d < 3; ++d) {
+              const double cd = origin[d] + ((double)kk[d] + 0.5) * h - X[d];
+              d2 += cd * cd;
+            }
+            if (d2 < best_d2) {
+              best_d2 = d2;
+              best = m.values[i];
+            }
+          }
+    if (best < 0) {
+      free(m.keys);
+      free(m.values);
+      mpm_embedded_surface_free(e);
+      return mpm_error_set(err, MPM_ERR_INVALID,
+                           "surface vertex %d at (%g, %g, %g) is more than 3 lattice cells from "
+                           "every particle domain of its body",
+                           v, X[0], X[1], X[2]);
+    }
+    e->domain[v] = (uint32_t)best;
+    for (int d = 0; d < 3; ++d) {
+      /* the reference hexahedron is the lattice cube [X_0, X_0 + h]: xi = 2 (X - X_0) / h - 1 */
+      const double lo = s->cX[d][s->corner[best][0]];
+      e->xi[v][d] = 2 * (X[d] - lo) / h - 1;
+      e->rest[v][d] = X[d];
+    }
+  }
+  free(m.keys);
+  free(m.values);
+  e->body = body;
+  e->vertex_count = nv;
+  e->triangle_count = mesh->triangle_count;
+  e->triangles = mesh->triangles; /* taken over */
+  mesh->triangles = NULL;
+  mesh->triangle_count = 0;
+  return MPM_OK;
+}
+
+void mpm_embedded_positions(const mpm_embedded_surface *e, const mpm_domain_set *s, double *x) {
+#pragma omp parallel for schedule(static)
+  for (int v = 0; v < e->vertex_count; ++v) {
+    double N[MPM_HEX_CORNERS], dN[MPM_HEX_CORNERS][3];
+    mpm_hex_shape(e->xi[v], N, dN);
+    const uint32_t q = e->domain[v];
+    double p[3] = {0, 0, 0};
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+      for (int d = 0; d < 3; ++d) p[d] += N[a] * (double)s->cx[d][s->corner[q][a]];
+    for (int d = 0; d < 3; ++d) x[3 * v + d] = p[d];
+  }
+}
+
+void mpm_embedded_surface_free(mpm_embedded_surface *e) {
+  mpm_free(e->triangles); /* the mesh loader's allocation (core/alloc.h) */
+  free(e->domain);
+  free(e->xi);
+  free(e->rest);
+  memset(e, 0, sizeof *e);
+}
+
+mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e,
+                                 const double *x, mpm_error *err) {
+  mpm_atomic_file f;
+  mpm_status st = mpm_atomic_open(&f, path, err);
+  if (st != MPM_OK) return st;
+  fprintf(f.fp, "# mpm embedded surface (Zhu et al. 2017 sec. 4.1), body %d\n", e->body);
+  for (int v = 0; v < e->vertex_count; ++v)
+    fprintf(f.fp, "v %.9g %.9g %.9g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+  for (int t = 0; t < e->triangle_count; ++t)
+    fprintf(f.fp, "f %d %d %d\n", e->triangles[3 * t] + 1, e->triangles[3 * t + 1] + 1,
+            e->triangles[3 * t + 2] + 1);
+  return mpm_atomic_commit(&f, err);
+}
+
+mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e,
+                                 const double *x, mpm_error *err) {
+  mpm_atomic_file f;
+  mpm_status st = mpm_atomic_open(&f, path, err);
+  if (st != MPM_OK) return st;
+  fprintf(f.fp,
+          "ply\nformat binary_little_endian 1.0\ncomment mpm embedded surface, body %d\n"
+          "element vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
+          "element face %d\nproperty list uchar int vertex_indices\nend_header\n",
+          e->body, e->vertex_count, e->triangle_count);
+  for (int v = 0; v < e->vertex_count; ++v) {
+    const float p[3] = {(float)x[3 * v], (float)x[3 * v + 1], (float)x[3 * v + 2]};
+    fwrite(p, sizeof p, 1, f.fp);
+  }
+  for (int t = 0; t < e->triangle_count; ++t) {
+    const unsigned char three = 3;
+    const int32_t idx[3] = {e->triangles[3 * t], e->triangles[3 * t + 1], e->triangles[3 * t + 2]};
+    fwrite(&three, 1, 1, f.fp);
+    fwrite(idx, sizeof idx, 1, f.fp);
+  }
+  return mpm_atomic_commit(&f, err); /* a short write shows up as the stream's error here */
+}
