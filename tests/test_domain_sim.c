@@ -4,6 +4,7 @@
  * both); mass is conserved; the domains can be switched off from the scene (by box and time)
  * and from the API, after which the particles go on as standard material points. */
 #include "support.h"
+#include "scene/mesh.h"
 #include "solver/sim.h"
 
 #include <math.h>
@@ -156,11 +157,64 @@ static void test_domain_scene_keys(void **state) {
   }
 }
 
+/* A torus made from a mesh with domains: every vertex of the embedded surface is reproduced
+ * exactly while the body is undeformed (trilinear interpolation reproduces the linear map),
+ * and the frame's OBJ and PLY surfaces read back as the same mesh. */
+static void test_embedded_surface(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("domain_surface");
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04},"
+           " \"time\": {\"end\": 0.1, \"fps\": 10}, \"output\": {\"directory\": \"%s\"},"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"mesh\", \"file\": \"%s/examples/meshes/torus.obj\","
+           " \"center\": [0.5, 0.5, 0.5], \"scale\": 0.15}, \"material\": \"m\", \"domains\": true}]}",
+           dir, MPM_SOURCE_DIR);
+  mpm_scene scene;
+  mpm_error err;
+  if (mpm_scene_parse(text, "torus.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_scene_free(&scene);
+  assert_int_equal(sim->surface_count, 1);
+  const mpm_embedded_surface *e = &sim->surfaces[0];
+  assert_int_equal(e->triangle_count, 1600);
+  double *x = malloc(3 * (size_t)e->vertex_count * sizeof *x);
+  mpm_embedded_positions(e, &sim->domains, x);
+  double worst = 0, outside = 0;
+  for (int v = 0; v < e->vertex_count; ++v)
+    for (int d = 0; d < 3; ++d) {
+      worst = fmax(worst, fabs(x[3 * v + d] - e->rest[v][d]));
+      outside = fmax(outside, fabs(e->xi[v][d]));
+    }
+  assert_true(worst < TOL(1e-6, 1e-14));
+  assert_true(outside < 3.0); /* vertices outside every domain: within a cell of the nearest */
+  free(x);
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  char path[600];
+  const char *ext[2] = {"obj", "ply"};
+  for (int k = 0; k < 2; ++k) {
+    snprintf(path, sizeof path, "%s/surface_body0_0000.%s", dir, ext[k]);
+    mpm_mesh m;
+    if (mpm_mesh_load(path, &m, &err) != MPM_OK) fail_msg("%s", err.message);
+    assert_int_equal(m.vertex_count, e->vertex_count);
+    assert_int_equal(m.triangle_count, e->triangle_count);
+    for (int v = 0; v < m.vertex_count; ++v)
+      for (int d = 0; d < 3; ++d) assert_close(m.vertices[3 * v + d], e->rest[v][d], 1e-6);
+    assert_int_equal(mpm_mesh_boundary_edges(&m), 0);
+    mpm_mesh_free(&m);
+  }
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_stretched_bar),
       cmocka_unit_test(test_release_from_scene_and_api),
       cmocka_unit_test(test_domain_scene_keys),
+      cmocka_unit_test(test_embedded_surface),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
