@@ -31,6 +31,8 @@ static void usage(FILE *out) {
           "      ns per 3x3 SVD (mpm_svd3)\n"
           "  mpm bench checkpoint [--particles N] [--repeats N] [--dir DIR]\n"
           "      checkpoint write/read/resume seconds and MB/s, cost of the guards per step\n"
+          "  mpm bench domains [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
+          "      ns per particle-step with particle domains against material points\n"
           "  mpm render OUTDIR [--field F] [--size WxH] [--colormap C] [--every N] [--movie]\n"
           "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed);\n"
           "      F: velocity (default), J, stress, plastic, material, body\n"

@@ -10,4 +10,8 @@ int mpm_bench_stress(int argc, char **argv);
  * cost of the instability guards and of retry mode (bench_checkpoint.c). */
 int mpm_bench_checkpoint(int argc, char **argv);
 
+/* `mpm bench domains`: ns per particle-step with particle domains against standard material
+ * points on the same block, per thread count (bench_domains.c). */
+int mpm_bench_domains(int argc, char **argv);
+
 #endif

@@ -38,6 +38,7 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   free(s->adj);
   free(s->cblock);
   free(s->cbase);
+  free(s->vP);
   memset(s, 0, sizeof *s);
 }
 

@@ -43,6 +43,9 @@ typedef struct mpm_domain_set {
   /* per step, per corner: the 8 sparse-grid blocks around its stencil's base node */
   int32_t (*cblock)[8];
   int32_t (*cbase)[3];
+  /* per step, per particle: V_p^0 P_p, computed once and gathered by the corners */
+  mpm_real (*vP)[9];
+  size_t vP_capacity;
 } mpm_domain_set;
 
 void mpm_domain_set_init(mpm_domain_set *s);

@@ -4,10 +4,15 @@
 #include "core/mat3.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
                         const mpm_real origin[3]) {
+  /* corners come in lattice order: neighbours mostly share their base block, whose 8 block
+   * indices are then reused instead of looked up again */
+  int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+  int32_t last_blocks[8] = {0};
   for (size_t c = 0; c < s->corner_count; ++c) {
     if (s->adj_start[c] == s->adj_start[c + 1]) continue; /* no active particle uses it */
     const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
@@ -16,31 +21,53 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel 
     mpm_kernel_stencil(k, xr, &st);
     int32_t *blocks = s->cblock[c];
     for (int d = 0; d < 3; ++d) s->cbase[c][d] = st.base[d];
+    const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
+                           st.base[2] >> MPM_BLOCK_BITS};
+    if (bb[0] == last[0] && bb[1] == last[1] && bb[2] == last[2]) {
+      memcpy(blocks, last_blocks, sizeof last_blocks);
+      continue;
+    }
     for (int o = 0; o < 8; ++o) {
-      const int32_t bc[3] = {(st.base[0] >> MPM_BLOCK_BITS) + ((o >> 2) & 1),
-                             (st.base[1] >> MPM_BLOCK_BITS) + ((o >> 1) & 1),
-                             (st.base[2] >> MPM_BLOCK_BITS) + (o & 1)};
+      const int32_t bc[3] = {bb[0] + ((o >> 2) & 1), bb[1] + ((o >> 1) & 1), bb[2] + (o & 1)};
       blocks[o] = mpm_sparse_grid_touch(g, bc);
       if (blocks[o] < 0) return -1;
     }
+    memcpy(last, bb, sizeof last);
+    memcpy(last_blocks, blocks, sizeof last_blocks);
   }
   return 0;
 }
 
-/* The channel values of node base + (i, j, k) of corner c. */
-static inline mpm_real *node_channel(mpm_grid_block *blocks, const int32_t cblock[8],
-                                     const int32_t base[3], int i, int j, int k, int ch) {
+/* The block and the node within it of node base + (i, j, k) of a corner's stencil. */
+static inline mpm_grid_block *node_at(mpm_grid_block *blocks, const int32_t cblock[8],
+                                      const int32_t base[3], int i, int j, int k, int *local) {
   const int n[3] = {base[0] + i, base[1] + j, base[2] + k};
   const int o = (((n[0] >> MPM_BLOCK_BITS) - (base[0] >> MPM_BLOCK_BITS)) << 2) |
                 (((n[1] >> MPM_BLOCK_BITS) - (base[1] >> MPM_BLOCK_BITS)) << 1) |
                 ((n[2] >> MPM_BLOCK_BITS) - (base[2] >> MPM_BLOCK_BITS));
-  const int local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
-  return &blocks[cblock[o]].ch[ch][local];
+  *local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
+  return &blocks[cblock[o]];
 }
 
-void mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g) {
+int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g) {
   const mpm_particles *p = &s->particles;
-  const long nc = (long)s->corner_count;
+  const long nc = (long)s->corner_count, np = (long)p->count;
+  /* 0. V0 P of every active particle, once (each is gathered by its 8 corners) */
+  if (s->vP_capacity < p->count) {
+    mpm_real(*grown)[9] = realloc(s->vP, (p->count + 1) * sizeof *grown);
+    if (!grown) return -1;
+    s->vP = grown;
+    s->vP_capacity = p->count;
+  }
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < np; ++q) {
+    if (!s->active[q]) continue;
+    mpm_real F[9], P[9];
+    for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
+    const mpm_material mat = mpm_material_at(&ctx->materials[p->material[q]], p->plastic[q]);
+    mat.model->pk1(&mat, F, P);
+    for (int e = 0; e < 9; ++e) s->vP[q][e] = p->vol0[q] * P[e];
+  }
   /* 1. particle -> corner, gathered per corner (each corner sums its <= 8 particle slots in
    *    slot order: no races, the same sums for any thread count) */
 #pragma omp parallel for schedule(static)
@@ -53,13 +80,9 @@ void mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_g
       m += w * mq;
       for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
       /* f_a = -V0 P g_ap (Zhu eq. 8 with eq. 5) */
-      mpm_real F[9], P[9];
-      for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
-      const mpm_material mat = mpm_material_at(&ctx->materials[p->material[q]], p->plastic[q]);
-      mat.model->pk1(&mat, F, P);
-      const mpm_real *gq = s->g[q][a];
+      const mpm_real *gq = s->g[q][a], *vP = s->vP[q];
       for (int d = 0; d < 3; ++d)
-        f[d] -= (double)p->vol0[q] * (P[3 * d] * gq[0] + P[3 * d + 1] * gq[1] + P[3 * d + 2] * gq[2]);
+        f[d] -= vP[3 * d] * gq[0] + vP[3 * d + 1] * gq[1] + vP[3 * d + 2] * gq[2];
     }
     s->cm[c] = (mpm_real)m;
     for (int d = 0; d < 3; ++d) {
@@ -81,15 +104,16 @@ void mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_g
         for (int l = 0; l < W; ++l) {
           const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
           if (w == 0) continue;
-          *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l, MPM_CH_MASS) += w * s->cm[c];
+          int n;
+          mpm_grid_block *blk = node_at(g->blocks, s->cblock[c], s->cbase[c], i, j, l, &n);
+          blk->ch[MPM_CH_MASS][n] += w * s->cm[c];
           for (int d = 0; d < 3; ++d) {
-            *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l, MPM_CH_MV + d) +=
-                w * s->cp[d][c];
-            *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l, MPM_CH_F + d) +=
-                w * s->cf[d][c];
+            blk->ch[MPM_CH_MV + d][n] += w * s->cp[d][c];
+            blk->ch[MPM_CH_F + d][n] += w * s->cf[d][c];
           }
         }
   }
+  return 0;
 }
 
 void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
@@ -125,11 +149,11 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
         for (int l = 0; l < W; ++l) {
           const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
           if (w == 0) continue;
+          int n;
+          const mpm_grid_block *blk = node_at(g->blocks, s->cblock[c], s->cbase[c], i, j, l, &n);
           for (int d = 0; d < 3; ++d) {
-            const mpm_real vn = *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l,
-                                              MPM_CH_VNEW + d);
-            const mpm_real vo = *node_channel(g->blocks, s->cblock[c], s->cbase[c], i, j, l,
-                                              MPM_CH_VOLD + d);
+            const mpm_real vn = blk->ch[MPM_CH_VNEW + d][n];
+            const mpm_real vo = blk->ch[MPM_CH_VOLD + d][n];
             vnew[d] += w * vn;
             dv[d] += w * (vn - vo);
           }

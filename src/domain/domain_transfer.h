@@ -25,8 +25,9 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel 
                         const mpm_real origin[3]);
 
 /* Rasterize the domain particles to their corners and the corners to the grid's mass,
- * momentum and force channels (ctx: kernel, origin, materials). */
-void mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g);
+ * momentum and force channels (ctx: kernel, origin, materials). Returns 0, -1 when out of
+ * memory (nothing added to the grid then). */
+int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g);
 
 /* After the grid update (channels hold v^n and v^{n+1}): update corners and particles.
  * poses: colliders at the end of the step (count of them). */

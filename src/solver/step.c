@@ -133,7 +133,10 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
     dtc.kernel = sim->domain_kernel;
     const double t1 = mpm_wall_seconds();
     mpm_p2g_sparse(&tc, g, p);
-    if (domains) mpm_domain_p2g(&dtc, &sim->domains, g);
+    if (domains && mpm_domain_p2g(&dtc, &sim->domains, g))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory for the stresses of %zu domain particles",
+                           (long long)sim->steps, sim->domains.particles.count);
     const double t2 = mpm_wall_seconds();
     mpm_grid_update_sparse(&gu, g);
     const double t3 = mpm_wall_seconds();

@@ -1,0 +1,103 @@
+/* bench_domains.c - `mpm bench domains`: a falling elastic block simulated with standard
+ * material points and with particle domains (Zhu et al. 2017), the same particles: ns per
+ * particle per step for each, at each thread count asked. Figures are printed, never
+ * asserted. */
+#include "bench.h"
+#include "bench_util.h"
+#include "cli.h"
+#include "core/parallel.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static mpm_sim *block(int n, int domains, mpm_error *err) {
+  const double dx = 0.02, side = cbrt((double)n) * dx / 2, lo = 10 * dx;
+  const double domain = side + 25 * dx;
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
+           " \"time\": {\"end\": 10, \"fps\": 10},"
+           " \"materials\": [{\"name\": \"jello\", \"model\": \"neo_hookean\", \"E\": 1e5, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
+           "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"jello\", \"particles_per_cell\": 8, "
+           "\"domains\": %s}]}",
+           domain, domain, domain, dx, lo + side / 2, lo + side / 2 + 5 * dx, lo + side / 2,
+           side / 2, side / 2, side / 2, domains ? "true" : "false");
+  mpm_scene scene;
+  if (mpm_scene_parse(text, "bench-domains", &scene, err) != MPM_OK) return NULL;
+  mpm_sim *sim = NULL;
+  mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
+  mpm_scene_free(&scene);
+  return st == MPM_OK ? sim : NULL;
+}
+
+int mpm_bench_domains(int argc, char **argv) {
+  int particles = 200000, steps = 10, repeats = 3, threads[16] = {1, 2}, nthreads = 2;
+  for (int i = 0; i < argc; ++i) {
+    if (!strcmp(argv[i], "--particles")) {
+      if (mpm_cli_parse_int("--particles", i + 1 < argc ? argv[i + 1] : NULL, 1000, 50000000,
+                            &particles))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--steps")) {
+      if (mpm_cli_parse_int("--steps", i + 1 < argc ? argv[i + 1] : NULL, 1, 10000, &steps))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--repeats")) {
+      if (mpm_cli_parse_int("--repeats", i + 1 < argc ? argv[i + 1] : NULL, 1, 100, &repeats))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+      nthreads = bench_parse_threads(argv[++i], threads, 16);
+      if (nthreads < 1) {
+        fprintf(stderr, "mpm bench domains: --threads expects a list like 1,2\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else {
+      fprintf(stderr, "mpm bench domains: unknown option '%s'\n", argv[i]);
+      return MPM_EXIT_USAGE;
+    }
+  }
+  bench_print_machine();
+  printf("domains benchmark: a falling neo-Hookean block, 8 particles per cell, quadratic grid "
+         "kernel for material points, linear corner kernel for domains; median of %d runs of %d "
+         "steps\n",
+         repeats, steps);
+  for (int t = 0; t < nthreads; ++t) {
+    mpm_set_threads(threads[t]);
+    double ns[2] = {0, 0};
+    size_t n = 0, corners = 0;
+    for (int domains = 0; domains < 2; ++domains) {
+      mpm_error err;
+      mpm_sim *sim = block(particles, domains, &err);
+      if (!sim) {
+        fprintf(stderr, "mpm bench: %s\n", err.message);
+        return MPM_EXIT_FAILURE;
+      }
+      n = sim->particles.count + sim->domains.active_count;
+      corners = sim->domains.corner_count ? sim->domains.corner_count : corners;
+      for (int k = 0; k < 2; ++k) mpm_sim_step(sim, 1e-3);
+      double runs[100];
+      for (int r = 0; r < repeats; ++r) {
+        const double t0 = mpm_wall_seconds();
+        for (int k = 0; k < steps; ++k)
+          if (mpm_sim_step(sim, 1e-3) != MPM_OK) {
+            fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+            mpm_sim_destroy(sim);
+            return MPM_EXIT_FAILURE;
+          }
+        runs[r] = (mpm_wall_seconds() - t0) * 1e9 / ((double)n * steps);
+      }
+      ns[domains] = bench_median(runs, repeats);
+      mpm_sim_destroy(sim);
+    }
+    printf("  %d threads, %zu particles (%zu corners): material points %.1f ns, particle domains "
+           "%.1f ns per particle-step (%.2fx)\n",
+           threads[t], n, corners, ns[0], ns[1], ns[1] / ns[0]);
+    fflush(stdout);
+  }
+  return MPM_EXIT_OK;
+}
