@@ -57,6 +57,34 @@ static void test_cfl_violation_stops(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The same with particle domains: the corners carry the velocity, the guard names the domain
+ * particle. */
+static void test_cfl_violation_domains(void **state) {
+  (void)state;
+  char text[2048];
+  snprintf(text, sizeof text, BLOCK, "stop", 8, "fixed_corotated");
+  const char *key = "\"material\": \"jello\"}";
+  const char *at = strstr(text, key);
+  assert_non_null(at);
+  char fixed[2100]; /* the body with "domains": true added */
+  snprintf(fixed, sizeof fixed, "%.*s\"material\": \"jello\", \"domains\": true}%s",
+           (int)(at - text), text, at + strlen(key));
+  mpm_scene scene;
+  mpm_error err;
+  if (mpm_scene_parse(fixed, "block.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_scene_free(&scene);
+  assert_true(sim->domains.active_count > 0);
+  for (size_t c = 0; c < sim->domains.corner_count; ++c) sim->domains.cv[0][c] = 50;
+  mpm_domain_set_sync_particles(&sim->domains);
+  sim->max_speed = 0;
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
+  expect_message(sim, "violated the CFL condition");
+  expect_message(sim, "domain particle id ");
+  mpm_sim_destroy(sim);
+}
+
 static void test_retry_halves_dt_until_stable(void **state) {
   (void)state;
   mpm_sim *sim = block("retry", 8, "fixed_corotated");
@@ -160,6 +188,7 @@ static void test_guard_scene_keys(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cfl_violation_stops),
+      cmocka_unit_test(test_cfl_violation_domains),
       cmocka_unit_test(test_retry_halves_dt_until_stable),
       cmocka_unit_test(test_retry_gives_up),
       cmocka_unit_test(test_particle_leaving_domain),

@@ -9,6 +9,8 @@
  *     blow-up, before any value is infinite);
  *   - an inverted F (det F <= 0) for a model that cannot take one (neo-Hookean without a
  *     min_stretch clamp evaluates log J).
+ * Standard and domain particles are scanned alike (a domain particle is interpolated from
+ * its corners, so it leaves the domain or outruns the step with them).
  * The first offending particle (lowest index, whatever the threads) is named with its id,
  * body, material, the step, the time and the quantity. With solver.on_instability = "retry"
  * the particles, time and step count saved before the step are restored and the step is
@@ -32,8 +34,9 @@ static int model_takes_inversion(const mpm_material *m) {
   return !(m->kind == MPM_MODEL_NEO_HOOKEAN && !(m->min_stretch > 0));
 }
 
-static guard_hit scan(const mpm_sim *sim, double dt) {
-  const mpm_particles *p = &sim->particles;
+/* The particles of p (those with active[i] set, when active is given). */
+static guard_hit scan(const mpm_sim *sim, const mpm_particles *p, const uint8_t *active,
+                      double dt) {
   const long n = (long)p->count;
   const double dx = sim->scene.dx;
   mpm_real lo[3], hi[3];
@@ -50,6 +53,7 @@ static guard_hit scan(const mpm_sim *sim, double dt) {
   long first_domain = n, first_cfl = n, first_inv = n;
 #pragma omp parallel for schedule(static) reduction(min : first_domain, first_cfl, first_inv)
   for (long i = 0; i < n; ++i) {
+    if (active && !active[i]) continue;
     int out = 0;
     for (int d = 0; d < 3; ++d) out |= !(p->x[d][i] > lo[d] && p->x[d][i] < hi[d]);
     if (out && i < first_domain) first_domain = i;
@@ -90,16 +94,16 @@ static guard_hit scan(const mpm_sim *sim, double dt) {
 }
 
 /* The message for a guard hit, in sim->error. */
-static mpm_status report(mpm_sim *sim, const guard_hit *h, double dt) {
-  const mpm_particles *p = &sim->particles;
+static mpm_status report(mpm_sim *sim, const mpm_particles *p, const guard_hit *h, double dt) {
+  const char *kind = p == &sim->particles ? "" : "domain ";
   const long i = h->particle;
   const int m = p->material[i];
   const char *mname = sim->scene.materials[m].name;
   char where[200];
   snprintf(where, sizeof where,
-           "simulation unstable at step %lld (t = %.6g s, dt = %.3g s): particle id %u (body %d, "
-           "material %d '%s')",
-           (long long)sim->steps, sim->time, dt, p->id[i], p->body[i], m, mname);
+           "simulation unstable at step %lld (t = %.6g s, dt = %.3g s): %sparticle id %u (body "
+           "%d, material %d '%s')",
+           (long long)sim->steps, sim->time, dt, kind, p->id[i], p->body[i], m, mname);
   switch (h->kind) {
   case GUARD_DOMAIN:
     return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
@@ -125,8 +129,11 @@ static mpm_status report(mpm_sim *sim, const guard_hit *h, double dt) {
 }
 
 mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
-  const guard_hit h = scan(sim, dt);
-  return h.kind == GUARD_NONE ? MPM_OK : report(sim, &h, dt);
+  guard_hit h = scan(sim, &sim->particles, NULL, dt);
+  if (h.kind != GUARD_NONE) return report(sim, &sim->particles, &h, dt);
+  if (!sim->domains.active_count) return MPM_OK;
+  h = scan(sim, &sim->domains.particles, sim->domains.active, dt);
+  return h.kind == GUARD_NONE ? MPM_OK : report(sim, &sim->domains.particles, &h, dt);
 }
 
 /* Save or restore what a step changes (the particles and the clock). */
