@@ -4,6 +4,7 @@
  * both); mass is conserved; the domains can be switched off from the scene (by box and time)
  * and from the API, after which the particles go on as standard material points. */
 #include "support.h"
+#include "core/parallel.h"
 #include "scene/mesh.h"
 #include "solver/sim.h"
 
@@ -209,12 +210,36 @@ static void test_embedded_surface(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The domain transfers give bitwise the same state for 1 and 2 threads. */
+static void test_threads_bitwise(void **state) {
+  (void)state;
+  mpm_sim *run[2];
+  for (int t = 0; t < 2; ++t) {
+    mpm_set_threads(t + 1);
+    run[t] = bar("true", "");
+    for (int f = 0; f < 2; ++f)
+      if (mpm_sim_advance_frame(run[t]) != MPM_OK) fail_msg("%s", mpm_sim_last_error(run[t]));
+  }
+  mpm_set_threads(2);
+  const mpm_domain_set *a = &run[0]->domains, *b = &run[1]->domains;
+  assert_int_equal(a->particles.count, b->particles.count);
+  for (int d = 0; d < 3; ++d) {
+    assert_memory_equal(a->cx[d], b->cx[d], a->corner_count * sizeof(mpm_real));
+    assert_memory_equal(a->particles.x[d], b->particles.x[d], a->particles.count * sizeof(mpm_real));
+  }
+  for (int e = 0; e < 9; ++e)
+    assert_memory_equal(a->particles.F[e], b->particles.F[e], a->particles.count * sizeof(mpm_real));
+  mpm_sim_destroy(run[0]);
+  mpm_sim_destroy(run[1]);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_stretched_bar),
       cmocka_unit_test(test_release_from_scene_and_api),
       cmocka_unit_test(test_domain_scene_keys),
       cmocka_unit_test(test_embedded_surface),
+      cmocka_unit_test(test_threads_bitwise),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

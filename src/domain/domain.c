@@ -39,6 +39,9 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   free(s->cblock);
   free(s->cbase);
   free(s->vP);
+  free(s->group_corner);
+  free(s->group_start);
+  free(s->block_group);
   memset(s, 0, sizeof *s);
 }
 

@@ -46,6 +46,11 @@ typedef struct mpm_domain_set {
   /* per step, per particle: V_p^0 P_p, computed once and gathered by the corners */
   mpm_real (*vP)[9];
   size_t vP_capacity;
+  /* per step: the used corners grouped by base block, the groups by colour (parallel
+   * corner -> grid scatter, domain_transfer.c) */
+  uint32_t *group_corner, *group_start;
+  int32_t *block_group;
+  size_t group_capacity, block_capacity, colour_start[9];
 } mpm_domain_set;
 
 void mpm_domain_set_init(mpm_domain_set *s);

@@ -49,6 +49,55 @@ static inline mpm_grid_block *node_at(mpm_grid_block *blocks, const int32_t cblo
   return &blocks[cblock[o]];
 }
 
+/* Group the used corners by base block (counting sort on the block index, stable in corner
+ * order) and the groups by colour; fills group_corner, group_start and colour_start. */
+static int group_corners(mpm_domain_set *s, const mpm_sparse_grid *g) {
+  const size_t nc = s->corner_count, nb = g->block_count;
+  if (s->group_capacity < nc + 1 || s->block_capacity < nb + 1) {
+    free(s->group_corner);
+    free(s->group_start);
+    free(s->block_group);
+    s->group_corner = malloc((nc + 1) * sizeof *s->group_corner);
+    s->group_start = malloc((nb + 2) * sizeof *s->group_start);
+    s->block_group = malloc((nb + 1) * sizeof *s->block_group);
+    if (!s->group_corner || !s->group_start || !s->block_group) {
+      s->group_capacity = s->block_capacity = 0;
+      return -1;
+    }
+    s->group_capacity = nc + 1;
+    s->block_capacity = nb + 1;
+  }
+  /* the base blocks in use, numbered as groups in colour order, then block order */
+  int32_t *bg = s->block_group;
+  for (size_t b = 0; b < nb; ++b) bg[b] = -1;
+  for (size_t c = 0; c < nc; ++c)
+    if (s->adj_start[c] != s->adj_start[c + 1]) bg[s->cblock[c][0]] = 0;
+  size_t groups = 0;
+  for (int colour = 0; colour < 8; ++colour) {
+    s->colour_start[colour] = groups;
+    for (size_t b = 0; b < nb; ++b) {
+      if (bg[b] < 0) continue;
+      const int32_t *bc = g->coord[b];
+      if (((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1)) == colour) bg[b] = (int32_t)groups++;
+    }
+  }
+  s->colour_start[8] = groups;
+  /* counting sort of the corners by group */
+  uint32_t *start = s->group_start;
+  memset(start, 0, (groups + 1) * sizeof *start);
+  for (size_t c = 0; c < nc; ++c)
+    if (s->adj_start[c] != s->adj_start[c + 1]) start[bg[s->cblock[c][0]] + 1]++;
+  for (size_t q = 0; q < groups; ++q) start[q + 1] += start[q];
+  for (size_t c = 0; c < nc; ++c)
+    if (s->adj_start[c] != s->adj_start[c + 1]) {
+      const int32_t q = bg[s->cblock[c][0]];
+      s->group_corner[start[q]++] = (uint32_t)c;
+    }
+  for (size_t q = groups; q > 0; --q) start[q] = start[q - 1]; /* back to the starts */
+  start[0] = 0;
+  return 0;
+}
+
 int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
@@ -90,28 +139,39 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_gr
       s->cf[d][c] = (mpm_real)f[d];
     }
   }
-  /* 2. corner -> grid, serial in corner order */
+  /* 2. corner -> grid. Corners are grouped by their base block and the groups coloured by the
+   *    parity of the block's coordinates, as the standard P2G does (sparse_grid.h): a stencil
+   *    reaches only its base block and the forward neighbours, so the groups of one colour
+   *    never touch the same node and run in parallel, and a node receives the colours in a
+   *    fixed order and each group's corners in corner order: the same sums for any number
+   *    of threads. */
+  if (group_corners(s, g)) return -1;
   const mpm_kernel *k = &ctx->kernel;
   const int W = k->width;
-  for (long c = 0; c < nc; ++c) {
-    if (s->adj_start[c] == s->adj_start[c + 1]) continue;
-    const mpm_real xr[3] = {s->cx[0][c] - ctx->origin[0], s->cx[1][c] - ctx->origin[1],
-                            s->cx[2][c] - ctx->origin[2]};
-    mpm_stencil st;
-    mpm_kernel_stencil(k, xr, &st);
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int l = 0; l < W; ++l) {
-          const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
-          if (w == 0) continue;
-          int n;
-          mpm_grid_block *blk = node_at(g->blocks, s->cblock[c], s->cbase[c], i, j, l, &n);
-          blk->ch[MPM_CH_MASS][n] += w * s->cm[c];
-          for (int d = 0; d < 3; ++d) {
-            blk->ch[MPM_CH_MV + d][n] += w * s->cp[d][c];
-            blk->ch[MPM_CH_F + d][n] += w * s->cf[d][c];
-          }
-        }
+  for (int colour = 0; colour < 8; ++colour) {
+    const long g0 = (long)s->colour_start[colour], g1 = (long)s->colour_start[colour + 1];
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long grp = g0; grp < g1; ++grp)
+      for (uint32_t j = s->group_start[grp]; j < s->group_start[grp + 1]; ++j) {
+        const uint32_t c = s->group_corner[j];
+        const mpm_real xr[3] = {s->cx[0][c] - ctx->origin[0], s->cx[1][c] - ctx->origin[1],
+                                s->cx[2][c] - ctx->origin[2]};
+        mpm_stencil st;
+        mpm_kernel_stencil(k, xr, &st);
+        for (int i = 0; i < W; ++i)
+          for (int jj = 0; jj < W; ++jj)
+            for (int l = 0; l < W; ++l) {
+              const mpm_real w = st.w[0][i] * st.w[1][jj] * st.w[2][l];
+              if (w == 0) continue;
+              int n;
+              mpm_grid_block *blk = node_at(g->blocks, s->cblock[c], s->cbase[c], i, jj, l, &n);
+              blk->ch[MPM_CH_MASS][n] += w * s->cm[c];
+              for (int d = 0; d < 3; ++d) {
+                blk->ch[MPM_CH_MV + d][n] += w * s->cp[d][c];
+                blk->ch[MPM_CH_F + d][n] += w * s->cf[d][c];
+              }
+            }
+      }
   }
   return 0;
 }
