@@ -22,6 +22,9 @@ frame, that what ParaView would load is what the engine computed:
               positions, velocities and ids equal the VTU's exactly, particle by particle.
   stats.csv   sum(mass) within 1e-6 relative; 0.5 sum(m |v|^2) from the VTU arrays within
               1e-4 relative; sum(m v) within 1e-6 of sum(m |v|).
+  domains_NNNN.vtu (scenes with particle domains)
+              every cell a VTK_HEXAHEDRON, one per domain particle, ids among the frame's;
+              frame 0's hexahedra all of one positive volume by VTK's HexVolume (corner order).
 
 Run with Debian's interpreter, which has python3-vtk9 (a pyenv `python3` on PATH has no vtk):
 
@@ -49,7 +52,8 @@ try:
     from vtkmodules.vtkCommonCore import (VTK_DOUBLE, VTK_FLOAT, VTK_INT, VTK_UNSIGNED_INT,
                                           vtkLogger, vtkOutputWindow, vtkStringOutputWindow,
                                           vtkVersion)
-    from vtkmodules.vtkCommonDataModel import VTK_VERTEX
+    from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_VERTEX
+    from vtkmodules.vtkFiltersVerdict import vtkMeshQuality
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 except ImportError as e:
     print("check_output.py: FAIL: cannot import VTK in %s (%s); install it with "
@@ -418,6 +422,34 @@ def scene_bodies(path):
         return None
 
 
+def check_domains(where, path, frame_ids, first, messages):
+    """domains_NNNN.vtu: VTK_HEXAHEDRON cells over the corner points, one per domain particle,
+    ids among the frame's; in frame 0 every hexahedron has the same positive volume (VTK's own
+    HexVolume: a wrong corner order gives a negative or twisted one)."""
+    grid = read_vtu(where, path, messages)
+    cells = grid.GetNumberOfCells()
+    if cells == 0:
+        where.fail(None, "no domain cells")
+    for c in range(cells):
+        if grid.GetCellType(c) != VTK_HEXAHEDRON:
+            where.fail("types", "cell %d has type %d, expected VTK_HEXAHEDRON (12)"
+                       % (c, grid.GetCellType(c)))
+    ids = values(grid.GetCellData().GetArray("id"))
+    if not set(ids) <= frame_ids or len(set(ids)) != len(ids):
+        where.fail("id", "domain ids are not unique ids of the frame's particles")
+    if first:
+        q = vtkMeshQuality()
+        q.SetInputData(grid)
+        q.SetHexQualityMeasureToVolume()
+        q.Update()
+        vol = values(q.GetOutput().GetCellData().GetArray("Quality"))
+        lo, hi = min(vol), max(vol)
+        if not (lo > 0 and hi - lo <= 1e-4 * hi):
+            where.fail("connectivity", "hexahedron volumes %g..%g, expected one positive volume"
+                       % (lo, hi))
+    return cells
+
+
 def check_scene(mpm, scene, outdir, frames, messages):
     name = os.path.splitext(os.path.basename(scene))[0]
     t0 = time.monotonic()
@@ -432,7 +464,7 @@ def check_scene(mpm, scene, outdir, frames, messages):
         Where(name, "stats.csv").fail(None, "frames %s, expected 0..%d"
                                       % (sorted(stats), len(entries) - 1))
     info = scene_bodies(scene)
-    real, ids0, n = None, None, 0
+    real, ids0, n, domain_cells = None, None, 0, 0
     for k, (step, vtu) in enumerate(entries):
         m = re.fullmatch(r"frame_(\d+)\.vtu", os.path.basename(vtu))
         if not m or int(m.group(1)) != k:
@@ -443,13 +475,17 @@ def check_scene(mpm, scene, outdir, frames, messages):
         ply_path = vtu[:-4] + ".ply"
         ply = read_ply(Where(name, ply_path, k), ply_path)
         real, ids = check_frame(where, grid, ply, step, stats[k], info, real)
+        dom = os.path.join(outdir, "domains_%04d.vtu" % k)
+        if os.path.exists(dom):
+            domain_cells = check_domains(Where(name, dom, k), dom, set(ids), k == 0, messages)
         if ids0 is not None and ids != ids0:
             where.fail("id", "the set of ids differs from frame 0's")
         ids0, n = ids, len(ids)
     t2 = time.monotonic()
     bodies = "%d bodies" % len(info[0]) if info else "bodies not checked (scene unreadable)"
-    print("%s: %d frames x %d particles, %s, %s; run %.1f s, check %.1f s: ok"
-          % (name, len(entries), n, real, bodies, t1 - t0, t2 - t1))
+    domains = ", %d domain hexahedra" % domain_cells if domain_cells else ""
+    print("%s: %d frames x %d particles%s, %s, %s; run %.1f s, check %.1f s: ok"
+          % (name, len(entries), n, domains, real, bodies, t1 - t0, t2 - t1))
     return len(entries)
 
 
