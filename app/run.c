@@ -64,8 +64,8 @@ int mpm_cmd_check(int argc, char **argv) {
   printf("%s: ok (%zu particles, %zu of them with domains, %d materials, %d colliders, dx = %g "
          "m, %d frames, about %.0f MiB)\n",
          argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
-         sim->material_count, sim->collider_count, sim->scene.dx,
-         sim->frame_count, mpm_scene_memory_estimate(&sim->scene, NULL) / (1024.0 * 1024.0));
+         sim->material_count, sim->collider_count, sim->scene.dx, sim->frame_count,
+         mpm_scene_memory_estimate(&sim->scene, NULL) / (1024.0 * 1024.0));
   mpm_sim_destroy(sim);
   return MPM_EXIT_OK;
 }
@@ -183,13 +183,12 @@ int mpm_cmd_run(int argc, char **argv) {
   pr.first_frame = sim->frame;
   pr.first_steps = sim->steps;
   if (!quiet && resume_dir)
-    fprintf(stderr, "mpm: resuming %s from %s: frame %d of %d, t = %.6g s, step %lld\n",
-            scene_path, checkpoint, sim->frame, sim->frame_count, sim->time,
-            (long long)sim->steps);
+    fprintf(stderr, "mpm: resuming %s from %s: frame %d of %d, t = %.6g s, step %lld\n", scene_path,
+            checkpoint, sim->frame, sim->frame_count, sim->time, (long long)sim->steps);
   if (!quiet)
     fprintf(stderr, "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d threads, %s)\n",
-            scene_path, sim->particles.count + sim->domains.active_count, sim->scene.dx, sim->frame_count, sim->output_dir,
-            mpm_thread_count(), mpm_real_type());
+            scene_path, sim->particles.count + sim->domains.active_count, sim->scene.dx,
+            sim->frame_count, sim->output_dir, mpm_thread_count(), mpm_real_type());
   int code = MPM_EXIT_OK;
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
     st = mpm_sim_advance_frame(sim);

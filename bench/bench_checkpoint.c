@@ -23,17 +23,18 @@ static mpm_sim *make_block(int n, const char *action, mpm_error *err) {
   const double dx = 0.02, side = cbrt((double)n) * dx / 2, lo = 10 * dx;
   const double domain = side + 20 * dx;
   char text[2048];
-  snprintf(text, sizeof text,
-           "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
-           " \"time\": {\"end\": 10, \"fps\": 10},"
-           " \"solver\": {\"on_instability\": \"%s\"},"
-           " \"materials\": [{\"name\": \"jello\", \"model\": \"neo_hookean\", \"E\": 1e5, "
-           "\"nu\": 0.3, \"density\": 1000}],"
-           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
-           "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"jello\", \"particles_per_cell\": 8, "
-           "\"jitter\": 0}]}",
-           domain, domain, domain, dx, action, lo + side / 2, lo + side / 2, lo + side / 2,
-           side / 2, side / 2, side / 2);
+  snprintf(
+      text, sizeof text,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
+      " \"time\": {\"end\": 10, \"fps\": 10},"
+      " \"solver\": {\"on_instability\": \"%s\"},"
+      " \"materials\": [{\"name\": \"jello\", \"model\": \"neo_hookean\", \"E\": 1e5, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
+      "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"jello\", \"particles_per_cell\": 8, "
+      "\"jitter\": 0}]}",
+      domain, domain, domain, dx, action, lo + side / 2, lo + side / 2, lo + side / 2, side / 2,
+      side / 2, side / 2);
   mpm_scene scene;
   if (mpm_scene_parse(text, "bench-checkpoint", &scene, err) != MPM_OK) return NULL;
   mpm_sim *sim = NULL;

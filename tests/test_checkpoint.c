@@ -46,8 +46,7 @@ static void write_scene(const char *path, double end, int every) {
 static mpm_sim *create(const char *scene_path) {
   mpm_sim *sim = NULL;
   char err[1024];
-  if (mpm_sim_create_from_file(scene_path, &sim, err, sizeof err) != MPM_OK)
-    fail_msg("%s", err);
+  if (mpm_sim_create_from_file(scene_path, &sim, err, sizeof err) != MPM_OK) fail_msg("%s", err);
   return sim;
 }
 
@@ -130,12 +129,14 @@ static void test_resume_is_bit_identical(void **state) {
 
   mpm_sim *a = create(scene);
   assert_int_equal(mpm_sim_enable_output(a, full), MPM_OK);
-  while (mpm_sim_frame(a) < mpm_sim_frame_count(a)) assert_int_equal(mpm_sim_advance_frame(a), MPM_OK);
+  while (mpm_sim_frame(a) < mpm_sim_frame_count(a))
+    assert_int_equal(mpm_sim_advance_frame(a), MPM_OK);
 
   mpm_sim *b = create(scene);
   assert_int_equal(mpm_sim_enable_output(b, part), MPM_OK);
   for (int f = 0; f < 3; ++f) assert_int_equal(mpm_sim_advance_frame(b), MPM_OK);
-  for (int s = 0; s < 5; ++s) assert_int_equal(mpm_sim_step(b, b->frame_dt - fmod(b->time, b->frame_dt)), MPM_OK);
+  for (int s = 0; s < 5; ++s)
+    assert_int_equal(mpm_sim_step(b, b->frame_dt - fmod(b->time, b->frame_dt)), MPM_OK);
   char path[1100];
   assert_int_equal(mpm_sim_write_checkpoint(b, path, sizeof path), MPM_OK);
   const int64_t steps_b = b->steps;
@@ -147,7 +148,8 @@ static void test_resume_is_bit_identical(void **state) {
   assert_string_equal(used, path);
   assert_int_equal(c->steps, steps_b);
   assert_int_equal(mpm_sim_frame(c), 3);
-  while (mpm_sim_frame(c) < mpm_sim_frame_count(c)) assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
+  while (mpm_sim_frame(c) < mpm_sim_frame_count(c))
+    assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
   assert_int_equal(c->steps, a->steps);
   assert_true(c->time == a->time);
   assert_same_particles(&a->particles, &c->particles);
@@ -275,8 +277,7 @@ static void run_signal_case(int sig, int code) {
   const pid_t pid = fork();
   assert_true(pid >= 0);
   if (pid == 0) {
-    if (!freopen("/dev/null", "w", stdout) || !freopen(log, "w", stderr))
-      _exit(126);
+    if (!freopen("/dev/null", "w", stdout) || !freopen(log, "w", stderr)) _exit(126);
     execl(test_mpm_bin(), "mpm", "run", scene, "--quiet", "-o", part, (char *)NULL);
     _exit(127);
   }
@@ -295,7 +296,8 @@ static void run_signal_case(int sig, int code) {
   output[n] = '\0';
   fclose(f);
   assert_true(WIFEXITED(status));
-  if (WEXITSTATUS(status) != code) fail_msg("exit %d, expected %d:\n%s", WEXITSTATUS(status), code, output);
+  if (WEXITSTATUS(status) != code)
+    fail_msg("exit %d, expected %d:\n%s", WEXITSTATUS(status), code, output);
 
   expect_output(sig == SIGINT ? "stopped by SIGINT" : "stopped by SIGTERM");
   expect_output("--resume");

@@ -316,8 +316,8 @@ static void run_conservation(mpm_kernel_kind kind) {
         const mpm_real x[3] = {(mpm_real)((i + 0.5) * h + 0.3), (mpm_real)((j + 0.5) * h + 0.3),
                                (mpm_real)((k + 0.5) * h + 0.3)};
         const mpm_real v[3] = {0, 0, 0};
-        mpm_particles_push(&p, x, v, (mpm_real)test_rand(&rng, 0.5, 1.5), (mpm_real)(h * h * h),
-                           0, 0);
+        mpm_particles_push(&p, x, v, (mpm_real)test_rand(&rng, 0.5, 1.5), (mpm_real)(h * h * h), 0,
+                           0);
       }
   mpm_error err;
   assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, origin, h, "b", &err), MPM_OK);
@@ -411,12 +411,9 @@ static void test_conservation_quadratic(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_weights_cube),
-      cmocka_unit_test(test_weights_distorted),
-      cmocka_unit_test(test_two_step_equals_direct),
-      cmocka_unit_test(test_affine_motion_exact_F),
-      cmocka_unit_test(test_build_from_body),
-      cmocka_unit_test(test_conservation_linear),
+      cmocka_unit_test(test_weights_cube),           cmocka_unit_test(test_weights_distorted),
+      cmocka_unit_test(test_two_step_equals_direct), cmocka_unit_test(test_affine_motion_exact_F),
+      cmocka_unit_test(test_build_from_body),        cmocka_unit_test(test_conservation_linear),
       cmocka_unit_test(test_conservation_quadratic),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

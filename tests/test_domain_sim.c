@@ -143,8 +143,7 @@ static void test_domain_scene_keys(void **state) {
        "applies only to a body with \"domains\": true"},
       {"true", ", \"domain_release\": [{\"time\": 1, \"min\": [0,0,0], \"max\": [1,0,1]}]",
        "domain_release[0].max"},
-      {"true", ", \"domain_release\": [{\"min\": [0,0,0], \"max\": [1,1,1]}]",
-       "domain_release[0]"},
+      {"true", ", \"domain_release\": [{\"min\": [0,0,0], \"max\": [1,1,1]}]", "domain_release[0]"},
       {"1", "", "bodies[0].domains"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
@@ -165,14 +164,15 @@ static void test_embedded_surface(void **state) {
   (void)state;
   const char *dir = test_temp_dir("domain_surface");
   char text[2048];
-  snprintf(text, sizeof text,
-           "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04},"
-           " \"time\": {\"end\": 0.1, \"fps\": 10}, \"output\": {\"directory\": \"%s\"},"
-           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
-           "\"nu\": 0.3, \"density\": 1000}],"
-           " \"bodies\": [{\"shape\": {\"type\": \"mesh\", \"file\": \"%s/examples/meshes/torus.obj\","
-           " \"center\": [0.5, 0.5, 0.5], \"scale\": 0.15}, \"material\": \"m\", \"domains\": true}]}",
-           dir, MPM_SOURCE_DIR);
+  snprintf(
+      text, sizeof text,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04},"
+      " \"time\": {\"end\": 0.1, \"fps\": 10}, \"output\": {\"directory\": \"%s\"},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"mesh\", \"file\": \"%s/examples/meshes/torus.obj\","
+      " \"center\": [0.5, 0.5, 0.5], \"scale\": 0.15}, \"material\": \"m\", \"domains\": true}]}",
+      dir, MPM_SOURCE_DIR);
   mpm_scene scene;
   mpm_error err;
   if (mpm_scene_parse(text, "torus.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
@@ -225,20 +225,20 @@ static void test_threads_bitwise(void **state) {
   assert_int_equal(a->particles.count, b->particles.count);
   for (int d = 0; d < 3; ++d) {
     assert_memory_equal(a->cx[d], b->cx[d], a->corner_count * sizeof(mpm_real));
-    assert_memory_equal(a->particles.x[d], b->particles.x[d], a->particles.count * sizeof(mpm_real));
+    assert_memory_equal(a->particles.x[d], b->particles.x[d],
+                        a->particles.count * sizeof(mpm_real));
   }
   for (int e = 0; e < 9; ++e)
-    assert_memory_equal(a->particles.F[e], b->particles.F[e], a->particles.count * sizeof(mpm_real));
+    assert_memory_equal(a->particles.F[e], b->particles.F[e],
+                        a->particles.count * sizeof(mpm_real));
   mpm_sim_destroy(run[0]);
   mpm_sim_destroy(run[1]);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_stretched_bar),
-      cmocka_unit_test(test_release_from_scene_and_api),
-      cmocka_unit_test(test_domain_scene_keys),
-      cmocka_unit_test(test_embedded_surface),
+      cmocka_unit_test(test_stretched_bar),     cmocka_unit_test(test_release_from_scene_and_api),
+      cmocka_unit_test(test_domain_scene_keys), cmocka_unit_test(test_embedded_surface),
       cmocka_unit_test(test_threads_bitwise),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -20,11 +20,11 @@ extern "C" {
 
 typedef enum mpm_status {
   MPM_OK = 0,
-  MPM_ERR_IO = 1,       /* a file could not be read or written */
-  MPM_ERR_PARSE = 2,    /* a file is not well formed (JSON, OBJ, PLY) */
-  MPM_ERR_INVALID = 3,  /* a value is out of range or a key is unknown */
-  MPM_ERR_NOMEM = 4,    /* an allocation failed */
-  MPM_ERR_UNSTABLE = 5, /* the simulation produced a non-finite or runaway value */
+  MPM_ERR_IO = 1,          /* a file could not be read or written */
+  MPM_ERR_PARSE = 2,       /* a file is not well formed (JSON, OBJ, PLY) */
+  MPM_ERR_INVALID = 3,     /* a value is out of range or a key is unknown */
+  MPM_ERR_NOMEM = 4,       /* an allocation failed */
+  MPM_ERR_UNSTABLE = 5,    /* the simulation produced a non-finite or runaway value */
   MPM_ERR_INTERRUPTED = 6, /* the caller's interrupt flag was raised (between two steps) */
 } mpm_status;
 

@@ -227,8 +227,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     }
     if (st != MPM_OK) break;
     if (reserve_corners(s, s->corner_count + MPM_HEX_CORNERS)) {
-      st = mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s",
-                         body_name);
+      st = mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s", body_name);
       break;
     }
     const size_t q = dp->count;
@@ -272,8 +271,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
   if (st != MPM_OK) return st;
   p->count = first; /* the body's particles now live in the domain set */
   if (build_adjacency(s))
-    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s",
-                         body_name);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s", body_name);
   /* corner velocities: the least-squares affine fit v0 + A (x - c) of the body's particle
    * velocities, evaluated at the corners. The sampler's fields (uniform, rigid rotation) are
    * affine, so the fit is exact and v_p = sum_a omega_ap v_a gives them back at the particles. */

@@ -25,11 +25,11 @@
 #include <stdint.h>
 
 typedef struct mpm_domain_set {
-  mpm_particles particles;                /* the domain particles */
-  uint32_t (*corner)[MPM_HEX_CORNERS];    /* corner indices of each particle's hexahedron */
-  mpm_real (*w)[MPM_HEX_CORNERS];         /* omega_ap (Zhu eq. 6) */
-  mpm_real (*g)[MPM_HEX_CORNERS][3];      /* reference gradient averages (Zhu eq. 5), 1/m */
-  uint8_t *active;                        /* 0 once switched off */
+  mpm_particles particles;             /* the domain particles */
+  uint32_t (*corner)[MPM_HEX_CORNERS]; /* corner indices of each particle's hexahedron */
+  mpm_real (*w)[MPM_HEX_CORNERS];      /* omega_ap (Zhu eq. 6) */
+  mpm_real (*g)[MPM_HEX_CORNERS][3];   /* reference gradient averages (Zhu eq. 5), 1/m */
+  uint8_t *active;                     /* 0 once switched off */
   size_t active_count;
   /* corners */
   size_t corner_count, corner_capacity;

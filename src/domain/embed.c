@@ -138,8 +138,8 @@ void mpm_embedded_surface_free(mpm_embedded_surface *e) {
   memset(e, 0, sizeof *e);
 }
 
-mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e,
-                                 const double *x, mpm_error *err) {
+mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e, const double *x,
+                                 mpm_error *err) {
   mpm_atomic_file f;
   mpm_status st = mpm_atomic_open(&f, path, err);
   if (st != MPM_OK) return st;
@@ -152,8 +152,8 @@ mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e
   return mpm_atomic_commit(&f, err);
 }
 
-mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e,
-                                 const double *x, mpm_error *err) {
+mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e, const double *x,
+                                 mpm_error *err) {
   mpm_atomic_file f;
   mpm_status st = mpm_atomic_open(&f, path, err);
   if (st != MPM_OK) return st;

@@ -16,10 +16,10 @@
 typedef struct mpm_embedded_surface {
   int body;
   int vertex_count, triangle_count;
-  int *triangles;      /* 3 zero-based vertex indices per triangle */
-  uint32_t *domain;    /* the domain particle (index in the domain set) of each vertex */
-  double (*xi)[3];     /* the vertex's reference coordinates in that domain's hexahedron */
-  double (*rest)[3];   /* rest position, m */
+  int *triangles;    /* 3 zero-based vertex indices per triangle */
+  uint32_t *domain;  /* the domain particle (index in the domain set) of each vertex */
+  double (*xi)[3];   /* the vertex's reference coordinates in that domain's hexahedron */
+  double (*rest)[3]; /* rest position, m */
 } mpm_embedded_surface;
 
 /* Embed `mesh` (world coordinates; the surface takes its triangles over) in the domain
@@ -35,9 +35,9 @@ void mpm_embedded_positions(const mpm_embedded_surface *e, const mpm_domain_set 
 void mpm_embedded_surface_free(mpm_embedded_surface *e);
 
 /* Write the deformed surface as Wavefront OBJ and as binary PLY, atomically. */
-mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e,
-                                 const double *x, mpm_error *err);
-mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e,
-                                 const double *x, mpm_error *err);
+mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e, const double *x,
+                                 mpm_error *err);
+mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e, const double *x,
+                                 mpm_error *err);
 
 #endif

@@ -52,8 +52,8 @@ mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_e
 mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *err);
 
 /* The same from the file's bytes in memory (path only names it in messages). */
-mpm_status mpm_checkpoint_parse(const void *data, size_t size, const char *path,
-                                mpm_checkpoint *c, mpm_error *err);
+mpm_status mpm_checkpoint_parse(const void *data, size_t size, const char *path, mpm_checkpoint *c,
+                                mpm_error *err);
 
 /* Write the guard header (magic, version, size, digest) into the first 512 bytes of a
  * checkpoint image of `size` bytes, as the writer does; for tools and the fuzz target. */

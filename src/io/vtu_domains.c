@@ -38,9 +38,8 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
   for (size_t i = 0; i < s->particles.count; ++i) ncell += s->active[i] != 0;
   const size_t R = sizeof(mpm_real);
   /* byte sizes of the arrays, in appended order, and their offsets */
-  const uint64_t sizes[10] = {
-      sizeof(double), 3 * nc * R, 3 * nc * R, ncell * 4, ncell * R, ncell * 4, ncell * 4,
-      8 * ncell * 8,  ncell * 8,  ncell};
+  const uint64_t sizes[10] = {sizeof(double), 3 * nc * R, 3 * nc * R,    ncell * 4, ncell * R,
+                              ncell * 4,      ncell * 4,  8 * ncell * 8, ncell * 8, ncell};
   uint64_t off[10], at = 0;
   for (int k = 0; k < 10; ++k) {
     off[k] = at;
@@ -51,45 +50,46 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
   if (st != MPM_OK) return st;
   out o = {f.fp, 0};
   char head[4096];
-  snprintf(head, sizeof head,
-           "<?xml version=\"1.0\"?>\n"
-           "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-           "header_type=\"UInt64\">\n"
-           "  <UnstructuredGrid>\n"
-           "    <FieldData>\n"
-           "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" "
-           "format=\"appended\" offset=\"%llu\"/>\n"
-           "    </FieldData>\n"
-           "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
-           "      <Points>\n"
-           "        <DataArray type=\"%s\" Name=\"Points\" NumberOfComponents=\"3\" "
-           "format=\"appended\" offset=\"%llu\"/>\n"
-           "      </Points>\n"
-           "      <PointData>\n"
-           "        <DataArray type=\"%s\" Name=\"velocity\" NumberOfComponents=\"3\" "
-           "format=\"appended\" offset=\"%llu\"/>\n"
-           "      </PointData>\n"
-           "      <CellData>\n"
-           "        <DataArray type=\"UInt32\" Name=\"id\" format=\"appended\" offset=\"%llu\"/>\n"
-           "        <DataArray type=\"%s\" Name=\"J\" format=\"appended\" offset=\"%llu\"/>\n"
-           "        <DataArray type=\"Int32\" Name=\"material\" format=\"appended\" "
-           "offset=\"%llu\"/>\n"
-           "        <DataArray type=\"Int32\" Name=\"body\" format=\"appended\" offset=\"%llu\"/>\n"
-           "      </CellData>\n"
-           "      <Cells>\n"
-           "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" "
-           "offset=\"%llu\"/>\n"
-           "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" "
-           "offset=\"%llu\"/>\n"
-           "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"%llu\"/>\n"
-           "      </Cells>\n"
-           "    </Piece>\n"
-           "  </UnstructuredGrid>\n"
-           "  <AppendedData encoding=\"raw\">\n_",
-           (unsigned long long)off[0], nc, ncell, REAL_TYPE, (unsigned long long)off[1],
-           REAL_TYPE, (unsigned long long)off[2], (unsigned long long)off[3], REAL_TYPE,
-           (unsigned long long)off[4], (unsigned long long)off[5], (unsigned long long)off[6],
-           (unsigned long long)off[7], (unsigned long long)off[8], (unsigned long long)off[9]);
+  snprintf(
+      head, sizeof head,
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "  <UnstructuredGrid>\n"
+      "    <FieldData>\n"
+      "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" "
+      "format=\"appended\" offset=\"%llu\"/>\n"
+      "    </FieldData>\n"
+      "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
+      "      <Points>\n"
+      "        <DataArray type=\"%s\" Name=\"Points\" NumberOfComponents=\"3\" "
+      "format=\"appended\" offset=\"%llu\"/>\n"
+      "      </Points>\n"
+      "      <PointData>\n"
+      "        <DataArray type=\"%s\" Name=\"velocity\" NumberOfComponents=\"3\" "
+      "format=\"appended\" offset=\"%llu\"/>\n"
+      "      </PointData>\n"
+      "      <CellData>\n"
+      "        <DataArray type=\"UInt32\" Name=\"id\" format=\"appended\" offset=\"%llu\"/>\n"
+      "        <DataArray type=\"%s\" Name=\"J\" format=\"appended\" offset=\"%llu\"/>\n"
+      "        <DataArray type=\"Int32\" Name=\"material\" format=\"appended\" "
+      "offset=\"%llu\"/>\n"
+      "        <DataArray type=\"Int32\" Name=\"body\" format=\"appended\" offset=\"%llu\"/>\n"
+      "      </CellData>\n"
+      "      <Cells>\n"
+      "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" "
+      "offset=\"%llu\"/>\n"
+      "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" "
+      "offset=\"%llu\"/>\n"
+      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"%llu\"/>\n"
+      "      </Cells>\n"
+      "    </Piece>\n"
+      "  </UnstructuredGrid>\n"
+      "  <AppendedData encoding=\"raw\">\n_",
+      (unsigned long long)off[0], nc, ncell, REAL_TYPE, (unsigned long long)off[1], REAL_TYPE,
+      (unsigned long long)off[2], (unsigned long long)off[3], REAL_TYPE, (unsigned long long)off[4],
+      (unsigned long long)off[5], (unsigned long long)off[6], (unsigned long long)off[7],
+      (unsigned long long)off[8], (unsigned long long)off[9]);
   put(&o, head, strlen(head));
   put_count(&o, sizes[0]);
   put(&o, &time, sizeof time);

@@ -101,8 +101,8 @@ typedef struct mpm_shape_desc {
 /* Particle domains switched off (Zhu sec. 7): from `time` on, every domain particle of the body
  * inside the box [min, max] continues as a standard material point. */
 typedef struct mpm_domain_release {
-  double time;             /* s */
-  double min[3], max[3];   /* m */
+  double time;           /* s */
+  double min[3], max[3]; /* m */
 } mpm_domain_release;
 #define MPM_MAX_RELEASES 16
 

@@ -38,12 +38,11 @@ static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
 static const char *const DOMAIN_KEYS[] = {"min", "max", "dx", "resolution", "walls", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
-static const char *const SOLVER_KEYS[] = {"kernel",      "transfer",       "flip_alpha",
-                                          "cfl",         "max_dt",         "grid",
-                                          "gimp_length", "on_instability", "max_retries",
-                                          "domain_kernel", NULL};
-static const char *const OUTPUT_KEYS[] = {"directory", "vtu", "ply", "stats", "checkpoint_every",
-                                          NULL};
+static const char *const SOLVER_KEYS[] = {
+    "kernel",      "transfer",       "flip_alpha",  "cfl",           "max_dt", "grid",
+    "gimp_length", "on_instability", "max_retries", "domain_kernel", NULL};
+static const char *const OUTPUT_KEYS[] = {"directory",        "vtu", "ply", "stats",
+                                          "checkpoint_every", NULL};
 static const char *const CAMERA_KEYS[] = {"eye", "target", "fov", NULL};
 
 /* Enum spellings, in the order of the enum values of scene.h. */
@@ -240,7 +239,8 @@ static int parse_output(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (!o) return 0;
   size_t old = mpm_json_push_key(c, "output");
   long long every = s->output.checkpoint_every;
-  if (mpm_json_expect_object(c, o, "an object with keys directory, vtu, ply, stats, checkpoint_every") < 0 ||
+  if (mpm_json_expect_object(
+          c, o, "an object with keys directory, vtu, ply, stats, checkpoint_every") < 0 ||
       mpm_json_check_keys(c, o, OUTPUT_KEYS, NULL) < 0 ||
       mpm_json_string(c, o, "directory", 0, s->output.directory, sizeof s->output.directory) < 0 ||
       mpm_json_bool(c, o, "vtu", 0, &s->output.vtu) < 0 ||

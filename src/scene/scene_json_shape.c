@@ -16,9 +16,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const BODY_KEYS[] = {
-    "name",   "shape", "material", "velocity", "angular_velocity", "particles_per_cell",
-    "jitter", "seed",  "domains",  "domain_release",   NULL};
+static const char *const BODY_KEYS[] = {"name",
+                                        "shape",
+                                        "material",
+                                        "velocity",
+                                        "angular_velocity",
+                                        "particles_per_cell",
+                                        "jitter",
+                                        "seed",
+                                        "domains",
+                                        "domain_release",
+                                        NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", NULL};
@@ -343,8 +351,8 @@ static int check_inside(mpm_json_ctx *c, const mpm_scene *s, const double lo[3],
 /* domain_release: [{"time": s, "min": [x, y, z], "max": [x, y, z]}, ...] */
 static int parse_releases(mpm_json_ctx *c, const cJSON *node, mpm_body_desc *b) {
   const cJSON *arr = NULL;
-  const int has = mpm_sj_get_array(c, node, "domain_release", 0,
-                                   "an array of {time, min, max} objects", &arr);
+  const int has =
+      mpm_sj_get_array(c, node, "domain_release", 0, "an array of {time, min, max} objects", &arr);
   if (has <= 0) return has;
   if (!b->domains)
     return mpm_json_fail_at(c, "domain_release", MPM_ERR_INVALID,
@@ -398,8 +406,7 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
       mpm_json_integer(c, node, "seed", 0, mpm_json_in('[', 0, 4294967295.0, ']', NULL), &seed) < 0)
     return -1;
   b->seed = (unsigned)seed;
-  if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 ||
-      parse_releases(c, node, b) < 0)
+  if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 || parse_releases(c, node, b) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,

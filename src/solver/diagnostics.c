@@ -11,8 +11,8 @@
 #include <string.h>
 
 /* Add the particles of p (those with active[i] != 0 when active is given) to out. */
-static void accumulate(const mpm_sim *sim, const mpm_particles *p, const uint8_t *active,
-                       int apic, mpm_diagnostics *out) {
+static void accumulate(const mpm_sim *sim, const mpm_particles *p, const uint8_t *active, int apic,
+                       mpm_diagnostics *out) {
   for (size_t i = 0; i < p->count; ++i) {
     if (active && !active[i]) continue;
     const double m = p->mass[i];

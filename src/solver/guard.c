@@ -57,8 +57,7 @@ static guard_hit scan(const mpm_sim *sim, const mpm_particles *p, const uint8_t 
     int out = 0;
     for (int d = 0; d < 3; ++d) out |= !(p->x[d][i] > lo[d] && p->x[d][i] < hi[d]);
     if (out && i < first_domain) first_domain = i;
-    const mpm_real v2 =
-        p->v[0][i] * p->v[0][i] + p->v[1][i] * p->v[1][i] + p->v[2][i] * p->v[2][i];
+    const mpm_real v2 = p->v[0][i] * p->v[0][i] + p->v[1][i] * p->v[1][i] + p->v[2][i] * p->v[2][i];
     if (v2 > vmax2 && i < first_cfl) first_cfl = i;
     const int m = p->material[i];
     if (any_fragile && m < 64 && fragile[m]) {
@@ -106,10 +105,11 @@ static mpm_status report(mpm_sim *sim, const mpm_particles *p, const guard_hit *
            (long long)sim->steps, sim->time, dt, kind, p->id[i], p->body[i], m, mname);
   switch (h->kind) {
   case GUARD_DOMAIN:
-    return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
-                         "%s left the domain: position (%.4g, %.4g, %.4g) m passed the walls; try a "
-                         "smaller solver.cfl, stiffer walls or a larger domain",
-                         where, (double)p->x[0][i], (double)p->x[1][i], (double)p->x[2][i]);
+    return mpm_error_set(
+        &sim->error, MPM_ERR_UNSTABLE,
+        "%s left the domain: position (%.4g, %.4g, %.4g) m passed the walls; try a "
+        "smaller solver.cfl, stiffer walls or a larger domain",
+        where, (double)p->x[0][i], (double)p->x[1][i], (double)p->x[2][i]);
   case GUARD_CFL:
     return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
                          "%s violated the CFL condition: it moved %.3g cells in one step (speed "

@@ -114,8 +114,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     if (st != MPM_OK) goto fail;
     for (size_t i = first; i < sim->particles.count; ++i) {
       sim->particles.id[i] = next_id++;
-      sim->particles.plastic[i] =
-          sim->materials[sim->particles.material[i]].model->plastic_initial;
+      sim->particles.plastic[i] = sim->materials[sim->particles.material[i]].model->plastic_initial;
     }
     if (sc->bodies[b].domains) { /* the body's particles move into the domain set */
       char name[MPM_NAME_MAX + 64];
@@ -152,7 +151,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     lp = sc->dx / cbrt(ppc > 1 ? ppc : 1);
   }
   sim->kernel = mpm_kernel_make(sc->solver.kernel, (mpm_real)sc->dx, (mpm_real)lp);
-  sim->domain_kernel = mpm_kernel_make(sc->solver.domain_kernel, (mpm_real)sc->dx, (mpm_real)sc->dx);
+  sim->domain_kernel =
+      mpm_kernel_make(sc->solver.domain_kernel, (mpm_real)sc->dx, (mpm_real)sc->dx);
 
   if (sc->solver.grid == MPM_GRID_DENSE) {
     const int n[3] = {sim->cells[0] + 3, sim->cells[1] + 3, sim->cells[2] + 3};
@@ -180,7 +180,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   }
   for (size_t i = 0; i < sim->domains.particles.count; ++i) {
     mpm_real v2 = 0;
-    for (int d = 0; d < 3; ++d) v2 += sim->domains.particles.v[d][i] * sim->domains.particles.v[d][i];
+    for (int d = 0; d < 3; ++d)
+      v2 += sim->domains.particles.v[d][i] * sim->domains.particles.v[d][i];
     if (v2 > vmax2) vmax2 = v2;
   }
   sim->max_speed = mpm_sqrt(vmax2);

@@ -60,9 +60,9 @@ struct mpm_sim {
   mpm_stats_row *stats;
   double frame_wall_start;
   /* robustness (guard.c, sim_checkpoint.c) */
-  int dt_level;                 /* dt is halved this many times after an unstable step */
-  long long retries;            /* steps redone with a smaller dt, over the run */
-  mpm_particles backup;         /* the particles at the start of a step (retry mode) */
+  int dt_level;         /* dt is halved this many times after an unstable step */
+  long long retries;    /* steps redone with a smaller dt, over the run */
+  mpm_particles backup; /* the particles at the start of a step (retry mode) */
   const volatile int *interrupt;
   char last_checkpoint[MPM_PATH_MAX + 32];
   mpm_error error;

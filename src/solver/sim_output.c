@@ -41,7 +41,8 @@ static int combine_particles(const mpm_sim *sim, mpm_particles *all) {
       if (pass && !sim->domains.active[i]) continue;
       const mpm_real x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
       const mpm_real v[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
-      const long j = mpm_particles_push(all, x, v, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
+      const long j =
+          mpm_particles_push(all, x, v, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
       for (int c = 0; c < 9; ++c) {
         all->F[c][j] = p->F[c][i];
         all->B[c][j] = p->B[c][i];
