@@ -243,7 +243,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
    *    the unique stable order, the same for any number of threads. */
   const size_t keys = g->owner_count * (size_t)material_count * MPM_BLOCK_NODES;
   if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) ||
-      ensure_u32(&g->hist, &g->hist_capacity, keys * (size_t)nch))
+      ensure_u32(&g->hist, &g->hist_capacity, keys * (size_t)nch + 1))
     return -1;
   uint32_t *cs = g->cell_start, *hist = g->hist;
   const int32_t *mat = p->material;
