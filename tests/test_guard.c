@@ -57,12 +57,10 @@ static void test_cfl_violation_stops(void **state) {
   mpm_sim_destroy(sim);
 }
 
-/* The same with particle domains: the corners carry the velocity, the guard names the domain
- * particle. */
-static void test_cfl_violation_domains(void **state) {
-  (void)state;
+/* A block with particle domains, launched at 50 m/s as launch() does. */
+static mpm_sim *domain_block(const char *action) {
   char text[2048];
-  snprintf(text, sizeof text, BLOCK, "stop", 8, "fixed_corotated");
+  snprintf(text, sizeof text, BLOCK, action, 8, "fixed_corotated");
   const char *key = "\"material\": \"jello\"}";
   const char *at = strstr(text, key);
   assert_non_null(at);
@@ -79,9 +77,26 @@ static void test_cfl_violation_domains(void **state) {
   for (size_t c = 0; c < sim->domains.corner_count; ++c) sim->domains.cv[0][c] = 50;
   mpm_domain_set_sync_particles(&sim->domains);
   sim->max_speed = 0;
+  return sim;
+}
+
+/* The same with particle domains: the corners carry the velocity, the guard names the domain
+ * particle; in retry mode the domain particles and corners are restored and the step redone. */
+static void test_cfl_violation_domains(void **state) {
+  (void)state;
+  mpm_sim *sim = domain_block("stop");
   assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
   expect_message(sim, "violated the CFL condition");
   expect_message(sim, "domain particle id ");
+  mpm_sim_destroy(sim);
+
+  sim = domain_block("retry");
+  const double x0 = sim->domains.cx[0][0], dt_cfl = mpm_sim_cfl_dt(sim);
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
+  assert_int_equal(sim->dt_level, 3);
+  assert_close(sim->last_dt, dt_cfl / 8, 1e-9);
+  /* the corner moved once, by the redone step, not by the undone ones */
+  assert_close(sim->domains.cx[0][0] - x0, 50 * sim->last_dt, 0.05 * 50 * sim->last_dt);
   mpm_sim_destroy(sim);
 }
 

@@ -416,10 +416,6 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   if (b->domains && s->solver.grid != MPM_GRID_SPARSE)
     return mpm_json_fail_at(c, "domains", MPM_ERR_INVALID,
                             "particle domains need solver.grid \"sparse\"");
-  if (b->domains && s->solver.on_instability == MPM_INSTABILITY_RETRY)
-    return mpm_json_fail_at(c, "domains", MPM_ERR_INVALID,
-                            "particle domains cannot yet be combined with solver.on_instability "
-                            "\"retry\"; use \"stop\"");
   double lo[3], hi[3];
   char note[200] = "";
   if (b->shape.kind == MPM_SHAPE_MESH) {

@@ -17,6 +17,7 @@
  * redone with half the dt, up to solver.max_retries halvings; the following steps keep the
  * smaller dt, and one halving is given back per frame (step.c). */
 #include "solver/sim.h"
+#include "core/alloc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -136,12 +137,11 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
   return h.kind == GUARD_NONE ? MPM_OK : report(sim, &sim->domains.particles, &h, dt);
 }
 
-/* Save or restore what a step changes (the particles and the clock). */
-static int save_state(mpm_sim *sim) {
-  mpm_particles *src = &sim->particles, *dst = &sim->backup;
+/* Copy the particles of src into dst (grown as needed). */
+static int copy_particles(mpm_particles *dst, const mpm_particles *src) {
   if (dst->capacity < src->count && mpm_particles_reserve(dst, src->capacity)) return -1;
   mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
-  mpm_particles_real_arrays(src, a);
+  mpm_particles_real_arrays((mpm_particles *)src, a);
   mpm_particles_real_arrays(dst, b);
   const size_t n = src->count;
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) memcpy(*b[k], *a[k], n * sizeof(mpm_real));
@@ -152,11 +152,51 @@ static int save_state(mpm_sim *sim) {
   return 0;
 }
 
+/* The corner arrays a step changes: positions and velocities. */
+static void corner_state(mpm_domain_set *s, mpm_real *out[6]) {
+  for (int d = 0; d < 3; ++d) {
+    out[d] = s->cx[d];
+    out[3 + d] = s->cv[d];
+  }
+}
+
+/* Save what a step changes: the particles, the domain particles and their corners (the clock
+ * is saved by the caller). */
+static int save_state(mpm_sim *sim) {
+  if (copy_particles(&sim->backup, &sim->particles)) return -1;
+  mpm_domain_set *s = &sim->domains;
+  if (!s->active_count) return 0;
+  if (copy_particles(&sim->domain_backup, &s->particles)) return -1;
+  if (sim->corner_backup_capacity < s->corner_count) {
+    for (int k = 0; k < 6; ++k) {
+      mpm_free(sim->corner_backup[k]);
+      sim->corner_backup[k] = mpm_alloc((s->corner_count + 1) * sizeof(mpm_real));
+      if (!sim->corner_backup[k]) {
+        sim->corner_backup_capacity = 0;
+        return -1;
+      }
+    }
+    sim->corner_backup_capacity = s->corner_count;
+  }
+  mpm_real *c[6];
+  corner_state(s, c);
+  for (int k = 0; k < 6; ++k)
+    memcpy(sim->corner_backup[k], c[k], s->corner_count * sizeof(mpm_real));
+  return 0;
+}
+
 static void restore_state(mpm_sim *sim) {
   /* swap the arrays: the backup becomes the particles (the failed state is dropped) */
   mpm_particles t = sim->particles;
   sim->particles = sim->backup;
   sim->backup = t;
+  mpm_domain_set *s = &sim->domains;
+  if (!s->active_count) return;
+  copy_particles(&s->particles, &sim->domain_backup); /* same size: cannot fail */
+  mpm_real *c[6];
+  corner_state(s, c);
+  for (int k = 0; k < 6; ++k)
+    memcpy(c[k], sim->corner_backup[k], s->corner_count * sizeof(mpm_real));
 }
 
 mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
@@ -165,6 +205,8 @@ mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
   const int64_t steps0 = sim->steps;
   const mpm_real speed0 = sim->max_speed;
   double dt_cap = max_dt;
+  /* domains due to be switched off go before the step (and before a saved state) */
+  if (mpm_sim_apply_domain_releases(sim) != MPM_OK) return sim->error.status;
   for (;;) {
     if (retry && save_state(sim))
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM,

@@ -82,7 +82,6 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
                          p->count ? p->body[worst] : -1, p->count ? p->material[worst] : -1,
                          sqrt(worst_v2));
   }
-  if (mpm_sim_apply_domain_releases(sim) != MPM_OK) return sim->error.status;
   const double t0 = mpm_wall_seconds();
 
   mpm_transfer_ctx tc;
