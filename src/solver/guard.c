@@ -139,7 +139,13 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
 
 /* Copy the particles of src into dst (grown as needed). */
 static int copy_particles(mpm_particles *dst, const mpm_particles *src) {
-  if (dst->capacity < src->count && mpm_particles_reserve(dst, src->capacity)) return -1;
+  /* the backup may become the particles (restore swaps them): it always has arrays */
+  const size_t want = src->capacity > 16 ? src->capacity : 16;
+  if (dst->capacity < src->count || !dst->capacity) {
+    if (mpm_particles_reserve(dst, want)) return -1;
+  }
+  dst->count = 0;
+  if (!src->count) return 0;
   mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays((mpm_particles *)src, a);
   mpm_particles_real_arrays(dst, b);

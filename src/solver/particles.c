@@ -78,6 +78,7 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
 void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,
                            uint32_t *iscratch) {
   const long n = (long)p->count;
+  if (n == 0) return;
   mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays(p, arrays);
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) {
