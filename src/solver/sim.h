@@ -60,8 +60,8 @@ struct mpm_sim {
   mpm_stats_row *stats;
   double frame_wall_start;
   /* robustness (guard.c, sim_checkpoint.c) */
-  int dt_level;         /* dt is halved this many times after an unstable step */
-  long long retries;    /* steps redone with a smaller dt, over the run */
+  int dt_level;                /* dt is halved this many times after an unstable step */
+  long long retries;           /* steps redone with a smaller dt, over the run */
   mpm_particles backup;        /* the particles at the start of a step (retry mode) */
   mpm_particles domain_backup; /* the domain particles and corners at the start of a step */
   mpm_real *corner_backup[6];

@@ -104,6 +104,7 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   gu.poses = sim->poses;
 
   mpm_g2p_result r;
+  const mpm_particles *bad_set = p; /* the set r.bad_particle indexes */
   if (sc->solver.grid == MPM_GRID_SPARSE) {
     mpm_sparse_grid *g = &sim->sparse;
     if (mpm_sparse_grid_sort(g, &sim->kernel, sim->origin, sim->material_count, p))
@@ -145,17 +146,8 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
           mpm_domain_g2p(&dtc, &sim->domains, g, sim->poses, sim->collider_count);
       if (rd.max_speed > r.max_speed) r.max_speed = rd.max_speed;
       if (rd.bad_particle >= 0 && r.bad_particle < 0) {
-        const mpm_particles *dp = &sim->domains.particles;
-        const long i = rd.bad_particle;
-        sim->time += dt;
-        sim->steps++;
-        return mpm_error_set(
-            &sim->error, MPM_ERR_UNSTABLE,
-            "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): domain particle id %u "
-            "(body %d, material %d) has a non-finite %s; try a smaller solver.cfl or "
-            "solver.max_dt, or a finer domain.dx",
-            (long long)sim->steps, sim->time, dt, dp->id[i], dp->body[i], dp->material[i],
-            bad_quantity(dp, i));
+        bad_set = &sim->domains.particles;
+        r.bad_particle = rd.bad_particle;
       }
     }
     const double t4 = mpm_wall_seconds();
@@ -184,13 +176,14 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   sim->max_speed = r.max_speed;
   if (r.bad_particle >= 0) {
     const long i = r.bad_particle;
+    const mpm_particles *q = bad_set;
     return mpm_error_set(
         &sim->error, MPM_ERR_UNSTABLE,
-        "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): particle id %u "
+        "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): %sparticle id %u "
         "(body %d, material %d) has a non-finite %s; try a smaller solver.cfl or "
         "solver.max_dt, or a finer domain.dx",
-        (long long)sim->steps, sim->time, dt, p->id[i], p->body[i], p->material[i],
-        bad_quantity(p, i));
+        (long long)sim->steps, sim->time, dt, q == p ? "" : "domain ", q->id[i], q->body[i],
+        q->material[i], bad_quantity(q, i));
   }
   return MPM_OK;
 }
