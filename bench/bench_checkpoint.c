@@ -18,31 +18,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* A cube of about n particles, 8 per cell, resting above the floor. */
-static mpm_sim *make_block(int n, const char *action, mpm_error *err) {
-  const double dx = 0.02, side = cbrt((double)n) * dx / 2, lo = 10 * dx;
-  const double domain = side + 20 * dx;
-  char text[2048];
-  snprintf(
-      text, sizeof text,
-      "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
-      " \"time\": {\"end\": 10, \"fps\": 10},"
-      " \"solver\": {\"on_instability\": \"%s\"},"
-      " \"materials\": [{\"name\": \"jello\", \"model\": \"neo_hookean\", \"E\": 1e5, "
-      "\"nu\": 0.3, \"density\": 1000}],"
-      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
-      "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"jello\", \"particles_per_cell\": 8, "
-      "\"jitter\": 0}]}",
-      domain, domain, domain, dx, action, lo + side / 2, lo + side / 2, lo + side / 2, side / 2,
-      side / 2, side / 2);
-  mpm_scene scene;
-  if (mpm_scene_parse(text, "bench-checkpoint", &scene, err) != MPM_OK) return NULL;
-  mpm_sim *sim = NULL;
-  mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
-  mpm_scene_free(&scene);
-  return st == MPM_OK ? sim : NULL;
-}
-
 /* ns per particle-step of `steps` steps */
 static double time_steps(mpm_sim *sim, int steps) {
   const double t0 = mpm_wall_seconds();
@@ -78,7 +53,7 @@ int mpm_bench_checkpoint(int argc, char **argv) {
     return MPM_EXIT_FAILURE;
   }
   mpm_error err;
-  mpm_sim *sim = make_block(particles, "stop", &err);
+  mpm_sim *sim = bench_block(particles, 0, "stop", &err);
   if (!sim || mpm_sim_enable_output(sim, dir) != MPM_OK) {
     fprintf(stderr, "mpm bench: %s\n", sim ? mpm_sim_last_error(sim) : err.message);
     mpm_sim_destroy(sim);
@@ -107,7 +82,7 @@ int mpm_bench_checkpoint(int argc, char **argv) {
     }
     read[r] = mpm_wall_seconds() - t0;
     mpm_checkpoint_free(&c);
-    mpm_sim *again = make_block(particles, "stop", &err);
+    mpm_sim *again = bench_block(particles, 0, "stop", &err);
     t0 = mpm_wall_seconds();
     const mpm_status st2 = again ? mpm_sim_resume(again, dir, NULL, 0) : MPM_ERR_NOMEM;
     resume[r] = mpm_wall_seconds() - t0;
@@ -128,7 +103,7 @@ int mpm_bench_checkpoint(int argc, char **argv) {
 
   /* guards: the step with the scan (always on) against the raw step; retry mode's copy */
   double raw[100], guarded[100], retry[100];
-  mpm_sim *rsim = make_block(particles, "retry", &err);
+  mpm_sim *rsim = bench_block(particles, 0, "retry", &err);
   if (rsim) time_steps(rsim, 3);
   for (int r = 0; r < repeats && rsim; ++r) {
     const double t0 = mpm_wall_seconds();

@@ -8,32 +8,8 @@
 #include "core/parallel.h"
 #include "solver/sim.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
-
-static mpm_sim *block(int n, int domains, mpm_error *err) {
-  const double dx = 0.02, side = cbrt((double)n) * dx / 2, lo = 10 * dx;
-  const double domain = side + 25 * dx;
-  char text[2048];
-  snprintf(
-      text, sizeof text,
-      "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
-      " \"time\": {\"end\": 10, \"fps\": 10},"
-      " \"materials\": [{\"name\": \"jello\", \"model\": \"neo_hookean\", \"E\": 1e5, "
-      "\"nu\": 0.3, \"density\": 1000}],"
-      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
-      "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"jello\", \"particles_per_cell\": 8, "
-      "\"domains\": %s}]}",
-      domain, domain, domain, dx, lo + side / 2, lo + side / 2 + 5 * dx, lo + side / 2, side / 2,
-      side / 2, side / 2, domains ? "true" : "false");
-  mpm_scene scene;
-  if (mpm_scene_parse(text, "bench-domains", &scene, err) != MPM_OK) return NULL;
-  mpm_sim *sim = NULL;
-  mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
-  mpm_scene_free(&scene);
-  return st == MPM_OK ? sim : NULL;
-}
 
 int mpm_bench_domains(int argc, char **argv) {
   int particles = 200000, steps = 10, repeats = 3, threads[16] = {1, 2}, nthreads = 2;
@@ -73,7 +49,7 @@ int mpm_bench_domains(int argc, char **argv) {
     size_t n = 0, corners = 0;
     for (int domains = 0; domains < 2; ++domains) {
       mpm_error err;
-      mpm_sim *sim = block(particles, domains, &err);
+      mpm_sim *sim = bench_block(particles, domains, "stop", &err);
       if (!sim) {
         fprintf(stderr, "mpm bench: %s\n", err.message);
         return MPM_EXIT_FAILURE;

@@ -3,6 +3,9 @@
 
 #include "core/parallel.h"
 #include "mpm/mpm.h"
+#include "solver/sim.h"
+
+#include <math.h>
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -56,4 +59,28 @@ static int cmp_double(const void *a, const void *b) {
 double bench_median(double *v, int n) {
   qsort(v, (size_t)n, sizeof *v, cmp_double);
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+mpm_sim *bench_block(int n, int domains, const char *on_instability, mpm_error *err) {
+  const double dx = 0.02, side = cbrt((double)n) * dx / 2, lo = 10 * dx;
+  const double domain = side + 25 * dx;
+  char text[2048];
+  snprintf(
+      text, sizeof text,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
+      " \"time\": {\"end\": 10, \"fps\": 10},"
+      " \"solver\": {\"on_instability\": \"%s\"},"
+      " \"materials\": [{\"name\": \"jello\", \"model\": \"neo_hookean\", \"E\": 1e5, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
+      "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"jello\", \"particles_per_cell\": 8, "
+      "\"domains\": %s}]}",
+      domain, domain, domain, dx, on_instability, lo + side / 2, lo + side / 2 + 5 * dx,
+      lo + side / 2, side / 2, side / 2, side / 2, domains ? "true" : "false");
+  mpm_scene scene;
+  if (mpm_scene_parse(text, "bench-block", &scene, err) != MPM_OK) return NULL;
+  mpm_sim *sim = NULL;
+  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
+  mpm_scene_free(&scene);
+  return st == MPM_OK ? sim : NULL;
 }

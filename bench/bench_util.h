@@ -1,6 +1,8 @@
-/* bench_util.h - helpers shared by the benchmarks (bench.c, bench_stress.c). */
+/* bench_util.h - helpers shared by the benchmarks (bench*.c). */
 #ifndef MPM_BENCH_UTIL_H
 #define MPM_BENCH_UTIL_H
+
+#include "core/error.h"
 
 /* One line: CPU model, OpenMP threads available, real type, version. */
 void bench_print_machine(void);
@@ -13,5 +15,10 @@ int bench_parse_threads(const char *s, int *list, int max);
 
 /* Median of v[0..n) (sorts v in place). */
 double bench_median(double *v, int n);
+
+/* A neo-Hookean cube of about n particles (8 per cell, no jitter, dx = 2 cm) a few cells above
+ * the floor of its box, as a simulation: with particle domains when `domains`, with the solver's
+ * on_instability = `on_instability`. NULL with err set on failure. */
+struct mpm_sim *bench_block(int n, int domains, const char *on_instability, mpm_error *err);
 
 #endif

@@ -1,6 +1,7 @@
 /* domain.c - building particle domains from a body's lattice, their weights, switching them
  * off (see domain.h). */
 #include "domain/domain.h"
+#include "domain/lattice_map.h"
 #include "core/alloc.h"
 
 #include <math.h>
@@ -146,27 +147,6 @@ int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
   return 0;
 }
 
-/* Open-addressing map from lattice vertex (3 x 21 bits) to corner index. */
-typedef struct vertex_map {
-  uint64_t *keys;
-  uint32_t *values;
-  size_t mask;
-} vertex_map;
-
-static uint64_t vertex_key(const int64_t v[3]) {
-  const uint64_t b = 1u << 20;
-  return ((uint64_t)(v[0] + (int64_t)b) << 42) | ((uint64_t)(v[1] + (int64_t)b) << 21) |
-         (uint64_t)(v[2] + (int64_t)b);
-}
-
-static uint32_t *vertex_slot(vertex_map *m, uint64_t key, int *found) {
-  size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & m->mask;
-  while (m->keys[i] != UINT64_MAX && m->keys[i] != key) i = (i + 1) & m->mask;
-  *found = m->keys[i] == key;
-  m->keys[i] = key;
-  return &m->values[i];
-}
-
 /* Rebuild the corner -> particle-slot adjacency (CSR) over the active particles. */
 static int build_adjacency(mpm_domain_set *s) {
   free(s->adj_start);
@@ -197,19 +177,12 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
       reserve_corners(s, s->corner_count + 2 * n + 64))
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
                          body_name);
-  vertex_map m;
-  size_t size = 64;
-  while (size < 16 * n) size *= 2;
-  m.keys = malloc(size * sizeof *m.keys);
-  m.values = malloc(size * sizeof *m.values);
-  m.mask = size - 1;
-  if (!m.keys || !m.values) {
-    free(m.keys);
-    free(m.values);
+  mpm_lattice_map m; /* lattice vertex -> corner */
+  if (mpm_lattice_map_init(&m, 8 * n)) {
+    mpm_lattice_map_free(&m);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
                          body_name);
   }
-  memset(m.keys, 0xFF, size * sizeof *m.keys);
   mpm_status st = MPM_OK;
   mpm_particles *dp = &s->particles;
   for (size_t i = first; i < p->count && st == MPM_OK; ++i) {
@@ -235,9 +208,11 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
       const int64_t v[3] = {k[0] + ((a >> 0) & 1), k[1] + ((a >> 1) & 1), k[2] + ((a >> 2) & 1)};
       for (int d = 0; d < 3; ++d) X[a][d] = lattice_origin[d] + (double)v[d] * h;
-      int found;
-      uint32_t *slot = vertex_slot(&m, vertex_key(v), &found);
-      if (!found) {
+      const uint64_t key = mpm_lattice_key(v);
+      const size_t at = mpm_lattice_map_slot(&m, key);
+      uint32_t *slot = &m.values[at];
+      if (m.keys[at] != key) {
+        m.keys[at] = key;
         const size_t c = s->corner_count++;
         *slot = (uint32_t)c;
         for (int d = 0; d < 3; ++d) {
@@ -266,8 +241,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     s->active[q] = 1;
     s->active_count++;
   }
-  free(m.keys);
-  free(m.values);
+  mpm_lattice_map_free(&m);
   if (st != MPM_OK) return st;
   p->count = first; /* the body's particles now live in the domain set */
   if (build_adjacency(s))

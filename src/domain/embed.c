@@ -1,5 +1,6 @@
 /* embed.c - embedded surface meshes (see embed.h). */
 #include "domain/embed.h"
+#include "domain/lattice_map.h"
 #include "core/alloc.h"
 #include "io/io.h"
 
@@ -9,47 +10,22 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* lattice cell -> domain particle, open addressing */
-typedef struct cell_map {
-  uint64_t *keys;
-  uint32_t *values;
-  size_t mask;
-} cell_map;
-
-static uint64_t cell_key(const int64_t k[3]) {
-  const int64_t b = 1 << 20;
-  return ((uint64_t)(k[0] + b) << 42) | ((uint64_t)(k[1] + b) << 21) | (uint64_t)(k[2] + b);
-}
-
-static size_t cell_slot(const cell_map *m, uint64_t key) {
-  size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 17) & m->mask;
-  while (m->keys[i] != UINT64_MAX && m->keys[i] != key) i = (i + 1) & m->mask;
-  return i;
-}
-
 mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
                              const mpm_domain_set *s, size_t first, const double origin[3],
                              double h, mpm_error *err) {
   memset(e, 0, sizeof *e);
   const size_t n = s->particles.count - first;
   if (!n) return mpm_error_set(err, MPM_ERR_INVALID, "no domain to embed the surface in");
-  cell_map m;
-  size_t size = 64;
-  while (size < 4 * n) size *= 2;
-  m.keys = malloc(size * sizeof *m.keys);
-  m.values = malloc(size * sizeof *m.values);
-  m.mask = size - 1;
+  mpm_lattice_map m; /* lattice cell -> domain particle */
   const int nv = mesh->vertex_count;
   e->domain = malloc((size_t)(nv ? nv : 1) * sizeof *e->domain);
   e->xi = malloc((size_t)(nv ? nv : 1) * sizeof *e->xi);
   e->rest = malloc((size_t)(nv ? nv : 1) * sizeof *e->rest);
-  if (!m.keys || !m.values || !e->domain || !e->xi || !e->rest) {
-    free(m.keys);
-    free(m.values);
+  if (mpm_lattice_map_init(&m, n) || !e->domain || !e->xi || !e->rest) {
+    mpm_lattice_map_free(&m);
     mpm_embedded_surface_free(e);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory embedding a surface mesh");
   }
-  memset(m.keys, 0xFF, size * sizeof *m.keys);
   /* the particles' cells: from their reference positions, the centres of their corners */
   for (size_t q = first; q < s->particles.count; ++q) {
     int64_t k[3];
@@ -58,8 +34,8 @@ mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
       for (int a = 0; a < MPM_HEX_CORNERS; ++a) c += s->cX[d][s->corner[q][a]];
       k[d] = (int64_t)floor((c / MPM_HEX_CORNERS - origin[d]) / h);
     }
-    const uint64_t key = cell_key(k);
-    const size_t i = cell_slot(&m, key);
+    const uint64_t key = mpm_lattice_key(k);
+    const size_t i = mpm_lattice_map_slot(&m, key);
     m.keys[i] = key;
     m.values[i] = (uint32_t)q;
   }
@@ -76,8 +52,8 @@ mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
           for (int64_t c = -r; c <= r; ++c) {
             if (llabs(a) != r && llabs(b) != r && llabs(c) != r) continue; /* the shell only */
             const int64_t kk[3] = {k[0] + a, k[1] + b, k[2] + c};
-            const uint64_t key = cell_key(kk);
-            const size_t i = cell_slot(&m, key);
+            const uint64_t key = mpm_lattice_key(kk);
+            const size_t i = mpm_lattice_map_slot(&m, key);
             if (m.keys[i] != key) continue;
             double d2 = 0;
             for (int d = 0; d < 3; ++d) {
@@ -90,8 +66,7 @@ mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
             }
           }
     if (best < 0) {
-      free(m.keys);
-      free(m.values);
+      mpm_lattice_map_free(&m);
       mpm_embedded_surface_free(e);
       return mpm_error_set(err, MPM_ERR_INVALID,
                            "surface vertex %d at (%g, %g, %g) is more than 3 lattice cells from "
@@ -106,8 +81,7 @@ mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
       e->rest[v][d] = X[d];
     }
   }
-  free(m.keys);
-  free(m.values);
+  mpm_lattice_map_free(&m);
   e->body = body;
   e->vertex_count = nv;
   e->triangle_count = mesh->triangle_count;
