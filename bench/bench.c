@@ -209,7 +209,7 @@ static int bench_step(int argc, char **argv) {
            bench_median(grid, repeats), bench_median(g2p, repeats));
     printf("  memory: %.1f bytes per particle (library peak %.1f MiB; %zu grid blocks)\n",
            (double)(mpm_alloc_peak_bytes() - live0) / n, mpm_alloc_peak_bytes() / 1048576.0,
-           sim->sparse.block_count);
+           sim->grid.ops->box_count(&sim->grid));
     fflush(stdout);
     mpm_sim_destroy(sim);
   }

@@ -8,7 +8,7 @@
 #include "domain/domain.h"
 #include "domain/domain_transfer.h"
 #include "scene/sample.h"
-#include "solver/grid_update.h"
+#include "solver/explicit_update.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -346,14 +346,20 @@ static void run_conservation(mpm_kernel_kind kind) {
     ctx.clamp_lo[d] = -10;
     ctx.clamp_hi[d] = 10;
   }
-  mpm_sparse_grid g;
-  mpm_sparse_grid_init(&g);
+  mpm_grid grid;
+  mpm_grid_init_sparse(&grid, 0, ctx.origin, (mpm_real)dx);
   mpm_particles none;
   mpm_particles_init(&none, 16);
-  assert_int_equal(mpm_sparse_grid_sort(&g, &ctx.kernel, ctx.origin, 1, &none), 0);
-  assert_int_equal(mpm_domain_activate(&s, &g, &ctx.kernel, ctx.origin), 0);
-  mpm_sparse_grid_clear(&g, MPM_GRID_CHANNELS);
-  mpm_domain_p2g(&ctx, &s, &g);
+  assert_int_equal(grid.ops->activate(&grid, &ctx.kernel, 1, &none), 0);
+  assert_int_equal(mpm_domain_activate(&s, &grid.impl.sparse, &ctx.kernel, ctx.origin), 0);
+  mpm_dofs dofs;
+  mpm_dofs_init(&dofs);
+  mpm_dofs_begin_layout(&dofs);
+  assert_int_equal(mpm_dofs_add_grid(&dofs, &grid), 0);
+  assert_int_equal(mpm_dofs_end_layout(&dofs, MPM_DOF_ALL), 0);
+  mpm_dofs_clear(&dofs, MPM_DOF_ALL);
+  const mpm_grid_values val = mpm_dofs_grid_values(&dofs, &grid);
+  mpm_domain_p2g(&ctx, &s, &grid.impl.sparse, &val);
 
   double m_p = 0, P_p[3] = {0, 0, 0};
   for (size_t q = 0; q < s.particles.count; ++q) {
@@ -361,15 +367,14 @@ static void run_conservation(mpm_kernel_kind kind) {
     for (int d = 0; d < 3; ++d) P_p[d] += (double)s.particles.mass[q] * s.particles.v[d][q];
   }
   double m_g = 0, P_g[3] = {0, 0, 0}, f_g[3] = {0, 0, 0}, f_abs = 0;
-  for (size_t b = 0; b < g.block_count; ++b)
-    for (int n = 0; n < MPM_BLOCK_NODES; ++n) {
-      m_g += g.blocks[b].ch[MPM_CH_MASS][n];
-      for (int d = 0; d < 3; ++d) {
-        P_g[d] += g.blocks[b].ch[MPM_CH_MV + d][n];
-        f_g[d] += g.blocks[b].ch[MPM_CH_F + d][n];
-        f_abs += fabs(g.blocks[b].ch[MPM_CH_F + d][n]);
-      }
+  for (size_t n = 0; n < dofs.count; ++n) {
+    m_g += dofs.mass[n];
+    for (int d = 0; d < 3; ++d) {
+      P_g[d] += dofs.v0[d][n];
+      f_g[d] += dofs.f[d][n];
+      f_abs += fabs(dofs.f[d][n]);
     }
+  }
   assert_close(m_g, m_p, TOL(1e-5, 1e-13) * m_p);
   for (int d = 0; d < 3; ++d) {
     assert_close(P_g[d], P_p[d], TOL(1e-5, 1e-13) * m_p);
@@ -378,23 +383,23 @@ static void run_conservation(mpm_kernel_kind kind) {
   assert_true(f_abs > 0);
 
   /* grid update without gravity or walls, then back */
-  mpm_grid_update_ctx gu;
-  memset(&gu, 0, sizeof gu);
-  gu.dt = ctx.dt;
-  gu.dx = (mpm_real)dx;
+  mpm_explicit_update u;
+  memset(&u, 0, sizeof u);
+  u.dt = ctx.dt;
   for (int d = 0; d < 3; ++d) {
-    gu.wall_lo[d] = -1000000;
-    gu.wall_hi[d] = 1000000;
+    u.boundary.wall_lo[d] = -1000000;
+    u.boundary.wall_hi[d] = 1000000;
   }
-  mpm_grid_update_sparse(&gu, &g);
-  mpm_g2p_result r = mpm_domain_g2p(&ctx, &s, &g, NULL, 0);
+  mpm_dofs_explicit_update(&u, MPM_P2G_MOMENTUM_FORCE, &dofs);
+  mpm_g2p_result r = mpm_domain_g2p(&ctx, &s, &val, NULL, 0);
   assert_true(r.bad_particle < 0);
   double P_after[3] = {0, 0, 0};
   for (size_t q = 0; q < s.particles.count; ++q)
     for (int d = 0; d < 3; ++d) P_after[d] += (double)s.particles.mass[q] * s.particles.v[d][q];
   for (int d = 0; d < 3; ++d) assert_close(P_after[d], P_p[d], TOL(1e-4, 1e-12) * m_p);
 
-  mpm_sparse_grid_free(&g);
+  mpm_grid_free(&grid);
+  mpm_dofs_free(&dofs);
   mpm_particles_free(&none);
   mpm_particles_free(&p);
   mpm_domain_set_free(&s);

@@ -116,13 +116,8 @@ static void test_grid_mass(void **state) {
     run_steps(sim, 1, 1e-4);
     double grid_mass = 0, particle_mass = 0;
     for (size_t i = 0; i < sim->particles.count; ++i) particle_mass += sim->particles.mass[i];
-    if (g == 0) {
-      for (size_t b = 0; b < sim->sparse.block_count; ++b)
-        for (int n = 0; n < MPM_BLOCK_NODES; ++n)
-          grid_mass += sim->sparse.blocks[b].ch[MPM_CH_MASS][n];
-    } else {
-      for (size_t n = 0; n < sim->dense.count; ++n) grid_mass += sim->dense.ch[MPM_CH_MASS][n];
-    }
+    /* the grid level's nodes are the DOFs, in block order (sparse) or node order (dense) */
+    for (size_t n = 0; n < sim->dofs.count; ++n) grid_mass += sim->dofs.mass[n];
     assert_close(grid_mass / particle_mass, 1.0, TOL(1e-5, 1e-13));
     mpm_sim_destroy(sim);
   }

@@ -20,7 +20,7 @@
 
 #include "core/error.h"
 #include "domain/hex.h"
-#include "solver/particles.h"
+#include "core/particles.h"
 
 #include <stdint.h>
 

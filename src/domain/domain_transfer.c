@@ -38,15 +38,14 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel 
   return 0;
 }
 
-/* The block and the node within it of node base + (i, j, k) of a corner's stencil. */
-static inline mpm_grid_block *node_at(mpm_grid_block *blocks, const int32_t cblock[8],
-                                      const int32_t base[3], int i, int j, int k, int *local) {
+/* The level's node index of node base + (i, j, k) of a corner's stencil. */
+static inline size_t node_at(const int32_t cblock[8], const int32_t base[3], int i, int j, int k) {
   const int n[3] = {base[0] + i, base[1] + j, base[2] + k};
   const int o = (((n[0] >> MPM_BLOCK_BITS) - (base[0] >> MPM_BLOCK_BITS)) << 2) |
                 (((n[1] >> MPM_BLOCK_BITS) - (base[1] >> MPM_BLOCK_BITS)) << 1) |
                 ((n[2] >> MPM_BLOCK_BITS) - (base[2] >> MPM_BLOCK_BITS));
-  *local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
-  return &blocks[cblock[o]];
+  const int local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
+  return (size_t)cblock[o] * MPM_BLOCK_NODES + (size_t)local;
 }
 
 /* Group the used corners by base block (counting sort on the block index, stable in corner
@@ -98,7 +97,8 @@ static int group_corners(mpm_domain_set *s, const mpm_sparse_grid *g) {
   return 0;
 }
 
-int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g) {
+int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
+                   const mpm_grid_values *val) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
   /* 0. V0 P of every active particle, once (each is gathered by its 8 corners) */
@@ -163,12 +163,11 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_gr
             for (int l = 0; l < W; ++l) {
               const mpm_real w = st.w[0][i] * st.w[1][jj] * st.w[2][l];
               if (w == 0) continue;
-              int n;
-              mpm_grid_block *blk = node_at(g->blocks, s->cblock[c], s->cbase[c], i, jj, l, &n);
-              blk->ch[MPM_CH_MASS][n] += w * s->cm[c];
+              const size_t n = node_at(s->cblock[c], s->cbase[c], i, jj, l);
+              val->mass[n] += w * s->cm[c];
               for (int d = 0; d < 3; ++d) {
-                blk->ch[MPM_CH_MV + d][n] += w * s->cp[d][c];
-                blk->ch[MPM_CH_F + d][n] += w * s->cf[d][c];
+                val->v0[d][n] += w * s->cp[d][c];
+                val->f[d][n] += w * s->cf[d][c];
               }
             }
       }
@@ -188,7 +187,7 @@ void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
 }
 
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
-                              const mpm_sparse_grid *g, const mpm_collider_pose *poses,
+                              const mpm_grid_values *val, const mpm_collider_pose *poses,
                               int collider_count) {
   const mpm_kernel *k = &ctx->kernel;
   const int W = k->width;
@@ -209,11 +208,10 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
         for (int l = 0; l < W; ++l) {
           const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
           if (w == 0) continue;
-          int n;
-          const mpm_grid_block *blk = node_at(g->blocks, s->cblock[c], s->cbase[c], i, j, l, &n);
+          const size_t n = node_at(s->cblock[c], s->cbase[c], i, j, l);
           for (int d = 0; d < 3; ++d) {
-            const mpm_real vn = blk->ch[MPM_CH_VNEW + d][n];
-            const mpm_real vo = blk->ch[MPM_CH_VOLD + d][n];
+            const mpm_real vn = val->v[d][n];
+            const mpm_real vo = val->v0[d][n];
             vnew[d] += w * vn;
             dv[d] += w * (vn - vo);
           }

@@ -24,15 +24,16 @@
 int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
                         const mpm_real origin[3]);
 
-/* Rasterize the domain particles to their corners and the corners to the grid's mass,
- * momentum and force channels (ctx: kernel, origin, materials). Returns 0, -1 when out of
+/* Rasterize the domain particles to their corners and the corners to the grid level's mass,
+ * momentum (v0) and force values (ctx: kernel, origin, materials). Returns 0, -1 when out of
  * memory (nothing added to the grid then). */
-int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, mpm_sparse_grid *g);
+int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
+                   const mpm_grid_values *val);
 
-/* After the grid update (channels hold v^n and v^{n+1}): update corners and particles.
+/* After the grid update (val holds v^n in v0 and v^{n+1} in v): update corners and particles.
  * poses: colliders at the end of the step (count of them). */
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
-                              const mpm_sparse_grid *g, const mpm_collider_pose *poses,
+                              const mpm_grid_values *val, const mpm_collider_pose *poses,
                               int collider_count);
 
 /* F_p^{n+1} = F_p^n + dt grad_X v (Zhu eq. 7) of particle q from the grid velocities at its

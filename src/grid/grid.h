@@ -1,35 +1,92 @@
-/* grid.h - what every grid stores per node: the channels of one explicit step.
+/* grid.h - the grid interface: one level of grid nodes, whatever its variant.
  *
- * P2G accumulates mass, momentum (m v) and force; the grid update turns them into the old
- * velocity v^n (kept for FLIP, Gao sec. 3.2 step 6) and the new velocity v^{n+1}, stored back
- * into the momentum and force channels respectively so that no extra memory is needed. */
+ * A grid level is topology and geometry: which nodes exist this step, their integer
+ * coordinates, the level's origin and spacing dx. The values at its nodes (mass, velocities,
+ * force) are not stored here but in the DOF set (solver/dofs.h), where the level's nodes are
+ * DOFs dof_begin .. dof_begin + node_count. So one step, one explicit update and one solver
+ * work on every level alike, and Gao et al.'s multi-level grid (sec. 5-6) will be a stack of
+ * levels, each with its own origin and dx (dx_L = dx_0 / 2^L).
+ *
+ * Two variants fill the table of operations (mpm_grid_ops), PETSc style:
+ *   sparse  paged 4x4x4-node blocks activated from particle positions (sparse_grid.h), the
+ *           production grid;
+ *   dense   a full box of nodes over the domain (dense_grid.h), the plain reference the tests
+ *           compare the sparse grid with.
+ * Both present their nodes as boxes (block.h): a sparse block is a 4x4x4 box, a dense grid
+ * one box per x-slab. Transfers keep their variant-specific fast paths (transfer.h dispatches
+ * on the variant); everything else sees only this interface. */
 #ifndef MPM_GRID_GRID_H
 #define MPM_GRID_GRID_H
 
-#include "core/real.h"
+#include "core/particles.h"
+#include "grid/block.h"
+#include "grid/dense_grid.h"
+#include "grid/sparse_grid.h"
+#include "interp/kernel.h"
 
-enum {
-  MPM_CH_MASS = 0,
-  MPM_CH_MV = 1, /* momentum x,y,z; after the grid update: old velocity v^n */
-  MPM_CH_F = 4,  /* force x,y,z; after the grid update: new velocity v^{n+1} */
-  MPM_GRID_CHANNELS = 7
+typedef struct mpm_grid mpm_grid;
+
+typedef struct mpm_grid_ops {
+  const char *name;
+  /* Make every node that the stencils of kernel k around the particles p touch part of the
+   * level (sparse: sort p into owner blocks, activate their pads, colour them; dense: every node
+   * already is). Nodes activated earlier in the step stay. 0, or -1 when out of memory. */
+  int (*activate)(mpm_grid *g, const mpm_kernel *k, int material_count, const mpm_particles *p);
+  /* The order in which the last activation wants the particles visited (perm[j]: the particle
+   * visited j-th; the caller may permute the particle arrays into it and reset it to the
+   * identity), or NULL when the variant visits them in memory order. */
+  uint32_t *(*particle_order)(mpm_grid *g);
+  /* Nodes of the level now; they are DOFs dof_begin .. dof_begin + node_count(g). */
+  size_t (*node_count)(const mpm_grid *g);
+  /* The level's nodes as box_count(g) disjoint boxes covering them. */
+  size_t (*box_count)(const mpm_grid *g);
+  mpm_node_box (*box)(const mpm_grid *g, size_t b);
+  /* Bytes held (not counting the values in the DOF set). */
+  size_t (*bytes)(const mpm_grid *g);
+  void (*free)(mpm_grid *g);
+} mpm_grid_ops;
+
+struct mpm_grid {
+  const mpm_grid_ops *ops;
+  mpm_grid_kind kind;
+  int level;          /* 0: the coarsest */
+  mpm_real origin[3]; /* position of node (0, 0, 0), m */
+  mpm_real dx;        /* node spacing, m */
+  size_t dof_begin;   /* the level's first DOF (set by mpm_dofs_add_grid) */
+  union {
+    mpm_sparse_grid sparse;
+    mpm_dense_grid dense;
+  } impl;
 };
-#define MPM_CH_VOLD MPM_CH_MV
-#define MPM_CH_VNEW MPM_CH_F
 
-/* Sparse grid blocks are 4x4x4 nodes (SPGrid-like pages of 64 nodes per channel). */
-#define MPM_BLOCK_BITS 2
-#define MPM_BLOCK 4
-#define MPM_BLOCK_NODES 64
+/* A sparse level at origin with spacing dx, no nodes yet. */
+void mpm_grid_init_sparse(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx);
+/* A dense level of n[0] x n[1] x n[2] nodes from origin. 0, or -1 when out of memory. */
+int mpm_grid_init_dense(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx,
+                        const int n[3]);
 
-/* A particle's stencil starts at its base node, which lies in its owner block, and reaches at
- * most MPM_STENCIL_MAX - 1 nodes forward: the owner block and its 7 forward neighbours cover
- * it, an 8x8x8 "pad" of nodes. P2G accumulates into a pad, then adds the pad to the 8 blocks. */
-#define MPM_PAD 8
-#define MPM_PAD_NODES 512
+static inline void mpm_grid_free(mpm_grid *g) {
+  if (g->ops) g->ops->free(g);
+  g->ops = NULL;
+}
 
-typedef struct mpm_grid_block {
-  mpm_real ch[MPM_GRID_CHANNELS][MPM_BLOCK_NODES];
-} mpm_grid_block;
+/* Position of node idx of the level, m: origin + dx idx, rounded as every user rounds it. */
+static inline void mpm_grid_node_position(const mpm_grid *g, const int32_t idx[3], mpm_real x[3]) {
+  for (int d = 0; d < 3; ++d) x[d] = g->origin[d] + (mpm_real)idx[d] * g->dx;
+}
+
+/* The values at one level's nodes: views into the DOF set, node n at index n of each array
+ * (the arrays already start at the level's dof_begin). Fields the step does not use are NULL.
+ *   mass  m_i
+ *   v0    P2G accumulates the momentum sum w m v (APIC: + its affine part) here; the explicit
+ *         update turns it into the velocity at the start of the step v^n (FLIP reads it)
+ *   v     the velocity at the end of the step v^{n+1}
+ *   f     the force, -sum V0 tau grad w (not used when P2G folds dt f into the momentum) */
+typedef struct mpm_grid_values {
+  mpm_real *mass;
+  mpm_real *v0[3];
+  mpm_real *v[3];
+  mpm_real *f[3];
+} mpm_grid_values;
 
 #endif

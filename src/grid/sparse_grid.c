@@ -29,7 +29,6 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->keys);
   mpm_free(g->values);
   mpm_free(g->coord);
-  mpm_free(g->blocks);
   mpm_free(g->neighbor);
   mpm_free(g->cell_start);
   mpm_free(g->color_blocks);
@@ -43,8 +42,7 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
 
 size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g) {
   return g->table_size * (sizeof(uint64_t) + sizeof(int32_t)) +
-         g->block_capacity * (sizeof(mpm_grid_block) + sizeof(int32_t) * 3 + sizeof(int32_t) * 8 +
-                              sizeof(int32_t)) +
+         g->block_capacity * (sizeof(int32_t) * 3 + sizeof(int32_t) * 8 + sizeof(int32_t)) +
          (g->cell_capacity + g->hist_capacity) * sizeof(uint32_t) +
          g->particle_capacity * (2 * sizeof(uint32_t) + sizeof(uint64_t));
 }
@@ -72,12 +70,10 @@ static int grow_table(mpm_sparse_grid *g, size_t size) {
 static int grow_blocks(mpm_sparse_grid *g, size_t cap) {
   int32_t(*coord)[3] = mpm_alloc(cap * sizeof *coord);
   int32_t(*nbr)[8] = mpm_alloc(cap * sizeof *nbr);
-  mpm_grid_block *blocks = mpm_alloc(cap * sizeof *blocks);
   int32_t *colors = mpm_alloc(cap * sizeof *colors);
-  if (!coord || !nbr || !blocks || !colors) {
+  if (!coord || !nbr || !colors) {
     mpm_free(coord);
     mpm_free(nbr);
-    mpm_free(blocks);
     mpm_free(colors);
     return -1;
   }
@@ -87,11 +83,9 @@ static int grow_blocks(mpm_sparse_grid *g, size_t cap) {
   }
   mpm_free(g->coord);
   mpm_free(g->neighbor);
-  mpm_free(g->blocks);
   mpm_free(g->color_blocks);
   g->coord = coord;
   g->neighbor = nbr;
-  g->blocks = blocks;
   g->color_blocks = colors;
   g->block_capacity = cap;
   return 0;
@@ -305,12 +299,4 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
 int32_t mpm_sparse_grid_touch(mpm_sparse_grid *g, const int32_t c[3]) {
   if (!g->table_size && grow_table(g, 4096)) return -1;
   return find_or_insert(g, c[0], c[1], c[2]);
-}
-
-void mpm_sparse_grid_clear(mpm_sparse_grid *g, int channels) {
-  const long nb = (long)g->block_count;
-  mpm_grid_block *blocks = g->blocks;
-  const size_t bytes = (size_t)channels * sizeof blocks[0].ch[0];
-#pragma omp parallel for schedule(static)
-  for (long b = 0; b < nb; ++b) memset(blocks[b].ch[0], 0, bytes);
 }

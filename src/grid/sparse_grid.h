@@ -16,9 +16,9 @@
 #ifndef MPM_GRID_SPARSE_GRID_H
 #define MPM_GRID_SPARSE_GRID_H
 
-#include "grid/grid.h"
+#include "grid/block.h"
 #include "interp/kernel.h"
-#include "solver/particles.h"
+#include "core/particles.h"
 
 #include <stddef.h>
 #include <stdint.h>
@@ -31,7 +31,6 @@ typedef struct mpm_sparse_grid {
   /* blocks: [0, owner_count) own particles, the rest are neighbours (halo) */
   size_t block_count, block_capacity, owner_count;
   int32_t (*coord)[3];
-  mpm_grid_block *blocks;
   int32_t (*neighbor)[8]; /* per owner block: the 8 blocks its pad covers */
   /* Particles are sorted by (owner block b, material m, base-node cell c in the block): those
    * of one (b, m, c) are perm[cell_start[q] .. cell_start[q+1]) with q = (b*nmat + m)*64 + c.
@@ -64,11 +63,8 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g);
 int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
                          int material_count, const mpm_particles *p);
 
-/* Zero the first `channels` channels of every active block (parallel); the others are left as
- * they are (APIC uses only mass and momentum, see transfer.h). */
-void mpm_sparse_grid_clear(mpm_sparse_grid *g, int channels);
-
-/* Bytes held by the grid (blocks, hash, lists), for memory reports. */
+/* Bytes held by the grid (hash, block lists, particle order), for memory reports; the node
+ * values live in the DOF set. */
 size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g);
 
 /* The particles of owner block b and material m: perm[*begin .. *end). */

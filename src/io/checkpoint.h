@@ -17,7 +17,7 @@
 #include "core/error.h"
 #include "domain/domain.h"
 #include "io/io.h"
-#include "solver/particles.h"
+#include "core/particles.h"
 
 #include <stdint.h>
 

@@ -7,7 +7,7 @@
 
 #include "core/error.h"
 #include "core/real.h"
-#include "solver/particles.h"
+#include "core/particles.h"
 
 #include <stdio.h>
 

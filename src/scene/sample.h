@@ -10,7 +10,7 @@
 #include "core/error.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
-#include "solver/particles.h"
+#include "core/particles.h"
 
 /// Lattice spacing of bodies[body_index]: scene->dx / cbrt(particles_per_cell), m.
 double mpm_sample_spacing(const mpm_scene *scene, int body_index);

@@ -15,7 +15,7 @@
  * body, material, the step, the time and the quantity. With solver.on_instability = "retry"
  * the particles, time and step count saved before the step are restored and the step is
  * redone with half the dt, up to solver.max_retries halvings; the following steps keep the
- * smaller dt, and one halving is given back per frame (step.c). */
+ * smaller dt, and one halving is given back per frame (frame.c). */
 #include "solver/sim.h"
 #include "core/alloc.h"
 
@@ -41,7 +41,7 @@ static guard_hit scan(const mpm_sim *sim, const mpm_particles *p, const uint8_t 
   const long n = (long)p->count;
   const double dx = sim->scene.dx;
   mpm_real lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) { /* the G2P clamp (step.c fill_transfer_ctx), rounded alike */
+  for (int d = 0; d < 3; ++d) { /* the G2P clamp (step.c step_setup), rounded alike */
     lo[d] = (mpm_real)(sim->scene.domain_min[d] + dx);
     hi[d] = (mpm_real)(sim->scene.domain_max[d] - dx);
   }
@@ -205,14 +205,12 @@ static void restore_state(mpm_sim *sim) {
     memcpy(c[k], sim->corner_backup[k], s->corner_count * sizeof(mpm_real));
 }
 
-mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
+mpm_status mpm_sim_guarded_step(mpm_sim *sim, double max_dt) {
   const int retry = sim->scene.solver.on_instability == MPM_INSTABILITY_RETRY;
   const double time0 = sim->time, last_dt0 = sim->last_dt;
   const int64_t steps0 = sim->steps;
   const mpm_real speed0 = sim->max_speed;
   double dt_cap = max_dt;
-  /* domains due to be switched off go before the step (and before a saved state) */
-  if (mpm_sim_apply_domain_releases(sim) != MPM_OK) return sim->error.status;
   for (;;) {
     if (retry && save_state(sim))
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM,

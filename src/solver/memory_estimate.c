@@ -1,7 +1,7 @@
 /* memory_estimate.c - how much memory a scene will need, and whether the machine has it, so
  * that a scene too large for the machine is refused before anything is allocated. */
 #include "solver/sim.h"
-#include "grid/grid.h"
+#include "solver/dofs.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -40,6 +40,9 @@ static double body_particles(const mpm_scene *s, int b) {
   return v / (s->dx * s->dx * s->dx) * body->particles_per_cell;
 }
 
+/* Reals per DOF with every field of the DOF set (mass, v0, v, f). */
+#define DOF_REALS 10
+
 /* Nodes of the dense reference grid (solver.grid = dense), 0 for the sparse grid. */
 static double dense_nodes(const mpm_scene *s) {
   if (s->solver.grid != MPM_GRID_DENSE) return 0;
@@ -52,7 +55,7 @@ double mpm_scene_memory_estimate(const mpm_scene *s, double *particles) {
   double n = 0;
   for (int b = 0; b < s->body_count; ++b) n += body_particles(s, b);
   if (particles) *particles = n;
-  return n * BYTES_PER_PARTICLE + dense_nodes(s) * MPM_GRID_CHANNELS * sizeof(mpm_real) +
+  return n * BYTES_PER_PARTICLE + dense_nodes(s) * DOF_REALS * sizeof(mpm_real) +
          64.0 * 1024 * 1024; /* plus the program itself */
 }
 
@@ -91,7 +94,7 @@ mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
     char grid[160] = "";
     if (dense > 0)
       snprintf(grid, sizeof grid, ", and a dense grid (solver.grid) of %.3g nodes: %.3g GiB", dense,
-               dense * MPM_GRID_CHANNELS * sizeof(mpm_real) / gib);
+               dense * DOF_REALS * sizeof(mpm_real) / gib);
     return mpm_error_set(err, MPM_ERR_INVALID,
                          "%s: the scene needs about %.3g GiB (%.3g particles at about %.0f bytes "
                          "each%s) but this machine has %.1f GiB available; use a larger dx, fewer "

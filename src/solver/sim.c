@@ -156,12 +156,14 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
 
   if (sc->solver.grid == MPM_GRID_DENSE) {
     const int n[3] = {sim->cells[0] + 3, sim->cells[1] + 3, sim->cells[2] + 3};
-    if (mpm_dense_grid_init(&sim->dense, n)) {
+    if (mpm_grid_init_dense(&sim->grid, 0, sim->origin, (mpm_real)sc->dx, n)) {
       st = oom(err, "the dense grid");
       goto fail;
     }
+  } else {
+    mpm_grid_init_sparse(&sim->grid, 0, sim->origin, (mpm_real)sc->dx);
   }
-  mpm_sparse_grid_init(&sim->sparse);
+  mpm_dofs_init(&sim->dofs);
   sim->reorder_interval = 16;
 
   /* time */
@@ -265,8 +267,8 @@ void mpm_sim_destroy(mpm_sim *sim) {
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);
   free(sim->colliders);
   free(sim->poses);
-  mpm_sparse_grid_free(&sim->sparse);
-  mpm_dense_grid_free(&sim->dense);
+  mpm_grid_free(&sim->grid);
+  mpm_dofs_free(&sim->dofs);
   mpm_free(sim->scratch);
   mpm_free(sim->iscratch);
   free(sim->frame_times);

@@ -6,19 +6,20 @@
 
 #include "collide/collider.h"
 #include "domain/domain.h"
+#include "core/particles.h"
 #include "domain/embed.h"
-#include "grid/dense_grid.h"
-#include "grid/sparse_grid.h"
+#include "grid/grid.h"
 #include "interp/kernel.h"
 #include "io/io.h"
 #include "material/material.h"
 #include "scene/scene.h"
-#include "solver/particles.h"
+#include "solver/dofs.h"
 #include "transfer/transfer.h"
 
 #include <stdint.h>
 
-/* Time spent in each stage, seconds, accumulated since creation (benchmarks read it). */
+/* Time spent in the stages of the step (step.c), seconds, accumulated since creation
+ * (benchmarks read it): sort = activation and DOF layout, grid = the update on the DOF set. */
 typedef struct mpm_stage_times {
   double sort, p2g, grid, g2p, total;
 } mpm_stage_times;
@@ -38,9 +39,9 @@ struct mpm_sim {
   mpm_embedded_surface *surfaces; /* meshes of mesh bodies with domains (Zhu sec. 4.1) */
   int surface_count;
   mpm_real origin[3];
-  int cells[3]; /* grid cells per axis over the domain */
-  mpm_sparse_grid sparse;
-  mpm_dense_grid dense;
+  int cells[3];      /* grid cells per axis over the domain */
+  mpm_grid grid;     /* the grid level (sparse or dense; one level until the adaptive grid) */
+  mpm_dofs dofs;     /* the unknowns of the step: the values at the grid's nodes */
   mpm_real *scratch; /* per-particle buffers for the periodic reorder */
   uint32_t *iscratch;
   size_t scratch_capacity;
@@ -96,11 +97,15 @@ typedef struct mpm_diagnostics {
 } mpm_diagnostics;
 mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim);
 
-/* One step with the instability guards (guard.c): the raw step (step.c), then a scan for
- * non-finite values, particles leaving the domain, CFL violations and inversions the model
- * cannot take; with solver.on_instability = "retry" an unstable step is undone and redone with
- * half the dt, up to solver.max_retries times. */
+/* One step, three layers: mpm_sim_step (frame.c, public) runs the work between steps, then the
+ * guarded step; mpm_sim_guarded_step (guard.c) runs the raw step, then a scan for non-finite
+ * values, particles leaving the domain, CFL violations and inversions the model cannot take,
+ * and with solver.on_instability = "retry" undoes an unstable step and redoes it with half the
+ * dt, up to solver.max_retries times; mpm_sim_raw_step (step.c) runs the stages of one step. */
+mpm_status mpm_sim_guarded_step(mpm_sim *sim, double max_dt);
 mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt);
+/* The work between steps (frame.c): domain releases. */
+mpm_status mpm_sim_between_steps(mpm_sim *sim);
 /* The guards' scan alone, for the state after a step of dt: MPM_ERR_UNSTABLE with the
  * diagnostic in sim->error, or MPM_OK. */
 mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
@@ -109,7 +114,7 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);
 
 /* Switch off the domains the scene's domain_release boxes name for the current time (sim.c);
- * run before every step. */
+ * a stage of mpm_sim_between_steps. */
 mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim);
 
 /* Write the current state as the next frame (VTU, PLY, PVD, stats) into the output dir. */

@@ -1,15 +1,32 @@
-/* step.c - one explicit symplectic-Euler MPM step (Gao sec. 3.2 steps 1-6) and the frame loop.
+/* step.c - one explicit symplectic-Euler MPM step (Gao sec. 3.2 steps 1-6; Zhu Algorithm 1
+ * without enrichment for particle domains) as an ordered list of stages.
  *
- * Stages, each timed: sort particles into grid blocks -> P2G (mass, momentum, force from the
- * Kirchhoff stress) -> grid update (gravity, colliders, walls) -> G2P (velocity, C, F, x).
+ * Stages (explicit_stages below), each a function of the simulation and the step's context,
+ * timed into sim->times:
+ *   sort     activate the grid level from the particles' stencils (sparse: sort them into
+ *            owner blocks; every 16 steps the particle arrays are permuted into that order) and
+ *            around the domain corners
+ *   layout   lay the DOF set out over the level's nodes and clear what P2G accumulates
+ *   p2g      particles -> grid (mass, momentum, force from the Kirchhoff stress; the sparse
+ *            grid's APIC kernel folds dt f into the momentum); domain particles -> corners ->
+ *            grid (Zhu eqs. 5, 6, 8)
+ *   update   the explicit update of the DOF set: gravity, force, colliders, domain walls
+ *            (solver/explicit_update.h)
+ *   g2p      grid -> particles, fused with what follows it in an explicit step: velocity (APIC
+ *            or PIC/FLIP), affine moment, F <- (I + dt grad v) F, the plasticity return map, and
+ *            advection; for domains grid -> corners -> particles (Zhu eqs. 7, 9)
+ * Work between steps (domain releases today) runs in frame.c before the guarded step, never
+ * inside it.
+ *
  * Time step: dt = cfl dx / (c + max |v_p|) with c the largest elastic wave speed, bounded by
  * the scene's max_dt and clipped so that frames end exactly on their times. */
 #include "solver/sim.h"
-#include "solver/grid_update.h"
 #include "core/alloc.h"
 #include "domain/domain_transfer.h"
+#include "solver/explicit_update.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -19,6 +36,27 @@ double mpm_sim_cfl_dt(const mpm_sim *sim) {
   if (sim->scene.solver.max_dt > 0 && dt > sim->scene.solver.max_dt) dt = sim->scene.solver.max_dt;
   return dt;
 }
+
+/* What the stages of one step share. */
+typedef struct step_ctx {
+  double dt;
+  mpm_transfer_ctx tc;  /* standard particles */
+  mpm_transfer_ctx dtc; /* domain corners: the corner kernel */
+  mpm_explicit_update update;
+  mpm_p2g_output p2g_output;
+  int domains; /* the step has active domain particles */
+  mpm_grid_values val;
+  mpm_g2p_result r;
+  const mpm_particles *bad_set; /* the set r.bad_particle indexes */
+} step_ctx;
+
+typedef mpm_status (*stage_fn)(mpm_sim *sim, step_ctx *c);
+
+typedef struct stage {
+  const char *name;
+  stage_fn run;
+  size_t timer; /* offset of its seconds in mpm_stage_times */
+} stage;
 
 static int ensure_scratch(mpm_sim *sim) {
   const size_t cap = sim->particles.capacity;
@@ -32,20 +70,119 @@ static int ensure_scratch(mpm_sim *sim) {
   return 0;
 }
 
-static void fill_transfer_ctx(const mpm_sim *sim, mpm_real dt, mpm_transfer_ctx *t) {
-  memset(t, 0, sizeof *t);
+static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
+  mpm_grid *g = &sim->grid;
+  mpm_particles *p = &sim->particles;
+  if (g->ops->activate(g, &c->tc.kernel, sim->material_count, p))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory sorting %zu particles into grid blocks",
+                         (long long)sim->steps, p->count);
+  uint32_t *perm = g->ops->particle_order(g);
+  if (perm && sim->steps % sim->reorder_interval == 0) {
+    /* move particles into block order now and then, so transfers stream through memory */
+    if (ensure_scratch(sim))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
+    mpm_particles_permute(p, perm, &sim->scratch, sim->iscratch);
+    for (size_t j = 0; j < p->count; ++j) perm[j] = (uint32_t)j;
+  }
+  if (c->domains &&
+      mpm_domain_activate(&sim->domains, &g->impl.sparse, &c->dtc.kernel, c->dtc.origin))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory activating the grid around domain corners",
+                         (long long)sim->steps);
+  return MPM_OK;
+}
+
+static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
+  mpm_dofs *d = &sim->dofs;
+  mpm_dofs_begin_layout(d);
+  const int impulse = c->p2g_output == MPM_P2G_IMPULSE;
+  const unsigned fields = impulse ? MPM_DOF_MASS | MPM_DOF_V0 | MPM_DOF_V : MPM_DOF_ALL;
+  if (mpm_dofs_add_grid(d, &sim->grid) || mpm_dofs_end_layout(d, fields))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory for the values of %zu grid nodes",
+                         (long long)sim->steps, d->count);
+  mpm_dofs_clear(d, fields & ~(unsigned)MPM_DOF_V); /* the update writes every v */
+  c->val = mpm_dofs_grid_values(d, &sim->grid);
+  return MPM_OK;
+}
+
+static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
+  mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
+  if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid.impl.sparse, &c->val))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory for the stresses of %zu domain particles",
+                         (long long)sim->steps, sim->domains.particles.count);
+  return MPM_OK;
+}
+
+static mpm_status stage_update(mpm_sim *sim, step_ctx *c) {
+  mpm_dofs_explicit_update(&c->update, c->p2g_output, &sim->dofs);
+  return MPM_OK;
+}
+
+static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
+  c->r = mpm_g2p(&c->tc, &sim->grid, &c->val, &sim->particles);
+  c->bad_set = &sim->particles;
+  if (c->domains) {
+    const mpm_g2p_result rd =
+        mpm_domain_g2p(&c->dtc, &sim->domains, &c->val, sim->poses, sim->collider_count);
+    if (rd.max_speed > c->r.max_speed) c->r.max_speed = rd.max_speed;
+    if (rd.bad_particle >= 0 && c->r.bad_particle < 0) {
+      c->bad_set = &sim->domains.particles;
+      c->r.bad_particle = rd.bad_particle;
+    }
+  }
+  return MPM_OK;
+}
+
+static const stage explicit_stages[] = {
+    {"sort", stage_sort, offsetof(mpm_stage_times, sort)},
+    {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
+    {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
+    {"update", stage_update, offsetof(mpm_stage_times, grid)},
+    {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
+};
+
+/* The step's context for a step of dt. */
+static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
+  const mpm_scene *sc = &sim->scene;
+  memset(c, 0, sizeof *c);
+  c->dt = dt;
+  mpm_transfer_ctx *t = &c->tc;
   t->kernel = sim->kernel;
-  t->dt = dt;
-  t->transfer = sim->scene.solver.transfer;
-  t->flip_alpha = (mpm_real)sim->scene.solver.flip_alpha;
+  t->dt = (mpm_real)dt;
+  t->transfer = sc->solver.transfer;
+  t->flip_alpha = (mpm_real)sc->solver.flip_alpha;
   t->materials = sim->materials;
   t->material_count = sim->material_count;
   for (int d = 0; d < 3; ++d) {
-    t->origin[d] = sim->origin[d];
+    t->origin[d] = sim->grid.origin[d];
     /* keep every stencil inside the grid: one cell from the domain faces */
-    t->clamp_lo[d] = (mpm_real)(sim->scene.domain_min[d] + sim->scene.dx);
-    t->clamp_hi[d] = (mpm_real)(sim->scene.domain_max[d] - sim->scene.dx);
+    t->clamp_lo[d] = (mpm_real)(sc->domain_min[d] + sc->dx);
+    t->clamp_hi[d] = (mpm_real)(sc->domain_max[d] - sc->dx);
   }
+  c->dtc = c->tc;
+  c->dtc.kernel = sim->domain_kernel;
+  c->domains = sim->domains.active_count > 0;
+  /* the sparse grid's APIC P2G folds the force into the momentum; domain corners bring their
+   * force apart (their FLIP update needs the grid's velocity before the force) */
+  c->p2g_output =
+      mpm_p2g_fuses_force(t, &sim->grid) && !c->domains ? MPM_P2G_IMPULSE : MPM_P2G_MOMENTUM_FORCE;
+  mpm_explicit_update *u = &c->update;
+  u->dt = (mpm_real)dt;
+  const mpm_real dx = sim->grid.dx;
+  for (int d = 0; d < 3; ++d) {
+    u->gravity[d] = (mpm_real)sc->gravity[d];
+    u->boundary.wall_lo[d] = sim->grid.origin[d] + (mpm_real)sc->wall_cells * dx;
+    u->boundary.wall_hi[d] = sim->grid.origin[d] + (mpm_real)(sim->cells[d] - sc->wall_cells) * dx;
+  }
+  u->boundary.wall_rule = sc->wall_rule;
+  u->boundary.wall_friction = (mpm_real)sc->wall_friction;
+  u->boundary.collider_count = sim->collider_count;
+  for (int k = 0; k < sim->collider_count; ++k)
+    sim->poses[k] = mpm_collider_pose_at(&sim->colliders[k], sim->time + dt);
+  u->boundary.poses = sim->poses;
 }
 
 static const char *bad_quantity(const mpm_particles *p, long i) {
@@ -56,170 +193,60 @@ static const char *bad_quantity(const mpm_particles *p, long i) {
   return "deformation gradient";
 }
 
+/* The collapse of dt: name the fastest particle (non-finite speeds count as fastest). */
+static mpm_status dt_collapsed(mpm_sim *sim, double dt) {
+  const mpm_particles *p = &sim->particles;
+  size_t worst = 0;
+  double worst_v2 = -1;
+  for (size_t i = 0; i < p->count; ++i) {
+    double v2 = 0;
+    for (int d = 0; d < 3; ++d) v2 += (double)p->v[d][i] * (double)p->v[d][i];
+    if (!isfinite(v2)) v2 = INFINITY;
+    if (v2 > worst_v2) {
+      worst_v2 = v2;
+      worst = i;
+    }
+  }
+  return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
+                       "simulation blew up at step %lld (t = %.6g s): the time step collapsed to "
+                       "%.3g s because particle id %u (body %d, material %d) moves at %.3g m/s; "
+                       "check initial velocities and material stiffness",
+                       (long long)sim->steps, sim->time, dt, p->count ? p->id[worst] : 0,
+                       p->count ? p->body[worst] : -1, p->count ? p->material[worst] : -1,
+                       sqrt(worst_v2));
+}
+
 mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
-  mpm_particles *p = &sim->particles;
-  const mpm_scene *sc = &sim->scene;
   double dt = mpm_sim_cfl_dt(sim);
   if (max_dt > 0 && dt > max_dt) dt = max_dt;
-  if (!(dt > 1e-12 * sim->frame_dt) || !isfinite(dt)) {
-    /* name the fastest particle (non-finite speeds count as fastest) */
-    size_t worst = 0;
-    double worst_v2 = -1;
-    for (size_t i = 0; i < p->count; ++i) {
-      double v2 = 0;
-      for (int d = 0; d < 3; ++d) v2 += (double)p->v[d][i] * (double)p->v[d][i];
-      if (!isfinite(v2)) v2 = INFINITY;
-      if (v2 > worst_v2) {
-        worst_v2 = v2;
-        worst = i;
-      }
-    }
-    return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
-                         "simulation blew up at step %lld (t = %.6g s): the time step collapsed to "
-                         "%.3g s because particle id %u (body %d, material %d) moves at %.3g m/s; "
-                         "check initial velocities and material stiffness",
-                         (long long)sim->steps, sim->time, dt, p->count ? p->id[worst] : 0,
-                         p->count ? p->body[worst] : -1, p->count ? p->material[worst] : -1,
-                         sqrt(worst_v2));
-  }
+  if (!(dt > 1e-12 * sim->frame_dt) || !isfinite(dt)) return dt_collapsed(sim, dt);
   const double t0 = mpm_wall_seconds();
-
-  mpm_transfer_ctx tc;
-  fill_transfer_ctx(sim, (mpm_real)dt, &tc);
-  mpm_grid_update_ctx gu;
-  memset(&gu, 0, sizeof gu);
-  gu.dt = (mpm_real)dt;
-  gu.dx = (mpm_real)sc->dx;
-  for (int d = 0; d < 3; ++d) {
-    gu.gravity[d] = (mpm_real)sc->gravity[d];
-    gu.origin[d] = sim->origin[d];
-    gu.wall_lo[d] = sc->wall_cells;
-    gu.wall_hi[d] = sim->cells[d] - sc->wall_cells;
-  }
-  gu.wall_rule = sc->wall_rule;
-  gu.wall_friction = (mpm_real)sc->wall_friction;
-  gu.collider_count = sim->collider_count;
-  for (int c = 0; c < sim->collider_count; ++c)
-    sim->poses[c] = mpm_collider_pose_at(&sim->colliders[c], sim->time + dt);
-  gu.poses = sim->poses;
-
-  mpm_g2p_result r;
-  const mpm_particles *bad_set = p; /* the set r.bad_particle indexes */
-  if (sc->solver.grid == MPM_GRID_SPARSE) {
-    mpm_sparse_grid *g = &sim->sparse;
-    if (mpm_sparse_grid_sort(g, &sim->kernel, sim->origin, sim->material_count, p))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                           "step %lld: out of memory sorting %zu particles into grid blocks",
-                           (long long)sim->steps, p->count);
-    if (sim->steps % sim->reorder_interval == 0) {
-      /* move particles into block order now and then, so transfers stream through memory */
-      if (ensure_scratch(sim))
-        return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
-      mpm_particles_permute(p, g->perm, &sim->scratch, sim->iscratch);
-      for (size_t j = 0; j < p->count; ++j) g->perm[j] = (uint32_t)j;
-    }
-    /* APIC P2G fuses the force into the momentum and leaves the force channels alone. Domain
-     * corners bring their force in the force channels (their FLIP update needs the grid's
-     * velocity before the force), so with domains every channel is cleared and read. */
-    const int domains = sim->domains.active_count > 0;
-    const int fused = sc->solver.transfer == MPM_TRANSFER_APIC && !domains;
-    gu.force_in_momentum = fused;
-    if (domains && mpm_domain_activate(&sim->domains, g, &sim->domain_kernel, sim->origin))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                           "step %lld: out of memory activating the grid around domain corners",
-                           (long long)sim->steps);
-    mpm_sparse_grid_clear(g, fused ? MPM_CH_F : MPM_GRID_CHANNELS);
-    mpm_transfer_ctx dtc = tc;
-    dtc.kernel = sim->domain_kernel;
-    const double t1 = mpm_wall_seconds();
-    mpm_p2g_sparse(&tc, g, p);
-    if (domains && mpm_domain_p2g(&dtc, &sim->domains, g))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                           "step %lld: out of memory for the stresses of %zu domain particles",
-                           (long long)sim->steps, sim->domains.particles.count);
-    const double t2 = mpm_wall_seconds();
-    mpm_grid_update_sparse(&gu, g);
-    const double t3 = mpm_wall_seconds();
-    r = mpm_g2p_sparse(&tc, g, p);
-    if (domains) {
-      const mpm_g2p_result rd =
-          mpm_domain_g2p(&dtc, &sim->domains, g, sim->poses, sim->collider_count);
-      if (rd.max_speed > r.max_speed) r.max_speed = rd.max_speed;
-      if (rd.bad_particle >= 0 && r.bad_particle < 0) {
-        bad_set = &sim->domains.particles;
-        r.bad_particle = rd.bad_particle;
-      }
-    }
-    const double t4 = mpm_wall_seconds();
-    sim->times.sort += t1 - t0;
-    sim->times.p2g += t2 - t1;
-    sim->times.grid += t3 - t2;
-    sim->times.g2p += t4 - t3;
-  } else {
-    mpm_dense_grid_clear(&sim->dense);
-    const double t1 = mpm_wall_seconds();
-    mpm_p2g_dense(&tc, &sim->dense, p);
-    const double t2 = mpm_wall_seconds();
-    mpm_grid_update_dense(&gu, &sim->dense);
-    const double t3 = mpm_wall_seconds();
-    r = mpm_g2p_dense(&tc, &sim->dense, p);
-    const double t4 = mpm_wall_seconds();
-    sim->times.sort += t1 - t0;
-    sim->times.p2g += t2 - t1;
-    sim->times.grid += t3 - t2;
-    sim->times.g2p += t4 - t3;
+  step_ctx c;
+  step_setup(sim, dt, &c);
+  double t = t0;
+  for (size_t k = 0; k < sizeof explicit_stages / sizeof explicit_stages[0]; ++k) {
+    const stage *s = &explicit_stages[k];
+    const mpm_status st = s->run(sim, &c);
+    if (st != MPM_OK) return st;
+    const double now = mpm_wall_seconds();
+    *(double *)((char *)&sim->times + s->timer) += now - t;
+    t = now;
   }
   sim->times.total += mpm_wall_seconds() - t0;
   sim->time += dt;
   sim->steps++;
   sim->last_dt = dt;
-  sim->max_speed = r.max_speed;
-  if (r.bad_particle >= 0) {
-    const long i = r.bad_particle;
-    const mpm_particles *q = bad_set;
+  sim->max_speed = c.r.max_speed;
+  if (c.r.bad_particle >= 0) {
+    const long i = c.r.bad_particle;
+    const mpm_particles *q = c.bad_set;
     return mpm_error_set(
         &sim->error, MPM_ERR_UNSTABLE,
         "simulation blew up at step %lld (t = %.6g s, dt = %.3g s): %sparticle id %u "
         "(body %d, material %d) has a non-finite %s; try a smaller solver.cfl or "
         "solver.max_dt, or a finer domain.dx",
-        (long long)sim->steps, sim->time, dt, q == p ? "" : "domain ", q->id[i], q->body[i],
-        q->material[i], bad_quantity(q, i));
+        (long long)sim->steps, sim->time, dt, q == &sim->particles ? "" : "domain ", q->id[i],
+        q->body[i], q->material[i], bad_quantity(q, i));
   }
   return MPM_OK;
-}
-
-mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
-  if (sim->frame >= sim->frame_count)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                         "the simulation already reached its end time");
-  sim->frame_wall_start = mpm_wall_seconds();
-  double end = (sim->frame + 1) * sim->frame_dt;
-  if (end > sim->scene.end_time) end = sim->scene.end_time;
-  /* steps land exactly on the frame time; a tiny remainder is merged into the last step */
-  while (sim->time < end - 1e-12 * (1 + end)) {
-    /* only between two steps: the state is whole, a checkpoint of it resumes exactly */
-    if (sim->interrupt && *sim->interrupt)
-      return mpm_error_set(&sim->error, MPM_ERR_INTERRUPTED,
-                           "interrupted at step %lld (t = %.6g s, frame %d of %d)",
-                           (long long)sim->steps, sim->time, sim->frame, sim->frame_count);
-    double remaining = end - sim->time;
-    /* after an unstable step the retry guard runs on halved steps for a while */
-    double dt = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
-    if (dt >= remaining)
-      dt = remaining;
-    else if (dt > 0.5 * remaining)
-      dt = 0.5 * remaining;
-    mpm_status st = mpm_sim_step(sim, dt);
-    if (st != MPM_OK) return st;
-  }
-  sim->time = end;
-  sim->frame++;
-  if (sim->dt_level > 0) sim->dt_level--; /* one halving is given back per calm frame */
-  if (!sim->output_enabled) return MPM_OK;
-  mpm_status st = mpm_sim_write_frame(sim);
-  const int every = sim->scene.output.checkpoint_every;
-  if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
-      sim->time < sim->scene.end_time * (1 - 1e-12))
-    st = mpm_sim_write_checkpoint(sim, NULL, 0);
-  return st;
 }

@@ -18,8 +18,7 @@
 /* Update particle i from grid channels viewed from node org with strides sx, sy.
  * Returns |v|^2, or -1 when a value is not finite. */
 ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_transfer_ctx *ctx,
-                                       mpm_particles *p, uint32_t i,
-                                       const mpm_real *const ch[MPM_GRID_CHANNELS],
+                                       mpm_particles *p, uint32_t i, const mpm_grid_values *val,
                                        const int org[3], long sx, long sy) {
   const mpm_kernel *k = &ctx->kernel;
   const int flip = !apic;
@@ -29,12 +28,15 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_tr
   mpm_kernel_stencil(k, xr, &s);
   const long off = (long)(s.base[0] - org[0]) * sx + (long)(s.base[1] - org[1]) * sy +
                    (long)(s.base[2] - org[2]);
-  const mpm_real *at[MPM_GRID_CHANNELS];
-  for (int c = 0; c < MPM_GRID_CHANNELS; ++c) at[c] = ch[c] ? ch[c] + off : NULL;
+  const mpm_real *vn[3], *vo[3];
+  for (int d = 0; d < 3; ++d) {
+    vn[d] = val->v[d] + off;
+    vo[d] = val->v0[d] ? val->v0[d] + off : NULL;
+  }
   mpm_real f[3];
   for (int d = 0; d < 3; ++d) f[d] = xr[d] * k->inv_dx - (mpm_real)s.base[d];
   mpm_g2p_gather o;
-  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, at, sx, sy, &o);
+  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, vn, vo, sx, sy, &o);
 
   const mpm_real dt = ctx->dt;
   mpm_real v[3];
@@ -148,18 +150,22 @@ static void range_return_map(const mpm_material *mat, mpm_particles *p, const ui
 }
 
 ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
-                             const mpm_sparse_grid *g, mpm_particles *p, int32_t b,
-                             mpm_real *max_v2, long *bad) {
+                             const mpm_sparse_grid *g, const mpm_grid_values *val, mpm_particles *p,
+                             int32_t b, mpm_real *max_v2, long *bad) {
   /* the 8 blocks around the owner block as an AoS pad: v_new xyz, v_old xyz per node; and the
      blocks of the next owner block are requested while this one is processed */
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
   if ((size_t)b + 1 < g->owner_count)
-    for (int o = 0; o < 8; ++o)
-      for (int c = apic ? 3 : 0; c < 6; ++c)
+    for (int o = 0; o < 8; ++o) {
+      const size_t nb = (size_t)g->neighbor[b + 1][o] * MPM_BLOCK_NODES;
+      for (int c = 0; c < (apic ? 3 : 6); ++c) {
+        const mpm_real *a = c < 3 ? val->v[c] : val->v0[c - 3];
         for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
-          __builtin_prefetch(&g->blocks[g->neighbor[b + 1][o]].ch[MPM_CH_VOLD + c][q], 0);
+          __builtin_prefetch(&a[nb + q], 0);
+      }
+    }
   for (int o = 0; o < 8; ++o) {
-    const mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
+    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
     const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
               oz = (o & 1) * MPM_BLOCK;
     /* stencils reach only W - 1 nodes into the forward blocks */
@@ -169,10 +175,10 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
         for (int k = 0; k < nk; ++k) {
           mpm_real *dst = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) *
                                MPM_PAD_STRIDE(apic)];
-          const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
+          const size_t n = nb + (size_t)((i * MPM_BLOCK + j) * MPM_BLOCK + k);
           for (int d = 0; d < 3; ++d) {
-            dst[d] = blk->ch[MPM_CH_VNEW + d][n];
-            if (!apic) dst[3 + d] = blk->ch[MPM_CH_VOLD + d][n];
+            dst[d] = val->v[d][n];
+            if (!apic) dst[3 + d] = val->v0[d][n];
           }
         }
   }
@@ -206,7 +212,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
 }
 
 mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
-                              mpm_particles *p) {
+                              const mpm_grid_values *val, mpm_particles *p) {
   const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
   const long nb = (long)g->owner_count;
   mpm_real max_v2 = 0;
@@ -219,22 +225,22 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
     for (long b = 0; b < nb; ++b) {
       switch (W * 2 + apic) {
       case 4:
-        g2p_block(2, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        g2p_block(2, 0, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
         break;
       case 5:
-        g2p_block(2, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        g2p_block(2, 1, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
         break;
       case 6:
-        g2p_block(3, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        g2p_block(3, 0, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
         break;
       case 7:
-        g2p_block(3, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        g2p_block(3, 1, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
         break;
       case 8:
-        g2p_block(4, 0, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        g2p_block(4, 0, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
         break;
       default:
-        g2p_block(4, 1, ctx, g, p, (int32_t)b, &my_v2, &my_bad);
+        g2p_block(4, 1, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
         break;
       }
     }
@@ -249,12 +255,10 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
 }
 
 mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
-                             mpm_particles *p) {
+                             const mpm_grid_values *val, mpm_particles *p) {
   const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
   const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
   const int org[3] = {0, 0, 0};
-  const mpm_real *ch[MPM_GRID_CHANNELS];
-  for (int c = 0; c < MPM_GRID_CHANNELS; ++c) ch[c] = g->ch[c];
   const long n = (long)p->count;
   mpm_real max_v2 = 0;
   long bad = -1;
@@ -267,13 +271,13 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
       mpm_real v2;
       switch (W) {
       case 2:
-        v2 = update_particle(2, apic, ctx, p, (uint32_t)i, ch, org, sx, sy);
+        v2 = update_particle(2, apic, ctx, p, (uint32_t)i, val, org, sx, sy);
         break;
       case 3:
-        v2 = update_particle(3, apic, ctx, p, (uint32_t)i, ch, org, sx, sy);
+        v2 = update_particle(3, apic, ctx, p, (uint32_t)i, val, org, sx, sy);
         break;
       default:
-        v2 = update_particle(4, apic, ctx, p, (uint32_t)i, ch, org, sx, sy);
+        v2 = update_particle(4, apic, ctx, p, (uint32_t)i, val, org, sx, sy);
         break;
       }
       if (v2 < 0) {
@@ -306,4 +310,10 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
   }
   mpm_g2p_result r = {mpm_sqrt(max_v2), bad};
   return r;
+}
+
+mpm_g2p_result mpm_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+                       mpm_particles *p) {
+  if (g->kind == MPM_GRID_SPARSE) return mpm_g2p_sparse(ctx, &g->impl.sparse, val, p);
+  return mpm_g2p_dense(ctx, &g->impl.dense, val, p);
 }

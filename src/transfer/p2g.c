@@ -35,7 +35,7 @@ ALWAYS_INLINE void chunk_stress(const mpm_material *mat, const mpm_particles *p,
 ALWAYS_INLINE void scatter_chunk(const int W, const int apic, const mpm_transfer_ctx *ctx,
                                  const mpm_particles *p, const uint32_t *idx, int n,
                                  mpm_real tau[9][MPM_STRESS_CHUNK],
-                                 mpm_real *const ch[MPM_GRID_CHANNELS], const int org[3], long sx,
+                                 mpm_real *const ch[MPM_P2G_CHANNELS], const int org[3], long sx,
                                  long sy) {
   const mpm_kernel *k = &ctx->kernel;
   for (int q = 0; q < n; ++q) {
@@ -53,8 +53,8 @@ ALWAYS_INLINE void scatter_chunk(const int W, const int apic, const mpm_transfer
     }
     const long off = (long)(s.base[0] - org[0]) * sx + (long)(s.base[1] - org[1]) * sy +
                      (long)(s.base[2] - org[2]);
-    mpm_real *at[MPM_GRID_CHANNELS];
-    for (int c = 0; c < MPM_GRID_CHANNELS; ++c) at[c] = ch[c] + off;
+    mpm_real *at[MPM_P2G_CHANNELS];
+    for (int c = 0; c < MPM_P2G_CHANNELS; ++c) at[c] = ch[c] + off;
     mpm_p2g_particle(W, &s, m, mv, apic ? mB : NULL, K, at, sx, sy);
   }
 }
@@ -130,18 +130,30 @@ ALWAYS_INLINE void batch_prepare(const int apic, const mpm_transfer_ctx *ctx,
   batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, mass, mv, mB, K);
 }
 
+/* The P2G channels (mass, momentum, force) of a level's values. */
+static void p2g_channels(const mpm_grid_values *val, mpm_real *ch[MPM_P2G_CHANNELS]) {
+  ch[MPM_P2G_MASS] = val->mass;
+  for (int d = 0; d < 3; ++d) {
+    ch[MPM_P2G_MOMENTUM + d] = val->v0[d];
+    ch[MPM_P2G_FORCE + d] = val->f[d];
+  }
+}
+
 ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
-                             mpm_sparse_grid *g, const mpm_particles *p, int32_t b) {
+                             const mpm_sparse_grid *g, mpm_real *const ch[MPM_P2G_CHANNELS],
+                             const mpm_particles *p, int32_t b) {
   /* with APIC the force is fused into the momentum: only mass and momentum are used */
-  const int used = apic ? MPM_CH_F : MPM_GRID_CHANNELS;
+  const int used = apic ? MPM_P2G_FORCE : MPM_P2G_CHANNELS;
   const int stride = MPM_PAD_STRIDE(apic);
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
   memset(pad, 0, (size_t)MPM_PAD_NODES * (size_t)stride * sizeof(mpm_real));
   /* the 8 blocks are written at the end: ask for them now */
-  for (int o = 0; o < 8; ++o)
+  for (int o = 0; o < 8; ++o) {
+    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
     for (int c = 0; c < used; ++c)
       for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
-        __builtin_prefetch(&g->blocks[g->neighbor[b][o]].ch[c][q], 1);
+        __builtin_prefetch(&ch[c][nb + q], 1);
+  }
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
@@ -169,7 +181,7 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
   }
   /* add the pad (nodes x 8 channels) to the 8 blocks it covers (channels x nodes) */
   for (int o = 0; o < 8; ++o) {
-    mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
+    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
     const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
               oz = (o & 1) * MPM_BLOCK;
     /* stencils reach W - 1 nodes into the forward blocks: the rest of the pad is zero */
@@ -180,7 +192,7 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
           const mpm_real *src =
               &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * stride];
           const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
-          for (int c = 0; c < used; ++c) blk->ch[c][n] += src[c];
+          for (int c = 0; c < used; ++c) ch[c][nb + (size_t)n] += src[c];
         }
   }
 }
@@ -188,16 +200,19 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
 /* APIC P2G of one owner block: lanes are accumulated per node over the whole block (a compact
  * (W+3)^3 region of nodes, the base cells plus the stencil reach) and summed once at the end. */
 #define LANE_PAD_SIDE_MAX (MPM_BLOCK + MPM_STENCIL_MAX - 1)
-ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_sparse_grid *g,
+ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx,
+                                  const mpm_sparse_grid *g, mpm_real *const ch[MPM_P2G_CHANNELS],
                                   const mpm_particles *p, int32_t b) {
   const int S = MPM_BLOCK + W - 1;
   mpm_vl acc[LANE_PAD_SIDE_MAX * LANE_PAD_SIDE_MAX * LANE_PAD_SIDE_MAX][4]
       __attribute__((aligned(MPM_ALIGN)));
   memset(acc, 0, (size_t)(S * S * S) * sizeof acc[0]);
-  for (int o = 0; o < 8; ++o)
-    for (int c = 0; c < MPM_CH_F; ++c)
+  for (int o = 0; o < 8; ++o) {
+    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
+    for (int c = 0; c < MPM_P2G_FORCE; ++c)
       for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
-        __builtin_prefetch(&g->blocks[g->neighbor[b][o]].ch[c][q], 1);
+        __builtin_prefetch(&ch[c][nb + q], 1);
+  }
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const int nm = g->material_count;
@@ -229,14 +244,17 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx, mpm_
       for (int k = 0; k < S; ++k) {
         const mpm_vl sum = mpm_vl_sum4(acc[(i * S + j) * S + k]);
         const int o = (i >= MPM_BLOCK) << 2 | (j >= MPM_BLOCK) << 1 | (k >= MPM_BLOCK);
-        mpm_grid_block *blk = &g->blocks[g->neighbor[b][o]];
-        const int n = ((i & 3) * MPM_BLOCK + (j & 3)) * MPM_BLOCK + (k & 3);
-        for (int c = 0; c < MPM_CH_F; ++c) blk->ch[c][n] += sum[c];
+        const size_t n = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES +
+                         (size_t)(((i & 3) * MPM_BLOCK + (j & 3)) * MPM_BLOCK + (k & 3));
+        for (int c = 0; c < MPM_P2G_FORCE; ++c) ch[c][n] += sum[c];
       }
 }
 
-void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, mpm_sparse_grid *g, const mpm_particles *p) {
+void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                    const mpm_grid_values *val, const mpm_particles *p) {
   const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  mpm_real *ch[MPM_P2G_CHANNELS];
+  p2g_channels(val, ch);
   for (int color = 0; color < 8; ++color) {
     const long begin = (long)g->color_start[color], end = (long)g->color_start[color + 1];
 #pragma omp parallel for schedule(dynamic, 4)
@@ -244,30 +262,33 @@ void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, mpm_sparse_grid *g, const mpm_p
       const int32_t b = g->color_blocks[q];
       switch (W * 2 + apic) {
       case 4:
-        p2g_block(2, 0, ctx, g, p, b);
+        p2g_block(2, 0, ctx, g, ch, p, b);
         break;
       case 5:
-        p2g_block_apic(2, ctx, g, p, b);
+        p2g_block_apic(2, ctx, g, ch, p, b);
         break;
       case 6:
-        p2g_block(3, 0, ctx, g, p, b);
+        p2g_block(3, 0, ctx, g, ch, p, b);
         break;
       case 7:
-        p2g_block_apic(3, ctx, g, p, b);
+        p2g_block_apic(3, ctx, g, ch, p, b);
         break;
       case 8:
-        p2g_block(4, 0, ctx, g, p, b);
+        p2g_block(4, 0, ctx, g, ch, p, b);
         break;
       default:
-        p2g_block_apic(4, ctx, g, p, b);
+        p2g_block_apic(4, ctx, g, ch, p, b);
         break;
       }
     }
   }
 }
 
-void mpm_p2g_dense(const mpm_transfer_ctx *ctx, mpm_dense_grid *g, const mpm_particles *p) {
+void mpm_p2g_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g, const mpm_grid_values *val,
+                   const mpm_particles *p) {
   const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  mpm_real *ch[MPM_P2G_CHANNELS];
+  p2g_channels(val, ch);
   const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
   const int org[3] = {0, 0, 0};
   mpm_real tau[9][MPM_STRESS_CHUNK];
@@ -284,15 +305,27 @@ void mpm_p2g_dense(const mpm_transfer_ctx *ctx, mpm_dense_grid *g, const mpm_par
     chunk_stress(&ctx->materials[m], p, idx, n, tau);
     switch (W) {
     case 2:
-      scatter_chunk(2, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy);
+      scatter_chunk(2, apic, ctx, p, idx, n, tau, ch, org, sx, sy);
       break;
     case 3:
-      scatter_chunk(3, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy);
+      scatter_chunk(3, apic, ctx, p, idx, n, tau, ch, org, sx, sy);
       break;
     default:
-      scatter_chunk(4, apic, ctx, p, idx, n, tau, g->ch, org, sx, sy);
+      scatter_chunk(4, apic, ctx, p, idx, n, tau, ch, org, sx, sy);
       break;
     }
     i += (size_t)n;
   }
+}
+
+int mpm_p2g_fuses_force(const mpm_transfer_ctx *ctx, const mpm_grid *g) {
+  return g->kind == MPM_GRID_SPARSE && ctx->transfer == MPM_TRANSFER_APIC;
+}
+
+void mpm_p2g(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+             const mpm_particles *p) {
+  if (g->kind == MPM_GRID_SPARSE)
+    mpm_p2g_sparse(ctx, &g->impl.sparse, val, p);
+  else
+    mpm_p2g_dense(ctx, &g->impl.dense, val, p);
 }

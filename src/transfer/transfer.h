@@ -9,11 +9,10 @@
 #ifndef MPM_TRANSFER_TRANSFER_H
 #define MPM_TRANSFER_TRANSFER_H
 
-#include "grid/dense_grid.h"
-#include "grid/sparse_grid.h"
+#include "core/particles.h"
+#include "grid/grid.h"
 #include "interp/kernel.h"
 #include "material/material.h"
-#include "solver/particles.h"
 
 typedef struct mpm_transfer_ctx {
   mpm_kernel kernel;
@@ -24,6 +23,8 @@ typedef struct mpm_transfer_ctx {
   const mpm_material *materials;
   int material_count;
   mpm_real clamp_lo[3], clamp_hi[3]; /* particles are kept inside this box, m */
+  /* P2G on the sparse grid with APIC folds dt f into the momentum (Gao sec. 6.2's fused
+   * kernel); the force is then not accumulated (mpm_p2g_output in solver/explicit_update.h) */
 } mpm_transfer_ctx;
 
 /* What G2P reports back for the next step and for blow-up detection. */
@@ -32,14 +33,25 @@ typedef struct mpm_g2p_result {
   long bad_particle;  /* index of a particle with a non-finite value, or -1 */
 } mpm_g2p_result;
 
-/* Sparse grid: particles visited in the order g->perm computed by mpm_sparse_grid_sort. */
-void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, mpm_sparse_grid *g, const mpm_particles *p);
-mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
-                              mpm_particles *p);
+/* P2G adds the particles' mass, momentum and (unless fused) force to the level's values
+ * (mass, v0, f of mpm_grid_values); G2P reads v (and v0 for FLIP) and updates the particles.
+ * Both dispatch on the grid's variant. The sparse versions visit particles in the order
+ * g->perm of the last activation; the dense reference is serial in particle order for P2G. */
+void mpm_p2g(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+             const mpm_particles *p);
+mpm_g2p_result mpm_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+                       mpm_particles *p);
 
-/* Dense reference grid: serial P2G in particle order. */
-void mpm_p2g_dense(const mpm_transfer_ctx *ctx, mpm_dense_grid *g, const mpm_particles *p);
+/* 1 when P2G on grid g with ctx folds the force into the momentum (sparse grid, APIC). */
+int mpm_p2g_fuses_force(const mpm_transfer_ctx *ctx, const mpm_grid *g);
+
+void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                    const mpm_grid_values *val, const mpm_particles *p);
+mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                              const mpm_grid_values *val, mpm_particles *p);
+void mpm_p2g_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g, const mpm_grid_values *val,
+                   const mpm_particles *p);
 mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
-                             mpm_particles *p);
+                             const mpm_grid_values *val, mpm_particles *p);
 
 #endif

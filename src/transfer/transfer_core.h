@@ -5,15 +5,19 @@
 #ifndef MPM_TRANSFER_TRANSFER_CORE_H
 #define MPM_TRANSFER_TRANSFER_CORE_H
 
-#include "grid/grid.h"
+#include "grid/block.h"
 #include "interp/kernel.h"
+
+/* The seven quantities P2G accumulates per node, as channel arrays: mass, momentum (the DOF
+ * set's v0 field) and force. */
+enum { MPM_P2G_MASS = 0, MPM_P2G_MOMENTUM = 1, MPM_P2G_FORCE = 4, MPM_P2G_CHANNELS = 7 };
 
 /* One particle's contribution: mass, momentum m v w + (m B) D^{-1} (x_i - x_p) w (APIC, the
  * D^{-1}(x_i - x_p) w factor is the stencil's `a` vector), and force K grad w with
  * K = -V0 tau. mB = m B (row-major) or NULL for PIC/FLIP. */
 MPM_ALWAYS_INLINE void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_real m,
                                         const mpm_real mv[3], const mpm_real *mB,
-                                        const mpm_real K[9], mpm_real *const ch[MPM_GRID_CHANNELS],
+                                        const mpm_real K[9], mpm_real *const ch[MPM_P2G_CHANNELS],
                                         long sx, long sy) {
   for (int i = 0; i < W; ++i)
     for (int j = 0; j < W; ++j) {
@@ -33,13 +37,13 @@ MPM_ALWAYS_INLINE void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_r
           qz += mB[6] * ax + mB[7] * ay + mB[8] * az;
         }
         const long n = off + k;
-        ch[MPM_CH_MASS][n] += w * m;
-        ch[MPM_CH_MV + 0][n] += qx;
-        ch[MPM_CH_MV + 1][n] += qy;
-        ch[MPM_CH_MV + 2][n] += qz;
-        ch[MPM_CH_F + 0][n] += K[0] * gx + K[1] * gy + K[2] * gz;
-        ch[MPM_CH_F + 1][n] += K[3] * gx + K[4] * gy + K[5] * gz;
-        ch[MPM_CH_F + 2][n] += K[6] * gx + K[7] * gy + K[8] * gz;
+        ch[MPM_P2G_MASS][n] += w * m;
+        ch[MPM_P2G_MOMENTUM + 0][n] += qx;
+        ch[MPM_P2G_MOMENTUM + 1][n] += qy;
+        ch[MPM_P2G_MOMENTUM + 2][n] += qz;
+        ch[MPM_P2G_FORCE + 0][n] += K[0] * gx + K[1] * gy + K[2] * gz;
+        ch[MPM_P2G_FORCE + 1][n] += K[3] * gx + K[4] * gy + K[5] * gz;
+        ch[MPM_P2G_FORCE + 2][n] += K[6] * gx + K[7] * gy + K[8] * gz;
       }
     }
 }
@@ -52,11 +56,13 @@ typedef struct mpm_g2p_gather {
   mpm_real B[9];    /* APIC: B_p = sum w v^{n+1} (x_i - x_p)^T */
 } mpm_g2p_gather;
 
-/* f = distance of the particle from its base node in cells; dx the cell size. */
+/* f = distance of the particle from its base node in cells; dx the cell size. vn: the new
+ * velocity v^{n+1} per axis, vo: the old one v^n (read for FLIP only), both offset to the base
+ * node. */
 MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
                                         mpm_real dx, int flip, int apic,
-                                        const mpm_real *const ch[MPM_GRID_CHANNELS], long sx,
-                                        long sy, mpm_g2p_gather *o) {
+                                        const mpm_real *const vn[3], const mpm_real *const vo[3],
+                                        long sx, long sy, mpm_g2p_gather *o) {
   mpm_real v0 = 0, v1 = 0, v2 = 0, d0 = 0, d1 = 0, d2 = 0;
   mpm_real G[9] = {0}, B[9] = {0};
   for (int i = 0; i < W; ++i)
@@ -69,15 +75,14 @@ MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const
         const long n = off + k;
         const mpm_real wz = s->w[2][k];
         const mpm_real w = wij * wz;
-        const mpm_real ux = ch[MPM_CH_VNEW][n], uy = ch[MPM_CH_VNEW + 1][n],
-                       uz = ch[MPM_CH_VNEW + 2][n];
+        const mpm_real ux = vn[0][n], uy = vn[1][n], uz = vn[2][n];
         v0 += w * ux;
         v1 += w * uy;
         v2 += w * uz;
         if (flip) {
-          d0 += w * (ux - ch[MPM_CH_VOLD][n]);
-          d1 += w * (uy - ch[MPM_CH_VOLD + 1][n]);
-          d2 += w * (uz - ch[MPM_CH_VOLD + 2][n]);
+          d0 += w * (ux - vo[0][n]);
+          d1 += w * (uy - vo[1][n]);
+          d2 += w * (uz - vo[2][n]);
         }
         const mpm_real gx = gx_ij * wz, gy = gy_ij * wz, gz = wij * s->dw[2][k];
         G[0] += ux * gx;

@@ -18,7 +18,7 @@
 
 #include "core/lanes.h"
 #include "transfer/transfer_core.h"
-#include "solver/particles.h"
+#include "core/particles.h"
 
 #include <stdint.h>
 

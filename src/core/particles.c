@@ -1,5 +1,5 @@
 /* particles.c - structure-of-arrays storage of material points (see particles.h). */
-#include "solver/particles.h"
+#include "core/particles.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
 

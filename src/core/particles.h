@@ -3,8 +3,8 @@
  * Every component is its own aligned array so that kernels stream and vectorize across
  * particles. The order of particles changes every step (they are sorted into grid blocks);
  * `id` is the stable identity written to outputs. */
-#ifndef MPM_SOLVER_PARTICLES_H
-#define MPM_SOLVER_PARTICLES_H
+#ifndef MPM_CORE_PARTICLES_H
+#define MPM_CORE_PARTICLES_H
 
 #include "core/real.h"
 

@@ -1,0 +1,69 @@
+/* frame.c - the frame loop: steps of the guarded step until the frame's time, the work that
+ * runs between steps, and the frame's outputs.
+ *
+ * Between steps (between_steps below) is where the state may change shape: domains switched off
+ * today, and with later issues enrichment marks (Zhu sec. 5), refinement and particle split and
+ * merge (Gao sec. 7). These stages run before the guarded step (guard.c) saves its state for a
+ * retry, so a retry never undoes them and never repeats them. */
+#include "solver/sim.h"
+
+#include <math.h>
+
+typedef struct between_stage {
+  const char *name;
+  mpm_status (*run)(mpm_sim *sim);
+} between_stage;
+
+static const between_stage between_steps[] = {
+    {"domain releases", mpm_sim_apply_domain_releases},
+};
+
+mpm_status mpm_sim_between_steps(mpm_sim *sim) {
+  for (size_t k = 0; k < sizeof between_steps / sizeof between_steps[0]; ++k) {
+    const mpm_status st = between_steps[k].run(sim);
+    if (st != MPM_OK) return st;
+  }
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
+  const mpm_status st = mpm_sim_between_steps(sim);
+  if (st != MPM_OK) return st;
+  return mpm_sim_guarded_step(sim, max_dt);
+}
+
+mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
+  if (sim->frame >= sim->frame_count)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "the simulation already reached its end time");
+  sim->frame_wall_start = mpm_wall_seconds();
+  double end = (sim->frame + 1) * sim->frame_dt;
+  if (end > sim->scene.end_time) end = sim->scene.end_time;
+  /* steps land exactly on the frame time; a tiny remainder is merged into the last step */
+  while (sim->time < end - 1e-12 * (1 + end)) {
+    /* only between two steps: the state is whole, a checkpoint of it resumes exactly */
+    if (sim->interrupt && *sim->interrupt)
+      return mpm_error_set(&sim->error, MPM_ERR_INTERRUPTED,
+                           "interrupted at step %lld (t = %.6g s, frame %d of %d)",
+                           (long long)sim->steps, sim->time, sim->frame, sim->frame_count);
+    double remaining = end - sim->time;
+    /* after an unstable step the retry guard runs on halved steps for a while */
+    double dt = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
+    if (dt >= remaining)
+      dt = remaining;
+    else if (dt > 0.5 * remaining)
+      dt = 0.5 * remaining;
+    mpm_status st = mpm_sim_step(sim, dt);
+    if (st != MPM_OK) return st;
+  }
+  sim->time = end;
+  sim->frame++;
+  if (sim->dt_level > 0) sim->dt_level--; /* one halving is given back per calm frame */
+  if (!sim->output_enabled) return MPM_OK;
+  mpm_status st = mpm_sim_write_frame(sim);
+  const int every = sim->scene.output.checkpoint_every;
+  if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
+      sim->time < sim->scene.end_time * (1 - 1e-12))
+    st = mpm_sim_write_checkpoint(sim, NULL, 0);
+  return st;
+}

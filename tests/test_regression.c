@@ -1,0 +1,240 @@
+/* test_regression.c - the explicit path's results stay bitwise what they were.
+ *
+ * A refactor of the step (the DOF set, the grid interface, the embedding operator, the stages)
+ * must change no result. This test runs a few example scenes (and two inline ones for the
+ * dense grid and for domain releases) for a few frames and compares a digest of the whole
+ * simulation state - every particle array in id order, the domain particles and their corners,
+ * the time and the step count - with the digests in tests/regression/state_<real>.txt, which
+ * were written by this same test against main before the refactor (commit 8b62097).
+ *
+ * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
+ * Regenerate the files only for an intended change of results, and say so in the commit:
+ *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression
+ * (and the same from build-double for state_double.txt). The digests are of IEEE bits: they
+ * hold for any thread count (the engine is deterministic) and any optimization level (the
+ * build is ISO C: no FMA contraction), on the x86-64 machines this project runs on. */
+#include "support.h"
+#include "core/hash.h"
+#include "solver/sim.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define STATE_QUANTITIES 9
+static const char *const quantity_name[STATE_QUANTITIES] = {
+    "clock", "x", "v", "F", "B", "plastic", "mass_vol0", "labels", "corners"};
+
+typedef struct state_digest {
+  uint64_t h[STATE_QUANTITIES];
+} state_digest;
+
+/* Digest of count values of `size` bytes gathered in the order `order` (NULL: natural). */
+static uint64_t digest_gather(uint64_t h, const void *data, size_t size, size_t count,
+                              const size_t *order) {
+  unsigned char buf[8];
+  const unsigned char *b = data;
+  for (size_t k = 0; k < count; ++k) {
+    const size_t i = order ? order[k] : k;
+    memcpy(buf, b + i * size, size);
+    h = mpm_hash64_words(buf, size, h);
+  }
+  return h;
+}
+
+static void digest_particles(const mpm_particles *p, const size_t *order, state_digest *s) {
+  const size_t n = p->count, r = sizeof(mpm_real);
+  for (int d = 0; d < 3; ++d) {
+    s->h[1] = digest_gather(s->h[1], p->x[d], r, n, order);
+    s->h[2] = digest_gather(s->h[2], p->v[d], r, n, order);
+  }
+  for (int c = 0; c < 9; ++c) {
+    s->h[3] = digest_gather(s->h[3], p->F[c], r, n, order);
+    s->h[4] = digest_gather(s->h[4], p->B[c], r, n, order);
+  }
+  s->h[5] = digest_gather(s->h[5], p->plastic, r, n, order);
+  s->h[6] = digest_gather(s->h[6], p->mass, r, n, order);
+  s->h[6] = digest_gather(s->h[6], p->vol0, r, n, order);
+  s->h[7] = digest_gather(s->h[7], p->material, sizeof(int32_t), n, order);
+  s->h[7] = digest_gather(s->h[7], p->body, sizeof(int32_t), n, order);
+  s->h[7] = digest_gather(s->h[7], p->id, sizeof(uint32_t), n, order);
+}
+
+static state_digest digest_sim(const mpm_sim *sim) {
+  state_digest s;
+  for (int q = 0; q < STATE_QUANTITIES; ++q) s.h[q] = 0x5eed0000u + (uint64_t)q;
+  const int64_t steps = sim->steps;
+  const double t = sim->time;
+  s.h[0] = mpm_hash64_words(&steps, sizeof steps, s.h[0]);
+  s.h[0] = mpm_hash64_words(&t, sizeof t, s.h[0]);
+  s.h[0] = mpm_hash64_words(&sim->last_dt, sizeof sim->last_dt, s.h[0]);
+  /* standard particles in id order: their memory order is an implementation detail */
+  const mpm_particles *p = &sim->particles;
+  size_t *order = malloc((p->count + 1) * sizeof *order);
+  uint32_t max_id = 0;
+  for (size_t i = 0; i < p->count; ++i)
+    if (p->id[i] > max_id) max_id = p->id[i];
+  size_t *slot = malloc(((size_t)max_id + 2) * sizeof *slot);
+  for (size_t i = 0; i <= max_id; ++i) slot[i] = SIZE_MAX;
+  for (size_t i = 0; i < p->count; ++i) slot[p->id[i]] = i;
+  size_t k = 0;
+  for (size_t i = 0; i <= max_id; ++i)
+    if (slot[i] != SIZE_MAX) order[k++] = slot[i];
+  assert_int_equal(k, p->count);
+  digest_particles(p, order, &s);
+  free(slot);
+  free(order);
+  /* domain particles are never reordered; their corners neither */
+  const mpm_domain_set *ds = &sim->domains;
+  digest_particles(&ds->particles, NULL, &s);
+  s.h[7] = digest_gather(s.h[7], ds->active, 1, ds->particles.count, NULL);
+  for (int d = 0; d < 3; ++d) {
+    s.h[8] = digest_gather(s.h[8], ds->cx[d], sizeof(mpm_real), ds->corner_count, NULL);
+    s.h[8] = digest_gather(s.h[8], ds->cv[d], sizeof(mpm_real), ds->corner_count, NULL);
+  }
+  return s;
+}
+
+/* A small dense-grid scene: cubic B-spline, FLIP, two materials, a sphere collider. */
+static const char dense_scene[] =
+    "{\"domain\": {\"min\": [0,0,0], \"max\": [0.6,0.6,0.6], \"dx\": 0.03},"
+    " \"time\": {\"end\": 1, \"fps\": 24},"
+    " \"solver\": {\"kernel\": \"cubic\", \"transfer\": \"flip\", \"flip_alpha\": 0.9,"
+    "              \"grid\": \"dense\", \"cfl\": 0.4},"
+    " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 3e4, \"nu\": 0.3,"
+    "                  \"density\": 1000},"
+    "                 {\"name\": \"s\", \"model\": \"drucker_prager\", \"E\": 2e5, \"nu\": 0.3,"
+    "                  \"density\": 1500, \"friction_angle\": 30}],"
+    " \"colliders\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.12,0.3], \"radius\": "
+    "0.08}, \"rule\": \"slip\"}],"
+    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.3,0.35,0.3], \"half_extent\": "
+    "[0.08,0.05,0.08]}, \"material\": \"j\", \"velocity\": [0.5,-1,0]},"
+    "              {\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.44,0.3], \"radius\": "
+    "0.05}, \"material\": \"s\"}]}";
+
+/* Domains switched off by a release box half-way: released particles continue as material
+ * points under FLIP with the quadratic corner kernel. */
+static const char release_scene[] =
+    "{\"domain\": {\"min\": [0,0,0], \"max\": [0.5,0.5,0.5], \"dx\": 0.025},"
+    " \"time\": {\"end\": 1, \"fps\": 24},"
+    " \"solver\": {\"kernel\": \"quadratic\", \"transfer\": \"flip\", \"flip_alpha\": 0.95,"
+    "              \"domain_kernel\": \"quadratic\", \"cfl\": 0.4},"
+    " \"materials\": [{\"name\": \"r\", \"model\": \"neo_hookean\", \"E\": 5e4, \"nu\": 0.3,"
+    "                  \"density\": 1000, \"min_stretch\": 0.1}],"
+    " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0,0.1,0], \"normal\": "
+    "[0,1,0]}, \"rule\": \"sticky\"}],"
+    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.25,0.2,0.25], \"half_extent\": "
+    "[0.1,0.05,0.05]}, \"material\": \"r\", \"jitter\": 0, \"domains\": true,"
+    "              \"velocity\": [0,-1,0],"
+    "              \"domain_release\": [{\"time\": 0.04, \"min\": [0.25,0,0], \"max\": "
+    "[1,1,1]}]}]}";
+
+typedef struct regression_case {
+  const char *name; /* as in the digest file */
+  const char *path; /* an example scene, or NULL for json */
+  const char *json; /* an inline scene */
+  int frames;
+} regression_case;
+
+static const regression_case cases[] = {
+    {"jello_cubes", "examples/jello_cubes.json", NULL, 3},
+    {"bunny_drop", "examples/bunny_drop.json", NULL, 2},
+    {"sand_pile", "examples/sand_pile.json", NULL, 2},
+    {"snowball", "examples/snowball.json", NULL, 1},
+    {"goo_slits", "examples/goo_slits.json", NULL, 1},
+    {"block_on_cylinder", "examples/block_on_cylinder.json", NULL, 3},
+    {"bar_stretch", "examples/bar_stretch.json", NULL, 4},
+    {"ball_bunny", "examples/ball_bunny.json", NULL, 2},
+    {"tunnel_squeeze", "examples/tunnel_squeeze.json", NULL, 6},
+    {"dense_flip_cubic", NULL, dense_scene, 3},
+    {"domain_release", NULL, release_scene, 3},
+};
+#define CASE_COUNT (sizeof cases / sizeof cases[0])
+
+static mpm_sim *make_sim(const regression_case *c) {
+  mpm_sim *sim = NULL;
+  char err[1024];
+  if (c->path) {
+    if (mpm_sim_create_from_file(c->path, &sim, err, sizeof err) != MPM_OK)
+      fail_msg("%s: %s", c->name, err);
+    return sim;
+  }
+  mpm_scene scene;
+  mpm_error e;
+  mpm_error_clear(&e);
+  if (mpm_scene_parse(c->json, c->name, &scene, &e) != MPM_OK)
+    fail_msg("%s: %s", c->name, e.message);
+  if (mpm_sim_create_from_scene(&scene, &sim, &e) != MPM_OK) fail_msg("%s: %s", c->name, e.message);
+  mpm_scene_free(&scene);
+  return sim;
+}
+
+static state_digest run_case(const regression_case *c) {
+  mpm_sim *sim = make_sim(c);
+  for (int f = 0; f < c->frames; ++f)
+    if (mpm_sim_advance_frame(sim) != MPM_OK)
+      fail_msg("%s frame %d: %s", c->name, f + 1, mpm_sim_last_error(sim));
+  state_digest s = digest_sim(sim);
+  mpm_sim_destroy(sim);
+  return s;
+}
+
+static const char *digest_file(void) {
+  return "tests/regression/state_" MPM_REAL_NAME ".txt";
+}
+
+/* Find "name quantity hex" in the digest file. Returns 1 and the digest, or 0. */
+static int lookup(const char *name, const char *quantity, uint64_t *out) {
+  FILE *f = fopen(digest_file(), "r");
+  if (!f) fail_msg("cannot open %s", digest_file());
+  char line[256], n[128], q[64];
+  unsigned long long h;
+  int found = 0;
+  while (fgets(line, sizeof line, f))
+    if (line[0] != '#' && sscanf(line, "%127s %63s %llx", n, q, &h) == 3 && !strcmp(n, name) &&
+        !strcmp(q, quantity)) {
+      *out = (uint64_t)h;
+      found = 1;
+    }
+  fclose(f);
+  return found;
+}
+
+static void test_state_unchanged(void **state) {
+  (void)state;
+  const char *write = getenv("MPM_REGRESSION_WRITE");
+  FILE *out = NULL;
+  if (write && *write) {
+    out = fopen(write, "w");
+    if (!out) fail_msg("cannot write %s", write);
+    fprintf(out, "# test_regression digests (%s build): scene quantity digest\n", MPM_REAL_NAME);
+  }
+  int mismatches = 0;
+  for (size_t i = 0; i < CASE_COUNT; ++i) {
+    const state_digest s = run_case(&cases[i]);
+    for (int q = 0; q < STATE_QUANTITIES; ++q) {
+      if (out) {
+        fprintf(out, "%s %s %016llx\n", cases[i].name, quantity_name[q],
+                (unsigned long long)s.h[q]);
+        continue;
+      }
+      uint64_t want = 0;
+      if (!lookup(cases[i].name, quantity_name[q], &want))
+        fail_msg("%s: no digest for %s %s", digest_file(), cases[i].name, quantity_name[q]);
+      if (want != s.h[q]) {
+        print_error("%s after %d frames: %s differs from the digest of main before the refactor "
+                    "(%016llx, expected %016llx)\n",
+                    cases[i].name, cases[i].frames, quantity_name[q], (unsigned long long)s.h[q],
+                    (unsigned long long)want);
+        ++mismatches;
+      }
+    }
+  }
+  if (out) fclose(out);
+  assert_int_equal(mismatches, 0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {cmocka_unit_test(test_state_unchanged)};
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
