@@ -359,7 +359,7 @@ static void run_conservation(mpm_kernel_kind kind) {
   assert_int_equal(mpm_dofs_end_layout(&dofs, MPM_DOF_ALL), 0);
   mpm_dofs_clear(&dofs, MPM_DOF_ALL);
   const mpm_grid_values val = mpm_dofs_grid_values(&dofs, &grid);
-  mpm_domain_p2g(&ctx, &s, &grid.impl.sparse, &val);
+  mpm_domain_p2g(&ctx, &s, &grid.impl.sparse, grid.dof_begin, &val);
 
   double m_p = 0, P_p[3] = {0, 0, 0};
   for (size_t q = 0; q < s.particles.count; ++q) {

@@ -28,21 +28,19 @@ static void corner_arrays(mpm_domain_set *s, mpm_real **out[19]) {
 
 void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_particles_free(&s->particles);
-  free(s->corner);
-  free(s->w);
-  free(s->g);
-  free(s->active);
+  mpm_free(s->corner);
+  mpm_free(s->w);
+  mpm_free(s->g);
+  mpm_free(s->active);
   mpm_real **a[CORNER_REAL_ARRAYS];
   corner_arrays(s, a);
   for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) mpm_free(*a[k]);
-  free(s->adj_start);
-  free(s->adj);
-  free(s->cblock);
-  free(s->cbase);
-  free(s->vP);
-  free(s->group_corner);
-  free(s->group_start);
-  free(s->block_group);
+  mpm_free(s->adj_start);
+  mpm_free(s->adj);
+  mpm_free(s->vP);
+  mpm_free(s->schedule_key);
+  mpm_free(s->block_colour);
+  mpm_embedding_free(&s->corner_grid);
   memset(s, 0, sizeof *s);
 }
 
@@ -96,14 +94,11 @@ int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORN
 
 /* ---- building from a lattice ---------------------------------------------------------- */
 
-static int grow(void **ptr, size_t old_n, size_t new_n, size_t elem, int aligned) {
-  void *q = aligned ? mpm_alloc(new_n * elem) : malloc(new_n * elem);
+static int grow(void **ptr, size_t old_n, size_t new_n, size_t elem) {
+  void *q = mpm_alloc(new_n * elem);
   if (!q) return -1;
   if (*ptr && old_n) memcpy(q, *ptr, old_n * elem);
-  if (aligned)
-    mpm_free(*ptr);
-  else
-    free(*ptr);
+  mpm_free(*ptr);
   *ptr = q;
   return 0;
 }
@@ -115,10 +110,7 @@ static int reserve_corners(mpm_domain_set *s, size_t need) {
   mpm_real **a[CORNER_REAL_ARRAYS];
   corner_arrays(s, a);
   for (int k = 0; k < CORNER_REAL_ARRAYS; ++k)
-    if (grow((void **)a[k], s->corner_count, cap, sizeof(mpm_real), 1)) return -1;
-  if (grow((void **)&s->cblock, 0, cap, sizeof *s->cblock, 0) ||
-      grow((void **)&s->cbase, 0, cap, sizeof *s->cbase, 0))
-    return -1;
+    if (grow((void **)a[k], s->corner_count, cap, sizeof(mpm_real))) return -1;
   s->corner_capacity = cap;
   return 0;
 }
@@ -130,10 +122,9 @@ static int reserve_particles(mpm_domain_set *s, size_t need) {
   while (cap < need) cap *= 2;
   if (mpm_particles_reserve(&s->particles, cap)) return -1;
   const size_t n = s->particles.count;
-  if (grow((void **)&s->corner, n, cap, sizeof *s->corner, 0) ||
-      grow((void **)&s->w, n, cap, sizeof *s->w, 0) ||
-      grow((void **)&s->g, n, cap, sizeof *s->g, 0) ||
-      grow((void **)&s->active, n, cap, sizeof *s->active, 0))
+  if (grow((void **)&s->corner, n, cap, sizeof *s->corner) ||
+      grow((void **)&s->w, n, cap, sizeof *s->w) || grow((void **)&s->g, n, cap, sizeof *s->g) ||
+      grow((void **)&s->active, n, cap, sizeof *s->active))
     return -1;
   return 0;
 }
@@ -149,23 +140,23 @@ int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
 
 /* Rebuild the corner -> particle-slot adjacency (CSR) over the active particles. */
 static int build_adjacency(mpm_domain_set *s) {
-  free(s->adj_start);
-  free(s->adj);
-  s->adj_start = calloc(s->corner_count + 1, sizeof *s->adj_start);
-  s->adj = malloc((s->particles.count * MPM_HEX_CORNERS + 1) * sizeof *s->adj);
+  mpm_free(s->adj_start);
+  mpm_free(s->adj);
+  s->adj_start = mpm_calloc(s->corner_count + 1, sizeof *s->adj_start);
+  s->adj = mpm_alloc((s->particles.count * MPM_HEX_CORNERS + 1) * sizeof *s->adj);
   if (!s->adj_start || !s->adj) return -1;
   for (size_t p = 0; p < s->particles.count; ++p)
     if (s->active[p])
       for (int a = 0; a < MPM_HEX_CORNERS; ++a) s->adj_start[s->corner[p][a] + 1]++;
   for (size_t c = 0; c < s->corner_count; ++c) s->adj_start[c + 1] += s->adj_start[c];
-  uint32_t *fill = malloc((s->corner_count + 1) * sizeof *fill);
+  uint32_t *fill = mpm_alloc((s->corner_count + 1) * sizeof *fill);
   if (!fill) return -1;
   memcpy(fill, s->adj_start, (s->corner_count + 1) * sizeof *fill);
   for (size_t p = 0; p < s->particles.count; ++p)
     if (s->active[p])
       for (int a = 0; a < MPM_HEX_CORNERS; ++a)
         s->adj[fill[s->corner[p][a]]++] = (uint32_t)(p * MPM_HEX_CORNERS + (size_t)a);
-  free(fill);
+  mpm_free(fill);
   return 0;
 }
 

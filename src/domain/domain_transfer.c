@@ -1,111 +1,132 @@
 /* domain_transfer.c - two-step particle -> corner -> grid transfers and back (see
  * domain_transfer.h). */
 #include "domain/domain_transfer.h"
+#include "core/alloc.h"
 #include "core/mat3.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
+
+/* Corner c takes part in the step: an active particle uses it. */
+static inline int corner_used(const mpm_domain_set *s, size_t c) {
+  return s->adj_start[c] != s->adj_start[c + 1];
+}
+
+/* The 8 blocks around base block bb (the pad its stencils reach), through a cache of the last
+ * base block: corners come in lattice order, so neighbours mostly share their base block.
+ * With `activate` (g itself, serial use) missing blocks are activated, else only found. -1 when
+ * one is missing or out of memory. */
+static int pad_blocks(const mpm_sparse_grid *g, mpm_sparse_grid *activate, const int32_t bb[3],
+                      int32_t last[3], int32_t blocks[8]) {
+  if (bb[0] == last[0] && bb[1] == last[1] && bb[2] == last[2]) return 0;
+  for (int o = 0; o < 8; ++o) {
+    const int32_t bc[3] = {bb[0] + ((o >> 2) & 1), bb[1] + ((o >> 1) & 1), bb[2] + (o & 1)};
+    blocks[o] = activate ? mpm_sparse_grid_touch(activate, bc) : mpm_sparse_grid_find(g, bc);
+    if (blocks[o] < 0) return -1;
+  }
+  for (int d = 0; d < 3; ++d) last[d] = bb[d];
+  return 0;
+}
 
 int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
                         const mpm_real origin[3]) {
-  /* corners come in lattice order: neighbours mostly share their base block, whose 8 block
-   * indices are then reused instead of looked up again */
-  int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
-  int32_t last_blocks[8] = {0};
+  int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN}, blocks[8];
   for (size_t c = 0; c < s->corner_count; ++c) {
-    if (s->adj_start[c] == s->adj_start[c + 1]) continue; /* no active particle uses it */
+    if (!corner_used(s, c)) continue;
     const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
                             s->cx[2][c] - origin[2]};
     mpm_stencil st;
     mpm_kernel_stencil(k, xr, &st);
-    int32_t *blocks = s->cblock[c];
-    for (int d = 0; d < 3; ++d) s->cbase[c][d] = st.base[d];
     const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
                            st.base[2] >> MPM_BLOCK_BITS};
-    if (bb[0] == last[0] && bb[1] == last[1] && bb[2] == last[2]) {
-      memcpy(blocks, last_blocks, sizeof last_blocks);
-      continue;
-    }
-    for (int o = 0; o < 8; ++o) {
-      const int32_t bc[3] = {bb[0] + ((o >> 2) & 1), bb[1] + ((o >> 1) & 1), bb[2] + (o & 1)};
-      blocks[o] = mpm_sparse_grid_touch(g, bc);
-      if (blocks[o] < 0) return -1;
-    }
-    memcpy(last, bb, sizeof last);
-    memcpy(last_blocks, blocks, sizeof last_blocks);
+    if (pad_blocks(g, g, bb, last, blocks)) return -1;
   }
   return 0;
 }
 
-/* The level's node index of node base + (i, j, k) of a corner's stencil. */
-static inline size_t node_at(const int32_t cblock[8], const int32_t base[3], int i, int j, int k) {
+/* The level's node index of node base + (i, j, k) of a stencil whose base block's pad is
+ * blocks[8]. */
+static inline size_t node_at(const int32_t blocks[8], const int base[3], int i, int j, int k) {
   const int n[3] = {base[0] + i, base[1] + j, base[2] + k};
   const int o = (((n[0] >> MPM_BLOCK_BITS) - (base[0] >> MPM_BLOCK_BITS)) << 2) |
                 (((n[1] >> MPM_BLOCK_BITS) - (base[1] >> MPM_BLOCK_BITS)) << 1) |
                 ((n[2] >> MPM_BLOCK_BITS) - (base[2] >> MPM_BLOCK_BITS));
   const int local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
-  return (size_t)cblock[o] * MPM_BLOCK_NODES + (size_t)local;
+  return (size_t)blocks[o] * MPM_BLOCK_NODES + (size_t)local;
 }
 
-/* Group the used corners by base block (counting sort on the block index, stable in corner
- * order) and the groups by colour; fills group_corner, group_start and colour_start. */
-static int group_corners(mpm_domain_set *s, const mpm_sparse_grid *g) {
+/* The embedding of the corners in the grid level (Zhu eqs. 2-3): row c holds the nodes of
+ * corner c's stencil with their nonzero weights omega_i(x_c), as DOF indices (dof_begin + the
+ * level's node index); rows of unused corners stay empty. Its scatter schedule groups the
+ * used corners by base block and colours the blocks by the parity of their coordinates, as the
+ * standard P2G does (sparse_grid.h): a stencil reaches only its base block and the forward
+ * neighbours, so the groups of one colour never touch the same node. */
+static int build_corner_embedding(const mpm_kernel *k, const mpm_real origin[3], mpm_domain_set *s,
+                                  const mpm_sparse_grid *g, size_t dof_begin) {
   const size_t nc = s->corner_count, nb = g->block_count;
-  if (s->group_capacity < nc + 1 || s->block_capacity < nb + 1) {
-    free(s->group_corner);
-    free(s->group_start);
-    free(s->block_group);
-    s->group_corner = malloc((nc + 1) * sizeof *s->group_corner);
-    s->group_start = malloc((nb + 2) * sizeof *s->group_start);
-    s->block_group = malloc((nb + 1) * sizeof *s->block_group);
-    if (!s->group_corner || !s->group_start || !s->block_group) {
-      s->group_capacity = s->block_capacity = 0;
-      return -1;
-    }
-    s->group_capacity = nc + 1;
-    s->block_capacity = nb + 1;
+  const int W = k->width;
+  mpm_embedding *E = &s->corner_grid;
+  if (mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W))) return -1;
+  if (s->schedule_key_capacity < nc + 1) {
+    mpm_free(s->schedule_key);
+    s->schedule_key = mpm_alloc((nc + 1) * sizeof *s->schedule_key);
+    s->schedule_key_capacity = s->schedule_key ? nc + 1 : 0;
   }
-  /* the base blocks in use, numbered as groups in colour order, then block order */
-  int32_t *bg = s->block_group;
-  for (size_t b = 0; b < nb; ++b) bg[b] = -1;
-  for (size_t c = 0; c < nc; ++c)
-    if (s->adj_start[c] != s->adj_start[c + 1]) bg[s->cblock[c][0]] = 0;
-  size_t groups = 0;
-  for (int colour = 0; colour < 8; ++colour) {
-    s->colour_start[colour] = groups;
-    for (size_t b = 0; b < nb; ++b) {
-      if (bg[b] < 0) continue;
-      const int32_t *bc = g->coord[b];
-      if (((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1)) == colour) bg[b] = (int32_t)groups++;
+  if (s->block_colour_capacity < nb + 1) {
+    mpm_free(s->block_colour);
+    s->block_colour = mpm_alloc((nb + 1) * sizeof *s->block_colour);
+    s->block_colour_capacity = s->block_colour ? nb + 1 : 0;
+  }
+  if (!s->schedule_key || !s->block_colour) return -1;
+  int missing = 0; /* a block not activated: cannot happen after mpm_domain_activate */
+#pragma omp parallel reduction(| : missing)
+  {
+    int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN}, blocks[8];
+#pragma omp for schedule(static)
+    for (long c = 0; c < (long)nc; ++c) {
+      s->schedule_key[c] = -1;
+      if (!corner_used(s, (size_t)c)) continue;
+      const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
+                              s->cx[2][c] - origin[2]};
+      mpm_stencil st;
+      mpm_kernel_stencil(k, xr, &st);
+      const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
+                             st.base[2] >> MPM_BLOCK_BITS};
+      if (pad_blocks(g, NULL, bb, last, blocks)) {
+        missing = 1;
+        continue;
+      }
+      s->schedule_key[c] = blocks[0];
+      for (int i = 0; i < W; ++i)
+        for (int j = 0; j < W; ++j)
+          for (int l = 0; l < W; ++l) {
+            const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
+            if (w == 0) continue;
+            const size_t n = dof_begin + node_at(blocks, st.base, i, j, l);
+            mpm_embedding_push(E, (size_t)c, (uint32_t)n, w);
+          }
     }
   }
-  s->colour_start[8] = groups;
-  /* counting sort of the corners by group */
-  uint32_t *start = s->group_start;
-  memset(start, 0, (groups + 1) * sizeof *start);
-  for (size_t c = 0; c < nc; ++c)
-    if (s->adj_start[c] != s->adj_start[c + 1]) start[bg[s->cblock[c][0]] + 1]++;
-  for (size_t q = 0; q < groups; ++q) start[q + 1] += start[q];
-  for (size_t c = 0; c < nc; ++c)
-    if (s->adj_start[c] != s->adj_start[c + 1]) {
-      const int32_t q = bg[s->cblock[c][0]];
-      s->group_corner[start[q]++] = (uint32_t)c;
-    }
-  for (size_t q = groups; q > 0; --q) start[q] = start[q - 1]; /* back to the starts */
-  start[0] = 0;
-  return 0;
+  if (missing) return -1;
+  for (size_t b = 0; b < nb; ++b) {
+    const int32_t *bc = g->coord[b];
+    s->block_colour[b] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
+  }
+  return mpm_embedding_schedule(E, s->schedule_key, nb, s->block_colour);
 }
 
 int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
-                   const mpm_grid_values *val) {
+                   size_t dof_begin, const mpm_grid_values *dof) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
   /* 0. V0 P of every active particle, once (each is gathered by its 8 corners) */
   if (s->vP_capacity < p->count) {
-    mpm_real(*grown)[9] = realloc(s->vP, (p->count + 1) * sizeof *grown);
-    if (!grown) return -1;
-    s->vP = grown;
+    mpm_free(s->vP); /* values are per step */
+    s->vP = mpm_alloc((p->count + 1) * sizeof *s->vP);
+    if (!s->vP) {
+      s->vP_capacity = 0;
+      return -1;
+    }
     s->vP_capacity = p->count;
   }
 #pragma omp parallel for schedule(static)
@@ -139,39 +160,14 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_spa
       s->cf[d][c] = (mpm_real)f[d];
     }
   }
-  /* 2. corner -> grid. Corners are grouped by their base block and the groups coloured by the
-   *    parity of the block's coordinates, as the standard P2G does (sparse_grid.h): a stencil
-   *    reaches only its base block and the forward neighbours, so the groups of one colour
-   *    never touch the same node and run in parallel, and a node receives the colours in a
-   *    fixed order and each group's corners in corner order: the same sums for any number
-   *    of threads. */
-  if (group_corners(s, g)) return -1;
-  const mpm_kernel *k = &ctx->kernel;
-  const int W = k->width;
-  for (int colour = 0; colour < 8; ++colour) {
-    const long g0 = (long)s->colour_start[colour], g1 = (long)s->colour_start[colour + 1];
-#pragma omp parallel for schedule(dynamic, 4)
-    for (long grp = g0; grp < g1; ++grp)
-      for (uint32_t j = s->group_start[grp]; j < s->group_start[grp + 1]; ++j) {
-        const uint32_t c = s->group_corner[j];
-        const mpm_real xr[3] = {s->cx[0][c] - ctx->origin[0], s->cx[1][c] - ctx->origin[1],
-                                s->cx[2][c] - ctx->origin[2]};
-        mpm_stencil st;
-        mpm_kernel_stencil(k, xr, &st);
-        for (int i = 0; i < W; ++i)
-          for (int jj = 0; jj < W; ++jj)
-            for (int l = 0; l < W; ++l) {
-              const mpm_real w = st.w[0][i] * st.w[1][jj] * st.w[2][l];
-              if (w == 0) continue;
-              const size_t n = node_at(s->cblock[c], s->cbase[c], i, jj, l);
-              val->mass[n] += w * s->cm[c];
-              for (int d = 0; d < 3; ++d) {
-                val->v0[d][n] += w * s->cp[d][c];
-                val->f[d][n] += w * s->cf[d][c];
-              }
-            }
-      }
-  }
+  /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
+   *    so that a node receives the colours in a fixed order and each group's corners in corner
+   *    order: the same sums for any number of threads */
+  if (build_corner_embedding(&ctx->kernel, ctx->origin, s, g, dof_begin)) return -1;
+  const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
+  mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
+                               dof->f[0], dof->f[1],  dof->f[2]};
+  mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
   return 0;
 }
 
@@ -187,35 +183,30 @@ void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
 }
 
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
-                              const mpm_grid_values *val, const mpm_collider_pose *poses,
+                              const mpm_grid_values *dof, const mpm_collider_pose *poses,
                               int collider_count) {
-  const mpm_kernel *k = &ctx->kernel;
-  const int W = k->width;
   const long nc = (long)s->corner_count;
+  const mpm_embedding *E = &s->corner_grid;
   const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
   /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
   mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
 #pragma omp parallel for schedule(static) reduction(max : max_v2)
   for (long c = 0; c < nc; ++c) {
-    if (s->adj_start[c] == s->adj_start[c + 1]) continue;
-    const mpm_real xr[3] = {s->cx[0][c] - ctx->origin[0], s->cx[1][c] - ctx->origin[1],
-                            s->cx[2][c] - ctx->origin[2]};
-    mpm_stencil st;
-    mpm_kernel_stencil(k, xr, &st);
+    if (!corner_used(s, (size_t)c)) continue;
+    /* the embedding applied to the grid's velocities: v^g_a = sum_i E_ai v_i^{n+1}, and the
+     * FLIP increment sum_i E_ai (v_i^{n+1} - v_i^n) */
     mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int l = 0; l < W; ++l) {
-          const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
-          if (w == 0) continue;
-          const size_t n = node_at(s->cblock[c], s->cbase[c], i, j, l);
-          for (int d = 0; d < 3; ++d) {
-            const mpm_real vn = val->v[d][n];
-            const mpm_real vo = val->v0[d][n];
-            vnew[d] += w * vn;
-            dv[d] += w * (vn - vo);
-          }
-        }
+    const uint32_t e0 = E->row_start[c], e1 = e0 + E->row_len[c];
+    for (uint32_t e = e0; e < e1; ++e) {
+      const uint32_t n = E->col[e];
+      const mpm_real w = E->w[e];
+      for (int d = 0; d < 3; ++d) {
+        const mpm_real vn = dof->v[d][n];
+        const mpm_real vo = dof->v0[d][n];
+        vnew[d] += w * vn;
+        dv[d] += w * (vn - vo);
+      }
+    }
     mpm_real v[3];
     for (int d = 0; d < 3; ++d) {
       s->cvg[d][c] = vnew[d];

@@ -9,8 +9,9 @@
  *        corner:              x_a += dt v^g_a                        (Zhu eq. 9)
  *        particle:            x_p = sum_a omega_ap x_a, v_p = sum_a omega_ap v_a
  * omega_i is the engine's kernel given (Zhu's linear hat by default). The particle -> corner
- * gathers go through the corner adjacency (race-free, deterministic); corner -> grid is one
- * serial pass in corner order (deterministic). */
+ * gathers go through the corner adjacency (race-free, deterministic); corner -> grid and grid
+ * -> corner are the embedding operator E (grid/embedding.h) with rows omega_i(x_a), applied as
+ * E^T (a coloured, deterministic parallel scatter) and as E. */
 #ifndef MPM_DOMAIN_DOMAIN_TRANSFER_H
 #define MPM_DOMAIN_DOMAIN_TRANSFER_H
 
@@ -24,16 +25,18 @@
 int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
                         const mpm_real origin[3]);
 
-/* Rasterize the domain particles to their corners and the corners to the grid level's mass,
- * momentum (v0) and force values (ctx: kernel, origin, materials). Returns 0, -1 when out of
- * memory (nothing added to the grid then). */
+/* Rasterize the domain particles to their corners, and the corners to the grid level whose
+ * first DOF is dof_begin through the corners' embedding (s->corner_grid, built here): the DOF
+ * set's mass, momentum (v0) and force (dof: the values of all DOFs, DOF 0 at index 0) (ctx: kernel,
+ * origin, materials). Returns 0, -1 when out of memory (nothing added to the grid then). */
 int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
-                   const mpm_grid_values *val);
+                   size_t dof_begin, const mpm_grid_values *dof);
 
-/* After the grid update (val holds v^n in v0 and v^{n+1} in v): update corners and particles.
- * poses: colliders at the end of the step (count of them). */
+/* After the grid update (the DOF set holds v^n in v0 and v^{n+1} in v; dof as for P2G): the
+ * corners' velocities through their embedding, then corners and particles. poses: colliders
+ * at the end of the step (count of them). */
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
-                              const mpm_grid_values *val, const mpm_collider_pose *poses,
+                              const mpm_grid_values *dof, const mpm_collider_pose *poses,
                               int collider_count);
 
 /* F_p^{n+1} = F_p^n + dt grad_X v (Zhu eq. 7) of particle q from the grid velocities at its

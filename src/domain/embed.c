@@ -18,9 +18,9 @@ mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
   if (!n) return mpm_error_set(err, MPM_ERR_INVALID, "no domain to embed the surface in");
   mpm_lattice_map m; /* lattice cell -> domain particle */
   const int nv = mesh->vertex_count;
-  e->domain = malloc((size_t)(nv ? nv : 1) * sizeof *e->domain);
-  e->xi = malloc((size_t)(nv ? nv : 1) * sizeof *e->xi);
-  e->rest = malloc((size_t)(nv ? nv : 1) * sizeof *e->rest);
+  e->domain = mpm_alloc((size_t)(nv ? nv : 1) * sizeof *e->domain);
+  e->xi = mpm_alloc((size_t)(nv ? nv : 1) * sizeof *e->xi);
+  e->rest = mpm_alloc((size_t)(nv ? nv : 1) * sizeof *e->rest);
   if (mpm_lattice_map_init(&m, n) || !e->domain || !e->xi || !e->rest) {
     mpm_lattice_map_free(&m);
     mpm_embedded_surface_free(e);
@@ -106,9 +106,9 @@ void mpm_embedded_positions(const mpm_embedded_surface *e, const mpm_domain_set 
 
 void mpm_embedded_surface_free(mpm_embedded_surface *e) {
   mpm_free(e->triangles); /* the mesh loader's allocation (core/alloc.h) */
-  free(e->domain);
-  free(e->xi);
-  free(e->rest);
+  mpm_free(e->domain);
+  mpm_free(e->xi);
+  mpm_free(e->rest);
   memset(e, 0, sizeof *e);
 }
 

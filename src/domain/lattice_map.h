@@ -4,8 +4,9 @@
 #ifndef MPM_DOMAIN_LATTICE_MAP_H
 #define MPM_DOMAIN_LATTICE_MAP_H
 
+#include "core/alloc.h"
+
 #include <stdint.h>
-#include <stdlib.h>
 #include <string.h>
 
 typedef struct mpm_lattice_map {
@@ -18,8 +19,8 @@ typedef struct mpm_lattice_map {
 static inline int mpm_lattice_map_init(mpm_lattice_map *m, size_t count) {
   size_t size = 64;
   while (size < 2 * count) size *= 2;
-  m->keys = malloc(size * sizeof *m->keys);
-  m->values = malloc(size * sizeof *m->values);
+  m->keys = mpm_alloc(size * sizeof *m->keys);
+  m->values = mpm_alloc(size * sizeof *m->values);
   m->mask = size - 1;
   if (!m->keys || !m->values) return -1;
   memset(m->keys, 0xFF, size * sizeof *m->keys);
@@ -27,8 +28,8 @@ static inline int mpm_lattice_map_init(mpm_lattice_map *m, size_t count) {
 }
 
 static inline void mpm_lattice_map_free(mpm_lattice_map *m) {
-  free(m->keys);
-  free(m->values);
+  mpm_free(m->keys);
+  mpm_free(m->values);
   memset(m, 0, sizeof *m);
 }
 

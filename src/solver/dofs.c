@@ -123,9 +123,8 @@ void mpm_dofs_clear(mpm_dofs *d, unsigned fields) {
   }
 }
 
-mpm_grid_values mpm_dofs_grid_values(const mpm_dofs *d, const mpm_grid *g) {
+static mpm_grid_values values_from(const mpm_dofs *d, size_t o) {
   mpm_grid_values v;
-  const size_t o = g->dof_begin;
   v.mass = d->mass ? d->mass + o : NULL;
   for (int c = 0; c < 3; ++c) {
     v.v0[c] = d->v0[c] ? d->v0[c] + o : NULL;
@@ -133,6 +132,14 @@ mpm_grid_values mpm_dofs_grid_values(const mpm_dofs *d, const mpm_grid *g) {
     v.f[c] = d->f[c] ? d->f[c] + o : NULL;
   }
   return v;
+}
+
+mpm_grid_values mpm_dofs_values(const mpm_dofs *d) {
+  return values_from(d, 0);
+}
+
+mpm_grid_values mpm_dofs_grid_values(const mpm_dofs *d, const mpm_grid *g) {
+  return values_from(d, g->dof_begin);
 }
 
 const mpm_dof_segment *mpm_dofs_segment_of(const mpm_dofs *d, size_t i) {

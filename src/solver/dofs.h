@@ -91,7 +91,9 @@ int mpm_dofs_end_layout(mpm_dofs *d, unsigned fields);
 /* Zero the fields of the mask over all DOFs (parallel). */
 void mpm_dofs_clear(mpm_dofs *d, unsigned fields);
 
-/* The values at grid level g's nodes (g must be a segment of the layout). */
+/* The values of all DOFs (DOF i at index i), and those at grid level g's nodes (node n at
+ * index n; g must be a segment of the layout). */
+mpm_grid_values mpm_dofs_values(const mpm_dofs *d);
 mpm_grid_values mpm_dofs_grid_values(const mpm_dofs *d, const mpm_grid *g);
 
 /* The segment holding DOF i (binary search), and DOF i's position, m. */

@@ -44,8 +44,9 @@ typedef struct step_ctx {
   mpm_transfer_ctx dtc; /* domain corners: the corner kernel */
   mpm_explicit_update update;
   mpm_p2g_output p2g_output;
-  int domains; /* the step has active domain particles */
-  mpm_grid_values val;
+  int domains;         /* the step has active domain particles */
+  mpm_grid_values val; /* the grid level's values */
+  mpm_grid_values all; /* the values of every DOF */
   mpm_g2p_result r;
   const mpm_particles *bad_set; /* the set r.bad_particle indexes */
 } step_ctx;
@@ -104,12 +105,14 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
                          (long long)sim->steps, d->count);
   mpm_dofs_clear(d, fields & ~(unsigned)MPM_DOF_V); /* the update writes every v */
   c->val = mpm_dofs_grid_values(d, &sim->grid);
+  c->all = mpm_dofs_values(d);
   return MPM_OK;
 }
 
 static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
-  if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid.impl.sparse, &c->val))
+  if (c->domains &&
+      mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid.impl.sparse, sim->grid.dof_begin, &c->all))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the stresses of %zu domain particles",
                          (long long)sim->steps, sim->domains.particles.count);
@@ -126,7 +129,7 @@ static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
   c->bad_set = &sim->particles;
   if (c->domains) {
     const mpm_g2p_result rd =
-        mpm_domain_g2p(&c->dtc, &sim->domains, &c->val, sim->poses, sim->collider_count);
+        mpm_domain_g2p(&c->dtc, &sim->domains, &c->all, sim->poses, sim->collider_count);
     if (rd.max_speed > c->r.max_speed) c->r.max_speed = rd.max_speed;
     if (rd.bad_particle >= 0 && c->r.bad_particle < 0) {
       c->bad_set = &sim->domains.particles;

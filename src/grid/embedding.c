@@ -1,0 +1,157 @@
+/* embedding.c - the embedding operator's storage, schedule, scatter and gather (see
+ * embedding.h). */
+#include "grid/embedding.h"
+#include "core/alloc.h"
+#include "core/parallel.h"
+
+#include <string.h>
+
+void mpm_embedding_init(mpm_embedding *E) {
+  memset(E, 0, sizeof *E);
+}
+
+void mpm_embedding_free(mpm_embedding *E) {
+  mpm_free(E->row_start);
+  mpm_free(E->row_len);
+  mpm_free(E->col);
+  mpm_free(E->w);
+  mpm_free(E->group_row);
+  mpm_free(E->group_start);
+  mpm_free(E->key_group);
+  memset(E, 0, sizeof *E);
+}
+
+size_t mpm_embedding_bytes(const mpm_embedding *E) {
+  return E->row_capacity * 2 * sizeof(uint32_t) +
+         E->entry_capacity * (sizeof(uint32_t) + sizeof(mpm_real)) +
+         (E->group_row_capacity + E->group_capacity) * sizeof(uint32_t) +
+         E->key_capacity * sizeof(int32_t);
+}
+
+/* Grow a buffer of `size`-byte items to hold `need`, without keeping its contents. */
+static int reserve(void **a, size_t *cap, size_t need, size_t size) {
+  if (need <= *cap && *a) return 0;
+  mpm_free(*a);
+  const size_t n = need + need / 8 + 16;
+  *a = mpm_alloc(n * size);
+  *cap = *a ? n : 0;
+  return *a ? 0 : -1;
+}
+
+int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
+                         uint32_t uniform_len) {
+  E->scheduled = 0;
+  E->rows = 0;
+  size_t rcap = E->row_capacity;
+  if (rows + 1 > rcap) {
+    size_t c2 = rcap;
+    if (reserve((void **)&E->row_start, &rcap, rows + 1, sizeof(uint32_t)) ||
+        reserve((void **)&E->row_len, &c2, rows + 1, sizeof(uint32_t))) {
+      E->row_capacity = 0;
+      return -1;
+    }
+    E->row_capacity = rcap < c2 ? rcap : c2;
+  }
+  size_t total = 0;
+  for (size_t a = 0; a < rows; ++a) {
+    E->row_start[a] = (uint32_t)total;
+    total += max_len ? max_len[a] : uniform_len;
+  }
+  E->row_start[rows] = (uint32_t)total;
+  if (total > UINT32_MAX) return -1;
+  size_t ccap = E->entry_capacity, wcap = E->entry_capacity;
+  if (total > E->entry_capacity || !E->col) {
+    if (reserve((void **)&E->col, &ccap, total, sizeof(uint32_t)) ||
+        reserve((void **)&E->w, &wcap, total, sizeof(mpm_real))) {
+      E->entry_capacity = 0;
+      return -1;
+    }
+    E->entry_capacity = ccap < wcap ? ccap : wcap;
+  }
+  memset(E->row_len, 0, rows * sizeof(uint32_t));
+  E->rows = rows;
+  return 0;
+}
+
+int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
+                           const uint8_t *key_colour) {
+  E->scheduled = 0;
+  const size_t rows = E->rows;
+  size_t cap = E->key_capacity;
+  if (reserve((void **)&E->key_group, &cap, key_count + 1, sizeof(int32_t))) return -1;
+  E->key_capacity = cap;
+  /* the keys in use, numbered as groups in colour order, then key order */
+  int32_t *kg = E->key_group;
+  for (size_t k = 0; k < key_count; ++k) kg[k] = -1;
+  size_t used_rows = 0;
+  for (size_t a = 0; a < rows; ++a)
+    if (key[a] >= 0) {
+      kg[key[a]] = 0;
+      ++used_rows;
+    }
+  size_t groups = 0;
+  for (int colour = 0; colour < MPM_EMBEDDING_COLOURS; ++colour) {
+    E->colour_start[colour] = groups;
+    for (size_t k = 0; k < key_count; ++k)
+      if (kg[k] >= 0 && key_colour[k] == colour) kg[k] = (int32_t)groups++;
+  }
+  E->colour_start[MPM_EMBEDDING_COLOURS] = groups;
+  cap = E->group_capacity;
+  if (reserve((void **)&E->group_start, &cap, groups + 2, sizeof(uint32_t))) return -1;
+  E->group_capacity = cap;
+  cap = E->group_row_capacity;
+  if (reserve((void **)&E->group_row, &cap, used_rows + 1, sizeof(uint32_t))) return -1;
+  E->group_row_capacity = cap;
+  /* counting sort of the rows by group, stable in row order */
+  uint32_t *start = E->group_start;
+  memset(start, 0, (groups + 1) * sizeof *start);
+  for (size_t a = 0; a < rows; ++a)
+    if (key[a] >= 0) start[kg[key[a]] + 1]++;
+  for (size_t q = 0; q < groups; ++q) start[q + 1] += start[q];
+  for (size_t a = 0; a < rows; ++a)
+    if (key[a] >= 0) E->group_row[start[kg[key[a]]]++] = (uint32_t)a;
+  for (size_t q = groups; q > 0; --q) start[q] = start[q - 1]; /* back to the starts */
+  start[0] = 0;
+  E->scheduled = 1;
+  return 0;
+}
+
+/* The scatter of row a. */
+static inline void scatter_row(const mpm_embedding *E, size_t a, int fields,
+                               const mpm_real *const *c, mpm_real *const *u) {
+  const uint32_t e0 = E->row_start[a], e1 = e0 + E->row_len[a];
+  for (uint32_t e = e0; e < e1; ++e) {
+    const uint32_t i = E->col[e];
+    const mpm_real w = E->w[e];
+    for (int k = 0; k < fields; ++k) u[k][i] += w * c[k][a];
+  }
+}
+
+void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
+                           mpm_real *const *u) {
+  if (!E->scheduled) {
+    for (size_t a = 0; a < E->rows; ++a) scatter_row(E, a, fields, c, u);
+    return;
+  }
+  for (int colour = 0; colour < MPM_EMBEDDING_COLOURS; ++colour) {
+    const long g0 = (long)E->colour_start[colour], g1 = (long)E->colour_start[colour + 1];
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long q = g0; q < g1; ++q)
+      for (uint32_t j = E->group_start[q]; j < E->group_start[q + 1]; ++j)
+        scatter_row(E, E->group_row[j], fields, c, u);
+  }
+}
+
+void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,
+                          mpm_real *const *c) {
+  const long rows = (long)E->rows;
+#pragma omp parallel for schedule(static)
+  for (long a = 0; a < rows; ++a) {
+    const uint32_t e0 = E->row_start[a], e1 = e0 + E->row_len[a];
+    for (int k = 0; k < fields; ++k) {
+      mpm_real s = 0;
+      for (uint32_t e = e0; e < e1; ++e) s += E->w[e] * u[k][E->col[e]];
+      c[k][a] = s;
+    }
+  }
+}

@@ -1,0 +1,89 @@
+/* embedding.h - the embedding operator E: a sparse matrix from "carrier" values to DOFs
+ * (DESIGN.md, "Embedding operator").
+ *
+ * Zhu et al.'s corner -> grid rasterization (sec. 4, eqs. 2-3 and 8: m_i = sum_a omega_i(x_a)
+ * m_a) and Gao et al.'s ghost -> parent distribution (sec. 6.1, eq. 15) are the same thing: a
+ * carrier a (a domain corner, a ghost node of a finer level) holds values that belong, with
+ * weights E_ai, to real DOFs i. P2G applies the transpose, G2P the operator itself:
+ *   after P2G   u_i += sum_a E_ai c_a        (mpm_embedding_scatter: mass, momentum, force)
+ *   before G2P  c_a  = sum_i E_ai u_i        (mpm_embedding_gather: velocities)
+ * With weights that sum to one over each row (a partition of unity) the scatter conserves
+ * mass and momentum, and with weights that reproduce linear functions the gather of a linear
+ * field is exact (tests/test_embedding.c). An enriched corner (Zhu sec. 5) will be an identity
+ * row: the corner is its own DOF; a T-junction node (Gao eqs. 11-14) a row of its parents'
+ * weights.
+ *
+ * Storage is CSR with room reserved per row: row a's entries are
+ *   col[row_start[a] .. row_start[a] + row_len[a]), with weights w[...],
+ * row_len[a] <= row_start[a + 1] - row_start[a], so that rows can be filled in parallel without
+ * a counting pass. Columns are DOF indices of the DOF set (solver/dofs.h).
+ *
+ * The scatter is parallel and deterministic: rows are grouped and the groups coloured so that
+ * rows of two groups of one colour never share a column (mpm_embedding_schedule); colours run
+ * one after the other, the groups of a colour in parallel, the rows of a group in row order. A
+ * DOF then receives its contributions in one fixed order for any number of threads. Without a
+ * schedule the scatter is one serial pass in row order. */
+#ifndef MPM_GRID_EMBEDDING_H
+#define MPM_GRID_EMBEDDING_H
+
+#include "core/real.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define MPM_EMBEDDING_COLOURS 8
+
+typedef struct mpm_embedding {
+  size_t rows, row_capacity;
+  size_t entry_capacity;
+  uint32_t *row_start; /* rows + 1 */
+  uint32_t *row_len;
+  uint32_t *col; /* DOF indices */
+  mpm_real *w;
+  /* the scatter's schedule: groups of rows (group_row[group_start[q] .. group_start[q + 1])),
+   * the groups of colour c are colour_start[c] .. colour_start[c + 1] */
+  int scheduled;
+  uint32_t *group_row, *group_start;
+  int32_t *key_group;
+  size_t group_row_capacity, group_capacity, key_capacity;
+  size_t colour_start[MPM_EMBEDDING_COLOURS + 1];
+} mpm_embedding;
+
+void mpm_embedding_init(mpm_embedding *E);
+void mpm_embedding_free(mpm_embedding *E);
+
+/* Room for `rows` rows; row a may hold up to max_len[a] entries (max_len NULL: uniform_len
+ * each). Row lengths start at 0; the caller fills col, w and row_len per row (in parallel if it
+ * likes). Drops the schedule. 0, or -1 when out of memory. */
+int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
+                         uint32_t uniform_len);
+
+/* Append entry (col, w) to row a (serial use per row). */
+static inline void mpm_embedding_push(mpm_embedding *E, size_t a, uint32_t col, mpm_real w) {
+  const uint32_t e = E->row_start[a] + E->row_len[a]++;
+  E->col[e] = col;
+  E->w[e] = w;
+}
+
+/* The scatter's schedule: rows with key[a] < 0 take no part (their values are not scattered);
+ * the others are grouped by key (0 <= key < key_count), groups numbered by colour
+ * (key_colour[key] in 0..MPM_EMBEDDING_COLOURS-1) then by key, the rows of a group in row order.
+ * The caller guarantees that rows in groups of one colour share no column. 0, or -1 when out
+ * of memory. */
+int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
+                           const uint8_t *key_colour);
+
+/* u[k][col] += w c[k][a] for every entry of every scheduled row (all rows without a schedule),
+ * for the `fields` pairs of arrays (c: carrier values, u: DOF values). */
+void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
+                           mpm_real *const *u);
+
+/* c[k][a] = sum over row a of w u[k][col], for every row, the `fields` pairs of arrays.
+ * Parallel over rows, deterministic. */
+void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,
+                          mpm_real *const *c);
+
+/* Bytes held. */
+size_t mpm_embedding_bytes(const mpm_embedding *E);
+
+#endif
