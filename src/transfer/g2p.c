@@ -7,6 +7,7 @@
  * owner block into a pad and then takes the particles of one cell as SIMD lanes
  * (transfer_lanes.h); the dense reference uses the scalar bodies of transfer_core.h. */
 #include "transfer/transfer.h"
+#include "transfer/batches.h"
 #include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
 
@@ -154,60 +155,31 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
                              int32_t b, mpm_real *max_v2, long *bad) {
   /* the 8 blocks around the owner block as an AoS pad: v_new xyz, v_old xyz per node; and the
      blocks of the next owner block are requested while this one is processed */
+  const mpm_real *const vel[6] = {val->v[0],  val->v[1],  val->v[2],
+                                  val->v0[0], val->v0[1], val->v0[2]};
+  const int count = apic ? 3 : 6;
+  if ((size_t)b + 1 < g->owner_count) MPM_PAD_PREFETCH(g, b + 1, count, vel, 0);
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
-  if ((size_t)b + 1 < g->owner_count)
-    for (int o = 0; o < 8; ++o) {
-      const size_t nb = (size_t)g->neighbor[b + 1][o] * MPM_BLOCK_NODES;
-      for (int c = 0; c < (apic ? 3 : 6); ++c) {
-        const mpm_real *a = c < 3 ? val->v[c] : val->v0[c - 3];
-        for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
-          __builtin_prefetch(&a[nb + q], 0);
-      }
-    }
-  for (int o = 0; o < 8; ++o) {
-    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
-    const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
-              oz = (o & 1) * MPM_BLOCK;
-    /* stencils reach only W - 1 nodes into the forward blocks */
-    const int ni = ox ? W - 1 : MPM_BLOCK, nj = oy ? W - 1 : MPM_BLOCK, nk = oz ? W - 1 : MPM_BLOCK;
-    for (int i = 0; i < ni; ++i)
-      for (int j = 0; j < nj; ++j)
-        for (int k = 0; k < nk; ++k) {
-          mpm_real *dst = &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) *
-                               MPM_PAD_STRIDE(apic)];
-          const size_t n = nb + (size_t)((i * MPM_BLOCK + j) * MPM_BLOCK + k);
-          for (int d = 0; d < 3; ++d) {
-            dst[d] = val->v[d][n];
-            if (!apic) dst[3 + d] = val->v0[d][n];
-          }
-        }
-  }
+  mpm_pad_gather(W, g, b, count, vel, MPM_PAD_STRIDE(apic), pad);
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
-  const size_t q0 = (size_t)b * (size_t)g->material_count * MPM_BLOCK_NODES;
-  const size_t q1 = q0 + (size_t)g->material_count * MPM_BLOCK_NODES;
-  for (size_t q = q0; q < q1; ++q) {
-    const uint32_t begin = g->cell_start[q], end = g->cell_start[q + 1];
-    const size_t cell = (q - q0) % MPM_BLOCK_NODES;
-    const mpm_material *mat = &ctx->materials[(q - q0) / MPM_BLOCK_NODES];
-    for (uint32_t j = begin; j < end; j += MPM_LANES) {
-      const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
-      const uint32_t *idx = g->perm + j;
-      if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 1);
-      const int contiguous = mpm_batch_contiguous(idx, n);
-      int base[3];
-      mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
-      const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
-                       (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
-      mpm_g2p_lanes_out o;
-      mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, off, MPM_PAD * MPM_PAD, MPM_PAD, &o);
-      batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
-    }
-    if (cell == MPM_BLOCK_NODES - 1 && mat->model->return_map) /* the material's last cell */
-      range_return_map(mat, p, g->perm, g->cell_start[q + 1 - MPM_BLOCK_NODES],
-                       g->cell_start[q + 1]);
+  mpm_batches it;
+  mpm_batches_begin(&it, g, (size_t)b);
+  while (mpm_batches_next(&it)) {
+    if (it.pos + 2 * MPM_LANES < g->particle_count)
+      MPM_PREFETCH_PARTICLE(p, it.idx[2 * MPM_LANES], 1);
+    const int contiguous = mpm_batch_contiguous(it.idx, it.n);
+    int base[3];
+    mpm_lane_stencil s;
+    mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, it.idx, it.n, contiguous, 0, base, &s);
+    mpm_g2p_lanes_out o;
+    mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
+                  MPM_PAD, &o);
+    batch_update(apic, ctx, p, it.idx, it.n, contiguous, &o, max_v2, bad);
+    const mpm_material *mat = &ctx->materials[it.material];
+    if (it.material_last && mat->model->return_map) /* all of the material's F are new */
+      range_return_map(mat, p, g->perm, it.range_begin, it.range_end);
   }
 }
 

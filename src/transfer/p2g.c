@@ -9,6 +9,7 @@
  * that is then added to the 8 blocks it covers. No atomics; deterministic for any thread count
  * (see sparse_grid.h). */
 #include "transfer/transfer.h"
+#include "transfer/batches.h"
 #include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
 
@@ -147,54 +148,26 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
   const int stride = MPM_PAD_STRIDE(apic);
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
   memset(pad, 0, (size_t)MPM_PAD_NODES * (size_t)stride * sizeof(mpm_real));
-  /* the 8 blocks are written at the end: ask for them now */
-  for (int o = 0; o < 8; ++o) {
-    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
-    for (int c = 0; c < used; ++c)
-      for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
-        __builtin_prefetch(&ch[c][nb + q], 1);
-  }
+  MPM_PAD_PREFETCH(g, b, used, ch, 1); /* the 8 blocks are written at the end: ask for them now */
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
-  const int nm = g->material_count;
   stress_window w;
-  for (int m = 0; m < nm; ++m) {
-    const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
-    const uint32_t range_end = g->cell_start[q0 + MPM_BLOCK_NODES];
-    w.begin = w.count = 0;
-    for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
-      const uint32_t begin = g->cell_start[q0 + c], end = g->cell_start[q0 + c + 1];
-      for (uint32_t j = begin; j < end; j += MPM_LANES) {
-        const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
-        const uint32_t *idx = g->perm + j;
-        if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
-        int base[3];
-        mpm_lane_stencil s;
-        mpm_vl mass, mv[3], mB[9], K[9];
-        stress_window_need(&w, &ctx->materials[m], p, g->perm, j, n, range_end);
-        batch_prepare(apic, ctx, p, &w, j, idx, n, base, &s, &mass, mv, mB, K);
-        const long off = (long)(base[0] - org[0]) * MPM_PAD * MPM_PAD +
-                         (long)(base[1] - org[1]) * MPM_PAD + (long)(base[2] - org[2]);
-        mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, off, MPM_PAD * MPM_PAD, MPM_PAD);
-      }
-    }
+  mpm_batches it;
+  mpm_batches_begin(&it, g, (size_t)b);
+  while (mpm_batches_next(&it)) {
+    if (it.material_first) w.begin = w.count = 0;
+    if (it.pos + 2 * MPM_LANES < g->particle_count)
+      MPM_PREFETCH_PARTICLE(p, it.idx[2 * MPM_LANES], 0);
+    int base[3];
+    mpm_lane_stencil s;
+    mpm_vl mass, mv[3], mB[9], K[9];
+    stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
+    batch_prepare(apic, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
+    mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
+                  MPM_PAD);
   }
-  /* add the pad (nodes x 8 channels) to the 8 blocks it covers (channels x nodes) */
-  for (int o = 0; o < 8; ++o) {
-    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
-    const int ox = ((o >> 2) & 1) * MPM_BLOCK, oy = ((o >> 1) & 1) * MPM_BLOCK,
-              oz = (o & 1) * MPM_BLOCK;
-    /* stencils reach W - 1 nodes into the forward blocks: the rest of the pad is zero */
-    const int ni = ox ? W - 1 : MPM_BLOCK, nj = oy ? W - 1 : MPM_BLOCK, nk = oz ? W - 1 : MPM_BLOCK;
-    for (int i = 0; i < ni; ++i)
-      for (int j = 0; j < nj; ++j)
-        for (int k = 0; k < nk; ++k) {
-          const mpm_real *src =
-              &pad[((ox + i) * MPM_PAD * MPM_PAD + (oy + j) * MPM_PAD + oz + k) * stride];
-          const int n = (i * MPM_BLOCK + j) * MPM_BLOCK + k;
-          for (int c = 0; c < used; ++c) ch[c][nb + (size_t)n] += src[c];
-        }
-  }
+  /* add the pad (nodes x 8 channels) to the 8 blocks it covers */
+  mpm_pad_add(W, g, b, used, pad, stride, ch);
 }
 
 /* APIC P2G of one owner block: lanes are accumulated per node over the whole block (a compact
@@ -207,36 +180,23 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx,
   mpm_vl acc[LANE_PAD_SIDE_MAX * LANE_PAD_SIDE_MAX * LANE_PAD_SIDE_MAX][4]
       __attribute__((aligned(MPM_ALIGN)));
   memset(acc, 0, (size_t)(S * S * S) * sizeof acc[0]);
-  for (int o = 0; o < 8; ++o) {
-    const size_t nb = (size_t)g->neighbor[b][o] * MPM_BLOCK_NODES;
-    for (int c = 0; c < MPM_P2G_FORCE; ++c)
-      for (int q = 0; q < MPM_BLOCK_NODES; q += 64 / (int)sizeof(mpm_real))
-        __builtin_prefetch(&ch[c][nb + q], 1);
-  }
+  MPM_PAD_PREFETCH(g, b, MPM_P2G_FORCE, ch, 1);
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
-  const int nm = g->material_count;
   stress_window w;
-  for (int m = 0; m < nm; ++m) {
-    const size_t q0 = ((size_t)b * nm + m) * MPM_BLOCK_NODES;
-    const uint32_t range_end = g->cell_start[q0 + MPM_BLOCK_NODES];
-    w.begin = w.count = 0;
-    for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
-      const uint32_t begin = g->cell_start[q0 + c], end = g->cell_start[q0 + c + 1];
-      for (uint32_t j = begin; j < end; j += MPM_LANES) {
-        const int n = (int)(end - j < MPM_LANES ? end - j : MPM_LANES);
-        const uint32_t *idx = g->perm + j;
-        if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
-        int base[3];
-        mpm_lane_stencil s;
-        mpm_vl mass, mv[3], mB[9], K[9];
-        stress_window_need(&w, &ctx->materials[m], p, g->perm, j, n, range_end);
-        batch_prepare(1, ctx, p, &w, j, idx, n, base, &s, &mass, mv, mB, K);
-        const long off =
-            ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
-        mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
-      }
-    }
+  mpm_batches it;
+  mpm_batches_begin(&it, g, (size_t)b);
+  while (mpm_batches_next(&it)) {
+    if (it.material_first) w.begin = w.count = 0;
+    if (it.pos + 2 * MPM_LANES < g->particle_count)
+      MPM_PREFETCH_PARTICLE(p, it.idx[2 * MPM_LANES], 0);
+    int base[3];
+    mpm_lane_stencil s;
+    mpm_vl mass, mv[3], mB[9], K[9];
+    stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
+    batch_prepare(1, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
+    const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
+    mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
   }
   /* sum the lanes of every node once and add mass and momentum to the 8 blocks */
   for (int i = 0; i < S; ++i)
