@@ -10,26 +10,14 @@
  * (see sparse_grid.h). */
 #include "transfer/transfer.h"
 #include "transfer/batches.h"
+#include "transfer/operators.h"
+#include "transfer/stress_window.h"
 #include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
 
 #include <string.h>
 
 #define ALWAYS_INLINE static inline __attribute__((always_inline))
-
-/* Kirchhoff stresses of particles idx[0..n) (all of material `mat`) into tau. */
-ALWAYS_INLINE void chunk_stress(const mpm_material *mat, const mpm_particles *p,
-                                const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK]) {
-  mpm_real Fbuf[9][MPM_STRESS_CHUNK], plastic[MPM_STRESS_CHUNK];
-  const mpm_real *Fp[9];
-  for (int c = 0; c < 9; ++c) {
-    const mpm_real *src = p->F[c];
-    for (int q = 0; q < n; ++q) Fbuf[c][q] = src[idx[q]];
-    Fp[c] = Fbuf[c];
-  }
-  for (int q = 0; q < n; ++q) plastic[q] = p->plastic[idx[q]];
-  mat->model->kirchhoff_batch(mat, n, Fp, plastic, tau);
-}
 
 /* Scatter particles idx[0..n) with stresses tau into channel arrays viewed from node `org`
  * (global node index of ch[..][0]) with strides sx, sy. */
@@ -81,51 +69,17 @@ ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int
   }
 }
 
-/* Stresses of the particles of one block and material, evaluated ahead in windows of up to
- * STRESS_WINDOW consecutive positions of the particle order (perm): the model's batch entry
- * then sees chunks of MPM_STRESS_CHUNK particles instead of the up to MPM_LANES of one cell,
- * which its SIMD SVD (core/svd3_lanes.h) needs to fill its vectors. */
-#define STRESS_WINDOW (4 * MPM_STRESS_CHUNK)
-typedef struct stress_window {
-  uint32_t begin, count; /* perm positions [begin, begin + count) */
-  mpm_real tau[9][STRESS_WINDOW];
-} stress_window;
-
-/* Make positions [j, j + n) of perm available in w; `end` is the end of the material's range
- * of positions in this block (a window never reaches past it). A batch that straddles the end
- * of the window starts the next one, so at most MPM_LANES - 1 stresses per window are
- * evaluated twice. */
-static void stress_window_need(stress_window *w, const mpm_material *mat, const mpm_particles *p,
-                               const uint32_t *perm, uint32_t j, int n, uint32_t end) {
-  if (j >= w->begin && j + (uint32_t)n <= w->begin + w->count) return;
-  w->begin = j;
-  w->count = end - j < STRESS_WINDOW ? end - j : STRESS_WINDOW;
-  for (uint32_t k0 = 0; k0 < w->count; k0 += MPM_STRESS_CHUNK) {
-    const int k = (int)(w->count - k0 < MPM_STRESS_CHUNK ? w->count - k0 : MPM_STRESS_CHUNK);
-    const uint32_t *idx = perm + j + k0;
-    int contiguous = 1; /* positions of several cells: check every one */
-    for (int q = 1; q < k; ++q) contiguous &= idx[q] == idx[0] + (uint32_t)q;
-    mpm_real tau[9][MPM_STRESS_CHUNK];
-    if (contiguous) { /* the model reads F in place */
-      const mpm_real *Fp[9];
-      for (int c = 0; c < 9; ++c) Fp[c] = p->F[c] + idx[0];
-      mat->model->kirchhoff_batch(mat, k, Fp, p->plastic + idx[0], tau);
-    } else {
-      chunk_stress(mat, p, idx, k, tau);
-    }
-    for (int c = 0; c < 9; ++c) memcpy(&w->tau[c][k0], tau[c], (size_t)k * sizeof(mpm_real));
-  }
-}
-
 /* Everything P2G needs of a batch of n particles at perm position j: lane stencils (with APIC
- * factors when apic) and lane inputs (see batch_inputs), the stresses taken from the window. */
-ALWAYS_INLINE void batch_prepare(const int apic, const mpm_transfer_ctx *ctx,
+ * factors when apic) and lane inputs (see batch_inputs), the stresses taken from the window;
+ * without force, no stresses (K = 0). */
+ALWAYS_INLINE void batch_prepare(const int apic, const int force, const mpm_transfer_ctx *ctx,
                                  const mpm_particles *p, const stress_window *w, uint32_t j,
                                  const uint32_t *idx, int n, int base[3], mpm_lane_stencil *s,
                                  mpm_vl *mass, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
   const int contiguous = mpm_batch_contiguous(idx, n);
+  static const mpm_real zero[MPM_LANES] = {0};
   const mpm_real *tau[9];
-  for (int c = 0; c < 9; ++c) tau[c] = w->tau[c] + (j - w->begin);
+  for (int c = 0; c < 9; ++c) tau[c] = force ? w->tau[c] + (j - w->begin) : zero;
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
   mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, s);
   batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, mass, mv, mB, K);
@@ -140,11 +94,14 @@ static void p2g_channels(const mpm_grid_values *val, mpm_real *ch[MPM_P2G_CHANNE
   }
 }
 
-ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
-                             const mpm_sparse_grid *g, mpm_real *const ch[MPM_P2G_CHANNELS],
-                             const mpm_particles *p, int32_t b) {
+/* P2G of owner block b into a pad of 8 (PIC/FLIP) or 4 (APIC, force fused) reals per node,
+ * then added to the level's values; without force (force = 0) only mass and momentum. */
+ALWAYS_INLINE void p2g_block(const int W, const int apic, const int force,
+                             const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                             mpm_real *const ch[MPM_P2G_CHANNELS], const mpm_particles *p,
+                             int32_t b) {
   /* with APIC the force is fused into the momentum: only mass and momentum are used */
-  const int used = apic ? MPM_P2G_FORCE : MPM_P2G_CHANNELS;
+  const int used = apic || !force ? MPM_P2G_FORCE : MPM_P2G_CHANNELS;
   const int stride = MPM_PAD_STRIDE(apic);
   mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
   memset(pad, 0, (size_t)MPM_PAD_NODES * (size_t)stride * sizeof(mpm_real));
@@ -161,8 +118,9 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
     int base[3];
     mpm_lane_stencil s;
     mpm_vl mass, mv[3], mB[9], K[9];
-    stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
-    batch_prepare(apic, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
+    if (force)
+      stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
+    batch_prepare(apic, force, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
     mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
                   MPM_PAD);
   }
@@ -173,7 +131,7 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const mpm_transfer_ctx
 /* APIC P2G of one owner block: lanes are accumulated per node over the whole block (a compact
  * (W+3)^3 region of nodes, the base cells plus the stencil reach) and summed once at the end. */
 #define LANE_PAD_SIDE_MAX (MPM_BLOCK + MPM_STENCIL_MAX - 1)
-ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx,
+ALWAYS_INLINE void p2g_block_apic(const int W, const int force, const mpm_transfer_ctx *ctx,
                                   const mpm_sparse_grid *g, mpm_real *const ch[MPM_P2G_CHANNELS],
                                   const mpm_particles *p, int32_t b) {
   const int S = MPM_BLOCK + W - 1;
@@ -193,8 +151,9 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx,
     int base[3];
     mpm_lane_stencil s;
     mpm_vl mass, mv[3], mB[9], K[9];
-    stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
-    batch_prepare(1, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
+    if (force)
+      stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
+    batch_prepare(1, force, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
     const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
     mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
   }
@@ -210,38 +169,70 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const mpm_transfer_ctx *ctx,
       }
 }
 
-void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
-                    const mpm_grid_values *val, const mpm_particles *p) {
+/* The P2G of every owner block, colour by colour (blocks of one colour in parallel). */
+static void p2g_blocks(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                       mpm_real *const ch[MPM_P2G_CHANNELS], const mpm_particles *p,
+                       const int force) {
   const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
-  mpm_real *ch[MPM_P2G_CHANNELS];
-  p2g_channels(val, ch);
   for (int color = 0; color < 8; ++color) {
     const long begin = (long)g->color_start[color], end = (long)g->color_start[color + 1];
 #pragma omp parallel for schedule(dynamic, 4)
     for (long q = begin; q < end; ++q) {
       const int32_t b = g->color_blocks[q];
-      switch (W * 2 + apic) {
-      case 4:
-        p2g_block(2, 0, ctx, g, ch, p, b);
+      switch ((W * 2 + apic) * 2 + force) {
+      case 9:
+        p2g_block(2, 0, 1, ctx, g, ch, p, b);
         break;
-      case 5:
-        p2g_block_apic(2, ctx, g, ch, p, b);
+      case 11:
+        p2g_block_apic(2, 1, ctx, g, ch, p, b);
         break;
-      case 6:
-        p2g_block(3, 0, ctx, g, ch, p, b);
+      case 13:
+        p2g_block(3, 0, 1, ctx, g, ch, p, b);
         break;
-      case 7:
-        p2g_block_apic(3, ctx, g, ch, p, b);
+      case 15:
+        p2g_block_apic(3, 1, ctx, g, ch, p, b);
+        break;
+      case 17:
+        p2g_block(4, 0, 1, ctx, g, ch, p, b);
+        break;
+      case 19:
+        p2g_block_apic(4, 1, ctx, g, ch, p, b);
         break;
       case 8:
-        p2g_block(4, 0, ctx, g, ch, p, b);
+        p2g_block(2, 0, 0, ctx, g, ch, p, b);
+        break;
+      case 10:
+        p2g_block_apic(2, 0, ctx, g, ch, p, b);
+        break;
+      case 12:
+        p2g_block(3, 0, 0, ctx, g, ch, p, b);
+        break;
+      case 14:
+        p2g_block_apic(3, 0, ctx, g, ch, p, b);
+        break;
+      case 16:
+        p2g_block(4, 0, 0, ctx, g, ch, p, b);
         break;
       default:
-        p2g_block_apic(4, ctx, g, ch, p, b);
+        p2g_block_apic(4, 0, ctx, g, ch, p, b);
         break;
       }
     }
   }
+}
+
+void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                    const mpm_grid_values *val, const mpm_particles *p) {
+  mpm_real *ch[MPM_P2G_CHANNELS];
+  p2g_channels(val, ch);
+  p2g_blocks(ctx, g, ch, p, 1);
+}
+
+void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                                  const mpm_grid_values *val, const mpm_particles *p) {
+  mpm_real *ch[MPM_P2G_CHANNELS];
+  p2g_channels(val, ch);
+  p2g_blocks(ctx, g, ch, p, 0);
 }
 
 void mpm_p2g_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g, const mpm_grid_values *val,

@@ -346,4 +346,76 @@ MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane
   }
 }
 
+/* The scatter of per-particle matrices M (the lanes' M_p) to a pad of `stride` >= 4 reals per
+ * node: f_d(node) += sum_e M_de dw_e(node), grad w = (dwx wy wz, wx dwy wz, wx wy dwz), lanes
+ * summed once per node. The force of P2G is this with M = -V0 tau. */
+MPM_ALWAYS_INLINE void mpm_scatter_lanes(const int W, const mpm_lane_stencil *s, const mpm_vl M[9],
+                                         mpm_real *pad, int stride, long off, long sx, long sy) {
+  mpm_vl FX[3][MPM_STENCIL_MAX], FY[3][MPM_STENCIL_MAX], FZ[3][MPM_STENCIL_MAX];
+  for (int d = 0; d < 3; ++d)
+    for (int q = 0; q < W; ++q) {
+      FX[d][q] = M[3 * d] * s->dw[0][q];
+      FY[d][q] = M[3 * d + 1] * s->dw[1][q];
+      FZ[d][q] = M[3 * d + 2] * s->dw[2][q];
+    }
+  const mpm_vl zero = {0};
+  for (int i = 0; i < W; ++i) {
+    const mpm_vl wx = s->w[0][i];
+    for (int j = 0; j < W; ++j) {
+      const mpm_vl wy = s->w[1][j], wxy = wx * wy;
+      mpm_vl UF[3];
+      for (int d = 0; d < 3; ++d) UF[d] = wy * FX[d][i] + wx * FY[d][j];
+      for (int k = 0; k < W; ++k) {
+        const mpm_vl wz = s->w[2][k];
+        mpm_real *node = pad + (off + i * sx + j * sy + k) * stride;
+        mpm_vl c[4] = {wz * UF[0] + wxy * FZ[0][k], wz * UF[1] + wxy * FZ[1][k],
+                       wz * UF[2] + wxy * FZ[2][k], zero};
+        const mpm_vl sum = mpm_vl_sum4(c);
+        for (int d = 0; d < 3; ++d) node[d] += sum[d];
+      }
+    }
+  }
+}
+
+/* The gradient of a node field u at the lanes' particles: G_de = sum_nodes u_d dw_e, from a
+ * pad of `stride` reals per node (u in the first 3). */
+MPM_ALWAYS_INLINE void mpm_gradient_lanes(const int W, const mpm_lane_stencil *s,
+                                          const mpm_real *pad, int stride, long off, long sx,
+                                          long sy, mpm_vl G[9]) {
+  const mpm_vl zero = {0};
+  mpm_vl gx[3], gy[3], gz[3];
+  for (int d = 0; d < 3; ++d) gx[d] = gy[d] = gz[d] = zero;
+  for (int i = 0; i < W; ++i) {
+    mpm_vl Y0[3], Y1[3], Y2[3];
+    for (int d = 0; d < 3; ++d) Y0[d] = Y1[d] = Y2[d] = zero;
+    for (int j = 0; j < W; ++j) {
+      mpm_vl Z0[3], Z1[3];
+      for (int d = 0; d < 3; ++d) Z0[d] = Z1[d] = zero;
+      for (int k = 0; k < W; ++k) {
+        const mpm_real *node = pad + (off + i * sx + j * sy + k) * stride;
+        for (int d = 0; d < 3; ++d) {
+          const mpm_vl u = mpm_vl_splat(node[d]);
+          Z0[d] += s->w[2][k] * u;
+          Z1[d] += s->dw[2][k] * u;
+        }
+      }
+      for (int d = 0; d < 3; ++d) {
+        Y0[d] += s->dw[1][j] * Z0[d];
+        Y1[d] += s->w[1][j] * Z0[d];
+        Y2[d] += s->w[1][j] * Z1[d];
+      }
+    }
+    for (int d = 0; d < 3; ++d) {
+      gx[d] += s->dw[0][i] * Y1[d];
+      gy[d] += s->w[0][i] * Y0[d];
+      gz[d] += s->w[0][i] * Y2[d];
+    }
+  }
+  for (int d = 0; d < 3; ++d) {
+    G[3 * d] = gx[d];
+    G[3 * d + 1] = gy[d];
+    G[3 * d + 2] = gz[d];
+  }
+}
+
 #endif

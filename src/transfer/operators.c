@@ -1,0 +1,283 @@
+/* operators.c - the separate transfer operators (see operators.h): the sparse grid's SIMD
+ * versions on the batch walk, and the dense grid's scalar reference versions. */
+#include "transfer/operators.h"
+#include "core/parallel.h"
+#include "transfer/batches.h"
+#include "transfer/stress_window.h"
+#include "transfer/transfer_lanes.h"
+
+#include <string.h>
+
+#define ALWAYS_INLINE static inline __attribute__((always_inline))
+#define STRIDE 4 /* reals per node in the operators' pads: 3 components and one unused */
+
+/* ---- sparse grid ---- */
+
+/* The lanes' matrices: M_p from the arrays, or -V0 tau_p from the stress window. Lanes >= n
+ * are zero. */
+ALWAYS_INLINE void batch_matrices(const int stress, const mpm_particles *p, const mpm_batches *it,
+                                  int contiguous, const mpm_real *const M[9],
+                                  const stress_window *w, mpm_vl out[9]) {
+  mpm_vl live = {0};
+  for (int l = 0; l < it->n; ++l) live[l] = 1;
+  if (!stress) {
+    for (int c = 0; c < 9; ++c) out[c] = mpm_lanes_load(M[c], it->idx, it->n, contiguous) * live;
+    return;
+  }
+  const mpm_vl nv = -mpm_lanes_load(p->vol0, it->idx, it->n, contiguous) * live;
+  for (int c = 0; c < 9; ++c) {
+    mpm_vl t = {0}; /* lanes >= n of the window may hold anything */
+    for (int l = 0; l < it->n; ++l) t[l] = w->tau[c][it->pos - w->begin + (uint32_t)l];
+    out[c] = nv * t;
+  }
+}
+
+ALWAYS_INLINE void scatter_block(const int W, const int stress, const mpm_transfer_ctx *ctx,
+                                 const mpm_sparse_grid *g, mpm_real *const f[3],
+                                 const mpm_real *const M[9], const mpm_particles *p, int32_t b) {
+  mpm_real pad[MPM_PAD_NODES * STRIDE] __attribute__((aligned(MPM_ALIGN)));
+  memset(pad, 0, sizeof pad);
+  const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
+                      g->coord[b][2] * MPM_BLOCK};
+  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
+  stress_window w;
+  w.begin = w.count = 0;
+  mpm_batches it;
+  mpm_batches_begin(&it, g, (size_t)b);
+  while (mpm_batches_next(&it)) {
+    if (stress) {
+      if (it.material_first) w.begin = w.count = 0;
+      stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
+    }
+    const int contiguous = mpm_batch_contiguous(it.idx, it.n);
+    int base[3];
+    mpm_lane_stencil s;
+    mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, it.idx, it.n, contiguous, 0, base, &s);
+    mpm_vl Mv[9];
+    batch_matrices(stress, p, &it, contiguous, M, &w, Mv);
+    mpm_scatter_lanes(W, &s, Mv, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
+                      MPM_PAD);
+  }
+  mpm_pad_add(W, g, b, 3, pad, STRIDE, f);
+}
+
+static void scatter_sparse(const int stress, const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                           mpm_real *const f[3], const mpm_real *const M[9],
+                           const mpm_particles *p) {
+  const int W = ctx->kernel.width;
+  for (int colour = 0; colour < 8; ++colour) {
+    const long begin = (long)g->color_start[colour], end = (long)g->color_start[colour + 1];
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long q = begin; q < end; ++q) {
+      const int32_t b = g->color_blocks[q];
+      switch (W * 2 + stress) {
+      case 4:
+        scatter_block(2, 0, ctx, g, f, M, p, b);
+        break;
+      case 5:
+        scatter_block(2, 1, ctx, g, f, M, p, b);
+        break;
+      case 6:
+        scatter_block(3, 0, ctx, g, f, M, p, b);
+        break;
+      case 7:
+        scatter_block(3, 1, ctx, g, f, M, p, b);
+        break;
+      case 8:
+        scatter_block(4, 0, ctx, g, f, M, p, b);
+        break;
+      default:
+        scatter_block(4, 1, ctx, g, f, M, p, b);
+        break;
+      }
+    }
+  }
+}
+
+ALWAYS_INLINE void gather_block(const int W, const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                                const mpm_real *const u[3], const mpm_particles *p,
+                                mpm_real *const G[9], int32_t b) {
+  mpm_real pad[MPM_PAD_NODES * STRIDE] __attribute__((aligned(MPM_ALIGN)));
+  mpm_pad_gather(W, g, b, 3, u, STRIDE, pad);
+  const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
+                      g->coord[b][2] * MPM_BLOCK};
+  const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
+  mpm_batches it;
+  mpm_batches_begin(&it, g, (size_t)b);
+  while (mpm_batches_next(&it)) {
+    const int contiguous = mpm_batch_contiguous(it.idx, it.n);
+    int base[3];
+    mpm_lane_stencil s;
+    mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, it.idx, it.n, contiguous, 0, base, &s);
+    mpm_vl Gv[9];
+    mpm_gradient_lanes(W, &s, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD, MPM_PAD,
+                       Gv);
+    for (int c = 0; c < 9; ++c) mpm_lanes_store(G[c], it.idx, it.n, contiguous, Gv[c]);
+  }
+}
+
+static void gather_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                          const mpm_real *const u[3], const mpm_particles *p,
+                          mpm_real *const G[9]) {
+  const int W = ctx->kernel.width;
+  const long nb = (long)g->owner_count;
+#pragma omp parallel for schedule(dynamic, 8)
+  for (long b = 0; b < nb; ++b) {
+    switch (W) {
+    case 2:
+      gather_block(2, ctx, g, u, p, G, (int32_t)b);
+      break;
+    case 3:
+      gather_block(3, ctx, g, u, p, G, (int32_t)b);
+      break;
+    default:
+      gather_block(4, ctx, g, u, p, G, (int32_t)b);
+      break;
+    }
+  }
+}
+
+/* ---- dense grid: scalar reference loops ---- */
+
+/* Stencil of particle i and the dense index of its base node. */
+static long dense_stencil(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
+                          const mpm_particles *p, size_t i, mpm_stencil *s) {
+  const mpm_real xr[3] = {p->x[0][i] - ctx->origin[0], p->x[1][i] - ctx->origin[1],
+                          p->x[2][i] - ctx->origin[2]};
+  mpm_kernel_stencil(&ctx->kernel, xr, s);
+  return ((long)s->base[0] * g->n[1] + s->base[1]) * g->n[2] + s->base[2];
+}
+
+/* f += M grad w over particle i's stencil (M row-major). */
+static void dense_scatter_particle(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
+                                   const mpm_particles *p, size_t i, const mpm_real M[9],
+                                   mpm_real *const f[3]) {
+  mpm_stencil s;
+  const long n0 = dense_stencil(ctx, g, p, i, &s);
+  const int W = ctx->kernel.width;
+  const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
+  for (int a = 0; a < W; ++a)
+    for (int b = 0; b < W; ++b)
+      for (int c = 0; c < W; ++c) {
+        const mpm_real gw[3] = {s.dw[0][a] * s.w[1][b] * s.w[2][c],
+                                s.w[0][a] * s.dw[1][b] * s.w[2][c],
+                                s.w[0][a] * s.w[1][b] * s.dw[2][c]};
+        const long n = n0 + a * sx + b * sy + c;
+        for (int d = 0; d < 3; ++d)
+          f[d][n] += M[3 * d] * gw[0] + M[3 * d + 1] * gw[1] + M[3 * d + 2] * gw[2];
+      }
+}
+
+static void dense_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
+                                const mpm_grid_values *val, const mpm_particles *p) {
+  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
+  for (size_t i = 0; i < p->count; ++i) {
+    mpm_stencil s;
+    const long n0 = dense_stencil(ctx, g, p, i, &s);
+    const mpm_real m = p->mass[i];
+    for (int a = 0; a < W; ++a)
+      for (int b = 0; b < W; ++b)
+        for (int c = 0; c < W; ++c) {
+          const mpm_real w = s.w[0][a] * s.w[1][b] * s.w[2][c];
+          const long n = n0 + a * sx + b * sy + c;
+          val->mass[n] += w * m;
+          const mpm_real av[3] = {s.a[0][a] * s.w[1][b] * s.w[2][c],
+                                  s.w[0][a] * s.a[1][b] * s.w[2][c],
+                                  s.w[0][a] * s.w[1][b] * s.a[2][c]};
+          for (int d = 0; d < 3; ++d) {
+            mpm_real q = w * m * p->v[d][i];
+            if (apic)
+              q += m * (p->B[3 * d][i] * av[0] + p->B[3 * d + 1][i] * av[1] +
+                        p->B[3 * d + 2][i] * av[2]);
+            val->v0[d][n] += q;
+          }
+        }
+  }
+}
+
+static void dense_stress_force(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
+                               mpm_real *const f[3], const mpm_particles *p) {
+  mpm_real tau[9][MPM_STRESS_CHUNK];
+  uint32_t idx[MPM_STRESS_CHUNK];
+  size_t i = 0;
+  while (i < p->count) { /* chunks of consecutive particles of one material */
+    const int32_t m = p->material[i];
+    int n = 0;
+    while (i + (size_t)n < p->count && n < MPM_STRESS_CHUNK && p->material[i + (size_t)n] == m) {
+      idx[n] = (uint32_t)(i + (size_t)n);
+      ++n;
+    }
+    chunk_stress(&ctx->materials[m], p, idx, n, tau);
+    for (int q = 0; q < n; ++q) {
+      mpm_real K[9];
+      for (int c = 0; c < 9; ++c) K[c] = -p->vol0[idx[q]] * tau[c][q];
+      dense_scatter_particle(ctx, g, p, idx[q], K, f);
+    }
+    i += (size_t)n;
+  }
+}
+
+static void dense_gather(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
+                         const mpm_real *const u[3], const mpm_particles *p, mpm_real *const G[9]) {
+  const int W = ctx->kernel.width;
+  const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
+  const long count = (long)p->count;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < count; ++i) {
+    mpm_stencil s;
+    const long n0 = dense_stencil(ctx, g, p, (size_t)i, &s);
+    mpm_real acc[9] = {0};
+    for (int a = 0; a < W; ++a)
+      for (int b = 0; b < W; ++b)
+        for (int c = 0; c < W; ++c) {
+          const mpm_real gw[3] = {s.dw[0][a] * s.w[1][b] * s.w[2][c],
+                                  s.w[0][a] * s.dw[1][b] * s.w[2][c],
+                                  s.w[0][a] * s.w[1][b] * s.dw[2][c]};
+          const long n = n0 + a * sx + b * sy + c;
+          for (int d = 0; d < 3; ++d)
+            for (int e = 0; e < 3; ++e) acc[3 * d + e] += u[d][n] * gw[e];
+        }
+    for (int k = 0; k < 9; ++k) G[k][i] = acc[k];
+  }
+}
+
+/* ---- the operators ---- */
+
+void mpm_p2g_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                           const mpm_grid_values *val, const mpm_particles *p) {
+  if (g->kind == MPM_GRID_SPARSE)
+    mpm_p2g_mass_momentum_sparse(ctx, &g->impl.sparse, val, p);
+  else
+    dense_mass_momentum(ctx, &g->impl.dense, val, p);
+}
+
+void mpm_p2g_stress_force(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                          const mpm_particles *p) {
+  if (g->kind == MPM_GRID_SPARSE)
+    scatter_sparse(1, ctx, &g->impl.sparse, f, NULL, p);
+  else
+    dense_stress_force(ctx, &g->impl.dense, f, p);
+}
+
+void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                          const mpm_real *const M[9], const mpm_particles *p) {
+  if (g->kind == MPM_GRID_SPARSE) {
+    scatter_sparse(0, ctx, &g->impl.sparse, f, M, p);
+    return;
+  }
+  for (size_t i = 0; i < p->count; ++i) {
+    mpm_real Mi[9];
+    for (int c = 0; c < 9; ++c) Mi[c] = M[c][i];
+    dense_scatter_particle(ctx, &g->impl.dense, p, i, Mi, f);
+  }
+}
+
+void mpm_gather_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                          const mpm_real *const u[3], const mpm_particles *p,
+                          mpm_real *const G[9]) {
+  if (g->kind == MPM_GRID_SPARSE)
+    gather_sparse(ctx, &g->impl.sparse, u, p, G);
+  else
+    dense_gather(ctx, &g->impl.dense, u, p, G);
+}

@@ -1,0 +1,43 @@
+/* operators.h - the transfers as separate, reusable operators (DESIGN.md, "Transfers as
+ * operators").
+ *
+ * An explicit step uses the fused fast path (transfer.h: stress + scatter in one pass;
+ * velocity, F, return map and advection in one pass). The implicit solve (Zhu et al. sec. 6,
+ * eqs. 12-15; Stomakhin et al. 2013 sec. 4 for material points) needs the pieces alone, many
+ * times per step, without moving particles:
+ *   mass and momentum   m_i += sum_p w_ip m_p,
+ *                       p_i += sum_p w_ip m_p (v_p + B_p D_p^{-1} (x_i - x_p))  (APIC part
+ *                       with APIC; Gao sec. 3.2 step 1)
+ *   stress divergence   f_i += -sum_p V_p^0 tau_p grad w_ip      (Gao sec. 3.2 step 2)
+ *   matrix scatter      f_i += sum_p M_p grad w_ip               (the force differential of
+ *                       Stomakhin eq. 6 with M_p = -V0 A_p F_p^T, A_p = dP/dF : dF_p)
+ *   gradient gather     G_p = sum_i u_i grad w_ip^T              (dF_p = dt G_p F_p)
+ * The matrix scatter and the gradient gather are adjoint, sum_p <G_p(u), M_p> =
+ * sum_i <u_i, f_i(M)>, which is what makes the implicit system's matrix symmetric
+ * (tests/test_transfer_operators.c).
+ *
+ * Node arrays are those of one grid level (node n at index n: the level's view of the DOF set,
+ * mpm_grid_values, or a solver vector offset by the level's dof_begin); per-particle matrices
+ * are 9 arrays (row-major components) indexed like the particles. On the sparse grid the
+ * particles must be sorted by the level's activation; the operators walk them with the batch
+ * walk of batches.h as SIMD lanes, the scatters colour by colour (deterministic for any
+ * number of threads). The dense reference grid uses plain scalar loops. */
+#ifndef MPM_TRANSFER_OPERATORS_H
+#define MPM_TRANSFER_OPERATORS_H
+
+#include "transfer/transfer.h"
+
+void mpm_p2g_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                           const mpm_grid_values *val, const mpm_particles *p);
+void mpm_p2g_stress_force(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                          const mpm_particles *p);
+void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                          const mpm_real *const M[9], const mpm_particles *p);
+void mpm_gather_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                          const mpm_real *const u[3], const mpm_particles *p, mpm_real *const G[9]);
+
+/* The sparse grid's mass and momentum P2G (p2g.c, the fused kernels without the force). */
+void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                                  const mpm_grid_values *val, const mpm_particles *p);
+
+#endif
