@@ -391,7 +391,7 @@ static void run_conservation(mpm_kernel_kind kind) {
     u.boundary.wall_hi[d] = 1000000;
   }
   mpm_dofs_explicit_update(&u, MPM_P2G_MOMENTUM_FORCE, &dofs);
-  mpm_g2p_result r = mpm_domain_g2p(&ctx, &s, &val, NULL, 0);
+  mpm_g2p_result r = mpm_domain_g2p(&ctx, &s, &val, &u.boundary);
   assert_true(r.bad_particle < 0);
   double P_after[3] = {0, 0, 0};
   for (size_t q = 0; q < s.particles.count; ++q)

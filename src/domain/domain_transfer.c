@@ -183,8 +183,7 @@ void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
 }
 
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
-                              const mpm_grid_values *dof, const mpm_collider_pose *poses,
-                              int collider_count) {
+                              const mpm_grid_values *dof, const mpm_boundary *boundary) {
   const long nc = (long)s->corner_count;
   const mpm_embedding *E = &s->corner_grid;
   const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
@@ -212,14 +211,14 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
       s->cvg[d][c] = vnew[d];
       v[d] = alpha * (s->cv[d][c] + dv[d]) + (1 - alpha) * vnew[d];
     }
-    /* colliders on the corners (Zhu sec. 7, Algorithm 1 line 24): the corner velocity obeys
-     * the boundary rule, and the particles take their velocities from the corners, which
-     * applies the collision impulse to them. The corner moves with the grid velocity (which
-     * the grid update already made obey the colliders), as F does: F stays the gradient of
-     * the corner positions (F = sum_a x_a g_ap^T) */
+    /* colliders and walls on the corners (Zhu sec. 7, Algorithm 1 line 24): the corner
+     * velocity obeys the boundary rules, and the particles take their velocities from the
+     * corners, which applies the collision impulse to them. The corner moves with the grid
+     * velocity (which the grid update already made obey the boundary), as F does: F stays the
+     * gradient of the corner positions (F = sum_a x_a g_ap^T) */
     const mpm_real vg[3] = {vnew[0], vnew[1], vnew[2]};
     const mpm_real xn[3] = {s->cx[0][c], s->cx[1][c], s->cx[2][c]};
-    for (int q = 0; q < collider_count; ++q) mpm_collider_apply(&poses[q], xn, v);
+    mpm_boundary_apply(boundary, xn, 0, v);
     const mpm_real vg2 = vg[0] * vg[0] + vg[1] * vg[1] + vg[2] * vg[2];
     if (vg2 > max_v2) max_v2 = vg2;
     for (int d = 0; d < 3; ++d) {

@@ -15,7 +15,7 @@
 #ifndef MPM_DOMAIN_DOMAIN_TRANSFER_H
 #define MPM_DOMAIN_DOMAIN_TRANSFER_H
 
-#include "collide/collider.h"
+#include "collide/boundary.h"
 #include "domain/domain.h"
 #include "grid/sparse_grid.h"
 #include "transfer/transfer.h"
@@ -33,11 +33,10 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_spa
                    size_t dof_begin, const mpm_grid_values *dof);
 
 /* After the grid update (the DOF set holds v^n in v0 and v^{n+1} in v; dof as for P2G): the
- * corners' velocities through their embedding, then corners and particles. poses: colliders
- * at the end of the step (count of them). */
+ * corners' velocities through their embedding, the boundary rules (colliders at the end of
+ * the step, walls) at the corners, then corners and particles. */
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
-                              const mpm_grid_values *dof, const mpm_collider_pose *poses,
-                              int collider_count);
+                              const mpm_grid_values *dof, const mpm_boundary *boundary);
 
 /* F_p^{n+1} = F_p^n + dt grad_X v (Zhu eq. 7) of particle q from the grid velocities at its
  * corners (s->cvg), as mpm_domain_g2p does it; exposed for tests. */

@@ -128,8 +128,7 @@ static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
   c->r = mpm_g2p(&c->tc, &sim->grid, &c->val, &sim->particles);
   c->bad_set = &sim->particles;
   if (c->domains) {
-    const mpm_g2p_result rd =
-        mpm_domain_g2p(&c->dtc, &sim->domains, &c->all, sim->poses, sim->collider_count);
+    const mpm_g2p_result rd = mpm_domain_g2p(&c->dtc, &sim->domains, &c->all, &c->update.boundary);
     if (rd.max_speed > c->r.max_speed) c->r.max_speed = rd.max_speed;
     if (rd.bad_particle >= 0 && c->r.bad_particle < 0) {
       c->bad_set = &sim->domains.particles;
