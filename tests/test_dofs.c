@@ -36,7 +36,10 @@ static void fixture_make(fixture *f) {
   const mpm_real v[3] = {0, 0, 0};
   for (int i = 0; i < 4; ++i) mpm_particles_push(&p, x[i], v, 1, 1, 0, 0);
   const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_QUADRATIC, f->sparse.dx, f->sparse.dx);
-  assert_int_equal(f->sparse.ops->activate(&f->sparse, &k, 1, &p), 0);
+  mpm_arena scratch;
+  mpm_arena_init(&scratch);
+  assert_int_equal(f->sparse.ops->activate(&f->sparse, &k, 1, &p, &scratch), 0);
+  mpm_arena_free(&scratch);
   mpm_particles_free(&p);
   const int n[3] = {5, 3, 4};
   assert_int_equal(mpm_grid_init_dense(&f->dense, 1, origin, (mpm_real)0.025, n), 0);

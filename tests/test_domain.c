@@ -350,7 +350,9 @@ static void run_conservation(mpm_kernel_kind kind) {
   mpm_grid_init_sparse(&grid, 0, ctx.origin, (mpm_real)dx);
   mpm_particles none;
   mpm_particles_init(&none, 16);
-  assert_int_equal(grid.ops->activate(&grid, &ctx.kernel, 1, &none), 0);
+  mpm_arena scratch;
+  mpm_arena_init(&scratch);
+  assert_int_equal(grid.ops->activate(&grid, &ctx.kernel, 1, &none, &scratch), 0);
   assert_int_equal(mpm_domain_activate(&s, &grid.impl.sparse, &ctx.kernel, ctx.origin), 0);
   mpm_dofs dofs;
   mpm_dofs_init(&dofs);
@@ -359,7 +361,7 @@ static void run_conservation(mpm_kernel_kind kind) {
   assert_int_equal(mpm_dofs_end_layout(&dofs, MPM_DOF_ALL), 0);
   mpm_dofs_clear(&dofs, MPM_DOF_ALL);
   const mpm_grid_values val = mpm_dofs_grid_values(&dofs, &grid);
-  mpm_domain_p2g(&ctx, &s, &grid.impl.sparse, grid.dof_begin, &val);
+  mpm_domain_p2g(&ctx, &s, &grid.impl.sparse, grid.dof_begin, &val, &scratch);
 
   double m_p = 0, P_p[3] = {0, 0, 0};
   for (size_t q = 0; q < s.particles.count; ++q) {
@@ -400,6 +402,7 @@ static void run_conservation(mpm_kernel_kind kind) {
 
   mpm_grid_free(&grid);
   mpm_dofs_free(&dofs);
+  mpm_arena_free(&scratch);
   mpm_particles_free(&none);
   mpm_particles_free(&p);
   mpm_domain_set_free(&s);

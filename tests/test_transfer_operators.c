@@ -23,6 +23,7 @@ typedef struct world {
   mpm_material mat[2];
   mpm_transfer_ctx ctx;
   mpm_grid grid;
+  mpm_arena scratch;
   mpm_dofs dofs;
   mpm_grid_values val;
 } world;
@@ -73,7 +74,8 @@ static void world_make(world *w, mpm_kernel_kind kind, mpm_transfer_kind transfe
     mpm_grid_init_sparse(&w->grid, 0, ORIGIN, DX);
   else
     assert_int_equal(mpm_grid_init_dense(&w->grid, 0, ORIGIN, DX, n), 0);
-  assert_int_equal(w->grid.ops->activate(&w->grid, &t->kernel, 2, &w->p), 0);
+  mpm_arena_init(&w->scratch);
+  assert_int_equal(w->grid.ops->activate(&w->grid, &t->kernel, 2, &w->p, &w->scratch), 0);
   mpm_dofs_init(&w->dofs);
   mpm_dofs_begin_layout(&w->dofs);
   assert_int_equal(mpm_dofs_add_grid(&w->dofs, &w->grid), 0);
@@ -86,6 +88,7 @@ static void world_free(world *w) {
   mpm_particles_free(&w->p);
   mpm_dofs_free(&w->dofs);
   mpm_grid_free(&w->grid);
+  mpm_arena_free(&w->scratch);
 }
 
 /* The DOF of node idx of the level (independently of the transfer code: through the block

@@ -25,6 +25,7 @@
 #define STAGGER_SLOTS 31 /* odd, so successive arrays cycle through distinct sets */
 
 static atomic_size_t live_bytes;
+static atomic_size_t alloc_calls;
 static atomic_size_t peak_bytes;
 static atomic_uint stagger_counter;
 
@@ -34,6 +35,7 @@ typedef struct header {
 } header;
 
 void *mpm_alloc(size_t bytes) {
+  atomic_fetch_add(&alloc_calls, 1);
   const int large = bytes >= HUGE_THRESHOLD;
   const size_t align = large ? HUGE_ALIGN : MPM_ALIGN;
   size_t offset = MPM_ALIGN; /* room for the header, keeps MPM_ALIGN alignment */
@@ -72,6 +74,9 @@ void mpm_free(void *p) {
 
 size_t mpm_alloc_live_bytes(void) {
   return atomic_load(&live_bytes);
+}
+size_t mpm_alloc_calls(void) {
+  return atomic_load(&alloc_calls);
 }
 size_t mpm_alloc_peak_bytes(void) {
   return atomic_load(&peak_bytes);

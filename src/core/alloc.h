@@ -11,6 +11,7 @@ void *mpm_alloc(size_t bytes); /* aligned to MPM_ALIGN, NULL on failure */
 void *mpm_calloc(size_t count, size_t size);
 void mpm_free(void *p);            /* NULL is fine */
 size_t mpm_alloc_live_bytes(void); /* bytes currently allocated through mpm_alloc */
+size_t mpm_alloc_calls(void);      /* mpm_alloc calls since start (tests: a warm step makes none) */
 size_t mpm_alloc_peak_bytes(void); /* high-water mark since start or last reset */
 void mpm_alloc_reset_peak(void);
 

@@ -37,9 +37,6 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) mpm_free(*a[k]);
   mpm_free(s->adj_start);
   mpm_free(s->adj);
-  mpm_free(s->vP);
-  mpm_free(s->schedule_key);
-  mpm_free(s->block_colour);
   mpm_embedding_free(&s->corner_grid);
   memset(s, 0, sizeof *s);
 }

@@ -41,16 +41,10 @@ typedef struct mpm_domain_set {
   mpm_real *cm, *cp[3], *cf[3], *cvg[3];
   /* corner -> particle slots (p * 8 + a), CSR, for race-free particle -> corner gathers */
   uint32_t *adj_start, *adj;
-  /* per step, per particle: V_p^0 P_p, computed once and gathered by the corners */
-  mpm_real (*vP)[9];
-  size_t vP_capacity;
   /* per step: the embedding of the corners in the grid (Zhu eqs. 2-3: row a holds the grid
    * nodes of corner a's stencil and their weights omega_i(x_a); rows of unused corners are
    * empty), and its scatter schedule: corners keyed by base block, blocks coloured by parity */
   mpm_embedding corner_grid;
-  int32_t *schedule_key;
-  uint8_t *block_colour;
-  size_t schedule_key_capacity, block_colour_capacity;
 } mpm_domain_set;
 
 void mpm_domain_set_init(mpm_domain_set *s);

@@ -62,29 +62,21 @@ static inline size_t node_at(const int32_t blocks[8], const int base[3], int i, 
  * standard P2G does (sparse_grid.h): a stencil reaches only its base block and the forward
  * neighbours, so the groups of one colour never touch the same node. */
 static int build_corner_embedding(const mpm_kernel *k, const mpm_real origin[3], mpm_domain_set *s,
-                                  const mpm_sparse_grid *g, size_t dof_begin) {
+                                  const mpm_sparse_grid *g, size_t dof_begin, mpm_arena *scratch) {
   const size_t nc = s->corner_count, nb = g->block_count;
   const int W = k->width;
   mpm_embedding *E = &s->corner_grid;
   if (mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W))) return -1;
-  if (s->schedule_key_capacity < nc + 1) {
-    mpm_free(s->schedule_key);
-    s->schedule_key = mpm_alloc((nc + 1) * sizeof *s->schedule_key);
-    s->schedule_key_capacity = s->schedule_key ? nc + 1 : 0;
-  }
-  if (s->block_colour_capacity < nb + 1) {
-    mpm_free(s->block_colour);
-    s->block_colour = mpm_alloc((nb + 1) * sizeof *s->block_colour);
-    s->block_colour_capacity = s->block_colour ? nb + 1 : 0;
-  }
-  if (!s->schedule_key || !s->block_colour) return -1;
+  int32_t *key = mpm_arena_alloc(scratch, (nc + 1) * sizeof *key);
+  uint8_t *colour = mpm_arena_alloc(scratch, nb + 1);
+  if (!key || !colour) return -1;
   int missing = 0; /* a block not activated: cannot happen after mpm_domain_activate */
 #pragma omp parallel reduction(| : missing)
   {
     int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN}, blocks[8];
 #pragma omp for schedule(static)
     for (long c = 0; c < (long)nc; ++c) {
-      s->schedule_key[c] = -1;
+      key[c] = -1;
       if (!corner_used(s, (size_t)c)) continue;
       const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
                               s->cx[2][c] - origin[2]};
@@ -96,7 +88,7 @@ static int build_corner_embedding(const mpm_kernel *k, const mpm_real origin[3],
         missing = 1;
         continue;
       }
-      s->schedule_key[c] = blocks[0];
+      key[c] = blocks[0];
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
           for (int l = 0; l < W; ++l) {
@@ -110,25 +102,18 @@ static int build_corner_embedding(const mpm_kernel *k, const mpm_real origin[3],
   if (missing) return -1;
   for (size_t b = 0; b < nb; ++b) {
     const int32_t *bc = g->coord[b];
-    s->block_colour[b] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
+    colour[b] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
   }
-  return mpm_embedding_schedule(E, s->schedule_key, nb, s->block_colour);
+  return mpm_embedding_schedule(E, key, nb, colour);
 }
 
 int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
-                   size_t dof_begin, const mpm_grid_values *dof) {
+                   size_t dof_begin, const mpm_grid_values *dof, mpm_arena *scratch) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
   /* 0. V0 P of every active particle, once (each is gathered by its 8 corners) */
-  if (s->vP_capacity < p->count) {
-    mpm_free(s->vP); /* values are per step */
-    s->vP = mpm_alloc((p->count + 1) * sizeof *s->vP);
-    if (!s->vP) {
-      s->vP_capacity = 0;
-      return -1;
-    }
-    s->vP_capacity = p->count;
-  }
+  mpm_real(*vP)[9] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
+  if (!vP) return -1;
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < np; ++q) {
     if (!s->active[q]) continue;
@@ -136,7 +121,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_spa
     for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
     const mpm_material mat = mpm_material_at(&ctx->materials[p->material[q]], p->plastic[q]);
     mat.model->pk1(&mat, F, P);
-    for (int e = 0; e < 9; ++e) s->vP[q][e] = p->vol0[q] * P[e];
+    for (int e = 0; e < 9; ++e) vP[q][e] = p->vol0[q] * P[e];
   }
   /* 1. particle -> corner, gathered per corner (each corner sums its <= 8 particle slots in
    *    slot order: no races, the same sums for any thread count) */
@@ -150,9 +135,9 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_spa
       m += w * mq;
       for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
       /* f_a = -V0 P g_ap (Zhu eq. 8 with eq. 5) */
-      const mpm_real *gq = s->g[q][a], *vP = s->vP[q];
+      const mpm_real *gq = s->g[q][a], *vPq = vP[q];
       for (int d = 0; d < 3; ++d)
-        f[d] -= vP[3 * d] * gq[0] + vP[3 * d + 1] * gq[1] + vP[3 * d + 2] * gq[2];
+        f[d] -= vPq[3 * d] * gq[0] + vPq[3 * d + 1] * gq[1] + vPq[3 * d + 2] * gq[2];
     }
     s->cm[c] = (mpm_real)m;
     for (int d = 0; d < 3; ++d) {
@@ -163,7 +148,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_spa
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
    *    order: the same sums for any number of threads */
-  if (build_corner_embedding(&ctx->kernel, ctx->origin, s, g, dof_begin)) return -1;
+  if (build_corner_embedding(&ctx->kernel, ctx->origin, s, g, dof_begin, scratch)) return -1;
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};

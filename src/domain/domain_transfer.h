@@ -27,10 +27,11 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel 
 
 /* Rasterize the domain particles to their corners, and the corners to the grid level whose
  * first DOF is dof_begin through the corners' embedding (s->corner_grid, built here): the DOF
- * set's mass, momentum (v0) and force (dof: the values of all DOFs, DOF 0 at index 0) (ctx: kernel,
+ * set's mass, momentum (v0) and force (dof: the values of all DOFs, DOF 0 at index 0); the
+ * particles' stresses and the scatter schedule's keys are step scratch (ctx: kernel,
  * origin, materials). Returns 0, -1 when out of memory (nothing added to the grid then). */
 int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
-                   size_t dof_begin, const mpm_grid_values *dof);
+                   size_t dof_begin, const mpm_grid_values *dof, mpm_arena *scratch);
 
 /* After the grid update (the DOF set holds v^n in v0 and v^{n+1} in v; dof as for P2G): the
  * corners' velocities through their embedding, the boundary rules (colliders at the end of

@@ -6,8 +6,8 @@
 /* ---- sparse: one box per 4x4x4 block, blocks in activation order ---- */
 
 static int sparse_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
-                           const mpm_particles *p) {
-  return mpm_sparse_grid_sort(&g->impl.sparse, k, g->origin, material_count, p);
+                           const mpm_particles *p, mpm_arena *scratch) {
+  return mpm_sparse_grid_sort(&g->impl.sparse, k, g->origin, material_count, p, scratch);
 }
 
 static uint32_t *sparse_particle_order(mpm_grid *g) {
@@ -45,8 +45,8 @@ static const mpm_grid_ops sparse_ops = {"sparse",          sparse_activate,  spa
 /* ---- dense: every node always there, one box per x-slab ---- */
 
 static int dense_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
-                          const mpm_particles *p) {
-  (void)g, (void)k, (void)material_count, (void)p;
+                          const mpm_particles *p, mpm_arena *scratch) {
+  (void)g, (void)k, (void)material_count, (void)p, (void)scratch;
   return 0;
 }
 

@@ -30,8 +30,10 @@ typedef struct mpm_grid_ops {
   const char *name;
   /* Make every node that the stencils of kernel k around the particles p touch part of the
    * level (sparse: sort p into owner blocks, activate their pads, colour them; dense: every node
-   * already is). Nodes activated earlier in the step stay. 0, or -1 when out of memory. */
-  int (*activate)(mpm_grid *g, const mpm_kernel *k, int material_count, const mpm_particles *p);
+   * already is). Nodes activated earlier in the step stay. Scratch comes from `scratch` (the
+   * step's arena). 0, or -1 when out of memory. */
+  int (*activate)(mpm_grid *g, const mpm_kernel *k, int material_count, const mpm_particles *p,
+                  mpm_arena *scratch);
   /* The order in which the last activation wants the particles visited (perm[j]: the particle
    * visited j-th; the caller may permute the particle arrays into it and reset it to the
    * identity), or NULL when the variant visits them in memory order. */

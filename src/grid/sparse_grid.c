@@ -32,19 +32,14 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->neighbor);
   mpm_free(g->cell_start);
   mpm_free(g->color_blocks);
-  mpm_free(g->pkey);
   mpm_free(g->perm);
-  mpm_free(g->pkey64);
-  mpm_free(g->hist);
-  mpm_free(g->run_index);
   memset(g, 0, sizeof *g);
 }
 
 size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g) {
   return g->table_size * (sizeof(uint64_t) + sizeof(int32_t)) +
          g->block_capacity * (sizeof(int32_t) * 3 + sizeof(int32_t) * 8 + sizeof(int32_t)) +
-         (g->cell_capacity + g->hist_capacity) * sizeof(uint32_t) +
-         g->particle_capacity * (2 * sizeof(uint32_t) + sizeof(uint64_t));
+         g->cell_capacity * sizeof(uint32_t) + g->particle_capacity * sizeof(uint32_t);
 }
 
 static int grow_table(mpm_sparse_grid *g, size_t size) {
@@ -154,18 +149,17 @@ static int ensure_u32(uint32_t **a, size_t *cap, size_t need) {
 }
 
 int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
-                         int material_count, const mpm_particles *p) {
+                         int material_count, const mpm_particles *p, mpm_arena *scratch) {
   const size_t n = p->count;
-  if (n > g->particle_capacity) {
-    mpm_free(g->pkey);
+  if (n > g->particle_capacity || !g->perm) {
     mpm_free(g->perm);
-    mpm_free(g->pkey64);
-    g->pkey = mpm_alloc((n + 1) * sizeof(uint32_t));
     g->perm = mpm_alloc((n + 1) * sizeof(uint32_t));
-    g->pkey64 = mpm_alloc((n + 1) * sizeof(uint64_t));
-    if (!g->pkey || !g->perm || !g->pkey64) return -1;
+    if (!g->perm) return -1;
     g->particle_capacity = n;
   }
+  uint64_t *pk = mpm_arena_alloc(scratch, (n + 1) * sizeof(uint64_t));
+  uint32_t *pkey = mpm_arena_alloc(scratch, (n + 1) * sizeof(uint32_t));
+  if (!pk || !pkey) return -1;
   if (!g->table_size && grow_table(g, 4096)) return -1;
   memset(g->keys, 0xFF, g->table_size * sizeof(uint64_t));
   g->block_count = 0;
@@ -174,7 +168,6 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   /* 1. base node of each particle's stencil -> (owner block, cell in block), in parallel */
   const mpm_real inv_dx = k->inv_dx, shift = k->shift;
   const mpm_real *x0 = p->x[0], *x1 = p->x[1], *x2 = p->x[2];
-  uint64_t *pk = g->pkey64;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < (long)n; ++i) {
     /* int32 first: that conversion vectorizes, the direct one to int64 does not */
@@ -198,8 +191,8 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
     run_count[t + 1] = c;
   }
   for (int t = 0; t < nch; ++t) run_count[t + 1] += run_count[t];
-  if (ensure_u32(&g->run_index, &g->run_capacity, run_count[nch] + 1)) return -1;
-  uint32_t *runs = g->run_index;
+  uint32_t *runs = mpm_arena_alloc(scratch, (run_count[nch] + 1) * sizeof(uint32_t));
+  if (!runs) return -1;
 #pragma omp parallel for schedule(static, 1)
   for (int t = 0; t < nch; ++t) {
     const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
@@ -214,9 +207,8 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
                                      (int32_t)((bk >> 19) & mask19) - PKEY_BIAS,
                                      (int32_t)((bk >> 38) & mask19) - PKEY_BIAS);
     if (b < 0) return -1;
-    g->pkey[runs[r]] = (uint32_t)b;
+    pkey[runs[r]] = (uint32_t)b;
   }
-  uint32_t *pkey = g->pkey;
 #pragma omp parallel for schedule(static, 1)
   for (int t = 0; t < nch; ++t) {
     const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
@@ -236,10 +228,9 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   /* 3. stable counting sort by (block, material, cell), with per-chunk histograms: the result is
    *    the unique stable order, the same for any number of threads. */
   const size_t keys = g->owner_count * (size_t)material_count * MPM_BLOCK_NODES;
-  if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) ||
-      ensure_u32(&g->hist, &g->hist_capacity, keys * (size_t)nch + 1))
-    return -1;
-  uint32_t *cs = g->cell_start, *hist = g->hist;
+  uint32_t *hist = mpm_arena_alloc(scratch, (keys * (size_t)nch + 1) * sizeof(uint32_t));
+  if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) || !hist) return -1;
+  uint32_t *cs = g->cell_start;
   const int32_t *mat = p->material;
 #pragma omp parallel for schedule(static, 1)
   for (int t = 0; t < nch; ++t) {

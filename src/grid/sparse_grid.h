@@ -16,6 +16,7 @@
 #ifndef MPM_GRID_SPARSE_GRID_H
 #define MPM_GRID_SPARSE_GRID_H
 
+#include "core/arena.h"
 #include "grid/block.h"
 #include "interp/kernel.h"
 #include "core/particles.h"
@@ -42,13 +43,8 @@ typedef struct mpm_sparse_grid {
   /* owner blocks by colour: color_blocks[color_start[c] .. color_start[c+1]) */
   int32_t *color_blocks;
   size_t color_start[9];
-  /* per-particle scratch for sorting, and per-thread histograms */
-  uint64_t *pkey64;
-  uint32_t *pkey, *perm;
-  uint32_t *hist;
-  size_t hist_capacity;
-  uint32_t *run_index; /* starts of runs of particles in one block */
-  size_t run_capacity;
+  /* the sorted order (the sort's keys, runs and per-thread histograms are step scratch) */
+  uint32_t *perm;
   size_t particle_capacity;
   size_t particle_count; /* particles sorted by the last mpm_sparse_grid_sort */
 } mpm_sparse_grid;
@@ -59,9 +55,10 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g);
 /* Assign particles to owner blocks, sort them by (block, material, cell) into `perm` (particle j of
  * the sorted order is perm[j]), activate the pads and colour the owner blocks (see the file
  * comment). The particle arrays are not moved; the caller reorders them now and then with
- * mpm_particles_permute. Returns 0, or -1 when memory runs out. */
+ * mpm_particles_permute. The sort's keys and histograms come from `scratch` (taken back when the
+ * step ends). Returns 0, or -1 when memory runs out. */
 int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
-                         int material_count, const mpm_particles *p);
+                         int material_count, const mpm_particles *p, mpm_arena *scratch);
 
 /* Bytes held by the grid (hash, block lists, particle order), for memory reports; the node
  * values live in the DOF set. */

@@ -164,6 +164,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     mpm_grid_init_sparse(&sim->grid, 0, sim->origin, (mpm_real)sc->dx);
   }
   mpm_dofs_init(&sim->dofs);
+  mpm_arena_init(&sim->step_arena);
   sim->reorder_interval = 16;
 
   /* time */
@@ -269,6 +270,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim->poses);
   mpm_grid_free(&sim->grid);
   mpm_dofs_free(&sim->dofs);
+  mpm_arena_free(&sim->step_arena);
   mpm_free(sim->scratch);
   mpm_free(sim->iscratch);
   free(sim->frame_times);

@@ -39,10 +39,11 @@ struct mpm_sim {
   mpm_embedded_surface *surfaces; /* meshes of mesh bodies with domains (Zhu sec. 4.1) */
   int surface_count;
   mpm_real origin[3];
-  int cells[3];      /* grid cells per axis over the domain */
-  mpm_grid grid;     /* the grid level (sparse or dense; one level until the adaptive grid) */
-  mpm_dofs dofs;     /* the unknowns of the step: the values at the grid's nodes */
-  mpm_real *scratch; /* per-particle buffers for the periodic reorder */
+  int cells[3];         /* grid cells per axis over the domain */
+  mpm_grid grid;        /* the grid level (sparse or dense; one level until the adaptive grid) */
+  mpm_dofs dofs;        /* the unknowns of the step: the values at the grid's nodes */
+  mpm_arena step_arena; /* the step's scratch, taken back when the next step begins */
+  mpm_real *scratch;    /* per-particle buffers for the periodic reorder */
   uint32_t *iscratch;
   size_t scratch_capacity;
   int reorder_interval; /* physically reorder particles every this many steps */

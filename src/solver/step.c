@@ -74,7 +74,7 @@ static int ensure_scratch(mpm_sim *sim) {
 static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
   mpm_grid *g = &sim->grid;
   mpm_particles *p = &sim->particles;
-  if (g->ops->activate(g, &c->tc.kernel, sim->material_count, p))
+  if (g->ops->activate(g, &c->tc.kernel, sim->material_count, p, &sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory sorting %zu particles into grid blocks",
                          (long long)sim->steps, p->count);
@@ -111,8 +111,8 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
 
 static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
-  if (c->domains &&
-      mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid.impl.sparse, sim->grid.dof_begin, &c->all))
+  if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid.impl.sparse,
+                                   sim->grid.dof_begin, &c->all, &sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the stresses of %zu domain particles",
                          (long long)sim->steps, sim->domains.particles.count);
@@ -223,6 +223,10 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   if (max_dt > 0 && dt > max_dt) dt = max_dt;
   if (!(dt > 1e-12 * sim->frame_dt) || !isfinite(dt)) return dt_collapsed(sim, dt);
   const double t0 = mpm_wall_seconds();
+  /* the last step's scratch is taken back (the arena grows to the largest step it saw) */
+  if (mpm_arena_reset(&sim->step_arena))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for step scratch",
+                         (long long)sim->steps);
   step_ctx c;
   step_setup(sim, dt, &c);
   double t = t0;
