@@ -4,6 +4,7 @@ BUILD ?= build
 BUILD_DOUBLE ?= build-double
 BUILD_SANITIZE ?= build-sanitize
 BUILD_FUZZ ?= build-fuzz
+BUILD_TSAN ?= build-tsan
 FUZZ_SECONDS ?= 60
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
@@ -12,9 +13,16 @@ DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng
 	libhdf5-dev gnuplot-nox python3-vtk9 valgrind
 # clang and its runtime (libFuzzer, sanitizers): only `make fuzz` and `make test-fuzz` need them
 FUZZ_DEB_PACKAGES = clang libclang-rt-14-dev
+# ThreadSanitizer needs clang and LLVM's OpenMP runtime with its Archer tool (libarcher.so)
+TSAN_DEB_PACKAGES = clang libclang-rt-14-dev libomp-14-dev
+ARCHER ?= /usr/lib/llvm-14/lib/libarcher.so
+# the tests run under ThreadSanitizer: every parallel kernel (P2G colouring, G2P, the sort, the
+# DOF set's reductions and update, the embedding's scatter, the transfer operators, domains)
+TSAN_TESTS = test_sim|test_domain_sim|test_domain|test_dofs|test_embedding|test_transfer_operators|test_memory
 
 .PHONY: all deps build build-double build-sanitize demo test test-float test-double \
-	test-sanitize bench clean format valgrind deps-fuzz build-fuzz fuzz test-fuzz
+	test-sanitize bench clean format valgrind deps-fuzz build-fuzz fuzz test-fuzz deps-tsan \
+	build-tsan test-tsan
 
 all: build
 
@@ -37,6 +45,9 @@ deps:
 deps-fuzz: deps
 	$(call apt_install,$(FUZZ_DEB_PACKAGES))
 
+deps-tsan: deps
+	$(call apt_install,$(TSAN_DEB_PACKAGES))
+
 build: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD) -j $(JOBS)
@@ -56,12 +67,19 @@ build-fuzz: deps-fuzz
 	  -DMPM_OPENMP=OFF -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD_FUZZ) -j $(JOBS) --target fuzz_scene fuzz_obj fuzz_ply fuzz_checkpoint
 
+# ThreadSanitizer build (clang, LLVM's OpenMP) of the library and the tests of TSAN_TESTS
+build-tsan: deps-tsan
+	cmake -S . -B $(BUILD_TSAN) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_TSAN=ON \
+	  $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD_TSAN) -j $(JOBS) --target $(subst |, ,$(TSAN_TESTS))
+
 demo: build
 	./$(BUILD)/mpm run $(DEMO_SCENE) -o out
 
-# The whole suite: the default float build, the double build, float under ASan + UBSan, and
-# a short fuzz run of the scene, mesh and checkpoint readers, and the valgrind run below.
-test: test-float test-double test-sanitize test-fuzz valgrind
+# The whole suite: the default float build, the double build, float under ASan + UBSan, the
+# parallel tests under ThreadSanitizer, a short fuzz run of the scene, mesh and checkpoint
+# readers, and the valgrind run below.
+test: test-float test-double test-sanitize test-tsan test-fuzz valgrind
 
 test-float: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
@@ -72,6 +90,12 @@ test-double: build-double
 test-sanitize: build-sanitize
 	cd $(BUILD_SANITIZE) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS)
+
+# Archer (OMP_TOOL_LIBRARIES) tells ThreadSanitizer about OpenMP's barriers and locks; any
+# report fails the run.
+test-tsan: build-tsan
+	cd $(BUILD_TSAN) && OMP_TOOL_LIBRARIES=$(ARCHER) TSAN_OPTIONS="halt_on_error=1 exitcode=66 ignore_noninstrumented_modules=1" \
+	  ctest --output-on-failure -j $(JOBS) -R '^($(TSAN_TESTS))$$'
 
 # Fuzz the scene parser, the OBJ and PLY readers and the checkpoint reader for FUZZ_SECONDS each (fuzz/run.sh):
 # executions per target are printed; a crash, leak, sanitizer report or timeout fails, with
@@ -106,4 +130,4 @@ format:
 	clang-format -i $$(git ls-files '*.c' '*.h')
 
 clean:
-	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) $(BUILD_FUZZ) out
+	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) $(BUILD_FUZZ) $(BUILD_TSAN) out
