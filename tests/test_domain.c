@@ -353,7 +353,7 @@ static void run_conservation(mpm_kernel_kind kind) {
   mpm_arena scratch;
   mpm_arena_init(&scratch);
   assert_int_equal(grid.ops->activate(&grid, &ctx.kernel, 1, &none, &scratch), 0);
-  assert_int_equal(mpm_domain_activate(&s, &grid.impl.sparse, &ctx.kernel, ctx.origin), 0);
+  assert_int_equal(mpm_domain_activate(&s, &grid, &ctx.kernel), 0);
   mpm_dofs dofs;
   mpm_dofs_init(&dofs);
   mpm_dofs_begin_layout(&dofs);
@@ -361,7 +361,7 @@ static void run_conservation(mpm_kernel_kind kind) {
   assert_int_equal(mpm_dofs_end_layout(&dofs, MPM_DOF_ALL), 0);
   mpm_dofs_clear(&dofs, MPM_DOF_ALL);
   const mpm_grid_values val = mpm_dofs_grid_values(&dofs, &grid);
-  mpm_domain_p2g(&ctx, &s, &grid.impl.sparse, grid.dof_begin, &val, &scratch);
+  mpm_domain_p2g(&ctx, &s, &grid, &val, &scratch);
 
   double m_p = 0, P_p[3] = {0, 0, 0};
   for (size_t q = 0; q < s.particles.count; ++q) {

@@ -27,9 +27,12 @@ static const char *BAR =
     "   {\"shape\": {\"type\": \"box\", \"center\": [1.0, 0.5, 0.5], \"half_extent\": [0.05, 0.08, "
     "0.08]}, \"rule\": \"sticky\", \"motion\": {\"velocity\": [0.2, 0, 0]}}]}";
 
-static mpm_sim *bar(const char *domains, const char *extra) {
-  char text[4096];
-  snprintf(text, sizeof text, BAR, domains, extra);
+static mpm_sim *bar_on(const char *grid, const char *domains, const char *extra) {
+  char text[4096], fmt[4096];
+  /* the grid kind goes into the scene's solver section */
+  const char *g = strstr(BAR, " \"gravity\"");
+  snprintf(fmt, sizeof fmt, "%.*s \"solver\": {\"grid\": \"%s\"},%s", (int)(g - BAR), BAR, grid, g);
+  snprintf(text, sizeof text, fmt, domains, extra);
   mpm_scene scene;
   mpm_error err;
   if (mpm_scene_parse(text, "bar.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
@@ -37,6 +40,10 @@ static mpm_sim *bar(const char *domains, const char *extra) {
   if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
   mpm_scene_free(&scene);
   return sim;
+}
+
+static mpm_sim *bar(const char *domains, const char *extra) {
+  return bar_on("sparse", domains, extra);
 }
 
 /* Positions of all particles (standard and domain) by id. */
@@ -235,11 +242,34 @@ static void test_threads_bitwise(void **state) {
   mpm_sim_destroy(run[1]);
 }
 
+/* Particle domains on the dense reference grid: the corner embedding goes through the grid
+ * interface alone (grid/grid.h), and the dense grid gives bitwise the sparse grid's state (the
+ * corners' scatter schedule gives every node its contributions in the same order). */
+static void test_dense_equals_sparse(void **state) {
+  (void)state;
+  mpm_sim *run[2] = {bar_on("sparse", "true", ""), bar_on("dense", "true", "")};
+  for (int g = 0; g < 2; ++g)
+    for (int f = 0; f < 2; ++f)
+      if (mpm_sim_advance_frame(run[g]) != MPM_OK) fail_msg("%s", mpm_sim_last_error(run[g]));
+  assert_int_equal(run[1]->grid.kind, MPM_GRID_DENSE);
+  const mpm_domain_set *a = &run[0]->domains, *b = &run[1]->domains;
+  for (int d = 0; d < 3; ++d) {
+    assert_memory_equal(a->cx[d], b->cx[d], a->corner_count * sizeof(mpm_real));
+    assert_memory_equal(a->cv[d], b->cv[d], a->corner_count * sizeof(mpm_real));
+  }
+  for (int e = 0; e < 9; ++e)
+    assert_memory_equal(a->particles.F[e], b->particles.F[e],
+                        a->particles.count * sizeof(mpm_real));
+  assert_true(run[0]->steps == run[1]->steps && run[0]->steps > 10);
+  mpm_sim_destroy(run[0]);
+  mpm_sim_destroy(run[1]);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_stretched_bar),     cmocka_unit_test(test_release_from_scene_and_api),
-      cmocka_unit_test(test_domain_scene_keys), cmocka_unit_test(test_embedded_surface),
-      cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_dense_equals_sparse),        cmocka_unit_test(test_stretched_bar),
+      cmocka_unit_test(test_release_from_scene_and_api), cmocka_unit_test(test_domain_scene_keys),
+      cmocka_unit_test(test_embedded_surface),           cmocka_unit_test(test_threads_bitwise),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -37,6 +37,7 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) mpm_free(*a[k]);
   mpm_free(s->adj_start);
   mpm_free(s->adj);
+  mpm_free(s->corner_use);
   mpm_embedding_free(&s->corner_grid);
   memset(s, 0, sizeof *s);
 }
@@ -139,13 +140,18 @@ int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
 static int build_adjacency(mpm_domain_set *s) {
   mpm_free(s->adj_start);
   mpm_free(s->adj);
+  mpm_free(s->corner_use);
   s->adj_start = mpm_calloc(s->corner_count + 1, sizeof *s->adj_start);
   s->adj = mpm_alloc((s->particles.count * MPM_HEX_CORNERS + 1) * sizeof *s->adj);
-  if (!s->adj_start || !s->adj) return -1;
+  s->corner_use = mpm_alloc(s->corner_count + 1);
+  if (!s->adj_start || !s->adj || !s->corner_use) return -1;
   for (size_t p = 0; p < s->particles.count; ++p)
     if (s->active[p])
       for (int a = 0; a < MPM_HEX_CORNERS; ++a) s->adj_start[s->corner[p][a] + 1]++;
-  for (size_t c = 0; c < s->corner_count; ++c) s->adj_start[c + 1] += s->adj_start[c];
+  for (size_t c = 0; c < s->corner_count; ++c) {
+    s->corner_use[c] = s->adj_start[c + 1] != 0;
+    s->adj_start[c + 1] += s->adj_start[c];
+  }
   uint32_t *fill = mpm_alloc((s->corner_count + 1) * sizeof *fill);
   if (!fill) return -1;
   memcpy(fill, s->adj_start, (s->corner_count + 1) * sizeof *fill);

@@ -41,6 +41,7 @@ typedef struct mpm_domain_set {
   mpm_real *cm, *cp[3], *cf[3], *cvg[3];
   /* corner -> particle slots (p * 8 + a), CSR, for race-free particle -> corner gathers */
   uint32_t *adj_start, *adj;
+  uint8_t *corner_use; /* 1 when an active particle uses the corner (it takes part in steps) */
   /* per step: the embedding of the corners in the grid (Zhu eqs. 2-3: row a holds the grid
    * nodes of corner a's stencil and their weights omega_i(x_a); rows of unused corners are
    * empty), and its scatter schedule: corners keyed by base block, blocks coloured by parity */

@@ -7,108 +7,64 @@
 #include <math.h>
 #include <string.h>
 
-/* Corner c takes part in the step: an active particle uses it. */
-static inline int corner_used(const mpm_domain_set *s, size_t c) {
-  return s->adj_start[c] != s->adj_start[c + 1];
-}
-
-/* The 8 blocks around base block bb (the pad its stencils reach), through a cache of the last
- * base block: corners come in lattice order, so neighbours mostly share their base block.
- * With `activate` (g itself, serial use) missing blocks are activated, else only found. -1 when
- * one is missing or out of memory. */
-static int pad_blocks(const mpm_sparse_grid *g, mpm_sparse_grid *activate, const int32_t bb[3],
-                      int32_t last[3], int32_t blocks[8]) {
-  if (bb[0] == last[0] && bb[1] == last[1] && bb[2] == last[2]) return 0;
-  for (int o = 0; o < 8; ++o) {
-    const int32_t bc[3] = {bb[0] + ((o >> 2) & 1), bb[1] + ((o >> 1) & 1), bb[2] + (o & 1)};
-    blocks[o] = activate ? mpm_sparse_grid_touch(activate, bc) : mpm_sparse_grid_find(g, bc);
-    if (blocks[o] < 0) return -1;
-  }
-  for (int d = 0; d < 3; ++d) last[d] = bb[d];
-  return 0;
-}
-
-int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
-                        const mpm_real origin[3]) {
-  int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN}, blocks[8];
-  for (size_t c = 0; c < s->corner_count; ++c) {
-    if (!corner_used(s, c)) continue;
-    const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
-                            s->cx[2][c] - origin[2]};
-    mpm_stencil st;
-    mpm_kernel_stencil(k, xr, &st);
-    const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
-                           st.base[2] >> MPM_BLOCK_BITS};
-    if (pad_blocks(g, g, bb, last, blocks)) return -1;
-  }
-  return 0;
-}
-
-/* The level's node index of node base + (i, j, k) of a stencil whose base block's pad is
- * blocks[8]. */
-static inline size_t node_at(const int32_t blocks[8], const int base[3], int i, int j, int k) {
-  const int n[3] = {base[0] + i, base[1] + j, base[2] + k};
-  const int o = (((n[0] >> MPM_BLOCK_BITS) - (base[0] >> MPM_BLOCK_BITS)) << 2) |
-                (((n[1] >> MPM_BLOCK_BITS) - (base[1] >> MPM_BLOCK_BITS)) << 1) |
-                ((n[2] >> MPM_BLOCK_BITS) - (base[2] >> MPM_BLOCK_BITS));
-  const int local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
-  return (size_t)blocks[o] * MPM_BLOCK_NODES + (size_t)local;
+int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
+  const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]};
+  return g->ops->activate_points(g, k, s->corner_count, x, s->corner_use);
 }
 
 /* The embedding of the corners in the grid level (Zhu eqs. 2-3): row c holds the nodes of
- * corner c's stencil with their nonzero weights omega_i(x_c), as DOF indices (dof_begin + the
- * level's node index); rows of unused corners stay empty. Its scatter schedule groups the
- * used corners by base block and colours the blocks by the parity of their coordinates, as the
- * standard P2G does (sparse_grid.h): a stencil reaches only its base block and the forward
- * neighbours, so the groups of one colour never touch the same node. */
-static int build_corner_embedding(const mpm_kernel *k, const mpm_real origin[3], mpm_domain_set *s,
-                                  const mpm_sparse_grid *g, size_t dof_begin, mpm_arena *scratch) {
-  const size_t nc = s->corner_count, nb = g->block_count;
+ * corner c's stencil with their nonzero weights omega_i(x_c), as DOF indices (the level's
+ * dof_begin + its node index); rows of unused corners stay empty. Its scatter schedule groups
+ * the used corners by the grid's scatter key of their stencils and colours the keys as the grid
+ * says (grid.h, stencil_nodes: for the sparse grid the base block and its parity, as the
+ * standard P2G colours blocks), so that the groups of one colour never touch the same node. */
+static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const mpm_grid *g,
+                                  mpm_arena *scratch) {
+  const size_t nc = s->corner_count, nk = g->ops->scatter_key_count(g);
   const int W = k->width;
   mpm_embedding *E = &s->corner_grid;
   if (mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W))) return -1;
   int32_t *key = mpm_arena_alloc(scratch, (nc + 1) * sizeof *key);
-  uint8_t *colour = mpm_arena_alloc(scratch, nb + 1);
-  if (!key || !colour) return -1;
-  int missing = 0; /* a block not activated: cannot happen after mpm_domain_activate */
+  uint8_t *colour = mpm_arena_alloc(scratch, nc + 1),
+          *key_colour = mpm_arena_alloc(scratch, nk + 1);
+  if (!key || !colour || !key_colour) return -1;
+  const uint32_t dof_begin = (uint32_t)g->dof_begin;
+  int missing = 0; /* a node not activated: cannot happen after mpm_domain_activate */
 #pragma omp parallel reduction(| : missing)
   {
-    int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN}, blocks[8];
+    mpm_grid_cursor cursor;
+    mpm_grid_cursor_init(&cursor);
 #pragma omp for schedule(static)
     for (long c = 0; c < (long)nc; ++c) {
       key[c] = -1;
-      if (!corner_used(s, (size_t)c)) continue;
-      const mpm_real xr[3] = {s->cx[0][c] - origin[0], s->cx[1][c] - origin[1],
-                              s->cx[2][c] - origin[2]};
+      if (!s->corner_use[c]) continue;
+      const mpm_real xr[3] = {s->cx[0][c] - g->origin[0], s->cx[1][c] - g->origin[1],
+                              s->cx[2][c] - g->origin[2]};
       mpm_stencil st;
       mpm_kernel_stencil(k, xr, &st);
-      const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
-                             st.base[2] >> MPM_BLOCK_BITS};
-      if (pad_blocks(g, NULL, bb, last, blocks)) {
+      uint32_t nodes[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
+      if (g->ops->stencil_nodes(g, st.base, W, &cursor, nodes, &key[c], &colour[c])) {
         missing = 1;
+        key[c] = -1;
         continue;
       }
-      key[c] = blocks[0];
+      int e = 0;
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
-          for (int l = 0; l < W; ++l) {
+          for (int l = 0; l < W; ++l, ++e) {
             const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
-            if (w == 0) continue;
-            const size_t n = dof_begin + node_at(blocks, st.base, i, j, l);
-            mpm_embedding_push(E, (size_t)c, (uint32_t)n, w);
+            if (w != 0) mpm_embedding_push(E, (size_t)c, dof_begin + nodes[e], w);
           }
     }
   }
   if (missing) return -1;
-  for (size_t b = 0; b < nb; ++b) {
-    const int32_t *bc = g->coord[b];
-    colour[b] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
-  }
-  return mpm_embedding_schedule(E, key, nb, colour);
+  for (size_t c = 0; c < nc; ++c) /* every corner of one key has the key's colour */
+    if (key[c] >= 0) key_colour[key[c]] = colour[c];
+  return mpm_embedding_schedule(E, key, nk, key_colour);
 }
 
-int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
-                   size_t dof_begin, const mpm_grid_values *dof, mpm_arena *scratch) {
+int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
+                   const mpm_grid_values *dof, mpm_arena *scratch) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
   /* 0. V0 P of every active particle, once (each is gathered by its 8 corners) */
@@ -148,7 +104,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_spa
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
    *    order: the same sums for any number of threads */
-  if (build_corner_embedding(&ctx->kernel, ctx->origin, s, g, dof_begin, scratch)) return -1;
+  if (build_corner_embedding(&ctx->kernel, s, g, scratch)) return -1;
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};
@@ -176,7 +132,7 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
   mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
 #pragma omp parallel for schedule(static) reduction(max : max_v2)
   for (long c = 0; c < nc; ++c) {
-    if (!corner_used(s, (size_t)c)) continue;
+    if (!s->corner_use[c]) continue;
     /* the embedding applied to the grid's velocities: v^g_a = sum_i E_ai v_i^{n+1}, and the
      * FLIP increment sum_i E_ai (v_i^{n+1} - v_i^n) */
     mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};

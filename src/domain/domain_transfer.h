@@ -1,5 +1,5 @@
 /* domain_transfer.h - the two-step transfers of particle domains (Zhu et al. 2017, sec. 4 and
- * Algorithm 1 without enrichment) on the sparse grid:
+ * Algorithm 1 without enrichment) on a grid level, through the grid interface (grid/grid.h):
  *   P2G  particle -> corner:  m_a = sum_p omega_ap m_p,  p_a = sum_p omega_ap m_p v_p,
  *                             f_a = -sum_p V_p^0 P_p g_ap        (Zhu eq. 8 through eq. 5)
  *        corner -> grid:      m_i += omega_i(x_a) m_a, and so on
@@ -17,21 +17,20 @@
 
 #include "collide/boundary.h"
 #include "domain/domain.h"
-#include "grid/sparse_grid.h"
+#include "grid/grid.h"
 #include "transfer/transfer.h"
 
-/* Activate the sparse-grid blocks of every corner's stencil (after mpm_sparse_grid_sort of the
- * standard particles, before the grid is cleared). Returns 0, or -1 when out of memory. */
-int mpm_domain_activate(mpm_domain_set *s, mpm_sparse_grid *g, const mpm_kernel *k,
-                        const mpm_real origin[3]);
+/* Activate the grid level's nodes around every used corner's stencil (after the activation from
+ * the standard particles, before the DOF layout). Returns 0, or -1 when out of memory. */
+int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k);
 
-/* Rasterize the domain particles to their corners, and the corners to the grid level whose
- * first DOF is dof_begin through the corners' embedding (s->corner_grid, built here): the DOF
+/* Rasterize the domain particles to their corners, and the corners to grid level g (its
+ * DOFs from g->dof_begin) through the corners' embedding (s->corner_grid, built here): the DOF
  * set's mass, momentum (v0) and force (dof: the values of all DOFs, DOF 0 at index 0); the
  * particles' stresses and the scatter schedule's keys are step scratch (ctx: kernel,
  * origin, materials). Returns 0, -1 when out of memory (nothing added to the grid then). */
-int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_sparse_grid *g,
-                   size_t dof_begin, const mpm_grid_values *dof, mpm_arena *scratch);
+int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
+                   const mpm_grid_values *dof, mpm_arena *scratch);
 
 /* After the grid update (the DOF set holds v^n in v0 and v^{n+1} in v; dof as for P2G): the
  * corners' velocities through their embedding, the boundary rules (colliders at the end of

@@ -10,6 +10,67 @@ static int sparse_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
   return mpm_sparse_grid_sort(&g->impl.sparse, k, g->origin, material_count, p, scratch);
 }
 
+/* The 8 blocks of the pad of base block bb (the block and its forward neighbours), through the
+ * cursor's cache of the last base block: carriers such as corners come in lattice order, so
+ * neighbours mostly share their base block. With `activate` (g itself) missing blocks are
+ * activated, else only found. -1 when one is missing or out of memory. */
+static int pad_blocks(const mpm_sparse_grid *g, mpm_sparse_grid *activate, const int32_t bb[3],
+                      mpm_grid_cursor *c) {
+  if (bb[0] == c->key[0] && bb[1] == c->key[1] && bb[2] == c->key[2]) return 0;
+  for (int o = 0; o < 8; ++o) {
+    const int32_t bc[3] = {bb[0] + ((o >> 2) & 1), bb[1] + ((o >> 1) & 1), bb[2] + (o & 1)};
+    c->blocks[o] = activate ? mpm_sparse_grid_touch(activate, bc) : mpm_sparse_grid_find(g, bc);
+    if (c->blocks[o] < 0) {
+      mpm_grid_cursor_init(c);
+      return -1;
+    }
+  }
+  for (int d = 0; d < 3; ++d) c->key[d] = bb[d];
+  return 0;
+}
+
+static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
+                                  const mpm_real *const x[3], const uint8_t *use) {
+  mpm_sparse_grid *sg = &g->impl.sparse;
+  mpm_grid_cursor c;
+  mpm_grid_cursor_init(&c);
+  for (size_t i = 0; i < n; ++i) {
+    if (use && !use[i]) continue;
+    const mpm_real xr[3] = {x[0][i] - g->origin[0], x[1][i] - g->origin[1], x[2][i] - g->origin[2]};
+    mpm_stencil st;
+    mpm_kernel_stencil(k, xr, &st);
+    const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
+                           st.base[2] >> MPM_BLOCK_BITS};
+    if (pad_blocks(sg, sg, bb, &c)) return -1;
+  }
+  return 0;
+}
+
+static int sparse_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *c,
+                                uint32_t *nodes, int32_t *key, uint8_t *colour) {
+  const int32_t bb[3] = {base[0] >> MPM_BLOCK_BITS, base[1] >> MPM_BLOCK_BITS,
+                         base[2] >> MPM_BLOCK_BITS};
+  if (pad_blocks(&g->impl.sparse, NULL, bb, c)) return -1;
+  int e = 0;
+  for (int i = 0; i < W; ++i)
+    for (int j = 0; j < W; ++j)
+      for (int l = 0; l < W; ++l) {
+        const int32_t n[3] = {base[0] + i, base[1] + j, base[2] + l};
+        const int o = (((n[0] >> MPM_BLOCK_BITS) - bb[0]) << 2) |
+                      (((n[1] >> MPM_BLOCK_BITS) - bb[1]) << 1) |
+                      ((n[2] >> MPM_BLOCK_BITS) - bb[2]);
+        const int local = ((n[0] & 3) << 4) | ((n[1] & 3) << 2) | (n[2] & 3);
+        nodes[e++] = (uint32_t)c->blocks[o] * MPM_BLOCK_NODES + (uint32_t)local;
+      }
+  *key = c->blocks[0];
+  *colour = (uint8_t)((bb[0] & 1) << 2 | (bb[1] & 1) << 1 | (bb[2] & 1));
+  return 0;
+}
+
+static size_t sparse_scatter_key_count(const mpm_grid *g) {
+  return g->impl.sparse.block_count;
+}
+
 static uint32_t *sparse_particle_order(mpm_grid *g) {
   return g->impl.sparse.perm;
 }
@@ -38,16 +99,57 @@ static void sparse_free(mpm_grid *g) {
   mpm_sparse_grid_free(&g->impl.sparse);
 }
 
-static const mpm_grid_ops sparse_ops = {"sparse",          sparse_activate,  sparse_particle_order,
-                                        sparse_node_count, sparse_box_count, sparse_box,
-                                        sparse_bytes,      sparse_free};
-
+static const mpm_grid_ops sparse_ops = {"sparse",
+                                        sparse_activate,
+                                        sparse_activate_points,
+                                        sparse_stencil_nodes,
+                                        sparse_scatter_key_count,
+                                        sparse_particle_order,
+                                        sparse_node_count,
+                                        sparse_box_count,
+                                        sparse_box,
+                                        sparse_bytes,
+                                        sparse_free};
 /* ---- dense: every node always there, one box per x-slab ---- */
 
 static int dense_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
                           const mpm_particles *p, mpm_arena *scratch) {
   (void)g, (void)k, (void)material_count, (void)p, (void)scratch;
   return 0;
+}
+
+static int dense_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
+                                 const mpm_real *const x[3], const uint8_t *use) {
+  (void)g, (void)k, (void)n, (void)x, (void)use;
+  return 0;
+}
+
+/* Stencils are keyed by virtual 4x4x4 blocks of the dense lattice, coloured by parity, as the
+ * sparse grid's blocks are. */
+static int dense_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *c,
+                               uint32_t *nodes, int32_t *key, uint8_t *colour) {
+  (void)c;
+  const int *n = g->impl.dense.n;
+  for (int d = 0; d < 3; ++d)
+    if (base[d] < 0 || base[d] + W > n[d]) return -1;
+  int e = 0;
+  for (int i = 0; i < W; ++i)
+    for (int j = 0; j < W; ++j)
+      for (int l = 0; l < W; ++l)
+        nodes[e++] = (uint32_t)(((base[0] + i) * n[1] + base[1] + j) * n[2] + base[2] + l);
+  const int32_t bb[3] = {base[0] >> MPM_BLOCK_BITS, base[1] >> MPM_BLOCK_BITS,
+                         base[2] >> MPM_BLOCK_BITS};
+  const int32_t nb[3] = {(n[0] >> MPM_BLOCK_BITS) + 1, (n[1] >> MPM_BLOCK_BITS) + 1,
+                         (n[2] >> MPM_BLOCK_BITS) + 1};
+  *key = (bb[0] * nb[1] + bb[1]) * nb[2] + bb[2];
+  *colour = (uint8_t)((bb[0] & 1) << 2 | (bb[1] & 1) << 1 | (bb[2] & 1));
+  return 0;
+}
+
+static size_t dense_scatter_key_count(const mpm_grid *g) {
+  const int *n = g->impl.dense.n;
+  return (size_t)((n[0] >> MPM_BLOCK_BITS) + 1) * (size_t)((n[1] >> MPM_BLOCK_BITS) + 1) *
+         (size_t)((n[2] >> MPM_BLOCK_BITS) + 1);
 }
 
 static uint32_t *dense_particle_order(mpm_grid *g) {
@@ -78,10 +180,17 @@ static void dense_free(mpm_grid *g) {
   memset(&g->impl.dense, 0, sizeof g->impl.dense);
 }
 
-static const mpm_grid_ops dense_ops = {"dense",          dense_activate,  dense_particle_order,
-                                       dense_node_count, dense_box_count, dense_box,
-                                       dense_bytes,      dense_free};
-
+static const mpm_grid_ops dense_ops = {"dense",
+                                       dense_activate,
+                                       dense_activate_points,
+                                       dense_stencil_nodes,
+                                       dense_scatter_key_count,
+                                       dense_particle_order,
+                                       dense_node_count,
+                                       dense_box_count,
+                                       dense_box,
+                                       dense_bytes,
+                                       dense_free};
 static void init_common(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx) {
   memset(g, 0, sizeof *g);
   g->level = level;

@@ -26,6 +26,17 @@
 
 typedef struct mpm_grid mpm_grid;
 
+/* What a variant remembers between lookups of one caller (the sparse grid: the blocks of the
+ * last stencil's pad); one per thread, started with mpm_grid_cursor_init. */
+typedef struct mpm_grid_cursor {
+  int32_t key[3];
+  int32_t blocks[8];
+} mpm_grid_cursor;
+
+static inline void mpm_grid_cursor_init(mpm_grid_cursor *c) {
+  c->key[0] = c->key[1] = c->key[2] = INT32_MIN;
+}
+
 typedef struct mpm_grid_ops {
   const char *name;
   /* Make every node that the stencils of kernel k around the particles p touch part of the
@@ -34,6 +45,19 @@ typedef struct mpm_grid_ops {
    * step's arena). 0, or -1 when out of memory. */
   int (*activate)(mpm_grid *g, const mpm_kernel *k, int material_count, const mpm_particles *p,
                   mpm_arena *scratch);
+  /* Make the nodes of the stencils of kernel k at the points x[d][i], i < n, part of the level
+   * (those with use[i] != 0; use NULL: all), as for carriers such as domain corners. Serial.
+   * 0, or -1 when out of memory. */
+  int (*activate_points)(mpm_grid *g, const mpm_kernel *k, size_t n, const mpm_real *const x[3],
+                         const uint8_t *use);
+  /* The level's nodes of the W^3 stencil nodes base + (i, j, k), 0 <= i, j, k < W, in (i, j, k)
+   * order, and the stencil's scatter key (0 .. scatter_key_count) and colour (0..7): stencils
+   * of one colour and different keys never share a node, so their scatters may run in
+   * parallel (grid/embedding.h). Read-only: safe in parallel with one cursor per thread. 0, or
+   * -1 when a node is not part of the level. */
+  int (*stencil_nodes)(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *cursor,
+                       uint32_t *nodes, int32_t *key, uint8_t *colour);
+  size_t (*scatter_key_count)(const mpm_grid *g);
   /* The order in which the last activation wants the particles visited (perm[j]: the particle
    * visited j-th; the caller may permute the particle arrays into it and reset it to the
    * identity), or NULL when the variant visits them in memory order. */

@@ -413,9 +413,6 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
                             "expected 0 with \"domains\": true (particle domains are the cells "
                             "of the body's lattice), got %g",
                             b->jitter);
-  if (b->domains && s->solver.grid != MPM_GRID_SPARSE)
-    return mpm_json_fail_at(c, "domains", MPM_ERR_INVALID,
-                            "particle domains need solver.grid \"sparse\"");
   double lo[3], hi[3];
   char note[200] = "";
   if (b->shape.kind == MPM_SHAPE_MESH) {

@@ -86,8 +86,7 @@ static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
     mpm_particles_permute(p, perm, &sim->scratch, sim->iscratch);
     for (size_t j = 0; j < p->count; ++j) perm[j] = (uint32_t)j;
   }
-  if (c->domains &&
-      mpm_domain_activate(&sim->domains, &g->impl.sparse, &c->dtc.kernel, c->dtc.origin))
+  if (c->domains && mpm_domain_activate(&sim->domains, g, &c->dtc.kernel))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory activating the grid around domain corners",
                          (long long)sim->steps);
@@ -111,8 +110,7 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
 
 static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
-  if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid.impl.sparse,
-                                   sim->grid.dof_begin, &c->all, &sim->step_arena))
+  if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid, &c->all, &sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the stresses of %zu domain particles",
                          (long long)sim->steps, sim->domains.particles.count);
