@@ -69,13 +69,19 @@ ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int
   }
 }
 
-/* Everything P2G needs of a batch of n particles at perm position j: lane stencils (with APIC
- * factors when apic) and lane inputs (see batch_inputs), the stresses taken from the window;
- * without force, no stresses (K = 0). */
+/* Everything P2G needs of the walk's current batch: lane stencils (with APIC factors when apic)
+ * and lane inputs (see batch_inputs), with the stresses from the window, which restarts at every
+ * material and is filled ahead as the batches need it; without force, no stresses (K = 0). The
+ * particles two batches ahead are asked for meanwhile. */
 ALWAYS_INLINE void batch_prepare(const int apic, const int force, const mpm_transfer_ctx *ctx,
-                                 const mpm_particles *p, const stress_window *w, uint32_t j,
-                                 const uint32_t *idx, int n, int base[3], mpm_lane_stencil *s,
+                                 const mpm_sparse_grid *g, const mpm_particles *p, stress_window *w,
+                                 const mpm_batches *it, int base[3], mpm_lane_stencil *s,
                                  mpm_vl *mass, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
+  const uint32_t j = it->pos, *idx = it->idx;
+  const int n = it->n;
+  if (it->material_first) w->begin = w->count = 0;
+  if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
+  if (force) stress_window_need(w, &ctx->materials[it->material], p, g->perm, j, n, it->range_end);
   const int contiguous = mpm_batch_contiguous(idx, n);
   static const mpm_real zero[MPM_LANES] = {0};
   const mpm_real *tau[9];
@@ -112,15 +118,10 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const int force,
   mpm_batches it;
   mpm_batches_begin(&it, g, (size_t)b);
   while (mpm_batches_next(&it)) {
-    if (it.material_first) w.begin = w.count = 0;
-    if (it.pos + 2 * MPM_LANES < g->particle_count)
-      MPM_PREFETCH_PARTICLE(p, it.idx[2 * MPM_LANES], 0);
     int base[3];
     mpm_lane_stencil s;
     mpm_vl mass, mv[3], mB[9], K[9];
-    if (force)
-      stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
-    batch_prepare(apic, force, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
+    batch_prepare(apic, force, ctx, g, p, &w, &it, base, &s, &mass, mv, mB, K);
     mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
                   MPM_PAD);
   }
@@ -145,15 +146,10 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const int force, const mpm_transf
   mpm_batches it;
   mpm_batches_begin(&it, g, (size_t)b);
   while (mpm_batches_next(&it)) {
-    if (it.material_first) w.begin = w.count = 0;
-    if (it.pos + 2 * MPM_LANES < g->particle_count)
-      MPM_PREFETCH_PARTICLE(p, it.idx[2 * MPM_LANES], 0);
     int base[3];
     mpm_lane_stencil s;
     mpm_vl mass, mv[3], mB[9], K[9];
-    if (force)
-      stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
-    batch_prepare(1, force, ctx, p, &w, it.pos, it.idx, it.n, base, &s, &mass, mv, mB, K);
+    batch_prepare(1, force, ctx, g, p, &w, &it, base, &s, &mass, mv, mB, K);
     const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
     mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
   }
