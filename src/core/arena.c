@@ -21,11 +21,20 @@ void mpm_arena_free(mpm_arena *a) {
   memset(a, 0, sizeof *a);
 }
 
+/* Large blocks start a different multiple of 128 bytes into the arena, as mpm_alloc staggers
+ * large arrays (alloc.c): arrays walked side by side then do not map to the same cache sets. */
+#define STAGGER_THRESHOLD ((size_t)1 << 20)
+#define STAGGER_STEP 128
+#define STAGGER_SLOTS 31
+
 void *mpm_arena_alloc(mpm_arena *a, size_t bytes) {
-  const size_t size = (bytes + MPM_ALIGN - 1) / MPM_ALIGN * MPM_ALIGN;
+  size_t size = (bytes + MPM_ALIGN - 1) / MPM_ALIGN * MPM_ALIGN;
+  if (size >= STAGGER_THRESHOLD)
+    size += STAGGER_STEP * (1 + (size_t)(a->large_count++ % STAGGER_SLOTS));
   if (a->used + a->overflow_bytes + size > a->peak) a->peak = a->used + a->overflow_bytes + size;
+  const size_t lead = size - (bytes + MPM_ALIGN - 1) / MPM_ALIGN * MPM_ALIGN; /* the stagger */
   if (a->base && a->used + size <= a->capacity) {
-    void *p = a->base + a->used;
+    void *p = a->base + a->used + lead;
     a->used += size;
     return p;
   }
@@ -41,6 +50,7 @@ int mpm_arena_reset(mpm_arena *a) {
   const int overflowed = a->overflow_count > 0;
   free_overflow(a);
   a->used = 0;
+  a->large_count = 0;
   if (!overflowed) return 0;
   /* grow to the peak, with room for some growth of the step */
   const size_t want = a->peak + a->peak / 8;

@@ -164,22 +164,29 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
-  mpm_batches it;
-  mpm_batches_begin(&it, g, (size_t)b);
-  while (mpm_batches_next(&it)) {
-    if (it.pos + 2 * MPM_LANES < g->particle_count)
-      MPM_PREFETCH_PARTICLE(p, it.idx[2 * MPM_LANES], 1);
-    const int contiguous = mpm_batch_contiguous(it.idx, it.n);
-    int base[3];
-    mpm_lane_stencil s;
-    mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, it.idx, it.n, contiguous, 0, base, &s);
-    mpm_g2p_lanes_out o;
-    mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
-                  MPM_PAD, &o);
-    batch_update(apic, ctx, p, it.idx, it.n, contiguous, &o, max_v2, bad);
-    const mpm_material *mat = &ctx->materials[it.material];
-    if (it.material_last && mat->model->return_map) /* all of the material's F are new */
-      range_return_map(mat, p, g->perm, it.range_begin, it.range_end);
+  size_t q1;
+  const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
+  for (size_t q = q0; q < q1; ++q) {
+    const uint32_t end = g->cell_start[q + 1];
+    for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
+      const int n = mpm_batch_size(j, end);
+      const uint32_t *idx = g->perm + j;
+      if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 1);
+      const int contiguous = mpm_batch_contiguous(idx, n);
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
+      mpm_g2p_lanes_out o;
+      mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
+                    MPM_PAD, &o);
+      batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
+    }
+    const int m = mpm_cell_material(q, q0);
+    if (mpm_cell_last_of_material(q, q0) && ctx->materials[m].model->return_map) {
+      uint32_t begin, range_end; /* all of the material's F are new */
+      mpm_material_range(g, q0, m, &begin, &range_end);
+      range_return_map(&ctx->materials[m], p, g->perm, begin, range_end);
+    }
   }
 }
 

@@ -15,19 +15,19 @@
 
 /* The lanes' matrices: M_p from the arrays, or -V0 tau_p from the stress window. Lanes >= n
  * are zero. */
-ALWAYS_INLINE void batch_matrices(const int stress, const mpm_particles *p, const mpm_batches *it,
-                                  int contiguous, const mpm_real *const M[9],
+ALWAYS_INLINE void batch_matrices(const int stress, const mpm_particles *p, const uint32_t *idx,
+                                  uint32_t j, int n, int contiguous, const mpm_real *const M[9],
                                   const stress_window *w, mpm_vl out[9]) {
   mpm_vl live = {0};
-  for (int l = 0; l < it->n; ++l) live[l] = 1;
+  for (int l = 0; l < n; ++l) live[l] = 1;
   if (!stress) {
-    for (int c = 0; c < 9; ++c) out[c] = mpm_lanes_load(M[c], it->idx, it->n, contiguous) * live;
+    for (int c = 0; c < 9; ++c) out[c] = mpm_lanes_load(M[c], idx, n, contiguous) * live;
     return;
   }
-  const mpm_vl nv = -mpm_lanes_load(p->vol0, it->idx, it->n, contiguous) * live;
+  const mpm_vl nv = -mpm_lanes_load(p->vol0, idx, n, contiguous) * live;
   for (int c = 0; c < 9; ++c) {
     mpm_vl t = {0}; /* lanes >= n of the window may hold anything */
-    for (int l = 0; l < it->n; ++l) t[l] = w->tau[c][it->pos - w->begin + (uint32_t)l];
+    for (int l = 0; l < n; ++l) t[l] = w->tau[c][j - w->begin + (uint32_t)l];
     out[c] = nv * t;
   }
 }
@@ -42,21 +42,30 @@ ALWAYS_INLINE void scatter_block(const int W, const int stress, const mpm_transf
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
   stress_window w;
   w.begin = w.count = 0;
-  mpm_batches it;
-  mpm_batches_begin(&it, g, (size_t)b);
-  while (mpm_batches_next(&it)) {
-    if (stress) {
-      if (it.material_first) w.begin = w.count = 0;
-      stress_window_need(&w, &ctx->materials[it.material], p, g->perm, it.pos, it.n, it.range_end);
+  size_t q1;
+  const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
+  uint32_t range_end = 0;
+  for (size_t q = q0; q < q1; ++q) {
+    const int m = mpm_cell_material(q, q0);
+    if (mpm_cell_first_of_material(q, q0)) {
+      uint32_t range_begin;
+      mpm_material_range(g, q0, m, &range_begin, &range_end);
+      w.begin = w.count = 0;
     }
-    const int contiguous = mpm_batch_contiguous(it.idx, it.n);
-    int base[3];
-    mpm_lane_stencil s;
-    mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, it.idx, it.n, contiguous, 0, base, &s);
-    mpm_vl Mv[9];
-    batch_matrices(stress, p, &it, contiguous, M, &w, Mv);
-    mpm_scatter_lanes(W, &s, Mv, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
-                      MPM_PAD);
+    const uint32_t end = g->cell_start[q + 1];
+    for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
+      const int n = mpm_batch_size(j, end);
+      const uint32_t *idx = g->perm + j;
+      if (stress) stress_window_need(&w, &ctx->materials[m], p, g->perm, j, n, range_end);
+      const int contiguous = mpm_batch_contiguous(idx, n);
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
+      mpm_vl Mv[9];
+      batch_matrices(stress, p, idx, j, n, contiguous, M, &w, Mv);
+      mpm_scatter_lanes(W, &s, Mv, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
+                        MPM_PAD);
+    }
   }
   mpm_pad_add(W, g, b, 3, pad, STRIDE, f);
 }
@@ -102,18 +111,21 @@ ALWAYS_INLINE void gather_block(const int W, const mpm_transfer_ctx *ctx, const 
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
-  mpm_batches it;
-  mpm_batches_begin(&it, g, (size_t)b);
-  while (mpm_batches_next(&it)) {
-    const int contiguous = mpm_batch_contiguous(it.idx, it.n);
-    int base[3];
-    mpm_lane_stencil s;
-    mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, it.idx, it.n, contiguous, 0, base, &s);
-    mpm_vl Gv[9];
-    mpm_gradient_lanes(W, &s, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD, MPM_PAD,
-                       Gv);
-    for (int c = 0; c < 9; ++c) mpm_lanes_store(G[c], it.idx, it.n, contiguous, Gv[c]);
-  }
+  size_t q1;
+  const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
+  for (size_t q = q0; q < q1; ++q)
+    for (uint32_t j = g->cell_start[q]; j < g->cell_start[q + 1]; j += MPM_LANES) {
+      const int n = mpm_batch_size(j, g->cell_start[q + 1]);
+      const uint32_t *idx = g->perm + j;
+      const int contiguous = mpm_batch_contiguous(idx, n);
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
+      mpm_vl Gv[9];
+      mpm_gradient_lanes(W, &s, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD, MPM_PAD,
+                         Gv);
+      for (int c = 0; c < 9; ++c) mpm_lanes_store(G[c], idx, n, contiguous, Gv[c]);
+    }
 }
 
 static void gather_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,

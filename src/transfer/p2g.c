@@ -70,18 +70,18 @@ ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int
 }
 
 /* Everything P2G needs of the walk's current batch: lane stencils (with APIC factors when apic)
- * and lane inputs (see batch_inputs), with the stresses from the window, which restarts at every
- * material and is filled ahead as the batches need it; without force, no stresses (K = 0). The
- * particles two batches ahead are asked for meanwhile. */
+ * and lane inputs (see batch_inputs), with the stresses from the window, which is filled ahead as
+ * the batches need it (the caller restarts it at every material); without force, no stresses
+ * (K = 0). The particles two batches ahead are asked for meanwhile. */
 ALWAYS_INLINE void batch_prepare(const int apic, const int force, const mpm_transfer_ctx *ctx,
                                  const mpm_sparse_grid *g, const mpm_particles *p, stress_window *w,
-                                 const mpm_batches *it, int base[3], mpm_lane_stencil *s,
-                                 mpm_vl *mass, mpm_vl mv[3], mpm_vl mB[9], mpm_vl K[9]) {
-  const uint32_t j = it->pos, *idx = it->idx;
-  const int n = it->n;
-  if (it->material_first) w->begin = w->count = 0;
+                                 int material, uint32_t range_end, uint32_t j, uint32_t end,
+                                 int base[3], mpm_lane_stencil *s, mpm_vl *mass, mpm_vl mv[3],
+                                 mpm_vl mB[9], mpm_vl K[9]) {
+  const uint32_t *idx = g->perm + j;
+  const int n = mpm_batch_size(j, end);
   if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
-  if (force) stress_window_need(w, &ctx->materials[it->material], p, g->perm, j, n, it->range_end);
+  if (force) stress_window_need(w, &ctx->materials[material], p, g->perm, j, n, range_end);
   const int contiguous = mpm_batch_contiguous(idx, n);
   static const mpm_real zero[MPM_LANES] = {0};
   const mpm_real *tau[9];
@@ -115,15 +115,25 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const int force,
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   stress_window w;
-  mpm_batches it;
-  mpm_batches_begin(&it, g, (size_t)b);
-  while (mpm_batches_next(&it)) {
-    int base[3];
-    mpm_lane_stencil s;
-    mpm_vl mass, mv[3], mB[9], K[9];
-    batch_prepare(apic, force, ctx, g, p, &w, &it, base, &s, &mass, mv, mB, K);
-    mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
-                  MPM_PAD);
+  size_t q1;
+  const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
+  uint32_t range_end = 0;
+  for (size_t q = q0; q < q1; ++q) {
+    const int m = mpm_cell_material(q, q0);
+    if (mpm_cell_first_of_material(q, q0)) { /* the material's stresses start */
+      uint32_t range_begin;
+      mpm_material_range(g, q0, m, &range_begin, &range_end);
+      w.begin = w.count = 0;
+    }
+    const uint32_t end = g->cell_start[q + 1];
+    for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_vl mass, mv[3], mB[9], K[9];
+      batch_prepare(apic, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB, K);
+      mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
+                    MPM_PAD);
+    }
   }
   /* add the pad (nodes x 8 channels) to the 8 blocks it covers */
   mpm_pad_add(W, g, b, used, pad, stride, ch);
@@ -143,15 +153,25 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const int force, const mpm_transf
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   stress_window w;
-  mpm_batches it;
-  mpm_batches_begin(&it, g, (size_t)b);
-  while (mpm_batches_next(&it)) {
-    int base[3];
-    mpm_lane_stencil s;
-    mpm_vl mass, mv[3], mB[9], K[9];
-    batch_prepare(1, force, ctx, g, p, &w, &it, base, &s, &mass, mv, mB, K);
-    const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
-    mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
+  size_t q1;
+  const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
+  uint32_t range_end = 0;
+  for (size_t q = q0; q < q1; ++q) {
+    const int m = mpm_cell_material(q, q0);
+    if (mpm_cell_first_of_material(q, q0)) { /* the material's stresses start */
+      uint32_t range_begin;
+      mpm_material_range(g, q0, m, &range_begin, &range_end);
+      w.begin = w.count = 0;
+    }
+    const uint32_t end = g->cell_start[q + 1];
+    for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_vl mass, mv[3], mB[9], K[9];
+      batch_prepare(1, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB, K);
+      const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
+      mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
+    }
   }
   /* sum the lanes of every node once and add mass and momentum to the 8 blocks */
   for (int i = 0; i < S; ++i)
