@@ -21,7 +21,7 @@ typedef struct mpm_arena {
   void *overflow[MPM_ARENA_MAX_OVERFLOW];
   int overflow_count;
   size_t overflow_bytes;
-  size_t grown;       /* times the arena was grown (reported by tests and benchmarks) */
+  size_t grown;         /* times the arena was grown (reported by tests and benchmarks) */
   unsigned large_count; /* large blocks handed out this round (their stagger) */
 } mpm_arena;
 
