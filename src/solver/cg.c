@@ -1,0 +1,70 @@
+/* cg.c - preconditioned, projected conjugate gradients on the DOF set (see cg.h).
+ *
+ *   r = P (b - A x),  z = P M^-1 r,  p = z
+ *   repeat:  q = P A p,  alpha = <r, z> / <p, q>,  x += alpha p,  r -= alpha q,
+ *            stop when |r| <= tol |r0|;  z = P M^-1 r,  beta = <r, z>_new / <r, z>,  p = z + beta p
+ * (Hestenes and Stiefel 1952; Shewchuk 1994, "An Introduction to the Conjugate Gradient Method
+ * Without the Agonizing Pain", B3). */
+#include "solver/cg.h"
+
+#include <math.h>
+
+/* z = r / diag (or z = r), component-wise, in parallel. */
+static void precondition(const mpm_dofs *d, mpm_real *const diag[3], mpm_real *const r[3],
+                         mpm_real *const z[3]) {
+  if (!diag) {
+    mpm_dofs_copy(d, r, z);
+    return;
+  }
+  const long n = (long)d->count;
+  for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict rc = r[c], *restrict dc = diag[c];
+    mpm_real *restrict zc = z[c];
+#pragma omp parallel for simd schedule(static)
+    for (long i = 0; i < n; ++i) zc[i] = rc[i] / dc[i];
+  }
+}
+
+int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
+                 mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
+                 const mpm_cg_options *options, mpm_cg_result *result) {
+  mpm_real **r = mpm_dofs_vector(d, "cg.r"), **z = mpm_dofs_vector(d, "cg.z");
+  mpm_real **p = mpm_dofs_vector(d, "cg.p"), **q = mpm_dofs_vector(d, "cg.Ap");
+  if (!r || !z || !p || !q) return -1;
+  /* r = P (b - A x) */
+  apply(user, x, q);
+  mpm_dofs_copy(d, b, r);
+  mpm_dofs_axpy(d, -1, q, r);
+  if (project) project(user, r);
+  result->iterations = 0;
+  result->residual0 = result->residual = sqrt(mpm_dofs_dot(d, NULL, r, r));
+  result->converged = result->residual0 == 0;
+  if (result->converged) return 0;
+  const double target = options->rel_tol * result->residual0;
+  precondition(d, diag, r, z);
+  if (project) project(user, z); /* P M^-1 P: a diagonal need not commute with a slip projection */
+  mpm_dofs_copy(d, z, p);
+  double rz = mpm_dofs_dot(d, NULL, r, z);
+  for (int k = 0; k < options->max_iterations; ++k) {
+    apply(user, p, q);
+    if (project) project(user, q);
+    const double pq = mpm_dofs_dot(d, NULL, p, q);
+    if (!(pq > 0)) break; /* A is not positive on the search direction: breakdown */
+    const mpm_real alpha = (mpm_real)(rz / pq);
+    mpm_dofs_axpy(d, alpha, p, x);
+    mpm_dofs_axpy(d, -alpha, q, r);
+    result->iterations = k + 1;
+    result->residual = sqrt(mpm_dofs_dot(d, NULL, r, r));
+    if (result->residual <= target) {
+      result->converged = 1;
+      break;
+    }
+    precondition(d, diag, r, z);
+    if (project) project(user, z);
+    const double rz_new = mpm_dofs_dot(d, NULL, r, z);
+    const mpm_real beta = (mpm_real)(rz_new / rz);
+    rz = rz_new;
+    mpm_dofs_xpby(d, z, beta, p); /* p = z + beta p */
+  }
+  return 0;
+}

@@ -1,0 +1,46 @@
+/* cg.h - preconditioned conjugate gradients on the DOF set (Hestenes and Stiefel 1952), the
+ * linear solver of the implicit step (Zhu et al. 2017 sec. 6: eq. 12 solved matrix-free with
+ * the Jacobi preconditioner of eqs. 17-19).
+ *
+ * Solves A x = b for a symmetric positive (semi-)definite A that the caller applies
+ * (matrix-free: for MPM, gather -> per-particle stress differential -> scatter, see
+ * transfer/operators.h), on 3-component vectors over the DOFs of a mpm_dofs. Boundary
+ * conditions act inside the solve through a projection P that the caller applies (sticky DOFs:
+ * their components zeroed; slip DOFs: the normal component removed): the residual and every
+ * search direction are projected, so the iterates stay in the admissible subspace and CG solves
+ * P A P x = P b there. The preconditioner is a diagonal (Jacobi); the solve stops when
+ * sqrt(<r, r>) <= rel_tol sqrt(<r0, r0>) or after max_iterations.
+ *
+ * Every reduction is mpm_dofs_dot's (fixed chunks, fixed order), so the iterates, the
+ * iteration count and the answer are bitwise the same for any number of threads. The work
+ * vectors are the DOF set's named vectors "cg.r", "cg.z", "cg.p", "cg.Ap". */
+#ifndef MPM_SOLVER_CG_H
+#define MPM_SOLVER_CG_H
+
+#include "solver/dofs.h"
+
+/* y = A x, for vectors over the DOFs of the set. */
+typedef void (*mpm_cg_apply_fn)(void *user, mpm_real *const x[3], mpm_real *const y[3]);
+/* v = P v in place. */
+typedef void (*mpm_cg_project_fn)(void *user, mpm_real *const v[3]);
+
+typedef struct mpm_cg_options {
+  double rel_tol;     /* relative residual to reach, > 0 */
+  int max_iterations; /* >= 1 */
+} mpm_cg_options;
+
+typedef struct mpm_cg_result {
+  int iterations;
+  double residual0, residual; /* sqrt(<r, r>) at the start and at the end */
+  int converged;              /* residual <= rel_tol residual0 (or residual0 == 0) */
+} mpm_cg_result;
+
+/* Solve A x = b: x holds the initial guess and receives the solution. diag: the Jacobi
+ * diagonal (positive), or NULL for none; project: NULL for none. Returns 0, or -1 when the
+ * work vectors cannot be allocated (x is then unchanged). A breakdown (<p, A p> <= 0: A is not
+ * positive on the subspace) ends the solve, not converged. */
+int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
+                 mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
+                 const mpm_cg_options *options, mpm_cg_result *result);
+
+#endif
