@@ -7,6 +7,16 @@
 #include <math.h>
 #include <string.h>
 
+/* The fixed chunks of the parallel passes and reductions: their count, and chunk q's DOFs
+ * lo .. hi. Fixed, not per thread, so that sums do not depend on the thread count. */
+static long chunk_count(const mpm_dofs *d) {
+  return (long)((d->count + MPM_DOF_CHUNK - 1) / MPM_DOF_CHUNK);
+}
+static void chunk_range(const mpm_dofs *d, long q, size_t *lo, size_t *hi) {
+  *lo = (size_t)q * MPM_DOF_CHUNK;
+  *hi = d->count - *lo < MPM_DOF_CHUNK ? d->count : *lo + MPM_DOF_CHUNK;
+}
+
 void mpm_dofs_init(mpm_dofs *d) {
   memset(d, 0, sizeof *d);
 }
@@ -112,14 +122,13 @@ void mpm_dofs_clear(mpm_dofs *d, unsigned fields) {
   mpm_real **a[10];
   unsigned bit[10];
   field_arrays(d, a, bit);
-  const long chunks = (long)((d->count + MPM_DOF_CHUNK - 1) / MPM_DOF_CHUNK);
-  const size_t n = d->count;
+  const long chunks = chunk_count(d);
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < chunks; ++q) {
-    const size_t lo = (size_t)q * MPM_DOF_CHUNK;
-    const size_t len = n - lo < MPM_DOF_CHUNK ? n - lo : MPM_DOF_CHUNK;
+    size_t lo, hi;
+    chunk_range(d, q, &lo, &hi);
     for (int k = 0; k < 10; ++k)
-      if ((fields & bit[k]) && *a[k]) memset(*a[k] + lo, 0, len * sizeof(mpm_real));
+      if ((fields & bit[k]) && *a[k]) memset(*a[k] + lo, 0, (hi - lo) * sizeof(mpm_real));
   }
 }
 
@@ -204,13 +213,12 @@ static double sum_partials(const mpm_dofs *d, long chunks) {
 
 double mpm_dofs_dot(const mpm_dofs *d, const mpm_real *w, mpm_real *const a[3],
                     mpm_real *const b[3]) {
-  const long chunks = (long)((d->count + MPM_DOF_CHUNK - 1) / MPM_DOF_CHUNK);
-  const size_t n = d->count;
+  const long chunks = chunk_count(d);
   double *partial = d->partial;
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < chunks; ++q) {
-    const size_t lo = (size_t)q * MPM_DOF_CHUNK;
-    const size_t hi = n - lo < MPM_DOF_CHUNK ? n : lo + MPM_DOF_CHUNK;
+    size_t lo, hi;
+    chunk_range(d, q, &lo, &hi);
     double s = 0;
     for (size_t i = lo; i < hi; ++i) {
       const double ab =
@@ -223,13 +231,12 @@ double mpm_dofs_dot(const mpm_dofs *d, const mpm_real *w, mpm_real *const a[3],
 }
 
 double mpm_dofs_max_abs(const mpm_dofs *d, mpm_real *const a[3]) {
-  const long chunks = (long)((d->count + MPM_DOF_CHUNK - 1) / MPM_DOF_CHUNK);
-  const size_t n = d->count;
+  const long chunks = chunk_count(d);
   double *partial = d->partial;
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < chunks; ++q) {
-    const size_t lo = (size_t)q * MPM_DOF_CHUNK;
-    const size_t hi = n - lo < MPM_DOF_CHUNK ? n : lo + MPM_DOF_CHUNK;
+    size_t lo, hi;
+    chunk_range(d, q, &lo, &hi);
     double m = 0;
     for (size_t i = lo; i < hi; ++i)
       for (int c = 0; c < 3; ++c) {
