@@ -450,7 +450,8 @@ static void test_ply(void **state) {
 
 static const char csv_header[] =
     "frame,time,steps,dt,kinetic_energy,elastic_energy,momentum_x,momentum_y,momentum_z,"
-    "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds";
+    "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds,"
+    "cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,cg_unconverged";
 
 static void test_stats_csv(void **state) {
   (void)state;
@@ -472,6 +473,11 @@ static void test_stats_csv(void **state) {
     r->mass = 1.0 / 3.0 + i;
     r->wall_seconds = test_rand(&rng, 0, 10);
     r->particles = (size_t)5000000000ULL + (size_t)i;
+    r->cg_iterations_mean = 12.5 + i;
+    r->cg_iterations_max = 30 + i;
+    r->cg_residual_max = 1e-5 * (i + 1);
+    r->newton_iterations_mean = 1.5;
+    r->cg_unconverged = i;
   }
   const char *dir = test_temp_dir("io-csv");
   char path[600];
@@ -490,16 +496,16 @@ static void test_stats_csv(void **state) {
   while ((line = strtok_r(NULL, "\n", &save))) {
     assert_true(k < ROWS);
     const mpm_stats_row *r = &rows[k++];
-    double f[15];
+    double f[20];
     int nf = 0;
     char *save2 = NULL;
     for (char *c = strtok_r(line, ",", &save2); c; c = strtok_r(NULL, ",", &save2)) {
-      assert_true(nf < 15);
+      assert_true(nf < 20);
       f[nf++] = strtod(c, NULL);
       if (nf == 3) assert_int_equal(strtoll(c, NULL, 10), r->steps);
       if (nf == 14) assert_int_equal(strtoull(c, NULL, 10), r->particles);
     }
-    assert_int_equal(nf, 15);
+    assert_int_equal(nf, 20);
     assert_int_equal((int)f[0], r->frame);
     const double rel = 1e-8;
     assert_close(f[1], r->time, rel * r->time);
@@ -512,6 +518,11 @@ static void test_stats_csv(void **state) {
     }
     assert_true(f[12] == r->mass);
     assert_close(f[14], r->wall_seconds, rel * r->wall_seconds);
+    assert_close(f[15], r->cg_iterations_mean, 1e-5 * r->cg_iterations_mean);
+    assert_int_equal((int)f[16], r->cg_iterations_max);
+    assert_close(f[17], r->cg_residual_max, 1e-5 * r->cg_residual_max);
+    assert_close(f[18], r->newton_iterations_mean, 1e-5);
+    assert_int_equal((long long)f[19], r->cg_unconverged);
   }
   assert_int_equal(k, ROWS);
   free(text);

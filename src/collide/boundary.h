@@ -35,4 +35,49 @@ MPM_ALWAYS_INLINE void mpm_boundary_apply(const mpm_boundary *b, const mpm_real 
   }
 }
 
+/* The constraints the implicit solve enforces inside CG at a DOF at x (the same colliders and
+ * wall bands as mpm_boundary_apply, in the same order): a sticky obstacle fixes the whole
+ * velocity (returns -1, its velocity in vo[0]); a slip obstacle constrains the normal
+ * component; a separating one only when the predicted velocity v moves into it, (v - vo).n <
+ * 0. Up to 4 normals n[k] with obstacle velocities vo[k]; returns their count. */
+MPM_ALWAYS_INLINE int mpm_boundary_constraints(const mpm_boundary *b, const mpm_real x[3],
+                                               mpm_real depth, const mpm_real v[3],
+                                               mpm_real n[4][3], mpm_real vo[4][3]) {
+  int count = 0;
+  for (int c = 0; c < b->collider_count; ++c) {
+    mpm_real nc[3], vc[3];
+    if (mpm_collider_phi(&b->poses[c], x, nc) > 0) continue;
+    mpm_collider_velocity(&b->poses[c], x, vc);
+    const mpm_collider_desc *d = &b->poses[c].collider->desc;
+    if (d->rule == MPM_BOUNDARY_STICKY) {
+      for (int e = 0; e < 3; ++e) vo[0][e] = vc[e];
+      return -1;
+    }
+    const mpm_real vn = (v[0] - vc[0]) * nc[0] + (v[1] - vc[1]) * nc[1] + (v[2] - vc[2]) * nc[2];
+    if (d->rule == MPM_BOUNDARY_SEPARATE && vn >= 0) continue;
+    if (count < 4) {
+      for (int e = 0; e < 3; ++e) n[count][e] = nc[e], vo[count][e] = vc[e];
+      ++count;
+    }
+  }
+  for (int d = 0; d < 3; ++d) {
+    const mpm_real lo_plane = b->wall_lo[d] - depth, hi_plane = b->wall_hi[d] + depth;
+    const int lo = x[d]<lo_plane, hi = x[d]> hi_plane;
+    if (!lo && !hi) continue;
+    if (b->wall_rule == MPM_BOUNDARY_STICKY) {
+      vo[0][0] = vo[0][1] = vo[0][2] = 0;
+      return -1;
+    }
+    const mpm_real s = lo ? 1 : -1;
+    if (b->wall_rule == MPM_BOUNDARY_SEPARATE && s * v[d] >= 0) continue;
+    if (count < 4) {
+      n[count][0] = n[count][1] = n[count][2] = 0;
+      n[count][d] = s;
+      vo[count][0] = vo[count][1] = vo[count][2] = 0;
+      ++count;
+    }
+  }
+  return count;
+}
+
 #endif

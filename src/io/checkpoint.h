@@ -21,7 +21,7 @@
 
 #include <stdint.h>
 
-#define MPM_CHECKPOINT_VERSION 1
+#define MPM_CHECKPOINT_VERSION 2
 #define MPM_FRAME_NAME_MAX 64
 
 typedef struct mpm_checkpoint {

@@ -31,7 +31,11 @@ void mpm_ckpt_stats_to_row(const mpm_stats_row *s, double out[MPM_CKPT_STATS_COL
                                             s->mass,
                                             s->wall_seconds,
                                             (double)s->particles,
-                                            0};
+                                            s->cg_iterations_mean,
+                                            s->cg_iterations_max,
+                                            s->cg_residual_max,
+                                            s->newton_iterations_mean,
+                                            (double)s->cg_unconverged};
   memcpy(out, v, sizeof v);
 }
 
@@ -49,6 +53,11 @@ void mpm_ckpt_row_to_stats(const double v[MPM_CKPT_STATS_COLUMNS], mpm_stats_row
   s->mass = v[12];
   s->wall_seconds = v[13];
   s->particles = (size_t)v[14];
+  s->cg_iterations_mean = v[15];
+  s->cg_iterations_max = (int)v[16];
+  s->cg_residual_max = v[17];
+  s->newton_iterations_mean = v[18];
+  s->cg_unconverged = (long long)v[19];
 }
 
 /* Datasets carry Fletcher-32 checksums; the scalar attributes are covered by this one. */

@@ -100,8 +100,8 @@ static void fcr_dpdf_action(const mpm_material *m, const mpm_real F[9], const mp
     dP[i] = two_mu * (dF[i] - dR[i]) + l * dJ * C[i] + l * (J - 1) * dC[i];
 }
 
-static void fcr_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
-                                     const mpm_real dF[9], mpm_real dP[9]) {
+static void fcr_hessian_definite(const mpm_material *m, const mpm_real F[9],
+                                 mpm_stress_hessian *Hp) {
   mpm_iso_hessian H;
   mpm_real s[3];
   mpm_svd3(F, H.U, s, H.V);
@@ -120,6 +120,13 @@ static void fcr_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
     H.lskew[k] = two_mu - 2 * two_mu / mpm_fmax(s[i] + s[j], sum_floor) + vk;
   }
   mpm_iso_make_definite(&H);
+  *Hp = H;
+}
+
+static void fcr_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
+                                     const mpm_real dF[9], mpm_real dP[9]) {
+  mpm_stress_hessian H;
+  fcr_hessian_definite(m, F, &H);
   mpm_iso_action(&H, dF, dP);
 }
 
@@ -161,6 +168,7 @@ const mpm_model mpm_model_fixed_corotated = {
     .pk1 = fcr_pk1,
     .dpdf_action = fcr_dpdf_action,
     .dpdf_action_definite = fcr_dpdf_action_definite,
+    .hessian_definite = fcr_hessian_definite,
     .kirchhoff_batch = fcr_kirchhoff_batch,
     .return_map = NULL,
     .plastic_initial = 1,

@@ -82,11 +82,16 @@ void mpm_hencky_dpdf_action(const mpm_material *m, const mpm_real F[9], const mp
   mpm_iso_action(&H, dF, dP);
 }
 
+void mpm_hencky_hessian_definite(const mpm_material *m, const mpm_real F[9],
+                                 mpm_stress_hessian *H) {
+  hencky_hessian(m, F, H);
+  mpm_iso_make_definite(H);
+}
+
 void mpm_hencky_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
                                      const mpm_real dF[9], mpm_real dP[9]) {
   mpm_iso_hessian H;
-  hencky_hessian(m, F, &H);
-  mpm_iso_make_definite(&H);
+  mpm_hencky_hessian_definite(m, F, &H);
   mpm_iso_action(&H, dF, dP);
 }
 
@@ -126,6 +131,7 @@ const mpm_model mpm_model_hencky_stvk = {
     .pk1 = mpm_hencky_pk1,
     .dpdf_action = mpm_hencky_dpdf_action,
     .dpdf_action_definite = mpm_hencky_dpdf_action_definite,
+    .hessian_definite = mpm_hencky_hessian_definite,
     .kirchhoff_batch = mpm_hencky_kirchhoff_batch,
     .return_map = NULL,
     .plastic_initial = 1,

@@ -25,12 +25,11 @@
 
 #include <math.h>
 
-typedef struct mpm_iso_hessian {
-  mpm_real U[9], V[9];
-  mpm_real A[9];    /* d2 psi / dsigma_i dsigma_j, symmetric, row-major */
-  mpm_real lsym[3]; /* pairs (0,1), (0,2), (1,2) */
-  mpm_real lskew[3];
-} mpm_iso_hessian;
+#include "material/material.h"
+
+/* A: d2 psi / dsigma_i dsigma_j, symmetric, row-major; lsym, lskew: pairs (0,1), (0,2), (1,2)
+ * (material.h) */
+typedef mpm_stress_hessian mpm_iso_hessian;
 
 static const int MPM_ISO_PAIR[3][2] = {{0, 1}, {0, 2}, {1, 2}};
 

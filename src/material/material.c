@@ -8,6 +8,7 @@
  * von_mises.c, snow.c). Scene units are converted here: the friction angle from degrees to
  * radians; cohesion and yield stress stay in Pa. */
 #include "material/material.h"
+#include "material/isotropic.h"
 #include "material/snow.h"
 
 #include "core/mat3.h"
@@ -54,6 +55,10 @@ void mpm_material_init(mpm_material *m, const mpm_material_desc *d) {
  * degree one, so it is evaluated on tau and divided by |J| (the sign of J does not matter);
  * J = 0 is replaced by the smallest normal number so the result stays finite-or-inf, never
  * NaN. Only the symmetric part of tau counts (tau = P F^T is symmetric for isotropic models). */
+void mpm_stress_hessian_action(const mpm_stress_hessian *H, const mpm_real dF[9], mpm_real dP[9]) {
+  mpm_iso_action(H, dF, dP);
+}
+
 mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J) {
   const mpm_real p = mpm_m3_trace(tau) / 3;
   const mpm_real d0 = tau[0] - p, d1 = tau[4] - p, d2 = tau[8] - p;

@@ -15,6 +15,18 @@
 
 typedef struct mpm_model mpm_model;
 
+/* The stress derivative dP/dF of an isotropic model at one F, factored in the diagonal (SVD)
+ * space (material/isotropic.h): F = U diag(sigma) V^T, the 3x3 block A = d2 psi / dsigma^2
+ * and the twist/flip eigenvalues lsym, lskew of the pairs (0,1), (0,2), (1,2). The implicit
+ * solve builds it once per particle and Newton iteration and applies it at every CG
+ * iteration (mpm_stress_hessian_action), so the SVD and the definiteness fix are not redone
+ * per action. */
+typedef struct mpm_stress_hessian {
+  mpm_real U[9], V[9];
+  mpm_real A[9]; /* symmetric, row-major */
+  mpm_real lsym[3], lskew[3];
+} mpm_stress_hessian;
+
 /* A material as the solver sees it: the model and its parameters in the real type. */
 typedef struct mpm_material {
   const mpm_model *model;
@@ -43,6 +55,9 @@ struct mpm_model {
    * et al. 2005; Zhu eqs. 16 and 19), for the implicit solve. NULL until a model provides it. */
   void (*dpdf_action_definite)(const mpm_material *m, const mpm_real F[9], const mpm_real dF[9],
                                mpm_real dP[9]);
+  /* The definite derivative above, factored (for repeated actions): dpdf_action_definite(F,
+   * dF) equals mpm_stress_hessian_action(H, dF) with H from here, bitwise. */
+  void (*hessian_definite)(const mpm_material *m, const mpm_real F[9], mpm_stress_hessian *H);
   /* Batch: for n <= MPM_STRESS_CHUNK particles whose F components start at F[0..8][0] and
    * whose plastic state starts at plastic[0] (NULL: every particle at plastic_initial), write
    * the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */
@@ -73,6 +88,9 @@ void mpm_material_init(mpm_material *m, const mpm_material_desc *d);
  * scale their moduli, every other model returns *m. For the per-particle entries (energy,
  * pk1, dpdf_action), which take no plastic state. */
 mpm_material mpm_material_at(const mpm_material *m, mpm_real plastic);
+
+/* dP = (dP/dF) : dF with a factored derivative: U dP^(U^T dF V) V^T (material/isotropic.h). */
+void mpm_stress_hessian_action(const mpm_stress_hessian *H, const mpm_real dF[9], mpm_real dP[9]);
 
 /* Von Mises equivalent of the Cauchy stress sigma = tau / J, Pa (a scalar for outputs). */
 mpm_real mpm_von_mises(const mpm_real tau[9], mpm_real J);

@@ -133,8 +133,8 @@ static void nh_dpdf_action(const mpm_material *m, const mpm_real F[9], const mpm
   mpm_m3_mul_bt(T, d.V, dP);
 }
 
-static void nh_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
-                                    const mpm_real dF[9], mpm_real dP[9]) {
+static void nh_hessian_definite(const mpm_material *m, const mpm_real F[9],
+                                mpm_stress_hessian *Hp) {
   mpm_iso_hessian H;
   mpm_real s[3], c[3];
   mpm_svd3(F, H.U, s, H.V);
@@ -151,6 +151,13 @@ static void nh_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
     H.lskew[k] = mu + (l * lnJ - mu) / cc;
   }
   mpm_iso_make_definite(&H);
+  *Hp = H;
+}
+
+static void nh_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
+                                    const mpm_real dF[9], mpm_real dP[9]) {
+  mpm_stress_hessian H;
+  nh_hessian_definite(m, F, &H);
   mpm_iso_action(&H, dF, dP);
 }
 
@@ -208,6 +215,7 @@ const mpm_model mpm_model_neo_hookean = {
     .pk1 = nh_pk1,
     .dpdf_action = nh_dpdf_action,
     .dpdf_action_definite = nh_dpdf_action_definite,
+    .hessian_definite = nh_hessian_definite,
     .kirchhoff_batch = nh_kirchhoff_batch,
     .return_map = NULL,
     .plastic_initial = 1,

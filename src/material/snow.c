@@ -47,6 +47,11 @@ static void snow_dpdf_action_definite(const mpm_material *m, const mpm_real F[9]
   mpm_model_fixed_corotated.dpdf_action_definite(m, F, dF, dP);
 }
 
+static void snow_hessian_definite(const mpm_material *m, const mpm_real F[9],
+                                  mpm_stress_hessian *H) {
+  mpm_model_fixed_corotated.hessian_definite(m, F, H);
+}
+
 /* The fixed-corotated tau (fixed_corotated.c) with per-particle moduli. */
 static void snow_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
                                  const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
@@ -86,6 +91,7 @@ const mpm_model mpm_model_snow = {
     .pk1 = snow_pk1,
     .dpdf_action = snow_dpdf_action,
     .dpdf_action_definite = snow_dpdf_action_definite,
+    .hessian_definite = snow_hessian_definite,
     .kirchhoff_batch = snow_kirchhoff_batch,
     .return_map = snow_return_map,
     .plastic_initial = 1,

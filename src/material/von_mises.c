@@ -50,6 +50,7 @@ const mpm_model mpm_model_von_mises = {
     .pk1 = mpm_hencky_pk1,
     .dpdf_action = mpm_hencky_dpdf_action,
     .dpdf_action_definite = mpm_hencky_dpdf_action_definite,
+    .hessian_definite = mpm_hencky_hessian_definite,
     .kirchhoff_batch = mpm_hencky_kirchhoff_batch,
     .return_map = vm_return_map,
     .plastic_initial = 1,

@@ -84,6 +84,12 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->solver.gimp_length = 0.0;
   scene->solver.on_instability = MPM_INSTABILITY_STOP;
   scene->solver.max_retries = 8;
+  scene->solver.integrator = MPM_INTEGRATOR_EXPLICIT;
+  scene->solver.dt = 0;
+  scene->solver.newton_iterations = 1;
+  scene->solver.cg_tolerance = 1e-4;
+  scene->solver.cg_max_iterations = 500;
+  scene->solver.on_cg_failure = MPM_CG_FAILURE_WARN;
   scene->solver.domain_kernel = MPM_KERNEL_LINEAR;
   snprintf(scene->output.directory, sizeof scene->output.directory, "out");
   scene->output.vtu = 1;

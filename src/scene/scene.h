@@ -169,6 +169,16 @@ typedef enum mpm_instability_action {
   MPM_INSTABILITY_RETRY = 1, /* redo the step from its start with half the dt */
 } mpm_instability_action;
 
+typedef enum mpm_integrator_kind {
+  MPM_INTEGRATOR_EXPLICIT = 0, /* symplectic Euler at the elastic CFL step (default) */
+  MPM_INTEGRATOR_IMPLICIT = 1, /* backward Euler: Newton + CG on the DOF set (Zhu sec. 6) */
+} mpm_integrator_kind;
+
+typedef enum mpm_cg_failure_action {
+  MPM_CG_FAILURE_WARN = 0, /* keep the answer CG reached; counted in stats.csv (default) */
+  MPM_CG_FAILURE_STOP = 1, /* stop the run naming the step and the residual reached */
+} mpm_cg_failure_action;
+
 typedef struct mpm_solver_desc {
   mpm_kernel_kind kernel;
   mpm_transfer_kind transfer;
@@ -181,6 +191,13 @@ typedef struct mpm_solver_desc {
   int max_retries;                       /* halvings of dt tried for one step, default 8 */
   mpm_kernel_kind domain_kernel;         /* corner <-> grid weights: linear (Zhu eq. 2, default),
                                             quadratic or cubic */
+  /* time integration */
+  mpm_integrator_kind integrator;
+  double dt;                           /* implicit: a fixed step, s (0 = CFL on particle speed) */
+  int newton_iterations;               /* implicit: 1 = Zhu's linearized step (default) */
+  double cg_tolerance;                 /* implicit: CG's relative residual, default 1e-4 */
+  int cg_max_iterations;               /* implicit: default 500 */
+  mpm_cg_failure_action on_cg_failure; /* implicit: warn (default) or stop */
 } mpm_solver_desc;
 
 typedef struct mpm_scene {

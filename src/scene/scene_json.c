@@ -38,9 +38,15 @@ static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
 static const char *const DOMAIN_KEYS[] = {"min", "max", "dx", "resolution", "walls", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
-static const char *const SOLVER_KEYS[] = {
-    "kernel",      "transfer",       "flip_alpha",  "cfl",           "max_dt", "grid",
-    "gimp_length", "on_instability", "max_retries", "domain_kernel", NULL};
+static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha", "cfl", "max_dt",
+                                          "grid", "gimp_length", "on_instability", "max_retries",
+                                          "domain_kernel",
+                                          /* implicit integration */
+                                          "integrator", "dt", "newton_iterations", "cg_tolerance",
+                                          "cg_max_iterations", "on_cg_failure", NULL};
+/* The keys that only the implicit integrator reads. */
+static const char *const IMPLICIT_KEYS[] = {
+    "dt", "newton_iterations", "cg_tolerance", "cg_max_iterations", "on_cg_failure", NULL};
 static const char *const OUTPUT_KEYS[] = {"directory",        "vtu", "ply", "stats",
                                           "checkpoint_every", NULL};
 static const char *const CAMERA_KEYS[] = {"eye", "target", "fov", NULL};
@@ -52,6 +58,8 @@ static const char *const TRANSFER_NAMES[] = {"apic", "flip", NULL};
 static const char *const GRID_NAMES[] = {"sparse", "dense", NULL};
 static const char *const INSTABILITY_NAMES[] = {"stop", "retry", NULL};
 static const char *const DOMAIN_KERNEL_NAMES[] = {"linear", "quadratic", "cubic", NULL};
+static const char *const INTEGRATOR_NAMES[] = {"explicit", "implicit", NULL};
+static const char *const CG_FAILURE_NAMES[] = {"warn", "stop", NULL};
 
 const char mpm_sj_axis_name[3] = {'x', 'y', 'z'};
 
@@ -207,6 +215,8 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   int on_instability = (int)d->on_instability;
   long long retries = d->max_retries;
   int domain_kernel = (int)d->domain_kernel;
+  int integrator = (int)d->integrator, on_cg_failure = (int)d->on_cg_failure;
+  long long newton = d->newton_iterations, cg_max = d->cg_max_iterations;
   if (mpm_json_expect_object(c, sv, "an object of solver options") < 0 ||
       mpm_json_check_keys(c, sv, SOLVER_KEYS, NULL) < 0 ||
       mpm_json_enum(c, sv, "kernel", 0, KERNEL_NAMES, &kernel) < 0 ||
@@ -222,8 +232,29 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_enum(c, sv, "on_instability", 0, INSTABILITY_NAMES, &on_instability) < 0 ||
       mpm_json_integer(c, sv, "max_retries", 0, mpm_json_in('[', 1, 30, ']', "halvings of dt"),
                        &retries) < 0 ||
-      mpm_json_enum(c, sv, "domain_kernel", 0, DOMAIN_KERNEL_NAMES, &domain_kernel) < 0)
+      mpm_json_enum(c, sv, "domain_kernel", 0, DOMAIN_KERNEL_NAMES, &domain_kernel) < 0 ||
+      mpm_json_enum(c, sv, "integrator", 0, INTEGRATOR_NAMES, &integrator) < 0)
     return -1;
+  if (integrator != MPM_INTEGRATOR_IMPLICIT) {
+    for (int k = 0; IMPLICIT_KEYS[k]; ++k)
+      if (mpm_json_get(sv, IMPLICIT_KEYS[k]))
+        return mpm_json_fail_at(c, IMPLICIT_KEYS[k], MPM_ERR_INVALID,
+                                "a key of the implicit integrator only; set solver.integrator "
+                                "to \"implicit\" or remove it");
+  }
+  if (mpm_json_number(c, sv, "dt", 0, mpm_json_ge(0, "s, 0 = CFL on particle speed"), &d->dt) < 0 ||
+      mpm_json_integer(c, sv, "newton_iterations", 0,
+                       mpm_json_in('[', 1, 100, ']', "1 = one linearized step"), &newton) < 0 ||
+      mpm_json_number(c, sv, "cg_tolerance", 0, mpm_json_in('(', 0, 1, ')', "relative residual"),
+                      &d->cg_tolerance) < 0 ||
+      mpm_json_integer(c, sv, "cg_max_iterations", 0, mpm_json_in('[', 1, 100000, ']', NULL),
+                       &cg_max) < 0 ||
+      mpm_json_enum(c, sv, "on_cg_failure", 0, CG_FAILURE_NAMES, &on_cg_failure) < 0)
+    return -1;
+  d->integrator = (mpm_integrator_kind)integrator;
+  d->on_cg_failure = (mpm_cg_failure_action)on_cg_failure;
+  d->newton_iterations = (int)newton;
+  d->cg_max_iterations = (int)cg_max;
   d->max_retries = (int)retries;
   d->domain_kernel = (mpm_kernel_kind)domain_kernel;
   d->on_instability = (mpm_instability_action)on_instability;

@@ -53,7 +53,7 @@ typedef struct mpm_dof_segment {
 } mpm_dof_segment;
 
 #define MPM_DOF_MAX_SEGMENTS 16
-#define MPM_DOF_MAX_VECTORS 8
+#define MPM_DOF_MAX_VECTORS 16
 #define MPM_DOF_VECTOR_NAME 16
 #define MPM_DOF_CHUNK 4096
 

@@ -8,6 +8,7 @@
 #include "solver/sim.h"
 
 #include <math.h>
+#include <string.h>
 
 typedef struct between_stage {
   const char *name;
@@ -37,6 +38,7 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "the simulation already reached its end time");
   sim->frame_wall_start = mpm_wall_seconds();
+  memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
   double end = (sim->frame + 1) * sim->frame_dt;
   if (end > sim->scene.end_time) end = sim->scene.end_time;
   /* steps land exactly on the frame time; a tiny remainder is merged into the last step */

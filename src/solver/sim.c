@@ -33,10 +33,17 @@ static mpm_status check_steps_per_frame(const mpm_sim *sim, mpm_error *err) {
   int stiff = -1;
   for (int m = 0; m < sim->material_count; ++m)
     if (sim->materials[m].wave_speed > c) c = sim->materials[m].wave_speed, stiff = m;
-  const double dt_cfl = c > 0 ? sc->solver.cfl * sc->dx / c : INFINITY;
+  double dt_cfl = c > 0 ? sc->solver.cfl * sc->dx / c : INFINITY;
+  if (sc->solver.integrator == MPM_INTEGRATOR_IMPLICIT) /* no wave-speed bound */
+    dt_cfl = sc->solver.dt > 0 ? sc->solver.dt : INFINITY;
   const double dt = sc->solver.max_dt > 0 ? fmin(dt_cfl, sc->solver.max_dt) : dt_cfl;
   const double steps = 1.0 / (sc->fps * dt);
   if (!(steps > MAX_STEPS_PER_FRAME)) return MPM_OK;
+  if (sc->solver.integrator == MPM_INTEGRATOR_IMPLICIT && dt == sc->solver.dt)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: solver.dt = %g s makes %.3g steps per frame (at %g frames per "
+                         "second); expected at most %g: raise solver.dt",
+                         sc->path, sc->solver.dt, steps, sc->fps, MAX_STEPS_PER_FRAME);
   if (sc->solver.max_dt > 0 && sc->solver.max_dt <= dt_cfl)
     return mpm_error_set(err, MPM_ERR_INVALID,
                          "%s: solver.max_dt = %g s makes %.3g steps per frame (at %g frames per "
@@ -172,7 +179,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   sim->frame_count = (int)ceil(sc->end_time * sc->fps - 1e-9);
   if (sim->frame_count < 1) sim->frame_count = 1;
   sim->wave_speed = 0;
-  for (int m = 0; m < sim->material_count; ++m)
+  /* the implicit step is bounded by particle motion alone (no wave-speed bound) */
+  for (int m = 0; m < sim->material_count && sc->solver.integrator == MPM_INTEGRATOR_EXPLICIT; ++m)
     if (sim->materials[m].wave_speed > sim->wave_speed)
       sim->wave_speed = sim->materials[m].wave_speed;
   mpm_real vmax2 = 0;

@@ -24,6 +24,15 @@ typedef struct mpm_stage_times {
   double sort, p2g, grid, g2p, total;
 } mpm_stage_times;
 
+/* The implicit solver's figures, summed over the steps of the current frame (stats.csv). */
+typedef struct mpm_solver_figures {
+  long long steps, cg_iterations, newton_iterations, cg_unconverged;
+  int cg_max;               /* most CG iterations of one step */
+  double residual_max;      /* largest final relative CG residual of one step */
+  int last_cg, last_newton; /* the last step's (progress line) */
+  double last_residual;
+} mpm_solver_figures;
+
 struct mpm_sim {
   mpm_scene scene;
   mpm_particles particles;
@@ -53,6 +62,7 @@ struct mpm_sim {
   int frame, frame_count;
   mpm_real max_speed, wave_speed;
   mpm_stage_times times;
+  mpm_solver_figures solver_figures; /* implicit steps of this frame */
   /* outputs */
   int output_enabled;
   char output_dir[MPM_PATH_MAX];

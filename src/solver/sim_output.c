@@ -144,6 +144,13 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     row->mass = d.mass;
     row->wall_seconds = mpm_wall_seconds() - sim->frame_wall_start;
     row->particles = p->count;
+    const mpm_solver_figures *sf = &sim->solver_figures;
+    const double steps = sf->steps > 0 ? (double)sf->steps : 1;
+    row->cg_iterations_mean = (double)sf->cg_iterations / steps;
+    row->newton_iterations_mean = (double)sf->newton_iterations / steps;
+    row->cg_iterations_max = sf->cg_max;
+    row->cg_residual_max = sf->residual_max;
+    row->cg_unconverged = sf->cg_unconverged;
     snprintf(path, sizeof path, "%s/stats.csv", sim->output_dir);
     st = mpm_write_stats_csv(path, frame + 1, sim->stats, &sim->error);
     if (st != MPM_OK) goto done;

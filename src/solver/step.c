@@ -24,6 +24,8 @@
 #include "core/alloc.h"
 #include "domain/domain_transfer.h"
 #include "solver/explicit_update.h"
+#include "solver/implicit.h"
+#include "transfer/operators.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -31,6 +33,9 @@
 #include <string.h>
 
 double mpm_sim_cfl_dt(const mpm_sim *sim) {
+  const mpm_solver_desc *sd = &sim->scene.solver;
+  if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) return sd->dt;
+  /* implicit: sim->wave_speed is 0, so the step follows particle speed alone */
   const double speed = (double)sim->wave_speed + (double)sim->max_speed;
   double dt = speed > 0 ? sim->scene.solver.cfl * sim->scene.dx / speed : sim->frame_dt;
   if (sim->scene.solver.max_dt > 0 && dt > sim->scene.solver.max_dt) dt = sim->scene.solver.max_dt;
@@ -49,6 +54,7 @@ typedef struct step_ctx {
   mpm_grid_values all; /* the values of every DOF */
   mpm_g2p_result r;
   const mpm_particles *bad_set; /* the set r.bad_particle indexes */
+  mpm_implicit_result solve;    /* implicit steps */
 } step_ctx;
 
 typedef mpm_status (*stage_fn)(mpm_sim *sim, step_ctx *c);
@@ -109,7 +115,14 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
 }
 
 static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
-  mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
+  if (sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT &&
+      mpm_p2g_fuses_force(&c->tc, &sim->grid)) {
+    /* the implicit solve needs v^n and f^n apart (the Newton gradient), not the fused impulse */
+    mpm_p2g_mass_momentum(&c->tc, &sim->grid, &c->val, &sim->particles);
+    mpm_p2g_stress_force(&c->tc, &sim->grid, c->val.f, &sim->particles);
+  } else {
+    mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
+  }
   if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid, &c->all, &sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the stresses of %zu domain particles",
@@ -119,6 +132,50 @@ static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
 
 static mpm_status stage_update(mpm_sim *sim, step_ctx *c) {
   mpm_dofs_explicit_update(&c->update, c->p2g_output, &sim->dofs);
+  return MPM_OK;
+}
+
+/* The implicit update (solver/implicit.h) in place of the explicit one. */
+static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
+  const mpm_solver_desc *sd = &sim->scene.solver;
+  mpm_implicit s;
+  memset(&s, 0, sizeof s);
+  s.dt = c->update.dt;
+  for (int d = 0; d < 3; ++d) s.gravity[d] = c->update.gravity[d];
+  s.dofs = &sim->dofs;
+  s.tc = &c->tc;
+  s.grid = &sim->grid;
+  s.p = &sim->particles;
+  s.domains = c->domains ? &sim->domains : NULL;
+  s.boundary = &c->update.boundary;
+  s.arena = &sim->step_arena;
+  const mpm_implicit_options o = {sd->newton_iterations, sd->cg_tolerance, sd->cg_max_iterations,
+                                  1};
+  if (mpm_implicit_init(&s) || mpm_implicit_solve(&s, &o, &c->solve))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory for the implicit solve over %zu DOFs",
+                         (long long)sim->steps, sim->dofs.count);
+  mpm_solver_figures *f = &sim->solver_figures;
+  f->steps++;
+  f->cg_iterations += c->solve.cg_iterations;
+  f->newton_iterations += c->solve.newton_iterations;
+  if (c->solve.cg_iterations > f->cg_max) f->cg_max = c->solve.cg_iterations;
+  if (c->solve.cg_residual > f->residual_max) f->residual_max = c->solve.cg_residual;
+  f->last_cg = c->solve.cg_iterations;
+  f->last_newton = c->solve.newton_iterations;
+  f->last_residual = c->solve.cg_residual;
+  if (!c->solve.cg_converged) {
+    f->cg_unconverged++;
+    if (sd->on_cg_failure == MPM_CG_FAILURE_STOP)
+      return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
+                           "step %lld (t = %.6g s, dt = %.3g s): conjugate gradients did not "
+                           "converge: relative residual %.3g after %d iterations over %zu DOFs, "
+                           "expected at most solver.cg_tolerance = %g; raise "
+                           "solver.cg_max_iterations, lower solver.dt, or set "
+                           "solver.on_cg_failure to \"warn\"",
+                           (long long)sim->steps, sim->time, c->dt, c->solve.cg_residual,
+                           c->solve.cg_iterations, sim->dofs.count, sd->cg_tolerance);
+  }
   return MPM_OK;
 }
 
@@ -141,6 +198,15 @@ static const stage explicit_stages[] = {
     {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
     {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
     {"update", stage_update, offsetof(mpm_stage_times, grid)},
+    {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
+};
+
+/* The implicit step: the same stages with the solve in place of the explicit update. */
+static const stage implicit_stages[] = {
+    {"sort", stage_sort, offsetof(mpm_stage_times, sort)},
+    {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
+    {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
+    {"solve", stage_solve, offsetof(mpm_stage_times, grid)},
     {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
 };
 
@@ -167,8 +233,10 @@ static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
   c->domains = sim->domains.active_count > 0;
   /* the sparse grid's APIC P2G folds the force into the momentum; domain corners bring their
    * force apart (their FLIP update needs the grid's velocity before the force) */
-  c->p2g_output =
-      mpm_p2g_fuses_force(t, &sim->grid) && !c->domains ? MPM_P2G_IMPULSE : MPM_P2G_MOMENTUM_FORCE;
+  const int implicit = sc->solver.integrator == MPM_INTEGRATOR_IMPLICIT;
+  c->p2g_output = mpm_p2g_fuses_force(t, &sim->grid) && !c->domains && !implicit
+                      ? MPM_P2G_IMPULSE
+                      : MPM_P2G_MOMENTUM_FORCE;
   mpm_explicit_update *u = &c->update;
   u->dt = (mpm_real)dt;
   const mpm_real dx = sim->grid.dx;
@@ -228,8 +296,12 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   step_ctx c;
   step_setup(sim, dt, &c);
   double t = t0;
-  for (size_t k = 0; k < sizeof explicit_stages / sizeof explicit_stages[0]; ++k) {
-    const stage *s = &explicit_stages[k];
+  const int implicit = sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT;
+  const stage *stages = implicit ? implicit_stages : explicit_stages;
+  const size_t stage_count = implicit ? sizeof implicit_stages / sizeof implicit_stages[0]
+                                      : sizeof explicit_stages / sizeof explicit_stages[0];
+  for (size_t k = 0; k < stage_count; ++k) {
+    const stage *s = &stages[k];
     const mpm_status st = s->run(sim, &c);
     if (st != MPM_OK) return st;
     const double now = mpm_wall_seconds();

@@ -149,6 +149,57 @@ static void gather_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
   }
 }
 
+/* d_a += grad w^T Q^a grad w over particle i's stencil, into a pad (scalar: the Jacobi
+ * diagonal is built once per Newton iteration, not per CG iteration). Q: 6 symmetric entries
+ * (xx, xy, xz, yy, yz, zz) for each of the 3 components. */
+ALWAYS_INLINE void quadratic_particle(const int W, const mpm_stencil *s, const mpm_real Q[18],
+                                      mpm_real *pad, int stride, long off, long sx, long sy) {
+  for (int a = 0; a < W; ++a)
+    for (int b = 0; b < W; ++b)
+      for (int c = 0; c < W; ++c) {
+        const mpm_real gx = s->dw[0][a] * s->w[1][b] * s->w[2][c];
+        const mpm_real gy = s->w[0][a] * s->dw[1][b] * s->w[2][c];
+        const mpm_real gz = s->w[0][a] * s->w[1][b] * s->dw[2][c];
+        mpm_real *node = pad + (off + a * sx + b * sy + c) * stride;
+        for (int d = 0; d < 3; ++d) {
+          const mpm_real *q = Q + 6 * d;
+          node[d] += q[0] * gx * gx + q[3] * gy * gy + q[5] * gz * gz +
+                     2 * (q[1] * gx * gy + q[2] * gx * gz + q[4] * gy * gz);
+        }
+      }
+}
+
+static void quadratic_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                             mpm_real *const d[3], const mpm_real *const Q[18],
+                             const mpm_particles *p) {
+  const int W = ctx->kernel.width;
+  for (int colour = 0; colour < 8; ++colour) {
+    const long begin = (long)g->color_start[colour], end = (long)g->color_start[colour + 1];
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long k = begin; k < end; ++k) {
+      const int32_t b = g->color_blocks[k];
+      mpm_real pad[MPM_PAD_NODES * STRIDE] __attribute__((aligned(MPM_ALIGN)));
+      memset(pad, 0, sizeof pad);
+      const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
+                          g->coord[b][2] * MPM_BLOCK};
+      size_t q1;
+      const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
+      for (uint32_t j = g->cell_start[q0]; j < g->cell_start[q1]; ++j) {
+        const uint32_t i = g->perm[j];
+        const mpm_real xr[3] = {p->x[0][i] - ctx->origin[0], p->x[1][i] - ctx->origin[1],
+                                p->x[2][i] - ctx->origin[2]};
+        mpm_stencil s;
+        mpm_kernel_stencil(&ctx->kernel, xr, &s);
+        mpm_real Qi[18];
+        for (int c = 0; c < 18; ++c) Qi[c] = Q[c][i];
+        quadratic_particle(W, &s, Qi, pad, STRIDE, mpm_pad_offset(s.base, org), MPM_PAD * MPM_PAD,
+                           MPM_PAD);
+      }
+      mpm_pad_add(W, g, b, 3, pad, STRIDE, d);
+    }
+  }
+}
+
 /* ---- dense grid: scalar reference loops ---- */
 
 /* Stencil of particle i and the dense index of its base node. */
@@ -282,6 +333,31 @@ void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_re
     mpm_real Mi[9];
     for (int c = 0; c < 9; ++c) Mi[c] = M[c][i];
     dense_scatter_particle(ctx, &g->impl.dense, p, i, Mi, f);
+  }
+}
+
+void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                 mpm_real *const d[3], const mpm_real *const Q[18],
+                                 const mpm_particles *p) {
+  if (g->kind == MPM_GRID_SPARSE) {
+    quadratic_sparse(ctx, &g->impl.sparse, d, Q, p);
+    return;
+  }
+  const mpm_dense_grid *dg = &g->impl.dense;
+  const long sy = dg->n[2], sx = (long)dg->n[1] * dg->n[2];
+  for (size_t i = 0; i < p->count; ++i) {
+    mpm_stencil s;
+    const long n0 = dense_stencil(ctx, dg, p, i, &s);
+    mpm_real Qi[18], node[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX * 3];
+    for (int c = 0; c < 18; ++c) Qi[c] = Q[c][i];
+    const int W = ctx->kernel.width;
+    memset(node, 0, sizeof node);
+    quadratic_particle(W, &s, Qi, node, 3, 0, W * W, W);
+    for (int a = 0; a < W; ++a)
+      for (int b = 0; b < W; ++b)
+        for (int c = 0; c < W; ++c)
+          for (int e = 0; e < 3; ++e)
+            d[e][n0 + a * sx + b * sy + c] += node[((a * W + b) * W + c) * 3 + e];
   }
 }
 

@@ -12,6 +12,8 @@
  *   matrix scatter      f_i += sum_p M_p grad w_ip               (the force differential of
  *                       Stomakhin eq. 6 with M_p = -V0 A_p F_p^T, A_p = dP/dF : dF_p)
  *   gradient gather     G_p = sum_i u_i grad w_ip^T              (dF_p = dt G_p F_p)
+ *   quadratic forms     d_i,a += sum_p grad w_ip^T Q_p^a grad w_ip   (the Jacobi diagonal,
+ *                       Zhu eqs. 17-19, with Q^a = V0 F S^a F^T; scalar stencils)
  * The matrix scatter and the gradient gather are adjoint, sum_p <G_p(u), M_p> =
  * sum_i <u_i, f_i(M)>, which is what makes the implicit system's matrix symmetric
  * (tests/test_transfer_operators.c).
@@ -35,6 +37,11 @@ void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_re
                           const mpm_real *const M[9], const mpm_particles *p);
 void mpm_gather_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
                           const mpm_real *const u[3], const mpm_particles *p, mpm_real *const G[9]);
+/* Q: 18 arrays, the symmetric Q^a of component a in entries 6a .. 6a + 5 (xx, xy, xz, yy,
+ * yz, zz). */
+void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                 mpm_real *const d[3], const mpm_real *const Q[18],
+                                 const mpm_particles *p);
 
 /* The sparse grid's mass and momentum P2G (p2g.c, the fused kernels without the force). */
 void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,

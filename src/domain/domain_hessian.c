@@ -1,0 +1,198 @@
+/* domain_hessian.c - the particle domains' forces, energy, Hessian action and Jacobi diagonal
+ * for the implicit solve (see domain_hessian.h). */
+#include "domain/domain_hessian.h"
+
+#include <string.h>
+
+int mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s, const mpm_material *materials,
+                            mpm_arena *arena) {
+  memset(h, 0, sizeof *h);
+  h->s = s;
+  h->materials = materials;
+  const size_t np = s->particles.count + 1, nc = s->corner_count + 1;
+  h->H = mpm_arena_alloc(arena, np * sizeof *h->H);
+  h->Fh = mpm_arena_alloc(arena, np * sizeof *h->Fh);
+  h->dP = mpm_arena_alloc(arena, np * sizeof *h->dP);
+  int ok = h->H && h->Fh && h->dP;
+  for (int d = 0; d < 3; ++d) {
+    h->cu[d] = mpm_arena_alloc(arena, nc * sizeof(mpm_real));
+    h->cy[d] = mpm_arena_alloc(arena, nc * sizeof(mpm_real));
+    ok = ok && h->cu[d] && h->cy[d];
+  }
+  return ok ? 0 : -1;
+}
+
+/* cu = E u (0 for unused corners: their rows are empty). */
+static void corners_from_dofs(mpm_domain_hessian *h, mpm_real *const u[3]) {
+  const mpm_real *const uc[3] = {u[0], u[1], u[2]};
+  mpm_embedding_gather(&h->s->corner_grid, 3, uc, h->cu);
+}
+
+void mpm_domain_hessian_displace(mpm_domain_hessian *h, mpm_real *const u[3]) {
+  mpm_domain_set *s = h->s;
+  const mpm_particles *p = &s->particles;
+  if (u) corners_from_dofs(h, u);
+  const long n = (long)p->count;
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < n; ++q) {
+    for (int e = 0; e < 9; ++e) h->Fh[q][e] = p->F[e][q];
+    if (!s->active[q] || !u) continue;
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const uint32_t c = s->corner[q][a];
+      const mpm_real *g = s->g[q][a];
+      for (int r = 0; r < 3; ++r)
+        for (int t = 0; t < 3; ++t) h->Fh[q][3 * r + t] += h->cu[r][c] * g[t];
+    }
+  }
+}
+
+static mpm_material material_of(const mpm_domain_hessian *h, long q) {
+  const mpm_particles *p = &h->s->particles;
+  return mpm_material_at(&h->materials[p->material[q]], p->plastic[q]);
+}
+
+void mpm_domain_hessian_build(mpm_domain_hessian *h) {
+  const long n = (long)h->s->particles.count;
+  if (h->exact) return; /* the exact action evaluates dP/dF at F^ itself */
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < n; ++q) {
+    if (!h->s->active[q]) continue;
+    const mpm_material m = material_of(h, q);
+    m.model->hessian_definite(&m, h->Fh[q], &h->H[q]);
+  }
+}
+
+static void action(const mpm_domain_hessian *h, long q, const mpm_real dF[9], mpm_real dP[9]) {
+  if (h->exact) {
+    const mpm_material m = material_of(h, q);
+    m.model->dpdf_action(&m, h->Fh[q], dF, dP);
+  } else {
+    mpm_stress_hessian_action(&h->H[q], dF, dP);
+  }
+}
+
+/* cy_a = scale sum_p (per-particle matrix)_p g_pa, through the adjacency; then y += E^T cy. */
+static void corners_to_dofs(mpm_domain_hessian *h, mpm_real scale, mpm_real *const y[3]) {
+  mpm_domain_set *s = h->s;
+  const long nc = (long)s->corner_count;
+#pragma omp parallel for schedule(static)
+  for (long c = 0; c < nc; ++c) {
+    double f[3] = {0, 0, 0};
+    for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
+      const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
+      const mpm_real *g = s->g[q][a], *M = h->dP[q];
+      for (int d = 0; d < 3; ++d)
+        f[d] += M[3 * d] * g[0] + M[3 * d + 1] * g[1] + M[3 * d + 2] * g[2];
+    }
+    for (int d = 0; d < 3; ++d) h->cy[d][c] = (mpm_real)(scale * f[d]);
+  }
+  const mpm_real *const cy[3] = {h->cy[0], h->cy[1], h->cy[2]};
+  mpm_embedding_scatter(&s->corner_grid, 3, cy, y);
+}
+
+void mpm_domain_hessian_apply(mpm_domain_hessian *h, mpm_real scale, mpm_real *const x[3],
+                              mpm_real *const y[3]) {
+  mpm_domain_set *s = h->s;
+  const mpm_particles *p = &s->particles;
+  corners_from_dofs(h, x);
+  const long n = (long)p->count;
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < n; ++q) {
+    if (!s->active[q]) {
+      memset(h->dP[q], 0, sizeof h->dP[q]);
+      continue;
+    }
+    mpm_real dF[9] = {0};
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const uint32_t c = s->corner[q][a];
+      const mpm_real *g = s->g[q][a];
+      for (int r = 0; r < 3; ++r)
+        for (int t = 0; t < 3; ++t) dF[3 * r + t] += h->cu[r][c] * g[t];
+    }
+    mpm_real dP[9];
+    action(h, q, dF, dP);
+    for (int e = 0; e < 9; ++e) h->dP[q][e] = p->vol0[q] * dP[e];
+  }
+  corners_to_dofs(h, scale, y);
+}
+
+void mpm_domain_hessian_forces(mpm_domain_hessian *h, mpm_real *const f[3]) {
+  mpm_domain_set *s = h->s;
+  const mpm_particles *p = &s->particles;
+  const long n = (long)p->count;
+#pragma omp parallel for schedule(static)
+  for (long q = 0; q < n; ++q) {
+    if (!s->active[q]) {
+      memset(h->dP[q], 0, sizeof h->dP[q]);
+      continue;
+    }
+    const mpm_material m = material_of(h, q);
+    mpm_real P[9];
+    m.model->pk1(&m, h->Fh[q], P);
+    for (int e = 0; e < 9; ++e) h->dP[q][e] = p->vol0[q] * P[e];
+  }
+  corners_to_dofs(h, -1, f);
+}
+
+double mpm_domain_hessian_energy(const mpm_domain_hessian *h) {
+  const mpm_domain_set *s = h->s;
+  const mpm_particles *p = &s->particles;
+  double e = 0; /* serial: the same sum for any thread count */
+  for (size_t q = 0; q < p->count; ++q) {
+    if (!s->active[q]) continue;
+    const mpm_material m = material_of(h, (long)q);
+    e += (double)p->vol0[q] * (double)m.model->energy(&m, h->Fh[q]);
+  }
+  return e;
+}
+
+/* S^c_jl = C_cj,cl for c = 0..2 (each symmetric): nine actions on e_c e_l^T. */
+static void diagonal_blocks(const mpm_domain_hessian *h, long q, mpm_real S[3][9]) {
+  for (int c = 0; c < 3; ++c)
+    for (int l = 0; l < 3; ++l) {
+      mpm_real dF[9] = {0}, dP[9];
+      dF[3 * c + l] = 1;
+      action(h, q, dF, dP);
+      for (int j = 0; j < 3; ++j) S[c][3 * j + l] = dP[3 * c + j];
+    }
+}
+
+#define MAX_NODES (MPM_HEX_CORNERS * 64)
+
+void mpm_domain_hessian_diagonal(mpm_domain_hessian *h, mpm_real scale, mpm_real *const d[3]) {
+  const mpm_domain_set *s = h->s;
+  const mpm_particles *p = &s->particles;
+  const mpm_embedding *E = &s->corner_grid;
+  uint32_t col[MAX_NODES];
+  mpm_real b[MAX_NODES][3];
+  for (size_t q = 0; q < p->count; ++q) {
+    if (!s->active[q]) continue;
+    /* b_i = sum_a E_ai g_qa over the union of the corners' stencils */
+    int count = 0;
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const uint32_t c = s->corner[q][a];
+      const mpm_real *g = s->g[q][a];
+      for (uint32_t e = E->row_start[c]; e < E->row_start[c] + E->row_len[c]; ++e) {
+        int k = 0;
+        while (k < count && col[k] != E->col[e]) ++k;
+        if (k == count) {
+          if (count == MAX_NODES) continue;
+          col[count] = E->col[e];
+          b[count][0] = b[count][1] = b[count][2] = 0;
+          ++count;
+        }
+        for (int t = 0; t < 3; ++t) b[k][t] += E->w[e] * g[t];
+      }
+    }
+    mpm_real S[3][9];
+    diagonal_blocks(h, (long)q, S);
+    const mpm_real v = scale * p->vol0[q];
+    for (int k = 0; k < count; ++k)
+      for (int c = 0; c < 3; ++c) {
+        mpm_real sum = 0;
+        for (int j = 0; j < 3; ++j)
+          for (int l = 0; l < 3; ++l) sum += b[k][j] * S[c][3 * j + l] * b[k][l];
+        d[c][col[k]] += v * sum;
+      }
+  }
+}

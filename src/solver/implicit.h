@@ -1,0 +1,110 @@
+/* implicit.h - the implicit velocity update on the DOF set (Zhu et al. 2017 sec. 6; Stomakhin
+ * et al. 2013 sec. 4 for material points; Gast et al. 2015 for the Newton iterations).
+ *
+ * Backward Euler on the grid is the minimization of the incremental potential
+ *   E(v) = sum_i 1/2 m_i |v_i - v_i^n|^2 - dt sum_i m_i g . v_i + Phi(x + dt v),
+ * Phi the elastic energy of every material point and particle domain at the grid displaced by
+ * u = dt v. Its gradient is m (v - v^n) - dt m g - dt f(u), its Hessian M + dt^2 K(u) with
+ * K = -df/du. One Newton step from u = 0 is Zhu's eq. 12,
+ *   (M + dt^2 K) v = M v*,  v* = v^n + dt (g + f^n / m)          (eqs. 12-13, times M)
+ * (the mass-weighted form of (I + dt^2 M^-1 K) v = v*: symmetric, so CG applies). More
+ * iterations (newton_iterations > 1) solve (M + dt^2 K(u_k)) dv = -grad E(v_k) and take the
+ * longest step of a backtracking line search that lowers E (Armijo, halving).
+ *
+ * K is matrix-free (implicit_hessian.c):
+ *   material points  K du = sum_p V_p^0 (C_p : G_p F_p) F_p^T grad w_ip, G_p = sum_j du_j grad
+ * w_jp^T (gather_gradients -> stress differential -> scatter_matrices) particle domains the
+ * reference-configuration form, eqs. 14-15 (domain/domain_hessian.h) with C_p = dP/dF at the
+ * displaced F, made positive semi-definite per particle in the SVD space (eq. 16, the models'
+ * hessian_definite), factored once per Newton iteration. The Jacobi preconditioner is the diagonal
+ * of M + dt^2 K with the same definite C (eqs. 17-19).
+ *
+ * Boundary conditions (collide/boundary.h) act inside the solve: a DOF in a sticky obstacle
+ * has its velocity fixed to the obstacle's; in a slip obstacle, or in a separating one that the
+ * predicted velocity v* moves into, the normal component is fixed and projected out of CG's
+ * residual and search directions. After the solve the full boundary rule runs on every DOF
+ * with the normal velocity of v* restored first: that is where separation and Coulomb friction
+ * act (the friction sees the normal velocity the obstacle stopped).
+ *
+ * Plasticity: the particles' F is the elastic part; the Hessian is that of the elastic energy
+ * at the elastic F, and the return map runs after the F update in G2P, as in the explicit step. */
+#ifndef MPM_SOLVER_IMPLICIT_H
+#define MPM_SOLVER_IMPLICIT_H
+
+#include "collide/boundary.h"
+#include "core/arena.h"
+#include "domain/domain_hessian.h"
+#include "solver/cg.h"
+#include "solver/dofs.h"
+#include "transfer/transfer.h"
+
+typedef struct mpm_implicit_options {
+  int newton_iterations; /* >= 1; 1 = Zhu's single linearized step */
+  double cg_tolerance;   /* relative residual */
+  int cg_max_iterations;
+  int precondition; /* 1: Jacobi (eqs. 17-19), 0: none (benchmarks) */
+} mpm_implicit_options;
+
+typedef struct mpm_implicit_result {
+  int newton_iterations; /* taken */
+  int cg_iterations;     /* over all Newton iterations */
+  double cg_residual;    /* the largest final relative residual of the Newton iterations */
+  int cg_converged;      /* every CG solve reached the tolerance */
+  int line_search_failed;
+} mpm_implicit_result;
+
+/* The system of one step. The caller fills the inputs; mpm_implicit_init allocates scratch. */
+typedef struct mpm_implicit {
+  /* inputs */
+  mpm_real dt;
+  mpm_real gravity[3];
+  mpm_dofs *dofs; /* after P2G: mass, momentum (v0), force at u = 0 (f) */
+  const mpm_transfer_ctx *tc;
+  const mpm_grid *grid; /* material points: one level, its DOFs from grid->dof_begin */
+  const mpm_particles *p;
+  mpm_domain_set *domains; /* NULL or a set with active particles (its embedding built) */
+  const mpm_boundary *boundary;
+  int exact; /* 1: K is the model's own dP/dF (finite-difference tests), not the definite one */
+  /* scratch */
+  mpm_arena *arena;
+  mpm_stress_hessian *H; /* per material point */
+  mpm_real *Fh[9];       /* per material point: F at the displacement */
+  mpm_real *G[9];        /* per material point: gathered gradients, then scattered matrices */
+  mpm_domain_hessian dh;
+  /* the constraints: DOF index, the projector I - sum n n^T (xx, xy, xz, yy, yz, zz) */
+  size_t constraint_count;
+  uint32_t *constraint_dof;
+  mpm_real (*constraint_P)[6];
+  mpm_real apply_scale; /* dt^2 in CG's operator */
+  mpm_real *px[3];      /* DOF positions (built with the constraints), m */
+  mpm_real *depth;      /* DOF wall-band depths (solver/dofs.h) */
+} mpm_implicit;
+
+/* Scratch for the step (from s->arena). 0, or -1 when out of memory. */
+int mpm_implicit_init(mpm_implicit *s);
+
+/* The whole implicit update: v0 <- v^n, v <- v^{n+1} on every DOF (like the explicit update),
+ * boundary rules applied. 0, or -1 when out of memory. */
+int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_implicit_result *r);
+
+/* The pieces, for tests and benchmarks (u: a displacement over the DOF set):
+ * displace   F^ = (I + G(u)) F (material points), F + sum u_a g^T (domains); u NULL: u = 0
+ * build      the factored (definite) stress derivatives at F^
+ * apply      y = mass_scale m x + scale K x, projected when project is set
+ * forces     f = the elastic forces at F^
+ * energy     the elastic energy at F^
+ * diagonal   d = mass_scale m + scale diag(K) */
+void mpm_implicit_displace(mpm_implicit *s, mpm_real *const u[3]);
+void mpm_implicit_build(mpm_implicit *s);
+void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mpm_real *const x[3],
+                        mpm_real *const y[3]);
+void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]);
+double mpm_implicit_energy(mpm_implicit *s);
+void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
+                           mpm_real *const d[3]);
+/* Build the constraints from the predicted velocity v (over the DOF set). 0 or -1 (OOM). */
+int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);
+/* v = P v at the constrained DOFs. */
+void mpm_implicit_project(mpm_implicit *s, mpm_real *const v[3]);
+
+#endif
