@@ -47,6 +47,7 @@ static void level_view(const mpm_implicit *s, mpm_real *const u[3], mpm_real *v[
 }
 
 void mpm_implicit_displace(mpm_implicit *s, mpm_real *const u[3]) {
+  s->dh.exact = s->exact;
   const mpm_particles *p = s->p;
   const long n = p ? (long)p->count : 0;
   if (n > 0) {
@@ -73,6 +74,7 @@ void mpm_implicit_displace(mpm_implicit *s, mpm_real *const u[3]) {
 }
 
 void mpm_implicit_build(mpm_implicit *s) {
+  s->dh.exact = s->exact;
   const long n = s->p ? (long)s->p->count : 0;
   if (!s->exact) {
 #pragma omp parallel for schedule(static)
@@ -100,6 +102,7 @@ static void stress_action(const mpm_implicit *s, size_t i, const mpm_real dF[9],
 
 void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mpm_real *const x[3],
                         mpm_real *const y[3]) {
+  s->dh.exact = s->exact;
   const mpm_dofs *d = s->dofs;
   const long nd = (long)d->count;
   for (int c = 0; c < 3; ++c) {
@@ -171,6 +174,7 @@ double mpm_implicit_energy(mpm_implicit *s) {
 
 void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
                            mpm_real *const d[3]) {
+  s->dh.exact = s->exact;
   const mpm_dofs *dofs = s->dofs;
   const long nd = (long)dofs->count;
   for (int c = 0; c < 3; ++c) {

@@ -121,6 +121,12 @@ mpm_status mpm_sim_between_steps(mpm_sim *sim);
  * diagnostic in sim->error, or MPM_OK. */
 mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
 
+/* Tests and benchmarks: the stages of a step of dt up to the solve (sort, layout, P2G, with the
+ * force apart), and the step's implicit system in *s (its scratch is the step arena's, valid
+ * until the next step). Nothing is advanced. */
+struct mpm_implicit;
+mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, struct mpm_implicit *s);
+
 /* Output bookkeeping for frame_count + 1 records (sim_output.c). */
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);
 

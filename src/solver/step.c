@@ -135,20 +135,25 @@ static mpm_status stage_update(mpm_sim *sim, step_ctx *c) {
   return MPM_OK;
 }
 
+/* The step's implicit system over the DOF set laid out by P2G. */
+static void implicit_system(mpm_sim *sim, step_ctx *c, mpm_implicit *s) {
+  memset(s, 0, sizeof *s);
+  s->dt = c->update.dt;
+  for (int d = 0; d < 3; ++d) s->gravity[d] = c->update.gravity[d];
+  s->dofs = &sim->dofs;
+  s->tc = &c->tc;
+  s->grid = &sim->grid;
+  s->p = &sim->particles;
+  s->domains = c->domains ? &sim->domains : NULL;
+  s->boundary = &c->update.boundary;
+  s->arena = &sim->step_arena;
+}
+
 /* The implicit update (solver/implicit.h) in place of the explicit one. */
 static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
   const mpm_solver_desc *sd = &sim->scene.solver;
   mpm_implicit s;
-  memset(&s, 0, sizeof s);
-  s.dt = c->update.dt;
-  for (int d = 0; d < 3; ++d) s.gravity[d] = c->update.gravity[d];
-  s.dofs = &sim->dofs;
-  s.tc = &c->tc;
-  s.grid = &sim->grid;
-  s.p = &sim->particles;
-  s.domains = c->domains ? &sim->domains : NULL;
-  s.boundary = &c->update.boundary;
-  s.arena = &sim->step_arena;
+  implicit_system(sim, c, &s);
   const mpm_implicit_options o = {sd->newton_iterations, sd->cg_tolerance, sd->cg_max_iterations,
                                   1};
   if (mpm_implicit_init(&s) || mpm_implicit_solve(&s, &o, &c->solve))
@@ -324,5 +329,24 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
         (long long)sim->steps, sim->time, dt, q == &sim->particles ? "" : "domain ", q->id[i],
         q->body[i], q->material[i], bad_quantity(q, i));
   }
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, mpm_implicit *s) {
+  if (mpm_arena_reset(&sim->step_arena))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
+  step_ctx *c = mpm_arena_alloc(&sim->step_arena, sizeof *c);
+  if (!c) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
+  step_setup(sim, dt, c);
+  c->p2g_output = MPM_P2G_MOMENTUM_FORCE;
+  const mpm_integrator_kind was = sim->scene.solver.integrator;
+  sim->scene.solver.integrator = MPM_INTEGRATOR_IMPLICIT; /* P2G keeps v^n and f^n apart */
+  mpm_status st = MPM_OK;
+  for (size_t k = 0; k < 3 && st == MPM_OK; ++k) st = implicit_stages[k].run(sim, c);
+  sim->scene.solver.integrator = was;
+  if (st != MPM_OK) return st;
+  implicit_system(sim, c, s);
+  if (mpm_implicit_init(s))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the implicit system");
   return MPM_OK;
 }
