@@ -32,6 +32,8 @@ static void usage(FILE *out) {
           "  mpm bench checkpoint [--particles N] [--repeats N] [--dir DIR]\n"
           "      checkpoint write/read/resume seconds and MB/s, cost of the guards per step\n"
           "  mpm bench domains [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
+          "  mpm bench implicit [--particles N] [--drop-particles N] [--threads LIST]\n"
+          "                     [--repeats N] [--only action|drop]\n"
           "      ns per particle-step with particle domains against material points\n"
           "  mpm render OUTDIR [--field F] [--size WxH] [--colormap C] [--every N] [--movie]\n"
           "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed);\n"

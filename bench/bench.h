@@ -14,4 +14,9 @@ int mpm_bench_checkpoint(int argc, char **argv);
  * points on the same block, per thread count (bench_domains.c). */
 int mpm_bench_domains(int argc, char **argv);
 
+/* `mpm bench implicit`: the Hessian action against explicit P2G + G2P, CG iterations with and
+ * without the preconditioner, and time to simulate 1 s of a dropped block explicit against
+ * implicit (bench_implicit.c). */
+int mpm_bench_implicit(int argc, char **argv);
+
 #endif

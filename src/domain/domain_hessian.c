@@ -28,6 +28,23 @@ static void corners_from_dofs(mpm_domain_hessian *h, mpm_real *const u[3]) {
   mpm_embedding_gather(&h->s->corner_grid, 3, uc, h->cu);
 }
 
+/* sum_a (cu_a - cu_0) g_qa^T: sum_a g_qa = 0, so the reference corner changes nothing in exact
+ * arithmetic but makes a uniform displacement give exactly 0 (see transfer/operators.c). */
+static void corner_gradient(const mpm_domain_hessian *h, long q, mpm_real dF[9]) {
+  const mpm_domain_set *s = h->s;
+  const uint32_t c0 = s->corner[q][0];
+  const mpm_real ref[3] = {h->cu[0][c0], h->cu[1][c0], h->cu[2][c0]};
+  for (int e = 0; e < 9; ++e) dF[e] = 0;
+  for (int a = 1; a < MPM_HEX_CORNERS; ++a) {
+    const uint32_t c = s->corner[q][a];
+    const mpm_real *g = s->g[q][a];
+    for (int r = 0; r < 3; ++r) {
+      const mpm_real du = h->cu[r][c] - ref[r];
+      for (int t = 0; t < 3; ++t) dF[3 * r + t] += du * g[t];
+    }
+  }
+}
+
 void mpm_domain_hessian_displace(mpm_domain_hessian *h, mpm_real *const u[3]) {
   mpm_domain_set *s = h->s;
   const mpm_particles *p = &s->particles;
@@ -37,12 +54,9 @@ void mpm_domain_hessian_displace(mpm_domain_hessian *h, mpm_real *const u[3]) {
   for (long q = 0; q < n; ++q) {
     for (int e = 0; e < 9; ++e) h->Fh[q][e] = p->F[e][q];
     if (!s->active[q] || !u) continue;
-    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
-      const uint32_t c = s->corner[q][a];
-      const mpm_real *g = s->g[q][a];
-      for (int r = 0; r < 3; ++r)
-        for (int t = 0; t < 3; ++t) h->Fh[q][3 * r + t] += h->cu[r][c] * g[t];
-    }
+    mpm_real dF[9];
+    corner_gradient(h, q, dF);
+    for (int e = 0; e < 9; ++e) h->Fh[q][e] += dF[e];
   }
 }
 
@@ -102,14 +116,8 @@ void mpm_domain_hessian_apply(mpm_domain_hessian *h, mpm_real scale, mpm_real *c
       memset(h->dP[q], 0, sizeof h->dP[q]);
       continue;
     }
-    mpm_real dF[9] = {0};
-    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
-      const uint32_t c = s->corner[q][a];
-      const mpm_real *g = s->g[q][a];
-      for (int r = 0; r < 3; ++r)
-        for (int t = 0; t < 3; ++t) dF[3 * r + t] += h->cu[r][c] * g[t];
-    }
-    mpm_real dP[9];
+    mpm_real dF[9], dP[9];
+    corner_gradient(h, q, dF);
     action(h, q, dF, dP);
     for (int e = 0; e < 9; ++e) h->dP[q][e] = p->vol0[q] * dP[e];
   }

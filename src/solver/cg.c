@@ -31,20 +31,27 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
   mpm_real **r = mpm_dofs_vector(d, "cg.r"), **z = mpm_dofs_vector(d, "cg.z");
   mpm_real **p = mpm_dofs_vector(d, "cg.p"), **q = mpm_dofs_vector(d, "cg.Ap");
   if (!r || !z || !p || !q) return -1;
-  /* r = P (b - A x) */
+  result->iterations = 0;
+  /* the scale: |P b| in the preconditioner's norm, sqrt(<P b, P D^-1 P b>) */
+  mpm_dofs_copy(d, b, p);
+  if (project) project(user, p);
+  precondition(d, diag, p, z);
+  if (project) project(user, z);
+  result->rhs = sqrt(mpm_dofs_dot(d, NULL, p, z));
+  /* r = P (b - A x), z = P D^-1 r */
   apply(user, x, q);
   mpm_dofs_copy(d, b, r);
   mpm_dofs_axpy(d, -1, q, r);
   if (project) project(user, r);
-  result->iterations = 0;
-  result->residual0 = result->residual = sqrt(mpm_dofs_dot(d, NULL, r, r));
-  result->converged = result->residual0 == 0;
-  if (result->converged) return 0;
-  const double target = options->rel_tol * result->residual0;
   precondition(d, diag, r, z);
   if (project) project(user, z); /* P M^-1 P: a diagonal need not commute with a slip projection */
-  mpm_dofs_copy(d, z, p);
   double rz = mpm_dofs_dot(d, NULL, r, z);
+  result->residual0 = result->residual = sqrt(rz);
+  const double target =
+      options->rel_tol * (result->rhs > result->residual0 ? result->rhs : result->residual0);
+  result->converged = result->residual <= target;
+  if (result->converged) return 0;
+  mpm_dofs_copy(d, z, p);
   for (int k = 0; k < options->max_iterations; ++k) {
     apply(user, p, q);
     if (project) project(user, q);
@@ -54,14 +61,14 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
     mpm_dofs_axpy(d, alpha, p, x);
     mpm_dofs_axpy(d, -alpha, q, r);
     result->iterations = k + 1;
-    result->residual = sqrt(mpm_dofs_dot(d, NULL, r, r));
+    precondition(d, diag, r, z);
+    if (project) project(user, z);
+    const double rz_new = mpm_dofs_dot(d, NULL, r, z);
+    result->residual = sqrt(rz_new > 0 ? rz_new : 0);
     if (result->residual <= target) {
       result->converged = 1;
       break;
     }
-    precondition(d, diag, r, z);
-    if (project) project(user, z);
-    const double rz_new = mpm_dofs_dot(d, NULL, r, z);
     const mpm_real beta = (mpm_real)(rz_new / rz);
     rz = rz_new;
     mpm_dofs_xpby(d, z, beta, p); /* p = z + beta p */

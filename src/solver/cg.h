@@ -8,8 +8,14 @@
  * conditions act inside the solve through a projection P that the caller applies (sticky DOFs:
  * their components zeroed; slip DOFs: the normal component removed): the residual and every
  * search direction are projected, so the iterates stay in the admissible subspace and CG solves
- * P A P x = P b there. The preconditioner is a diagonal (Jacobi); the solve stops when
- * sqrt(<r, r>) <= rel_tol sqrt(<r0, r0>) or after max_iterations.
+ * P A P x = P b there. The preconditioner is a diagonal D (Jacobi). Residuals are measured in
+ * the preconditioner's norm, |r|_D = sqrt(<r, P D^-1 P r>) (the <r, z> CG computes anyway;
+ * for MPM it weighs each DOF's residual by 1/(m + dt^2 K_ii), i.e. in velocity units, so the
+ * stiff modes that a large step resolves to round-off do not set the pace), and the solve stops
+ * when |r|_D <= rel_tol max(|P b|_D, |r0|_D) or after max_iterations. Both scales are the
+ * problem's own: |b| (for MPM the momentum M v*) credits a good initial guess, |r0| (the
+ * elastic correction dt^2 K v* a stiff body needs) asks for that correction to rel_tol, not for
+ * the momentum of a body at rest to it. Without a preconditioner D = I.
  *
  * Every reduction is mpm_dofs_dot's (fixed chunks, fixed order), so the iterates, the
  * iteration count and the answer are bitwise the same for any number of threads. The work
@@ -31,8 +37,9 @@ typedef struct mpm_cg_options {
 
 typedef struct mpm_cg_result {
   int iterations;
-  double residual0, residual; /* sqrt(<r, r>) at the start and at the end */
-  int converged;              /* residual <= rel_tol residual0 (or residual0 == 0) */
+  double residual0, residual; /* |r|_D at the start and at the end */
+  double rhs;                 /* |P b|_D */
+  int converged;              /* residual <= rel_tol max(rhs, residual0) */
 } mpm_cg_result;
 
 /* Solve A x = b: x holds the initial guess and receives the solution. diag: the Jacobi

@@ -51,10 +51,15 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     double remaining = end - sim->time;
     /* after an unstable step the retry guard runs on halved steps for a while */
     double dt = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
-    if (dt >= remaining)
+    const mpm_solver_desc *sd = &sim->scene.solver;
+    if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) {
+      /* a fixed step: the frame's remaining time in equal steps no longer than dt */
+      dt = remaining / ceil(remaining / dt - 1e-9);
+    } else if (dt >= remaining) {
       dt = remaining;
-    else if (dt > 0.5 * remaining)
+    } else if (dt > 0.5 * remaining) {
       dt = 0.5 * remaining;
+    }
     mpm_status st = mpm_sim_step(sim, dt);
     if (st != MPM_OK) return st;
   }

@@ -228,9 +228,38 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
 
 static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
   r->cg_iterations += cg->iterations;
-  const double rel = cg->residual0 > 0 ? cg->residual / cg->residual0 : 0;
+  const double scale = cg->rhs > cg->residual0 ? cg->rhs : cg->residual0;
+  const double rel = scale > 0 ? cg->residual / scale : 0;
   if (rel > r->cg_residual) r->cg_residual = rel;
   if (!cg->converged) r->cg_converged = 0;
+}
+
+/* With Newton iterations, Zhu's step v_1 is searched too: from v_0 (the constrained components
+ * of v_1, zero elsewhere: no motion but what the obstacles impose) along v_1 - v_0, the
+ * longest of 1, 1/2, ... whose incremental potential is below E(v_0). A linearized step across
+ * an impact or a large rotation can overshoot badly; this keeps every iterate a descent. Returns
+ * 1 when no step lowers E (v is then v_0). */
+static int first_step_search(mpm_implicit *s, mpm_real *const u[3], mpm_real *const d0[3],
+                             mpm_real *const t[3]) {
+  mpm_dofs *d = s->dofs;
+  mpm_dofs_copy(d, d->v, d0); /* d0 = P v_1 (the free part), v <- v_0 = v_1 - P v_1 */
+  mpm_implicit_project(s, d0);
+  mpm_dofs_axpy(d, -1, d0, d->v);
+  displacement(s, d->v, u);
+  mpm_implicit_displace(s, u);
+  const double E0 = incremental_potential(s, d->v, t);
+  double alpha = 1;
+  for (int h = 0; h < 12; ++h, alpha *= 0.5) {
+    mpm_dofs_copy(d, d->v, t);
+    mpm_dofs_axpy(d, (mpm_real)alpha, d0, t);
+    displacement(s, t, u);
+    mpm_implicit_displace(s, u);
+    if (incremental_potential(s, t, u) < E0) {
+      mpm_dofs_axpy(d, (mpm_real)alpha, d0, d->v);
+      return 0;
+    }
+  }
+  return 1;
 }
 
 int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_implicit_result *r) {
@@ -265,6 +294,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   mpm_real **u = mpm_dofs_vector(d, "imp.u"), **dv = mpm_dofs_vector(d, "imp.dv");
   if (o->newton_iterations > 1 && (!u || !dv)) return -1;
   const double b_norm = sqrt(mpm_dofs_dot(d, NULL, b, b));
+  if (o->newton_iterations > 1 && first_step_search(s, u, dv, t)) r->line_search_failed = 1;
   for (int k = 1; k < o->newton_iterations; ++k) {
     displacement(s, d->v, u);
     mpm_implicit_displace(s, u);

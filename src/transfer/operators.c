@@ -108,6 +108,19 @@ ALWAYS_INLINE void gather_block(const int W, const mpm_transfer_ctx *ctx, const 
                                 mpm_real *const G[9], int32_t b) {
   mpm_real pad[MPM_PAD_NODES * STRIDE] __attribute__((aligned(MPM_ALIGN)));
   mpm_pad_gather(W, g, b, 3, u, STRIDE, pad);
+  /* G = sum_i (u_i - u_ref) grad w_i^T, u_ref the block's first node: the same in exact
+   * arithmetic (sum_i grad w_i = 0), but a uniform field gives exactly 0 and a smooth one loses
+   * no digits to the cancellation. The implicit solve applies K to velocities of ~1 m/s whose
+   * gradient is all that matters; without the reference the round-off of sum_i grad w_i (1e-7
+   * in float) times dt^2 K is a few percent of M v for a stiff body at a large step. */
+  const mpm_real ref[3] = {pad[0], pad[1], pad[2]};
+  const int span = MPM_BLOCK + W - 1;
+  for (int i = 0; i < span; ++i)
+    for (int j = 0; j < span; ++j)
+      for (int k = 0; k < span; ++k) {
+        mpm_real *node = &pad[(i * MPM_PAD * MPM_PAD + j * MPM_PAD + k) * STRIDE];
+        for (int c = 0; c < 3; ++c) node[c] -= ref[c];
+      }
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
@@ -291,6 +304,7 @@ static void dense_gather(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
     mpm_stencil s;
     const long n0 = dense_stencil(ctx, g, p, (size_t)i, &s);
     mpm_real acc[9] = {0};
+    const mpm_real ref[3] = {u[0][n0], u[1][n0], u[2][n0]}; /* as in gather_block */
     for (int a = 0; a < W; ++a)
       for (int b = 0; b < W; ++b)
         for (int c = 0; c < W; ++c) {
@@ -299,7 +313,7 @@ static void dense_gather(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
                                   s.w[0][a] * s.w[1][b] * s.dw[2][c]};
           const long n = n0 + a * sx + b * sy + c;
           for (int d = 0; d < 3; ++d)
-            for (int e = 0; e < 3; ++e) acc[3 * d + e] += u[d][n] * gw[e];
+            for (int e = 0; e < 3; ++e) acc[3 * d + e] += (u[d][n] - ref[d]) * gw[e];
         }
     for (int k = 0; k < 9; ++k) G[k][i] = acc[k];
   }

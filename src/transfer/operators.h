@@ -11,7 +11,8 @@
  *   stress divergence   f_i += -sum_p V_p^0 tau_p grad w_ip      (Gao sec. 3.2 step 2)
  *   matrix scatter      f_i += sum_p M_p grad w_ip               (the force differential of
  *                       Stomakhin eq. 6 with M_p = -V0 A_p F_p^T, A_p = dP/dF : dF_p)
- *   gradient gather     G_p = sum_i u_i grad w_ip^T              (dF_p = dt G_p F_p)
+ *   gradient gather     G_p = sum_i (u_i - u_ref) grad w_ip^T    (dF_p = dt G_p F_p; u_ref a
+ *                       nearby node's value: exact for uniform fields, see operators.c)
  *   quadratic forms     d_i,a += sum_p grad w_ip^T Q_p^a grad w_ip   (the Jacobi diagonal,
  *                       Zhu eqs. 17-19, with Q^a = V0 F S^a F^T; scalar stencils)
  * The matrix scatter and the gradient gather are adjoint, sum_p <G_p(u), M_p> =

@@ -1,0 +1,289 @@
+/* bench_implicit.c - `mpm bench implicit`: the implicit integrator's costs and its payoff.
+ *
+ * Part 1, one Hessian action: on a resting neo-Hookean block (8 particles per cell, quadratic,
+ * APIC), ns per DOF and per particle for one action of M + dt^2 K (gather, stress derivative,
+ * scatter; solver/implicit.h) beside ns per particle of one explicit P2G + G2P on the same body;
+ * CG iterations of one implicit step with and without the Jacobi preconditioner.
+ *
+ * Part 2, time to solution: 1 s of a block dropped onto a slip floor, for E = 5e6 Pa (Zhu's
+ * Table 1 material) and E = 1e9 Pa: the explicit integrator at its CFL step, and the implicit
+ * one at each step of a ladder (1/60 s down), judged against the explicit run: "stable" = no
+ * guard stop and no energy growth beyond the start, "accurate" = the centre of mass within half a
+ * cell of the explicit one at every 1/60 s frame. The largest step that is both is reported with
+ * its speedup. Figures are printed, never asserted. */
+#include "bench.h"
+#include "bench_util.h"
+#include "cli.h"
+#include "core/parallel.h"
+#include "solver/implicit.h"
+#include "solver/sim.h"
+#include "transfer/transfer.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A block of about n particles (8 per cell) at rest `drop` m above a slip floor, of Young's
+ * modulus E, with the integrator's solver keys. */
+static mpm_sim *block(int n, double dx, double E, double drop, const char *solver, double end,
+                      mpm_error *err) {
+  const double side = cbrt((double)n / 8) * dx, floor_y = 4 * dx;
+  const double domain = side + 12 * dx + drop;
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
+           " \"time\": {\"end\": %g, \"fps\": 60}, \"solver\": {%s},"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": %g, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
+           "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"m\", \"particles_per_cell\": 8, "
+           "\"jitter\": 0}],"
+           " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0, %g, 0], "
+           "\"normal\": [0, 1, 0]}, \"rule\": \"slip\"}]}",
+           side + 12 * dx, domain, side + 12 * dx, dx, end, solver, E, 6 * dx + side / 2,
+           floor_y + dx + drop + side / 2, 6 * dx + side / 2, side / 2, side / 2, side / 2,
+           floor_y);
+  mpm_scene scene;
+  if (mpm_scene_parse(text, "bench-implicit.json", &scene, err) != MPM_OK) return NULL;
+  mpm_sim *sim = NULL;
+  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
+  mpm_scene_free(&scene);
+  return st == MPM_OK ? sim : NULL;
+}
+
+static double com_height(const mpm_sim *sim) {
+  const mpm_particles *p = &sim->particles;
+  double m = 0, my = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    m += p->mass[i];
+    my += (double)p->mass[i] * p->x[1][i];
+  }
+  return m > 0 ? my / m : 0;
+}
+
+static double total_energy(const mpm_sim *sim) {
+  const mpm_diagnostics d = mpm_sim_diagnostics(sim);
+  double pot = 0;
+  const mpm_particles *p = &sim->particles;
+  for (size_t i = 0; i < p->count; ++i) pot += (double)p->mass[i] * 9.81 * (double)p->x[1][i];
+  return d.kinetic + d.elastic + pot;
+}
+
+/* ---- part 1 ---- */
+
+static int hessian_action(int particles, int repeats) {
+  mpm_error err;
+  const double dx = 0.02, dt = 1e-3;
+  mpm_sim *ex = block(particles, dx, 1e5, 0, "", 1, &err);
+  mpm_sim *im = block(particles, dx, 1e5, 0, "\"integrator\": \"implicit\"", 1, &err);
+  if (!ex || !im) {
+    fprintf(stderr, "mpm bench: %s\n", err.message);
+    return -1;
+  }
+  /* explicit P2G + G2P per particle, from the stage timers of a few steps */
+  for (int k = 0; k < 2; ++k) mpm_sim_step(ex, dt);
+  double runs[100], act[100];
+  for (int r = 0; r < repeats; ++r) {
+    const mpm_stage_times t0 = ex->times;
+    const int steps = 5;
+    for (int k = 0; k < steps; ++k) mpm_sim_step(ex, dt);
+    runs[r] = ((ex->times.p2g - t0.p2g) + (ex->times.g2p - t0.g2p)) * 1e9 /
+              ((double)ex->particles.count * steps);
+  }
+  const double explicit_ns = bench_median(runs, repeats);
+  /* one Hessian action */
+  mpm_implicit s;
+  if (mpm_sim_implicit_system(im, dt, &s) != MPM_OK) {
+    fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(im));
+    return -1;
+  }
+  mpm_dofs *d = s.dofs;
+  mpm_real **x = mpm_dofs_vector(d, "bench.x"), **y = mpm_dofs_vector(d, "bench.y");
+  if (!x || !y) return -1;
+  uint64_t rng = 1;
+  for (size_t i = 0; i < d->count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      rng ^= rng << 13, rng ^= rng >> 7, rng ^= rng << 17;
+      x[c][i] = d->mass[i] > 0 ? (mpm_real)((double)(rng >> 11) / 9007199254740992.0 - 0.5) : 0;
+    }
+  mpm_implicit_displace(&s, NULL);
+  const double b0 = mpm_wall_seconds();
+  mpm_implicit_build(&s);
+  const double build_s = mpm_wall_seconds() - b0;
+  const int actions = 10;
+  mpm_implicit_apply(&s, 1, s.apply_scale, x, y);
+  for (int r = 0; r < repeats; ++r) {
+    const double t0 = mpm_wall_seconds();
+    for (int k = 0; k < actions; ++k) mpm_implicit_apply(&s, 1, s.apply_scale, x, y);
+    act[r] = (mpm_wall_seconds() - t0) / actions;
+  }
+  const double a = bench_median(act, repeats);
+  const size_t np = im->particles.count, nd = d->count;
+  printf("  %d threads, %zu particles, %zu DOFs: Hessian action %.1f ns per DOF = %.1f ns per "
+         "particle; explicit P2G + G2P %.1f ns per particle (action / explicit %.2fx); building "
+         "the factored dP/dF %.1f ns per particle\n",
+         mpm_thread_count(), np, nd, a * 1e9 / (double)nd, a * 1e9 / (double)np, explicit_ns,
+         a * 1e9 / (double)np / explicit_ns, build_s * 1e9 / (double)np);
+  /* CG iterations of one step (from the resting state plus gravity), with and without Jacobi */
+  for (int pre = 1; pre >= 0; --pre) {
+    if (mpm_sim_implicit_system(im, 5e-3, &s) != MPM_OK) return -1;
+    const mpm_implicit_options o = {1, 1e-4, 2000, pre};
+    mpm_implicit_result r;
+    const double t0 = mpm_wall_seconds();
+    if (mpm_implicit_solve(&s, &o, &r)) return -1;
+    printf("    one step of 5 ms, CG to 1e-4 %s the Jacobi preconditioner: %d iterations, %.3f "
+           "s%s\n",
+           pre ? "with   " : "without", r.cg_iterations, mpm_wall_seconds() - t0,
+           r.cg_converged ? "" : " (not converged)");
+  }
+  mpm_sim_destroy(ex);
+  mpm_sim_destroy(im);
+  return 0;
+}
+
+/* ---- part 2 ---- */
+
+typedef struct run_figures {
+  int ok;         /* finished without a guard stop, energy never above the start */
+  double seconds; /* wall */
+  long long steps;
+  double com[64];     /* centre-of-mass height per frame */
+  double mean_cg;     /* implicit: CG iterations per step */
+  double max_com_err; /* against the reference, m */
+} run_figures;
+
+static void simulate(int particles, double dx, double E, const char *solver, run_figures *f) {
+  memset(f, 0, sizeof *f);
+  mpm_error err;
+  mpm_sim *sim = block(particles, dx, E, 0.1, solver, 1.0, &err);
+  if (!sim) {
+    fprintf(stderr, "mpm bench: %s\n", err.message);
+    return;
+  }
+  const double e0 = total_energy(sim);
+  long long cg = 0, isteps = 0;
+  f->ok = 1;
+  const double t0 = mpm_wall_seconds();
+  for (int fr = 0; fr < sim->frame_count && fr < 64; ++fr) {
+    if (mpm_sim_advance_frame(sim) != MPM_OK) {
+      f->ok = 0;
+      break;
+    }
+    cg += sim->solver_figures.cg_iterations;
+    isteps += sim->solver_figures.steps;
+    f->com[fr] = com_height(sim);
+    if (total_energy(sim) > e0 * (1 + 1e-3) + 1e-6) f->ok = 0;
+  }
+  f->seconds = mpm_wall_seconds() - t0;
+  f->steps = (long long)sim->steps;
+  f->mean_cg = isteps ? (double)cg / (double)isteps : 0;
+  mpm_sim_destroy(sim);
+}
+
+static int time_to_solution(int particles, double E) {
+  const double dx = 0.04;
+  run_figures ref, im;
+  simulate(particles, dx, E, "", &ref);
+  if (!ref.ok) {
+    printf("    E = %.3g Pa: the explicit reference run failed\n", E);
+    return 0;
+  }
+  printf("    E = %.3g Pa, %d threads: explicit %lld steps in %.2f s\n", E, mpm_thread_count(),
+         ref.steps, ref.seconds);
+  static const double ladder[] = {1.0 / 60, 1.0 / 120, 1.0 / 240, 1.0 / 480, 1.0 / 960};
+  int best = -1;
+  run_figures best_f = {0};
+  for (size_t k = 0; k < sizeof ladder / sizeof ladder[0]; ++k) {
+    char solver[160];
+    snprintf(solver, sizeof solver,
+             "\"integrator\": \"implicit\", \"dt\": %.9g, \"cg_tolerance\": 1e-4", ladder[k]);
+    simulate(particles, dx, E, solver, &im);
+    im.max_com_err = 0;
+    for (int fr = 0; fr < 60; ++fr)
+      im.max_com_err = fmax(im.max_com_err, fabs(im.com[fr] - ref.com[fr]));
+    const int accurate = im.ok && im.max_com_err <= 0.5 * dx;
+    if (getenv("MPM_BENCH_DEBUG"))
+      for (int fr = 0; fr < 60; fr += 3)
+        printf("        frame %d: com %.4f (explicit %.4f)\n", fr, im.com[fr], ref.com[fr]);
+    printf("      implicit dt = 1/%.0f s: %lld steps, %.1f CG iterations per step, %.2f s, "
+           "%s, centre of mass within %.4f m of explicit (%s) -> %.1fx\n",
+           1 / ladder[k], im.steps, im.mean_cg, im.seconds, im.ok ? "stable" : "UNSTABLE",
+           im.max_com_err, accurate ? "accurate" : "not accurate", ref.seconds / im.seconds);
+    fflush(stdout);
+    if (accurate && best < 0) {
+      best = (int)k;
+      best_f = im;
+      break; /* the ladder goes down: the first accurate step is the largest */
+    }
+  }
+  if (best >= 0)
+    printf("    E = %.3g Pa: largest stable and accurate implicit step 1/%.0f s: %.2f s against "
+           "explicit %.2f s, %.1fx faster to solution\n",
+           E, 1 / ladder[best], best_f.seconds, ref.seconds, ref.seconds / best_f.seconds);
+  else
+    printf("    E = %.3g Pa: no implicit step of the ladder was within half a cell\n", E);
+  return 0;
+}
+
+int mpm_bench_implicit(int argc, char **argv) {
+  int particles = 50000, drop_particles = 1000, repeats = 5, threads[16] = {1, 2}, nthreads = 2;
+  int part = 0; /* 0 both, 1 action, 2 time to solution */
+  for (int i = 0; i < argc; ++i) {
+    if (!strcmp(argv[i], "--particles")) {
+      if (mpm_cli_parse_int("--particles", i + 1 < argc ? argv[i + 1] : NULL, 1000, 50000000,
+                            &particles))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--drop-particles")) {
+      if (mpm_cli_parse_int("--drop-particles", i + 1 < argc ? argv[i + 1] : NULL, 64, 1000000,
+                            &drop_particles))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--repeats")) {
+      if (mpm_cli_parse_int("--repeats", i + 1 < argc ? argv[i + 1] : NULL, 1, 100, &repeats))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--only") && i + 1 < argc) {
+      ++i;
+      part = !strcmp(argv[i], "action") ? 1 : !strcmp(argv[i], "drop") ? 2 : -1;
+      if (part < 0) {
+        fprintf(stderr, "mpm bench implicit: --only expects action or drop\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
+      nthreads = bench_parse_threads(argv[++i], threads, 16);
+      if (nthreads < 1) {
+        fprintf(stderr, "mpm bench implicit: --threads expects a list like 1,2\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else {
+      fprintf(stderr, "mpm bench implicit: unknown option '%s'\n", argv[i]);
+      return MPM_EXIT_USAGE;
+    }
+  }
+  bench_print_machine();
+  if (part != 2) {
+    printf("implicit benchmark, part 1: one Hessian action against one explicit P2G + G2P "
+           "(neo-Hookean block, 8 particles per cell, quadratic, APIC; median of %d)\n",
+           repeats);
+    for (int t = 0; t < nthreads; ++t) {
+      mpm_set_threads(threads[t]);
+      if (hessian_action(particles, repeats)) return MPM_EXIT_FAILURE;
+      fflush(stdout);
+    }
+  }
+  if (part != 1) {
+    printf("implicit benchmark, part 2: 1 s of a block (about %d particles, dx = 4 cm) dropped "
+           "10 cm onto a slip floor; stable = no guard stop and no energy growth, accurate = "
+           "centre of mass within half a cell of the explicit run at every frame\n",
+           drop_particles);
+    static const double moduli[] = {5e6, 1e9};
+    for (int t = 0; t < nthreads; ++t) {
+      mpm_set_threads(threads[t]);
+      for (int e = 0; e < 2; ++e) time_to_solution(drop_particles, moduli[e]);
+    }
+  }
+  printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());
+  return MPM_EXIT_OK;
+}
