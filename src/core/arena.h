@@ -13,7 +13,7 @@
 
 #include <stddef.h>
 
-#define MPM_ARENA_MAX_OVERFLOW 64
+#define MPM_ARENA_MAX_OVERFLOW 256
 
 typedef struct mpm_arena {
   unsigned char *base;

@@ -67,9 +67,13 @@ typedef struct mpm_implicit {
   int exact; /* 1: K is the model's own dP/dF (finite-difference tests), not the definite one */
   /* scratch */
   mpm_arena *arena;
-  mpm_stress_hessian *H; /* per material point */
-  mpm_real *Fh[9];       /* per material point: F at the displacement */
-  mpm_real *G[9];        /* per material point: gathered gradients, then scattered matrices */
+  /* per material point, structure of arrays: the factored definite dP/dF at F^ with the
+   * particle's F folded in, U, W = F V, A (xx, xy, xz, yy, yz, zz), lsym, lskew, so that the
+   * action's matrix M = V0 (C : G F) F^T is U P^(U^T G W) W^T: four 3x3 products, vectorized
+   * across particles */
+  mpm_real *hU[9], *hW[9], *hA[6], *hs[3], *hk[3];
+  mpm_real *Fh[9]; /* per material point: F at the displacement */
+  mpm_real *G[9];  /* per material point: gathered gradients, then scattered matrices */
   mpm_domain_hessian dh;
   /* the constraints: DOF index, the projector I - sum n n^T (xx, xy, xz, yy, yz, zz) */
   size_t constraint_count;

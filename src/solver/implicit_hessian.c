@@ -4,6 +4,7 @@
  * (spatial form, Stomakhin et al. 2013 eq. 6 and sec. 4) and the particle domains (Zhu eqs.
  * 14-19, domain/domain_hessian.c). */
 #include "solver/implicit.h"
+#include "core/lanes.h"
 #include "core/mat3.h"
 #include "transfer/operators.h"
 
@@ -18,8 +19,11 @@ static void *arena_reals(mpm_arena *a, size_t n) {
  * entries fit in it. */
 int mpm_implicit_init(mpm_implicit *s) {
   const size_t n = s->p ? s->p->count : 0;
-  s->H = mpm_arena_alloc(s->arena, (n + 1) * sizeof *s->H);
-  int ok = s->H != NULL;
+  int ok = 1;
+  mpm_real **h[5] = {s->hU, s->hW, s->hA, s->hs, s->hk};
+  const int hn[5] = {9, 9, 6, 3, 3};
+  for (int k = 0; k < 5; ++k)
+    for (int c = 0; c < hn[k]; ++c) ok = ok && (h[k][c] = arena_reals(s->arena, n)) != NULL;
   for (int c = 0; c < 9; ++c) {
     s->Fh[c] = arena_reals(s->arena, n);
     s->G[c] = arena_reals(s->arena, 2 * n); /* G, then the second half: Q's overflow below */
@@ -82,22 +86,93 @@ void mpm_implicit_build(mpm_implicit *s) {
       const mpm_material m = material_at(s, (size_t)i);
       mpm_real Fh[9];
       for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
-      m.model->hessian_definite(&m, Fh, &s->H[i]);
+      mpm_stress_hessian H;
+      m.model->hessian_definite(&m, Fh, &H);
+      mpm_real F[9], W[9];
+      for (int c = 0; c < 9; ++c) F[c] = s->p->F[c][i];
+      mpm_m3_mul(F, H.V, W);
+      for (int c = 0; c < 9; ++c) s->hU[c][i] = H.U[c], s->hW[c][i] = W[c];
+      static const int sym[6] = {0, 1, 2, 4, 5, 8};
+      for (int c = 0; c < 6; ++c) s->hA[c][i] = H.A[sym[c]];
+      for (int c = 0; c < 3; ++c) s->hs[c][i] = H.lsym[c], s->hk[c][i] = H.lskew[c];
     }
   }
   if (s->domains) mpm_domain_hessian_build(&s->dh);
 }
 
-/* dP = C_i : dF at particle i's F^. */
-static void stress_action(const mpm_implicit *s, size_t i, const mpm_real dF[9], mpm_real dP[9]) {
-  if (s->exact) {
-    const mpm_material m = material_at(s, i);
-    mpm_real Fh[9];
-    for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
-    m.model->dpdf_action(&m, Fh, dF, dP);
-  } else {
-    mpm_stress_hessian_action(&s->H[i], dF, dP);
+/* M = U P^(U^T X W) W^T: the factored definite stress derivative of particle i applied to the
+ * velocity gradient X, M = (C : X F) F^T (isotropic.h's blocks: A on the diagonal, each pair
+ * (a, b) by lsym on its symmetric and lskew on its skew part). Written on scalars so that the
+ * caller's loop over particles vectorizes. */
+typedef struct factored_view {
+  const mpm_real *U[9], *W[9], *A[6], *ls[3], *lk[3];
+} factored_view;
+
+static factored_view view_of(const mpm_implicit *s) {
+  factored_view v;
+  for (int c = 0; c < 9; ++c) v.U[c] = s->hU[c], v.W[c] = s->hW[c];
+  for (int c = 0; c < 6; ++c) v.A[c] = s->hA[c];
+  for (int c = 0; c < 3; ++c) v.ls[c] = s->hs[c], v.lk[c] = s->hk[c];
+  return v;
+}
+
+/* The operator on one particle (T = mpm_real) or on MPM_NLANES consecutive particles
+ * (T = mpm_vn), from the structure of arrays. */
+#define LOAD_REAL(a, i) ((a)[i])
+#define LOAD_VN(a, i) load_vn((a) + (i))
+static inline mpm_vn load_vn(const mpm_real *a) {
+  mpm_vn v;
+  memcpy(&v, a, sizeof v);
+  return v;
+}
+#define DEFINE_FACTORED_OP(NAME, T, LOAD)                                                          \
+  MPM_ALWAYS_INLINE void NAME(const factored_view *s, long i, const T X[9], T M[9]) {              \
+    T U[9], W[9], Tm[9], d[9], q[9];                                                               \
+    for (int c = 0; c < 9; ++c) U[c] = LOAD(s->U[c], i), W[c] = LOAD(s->W[c], i);                  \
+    for (int r = 0; r < 3; ++r) /* d = U^T X W */                                                  \
+      for (int c = 0; c < 3; ++c)                                                                  \
+        Tm[3 * r + c] = U[r] * X[c] + U[3 + r] * X[3 + c] + U[6 + r] * X[6 + c];                   \
+    for (int r = 0; r < 3; ++r)                                                                    \
+      for (int c = 0; c < 3; ++c)                                                                  \
+        d[3 * r + c] = Tm[3 * r] * W[c] + Tm[3 * r + 1] * W[3 + c] + Tm[3 * r + 2] * W[6 + c];     \
+    const T a00 = LOAD(s->A[0], i), a01 = LOAD(s->A[1], i), a02 = LOAD(s->A[2], i);                \
+    const T a11 = LOAD(s->A[3], i), a12 = LOAD(s->A[4], i), a22 = LOAD(s->A[5], i);                \
+    q[0] = a00 * d[0] + a01 * d[4] + a02 * d[8];                                                   \
+    q[4] = a01 * d[0] + a11 * d[4] + a12 * d[8];                                                   \
+    q[8] = a02 * d[0] + a12 * d[4] + a22 * d[8];                                                   \
+    static const int pi[3] = {0, 0, 1}, pj[3] = {1, 2, 2};                                         \
+    for (int k = 0; k < 3; ++k) {                                                                  \
+      const int a = pi[k], b = pj[k];                                                              \
+      const T sy = R_(0.5) * (d[3 * a + b] + d[3 * b + a]);                                        \
+      const T sk = R_(0.5) * (d[3 * a + b] - d[3 * b + a]);                                        \
+      const T ls = LOAD(s->ls[k], i), lk = LOAD(s->lk[k], i);                                      \
+      q[3 * a + b] = ls * sy + lk * sk;                                                            \
+      q[3 * b + a] = ls * sy - lk * sk;                                                            \
+    }                                                                                              \
+    for (int r = 0; r < 3; ++r) /* M = U q W^T */                                                  \
+      for (int c = 0; c < 3; ++c)                                                                  \
+        Tm[3 * r + c] = U[3 * r] * q[c] + U[3 * r + 1] * q[3 + c] + U[3 * r + 2] * q[6 + c];       \
+    for (int r = 0; r < 3; ++r)                                                                    \
+      for (int c = 0; c < 3; ++c)                                                                  \
+        M[3 * r + c] =                                                                             \
+            Tm[3 * r] * W[3 * c] + Tm[3 * r + 1] * W[3 * c + 1] + Tm[3 * r + 2] * W[3 * c + 2];    \
   }
+DEFINE_FACTORED_OP(factored_op, mpm_real, LOAD_REAL)
+DEFINE_FACTORED_OP(factored_op_lanes, mpm_vn, LOAD_VN)
+
+/* M = (C_i : X F) F^T at particle i's F^ (the model's own derivative in exact mode). */
+static void stress_op(const mpm_implicit *s, long i, const mpm_real X[9], mpm_real M[9]) {
+  if (!s->exact) {
+    const factored_view v = view_of(s);
+    factored_op(&v, i, X, M);
+    return;
+  }
+  const mpm_material m = material_at(s, (size_t)i);
+  mpm_real Fh[9], F[9], dF[9], dP[9];
+  for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i], F[c] = s->p->F[c][i];
+  mpm_m3_mul(X, F, dF);
+  m.model->dpdf_action(&m, Fh, dF, dP);
+  mpm_m3_mul_bt(dP, F, M);
 }
 
 void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mpm_real *const x[3],
@@ -117,17 +192,42 @@ void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mp
     mpm_real *xl[3], *yl[3];
     level_view(s, x, xl);
     level_view(s, y, yl);
-    /* G_p = sum_j x_j grad w_jp^T, dF = G F, then M_p = scale V0 (C : dF) F^T in place of G */
+    /* G_p = sum_j x_j grad w_jp^T, then M_p = scale V0 (C : G F) F^T in place of G */
     mpm_gather_gradients(s->tc, s->grid, (const mpm_real *const *)xl, p, s->G);
+    if (s->exact) {
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
-      mpm_real G[9], F[9], dF[9], dP[9], M[9];
-      for (int c = 0; c < 9; ++c) G[c] = s->G[c][i], F[c] = p->F[c][i];
-      mpm_m3_mul(G, F, dF);
-      stress_action(s, (size_t)i, dF, dP);
-      mpm_m3_mul_bt(dP, F, M);
-      const mpm_real v = scale * p->vol0[i];
-      for (int c = 0; c < 9; ++c) s->G[c][i] = v * M[c];
+      for (long i = 0; i < n; ++i) {
+        mpm_real G[9], M[9];
+        for (int c = 0; c < 9; ++c) G[c] = s->G[c][i];
+        stress_op(s, i, G, M);
+        const mpm_real v = scale * p->vol0[i];
+        for (int c = 0; c < 9; ++c) s->G[c][i] = v * M[c];
+      }
+    } else {
+      const factored_view fv = view_of(s);
+      mpm_real *Gp[9];
+      for (int c = 0; c < 9; ++c) Gp[c] = s->G[c];
+      const mpm_real *restrict vol0 = p->vol0;
+      const long nv = n / MPM_NLANES;
+#pragma omp parallel for schedule(static)
+      for (long k = 0; k < nv; ++k) {
+        const long i = k * MPM_NLANES;
+        mpm_vn G[9], M[9];
+        for (int c = 0; c < 9; ++c) G[c] = load_vn(Gp[c] + i);
+        factored_op_lanes(&fv, i, G, M);
+        const mpm_vn v = scale * load_vn(vol0 + i);
+        for (int c = 0; c < 9; ++c) {
+          const mpm_vn out = v * M[c];
+          memcpy(Gp[c] + i, &out, sizeof out);
+        }
+      }
+      for (long i = nv * MPM_NLANES; i < n; ++i) { /* the remainder, one at a time */
+        mpm_real G[9], M[9];
+        for (int c = 0; c < 9; ++c) G[c] = Gp[c][i];
+        factored_op(&fv, i, G, M);
+        const mpm_real v = scale * vol0[i];
+        for (int c = 0; c < 9; ++c) Gp[c][i] = v * M[c];
+      }
     }
     mpm_scatter_matrices(s->tc, s->grid, yl, (const mpm_real *const *)s->G, p);
   }
@@ -187,7 +287,7 @@ void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
   const long n = p ? (long)p->count : 0;
   if (n > 0) {
     /* The diagonal entry of component a at node i is V0 b^T S^a b with b = F^T grad w_ip and
-     * S^a_jl = C_aj,al (eqs. 18-19 in the spatial form): grad w^T Q^a grad w with
+     * S^a_jl = C_aj,al (eqs. 18-19 in the spatial form), i.e. grad w^T Q^a grad w with
      * Q^a = V0 F S^a F^T. The 18 entries of Q live in G's two halves (G was sized 2n). */
     mpm_real *Q[18];
     for (int c = 0; c < 9; ++c) {
@@ -196,21 +296,18 @@ void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
     }
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
-      mpm_real F[9];
-      for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
       const mpm_real v = scale * p->vol0[i];
+      /* Q^a_nm = V0 [(C : e_a e_n^T F) F^T]_am: grad w^T Q^a grad w is the diagonal entry */
       for (int a = 0; a < 3; ++a) {
-        mpm_real S[9], T[9], Qa[9];
-        for (int l = 0; l < 3; ++l) {
-          mpm_real dF[9] = {0}, dP[9];
-          dF[3 * a + l] = 1;
-          stress_action(s, (size_t)i, dF, dP);
-          for (int j = 0; j < 3; ++j) S[3 * j + l] = dP[3 * a + j];
+        mpm_real Qa[9];
+        for (int e = 0; e < 3; ++e) {
+          mpm_real X[9] = {0}, M[9];
+          X[3 * a + e] = 1;
+          stress_op(s, i, X, M);
+          for (int m = 0; m < 3; ++m) Qa[3 * e + m] = M[3 * a + m];
         }
-        mpm_m3_mul(F, S, T);
-        mpm_m3_mul_bt(T, F, Qa);
-        const int e[6] = {0, 1, 2, 4, 5, 8};
-        for (int k = 0; k < 6; ++k) Q[6 * a + k][i] = v * Qa[e[k]];
+        const int e6[6] = {0, 1, 2, 4, 5, 8};
+        for (int k = 0; k < 6; ++k) Q[6 * a + k][i] = v * Qa[e6[k]];
       }
     }
     mpm_real *dl[3];
