@@ -2,7 +2,8 @@
  * (io/stats_csv.c) and draw them with gnuplot to PNG files in OUTDIR/plots/.
  *
  * The CSV is read and checked completely before anything is written: the header must be the
- * one mpm_write_stats_csv writes, every row must have its 15 fields and every field must be a
+ * one mpm_write_stats_csv writes (20 columns; the 15 of files from before the implicit
+ * integrator are read too), every row must have its fields and every field must be a
  * finite number (a bad file is an input error, exit 2, with the file and line named). Then:
  *   1. find gnuplot on PATH (not found: exit 1, nothing written);
  *   2. create the plots directory and write two temporaries into it: a whitespace-separated
@@ -55,6 +56,12 @@ enum {
   COL_MASS,
   COL_PARTICLES,
   COL_WALL,
+  COL_LEGACY_COUNT, /* files written before the implicit integrator end here */
+  COL_CG_MEAN = COL_LEGACY_COUNT,
+  COL_CG_MAX,
+  COL_CG_RESIDUAL,
+  COL_NEWTON_MEAN,
+  COL_CG_UNCONVERGED,
   COL_COUNT
 };
 
@@ -72,7 +79,12 @@ static const char *const column_names[COL_COUNT] = {"frame",
                                                     "angular_momentum_z",
                                                     "mass",
                                                     "particles",
-                                                    "wall_seconds"};
+                                                    "wall_seconds",
+                                                    "cg_iterations_mean",
+                                                    "cg_iterations_max",
+                                                    "cg_residual_max",
+                                                    "newton_iterations_mean",
+                                                    "cg_unconverged"};
 
 typedef struct stats_table {
   double (*rows)[COL_COUNT];
@@ -111,31 +123,35 @@ static int split_fields(char *line, char **fields, int max) {
   return n;
 }
 
-static mpm_status check_header(const char *path, char *line, mpm_error *err) {
+/* The header's columns: COL_COUNT, or COL_LEGACY_COUNT for a file of an earlier version (the
+ * solver columns read as 0). */
+static mpm_status check_header(const char *path, char *line, int *columns, mpm_error *err) {
   char *fields[COL_COUNT];
   const int n = split_fields(line, fields, COL_COUNT);
+  *columns = n;
   for (int c = 0; c < COL_COUNT && c < n; ++c)
     if (strcmp(fields[c], column_names[c]) != 0)
       return mpm_error_set(err, MPM_ERR_PARSE,
                            "%s: line 1: not an mpm stats header: column %d is '%.60s', expected "
                            "'%s'",
                            path, c + 1, fields[c], column_names[c]);
-  if (n != COL_COUNT)
+  if (n != COL_COUNT && n != COL_LEGACY_COUNT)
     return mpm_error_set(err, MPM_ERR_PARSE,
                          "%s: line 1: not an mpm stats header: %d columns, expected %d (frame, "
-                         "time, ..., wall_seconds)",
-                         path, n, COL_COUNT);
+                         "time, ..., cg_unconverged) or %d (frame, time, ..., wall_seconds)",
+                         path, n, COL_COUNT, COL_LEGACY_COUNT);
   return MPM_OK;
 }
 
-static mpm_status parse_row(const char *path, long line_no, char *line, double *row,
+static mpm_status parse_row(const char *path, long line_no, char *line, int columns, double *row,
                             mpm_error *err) {
   char *fields[COL_COUNT];
   const int n = split_fields(line, fields, COL_COUNT);
-  if (n != COL_COUNT)
+  for (int c = columns; c < COL_COUNT; ++c) row[c] = 0;
+  if (n != columns)
     return mpm_error_set(err, MPM_ERR_PARSE, "%s: line %ld: %d fields, expected %d", path, line_no,
-                         n, COL_COUNT);
-  for (int c = 0; c < COL_COUNT; ++c) {
+                         n, columns);
+  for (int c = 0; c < columns; ++c) {
     const char *s = fields[c];
     char *end;
     errno = 0;
@@ -163,13 +179,14 @@ static mpm_status read_stats(const char *path, stats_table *t, mpm_error *err) {
   char *line = NULL;
   size_t cap = 0;
   long line_no = 0;
+  int columns = COL_COUNT;
   mpm_status st = MPM_OK;
   errno = 0;
   while (getline(&line, &cap, f) >= 0) {
     ++line_no;
     chomp(line);
     if (line_no == 1) {
-      st = check_header(path, line, err);
+      st = check_header(path, line, &columns, err);
       if (st != MPM_OK) break;
       continue;
     }
@@ -184,7 +201,7 @@ static mpm_status read_stats(const char *path, stats_table *t, mpm_error *err) {
       t->rows = grown;
       t->capacity = want;
     }
-    st = parse_row(path, line_no, line, t->rows[t->count], err);
+    st = parse_row(path, line_no, line, columns, t->rows[t->count], err);
     if (st != MPM_OK) break;
     ++t->count;
   }

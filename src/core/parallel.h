@@ -2,6 +2,12 @@
 #ifndef MPM_CORE_PARALLEL_H
 #define MPM_CORE_PARALLEL_H
 
+/* Element-wise loops over fewer items than this run on one thread (an OpenMP region costs a
+ * few microseconds of fork and barrier; CG on a small body runs dozens of them per iteration).
+ * Used as `#pragma omp parallel for if (n > MPM_PARALLEL_MIN)`: the results do not depend on
+ * it. */
+#define MPM_PARALLEL_MIN 16384
+
 #ifdef _OPENMP
 #include <omp.h>
 static inline int mpm_thread_count(void) {

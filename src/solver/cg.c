@@ -6,6 +6,7 @@
  * (Hestenes and Stiefel 1952; Shewchuk 1994, "An Introduction to the Conjugate Gradient Method
  * Without the Agonizing Pain", B3). */
 #include "solver/cg.h"
+#include "core/parallel.h"
 
 #include <math.h>
 
@@ -17,10 +18,11 @@ static void precondition(const mpm_dofs *d, mpm_real *const diag[3], mpm_real *c
     return;
   }
   const long n = (long)d->count;
+#pragma omp parallel if (n > MPM_PARALLEL_MIN)
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict rc = r[c], *restrict dc = diag[c];
     mpm_real *restrict zc = z[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp for simd schedule(static) nowait
     for (long i = 0; i < n; ++i) zc[i] = rc[i] / dc[i];
   }
 }

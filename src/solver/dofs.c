@@ -215,7 +215,7 @@ double mpm_dofs_dot(const mpm_dofs *d, const mpm_real *w, mpm_real *const a[3],
                     mpm_real *const b[3]) {
   const long chunks = chunk_count(d);
   double *partial = d->partial;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (chunks > 1)
   for (long q = 0; q < chunks; ++q) {
     size_t lo, hi;
     chunk_range(d, q, &lo, &hi);
@@ -233,7 +233,7 @@ double mpm_dofs_dot(const mpm_dofs *d, const mpm_real *w, mpm_real *const a[3],
 double mpm_dofs_max_abs(const mpm_dofs *d, mpm_real *const a[3]) {
   const long chunks = chunk_count(d);
   double *partial = d->partial;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (chunks > 1)
   for (long q = 0; q < chunks; ++q) {
     size_t lo, hi;
     chunk_range(d, q, &lo, &hi);
@@ -252,20 +252,22 @@ double mpm_dofs_max_abs(const mpm_dofs *d, mpm_real *const a[3]) {
 
 void mpm_dofs_axpy(const mpm_dofs *d, mpm_real alpha, mpm_real *const x[3], mpm_real *const y[3]) {
   const long n = (long)d->count;
+#pragma omp parallel if (n > MPM_PARALLEL_MIN)
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict xc = x[c];
     mpm_real *restrict yc = y[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp for simd schedule(static) nowait
     for (long i = 0; i < n; ++i) yc[i] += alpha * xc[i];
   }
 }
 
 void mpm_dofs_xpby(const mpm_dofs *d, mpm_real *const x[3], mpm_real beta, mpm_real *const y[3]) {
   const long n = (long)d->count;
+#pragma omp parallel if (n > MPM_PARALLEL_MIN)
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict xc = x[c];
     mpm_real *restrict yc = y[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp for simd schedule(static) nowait
     for (long i = 0; i < n; ++i) yc[i] = xc[i] + beta * yc[i];
   }
 }

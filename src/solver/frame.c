@@ -54,7 +54,7 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     const mpm_solver_desc *sd = &sim->scene.solver;
     if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) {
       /* a fixed step: the frame's remaining time in equal steps no longer than dt */
-      dt = remaining / ceil(remaining / dt - 1e-9);
+      dt = remaining / ceil(remaining / dt - 1e-6); /* dt read from text may be a hair short */
     } else if (dt >= remaining) {
       dt = remaining;
     } else if (dt > 0.5 * remaining) {

@@ -123,7 +123,7 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
 
 void mpm_implicit_project(mpm_implicit *s, mpm_real *const v[3]) {
   const long n = (long)s->constraint_count;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
   for (long k = 0; k < n; ++k) {
     const uint32_t i = s->constraint_dof[k];
     const mpm_real *P = s->constraint_P[k];
@@ -171,7 +171,7 @@ static double incremental_potential(mpm_implicit *s, mpm_real *const v[3], mpm_r
   const long n = (long)d->count;
   for (int c = 0; c < 3; ++c) {
     const mpm_real dg = s->dt * s->gravity[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
     for (long i = 0; i < n; ++i) t[c][i] = v[c][i] - d->v0[c][i] - dg;
   }
   return 0.5 * mpm_dofs_dot(d, d->mass, t, t) + mpm_implicit_energy(s);
@@ -183,7 +183,7 @@ static void displacement(mpm_implicit *s, mpm_real *const v[3], mpm_real *const 
   const long n = (long)s->dofs->count;
   for (int c = 0; c < 3; ++c) {
     mpm_real *restrict uc = u[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
     for (long i = 0; i < n; ++i) uc[i] *= s->dt;
   }
 }
@@ -194,7 +194,7 @@ static void jacobi(mpm_implicit *s, mpm_real *const diag[3]) {
   const long n = (long)s->dofs->count;
   for (int c = 0; c < 3; ++c) {
     mpm_real *restrict dc = diag[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
     for (long i = 0; i < n; ++i) dc[i] = dc[i] > 0 ? dc[i] : 1;
   }
 }
@@ -278,7 +278,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict m = d->mass, *restrict vs = vstar[c];
     mpm_real *restrict bc = b[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
     for (long i = 0; i < n; ++i) bc[i] = m[i] * vs[i];
   }
   mpm_implicit_displace(s, NULL);
@@ -304,7 +304,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
     for (int c = 0; c < 3; ++c) {
       const mpm_real *restrict m = d->mass, *restrict tc = t[c];
       mpm_real *restrict bc = b[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
       for (long i = 0; i < n; ++i) bc[i] = -(m[i] * tc[i] - s->dt * bc[i]); /* -grad E */
     }
     mpm_implicit_project(s, b);

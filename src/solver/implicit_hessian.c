@@ -5,6 +5,7 @@
  * 14-19, domain/domain_hessian.c). */
 #include "solver/implicit.h"
 #include "core/lanes.h"
+#include "core/parallel.h"
 #include "core/mat3.h"
 #include "transfer/operators.h"
 
@@ -180,10 +181,11 @@ void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mp
   s->dh.exact = s->exact;
   const mpm_dofs *d = s->dofs;
   const long nd = (long)d->count;
+#pragma omp parallel if (nd > MPM_PARALLEL_MIN)
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict xc = x[c], *restrict m = d->mass;
     mpm_real *restrict yc = y[c];
-#pragma omp parallel for simd schedule(static)
+#pragma omp for simd schedule(static) nowait
     for (long i = 0; i < nd; ++i) yc[i] = mass_scale * m[i] * xc[i];
   }
   const mpm_particles *p = s->p;

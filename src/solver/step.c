@@ -291,7 +291,10 @@ static mpm_status dt_collapsed(mpm_sim *sim, double dt) {
 
 mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   double dt = mpm_sim_cfl_dt(sim);
-  if (max_dt > 0 && dt > max_dt) dt = max_dt;
+  const mpm_solver_desc *sd = &sim->scene.solver;
+  const int fixed = sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0;
+  /* a fixed step: the frame loop's even division of the frame (within a hair of dt) */
+  if (max_dt > 0 && (dt > max_dt || (fixed && max_dt <= dt * (1 + 1e-6)))) dt = max_dt;
   if (!(dt > 1e-12 * sim->frame_dt) || !isfinite(dt)) return dt_collapsed(sim, dt);
   const double t0 = mpm_wall_seconds();
   /* the last step's scratch is taken back (the arena grows to the largest step it saw) */

@@ -76,7 +76,7 @@ static void scatter_sparse(const int stress, const mpm_transfer_ctx *ctx, const 
   const int W = ctx->kernel.width;
   for (int colour = 0; colour < 8; ++colour) {
     const long begin = (long)g->color_start[colour], end = (long)g->color_start[colour + 1];
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) if (end - begin > 1)
     for (long q = begin; q < end; ++q) {
       const int32_t b = g->color_blocks[q];
       switch (W * 2 + stress) {
@@ -146,7 +146,7 @@ static void gather_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                           mpm_real *const G[9]) {
   const int W = ctx->kernel.width;
   const long nb = (long)g->owner_count;
-#pragma omp parallel for schedule(dynamic, 8)
+#pragma omp parallel for schedule(dynamic, 8) if (nb > 1)
   for (long b = 0; b < nb; ++b) {
     switch (W) {
     case 2:
@@ -188,7 +188,7 @@ static void quadratic_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid 
   const int W = ctx->kernel.width;
   for (int colour = 0; colour < 8; ++colour) {
     const long begin = (long)g->color_start[colour], end = (long)g->color_start[colour + 1];
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) if (end - begin > 1)
     for (long k = begin; k < end; ++k) {
       const int32_t b = g->color_blocks[k];
       mpm_real pad[MPM_PAD_NODES * STRIDE] __attribute__((aligned(MPM_ALIGN)));
