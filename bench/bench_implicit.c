@@ -175,12 +175,12 @@ static void simulate(int particles, double dx, double E, const char *solver, run
       f->ok = 0;
       break;
     }
-    cg += sim->solver_figures.cg_iterations;
-    isteps += sim->solver_figures.steps;
     f->com[fr] = com_height(sim);
     if (total_energy(sim) > e0 * (1 + 1e-3) + 1e-6) f->ok = 0;
   }
   f->seconds = mpm_wall_seconds() - t0;
+  cg = sim->cg_iterations;
+  isteps = sim->implicit_steps;
   f->steps = (long long)sim->steps;
   f->mean_cg = isteps ? (double)cg / (double)isteps : 0;
   mpm_sim_destroy(sim);

@@ -167,6 +167,58 @@ static void test_resume_is_bit_identical(void **state) {
   mpm_sim_destroy(c);
 }
 
+/* The implicit integrator (Newton iterations, fixed step): a run checkpointed mid-frame and
+ * resumed ends bit-identical, its stats rows' solver figures included. */
+static void test_resume_implicit(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("checkpoint_implicit");
+  char scene[512], full[512], part[512];
+  snprintf(scene, sizeof scene, "%s/scene.json", dir);
+  snprintf(full, sizeof full, "%s/full", dir);
+  snprintf(part, sizeof part, "%s/part", dir);
+  char text[4096];
+  snprintf(text, sizeof text, SCENE, 0.25, 2);
+  const char *key = "\"output\"";
+  char *at = strstr(text, key);
+  assert_non_null(at);
+  char tail[4096];
+  snprintf(tail, sizeof tail, "%s", at);
+  snprintf(at, sizeof text - (size_t)(at - text),
+           "\"solver\": {\"integrator\": \"implicit\", \"dt\": 0.01, "
+           "\"newton_iterations\": 2},\n %s",
+           tail);
+  write_file(scene, text);
+  mpm_sim *a = create(scene);
+  assert_int_equal(mpm_sim_enable_output(a, full), MPM_OK);
+  while (mpm_sim_frame(a) < mpm_sim_frame_count(a))
+    assert_int_equal(mpm_sim_advance_frame(a), MPM_OK);
+  mpm_sim *b = create(scene);
+  assert_int_equal(mpm_sim_enable_output(b, part), MPM_OK);
+  for (int f = 0; f < 2; ++f) assert_int_equal(mpm_sim_advance_frame(b), MPM_OK);
+  for (int s = 0; s < 2; ++s) /* two of the frame's five steps */
+    assert_int_equal(mpm_sim_step(b, 0.01), MPM_OK);
+  char path[1100];
+  assert_int_equal(mpm_sim_write_checkpoint(b, path, sizeof path), MPM_OK);
+  mpm_sim_destroy(b);
+  mpm_sim *c = create(scene);
+  char used[1100];
+  assert_int_equal(mpm_sim_resume(c, part, used, sizeof used), MPM_OK);
+  while (mpm_sim_frame(c) < mpm_sim_frame_count(c))
+    assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
+  assert_int_equal(c->steps, a->steps);
+  assert_same_particles(&a->particles, &c->particles);
+  assert_same_frames(full, part, mpm_sim_frame_count(a));
+  for (int f = 0; f <= mpm_sim_frame_count(a); ++f) {
+    assert_true(a->stats[f].cg_iterations_mean == c->stats[f].cg_iterations_mean);
+    assert_int_equal(a->stats[f].cg_iterations_max, c->stats[f].cg_iterations_max);
+    assert_true(a->stats[f].cg_residual_max == c->stats[f].cg_residual_max);
+    assert_true(a->stats[f].newton_iterations_mean == c->stats[f].newton_iterations_mean);
+  }
+  assert_true(a->stats[3].cg_iterations_mean > 0);
+  mpm_sim_destroy(a);
+  mpm_sim_destroy(c);
+}
+
 /* The reader gives back exactly what the writer wrote. */
 static void test_checkpoint_round_trip(void **state) {
   (void)state;
@@ -468,6 +520,7 @@ static void test_resume_with_domains(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resume_is_bit_identical),
+      cmocka_unit_test(test_resume_implicit),
       cmocka_unit_test(test_checkpoint_round_trip),
       cmocka_unit_test(test_failed_write_keeps_old),
       cmocka_unit_test(test_sigint_checkpoints),

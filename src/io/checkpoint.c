@@ -149,6 +149,9 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       put_attr(f, "particle_count", H5T_NATIVE_UINT64, &n) ||
       put_attr(f, "records", H5T_NATIVE_INT, &c->records))
     return -1;
+  for (int k = 0; k < MPM_CKPT_SOLVER_FIGURES; ++k)
+    if (put_attr(f, mpm_ckpt_solver_figure_names[k], H5T_NATIVE_DOUBLE, &c->solver_figures[k]))
+      return -1;
   const uint64_t sum = mpm_ckpt_attributes_checksum(c, n), content = mpm_ckpt_content_checksum(c);
   if (put_attr(f, "checksum", H5T_NATIVE_UINT64, &sum) ||
       put_attr(f, "content_checksum", H5T_NATIVE_UINT64, &content))

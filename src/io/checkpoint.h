@@ -23,6 +23,7 @@
 
 #define MPM_CHECKPOINT_VERSION 2
 #define MPM_FRAME_NAME_MAX 64
+#define MPM_CKPT_SOLVER_FIGURES 6
 
 typedef struct mpm_checkpoint {
   uint64_t scene_hash; /* FNV-1a of the scene text */
@@ -33,6 +34,9 @@ typedef struct mpm_checkpoint {
   int written_frames; /* frames written (frame 0 included) */
   int dt_level;       /* the retry guard's current halvings of dt */
   int threads;        /* threads of the run that wrote it (informative) */
+  /* the implicit solver's figures of the frame in progress (stats.csv): steps, CG iterations,
+   * Newton iterations, unconverged steps, most CG iterations of a step, largest residual */
+  double solver_figures[MPM_CKPT_SOLVER_FIGURES];
   mpm_particles particles;
   mpm_domain_set domains; /* Zhu's particle domains: particles, corners, weights, active */
   /* per-frame records, `records` of them (= written_frames) */

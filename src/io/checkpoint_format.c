@@ -6,6 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+const char *const mpm_ckpt_solver_figure_names[MPM_CKPT_SOLVER_FIGURES] = {
+    "solver_steps",          "solver_cg_iterations", "solver_newton_iterations",
+    "solver_cg_unconverged", "solver_cg_max",        "solver_residual_max"};
+
 /* HDF5 prints its error stack on stderr by default; our messages say what went wrong. */
 void mpm_ckpt_quiet_hdf5(void) {
   if (!getenv("MPM_HDF5_DEBUG")) H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
@@ -62,7 +66,17 @@ void mpm_ckpt_row_to_stats(const double v[MPM_CKPT_STATS_COLUMNS], mpm_stats_row
 
 /* Datasets carry Fletcher-32 checksums; the scalar attributes are covered by this one. */
 uint64_t mpm_ckpt_attributes_checksum(const mpm_checkpoint *c, uint64_t n) {
-  const double d[3] = {c->time, c->last_dt, c->max_speed};
+  const double d[3 + MPM_CKPT_SOLVER_FIGURES] = {
+      c->time,
+      c->last_dt,
+      c->max_speed,
+      c->solver_figures[0],
+      c->solver_figures[1],
+      c->solver_figures[2],
+      c->solver_figures[3],
+      c->solver_figures[4],
+      c->solver_figures[5],
+  };
   const int64_t i[8] = {c->steps,   c->frame,   c->written_frames, c->dt_level,
                         c->threads, c->records, (int64_t)n,        (int64_t)sizeof(mpm_real)};
   uint64_t h[3] = {c->scene_hash, mpm_fnv1a64(d, sizeof d), mpm_fnv1a64(i, sizeof i)};

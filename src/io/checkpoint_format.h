@@ -23,6 +23,9 @@
 #define MPM_CKPT_HEADER_BYTES 512
 extern const char mpm_ckpt_magic[8];
 
+/* The attribute names of mpm_checkpoint.solver_figures. */
+extern const char *const mpm_ckpt_solver_figure_names[MPM_CKPT_SOLVER_FIGURES];
+
 /* HDF5 prints its error stack on stderr by default; our messages say what went wrong
  * (MPM_HDF5_DEBUG=1 keeps HDF5's). */
 void mpm_ckpt_quiet_hdf5(void);

@@ -264,6 +264,13 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       get_attr(r, "particle_count", H5T_INTEGER, H5T_NATIVE_UINT64, &n) ||
       get_attr(r, "records", H5T_INTEGER, H5T_NATIVE_INT, &c->records))
     return -1;
+  for (int k = 0; k < MPM_CKPT_SOLVER_FIGURES; ++k)
+    if (get_attr(r, mpm_ckpt_solver_figure_names[k], H5T_FLOAT, H5T_NATIVE_DOUBLE,
+                 &c->solver_figures[k]))
+      return -1;
+  for (int k = 0; k < MPM_CKPT_SOLVER_FIGURES; ++k)
+    if (!isfinite(c->solver_figures[k]) || c->solver_figures[k] < 0)
+      return bad(r, "attribute '%s' is not a finite count", mpm_ckpt_solver_figure_names[k]);
   uint64_t sum = 0, content = 0;
   if (get_attr(r, "checksum", H5T_INTEGER, H5T_NATIVE_UINT64, &sum) ||
       get_attr(r, "content_checksum", H5T_INTEGER, H5T_NATIVE_UINT64, &content))

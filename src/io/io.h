@@ -67,7 +67,7 @@ typedef struct mpm_stats_row {
   /* implicit integration, over the frame's steps (0 for explicit runs) */
   double cg_iterations_mean, newton_iterations_mean;
   int cg_iterations_max;
-  double cg_residual_max;  /* largest final relative CG residual */
+  double cg_residual_max;   /* largest final relative CG residual */
   long long cg_unconverged; /* steps whose CG stopped short of the tolerance */
 } mpm_stats_row;
 

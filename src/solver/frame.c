@@ -38,7 +38,6 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "the simulation already reached its end time");
   sim->frame_wall_start = mpm_wall_seconds();
-  memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
   double end = (sim->frame + 1) * sim->frame_dt;
   if (end > sim->scene.end_time) end = sim->scene.end_time;
   /* steps land exactly on the frame time; a tiny remainder is merged into the last step */
@@ -66,8 +65,11 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   sim->time = end;
   sim->frame++;
   if (sim->dt_level > 0) sim->dt_level--; /* one halving is given back per calm frame */
-  if (!sim->output_enabled) return MPM_OK;
-  mpm_status st = mpm_sim_write_frame(sim);
+  mpm_status st = sim->output_enabled ? mpm_sim_write_frame(sim) : MPM_OK;
+  /* the frame's solver figures went into its stats row; the next frame starts from zero (a
+   * checkpoint taken mid-frame carries them) */
+  memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
+  if (!sim->output_enabled) return st;
   const int every = sim->scene.output.checkpoint_every;
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
       sim->time < sim->scene.end_time * (1 - 1e-12))

@@ -62,7 +62,9 @@ struct mpm_sim {
   int frame, frame_count;
   mpm_real max_speed, wave_speed;
   mpm_stage_times times;
-  mpm_solver_figures solver_figures; /* implicit steps of this frame */
+  mpm_solver_figures solver_figures;       /* implicit steps of this frame */
+  long long implicit_steps, cg_iterations; /* implicit steps and their CG iterations since
+                                              creation (benchmarks) */
   /* outputs */
   int output_enabled;
   char output_dir[MPM_PATH_MAX];

@@ -80,6 +80,11 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   c.written_frames = sim->written_frames;
   c.dt_level = sim->dt_level;
   c.threads = mpm_thread_count();
+  const mpm_solver_figures *sf = &sim->solver_figures;
+  const double figures[MPM_CKPT_SOLVER_FIGURES] = {
+      (double)sf->steps,          (double)sf->cg_iterations, (double)sf->newton_iterations,
+      (double)sf->cg_unconverged, (double)sf->cg_max,        sf->residual_max};
+  memcpy(c.solver_figures, figures, sizeof figures);
   c.particles = sim->particles; /* borrowed, not freed */
   c.domains = sim->domains;
   c.records = sim->written_frames;
@@ -152,6 +157,14 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   sim->frame = c->frame;
   sim->written_frames = c->written_frames;
   sim->dt_level = c->dt_level;
+  mpm_solver_figures *sf = &sim->solver_figures;
+  memset(sf, 0, sizeof *sf);
+  sf->steps = (long long)c->solver_figures[0];
+  sf->cg_iterations = (long long)c->solver_figures[1];
+  sf->newton_iterations = (long long)c->solver_figures[2];
+  sf->cg_unconverged = (long long)c->solver_figures[3];
+  sf->cg_max = (int)c->solver_figures[4];
+  sf->residual_max = c->solver_figures[5];
   for (int i = 0; i < c->records; ++i) {
     sim->frame_times[i] = c->frame_times[i];
     memcpy(sim->frame_files[i], c->frame_files[i], sizeof sim->frame_files[i]);

@@ -161,6 +161,8 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
                          "step %lld: out of memory for the implicit solve over %zu DOFs",
                          (long long)sim->steps, sim->dofs.count);
   mpm_solver_figures *f = &sim->solver_figures;
+  sim->implicit_steps++;
+  sim->cg_iterations += c->solve.cg_iterations;
   f->steps++;
   f->cg_iterations += c->solve.cg_iterations;
   f->newton_iterations += c->solve.newton_iterations;
