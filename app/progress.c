@@ -29,7 +29,9 @@ static void format_eta(double s, char *buf, size_t n) {
 }
 
 void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t steps,
-                         size_t particles) {
+                         size_t particles, const char *extra) {
+  const char *sep = extra && extra[0] ? "  " : "";
+  if (!extra) extra = "";
   const double now = mpm_wall_seconds();
   p->elapsed = now - p->start;
   if (p->mode == MPM_PROGRESS_QUIET) return;
@@ -44,13 +46,13 @@ void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t st
     char bar[64];
     for (int i = 0; i < width; ++i) bar[i] = i < fill ? '#' : '.';
     bar[width] = '\0';
-    fprintf(stderr, "\r[%s] frame %d/%d  t=%.4g s  %.0f steps/s  ETA %s  %zu particles\033[K", bar,
-            frame, p->frames, sim_time, rate, eta_s, particles);
+    fprintf(stderr, "\r[%s] frame %d/%d  t=%.4g s  %.0f steps/s  ETA %s  %zu particles%s%s\033[K",
+            bar, frame, p->frames, sim_time, rate, eta_s, particles, sep, extra);
     fflush(stderr);
     p->drawn = 1;
   } else {
-    fprintf(stderr, "frame %d/%d t=%.6g s steps=%lld steps/s=%.1f eta=%s particles=%zu\n", frame,
-            p->frames, sim_time, (long long)steps, rate, eta_s, particles);
+    fprintf(stderr, "frame %d/%d t=%.6g s steps=%lld steps/s=%.1f eta=%s particles=%zu%s%s\n",
+            frame, p->frames, sim_time, (long long)steps, rate, eta_s, particles, sep, extra);
   }
   p->last_steps = steps;
   p->last_time = now;

@@ -20,8 +20,9 @@ typedef struct mpm_progress {
 } mpm_progress;
 
 void mpm_progress_begin(mpm_progress *p, mpm_progress_mode mode, int frames, size_t particles);
+/* extra: appended to the line (the implicit solver's figures), or NULL. */
 void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t steps,
-                         size_t particles);
+                         size_t particles, const char *extra);
 void mpm_progress_end(mpm_progress *p);
 
 #endif

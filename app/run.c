@@ -207,7 +207,14 @@ int mpm_cmd_run(int argc, char **argv) {
       code = MPM_EXIT_FAILURE;
       break;
     }
-    mpm_progress_update(&pr, sim->frame, sim->time, sim->steps, sim->particles.count);
+    char solver[160] = "";
+    const mpm_solver_figures *sf = &sim->last_frame_solver;
+    if (sf->steps > 0) /* implicit: CG and Newton iterations per step over the frame */
+      snprintf(solver, sizeof solver, "CG %.1f/step (max %d, residual %.2g) Newton %.2f/step%s",
+               (double)sf->cg_iterations / (double)sf->steps, sf->cg_max, sf->residual_max,
+               (double)sf->newton_iterations / (double)sf->steps,
+               sf->cg_unconverged ? " unconverged" : "");
+    mpm_progress_update(&pr, sim->frame, sim->time, sim->steps, sim->particles.count, solver);
   }
   /* stopped short of the scene's end by --frames: leave a checkpoint to continue from */
   if (code == MPM_EXIT_OK && sim->time < sim->scene.end_time * (1 - 1e-12) &&

@@ -86,8 +86,8 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->solver.max_retries = 8;
   scene->solver.integrator = MPM_INTEGRATOR_EXPLICIT;
   scene->solver.dt = 0;
-  scene->solver.newton_iterations = 1;
-  scene->solver.cg_tolerance = 1e-4;
+  scene->solver.newton_iterations = 2;
+  scene->solver.cg_tolerance = 0; /* automatic: see mpm_solver_desc */
   scene->solver.cg_max_iterations = 500;
   scene->solver.on_cg_failure = MPM_CG_FAILURE_WARN;
   scene->solver.domain_kernel = MPM_KERNEL_LINEAR;
@@ -120,4 +120,9 @@ void mpm_scene_free(mpm_scene *scene) {
 void mpm_lame(double E, double nu, double *mu, double *lambda) {
   *mu = E / (2.0 * (1.0 + nu));
   *lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}
+
+double mpm_solver_cg_tolerance(const mpm_solver_desc *d) {
+  if (d->cg_tolerance > 0) return d->cg_tolerance;
+  return d->newton_iterations == 1 ? 1e-4 : 1e-2;
 }

@@ -194,8 +194,9 @@ typedef struct mpm_solver_desc {
   /* time integration */
   mpm_integrator_kind integrator;
   double dt;                           /* implicit: a fixed step, s (0 = CFL on particle speed) */
-  int newton_iterations;               /* implicit: 1 = Zhu's linearized step (default) */
-  double cg_tolerance;                 /* implicit: CG's relative residual, default 1e-4 */
+  int newton_iterations;               /* implicit: 1 = Zhu's linearized step; default 2 */
+  double cg_tolerance; /* implicit: CG's relative residual; 0 = automatic
+                          (mpm_solver_cg_tolerance) */
   int cg_max_iterations;               /* implicit: default 500 */
   mpm_cg_failure_action on_cg_failure; /* implicit: warn (default) or stop */
 } mpm_solver_desc;
@@ -222,6 +223,11 @@ typedef struct mpm_scene {
   mpm_output_desc output;
   mpm_camera_desc camera;
 } mpm_scene;
+
+/* The CG tolerance the implicit step uses: solver.cg_tolerance, or when it is 0 (the default)
+ * 1e-4 for Zhu's single linearized step (it is only as good as its solve) and 1e-2 with Newton
+ * iterations (inexact Newton: the line search and the next iteration correct a loose solve). */
+double mpm_solver_cg_tolerance(const mpm_solver_desc *d);
 
 /* Fill every default; arrays empty. */
 void mpm_scene_default(mpm_scene *scene);

@@ -68,6 +68,7 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   mpm_status st = sim->output_enabled ? mpm_sim_write_frame(sim) : MPM_OK;
   /* the frame's solver figures went into its stats row; the next frame starts from zero (a
    * checkpoint taken mid-frame carries them) */
+  sim->last_frame_solver = sim->solver_figures;
   memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
   if (!sim->output_enabled) return st;
   const int every = sim->scene.output.checkpoint_every;

@@ -63,6 +63,7 @@ struct mpm_sim {
   mpm_real max_speed, wave_speed;
   mpm_stage_times times;
   mpm_solver_figures solver_figures;       /* implicit steps of this frame */
+  mpm_solver_figures last_frame_solver;    /* the same for the last frame completed (progress) */
   long long implicit_steps, cg_iterations; /* implicit steps and their CG iterations since
                                               creation (benchmarks) */
   /* outputs */

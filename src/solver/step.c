@@ -154,8 +154,8 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
   const mpm_solver_desc *sd = &sim->scene.solver;
   mpm_implicit s;
   implicit_system(sim, c, &s);
-  const mpm_implicit_options o = {sd->newton_iterations, sd->cg_tolerance, sd->cg_max_iterations,
-                                  1};
+  const mpm_implicit_options o = {sd->newton_iterations, mpm_solver_cg_tolerance(sd),
+                                  sd->cg_max_iterations, 1};
   if (mpm_implicit_init(&s) || mpm_implicit_solve(&s, &o, &c->solve))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the implicit solve over %zu DOFs",
@@ -181,7 +181,7 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
                            "solver.cg_max_iterations, lower solver.dt, or set "
                            "solver.on_cg_failure to \"warn\"",
                            (long long)sim->steps, sim->time, c->dt, c->solve.cg_residual,
-                           c->solve.cg_iterations, sim->dofs.count, sd->cg_tolerance);
+                           c->solve.cg_iterations, sim->dofs.count, o.cg_tolerance);
   }
   return MPM_OK;
 }
