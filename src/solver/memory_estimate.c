@@ -15,6 +15,12 @@
  * Measured: 157 bytes per particle in the float build (README, `mpm bench step`). */
 #define BYTES_PER_PARTICLE (1.2 * (27.0 * (double)sizeof(mpm_real) + 12 + 16))
 
+/* The implicit step's scratch per particle: the factored stress derivative (30 reals), F at the
+ * displacement (9), the gathered gradients and the diagonal's quadratic forms (18); and per DOF
+ * (about 0.2 per particle at 8 particles per cell) the solver's ten 3-vectors, positions and
+ * wall depths (34 reals). */
+#define IMPLICIT_BYTES_PER_PARTICLE ((57.0 + 0.2 * 34.0) * (double)sizeof(mpm_real))
+
 /* Expected particle count of one body: its volume over the lattice cell. Meshes count half of
  * their bounding box (the loader measured it); analytic shapes their exact volume. */
 static double body_particles(const mpm_scene *s, int b) {
@@ -55,7 +61,10 @@ double mpm_scene_memory_estimate(const mpm_scene *s, double *particles) {
   double n = 0;
   for (int b = 0; b < s->body_count; ++b) n += body_particles(s, b);
   if (particles) *particles = n;
-  return n * BYTES_PER_PARTICLE + dense_nodes(s) * DOF_REALS * sizeof(mpm_real) +
+  const double per_particle =
+      BYTES_PER_PARTICLE +
+      (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT ? IMPLICIT_BYTES_PER_PARTICLE : 0);
+  return n * per_particle + dense_nodes(s) * DOF_REALS * sizeof(mpm_real) +
          64.0 * 1024 * 1024; /* plus the program itself */
 }
 
@@ -99,8 +108,11 @@ mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
                          "%s: the scene needs about %.3g GiB (%.3g particles at about %.0f bytes "
                          "each%s) but this machine has %.1f GiB available; use a larger dx, fewer "
                          "particles_per_cell or smaller bodies%s",
-                         s->path[0] ? s->path : "scene", need / gib, n, BYTES_PER_PARTICLE, grid,
-                         have / gib, dense > 0 ? ", or the sparse grid" : "");
+                         s->path[0] ? s->path : "scene", need / gib, n,
+                         BYTES_PER_PARTICLE + (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT
+                                                   ? IMPLICIT_BYTES_PER_PARTICLE
+                                                   : 0),
+                         grid, have / gib, dense > 0 ? ", or the sparse grid" : "");
   }
   return MPM_OK;
 }
