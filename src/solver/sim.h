@@ -126,7 +126,8 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
 
 /* Tests and benchmarks: the stages of a step of dt up to the solve (sort, layout, P2G, with the
  * force apart), and the step's implicit system in *s (its scratch is the step arena's, valid
- * until the next step). Nothing is advanced. */
+ * until the next step). Time and particles are not advanced (the sort may reorder the particle
+ * arrays, as a step does). */
 struct mpm_implicit;
 mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, struct mpm_implicit *s);
 
