@@ -29,13 +29,7 @@ static inline mpm_sim *implicit_block(const char *model, const char *material_ex
            "\"particles_per_cell\": %d, \"jitter\": 0, \"domains\": %s}]}",
            kernel, solver_extra, model, material_extra, half, half * 0.8, half * 0.9, ppc,
            domains ? "true" : "false");
-  mpm_scene scene;
-  mpm_error err;
-  if (mpm_scene_parse(text, "block.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
-  mpm_sim *sim = NULL;
-  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
-  mpm_scene_free(&scene);
-  return sim;
+  return test_sim_from_json(text, "block.json");
 }
 
 /* The particles of the system, standard or domain. */

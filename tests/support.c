@@ -1,6 +1,8 @@
 /* support.c - shared helpers for the cmocka test programs. */
 #include "support.h"
 #include "core/svd3.h"
+#include "scene/scene.h"
+#include "solver/sim.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -63,4 +65,14 @@ void test_svd_path(int path, const mpm_real F[9], mpm_real U[9], mpm_real s[3], 
     V[c] = Vb[c][lane];
   }
   for (int c = 0; c < 3; ++c) s[c] = sb[c][lane];
+}
+
+struct mpm_sim *test_sim_from_json(const char *text, const char *name) {
+  mpm_scene scene;
+  mpm_error err;
+  if (mpm_scene_parse(text, name, &scene, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_scene_free(&scene);
+  return sim;
 }

@@ -28,6 +28,11 @@ void assert_close_msg(double a, double b, double tol, const char *what);
 /* A fresh empty directory under /tmp for a test's files; returns a static buffer. */
 const char *test_temp_dir(const char *name);
 
+/* A simulation of the scene text (`name` for messages); fails the test with the loader's or
+ * the constructor's message. */
+struct mpm_sim;
+struct mpm_sim *test_sim_from_json(const char *text, const char *name);
+
 /* Path of the mpm program (from MPM_BIN, set by ctest) or NULL. */
 const char *test_mpm_bin(void);
 
