@@ -75,8 +75,10 @@ static void test_bad_scenes_exit_2_and_write_nothing(void **state) {
 
 static void test_check_examples(void **state) {
   (void)state;
-  const char *examples[] = {"examples/jello_cubes.json", "examples/sphere_bounce.json",
-                            "examples/block_on_cylinder.json", "examples/bunny_drop.json"};
+  const char *examples[] = {
+      "examples/jello_cubes.json",       "examples/sphere_bounce.json",
+      "examples/block_on_cylinder.json", "examples/bunny_drop.json",
+      "examples/stiff_bar_bending.json", "examples/rubber_bunny_implicit.json"};
   for (size_t i = 0; i < sizeof examples / sizeof examples[0]; ++i) {
     char args[600];
     snprintf(args, sizeof args, "check %s", examples[i]);
