@@ -109,6 +109,23 @@ static void test_hessian_matches_finite_differences(void **state) {
       }
 }
 
+/* On the dense reference grid (the operators' scalar paths) K matches central differences of
+ * the forces too. */
+static void test_dense_grid(void **state) {
+  (void)state;
+  uint64_t rng = 21;
+  for (int domains = 0; domains <= 1; ++domains) {
+    mpm_sim *sim = implicit_block("fixed_corotated", "", "quadratic", domains,
+                                  ", \"grid\": \"dense\"", 0.12, 8);
+    set_states(implicit_particles(sim), STATE_COMPRESSED, &rng);
+    const double err = fd_error(sim, &rng);
+    print_message("dense grid, %s: K du vs central differences, rel. error %.2e\n",
+                  domains ? "domains" : "points", err);
+    assert_true(err < TOL(3e-2, 1e-6));
+    mpm_sim_destroy(sim);
+  }
+}
+
 /* <a, K b> - <K a, b>, <a, K a> at a compressed state, definite and exact. */
 static void test_symmetric_and_definite(void **state) {
   (void)state;
@@ -407,6 +424,7 @@ static void test_scene_keys(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_hessian_matches_finite_differences),
+      cmocka_unit_test(test_dense_grid),
       cmocka_unit_test(test_symmetric_and_definite),
       cmocka_unit_test(test_momentum_conserved),
       cmocka_unit_test(test_free_fall),
