@@ -253,7 +253,7 @@ static void test_stiff_block_on_floor(void **state) {
   (void)state;
   const char *text =
       "{\"domain\": {\"min\": [0, 0, 0], \"max\": [0.6, 0.6, 0.6], \"dx\": 0.04},"
-      " \"gravity\": [0, -9.81, 0], \"time\": {\"end\": 0.3, \"fps\": 20},"
+      " \"gravity\": [0, -9.81, 0], \"time\": {\"end\": 0.2, \"fps\": 20},"
       " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.002,"
       " \"on_cg_failure\": \"stop\"},"
       " \"materials\": [{\"name\": \"steel\", \"model\": \"fixed_corotated\", \"E\": 1e8,"
