@@ -10,6 +10,7 @@ int mpm_cmd_check(int argc, char **argv);
 int mpm_cmd_bench(int argc, char **argv);
 int mpm_cmd_render(int argc, char **argv); /* render.c */
 int mpm_cmd_plot(int argc, char **argv);   /* plot.c */
+int mpm_cmd_error(int argc, char **argv);  /* error.c */
 
 /* Parse a positive integer option value; prints an error naming the option on failure. */
 int mpm_cli_parse_int(const char *opt, const char *value, int lo, int hi, int *out);

@@ -32,15 +32,21 @@ static void usage(FILE *out) {
           "  mpm bench checkpoint [--particles N] [--repeats N] [--dir DIR]\n"
           "      checkpoint write/read/resume seconds and MB/s, cost of the guards per step\n"
           "  mpm bench domains [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
+          "      ns per particle-step with particle domains against material points\n"
           "  mpm bench implicit [--particles N] [--drop-particles N] [--threads LIST]\n"
           "                     [--repeats N] [--only action|drop]\n"
-          "      ns per particle-step with particle domains against material points\n"
+          "      the Hessian action against explicit P2G + G2P, CG iterations with and\n"
+          "      without the preconditioner, time to simulate 1 s explicit and implicit\n"
           "  mpm render OUTDIR [--field F] [--size WxH] [--colormap C] [--every N] [--movie]\n"
           "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed);\n"
           "      F: velocity (default), J, stress, plastic, material, body\n"
           "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
           "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
           "      to OUTDIR/plots/*.png with gnuplot\n"
+          "  mpm error REST.vtu FINAL.vtu | mpm error OUTDIR REST_FRAME FINAL_FRAME\n"
+          "      the rest-state error (Zhu et al. 2017): particles matched by id, rigid\n"
+          "      motion removed by shape matching, mean and max distance over the rest\n"
+          "      shape's bounding-box diagonal\n"
           "  mpm --help | --version\n"
           "\n"
           "exit codes: 0 success, 1 simulation failure, 2 usage or input error,\n"
@@ -83,6 +89,7 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "bench")) return mpm_cmd_bench(argc - 2, argv + 2);
   if (!strcmp(cmd, "render")) return mpm_cmd_render(argc - 2, argv + 2);
   if (!strcmp(cmd, "plot")) return mpm_cmd_plot(argc - 2, argv + 2);
+  if (!strcmp(cmd, "error")) return mpm_cmd_error(argc - 2, argv + 2);
   fprintf(stderr, "mpm: unknown command '%s' (try 'mpm --help')\n", cmd);
   return MPM_EXIT_USAGE;
 }
