@@ -366,13 +366,18 @@ int mpm_cmd_render(int argc, char **argv) {
     }
     /* background: recomputed only when a collider moved */
     double key = 0;
+    int na = 0; /* the colliders acting at this frame's time (a grip's `active` window) */
     for (int k = 0; k < nc; ++k) {
-      poses[k] = mpm_collider_pose_at(&colliders[k], fr.time);
-      for (int d = 0; d < 3; ++d) key += (d + 1.0) * (k + 1.0) * poses[k].center[d];
-      for (int d = 0; d < 9; ++d) key += (d + 2.0) * (k + 3.0) * poses[k].R[d];
+      const double *w = colliders[k].desc.active;
+      if (!(fr.time >= w[0] && fr.time < w[1])) continue;
+      poses[na] = mpm_collider_pose_at(&colliders[k], fr.time);
+      for (int d = 0; d < 3; ++d) key += (d + 1.0) * (k + 1.0) * poses[na].center[d];
+      for (int d = 0; d < 9; ++d) key += (d + 2.0) * (k + 3.0) * poses[na].R[d];
+      key += 1e3 * (k + 1.0);
+      ++na;
     }
     if (!(key == bg_key)) {
-      mpm_render_background(&bg, &cam, floor_y, lo, hi, poses, nc);
+      mpm_render_background(&bg, &cam, floor_y, lo, hi, poses, na);
       bg_key = key;
     }
     const size_t pix = (size_t)o.width * (size_t)o.height;

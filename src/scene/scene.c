@@ -7,6 +7,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 static mpm_shape_desc shape_default(mpm_shape_kind kind) {
@@ -58,6 +59,8 @@ mpm_collider_desc mpm_collider_desc_default(void) {
   c.motion.angular_speed = 0.0;
   c.motion.keyframe_count = 0;
   c.motion.keyframes = NULL;
+  c.active[0] = 0;
+  c.active[1] = HUGE_VAL;
   return c;
 }
 

@@ -145,6 +145,8 @@ typedef struct mpm_collider_desc {
   mpm_boundary_rule rule;
   double friction; /* Coulomb coefficient >= 0 (slip and separate) */
   mpm_motion_desc motion;
+  double active[2]; /* s: the collider acts while active[0] <= t < active[1] (a grip that lets
+                       go); default [0, infinity) */
 } mpm_collider_desc;
 
 typedef struct mpm_output_desc {

@@ -29,7 +29,7 @@ static const char *const BODY_KEYS[] = {"name",
                                         NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
-                                            "friction", "motion", NULL};
+                                            "friction", "motion", "active",     NULL};
 static const char *const MOTION_KEYS[] = {"velocity", "axis", "angular_speed", "keyframes", NULL};
 static const char *const KEYFRAME_KEYS[] = {"time", "translation", "angle", NULL};
 
@@ -502,6 +502,25 @@ static int parse_motion(mpm_json_ctx *c, const cJSON *collider, mpm_motion_desc 
   return 0;
 }
 
+/* "active": [t0, t1], 0 <= t0 < t1 (s): when the collider acts. */
+static int parse_active(mpm_json_ctx *c, const cJSON *e, double active[2]) {
+  const cJSON *a = mpm_json_get(e, "active");
+  if (!a) return 0;
+  char buf[64];
+  if (!cJSON_IsArray(a) || cJSON_GetArraySize(a) != 2 || !cJSON_IsNumber(a->child) ||
+      !cJSON_IsNumber(a->child->next))
+    return mpm_json_fail_at(c, "active", MPM_ERR_INVALID,
+                            "expected [start, end] in seconds (two numbers), got %s",
+                            mpm_json_describe(a, buf, sizeof buf));
+  const double t0 = a->child->valuedouble, t1 = a->child->next->valuedouble;
+  if (!(t0 >= 0) || !(t1 > t0) || !isfinite(t1))
+    return mpm_json_fail_at(c, "active", MPM_ERR_INVALID,
+                            "expected 0 <= start < end (s), got [%g, %g]", t0, t1);
+  active[0] = t0;
+  active[1] = t1;
+  return 0;
+}
+
 int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   const cJSON *arr = NULL;
   int has = mpm_sj_get_array(c, root, "colliders", 0, "an array of collider objects", &arr);
@@ -527,7 +546,7 @@ int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
         mpm_json_enum(c, e, "rule", 0, mpm_sj_rule_names, &rule) < 0 ||
         mpm_json_number(c, e, "friction", 0, mpm_json_ge(0, "Coulomb coefficient"), &d->friction) <
             0 ||
-        parse_motion(c, e, &d->motion) < 0)
+        parse_motion(c, e, &d->motion) < 0 || parse_active(c, e, d->active) < 0)
       return -1;
     d->rule = (mpm_boundary_rule)rule;
     mpm_json_pop(c, o2);

@@ -254,9 +254,15 @@ static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
   }
   u->boundary.wall_rule = sc->wall_rule;
   u->boundary.wall_friction = (mpm_real)sc->wall_friction;
-  u->boundary.collider_count = sim->collider_count;
-  for (int k = 0; k < sim->collider_count; ++k)
-    sim->poses[k] = mpm_collider_pose_at(&sim->colliders[k], sim->time + dt);
+  /* the colliders acting at the end of the step (a grip's `active` window), their poses then */
+  const double t_end = sim->time + dt;
+  int active = 0;
+  for (int k = 0; k < sim->collider_count; ++k) {
+    const mpm_collider_desc *cd = &sim->colliders[k].desc;
+    if (t_end >= cd->active[0] && t_end < cd->active[1])
+      sim->poses[active++] = mpm_collider_pose_at(&sim->colliders[k], t_end);
+  }
+  u->boundary.collider_count = active;
   u->boundary.poses = sim->poses;
 }
 
