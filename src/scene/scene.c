@@ -129,3 +129,16 @@ double mpm_solver_cg_tolerance(const mpm_solver_desc *d) {
   if (d->cg_tolerance > 0) return d->cg_tolerance;
   return d->newton_iterations == 1 ? 1e-4 : 1e-2;
 }
+
+double mpm_material_strength(const mpm_material_desc *m, double t) {
+  const int n = m->strength_count;
+  if (n <= 0) return 1;
+  if (t <= m->strength[0][0]) return m->strength[0][1];
+  for (int k = 1; k < n; ++k)
+    if (t < m->strength[k][0]) {
+      const double t0 = m->strength[k - 1][0], t1 = m->strength[k][0];
+      const double a = (t - t0) / (t1 - t0);
+      return (1 - a) * m->strength[k - 1][1] + a * m->strength[k][1];
+    }
+  return m->strength[n - 1][1];
+}

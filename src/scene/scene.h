@@ -62,6 +62,8 @@ typedef enum mpm_shape_kind {
 /* Most points of a revolve profile. */
 #define MPM_PROFILE_MAX 32
 
+#define MPM_STRENGTH_KEYS 16
+
 typedef struct mpm_material_desc {
   char name[MPM_NAME_MAX];
   mpm_model_kind model;
@@ -75,6 +77,10 @@ typedef struct mpm_material_desc {
   double theta_c;        /* snow: critical compression, (0, 1); default 2.5e-2 */
   double theta_s;        /* snow: critical stretch, > 0; default 7.5e-3 */
   double hardening;      /* snow: hardening coefficient xi, >= 0; default 10 */
+  /* strength schedule (Zhu Fig. 5): the moduli scaled by a factor interpolated linearly between
+   * keyframes (time s, factor >= 0), held before the first and after the last; none: 1 */
+  int strength_count;
+  double strength[MPM_STRENGTH_KEYS][2];
 } mpm_material_desc;
 
 /* A solid shape in world coordinates. Boxes and cylinders may be rotated about `axis`-free
@@ -230,6 +236,9 @@ typedef struct mpm_scene {
  * 1e-4 for Zhu's single linearized step (it is only as good as its solve) and 1e-2 with Newton
  * iterations (inexact Newton: the line search and the next iteration correct a loose solve). */
 double mpm_solver_cg_tolerance(const mpm_solver_desc *d);
+
+/* A material's strength factor at time t (1 without a schedule). */
+double mpm_material_strength(const mpm_material_desc *m, double t);
 
 /* Fill every default; arrays empty. */
 void mpm_scene_default(mpm_scene *scene);

@@ -12,11 +12,12 @@
 #include <cjson/cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 static const char *const MATERIAL_KEYS[] = {
     "name",     "model",        "E",       "nu",      "density",   "min_stretch", "friction_angle",
-    "cohesion", "yield_stress", "theta_c", "theta_s", "hardening", NULL};
+    "cohesion", "yield_stress", "theta_c", "theta_s", "hardening", "strength",    NULL};
 
 /* Model spellings, in the order of mpm_model_kind (scene.h). */
 static const char *const MODEL_NAMES[] = {
@@ -73,6 +74,41 @@ static int check_model_keys(mpm_json_ctx *c, const cJSON *node, int model) {
   return 0;
 }
 
+/* "strength": [[t, factor], ...], 1 to MPM_STRENGTH_KEYS keyframes, times increasing, factors
+ * >= 0 (Zhu Fig. 5: a body's strength switched off and on). */
+static int parse_strength(mpm_json_ctx *c, const cJSON *node, mpm_material_desc *m) {
+  const cJSON *a = mpm_json_get(node, "strength");
+  if (!a) return 0;
+  char buf[64];
+  const int n = cJSON_IsArray(a) ? cJSON_GetArraySize(a) : 0;
+  if (n < 1 || n > MPM_STRENGTH_KEYS)
+    return mpm_json_fail_at(c, "strength", MPM_ERR_INVALID,
+                            "expected an array of 1 to %d [time, factor] keyframes, got %s",
+                            MPM_STRENGTH_KEYS, mpm_json_describe(a, buf, sizeof buf));
+  size_t old = mpm_json_push_key(c, "strength");
+  int k = 0;
+  for (const cJSON *e = a->child; e; e = e->next, ++k) {
+    const int ok = cJSON_IsArray(e) && cJSON_GetArraySize(e) == 2 && cJSON_IsNumber(e->child) &&
+                   cJSON_IsNumber(e->child->next);
+    const double t = ok ? e->child->valuedouble : 0, f = ok ? e->child->next->valuedouble : 0;
+    size_t o2 = mpm_json_push_index(c, k);
+    if (!ok)
+      return mpm_json_fail(c, MPM_ERR_INVALID, "expected [time, factor] (two numbers), got %s",
+                           mpm_json_describe(e, buf, sizeof buf));
+    if (!isfinite(t) || t < 0 || (k > 0 && !(t > m->strength[k - 1][0])))
+      return mpm_json_fail(c, MPM_ERR_INVALID,
+                           "expected a time >= 0 (s) after the previous keyframe's, got %g", t);
+    if (!isfinite(f) || f < 0 || f > 1e6)
+      return mpm_json_fail(c, MPM_ERR_INVALID, "expected a factor from 0 to 1e6, got %g", f);
+    m->strength[k][0] = t;
+    m->strength[k][1] = f;
+    mpm_json_pop(c, o2);
+  }
+  m->strength_count = n;
+  mpm_json_pop(c, old);
+  return 0;
+}
+
 /* One material object at the current path. */
 static int parse_material(mpm_json_ctx *c, const cJSON *node, int name_required,
                           mpm_material_desc *m) {
@@ -94,7 +130,8 @@ static int parse_material(mpm_json_ctx *c, const cJSON *node, int name_required,
                       &m->theta_c) < 0 ||
       mpm_json_number(c, node, "theta_s", 0, mpm_json_gt(0, "critical stretch"), &m->theta_s) < 0 ||
       mpm_json_number(c, node, "hardening", 0, mpm_json_ge(0, "hardening coefficient"),
-                      &m->hardening) < 0)
+                      &m->hardening) < 0 ||
+      parse_strength(c, node, m) < 0)
     return -1;
   const mpm_json_range yield = mpm_json_gt(0, "Pa");
   int has_yield = mpm_json_number(c, node, "yield_stress", 0, yield, &m->yield_stress);

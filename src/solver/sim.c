@@ -77,6 +77,12 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     st = oom(err, "materials");
     goto fail;
   }
+  sim->base_materials =
+      calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof *sim->materials);
+  if (!sim->base_materials) {
+    st = oom(err, "materials");
+    goto fail;
+  }
   for (int m = 0; m < sc->material_count; ++m) {
     mpm_material_init(&sim->materials[m], &sc->materials[m]);
     if (!sim->materials[m].model) {
@@ -85,7 +91,18 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
                          sc->path, m, sc->materials[m].name, (int)sc->materials[m].model);
       goto fail;
     }
+    sim->base_materials[m] = sim->materials[m];
+    if (sc->materials[m].strength_count > 0) {
+      sim->has_strength = 1;
+      /* the CFL bound holds for the stiffest the schedule makes the material */
+      double fmax = 0;
+      for (int k = 0; k < sc->materials[m].strength_count; ++k)
+        fmax = fmax > sc->materials[m].strength[k][1] ? fmax : sc->materials[m].strength[k][1];
+      sim->materials[m].wave_speed *= (mpm_real)sqrt(fmax);
+      sim->base_materials[m].wave_speed = sim->materials[m].wave_speed;
+    }
   }
+  mpm_sim_apply_strength(sim, 0);
   st = check_steps_per_frame(sim, err);
   if (st != MPM_OK) goto fail;
 
@@ -204,6 +221,17 @@ fail:
   return st;
 }
 
+void mpm_sim_apply_strength(mpm_sim *sim, double t) {
+  if (!sim->has_strength) return;
+  for (int m = 0; m < sim->material_count; ++m) {
+    const double f = mpm_material_strength(&sim->scene.materials[m], t);
+    mpm_material *cur = &sim->materials[m];
+    *cur = sim->base_materials[m]; /* wave_speed stays the schedule's largest (the CFL bound) */
+    cur->mu = (mpm_real)(f * (double)cur->mu);
+    cur->lambda = (mpm_real)(f * (double)cur->lambda);
+  }
+}
+
 /* Release the active domain particles inside [lo, hi] whose body allows it at this time
  * (body < 0: any body, no time condition); the count released goes to *count. */
 static mpm_status release_box(mpm_sim *sim, int body, const double lo[3], const double hi[3],
@@ -276,6 +304,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);
   free(sim->colliders);
   free(sim->poses);
+  free(sim->base_materials);
   mpm_grid_free(&sim->grid);
   mpm_dofs_free(&sim->dofs);
   mpm_arena_free(&sim->step_arena);

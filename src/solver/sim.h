@@ -36,7 +36,9 @@ typedef struct mpm_solver_figures {
 struct mpm_sim {
   mpm_scene scene;
   mpm_particles particles;
-  mpm_material *materials;
+  mpm_material *materials;      /* as they are this step (strength schedules applied) */
+  mpm_material *base_materials; /* as the scene gives them */
+  int has_strength;             /* some material has a strength schedule */
   int material_count;
   mpm_collider *colliders;
   mpm_collider_pose *poses;
@@ -130,6 +132,10 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
  * arrays, as a step does). */
 struct mpm_implicit;
 mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, struct mpm_implicit *s);
+
+/* Scale the materials' moduli by their strength schedules at time t (sim.c); a no-op without
+ * schedules. */
+void mpm_sim_apply_strength(mpm_sim *sim, double t);
 
 /* Output bookkeeping for frame_count + 1 records (sim_output.c). */
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);

@@ -309,6 +309,7 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   if (mpm_arena_reset(&sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for step scratch",
                          (long long)sim->steps);
+  mpm_sim_apply_strength(sim, sim->time); /* the moduli of this step (strength schedules) */
   step_ctx c;
   step_setup(sim, dt, &c);
   double t = t0;
