@@ -158,12 +158,12 @@ static void test_command(void **state) {
   const char *dir = test_temp_dir("rest_error_cli");
   char scene[600], args[2048];
   snprintf(scene, sizeof scene, "%s/scene.json", dir);
-  write_file(scene,
-             "{\"domain\": {\"min\": [0,0,0], \"max\": [0.6,0.6,0.6], \"dx\": 0.05},"
-             " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
-             " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}],"
-             " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.3,0.3],"
-             " \"radius\": 0.1}, \"material\": \"m\", \"velocity\": [0.5, 0, 0]}]}");
+  write_file(scene, "{\"domain\": {\"min\": [0,0,0], \"max\": [0.6,0.6,0.6], \"dx\": 0.05},"
+                    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
+                    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+                    "\"nu\": 0.3, \"density\": 1000}],"
+                    " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.3,0.3],"
+                    " \"radius\": 0.1}, \"material\": \"m\", \"velocity\": [0.5, 0, 0]}]}");
   snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
   if (mpm(args) != 0) fail_msg("%s", output);
   snprintf(args, sizeof args, "error '%s/out' 0 2", dir);

@@ -203,8 +203,8 @@ typedef struct mpm_solver_desc {
   mpm_integrator_kind integrator;
   double dt;                           /* implicit: a fixed step, s (0 = CFL on particle speed) */
   int newton_iterations;               /* implicit: 1 = Zhu's linearized step; default 2 */
-  double cg_tolerance; /* implicit: CG's relative residual; 0 = automatic
-                          (mpm_solver_cg_tolerance) */
+  double cg_tolerance;                 /* implicit: CG's relative residual; 0 = automatic
+                                          (mpm_solver_cg_tolerance) */
   int cg_max_iterations;               /* implicit: default 500 */
   mpm_cg_failure_action on_cg_failure; /* implicit: warn (default) or stop */
 } mpm_solver_desc;
