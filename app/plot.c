@@ -2,9 +2,10 @@
  * (io/stats_csv.c) and draw them with gnuplot to PNG files in OUTDIR/plots/.
  *
  * The CSV is read and checked completely before anything is written: the header must be the
- * one mpm_write_stats_csv writes (20 columns; the 15 of files from before the implicit
- * integrator are read too), every row must have its fields and every field must be a
- * finite number (a bad file is an input error, exit 2, with the file and line named). Then:
+ * one mpm_write_stats_csv writes (21 columns; the 20 of files from before dynamic enrichment
+ * and the 15 of files from before the implicit integrator are read too), every row must have its
+ * fields and every field must be a finite number (a bad file is an input error, exit 2, with the
+ * file and line named). Then:
  *   1. find gnuplot on PATH (not found: exit 1, nothing written);
  *   2. create the plots directory and write two temporaries into it: a whitespace-separated
  *      data file with the derived columns (total energy; steps per frame, the difference of
@@ -62,6 +63,8 @@ enum {
   COL_CG_RESIDUAL,
   COL_NEWTON_MEAN,
   COL_CG_UNCONVERGED,
+  COL_SOLVER_COUNT, /* files written before dynamic enrichment end here */
+  COL_ENRICHED = COL_SOLVER_COUNT,
   COL_COUNT
 };
 
@@ -84,7 +87,8 @@ static const char *const column_names[COL_COUNT] = {"frame",
                                                     "cg_iterations_max",
                                                     "cg_residual_max",
                                                     "newton_iterations_mean",
-                                                    "cg_unconverged"};
+                                                    "cg_unconverged",
+                                                    "enriched_percent"};
 
 typedef struct stats_table {
   double (*rows)[COL_COUNT];
@@ -123,8 +127,8 @@ static int split_fields(char *line, char **fields, int max) {
   return n;
 }
 
-/* The header's columns: COL_COUNT, or COL_LEGACY_COUNT for a file of an earlier version (the
- * solver columns read as 0). */
+/* The header's columns: COL_COUNT, or COL_SOLVER_COUNT or COL_LEGACY_COUNT for a file of an
+ * earlier version (the columns it lacks read as 0). */
 static mpm_status check_header(const char *path, char *line, int *columns, mpm_error *err) {
   char *fields[COL_COUNT];
   const int n = split_fields(line, fields, COL_COUNT);
@@ -135,11 +139,12 @@ static mpm_status check_header(const char *path, char *line, int *columns, mpm_e
                            "%s: line 1: not an mpm stats header: column %d is '%.60s', expected "
                            "'%s'",
                            path, c + 1, fields[c], column_names[c]);
-  if (n != COL_COUNT && n != COL_LEGACY_COUNT)
+  if (n != COL_COUNT && n != COL_SOLVER_COUNT && n != COL_LEGACY_COUNT)
     return mpm_error_set(err, MPM_ERR_PARSE,
                          "%s: line 1: not an mpm stats header: %d columns, expected %d (frame, "
-                         "time, ..., cg_unconverged) or %d (frame, time, ..., wall_seconds)",
-                         path, n, COL_COUNT, COL_LEGACY_COUNT);
+                         "time, ..., enriched_percent), %d (frame, time, ..., cg_unconverged) or "
+                         "%d (frame, time, ..., wall_seconds)",
+                         path, n, COL_COUNT, COL_SOLVER_COUNT, COL_LEGACY_COUNT);
   return MPM_OK;
 }
 
@@ -284,7 +289,8 @@ enum {
   DAT_LY,
   DAT_LZ,
   DAT_STEPS,
-  DAT_WALL
+  DAT_WALL,
+  DAT_ENRICHED
 };
 
 /* One PNG: its curves are `using X:Y title T` items over the data file. */
@@ -299,7 +305,7 @@ typedef struct plot_spec {
   plot_curve curves[3];
 } plot_spec;
 
-enum { PLOT_COUNT = 6 };
+enum { PLOT_COUNT = 7 };
 
 static const plot_spec plots[PLOT_COUNT] = {
     {"energy.png",
@@ -335,6 +341,13 @@ static const plot_spec plots[PLOT_COUNT] = {
      "wall time (s)",
      0,
      {{DAT_FRAME, DAT_WALL, NULL}}},
+    /* Zhu et al. 2017 Figs. 6, 10 */
+    {"enriched.png",
+     "enriched domain particles",
+     "time (s)",
+     "enriched particles (%)",
+     0,
+     {{DAT_TIME, DAT_ENRICHED, NULL}}},
 };
 
 /* Derived data: one line per frame, '?' (gnuplot's missing value here) where undefined. */
@@ -350,9 +363,10 @@ static void write_data(FILE *f, const stats_table *t, int dt_log) {
             r[COL_KINETIC] + r[COL_ELASTIC]);
     for (int c = COL_PX; c <= COL_LZ; ++c) fprintf(f, " %.17g", r[c]);
     if (i == 0)
-      fputs(" ? ?\n", f);
+      fputs(" ? ?", f);
     else
-      fprintf(f, " %.17g %.17g\n", r[COL_STEPS] - t->rows[i - 1][COL_STEPS], r[COL_WALL]);
+      fprintf(f, " %.17g %.17g", r[COL_STEPS] - t->rows[i - 1][COL_STEPS], r[COL_WALL]);
+    fprintf(f, " %.17g\n", r[COL_ENRICHED]);
   }
 }
 

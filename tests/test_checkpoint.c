@@ -12,6 +12,7 @@
 #include "solver/sim.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <sys/resource.h>
@@ -481,9 +482,11 @@ static void test_resume_fallbacks_and_refusals(void **state) {
   assert_int_equal(mpm(args), 2);
 }
 
-/* Particle domains (Zhu et al.) are part of the state: a bar with domains, half of them
- * switched off during the run, resumed from a checkpoint ends with the same frames and domain
- * meshes as an uninterrupted run. */
+/* Particle domains (Zhu et al.) are part of the state: a bar with domains, dragged by a grip,
+ * enriched (epsilon 1; Zhu sec. 5: the marks are a function of the state, recomputed on
+ * resume) and half of them switched off during the run, resumed from a checkpoint ends with
+ * the same frames, domain meshes (with their enrichment categories) and stats as an
+ * uninterrupted run. */
 static void test_resume_with_domains(void **state) {
   (void)state;
   const char *dir = test_temp_dir("checkpoint_domains");
@@ -497,6 +500,7 @@ static void test_resume_with_domains(void **state) {
              "2e4, \"nu\": 0.3, \"density\": 1000}],"
              " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.8, 0.5, 0.5], "
              "\"half_extent\": [0.2, 0.04, 0.04]}, \"material\": \"rubber\", \"domains\": true,"
+             " \"enrichment\": 1,"
              " \"domain_release\": [{\"time\": 0.5, \"min\": [0.9, 0, 0], \"max\": [2, 1, 1]}]}],"
              " \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": [0.6, 0.5, 0.5], "
              "\"half_extent\": [0.05, 0.08, 0.08]}, \"rule\": \"sticky\", \"motion\": "
@@ -517,6 +521,20 @@ static void test_resume_with_domains(void **state) {
     snprintf(b, sizeof b, "%s/domains_%04d.vtu", part, f);
     if (!same_file(a, b)) fail_msg("%s and %s differ", a, b);
   }
+  /* the run enriched: the last frames report enriched particles */
+  char path[700];
+  snprintf(path, sizeof path, "%s/stats.csv", full);
+  FILE *fp = fopen(path, "r");
+  assert_non_null(fp);
+  char line[1024];
+  double enriched = 0;
+  while (fgets(line, sizeof line, fp)) {
+    const char *last = strrchr(line, ',');
+    if (last && line[0] != 'f') enriched = fmax(enriched, atof(last + 1));
+  }
+  fclose(fp);
+  print_message("largest enriched_percent of the run: %g\n", enriched);
+  assert_true(enriched > 0);
 }
 
 int main(void) {

@@ -64,9 +64,10 @@ static mpm_sim *domain_block(const char *action) {
   const char *key = "\"material\": \"jello\"}";
   const char *at = strstr(text, key);
   assert_non_null(at);
-  char fixed[2100]; /* the body with "domains": true added */
-  snprintf(fixed, sizeof fixed, "%.*s\"material\": \"jello\", \"domains\": true}%s",
-           (int)(at - text), text, at + strlen(key));
+  char fixed[2100]; /* the body with "domains": true added (not enriched: the dt of the grid) */
+  snprintf(fixed, sizeof fixed,
+           "%.*s\"material\": \"jello\", \"domains\": true, \"enrichment\": 0}%s", (int)(at - text),
+           text, at + strlen(key));
   mpm_scene scene;
   mpm_error err;
   if (mpm_scene_parse(fixed, "block.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);

@@ -223,7 +223,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
   const size_t rs = sizeof(mpm_real);
   assert_int_equal(v.points, (long)n);
   assert_int_equal(v.cells, (long)n);
-  assert_int_equal(v.narrays, 14);
+  assert_int_equal(v.narrays, 15);
 
   const parsed_array *t = find_array(&v, "TIME", "FieldData", "Float64", 1, 1, 8);
   double tv;
@@ -240,6 +240,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
   const parsed_array *pl = find_array(&v, "plastic", "PointData", real_type(), 1, n, rs);
   const parsed_array *mat = find_array(&v, "material", "PointData", "Int32", 1, n, 4);
   const parsed_array *body = find_array(&v, "body", "PointData", "Int32", 1, n, 4);
+  const parsed_array *enr = find_array(&v, "enrichment", "PointData", "Int32", 1, n, 4);
   const parsed_array *conn = find_array(&v, "connectivity", "Cells", "Int64", 1, n, 8);
   const parsed_array *offs = find_array(&v, "offsets", "Cells", "Int64", 1, n, 8);
   const parsed_array *types = find_array(&v, "types", "Cells", "UInt8", 1, n, 1);
@@ -260,6 +261,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
     assert_true(real_at(pl, i) == p->plastic[i]);
     assert_int_equal(i32_at(mat, i), p->material[i]);
     assert_int_equal(i32_at(body, i), p->body[i]);
+    assert_int_equal(i32_at(enr, i), -1); /* no categories given: material points */
     assert_int_equal(i64_at(conn, i), (int64_t)i);
     assert_int_equal(i64_at(offs, i), (int64_t)i + 1);
     assert_int_equal(types->data[i], 1);
@@ -278,7 +280,7 @@ static void test_vtu_roundtrip(void **state) {
   const char *dir = test_temp_dir("io-vtu");
   char path[600];
   join(path, sizeof path, dir, "frame_0003.vtu");
-  mpm_frame_fields ff = {&p, J, stress, 0.041666666666666664};
+  mpm_frame_fields ff = {&p, J, stress, 0.041666666666666664, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_vtu(path, &ff, &err), MPM_OK);
   check_vtu(path, &p, J, stress, ff.time);
@@ -295,7 +297,7 @@ static void test_vtu_empty(void **state) {
   const char *dir = test_temp_dir("io-vtu-empty");
   char path[600];
   join(path, sizeof path, dir, "empty.vtu");
-  mpm_frame_fields ff = {&p, NULL, NULL, 2.5};
+  mpm_frame_fields ff = {&p, NULL, NULL, 2.5, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_vtu(path, &ff, &err), MPM_OK);
   check_vtu(path, &p, NULL, NULL, 2.5);
@@ -312,7 +314,7 @@ static void test_vtu_default_fields(void **state) {
   const char *dir = test_temp_dir("io-vtu-default");
   char path[600];
   join(path, sizeof path, dir, "f.vtu");
-  mpm_frame_fields ff = {&p, NULL, NULL, 0.0};
+  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_vtu(path, &ff, &err), MPM_OK);
   check_vtu(path, &p, NULL, NULL, 0.0);
@@ -333,7 +335,7 @@ static void test_vtu_small_buffer(void **state) {
   const char *dir = test_temp_dir("io-vtu-mem");
   char path[600];
   join(path, sizeof path, dir, "big.vtu");
-  mpm_frame_fields ff = {&p, NULL, NULL, 1.0};
+  mpm_frame_fields ff = {&p, NULL, NULL, 1.0, NULL};
   mpm_error err = {0};
   const size_t live = mpm_alloc_live_bytes();
   mpm_alloc_reset_peak();
@@ -403,7 +405,7 @@ static void test_ply(void **state) {
   const char *dir = test_temp_dir("io-ply");
   char path[600];
   join(path, sizeof path, dir, "frame_0000.ply");
-  mpm_frame_fields ff = {&p, NULL, NULL, 0.25};
+  mpm_frame_fields ff = {&p, NULL, NULL, 0.25, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_ply_points(path, &ff, &err), MPM_OK);
 
@@ -451,7 +453,8 @@ static void test_ply(void **state) {
 static const char csv_header[] =
     "frame,time,steps,dt,kinetic_energy,elastic_energy,momentum_x,momentum_y,momentum_z,"
     "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds,"
-    "cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,cg_unconverged";
+    "cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,cg_unconverged,"
+    "enriched_percent";
 
 static void test_stats_csv(void **state) {
   (void)state;
@@ -478,6 +481,7 @@ static void test_stats_csv(void **state) {
     r->cg_residual_max = 1e-5 * (i + 1);
     r->newton_iterations_mean = 1.5;
     r->cg_unconverged = i;
+    r->enriched_percent = 12.5 * i;
   }
   const char *dir = test_temp_dir("io-csv");
   char path[600];
@@ -496,16 +500,16 @@ static void test_stats_csv(void **state) {
   while ((line = strtok_r(NULL, "\n", &save))) {
     assert_true(k < ROWS);
     const mpm_stats_row *r = &rows[k++];
-    double f[20];
+    double f[21];
     int nf = 0;
     char *save2 = NULL;
     for (char *c = strtok_r(line, ",", &save2); c; c = strtok_r(NULL, ",", &save2)) {
-      assert_true(nf < 20);
+      assert_true(nf < 21);
       f[nf++] = strtod(c, NULL);
       if (nf == 3) assert_int_equal(strtoll(c, NULL, 10), r->steps);
       if (nf == 14) assert_int_equal(strtoull(c, NULL, 10), r->particles);
     }
-    assert_int_equal(nf, 20);
+    assert_int_equal(nf, 21);
     assert_int_equal((int)f[0], r->frame);
     const double rel = 1e-8;
     assert_close(f[1], r->time, rel * r->time);
@@ -523,6 +527,7 @@ static void test_stats_csv(void **state) {
     assert_close(f[17], r->cg_residual_max, 1e-5 * r->cg_residual_max);
     assert_close(f[18], r->newton_iterations_mean, 1e-5);
     assert_int_equal((long long)f[19], r->cg_unconverged);
+    assert_close(f[20], r->enriched_percent, 1e-9);
   }
   assert_int_equal(k, ROWS);
   free(text);

@@ -1,4 +1,4 @@
-/* test_plot.c - `mpm plot OUTDIR` as users run it: the six PNGs from a synthetic stats.csv and
+/* test_plot.c - `mpm plot OUTDIR` as users run it: the seven PNGs from a synthetic stats.csv and
  * from a real short run, exit code 2 with the file and line named for a missing directory or a
  * corrupt stats.csv (and no plots directory made), exit code 1 when gnuplot is not on PATH or
  * fails (its messages shown, earlier plots kept, no temporaries left), usage errors.
@@ -13,8 +13,9 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 
-static const char *const png_files[] = {"energy.png", "momentum.png",        "angular_momentum.png",
-                                        "dt.png",     "steps_per_frame.png", "wall_per_frame.png"};
+static const char *const png_files[] = {
+    "energy.png",          "momentum.png",       "angular_momentum.png", "dt.png",
+    "steps_per_frame.png", "wall_per_frame.png", "enriched.png"};
 enum { PNG_COUNT = sizeof png_files / sizeof png_files[0] };
 
 static const char stats_header[] =
@@ -46,7 +47,7 @@ static void write_stats(const char *dir, int frames) {
   fclose(f);
 }
 
-/* All six PNGs in dir, non-empty, with the PNG signature; nothing else there (no temporaries
+/* All seven PNGs in dir, non-empty, with the PNG signature; nothing else there (no temporaries
  * left behind). */
 static void expect_pngs(const char *dir) {
   static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};

@@ -80,4 +80,28 @@ MPM_ALWAYS_INLINE int mpm_boundary_constraints(const mpm_boundary *b, const mpm_
   return count;
 }
 
+/* The velocity v of a point at x that moves by dt v, corrected so that it ends on the surface
+ * of a slip or separating collider it would enter (v -= (phi(x + dt v) / dt) n) and on the
+ * plane of a slip or separating domain wall it would cross (Zhu sec. 7: collided domain
+ * corners are projected to the surface along the normal; as a velocity, so that F, which the
+ * same velocity updates, sees the projection). Sticky obstacles hold what they grip: nothing
+ * is moved. For points that no grid node carries: enriched domain corners. */
+MPM_ALWAYS_INLINE void mpm_boundary_project_motion(const mpm_boundary *b, const mpm_real x[3],
+                                                   mpm_real dt, mpm_real v[3]) {
+  for (int c = 0; c < b->collider_count; ++c) {
+    if (b->poses[c].collider->desc.rule == MPM_BOUNDARY_STICKY) continue;
+    const mpm_real y[3] = {x[0] + dt * v[0], x[1] + dt * v[1], x[2] + dt * v[2]};
+    mpm_real n[3];
+    const mpm_real phi = mpm_collider_phi(&b->poses[c], y, n);
+    if (phi < 0)
+      for (int d = 0; d < 3; ++d) v[d] -= phi / dt * n[d];
+  }
+  if (b->wall_rule == MPM_BOUNDARY_STICKY) return;
+  for (int d = 0; d < 3; ++d) {
+    const mpm_real y = x[d] + dt * v[d];
+    if (y < b->wall_lo[d]) v[d] = (b->wall_lo[d] - x[d]) / dt;
+    if (y > b->wall_hi[d]) v[d] = (b->wall_hi[d] - x[d]) / dt;
+  }
+}
+
 #endif

@@ -1,6 +1,7 @@
 /* domain.c - building particle domains from a body's lattice, their weights, switching them
  * off (see domain.h). */
 #include "domain/domain.h"
+#include "domain/enrich.h"
 #include "domain/lattice_map.h"
 #include "core/alloc.h"
 
@@ -39,6 +40,7 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_free(s->adj);
   mpm_free(s->corner_use);
   mpm_embedding_free(&s->corner_grid);
+  mpm_enrichment_free(&s->enrich);
   memset(s, 0, sizeof *s);
 }
 
@@ -328,5 +330,6 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
 }
 
 int mpm_domain_set_rebuild(mpm_domain_set *s) {
+  s->enrich.valid = 0; /* other particles, other corners: the marks are stale */
   return build_adjacency(s);
 }

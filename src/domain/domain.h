@@ -25,6 +25,33 @@
 
 #include <stdint.h>
 
+/* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */
+typedef struct mpm_domain_enrichment {
+  mpm_real *epsilon; /* per body: enriched when K(F) <= epsilon (0: never) */
+  mpm_real *spacing; /* per body: the domain lattice's spacing h, m */
+  int body_count;
+  int any;             /* some body has epsilon > 0 */
+  uint8_t *flag;       /* per particle: K(F_p) <= epsilon of its body */
+  uint8_t *category;   /* per particle: MPM_DOMAIN_UNENRICHED / TRANSITIONAL / ENRICHED */
+  uint8_t *enriched;   /* per corner: 1 when it is a DOF of its own this step */
+  uint8_t *on_grid;    /* per corner: used and not enriched (it is embedded in the grid) */
+  uint32_t *corner;    /* the enriched corners in corner order: k -> corner */
+  uint32_t *slot;      /* per enriched corner c: its k (other corners: unspecified) */
+  mpm_real *x[3];      /* their positions, in that order (the DOF segment's) */
+  size_t count;        /* enriched corners */
+  size_t dof_begin;    /* the DOF index of enriched corner 0 (set by the layout) */
+  size_t particles[3]; /* active particles per category */
+  /* the explicit step's bound from the enriched corners: max over particles with an enriched
+   * corner of c / (h s^2), s = min(sigma_min(F), 1) (1/s: the corners are h s apart, and the
+   * stiffness of a compressed particle grows like 1/s^2), 1/s; dt <= cfl / rate */
+  double rate;
+  size_t particle_capacity, corner_capacity;
+  /* the marks are those of the state at the start of step `marked_step` (valid: 1); a rebuild
+   * of the set (releases) makes them stale */
+  int valid;
+  long long marked_step;
+} mpm_domain_enrichment;
+
 typedef struct mpm_domain_set {
   mpm_particles particles;             /* the domain particles */
   uint32_t (*corner)[MPM_HEX_CORNERS]; /* corner indices of each particle's hexahedron */
@@ -46,6 +73,7 @@ typedef struct mpm_domain_set {
    * nodes of corner a's stencil and their weights omega_i(x_a); rows of unused corners are
    * empty), and its scatter schedule: corners keyed by base block, blocks coloured by parity */
   mpm_embedding corner_grid;
+  mpm_domain_enrichment enrich;
 } mpm_domain_set;
 
 void mpm_domain_set_init(mpm_domain_set *s);

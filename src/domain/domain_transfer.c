@@ -9,7 +9,9 @@
 
 int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
   const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]};
-  return g->ops->activate_points(g, k, s->corner_count, x, s->corner_use);
+  /* enriched corners (domain/enrich.h) do not touch the grid */
+  const uint8_t *use = s->enrich.count ? s->enrich.on_grid : s->corner_use;
+  return g->ops->activate_points(g, k, s->corner_count, x, use);
 }
 
 /* The embedding of the corners in the grid level (Zhu eqs. 2-3): row c holds the nodes of
@@ -29,6 +31,9 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
           *key_colour = mpm_arena_alloc(scratch, nk + 1);
   if (!key || !colour || !key_colour) return -1;
   const uint32_t dof_begin = (uint32_t)g->dof_begin;
+  const mpm_domain_enrichment *en = &s->enrich;
+  const int enriched = en->count > 0;
+  const uint32_t corner_dofs = (uint32_t)en->dof_begin;
   int missing = 0; /* a node not activated: cannot happen after mpm_domain_activate */
 #pragma omp parallel reduction(| : missing)
   {
@@ -38,6 +43,11 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
     for (long c = 0; c < (long)nc; ++c) {
       key[c] = -1;
       if (!s->corner_use[c]) continue;
+      if (enriched && en->enriched[c]) { /* its own DOF: an identity row (Zhu sec. 5.2) */
+        mpm_embedding_push(E, (size_t)c, corner_dofs + en->slot[c], 1);
+        key[c] = MPM_EMBEDDING_OWN_COLUMNS;
+        continue;
+      }
       const mpm_real xr[3] = {s->cx[0][c] - g->origin[0], s->cx[1][c] - g->origin[1],
                               s->cx[2][c] - g->origin[2]};
       mpm_stencil st;
@@ -128,6 +138,8 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
   const long nc = (long)s->corner_count;
   const mpm_embedding *E = &s->corner_grid;
   const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
+  const mpm_domain_enrichment *en = &s->enrich;
+  const int enriched = en->count > 0;
   /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
   mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
 #pragma omp parallel for schedule(static) reduction(max : max_v2)
@@ -157,9 +169,16 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
      * corners, which applies the collision impulse to them. The corner moves with the grid
      * velocity (which the grid update already made obey the boundary), as F does: F stays the
      * gradient of the corner positions (F = sum_a x_a g_ap^T) */
-    const mpm_real vg[3] = {vnew[0], vnew[1], vnew[2]};
+    mpm_real vg[3] = {vnew[0], vnew[1], vnew[2]};
     const mpm_real xn[3] = {s->cx[0][c], s->cx[1][c], s->cx[2][c]};
     mpm_boundary_apply(boundary, xn, 0, v);
+    /* an enriched corner moves with its own velocity, which obeyed the obstacles only where
+     * the step began: its motion is projected back to any surface it would cross (Zhu
+     * sec. 7), in the velocity F takes too */
+    if (enriched && en->enriched[c]) {
+      mpm_boundary_project_motion(boundary, xn, dt, vg);
+      for (int d = 0; d < 3; ++d) s->cvg[d][c] = vg[d];
+    }
     const mpm_real vg2 = vg[0] * vg[0] + vg[1] * vg[1] + vg[2] * vg[2];
     if (vg2 > max_v2) max_v2 = vg2;
     for (int d = 0; d < 3; ++d) {

@@ -18,6 +18,7 @@ void mpm_embedding_free(mpm_embedding *E) {
   mpm_free(E->group_row);
   mpm_free(E->group_start);
   mpm_free(E->key_group);
+  mpm_free(E->own_row);
   memset(E, 0, sizeof *E);
 }
 
@@ -25,7 +26,7 @@ size_t mpm_embedding_bytes(const mpm_embedding *E) {
   return E->row_capacity * 2 * sizeof(uint32_t) +
          E->entry_capacity * (sizeof(uint32_t) + sizeof(mpm_real)) +
          (E->group_row_capacity + E->group_capacity) * sizeof(uint32_t) +
-         E->key_capacity * sizeof(int32_t);
+         E->key_capacity * sizeof(int32_t) + E->own_row_capacity * sizeof(uint32_t);
 }
 
 /* Grow a buffer of `size`-byte items to hold `need`, without keeping its contents. */
@@ -83,12 +84,20 @@ int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_coun
   /* the keys in use, numbered as groups in colour order, then key order */
   int32_t *kg = E->key_group;
   for (size_t k = 0; k < key_count; ++k) kg[k] = -1;
-  size_t used_rows = 0;
+  size_t used_rows = 0, own = 0;
   for (size_t a = 0; a < rows; ++a)
     if (key[a] >= 0) {
       kg[key[a]] = 0;
       ++used_rows;
+    } else if (key[a] == MPM_EMBEDDING_OWN_COLUMNS) {
+      ++own;
     }
+  cap = E->own_row_capacity;
+  if (reserve((void **)&E->own_row, &cap, own + 1, sizeof(uint32_t))) return -1;
+  E->own_row_capacity = cap;
+  E->own_rows = 0;
+  for (size_t a = 0; a < rows; ++a)
+    if (key[a] == MPM_EMBEDDING_OWN_COLUMNS) E->own_row[E->own_rows++] = (uint32_t)a;
   size_t groups = 0;
   for (int colour = 0; colour < MPM_EMBEDDING_COLOURS; ++colour) {
     E->colour_start[colour] = groups;
@@ -140,6 +149,9 @@ void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *c
       for (uint32_t j = E->group_start[q]; j < E->group_start[q + 1]; ++j)
         scatter_row(E, E->group_row[j], fields, c, u);
   }
+  const long own = (long)E->own_rows;
+#pragma omp parallel for schedule(static) if (own >= MPM_PARALLEL_MIN)
+  for (long j = 0; j < own; ++j) scatter_row(E, E->own_row[j], fields, c, u);
 }
 
 void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,

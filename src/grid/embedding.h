@@ -47,7 +47,15 @@ typedef struct mpm_embedding {
   int32_t *key_group;
   size_t group_row_capacity, group_capacity, key_capacity;
   size_t colour_start[MPM_EMBEDDING_COLOURS + 1];
+  /* rows whose columns no other row has (key MPM_EMBEDDING_OWN_COLUMNS): scattered last, all
+   * in parallel */
+  uint32_t *own_row;
+  size_t own_rows, own_row_capacity;
 } mpm_embedding;
+
+/* The key of a row whose columns belong to it alone (an enriched corner's identity row, Zhu
+ * sec. 5: the corner is its own DOF): it needs no colour. */
+#define MPM_EMBEDDING_OWN_COLUMNS (-2)
 
 void mpm_embedding_init(mpm_embedding *E);
 void mpm_embedding_free(mpm_embedding *E);
@@ -65,11 +73,12 @@ static inline void mpm_embedding_push(mpm_embedding *E, size_t a, uint32_t col, 
   E->w[e] = w;
 }
 
-/* The scatter's schedule: rows with key[a] < 0 take no part (their values are not scattered);
- * the others are grouped by key (0 <= key < key_count), groups numbered by colour
- * (key_colour[key] in 0..MPM_EMBEDDING_COLOURS-1) then by key, the rows of a group in row order.
- * The caller guarantees that rows in groups of one colour share no column. 0, or -1 when out
- * of memory. */
+/* The scatter's schedule: rows with key[a] == MPM_EMBEDDING_OWN_COLUMNS are scattered after the
+ * groups, in parallel (the caller guarantees that no other row has their columns); other rows
+ * with key[a] < 0 take no part (their values are not scattered); the others are grouped by key (0
+ * <= key < key_count), groups numbered by colour (key_colour[key] in 0..MPM_EMBEDDING_COLOURS-1)
+ * then by key, the rows of a group in row order. The caller guarantees that rows in groups of one
+ * colour share no column. 0, or -1 when out of memory. */
 int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
                            const uint8_t *key_colour);
 

@@ -39,7 +39,8 @@ void mpm_ckpt_stats_to_row(const mpm_stats_row *s, double out[MPM_CKPT_STATS_COL
                                             s->cg_iterations_max,
                                             s->cg_residual_max,
                                             s->newton_iterations_mean,
-                                            (double)s->cg_unconverged};
+                                            (double)s->cg_unconverged,
+                                            s->enriched_percent};
   memcpy(out, v, sizeof v);
 }
 
@@ -62,6 +63,7 @@ void mpm_ckpt_row_to_stats(const double v[MPM_CKPT_STATS_COLUMNS], mpm_stats_row
   s->cg_residual_max = v[17];
   s->newton_iterations_mean = v[18];
   s->cg_unconverged = (long long)v[19];
+  s->enriched_percent = v[20];
 }
 
 /* Datasets carry Fletcher-32 checksums; the scalar attributes are covered by this one. */

@@ -30,14 +30,16 @@ mpm_status mpm_make_dirs(const char *path, mpm_error *err);
 /* ---- per-particle fields written with a frame ---- */
 typedef struct mpm_frame_fields {
   const mpm_particles *particles;
-  const mpm_real *J;      /* det F per particle */
-  const mpm_real *stress; /* von Mises stress per particle, Pa */
-  double time;            /* s */
+  const mpm_real *J;         /* det F per particle */
+  const mpm_real *stress;    /* von Mises stress per particle, Pa */
+  double time;               /* s */
+  const int32_t *enrichment; /* Zhu sec. 5.2 category per particle: 0 unenriched, 1
+                                transitional, 2 enriched, -1 a material point; NULL: all -1 */
 } mpm_frame_fields;
 
 /* VTK UnstructuredGrid, one vertex cell per particle, binary appended raw data with
  * Float32/Float64 per the real type: points; point data id, velocity, mass, volume (current,
- * V0 J), J, stress, plastic (the model's plastic state), material, body. */
+ * V0 J), J, stress, plastic (the model's plastic state), material, body, enrichment. */
 mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err);
 
 /* ParaView collection listing the frame files written so far (file names relative to the
@@ -69,6 +71,9 @@ typedef struct mpm_stats_row {
   int cg_iterations_max;
   double cg_residual_max;   /* largest final relative CG residual */
   long long cg_unconverged; /* steps whose CG stopped short of the tolerance */
+  /* dynamic enrichment (Zhu Figs. 6, 10): enriched domain particles at the frame's time, in
+   * percent of the active domain particles (0 without domains) */
+  double enriched_percent;
 } mpm_stats_row;
 
 /* Rewrites the whole CSV (header + rows) atomically; rows are kept by the caller. */

@@ -13,7 +13,7 @@ static const char stats_header[] =
     "frame,time,steps,dt,kinetic_energy,elastic_energy,momentum_x,momentum_y,momentum_z,"
     "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds,"
     "cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,"
-    "cg_unconverged\n";
+    "cg_unconverged,enriched_percent\n";
 
 mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row *rows,
                                mpm_error *err) {
@@ -31,12 +31,12 @@ mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row 
     errno = 0;
     if (fprintf(af.fp,
                 "%d,%.9g,%lld,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,"
-                "%.9g,%.6g,%d,%.6g,%.6g,%lld\n",
+                "%.9g,%.6g,%d,%.6g,%.6g,%lld,%.6g\n",
                 r->frame, r->time, r->steps, r->dt, r->kinetic, r->elastic, r->momentum[0],
                 r->momentum[1], r->momentum[2], r->angular_momentum[0], r->angular_momentum[1],
                 r->angular_momentum[2], r->mass, r->particles, r->wall_seconds,
                 r->cg_iterations_mean, r->cg_iterations_max, r->cg_residual_max,
-                r->newton_iterations_mean, r->cg_unconverged) < 0)
+                r->newton_iterations_mean, r->cg_unconverged, r->enriched_percent) < 0)
       werr = errno ? errno : EIO;
   }
   if (werr) {

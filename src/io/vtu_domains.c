@@ -38,10 +38,11 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
   for (size_t i = 0; i < s->particles.count; ++i) ncell += s->active[i] != 0;
   const size_t R = sizeof(mpm_real);
   /* byte sizes of the arrays, in appended order, and their offsets */
-  const uint64_t sizes[10] = {sizeof(double), 3 * nc * R, 3 * nc * R,    ncell * 4, ncell * R,
-                              ncell * 4,      ncell * 4,  8 * ncell * 8, ncell * 8, ncell};
-  uint64_t off[10], at = 0;
-  for (int k = 0; k < 10; ++k) {
+  const uint64_t sizes[11] = {sizeof(double), 3 * nc * R, 3 * nc * R, ncell * 4,
+                              ncell * R,      ncell * 4,  ncell * 4,  8 * ncell * 8,
+                              ncell * 8,      ncell,      ncell * 4};
+  uint64_t off[11], at = 0;
+  for (int k = 0; k < 11; ++k) {
     off[k] = at;
     at += 8 + sizes[k];
   }
@@ -75,6 +76,8 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
       "        <DataArray type=\"Int32\" Name=\"material\" format=\"appended\" "
       "offset=\"%llu\"/>\n"
       "        <DataArray type=\"Int32\" Name=\"body\" format=\"appended\" offset=\"%llu\"/>\n"
+      "        <DataArray type=\"Int32\" Name=\"enrichment\" format=\"appended\" "
+      "offset=\"%llu\"/>\n"
       "      </CellData>\n"
       "      <Cells>\n"
       "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" "
@@ -88,8 +91,8 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
       "  <AppendedData encoding=\"raw\">\n_",
       (unsigned long long)off[0], nc, ncell, REAL_TYPE, (unsigned long long)off[1], REAL_TYPE,
       (unsigned long long)off[2], (unsigned long long)off[3], REAL_TYPE, (unsigned long long)off[4],
-      (unsigned long long)off[5], (unsigned long long)off[6], (unsigned long long)off[7],
-      (unsigned long long)off[8], (unsigned long long)off[9]);
+      (unsigned long long)off[5], (unsigned long long)off[6], (unsigned long long)off[10],
+      (unsigned long long)off[7], (unsigned long long)off[8], (unsigned long long)off[9]);
   put(&o, head, strlen(head));
   put_count(&o, sizes[0]);
   put(&o, &time, sizeof time);
@@ -136,6 +139,14 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
   put_count(&o, sizes[9]);
   const uint8_t hex = 12; /* VTK_HEXAHEDRON */
   for (size_t k = 0; k < ncell; ++k) put(&o, &hex, 1);
+  /* the enrichment category of each domain (Zhu sec. 5.2: 0 unenriched, 1 transitional, 2
+   * enriched), from the marks of the set's current F (domain/enrich.h) */
+  put_count(&o, sizes[10]);
+  for (size_t i = 0; i < p->count; ++i)
+    if (s->active[i]) {
+      const int32_t cat = s->enrich.category ? s->enrich.category[i] : 0;
+      put(&o, &cat, sizeof cat);
+    }
   put(&o, "\n  </AppendedData>\n</VTKFile>\n", strlen("\n  </AppendedData>\n</VTKFile>\n"));
   if (o.err) {
     mpm_atomic_abort(&f);

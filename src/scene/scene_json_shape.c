@@ -16,17 +16,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const BODY_KEYS[] = {"name",
-                                        "shape",
-                                        "material",
-                                        "velocity",
-                                        "angular_velocity",
-                                        "particles_per_cell",
-                                        "jitter",
-                                        "seed",
-                                        "domains",
-                                        "domain_release",
-                                        NULL};
+static const char *const BODY_KEYS[] = {
+    "name",   "shape", "material", "velocity",       "angular_velocity", "particles_per_cell",
+    "jitter", "seed",  "domains",  "domain_release", "enrichment",       NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", "active",     NULL};
@@ -407,6 +399,14 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
     return -1;
   b->seed = (unsigned)seed;
   if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 || parse_releases(c, node, b) < 0)
+    return -1;
+  b->enrichment = b->domains ? 0.6 : 0; /* Zhu sec. 5.1: epsilon typically 0.6 */
+  if (mpm_json_get(node, "enrichment") && !b->domains)
+    return mpm_json_fail_at(c, "enrichment", MPM_ERR_INVALID,
+                            "applies only to a body with \"domains\": true");
+  if (mpm_json_number(c, node, "enrichment", 0,
+                      mpm_json_in('[', 0, 1, ']', "threshold on the enrichment metric K(F)"),
+                      &b->enrichment) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,

@@ -2,9 +2,12 @@
 #include "solver/explicit_update.h"
 #include "core/parallel.h"
 
-/* DOF i (mass m, position x) of a segment with the given boundary depth. */
+/* DOF i (mass m, position x) of a segment with the given boundary depth. With `ahead` the
+ * boundary acts where the step takes the DOF, x + dt v (domain corners, which move with their
+ * own velocity: a grid node's band of half a cell is what stops material before an obstacle;
+ * a corner has none). */
 MPM_ALWAYS_INLINE void update_dof(const mpm_explicit_update *u, const int impulse, mpm_dofs *d,
-                                  size_t i, const mpm_real x[3], mpm_real depth) {
+                                  size_t i, const mpm_real x[3], mpm_real depth, int ahead) {
   const mpm_real mass = d->mass[i];
   if (!(mass > 0)) {
     for (int c = 0; c < 3; ++c) d->v0[c][i] = d->v[c][i] = 0;
@@ -17,7 +20,12 @@ MPM_ALWAYS_INLINE void update_dof(const mpm_explicit_update *u, const int impuls
     v[c] = impulse ? v0[c] + u->dt * u->gravity[c]
                    : v0[c] + u->dt * (d->f[c][i] * inv_m + u->gravity[c]);
   }
-  mpm_boundary_apply(&u->boundary, x, depth, v);
+  if (ahead) {
+    const mpm_real y[3] = {x[0] + u->dt * v[0], x[1] + u->dt * v[1], x[2] + u->dt * v[2]};
+    mpm_boundary_apply(&u->boundary, y, depth, v);
+  } else {
+    mpm_boundary_apply(&u->boundary, x, depth, v);
+  }
   for (int c = 0; c < 3; ++c) {
     d->v0[c][i] = v0[c];
     d->v[c][i] = v[c];
@@ -40,7 +48,7 @@ static void update_grid_segment(const mpm_explicit_update *u, const int impulse,
           const int32_t idx[3] = {box.lo[0] + a, box.lo[1] + e, box.lo[2] + c};
           mpm_real x[3];
           mpm_grid_node_position(g, idx, x);
-          update_dof(u, impulse, d, i, x, depth);
+          update_dof(u, impulse, d, i, x, depth, 0);
         }
   }
 }
@@ -51,7 +59,7 @@ static void update_corner_segment(const mpm_explicit_update *u, const int impuls
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < n; ++k) {
     const mpm_real x[3] = {s->x[0][k], s->x[1][k], s->x[2][k]};
-    update_dof(u, impulse, d, s->begin + (size_t)k, x, s->boundary_depth);
+    update_dof(u, impulse, d, s->begin + (size_t)k, x, s->boundary_depth, 1);
   }
 }
 

@@ -49,6 +49,8 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
                            (long long)sim->steps, sim->time, sim->frame, sim->frame_count);
     double remaining = end - sim->time;
     /* after an unstable step the retry guard runs on halved steps for a while */
+    const mpm_status marked = mpm_sim_mark_enrichment(sim); /* they bound dt */
+    if (marked != MPM_OK) return marked;
     double dt = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
     const mpm_solver_desc *sd = &sim->scene.solver;
     if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) {

@@ -18,6 +18,7 @@ static int dof_positions(mpm_implicit *s, mpm_real *x[3], mpm_real **depth) {
   }
   *depth = mpm_arena_alloc(s->arena, (d->count + 1) * sizeof(mpm_real));
   if (!*depth) return -1;
+  s->corner_begin = d->count;
   for (int k = 0; k < d->segment_count; ++k) {
     const mpm_dof_segment *sg = &d->segment[k];
     if (sg->kind == MPM_DOF_GRID_NODE) {
@@ -38,6 +39,7 @@ static int dof_positions(mpm_implicit *s, mpm_real *x[3], mpm_real **depth) {
             }
       }
     } else {
+      if (sg->begin < s->corner_begin) s->corner_begin = sg->begin;
       for (size_t j = 0; j < sg->count; ++j) {
         for (int t = 0; t < 3; ++t) x[t][sg->begin + j] = sg->x[t][j];
         (*depth)[sg->begin + j] = sg->boundary_depth;
@@ -99,8 +101,11 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
   for (long i = 0; i < n; ++i) {
     flag[i] = 0;
     if (!(d->mass[i] > 0)) continue;
-    const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
     mpm_real vi[3] = {v[0][i], v[1][i], v[2][i]}, nn[4][3], vo[4][3];
+    /* a corner DOF is constrained where the predicted step takes it (explicit_update.c) */
+    const mpm_real ahead = (size_t)i >= s->corner_begin ? s->dt : 0;
+    const mpm_real x[3] = {s->px[0][i] + ahead * vi[0], s->px[1][i] + ahead * vi[1],
+                           s->px[2][i] + ahead * vi[2]};
     const int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], vi, nn, vo);
     flag[i] = (uint8_t)constrain_dof(count, nn, vo, vi, P[i]);
     for (int c = 0; c < 3; ++c) v[c][i] = vi[c];
@@ -219,8 +224,10 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
     if (!(d->mass[i] > 0)) continue;
-    const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
     mpm_real v[3] = {d->v[0][i], d->v[1][i], d->v[2][i]};
+    const mpm_real ahead = (size_t)i >= s->corner_begin ? s->dt : 0;
+    const mpm_real x[3] = {s->px[0][i] + ahead * v[0], s->px[1][i] + ahead * v[1],
+                           s->px[2][i] + ahead * v[2]};
     mpm_boundary_apply(s->boundary, x, s->depth[i], v);
     for (int c = 0; c < 3; ++c) d->v[c][i] = v[c];
   }

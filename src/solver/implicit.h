@@ -81,6 +81,7 @@ typedef struct mpm_implicit {
   mpm_real (*constraint_P)[6];
   mpm_real apply_scale; /* dt^2 in CG's operator */
   mpm_real *px[3];      /* DOF positions (built with the constraints), m */
+  size_t corner_begin;  /* the first corner DOF (DOFs from here are constrained ahead) */
   mpm_real *depth;      /* DOF wall-band depths (solver/dofs.h) */
 } mpm_implicit;
 

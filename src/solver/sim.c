@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 
 #include "solver/sim.h"
+#include "domain/enrich.h"
 #include "core/alloc.h"
 #include "scene/sample.h"
 
@@ -148,6 +149,12 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->domain_min, h,
                                       name, err);
       if (st != MPM_OK) goto fail;
+      if (mpm_enrichment_set_epsilon(&sim->domains, b, (mpm_real)sc->bodies[b].enrichment,
+                                     (mpm_real)h)) {
+        st = oom(err, "the enrichment thresholds");
+        goto fail;
+      }
+
       if (sc->bodies[b].shape.kind == MPM_SHAPE_MESH) { /* keep the mesh, embedded */
         mpm_embedded_surface *grown =
             realloc(sim->surfaces, (size_t)(sim->surface_count + 1) * sizeof *grown);

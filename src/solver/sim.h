@@ -133,6 +133,12 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt);
 struct mpm_implicit;
 mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, struct mpm_implicit *s);
 
+/* Zhu Algorithm 1 line 2: the enrichment marks (domain/enrich.h) of the step about to be taken,
+ * from the state at its start; they bound an explicit step's dt, so the frame loop asks before
+ * it plans a step, and every step asks before anything touches the grid. Computed once per
+ * step (a function of the state: a resumed run gets the same marks). */
+mpm_status mpm_sim_mark_enrichment(mpm_sim *sim);
+
 /* Scale the materials' moduli by their strength schedules at time t (sim.c); a no-op without
  * schedules. */
 void mpm_sim_apply_strength(mpm_sim *sim, double t);

@@ -10,6 +10,7 @@
 #include "core/parallel.h"
 #include "io/checkpoint.h"
 #include "solver/sim.h"
+#include "core/alloc.h"
 
 #include <dirent.h>
 #include <stdio.h>
@@ -147,9 +148,23 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   mpm_particles_free(&sim->particles);
   sim->particles = c->particles;
   memset(&c->particles, 0, sizeof c->particles);
+  /* the enrichment thresholds and spacings are the scene's (they stay); the marks are made
+   * anew from the state, as every step makes them */
+  mpm_domain_enrichment *was = &sim->domains.enrich;
+  mpm_real *epsilon = was->epsilon, *spacing = was->spacing;
+  const int body_count = was->body_count, any = was->any;
+  was->epsilon = was->spacing = NULL;
   mpm_domain_set_free(&sim->domains);
   sim->domains = c->domains;
   memset(&c->domains, 0, sizeof c->domains);
+  mpm_domain_enrichment *e = &sim->domains.enrich;
+  mpm_free(e->epsilon);
+  mpm_free(e->spacing);
+  e->epsilon = epsilon;
+  e->spacing = spacing;
+  e->body_count = body_count;
+  e->any = any;
+  e->valid = 0;
   sim->time = c->time;
   sim->last_dt = c->last_dt;
   sim->max_speed = (mpm_real)c->max_speed;

@@ -3,6 +3,7 @@
 #include "solver/sim.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
+#include "domain/enrich.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,9 +59,17 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   mpm_particles combined;
   memset(&combined, 0, sizeof combined);
   const int has_domains = sim->domains.particles.count > 0;
+  /* the enrichment categories of the state written (the marks the next step will use) */
   if (has_domains && combine_particles(sim, &combined))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d",
                          sim->written_frames);
+  if (has_domains) {
+    const mpm_status marked = mpm_sim_mark_enrichment(sim);
+    if (marked != MPM_OK) {
+      mpm_particles_free(&combined);
+      return marked;
+    }
+  }
   const mpm_particles *p = has_domains ? &combined : &sim->particles;
   const mpm_output_desc *o = &sim->scene.output;
   const int frame = sim->written_frames;
@@ -69,10 +78,12 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   char path[MPM_PATH_MAX + 64];
   mpm_status st = MPM_OK;
   mpm_real *J = NULL, *stress = NULL;
+  int32_t *category = NULL;
   if (o->vtu || o->ply) {
     J = mpm_alloc((p->count + 1) * sizeof(mpm_real));
     stress = mpm_alloc((p->count + 1) * sizeof(mpm_real));
-    if (!J || !stress) {
+    category = mpm_alloc((p->count + 1) * sizeof(int32_t));
+    if (!J || !stress || !category) {
       st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
       goto done;
     }
@@ -88,7 +99,13 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
       stress[i] = mpm_von_mises(tau, J[i]);
     }
   }
-  mpm_frame_fields ff = {p, J, stress, sim->time};
+  if (category) { /* as combine_particles orders them: material points, then active domains */
+    size_t j = 0;
+    for (; j < sim->particles.count; ++j) category[j] = -1;
+    for (size_t q = 0; q < sim->domains.particles.count; ++q)
+      if (sim->domains.active[q]) category[j++] = sim->domains.enrich.category[q];
+  }
+  mpm_frame_fields ff = {p, J, stress, sim->time, category};
   if (o->vtu) {
     snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "frame_%04d.vtu", frame);
     snprintf(path, sizeof path, "%s/%s", sim->output_dir, sim->frame_files[frame]);
@@ -151,6 +168,11 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     row->cg_iterations_max = sf->cg_max;
     row->cg_residual_max = sf->residual_max;
     row->cg_unconverged = sf->cg_unconverged;
+    const mpm_domain_enrichment *en = &sim->domains.enrich;
+    row->enriched_percent =
+        sim->domains.active_count
+            ? 100.0 * (double)en->particles[MPM_DOMAIN_ENRICHED] / (double)sim->domains.active_count
+            : 0;
     snprintf(path, sizeof path, "%s/stats.csv", sim->output_dir);
     st = mpm_write_stats_csv(path, frame + 1, sim->stats, &sim->error);
     if (st != MPM_OK) goto done;
@@ -160,5 +182,6 @@ done:
   mpm_particles_free(&combined);
   mpm_free(J);
   mpm_free(stress);
+  mpm_free(category);
   return st;
 }

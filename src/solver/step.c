@@ -23,6 +23,7 @@
 #include "solver/sim.h"
 #include "core/alloc.h"
 #include "domain/domain_transfer.h"
+#include "domain/enrich.h"
 #include "solver/explicit_update.h"
 #include "solver/implicit.h"
 #include "transfer/operators.h"
@@ -38,6 +39,10 @@ double mpm_sim_cfl_dt(const mpm_sim *sim) {
   /* implicit: sim->wave_speed is 0, so the step follows particle speed alone */
   const double speed = (double)sim->wave_speed + (double)sim->max_speed;
   double dt = speed > 0 ? sim->scene.solver.cfl * sim->scene.dx / speed : sim->frame_dt;
+  /* enriched corners are the material's own nodes (domain/enrich.h) */
+  const double rate = sim->domains.active_count ? sim->domains.enrich.rate : 0;
+  if (sd->integrator == MPM_INTEGRATOR_EXPLICIT && rate > 0 && sd->cfl / rate < dt)
+    dt = sd->cfl / rate;
   if (sim->scene.solver.max_dt > 0 && dt > sim->scene.solver.max_dt) dt = sim->scene.solver.max_dt;
   return dt;
 }
@@ -104,7 +109,14 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
   mpm_dofs_begin_layout(d);
   const int impulse = c->p2g_output == MPM_P2G_IMPULSE;
   const unsigned fields = impulse ? MPM_DOF_MASS | MPM_DOF_V0 | MPM_DOF_V : MPM_DOF_ALL;
-  if (mpm_dofs_add_grid(d, &sim->grid) || mpm_dofs_end_layout(d, fields))
+  mpm_domain_enrichment *en = &sim->domains.enrich;
+  int failed = mpm_dofs_add_grid(d, &sim->grid);
+  if (c->domains && en->count) { /* enriched corners: DOFs of their own (Zhu eq. 12) */
+    en->dof_begin = d->count;
+    const mpm_real *const x[3] = {en->x[0], en->x[1], en->x[2]};
+    failed = failed || mpm_dofs_add_corners(d, en->count, x);
+  }
+  if (failed || mpm_dofs_end_layout(d, fields))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the values of %zu grid nodes",
                          (long long)sim->steps, d->count);
@@ -297,7 +309,26 @@ static mpm_status dt_collapsed(mpm_sim *sim, double dt) {
                        sqrt(worst_v2));
 }
 
+mpm_status mpm_sim_mark_enrichment(mpm_sim *sim) {
+  mpm_domain_enrichment *e = &sim->domains.enrich;
+  if (!sim->domains.active_count || (e->valid && e->marked_step == sim->steps)) return MPM_OK;
+  if (mpm_domain_mark_enrichment(&sim->domains, sim->materials))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory marking the enrichment of %zu domain particles",
+                         (long long)sim->steps, sim->domains.particles.count);
+  e->valid = 1;
+  e->marked_step = sim->steps;
+  return MPM_OK;
+}
+
+static mpm_status mark_enrichment(mpm_sim *sim) {
+  return mpm_sim_mark_enrichment(sim);
+}
+
 mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
+  mpm_sim_apply_strength(sim, sim->time); /* the moduli of this step (strength schedules) */
+  const mpm_status marked = mark_enrichment(sim);
+  if (marked != MPM_OK) return marked;
   double dt = mpm_sim_cfl_dt(sim);
   const mpm_solver_desc *sd = &sim->scene.solver;
   const int fixed = sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0;
@@ -309,7 +340,6 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   if (mpm_arena_reset(&sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for step scratch",
                          (long long)sim->steps);
-  mpm_sim_apply_strength(sim, sim->time); /* the moduli of this step (strength schedules) */
   step_ctx c;
   step_setup(sim, dt, &c);
   double t = t0;
@@ -349,6 +379,8 @@ mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, mpm_implicit *s) {
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
   step_ctx *c = mpm_arena_alloc(&sim->step_arena, sizeof *c);
   if (!c) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
+  const mpm_status marked = mark_enrichment(sim);
+  if (marked != MPM_OK) return marked;
   step_setup(sim, dt, c);
   c->p2g_output = MPM_P2G_MOMENTUM_FORCE;
   const mpm_integrator_kind was = sim->scene.solver.integrator;

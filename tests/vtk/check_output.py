@@ -13,7 +13,7 @@ frame, that what ParaView would load is what the engine computed:
               the point of its own index; the arrays are exactly FieldData TIME (Float64) and
               PointData id (UInt32), velocity (3 comps), mass, volume, J, stress, plastic
               (the build's real, Float32 or Float64 as read from the Points) and material,
-              body (Int32). Values: TIME equals the PVD timestep and stats.csv time as written
+              body, enrichment (Int32; -1 for material points, 0-2 for domain particles). Values: TIME equals the PVD timestep and stats.csv time as written
               (%.9g or exact); all reals finite; mass, volume, J > 0; stress >= 0; ids unique
               and the same set in every frame; body indices 0..bodies-1, one material per body
               and, for bodies naming a material of the scene's list, that material's index.
@@ -70,7 +70,8 @@ REAL = "real"  # placeholder for the build's real type, Float32 or Float64
 FIELD_ARRAYS = {"TIME": (1, "Float64")}
 POINT_ARRAYS = {"id": (1, "UInt32"), "velocity": (3, REAL), "mass": (1, REAL),
                 "volume": (1, REAL), "J": (1, REAL), "stress": (1, REAL),
-                "plastic": (1, REAL), "material": (1, "Int32"), "body": (1, "Int32")}
+                "plastic": (1, REAL), "material": (1, "Int32"), "body": (1, "Int32"),
+                "enrichment": (1, "Int32")}
 PLY_PROPERTIES = ["x", "y", "z", "vx", "vy", "vz", "id"]
 PLY_STRUCT = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i",
               "uint": "I", "float": "f", "double": "d", "int32": "i", "uint32": "I",
@@ -363,6 +364,11 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
     if len(set(ids)) != n:
         where.fail("id", "ids are not unique")
 
+    # the enrichment category: -1 (material point), 0, 1, 2 (Zhu sec. 5.2)
+    for i, e in enumerate(values(pd["enrichment"])):
+        if e not in (-1, 0, 1, 2):
+            where.fail("enrichment", "particle %d has category %d, expected -1, 0, 1 or 2" % (i, e))
+
     # material and body against the scene
     mat, body = values(pd["material"]), values(pd["body"])
     if scene_info is not None:
@@ -437,6 +443,9 @@ def check_domains(where, path, frame_ids, first, messages):
     ids = values(grid.GetCellData().GetArray("id"))
     if not set(ids) <= frame_ids or len(set(ids)) != len(ids):
         where.fail("id", "domain ids are not unique ids of the frame's particles")
+    enr = grid.GetCellData().GetArray("enrichment")
+    if enr is None or not set(values(enr)) <= {0, 1, 2}:
+        where.fail("enrichment", "expected an enrichment category 0, 1 or 2 per domain")
     if first:
         q = vtkMeshQuality()
         q.SetInputData(grid)

@@ -1,0 +1,180 @@
+/* enrich.c - the enrichment metric and the per-step marks of Zhu et al.'s dynamic enrichment
+ * (see enrich.h). */
+#include "domain/enrich.h"
+#include "core/alloc.h"
+#include "core/mat3.h"
+#include "core/parallel.h"
+#include "core/svd3.h"
+
+#include <math.h>
+#include <string.h>
+
+mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c) {
+  const double J = (double)mpm_m3_det(F), f2 = (double)mpm_m3_ddot(F, F);
+  /* sigma_min >= 2 J / ||F||^2 (sigma_1 sigma_2 <= ||F||^2 / 2): when that is >= c no singular
+   * value is clamped and ||F^-1||_F = ||cof F||_F / J needs no SVD */
+  if (J > 0 && 2 * J >= (double)c * f2) {
+    mpm_real C[9];
+    mpm_m3_cofactor(F, C);
+    const double c2 = (double)mpm_m3_ddot(C, C);
+    return (mpm_real)(3 * J / sqrt(f2 * c2));
+  }
+  mpm_real U[9], sigma[3], V[9];
+  mpm_svd3(F, U, sigma, V);
+  double a = 0, b = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double s = sigma[i] > c ? (double)sigma[i] : (double)c; /* signed: inverted -> c */
+    a += s * s;
+    b += 1 / (s * s);
+  }
+  return (mpm_real)(3 / sqrt(a * b));
+}
+
+int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real h) {
+  mpm_domain_enrichment *e = &s->enrich;
+  if (b < 0) return -1;
+  if (b >= e->body_count) {
+    mpm_real *grown = mpm_alloc((size_t)(b + 1) * sizeof *grown);
+    mpm_real *grown_h = mpm_alloc((size_t)(b + 1) * sizeof *grown_h);
+    if (!grown || !grown_h) {
+      mpm_free(grown);
+      mpm_free(grown_h);
+      return -1;
+    }
+    for (int k = 0; k <= b; ++k) {
+      grown[k] = k < e->body_count ? e->epsilon[k] : 0;
+      grown_h[k] = k < e->body_count ? e->spacing[k] : 0;
+    }
+    mpm_free(e->epsilon);
+    mpm_free(e->spacing);
+    e->epsilon = grown;
+    e->spacing = grown_h;
+    e->body_count = b + 1;
+  }
+  e->epsilon[b] = epsilon;
+  e->spacing[b] = h;
+  e->any = 0;
+  for (int k = 0; k < e->body_count; ++k)
+    if (e->epsilon[k] > 0) e->any = 1;
+  return 0;
+}
+
+void mpm_enrichment_free(mpm_domain_enrichment *e) {
+  mpm_free(e->epsilon);
+  mpm_free(e->spacing);
+  mpm_free(e->flag);
+  mpm_free(e->category);
+  mpm_free(e->enriched);
+  mpm_free(e->on_grid);
+  mpm_free(e->corner);
+  mpm_free(e->slot);
+  for (int d = 0; d < 3; ++d) mpm_free(e->x[d]);
+  memset(e, 0, sizeof *e);
+}
+
+/* Room for the set's particles and corners (contents not kept). */
+static int reserve(mpm_domain_enrichment *e, size_t particles, size_t corners) {
+  if (particles > e->particle_capacity || !e->flag) {
+    mpm_free(e->flag);
+    mpm_free(e->category);
+    const size_t n = particles + particles / 8 + 16;
+    e->flag = mpm_alloc(n);
+    e->category = mpm_alloc(n);
+    e->particle_capacity = e->flag && e->category ? n : 0;
+    if (!e->particle_capacity) return -1;
+  }
+  if (corners > e->corner_capacity || !e->enriched) {
+    mpm_free(e->enriched);
+    mpm_free(e->on_grid);
+    mpm_free(e->corner);
+    mpm_free(e->slot);
+    const size_t n = corners + corners / 8 + 16;
+    e->enriched = mpm_alloc(n);
+    e->on_grid = mpm_alloc(n);
+    e->corner = mpm_alloc(n * sizeof *e->corner);
+    e->slot = mpm_alloc(n * sizeof *e->slot);
+    int ok = e->enriched && e->on_grid && e->corner && e->slot;
+    for (int d = 0; d < 3; ++d) {
+      mpm_free(e->x[d]);
+      e->x[d] = mpm_alloc(n * sizeof(mpm_real));
+      ok = ok && e->x[d];
+    }
+    e->corner_capacity = ok ? n : 0;
+    if (!ok) return -1;
+  }
+  return 0;
+}
+
+int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials) {
+  mpm_domain_enrichment *e = &s->enrich;
+  const mpm_particles *p = &s->particles;
+  const long np = (long)p->count, nc = (long)s->corner_count;
+  if (reserve(e, p->count + 1, s->corner_count + 1)) return -1;
+  e->rate = 0;
+  /* 1. the metric per particle (eq. 10 on the clamped F, sec. 5.3) */
+#pragma omp parallel for schedule(static) if (np >= MPM_PARALLEL_MIN / 8)
+  for (long q = 0; q < np; ++q) {
+    e->flag[q] = 0;
+    const mpm_real eps = mpm_enrichment_epsilon(s, p->body[q]);
+    if (!s->active[q] || !(eps > 0)) continue;
+    mpm_real F[9];
+    for (int k = 0; k < 9; ++k) F[k] = p->F[k][q];
+    const mpm_real c = materials[p->material[q]].min_stretch;
+    e->flag[q] = mpm_enrichment_metric(F, c > 0 ? c : (mpm_real)1e-6) <= eps;
+  }
+  /* 2. a corner is enriched when one of its particles is (gathered per corner: no races) */
+#pragma omp parallel for schedule(static) if (nc >= MPM_PARALLEL_MIN)
+  for (long c = 0; c < nc; ++c) {
+    uint8_t on = 0;
+    for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1] && !on; ++j)
+      on = e->flag[s->adj[j] / MPM_HEX_CORNERS];
+    e->enriched[c] = on;
+    e->on_grid[c] = s->corner_use[c] && !on;
+  }
+  /* 3. the particles' categories, and the explicit step's bound (enrich.h) */
+  size_t n0 = 0, n1 = 0, n2 = 0;
+  double rate = 0;
+#pragma omp parallel for schedule(static) reduction(+ : n0, n1, n2) reduction(max : rate) if (np >= MPM_PARALLEL_MIN)
+  for (long q = 0; q < np; ++q) {
+    if (!s->active[q]) {
+      e->category[q] = MPM_DOMAIN_UNENRICHED;
+      continue;
+    }
+    int k = 0;
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) k += e->enriched[s->corner[q][a]];
+    const uint8_t cat = k == 0                 ? MPM_DOMAIN_UNENRICHED
+                        : k == MPM_HEX_CORNERS ? MPM_DOMAIN_ENRICHED
+                                               : MPM_DOMAIN_TRANSITIONAL;
+    e->category[q] = cat;
+    if (cat != MPM_DOMAIN_UNENRICHED) {
+      mpm_real F[9], U[9], sigma[3], V[9];
+      for (int j = 0; j < 9; ++j) F[j] = p->F[j][q];
+      mpm_svd3(F, U, sigma, V);
+      const mpm_material *m = &materials[p->material[q]];
+      const double c = m->min_stretch > 0 ? m->min_stretch : 1e-6;
+      const double sm = fmin(fmax((double)sigma[2], c), 1);
+      const int b = p->body[q];
+      const double h = b >= 0 && b < e->body_count ? e->spacing[b] : 0;
+      const double r = h > 0 ? m->wave_speed / (h * sm * sm) : 0;
+      if (r > rate) rate = r;
+    }
+    n0 += cat == MPM_DOMAIN_UNENRICHED;
+    n1 += cat == MPM_DOMAIN_TRANSITIONAL;
+    n2 += cat == MPM_DOMAIN_ENRICHED;
+  }
+  e->rate = rate;
+  e->particles[0] = n0;
+  e->particles[1] = n1;
+  e->particles[2] = n2;
+  /* 4. the enriched corners in corner order, and their positions (the DOF segment's) */
+  size_t k = 0;
+  for (long c = 0; c < nc; ++c)
+    if (e->enriched[c]) {
+      e->corner[k] = (uint32_t)c;
+      e->slot[c] = (uint32_t)k;
+      for (int d = 0; d < 3; ++d) e->x[d][k] = s->cx[d][c];
+      ++k;
+    }
+  e->count = k;
+  return 0;
+}

@@ -1,0 +1,62 @@
+/* enrich.h - Zhu et al. 2017's dynamic enrichment (sec. 5): domain corners that become
+ * degrees of freedom of their own when their particles are badly deformed.
+ *
+ * At the start of every step each active domain particle p evaluates the enrichment metric
+ * (eq. 10) on its clamped deformation gradient (sec. 5.3); when K(F_p) <= epsilon (the body's
+ * `enrichment` key) all 8 of its corners are marked enriched. A particle is then
+ *   enriched       all its corners are enriched,
+ *   transitional   some are,
+ *   unenriched     none is (sec. 5.2, Fig. 3).
+ *
+ * An enriched corner is a DOF of the DOF set (solver/dofs.h, a corner segment after the grid
+ * levels: eq. 12's set {i, alpha-hat}) and its row of the corner embedding is the identity: the
+ * two-step rasterization stops there (the corner's mass, momentum and force, rasterized from
+ * its particles with omega_ap and the reference-gradient averages, go to its own DOF), the DOF
+ * is updated by the same explicit update or solved in the same implicit system as the grid
+ * nodes, and interpolation back (eq. 11) takes the corner's own velocity. Everything else
+ * in domain_transfer.c and domain_hessian.c is unchanged, because it goes through the
+ * embedding. A corner that is no longer marked returns to its grid row the next step.
+ *
+ * The metric. Eq. 10 reads K = 1 / (||F^-1||_F ||F||_F), but the paper calls K a value in
+ * (0, 1] with greater values for better conditioned F, and enriches below epsilon = 0.6;
+ * with Frobenius norms in 3D, ||F^-1||_F ||F||_F >= 3 (equality for F = s R), so the literal
+ * formula is at most 1/3 and would enrich every particle at rest. We use the normalized form
+ *   K(F) = 3 / (||F^-1||_F ||F||_F)  in (0, 1],  K(s R) = 1,
+ * which is what the paper's range and threshold describe: a uniaxial stretch of 1.5 gives
+ * K = 0.93, of 3 gives 0.62, a compression to 1/3 gives 0.62. F is clamped first (sec. 5.3):
+ * its signed singular values below the material's min_stretch c are raised to c, so that
+ * flat and inverted particles get a small finite K.
+ *
+ * The explicit time step. Grid nodes are dx apart whatever the material does, but enriched
+ * corners are the material's own nodes: h apart at rest, h sigma_min apart in a compressed
+ * particle, whose stiffness also grows (like 1/sigma_min^2 for neo-Hookean). The marks give
+ * the bound dt <= cfl h s^2 / c, s = min(sigma_min, 1) with sigma_min clamped as above, over
+ * the particles that touch an enriched corner (e->rate); the implicit step needs none. */
+#ifndef MPM_DOMAIN_ENRICH_H
+#define MPM_DOMAIN_ENRICH_H
+
+#include "domain/domain.h"
+#include "material/material.h"
+
+enum { MPM_DOMAIN_UNENRICHED = 0, MPM_DOMAIN_TRANSITIONAL = 1, MPM_DOMAIN_ENRICHED = 2 };
+
+/* K(F) as above with singular values clamped at c > 0. */
+mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c);
+
+/* Mark the corners and classify the particles of the set from their current F (materials: the
+ * clamp of each particle's material; s->enrich.epsilon per body), and list the enriched
+ * corners in corner order with their positions (the DOF segment's). Deterministic, parallel.
+ * Returns 0, or -1 when out of memory. */
+int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials);
+
+/* The threshold of body b (0: never enriched). */
+static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
+  return b >= 0 && b < s->enrich.body_count ? s->enrich.epsilon[b] : 0;
+}
+
+/* Set body b's threshold and lattice spacing h (sim setup). 0, or -1 when out of memory. */
+int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real h);
+
+void mpm_enrichment_free(mpm_domain_enrichment *e);
+
+#endif

@@ -1,0 +1,433 @@
+/* test_enrich.c - Zhu et al.'s dynamic enrichment (sec. 5, domain/enrich.h):
+ *  - the metric K(F) against a direct evaluation (random F, clamped flat and inverted F, the
+ *    values enrich.h quotes);
+ *  - the categories of a hand-built case: one badly stretched particle of a bar enriches its 8
+ *    corners, the particles sharing one of them are transitional, the others unenriched;
+ *  - a mixed body conserves mass and linear momentum through P2G (the DOF set's sums against
+ *    the particles') and through whole steps, while particles change category;
+ *  - epsilon = 1: the body never touches the grid (no grid node carries it), translates
+ *    exactly, and a bar twisted and released comes back to its rest shape (to a rest-state
+ *    error far below the unenriched body's);
+ *  - 1 and 2 threads give bitwise the same state; the scene key's errors. */
+#include "support.h"
+#include "analysis/rest_error.h"
+#include "core/mat3.h"
+#include "core/parallel.h"
+#include "domain/enrich.h"
+#include "solver/implicit.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the metric ----------------------------------------------------------------------- */
+
+static double direct_metric(const mpm_real F[9]) {
+  double Fd[9], C[9];
+  for (int k = 0; k < 9; ++k) Fd[k] = F[k];
+  /* inverse by cofactors, in double */
+  C[0] = Fd[4] * Fd[8] - Fd[5] * Fd[7];
+  C[1] = Fd[5] * Fd[6] - Fd[3] * Fd[8];
+  C[2] = Fd[3] * Fd[7] - Fd[4] * Fd[6];
+  C[3] = Fd[2] * Fd[7] - Fd[1] * Fd[8];
+  C[4] = Fd[0] * Fd[8] - Fd[2] * Fd[6];
+  C[5] = Fd[1] * Fd[6] - Fd[0] * Fd[7];
+  C[6] = Fd[1] * Fd[5] - Fd[2] * Fd[4];
+  C[7] = Fd[2] * Fd[3] - Fd[0] * Fd[5];
+  C[8] = Fd[0] * Fd[4] - Fd[1] * Fd[3];
+  const double J = Fd[0] * C[0] + Fd[1] * C[1] + Fd[2] * C[2];
+  double f2 = 0, i2 = 0;
+  for (int k = 0; k < 9; ++k) {
+    f2 += Fd[k] * Fd[k];
+    i2 += C[k] * C[k] / (J * J);
+  }
+  return 3 / (sqrt(f2) * sqrt(i2)); /* 3 / (||F||_F ||F^-1||_F) */
+}
+
+static void random_rotation(uint64_t *rng, mpm_real R[9]) {
+  mpm_real axis[3] = {(mpm_real)test_rand(rng, -1, 1), (mpm_real)test_rand(rng, -1, 1),
+                      (mpm_real)test_rand(rng, -1, 1)};
+  const mpm_real n = mpm_v3_norm(axis);
+  for (int d = 0; d < 3; ++d) axis[d] /= n;
+  mpm_m3_axis_angle(axis, (mpm_real)test_rand(rng, -3, 3), R);
+}
+
+static void test_metric(void **state) {
+  (void)state;
+  uint64_t rng = 7;
+  const mpm_real c = (mpm_real)0.2;
+  double worst = 0;
+  for (int t = 0; t < 2000; ++t) { /* well-conditioned F, det > 0: no clamp */
+    mpm_real F[9];
+    for (int k = 0; k < 9; ++k)
+      F[k] = (mpm_real)((k % 4 == 0 ? 1 : 0) + test_rand(&rng, -0.4, 0.4));
+    if (mpm_m3_det(F) < 0.3) continue;
+    const double K = mpm_enrichment_metric(F, c), Kd = direct_metric(F);
+    assert_true(K > 0 && K <= 1 + 1e-6);
+    if (fabs(K - Kd) > worst) worst = fabs(K - Kd);
+  }
+  print_message("enrichment metric against the direct evaluation: largest difference %.3g\n",
+                worst);
+  assert_true(worst < TOL(2e-6, 1e-13));
+  /* a scaled rotation is perfectly conditioned: K = 1 */
+  mpm_real R[9], F[9];
+  random_rotation(&rng, R);
+  for (int k = 0; k < 9; ++k) F[k] = (mpm_real)2.5 * R[k];
+  assert_close(mpm_enrichment_metric(F, c), 1, TOL(1e-6, 1e-13));
+  /* the values enrich.h quotes: stretches of 1.5 and 3, a compression to 1/3 */
+  const mpm_real s15[9] = {1.5, 0, 0, 0, 1, 0, 0, 0, 1}, s3[9] = {3, 0, 0, 0, 1, 0, 0, 0, 1};
+  const mpm_real c3[9] = {(mpm_real)(1.0 / 3), 0, 0, 0, 1, 0, 0, 0, 1};
+  assert_close(mpm_enrichment_metric(s15, c), 3 / sqrt(4.25 * (1 / 2.25 + 2)), 1e-6);
+  assert_close(mpm_enrichment_metric(s3, c), 3 / sqrt(11 * (1 / 9.0 + 2)), 1e-6);
+  assert_close(mpm_enrichment_metric(c3, c), mpm_enrichment_metric(s3, c), 1e-6);
+  /* flat and inverted F: the clamped singular value c (Zhu sec. 5.3), rotations included */
+  const double clamped = 3 / sqrt((2 + 0.04) * (2 + 25.0));
+  const mpm_real flat[3] = {1, 1, 0}, inverted[3] = {1, 1, -0.5}, small[3] = {1, 1, 0.05};
+  const mpm_real *cases[3] = {flat, inverted, small};
+  for (int k = 0; k < 3; ++k) {
+    mpm_real U[9], V[9], D[9] = {0}, T[9];
+    random_rotation(&rng, U);
+    random_rotation(&rng, V);
+    for (int d = 0; d < 3; ++d) D[4 * d] = cases[k][d];
+    mpm_m3_mul(U, D, T);
+    mpm_m3_mul_bt(T, V, F);
+    assert_close(mpm_enrichment_metric(F, c), clamped, TOL(1e-5, 1e-12));
+  }
+}
+
+/* ---- scenes ----------------------------------------------------------------------------- */
+
+/* A bar of 10 x 2 x 2 domains (spacing 0.02 m), no gravity, no collider, far from the walls;
+ * `extra` goes into the body, `solver` into the solver section. */
+static mpm_sim *bar(const char *extra, const char *solver) {
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0, 0.3, 0.3], \"max\": [1.6, 0.7, 0.7], \"dx\": 0.04},"
+           " \"gravity\": [0, 0, 0], \"time\": {\"end\": 4.0, \"fps\": 10},"
+           " \"solver\": {%s},"
+           " \"materials\": [{\"name\": \"rubber\", \"model\": \"neo_hookean\", \"E\": 2e4, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"name\": \"bar\", \"shape\": {\"type\": \"box\", \"center\": [0.8, "
+           "0.5, 0.5], \"half_extent\": [0.1, 0.02, 0.02]}, \"material\": \"rubber\", "
+           "\"particles_per_cell\": 8, \"domains\": true %s}]}",
+           solver, extra);
+  return test_sim_from_json(text, "bar.json");
+}
+
+/* Move every corner by x -> x0 + A (x - x0) + b (an affine map), with F and the particles to
+ * match: F = A, the corners' velocities w x + u for a spin w about x0 (not rigid: a field). */
+static void deform_corners(mpm_sim *sim, const double A[9], const double spin[3],
+                           const double u[3]) {
+  mpm_domain_set *s = &sim->domains;
+  const double x0[3] = {0.8, 0.5, 0.5};
+  for (size_t c = 0; c < s->corner_count; ++c) {
+    const double r[3] = {s->cX[0][c] - x0[0], s->cX[1][c] - x0[1], s->cX[2][c] - x0[2]};
+    for (int d = 0; d < 3; ++d)
+      s->cx[d][c] = (mpm_real)(x0[d] + A[3 * d] * r[0] + A[3 * d + 1] * r[1] + A[3 * d + 2] * r[2]);
+    const double v[3] = {spin[1] * r[2] - spin[2] * r[1] + u[0],
+                         spin[2] * r[0] - spin[0] * r[2] + u[1],
+                         spin[0] * r[1] - spin[1] * r[0] + u[2]};
+    for (int d = 0; d < 3; ++d) s->cv[d][c] = (mpm_real)v[d];
+  }
+  for (size_t q = 0; q < s->particles.count; ++q)
+    for (int e = 0; e < 9; ++e) s->particles.F[e][q] = (mpm_real)A[e];
+  mpm_domain_set_sync_particles(s);
+}
+
+/* The particle's F (sim state) set to diag(a, 1, 1). */
+static void stretch_particle(mpm_sim *sim, size_t q, double a) {
+  for (int e = 0; e < 9; ++e) sim->domains.particles.F[e][q] = (mpm_real)(e == 0 ? a : e % 4 == 0);
+}
+
+/* Particles sharing a corner with q. */
+static int shares_corner(const mpm_domain_set *s, size_t q, size_t r) {
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+    for (int b = 0; b < MPM_HEX_CORNERS; ++b)
+      if (s->corner[q][a] == s->corner[r][b]) return 1;
+  return 0;
+}
+
+static void test_categories(void **state) {
+  (void)state;
+  mpm_sim *sim = bar("", "");
+  mpm_domain_set *s = &sim->domains;
+  assert_int_equal(s->particles.count, 40);
+  assert_close(mpm_enrichment_epsilon(s, 0), 0.6, 1e-7); /* the default (Zhu sec. 5.1) */
+  const size_t q0 = 17;
+  stretch_particle(sim, q0, 4); /* K = 3 / sqrt(18 * 2.0625) = 0.49 <= 0.6 */
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  const mpm_domain_enrichment *e = &s->enrich;
+  assert_int_equal(e->count, 8);
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a) assert_true(e->enriched[s->corner[q0][a]]);
+  size_t transitional = 0;
+  for (size_t q = 0; q < s->particles.count; ++q) {
+    const int want = q == q0                   ? MPM_DOMAIN_ENRICHED
+                     : shares_corner(s, q0, q) ? MPM_DOMAIN_TRANSITIONAL
+                                               : MPM_DOMAIN_UNENRICHED;
+    assert_int_equal(e->category[q], want);
+    transitional += want == MPM_DOMAIN_TRANSITIONAL;
+  }
+  assert_true(transitional >= 3);
+  assert_int_equal(e->particles[MPM_DOMAIN_ENRICHED], 1);
+  assert_int_equal(e->particles[MPM_DOMAIN_TRANSITIONAL], transitional);
+  assert_int_equal(e->particles[MPM_DOMAIN_UNENRICHED], 40 - 1 - transitional);
+  /* the enriched corners are listed in corner order with their positions */
+  for (size_t k = 0; k < e->count; ++k) {
+    assert_true(k == 0 || e->corner[k] > e->corner[k - 1]);
+    assert_int_equal(e->slot[e->corner[k]], k);
+    for (int d = 0; d < 3; ++d) assert_true(e->x[d][k] == s->cx[d][e->corner[k]]);
+  }
+  /* a stretch of 1.5 (K = 0.93) enriches nothing; epsilon 0 never enriches */
+  stretch_particle(sim, q0, 1.5);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 0);
+  stretch_particle(sim, q0, 4);
+  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, 0, (mpm_real)0.02), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 0);
+  assert_int_equal(e->particles[MPM_DOMAIN_UNENRICHED], 40);
+  mpm_sim_destroy(sim);
+}
+
+/* Sum of m v over the domain particles. */
+static void particle_momentum(const mpm_sim *sim, double p[3], double *mass) {
+  const mpm_particles *q = &sim->domains.particles;
+  p[0] = p[1] = p[2] = *mass = 0;
+  for (size_t i = 0; i < q->count; ++i) {
+    *mass += q->mass[i];
+    for (int d = 0; d < 3; ++d) p[d] += (double)q->mass[i] * (double)q->v[d][i];
+  }
+}
+
+/* A bar, half of it stretched enough to enrich, spinning and moving. */
+static mpm_sim *mixed_bar(void) {
+  mpm_sim *sim = bar("", "");
+  const double A[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, spin[3] = {0.5, 2, -1}, u[3] = {0.3, -0.2, 0.1};
+  deform_corners(sim, A, spin, u);
+  for (size_t q = 0; q < sim->domains.particles.count; ++q)
+    if (sim->domains.particles.x[0][q] > 0.8) stretch_particle(sim, q, 3.5);
+  return sim;
+}
+
+static void test_mixed_conservation(void **state) {
+  (void)state;
+  mpm_sim *sim = mixed_bar();
+  double p0[3], m0;
+  particle_momentum(sim, p0, &m0);
+  mpm_implicit sys; /* sort, layout, P2G of one step (the DOF set as P2G leaves it) */
+  assert_int_equal(mpm_sim_implicit_system(sim, 1e-3, &sys), MPM_OK);
+  const mpm_domain_enrichment *e = &sim->domains.enrich;
+  assert_true(e->particles[0] > 0 && e->particles[1] > 0 && e->particles[2] > 0);
+  const mpm_dofs *d = &sim->dofs;
+  assert_int_equal(d->segment_count, 2);
+  assert_int_equal(d->segment[1].kind, MPM_DOF_CORNER);
+  assert_int_equal(d->segment[1].count, e->count);
+  double m = 0, mc = 0, p[3] = {0, 0, 0};
+  for (size_t i = 0; i < d->count; ++i) {
+    m += d->mass[i];
+    if (i >= d->segment[1].begin) mc += d->mass[i];
+    for (int k = 0; k < 3; ++k) p[k] += d->v0[k][i]; /* P2G leaves the momentum in v0 */
+  }
+  print_message("mixed body: %zu / %zu / %zu particles unenriched / transitional / enriched, "
+                "%zu enriched corners holding %.1f%% of the mass\n",
+                e->particles[0], e->particles[1], e->particles[2], e->count, 100 * mc / m);
+  assert_true(mc > 0 && mc < m);
+  assert_close(m, m0, TOL(1e-6, 1e-14) * m0);
+  for (int k = 0; k < 3; ++k) assert_close(p[k], p0[k], TOL(1e-6, 1e-14) * m0);
+  /* whole steps: no gravity, no obstacle, so the particles' momentum stays what it was while
+   * particles relax and change category */
+  size_t changed = 0;
+  uint8_t *was = malloc(sim->domains.particles.count);
+  memcpy(was, e->category, sim->domains.particles.count);
+  for (int step = 0; step < 60; ++step) {
+    assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
+    for (size_t q = 0; q < sim->domains.particles.count; ++q) changed += was[q] != e->category[q];
+    memcpy(was, e->category, sim->domains.particles.count);
+  }
+  free(was);
+  double p1[3], m1;
+  particle_momentum(sim, p1, &m1);
+  print_message("60 steps: %zu category changes; momentum (%.9g, %.9g, %.9g) -> (%.9g, %.9g, "
+                "%.9g)\n",
+                changed, p0[0], p0[1], p0[2], p1[0], p1[1], p1[2]);
+  assert_true(changed > 0);
+  for (int k = 0; k < 3; ++k) assert_close(p1[k], p0[k], TOL(2e-5, 1e-12) * m0);
+  mpm_sim_destroy(sim);
+}
+
+/* epsilon = 1: every particle is enriched (K <= 1 always), the grid carries nothing. */
+static void test_always_enriched_translation(void **state) {
+  (void)state;
+  mpm_sim *sim = bar(", \"enrichment\": 1", "");
+  const double A[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, spin[3] = {0, 0, 0}, u[3] = {0.3, -0.2, 0.1};
+  deform_corners(sim, A, spin, u);
+  mpm_domain_set *s = &sim->domains;
+  double x0[40][3];
+  for (size_t q = 0; q < 40; ++q)
+    for (int d = 0; d < 3; ++d) x0[q][d] = s->particles.x[d][q];
+  double t = 0;
+  for (int step = 0; step < 100; ++step) {
+    assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
+    t += sim->last_dt;
+    assert_int_equal(s->enrich.particles[MPM_DOMAIN_ENRICHED], 40);
+    assert_int_equal(sim->dofs.segment[0].count, 0); /* no grid node */
+    assert_int_equal(sim->dofs.segment[1].count, s->corner_count);
+  }
+  double worst = 0, worst_F = 0;
+  for (size_t q = 0; q < 40; ++q) {
+    for (int d = 0; d < 3; ++d)
+      worst = fmax(worst, fabs(s->particles.x[d][q] - (x0[q][d] + u[d] * t)));
+    for (int e = 0; e < 9; ++e) worst_F = fmax(worst_F, fabs(s->particles.F[e][q] - (e % 4 == 0)));
+  }
+  print_message("epsilon = 1, translation over %.3f s: position error %.3g m, |F - I| %.3g\n", t,
+                worst, worst_F);
+  /* float: x += dt v rounded at 0.8 m (6e-8) in each of the ~100 steps */
+  assert_true(worst < TOL(5e-6, 1e-13));
+  assert_true(worst_F < TOL(1e-6, 1e-13));
+  mpm_sim_destroy(sim);
+}
+
+/* Rest-state error of the domain particles against their reference positions. */
+static double rest_error(const mpm_sim *sim) {
+  const mpm_domain_set *s = &sim->domains;
+  const size_t n = s->particles.count;
+  double(*X)[3] = malloc(n * sizeof *X), (*x)[3] = malloc(n * sizeof *x);
+  for (size_t q = 0; q < n; ++q)
+    for (int d = 0; d < 3; ++d) {
+      double c = 0;
+      for (int a = 0; a < MPM_HEX_CORNERS; ++a) c += s->w[q][a] * s->cX[d][s->corner[q][a]];
+      X[q][d] = c;
+      x[q][d] = s->particles.x[d][q];
+    }
+  const mpm_point_cloud rest = {n, (const double(*)[3])X, s->particles.id, NULL};
+  const mpm_point_cloud final = {n, (const double(*)[3])x, s->particles.id, NULL};
+  mpm_rest_error r;
+  assert_int_equal(mpm_rest_error_compute(&rest, &final, &r), 0);
+  free(X);
+  free(x);
+  return r.mean;
+}
+
+/* A bar twisted about its axis (corner by corner, F to match) and released comes back to its
+ * rest shape when enriched; without enrichment the grid leaves much of the twist in. */
+static double twist_and_release(const char *extra, const char *solver, double seconds) {
+  mpm_sim *sim = bar(extra, solver);
+  mpm_domain_set *s = &sim->domains;
+  const double x0[3] = {0.8, 0.5, 0.5}, turns = 1.0; /* a full turn end to end */
+  for (size_t c = 0; c < s->corner_count; ++c) {
+    const double X = s->cX[0][c] - x0[0], th = 2 * 3.14159265358979323846 * turns * X / 0.2;
+    const double y = s->cX[1][c] - x0[1], z = s->cX[2][c] - x0[2];
+    s->cx[0][c] = (mpm_real)(x0[0] + X);
+    s->cx[1][c] = (mpm_real)(x0[1] + cos(th) * y - sin(th) * z);
+    s->cx[2][c] = (mpm_real)(x0[2] + sin(th) * y + cos(th) * z);
+    for (int d = 0; d < 3; ++d) s->cv[d][c] = 0;
+  }
+  for (size_t q = 0; q < s->particles.count; ++q) { /* F = sum_a x_a g_qa^T */
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) {
+        double f = 0;
+        for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+          f += (double)s->cx[r][s->corner[q][a]] * (double)s->g[q][a][t];
+        s->particles.F[3 * r + t][q] = (mpm_real)f;
+      }
+  }
+  mpm_domain_set_sync_particles(s);
+  const double twisted = rest_error(sim);
+  while (sim->time < seconds)
+    if (mpm_sim_step(sim, 0) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  const double err = rest_error(sim);
+  print_message("bar twisted by %.0f degrees (rest-state error %.3g), released%s: %.3g after "
+                "%.1f s\n",
+                360 * turns, twisted, extra, err, seconds);
+  mpm_sim_destroy(sim);
+  return err;
+}
+
+static void test_twist_release(void **state) {
+  (void)state;
+  const char *damped = "\"flip_alpha\": 0.5";
+  const double enriched = twist_and_release(", \"enrichment\": 1", damped, 4);
+  const double unenriched = twist_and_release(", \"enrichment\": 0", damped, 4);
+  assert_true(enriched < TOL(1e-4, 1e-6));
+  assert_true(enriched < 0.1 * unenriched);
+}
+
+static void test_threads_bitwise(void **state) {
+  (void)state;
+  mpm_sim *run[2];
+  size_t enriched_steps = 0;
+  for (int t = 0; t < 2; ++t) {
+    mpm_set_threads(t + 1);
+    run[t] = mixed_bar();
+    for (int k = 0; k < 40; ++k) {
+      if (mpm_sim_step(run[t], 0) != MPM_OK) fail_msg("%s", mpm_sim_last_error(run[t]));
+      enriched_steps += run[t]->domains.enrich.count > 0;
+    }
+  }
+  mpm_set_threads(2);
+  const mpm_domain_set *a = &run[0]->domains, *b = &run[1]->domains;
+  assert_true(enriched_steps > 10);
+  for (int d = 0; d < 3; ++d) {
+    assert_memory_equal(a->cx[d], b->cx[d], a->corner_count * sizeof(mpm_real));
+    assert_memory_equal(a->cv[d], b->cv[d], a->corner_count * sizeof(mpm_real));
+  }
+  for (int e = 0; e < 9; ++e)
+    assert_memory_equal(a->particles.F[e], b->particles.F[e],
+                        a->particles.count * sizeof(mpm_real));
+  mpm_sim_destroy(run[0]);
+  mpm_sim_destroy(run[1]);
+}
+
+static void test_scene_key(void **state) {
+  (void)state;
+  static const struct {
+    const char *body, *message;
+  } bad[] = {
+      {"\"enrichment\": 1.5", "bodies[0].enrichment"},
+      {"\"enrichment\": -0.1", "bodies[0].enrichment"},
+      {"\"enrichment\": \"on\"", "bodies[0].enrichment"},
+  };
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.05}, \"time\": "
+             "{\"end\": 1},"
+             " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+             "\"nu\": 0.3, \"density\": 1000}],"
+             " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5], "
+             "\"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"domains\": true, %s}]}",
+             bad[k].body);
+    mpm_scene scene;
+    mpm_error err;
+    assert_int_not_equal(mpm_scene_parse(text, "e.json", &scene, &err), MPM_OK);
+    if (!strstr(err.message, bad[k].message))
+      fail_msg("'%s' lacks '%s'", err.message, bad[k].message);
+  }
+  /* without domains the key is refused with its path */
+  mpm_scene scene;
+  mpm_error err;
+  const char *text =
+      "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.05}, \"time\": {\"end\": 1},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5], "
+      "\"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"enrichment\": 0.5}]}";
+  assert_int_not_equal(mpm_scene_parse(text, "e.json", &scene, &err), MPM_OK);
+  assert_non_null(strstr(err.message, "bodies[0].enrichment"));
+  assert_non_null(strstr(err.message, "\"domains\": true"));
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_metric),
+      cmocka_unit_test(test_categories),
+      cmocka_unit_test(test_mixed_conservation),
+      cmocka_unit_test(test_always_enriched_translation),
+      cmocka_unit_test(test_twist_release),
+      cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_scene_key),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
