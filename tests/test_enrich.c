@@ -283,8 +283,9 @@ static void test_always_enriched_translation(void **state) {
   }
   print_message("epsilon = 1, translation over %.3f s: position error %.3g m, |F - I| %.3g\n", t,
                 worst, worst_F);
-  /* float: x += dt v rounded at 0.8 m (6e-8) in each of the ~100 steps */
-  assert_true(worst < TOL(5e-6, 1e-13));
+  /* float: within a few roundings of x at 0.8 m (6e-8), the corners' moves being summed with
+   * compensation (domain_transfer.c) */
+  assert_true(worst < TOL(3e-7, 1e-13));
   assert_true(worst_F < TOL(1e-6, 1e-13));
   mpm_sim_destroy(sim);
 }

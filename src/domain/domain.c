@@ -15,17 +15,18 @@ void mpm_domain_set_init(mpm_domain_set *s) {
 }
 
 /* The real-valued corner arrays, for loops that treat them alike (grow, free). */
-static void corner_arrays(mpm_domain_set *s, mpm_real **out[19]) {
+static void corner_arrays(mpm_domain_set *s, mpm_real **out[22]) {
   int k = 0;
   for (int d = 0; d < 3; ++d) out[k++] = &s->cX[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cx[d];
+  for (int d = 0; d < 3; ++d) out[k++] = &s->cxc[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cv[d];
   out[k++] = &s->cm;
   for (int d = 0; d < 3; ++d) out[k++] = &s->cp[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cf[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cvg[d];
 }
-#define CORNER_REAL_ARRAYS 19
+#define CORNER_REAL_ARRAYS 22
 
 void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_particles_free(&s->particles);
@@ -213,6 +214,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
         *slot = (uint32_t)c;
         for (int d = 0; d < 3; ++d) {
           s->cX[d][c] = s->cx[d][c] = (mpm_real)X[a][d];
+          s->cxc[d][c] = 0;
           s->cv[d][c] = p->v[d][i]; /* the body's initial velocity field at the vertex, below */
         }
       }

@@ -63,6 +63,10 @@ typedef struct mpm_domain_set {
   size_t corner_count, corner_capacity;
   mpm_real *cX[3]; /* reference position, m */
   mpm_real *cx[3]; /* current position, m */
+  /* what the rounded cx could not hold of the position (compensated summation of the steps'
+   * moves, Kahan): a body drifting slowly does not round differently on either side of a
+   * power of two in float (issue 13) */
+  mpm_real *cxc[3];
   mpm_real *cv[3]; /* velocity, m/s (hybrid PIC/FLIP of the grid's) */
   /* per step: rasterized mass, momentum and force; the grid (PIC) velocity at the corner */
   mpm_real *cm, *cp[3], *cf[3], *cvg[3];

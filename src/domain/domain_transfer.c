@@ -183,9 +183,18 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     if (vg2 > max_v2) max_v2 = vg2;
     for (int d = 0; d < 3; ++d) {
       s->cv[d][c] = v[d];
-      mpm_real x = s->cx[d][c] + dt * vg[d]; /* Zhu eq. 9 */
-      x = x < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : x;
-      s->cx[d][c] = x > ctx->clamp_hi[d] ? ctx->clamp_hi[d] : x;
+      /* Zhu eq. 9, summed with compensation: y is the move plus what the last rounding lost;
+       * t = x + y rounded, and `lost` its rounding error exactly (Knuth's TwoSum) */
+      const mpm_real x = s->cx[d][c], y = dt * vg[d] + s->cxc[d][c];
+      mpm_real t = x + y;
+      const mpm_real yb = t - x;
+      mpm_real lost = (x - (t - yb)) + (y - yb);
+      if (t < ctx->clamp_lo[d] || t > ctx->clamp_hi[d]) { /* held at the clamp: exact there */
+        t = t < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : ctx->clamp_hi[d];
+        lost = 0;
+      }
+      s->cx[d][c] = t;
+      s->cxc[d][c] = lost;
     }
   }
   /* 2. particles: F from the grid velocities at the corners (Zhu eq. 7), the return map of

@@ -158,11 +158,13 @@ static int copy_particles(mpm_particles *dst, const mpm_particles *src) {
   return 0;
 }
 
-/* The corner arrays a step changes: positions and velocities. */
-static void corner_state(mpm_domain_set *s, mpm_real *out[6]) {
+/* The corner arrays a step changes: positions (with their compensation) and velocities. */
+#define CORNER_STATE 9
+static void corner_state(mpm_domain_set *s, mpm_real *out[CORNER_STATE]) {
   for (int d = 0; d < 3; ++d) {
     out[d] = s->cx[d];
     out[3 + d] = s->cv[d];
+    out[6 + d] = s->cxc[d];
   }
 }
 
@@ -174,7 +176,7 @@ static int save_state(mpm_sim *sim) {
   if (!s->active_count) return 0;
   if (copy_particles(&sim->domain_backup, &s->particles)) return -1;
   if (sim->corner_backup_capacity < s->corner_count) {
-    for (int k = 0; k < 6; ++k) {
+    for (int k = 0; k < CORNER_STATE; ++k) {
       mpm_free(sim->corner_backup[k]);
       sim->corner_backup[k] = mpm_alloc((s->corner_count + 1) * sizeof(mpm_real));
       if (!sim->corner_backup[k]) {
@@ -184,9 +186,9 @@ static int save_state(mpm_sim *sim) {
     }
     sim->corner_backup_capacity = s->corner_count;
   }
-  mpm_real *c[6];
+  mpm_real *c[CORNER_STATE];
   corner_state(s, c);
-  for (int k = 0; k < 6; ++k)
+  for (int k = 0; k < CORNER_STATE; ++k)
     memcpy(sim->corner_backup[k], c[k], s->corner_count * sizeof(mpm_real));
   return 0;
 }
@@ -199,9 +201,9 @@ static void restore_state(mpm_sim *sim) {
   mpm_domain_set *s = &sim->domains;
   if (!s->active_count) return;
   copy_particles(&s->particles, &sim->domain_backup); /* same size: cannot fail */
-  mpm_real *c[6];
+  mpm_real *c[CORNER_STATE];
   corner_state(s, c);
-  for (int k = 0; k < 6; ++k)
+  for (int k = 0; k < CORNER_STATE; ++k)
     memcpy(c[k], sim->corner_backup[k], s->corner_count * sizeof(mpm_real));
 }
 
