@@ -154,7 +154,11 @@ static void test_categories(void **state) {
   mpm_sim *sim = bar("", "");
   mpm_domain_set *s = &sim->domains;
   assert_int_equal(s->particles.count, 40);
-  assert_close(mpm_enrichment_epsilon(s, 0), 0.6, 1e-7); /* the default (Zhu sec. 5.1) */
+  assert_close(mpm_enrichment_epsilon(s, 0), 0, 0); /* the default: off */
+  mpm_sim_destroy(sim);
+  sim = bar(", \"enrichment\": 0.6", ""); /* Zhu sec. 5.1's value */
+  s = &sim->domains;
+  assert_close(mpm_enrichment_epsilon(s, 0), 0.6, 1e-7);
   const size_t q0 = 17;
   stretch_particle(sim, q0, 4); /* K = 3 / sqrt(18 * 2.0625) = 0.49 <= 0.6 */
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
@@ -203,7 +207,7 @@ static void particle_momentum(const mpm_sim *sim, double p[3], double *mass) {
 
 /* A bar, half of it stretched enough to enrich, spinning and moving. */
 static mpm_sim *mixed_bar(void) {
-  mpm_sim *sim = bar("", "");
+  mpm_sim *sim = bar(", \"enrichment\": 0.6", "");
   const double A[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, spin[3] = {0.5, 2, -1}, u[3] = {0.3, -0.2, 0.1};
   deform_corners(sim, A, spin, u);
   for (size_t q = 0; q < sim->domains.particles.count; ++q)

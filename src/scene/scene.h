@@ -122,7 +122,8 @@ typedef struct mpm_body_desc {
   double jitter;              /* 0..1 fraction of the lattice spacing */
   unsigned seed;              /* jitter seed */
   int domains;                /* 1: particle domains (Zhu et al. 2017 sec. 4); needs jitter 0 */
-  double enrichment;          /* domains: enrich where K(F) <= this (Zhu sec. 5); 0 never, 0.6 */
+  double enrichment;          /* domains: enrich where K(F) <= this (Zhu sec. 5); default 0:
+                                 never (Zhu: 0.6) */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
 } mpm_body_desc;

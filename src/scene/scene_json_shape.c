@@ -400,7 +400,10 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   b->seed = (unsigned)seed;
   if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 || parse_releases(c, node, b) < 0)
     return -1;
-  b->enrichment = b->domains ? 0.6 : 0; /* Zhu sec. 5.1: epsilon typically 0.6 */
+  /* Zhu sec. 5.1 uses epsilon = 0.6; off by default until enriched domains have hourglass
+   * control (one quadrature point per hexahedron leaves its hourglass modes free once no
+   * grid carries its corners: see docs/scene-format.md) */
+  b->enrichment = 0;
   if (mpm_json_get(node, "enrichment") && !b->domains)
     return mpm_json_fail_at(c, "enrichment", MPM_ERR_INVALID,
                             "applies only to a body with \"domains\": true");

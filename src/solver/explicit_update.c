@@ -3,9 +3,9 @@
 #include "core/parallel.h"
 
 /* DOF i (mass m, position x) of a segment with the given boundary depth. With `ahead` the
- * boundary acts where the step takes the DOF, x + dt v (domain corners, which move with their
- * own velocity: a grid node's band of half a cell is what stops material before an obstacle;
- * a corner has none). */
+ * boundary acts where the DOF is and again where the step takes it, x + dt v (domain corners,
+ * which move with their own velocity: a grid node's band of half a cell is what stops
+ * material before an obstacle; a corner has none, and a grip must hold what it holds). */
 MPM_ALWAYS_INLINE void update_dof(const mpm_explicit_update *u, const int impulse, mpm_dofs *d,
                                   size_t i, const mpm_real x[3], mpm_real depth, int ahead) {
   const mpm_real mass = d->mass[i];
@@ -20,11 +20,10 @@ MPM_ALWAYS_INLINE void update_dof(const mpm_explicit_update *u, const int impuls
     v[c] = impulse ? v0[c] + u->dt * u->gravity[c]
                    : v0[c] + u->dt * (d->f[c][i] * inv_m + u->gravity[c]);
   }
+  mpm_boundary_apply(&u->boundary, x, depth, v);
   if (ahead) {
     const mpm_real y[3] = {x[0] + u->dt * v[0], x[1] + u->dt * v[1], x[2] + u->dt * v[2]};
     mpm_boundary_apply(&u->boundary, y, depth, v);
-  } else {
-    mpm_boundary_apply(&u->boundary, x, depth, v);
   }
   for (int c = 0; c < 3; ++c) {
     d->v0[c][i] = v0[c];

@@ -102,11 +102,14 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
     flag[i] = 0;
     if (!(d->mass[i] > 0)) continue;
     mpm_real vi[3] = {v[0][i], v[1][i], v[2][i]}, nn[4][3], vo[4][3];
-    /* a corner DOF is constrained where the predicted step takes it (explicit_update.c) */
-    const mpm_real ahead = (size_t)i >= s->corner_begin ? s->dt : 0;
-    const mpm_real x[3] = {s->px[0][i] + ahead * vi[0], s->px[1][i] + ahead * vi[1],
-                           s->px[2][i] + ahead * vi[2]};
-    const int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], vi, nn, vo);
+    const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
+    int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], vi, nn, vo);
+    if (count == 0 && (size_t)i >= s->corner_begin) {
+      /* a corner DOF free where it is: constrained where the predicted step takes it
+       * (explicit_update.c) */
+      const mpm_real y[3] = {x[0] + s->dt * vi[0], x[1] + s->dt * vi[1], x[2] + s->dt * vi[2]};
+      count = mpm_boundary_constraints(s->boundary, y, s->depth[i], vi, nn, vo);
+    }
     flag[i] = (uint8_t)constrain_dof(count, nn, vo, vi, P[i]);
     for (int c = 0; c < 3; ++c) v[c][i] = vi[c];
   }
@@ -225,10 +228,12 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
   for (long i = 0; i < n; ++i) {
     if (!(d->mass[i] > 0)) continue;
     mpm_real v[3] = {d->v[0][i], d->v[1][i], d->v[2][i]};
-    const mpm_real ahead = (size_t)i >= s->corner_begin ? s->dt : 0;
-    const mpm_real x[3] = {s->px[0][i] + ahead * v[0], s->px[1][i] + ahead * v[1],
-                           s->px[2][i] + ahead * v[2]};
+    const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
     mpm_boundary_apply(s->boundary, x, s->depth[i], v);
+    if ((size_t)i >= s->corner_begin) { /* corners: and where the step takes them */
+      const mpm_real y[3] = {x[0] + s->dt * v[0], x[1] + s->dt * v[1], x[2] + s->dt * v[2]};
+      mpm_boundary_apply(s->boundary, y, s->depth[i], v);
+    }
     for (int c = 0; c < 3; ++c) d->v[c][i] = v[c];
   }
 }
