@@ -111,6 +111,13 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
   const long np = (long)p->count, nc = (long)s->corner_count;
   if (reserve(e, p->count + 1, s->corner_count + 1)) return -1;
   e->rate = 0;
+  if (!e->any) { /* no body enriches: nothing to evaluate (the domain step's common case) */
+    memset(e->category, MPM_DOMAIN_UNENRICHED, p->count);
+    e->count = 0;
+    e->particles[0] = s->active_count;
+    e->particles[1] = e->particles[2] = 0;
+    return 0;
+  }
   /* 1. the metric per particle (eq. 10 on the clamped F, sec. 5.3) */
 #pragma omp parallel for schedule(static) if (np >= MPM_PARALLEL_MIN / 8)
   for (long q = 0; q < np; ++q) {
