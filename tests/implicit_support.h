@@ -14,6 +14,7 @@
 /* A block of `model` (extra material keys in material_extra) of half size `half` with `ppc`
  * particles per cell (on the lattice, no jitter), as
  * domains or not, on `kernel`; solver_extra is added to the solver section. */
+/* domains: 0 material points, 1 particle domains, 2 domains enriched where K(F) <= 0.85. */
 static inline mpm_sim *implicit_block(const char *model, const char *material_extra,
                                       const char *kernel, int domains, const char *solver_extra,
                                       double half, int ppc) {
@@ -28,7 +29,7 @@ static inline mpm_sim *implicit_block(const char *model, const char *material_ex
            "0.59, 0.61], \"half_extent\": [%g, %g, %g]}, \"material\": \"m\", "
            "\"particles_per_cell\": %d, \"jitter\": 0, \"domains\": %s}]}",
            kernel, solver_extra, model, material_extra, half, half * 0.8, half * 0.9, ppc,
-           domains ? "true" : "false");
+           domains == 2 ? "true, \"enrichment\": 0.92" : domains ? "true" : "false");
   return test_sim_from_json(text, "block.json");
 }
 

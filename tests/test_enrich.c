@@ -385,6 +385,42 @@ static void test_threads_bitwise(void **state) {
   mpm_sim_destroy(run[1]);
 }
 
+/* The hourglass measure q_alpha (domain/enrich.h) vanishes for every affine motion of a domain
+ * (rotations, stretches, shears, translations) and sees a pure hourglass pattern. */
+static void test_hourglass_modes(void **state) {
+  (void)state;
+  mpm_sim *sim = bar("", "");
+  mpm_domain_set *s = &sim->domains;
+  uint64_t rng = 5;
+  double worst = 0;
+  for (int t = 0; t < 20; ++t) {
+    double A[9];
+    for (int k = 0; k < 9; ++k) A[k] = (k % 4 == 0) + test_rand(&rng, -0.6, 0.6);
+    const double spin[3] = {0, 0, 0}, u[3] = {0, 0, 0};
+    deform_corners(sim, A, spin, u);
+    for (size_t q = 0; q < s->particles.count; ++q) {
+      mpm_real Q[4][3];
+      mpm_hourglass_q(s, q, s->cx, Q);
+      for (int al = 0; al < 4; ++al)
+        for (int d = 0; d < 3; ++d) worst = fmax(worst, fabs(Q[al][d]));
+    }
+  }
+  print_message("hourglass q of affine motions: largest %.3g m (corner spacing 0.02 m)\n", worst);
+  assert_true(worst < TOL(1e-6, 1e-14));
+  /* mode 4 (s_i s_j s_k) of one domain, amplitude 1 mm along y: q_4 = 8 mm, the others 0 */
+  const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zero[3] = {0, 0, 0};
+  deform_corners(sim, I, zero, zero);
+  const size_t q0 = 17;
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+    s->cx[1][s->corner[q0][a]] += (mpm_real)(1e-3 * mpm_hourglass_modes[3][a]);
+  mpm_real Q[4][3];
+  mpm_hourglass_q(s, q0, s->cx, Q);
+  for (int al = 0; al < 4; ++al)
+    for (int d = 0; d < 3; ++d)
+      assert_close(Q[al][d], al == 3 && d == 1 ? 8e-3 : 0, TOL(2e-7, 1e-14));
+  mpm_sim_destroy(sim);
+}
+
 static void test_scene_key(void **state) {
   (void)state;
   static const struct {
@@ -432,6 +468,7 @@ int main(void) {
       cmocka_unit_test(test_always_enriched_translation),
       cmocka_unit_test(test_twist_release),
       cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_hourglass_modes),
       cmocka_unit_test(test_scene_key),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -109,6 +109,31 @@ static void test_hessian_matches_finite_differences(void **state) {
       }
 }
 
+/* With enriched corners (Zhu sec. 5: identity rows of the corner embedding, corner DOFs) and
+ * their hourglass control (domain/enrich.h) K matches central differences of the forces. */
+static void test_enriched_finite_differences(void **state) {
+  (void)state;
+  static const char *const kernels[] = {"linear", "quadratic"};
+  uint64_t rng = 17;
+  for (int m = 0; m < 2; ++m)
+    for (int k = 0; k < 2; ++k) {
+      char solver[128];
+      snprintf(solver, sizeof solver, ", \"domain_kernel\": \"%s\"", kernels[k]);
+      mpm_sim *sim = implicit_block(MODELS[m].model, "", "quadratic", 2, solver, 0.12, 8);
+      set_states(implicit_particles(sim), STATE_RANDOM, &rng);
+      const double err = fd_error(sim, &rng);
+      const mpm_domain_enrichment *e = &sim->domains.enrich;
+      print_message("K du vs central differences, enriched: %-16s %-9s %zu / %zu / %zu "
+                    "particles unenriched / transitional / enriched, %zu corner DOFs: rel. error "
+                    "%.2e\n",
+                    MODELS[m].model, kernels[k], e->particles[0], e->particles[1], e->particles[2],
+                    e->count, err);
+      assert_true(e->particles[1] > 0 && e->particles[2] > 0);
+      assert_true(err < TOL(3e-2, 1e-6));
+      mpm_sim_destroy(sim);
+    }
+}
+
 /* On the dense reference grid (the operators' scalar paths) K matches central differences of
  * the forces too. */
 static void test_dense_grid(void **state) {
@@ -424,6 +449,7 @@ static void test_scene_keys(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_hessian_matches_finite_differences),
+      cmocka_unit_test(test_enriched_finite_differences),
       cmocka_unit_test(test_dense_grid),
       cmocka_unit_test(test_symmetric_and_definite),
       cmocka_unit_test(test_momentum_conserved),

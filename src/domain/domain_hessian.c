@@ -1,6 +1,7 @@
 /* domain_hessian.c - the particle domains' forces, energy, Hessian action and Jacobi diagonal
  * for the implicit solve (see domain_hessian.h). */
 #include "domain/domain_hessian.h"
+#include "domain/enrich.h"
 
 #include <string.h>
 
@@ -18,6 +19,16 @@ int mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s, const mpm_
     h->cu[d] = mpm_arena_alloc(arena, nc * sizeof(mpm_real));
     h->cy[d] = mpm_arena_alloc(arena, nc * sizeof(mpm_real));
     ok = ok && h->cu[d] && h->cy[d];
+  }
+  if (ok && s->enrich.count) {
+    h->kappa = mpm_arena_alloc(arena, np * sizeof *h->kappa);
+    h->qh = mpm_arena_alloc(arena, np * sizeof *h->qh);
+    h->Q = mpm_arena_alloc(arena, np * sizeof *h->Q);
+    ok = h->kappa && h->qh && h->Q;
+    for (size_t q = 0; ok && q + 1 < np; ++q) {
+      h->kappa[q] = mpm_hourglass_kappa(s, materials, q);
+      memset(h->qh[q], 0, sizeof h->qh[q]);
+    }
   }
   return ok ? 0 : -1;
 }
@@ -53,6 +64,15 @@ void mpm_domain_hessian_displace(mpm_domain_hessian *h, mpm_real *const u[3]) {
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < n; ++q) {
     for (int e = 0; e < 9; ++e) h->Fh[q][e] = p->F[e][q];
+    if (h->kappa && h->kappa[q] > 0) { /* q_alpha at x + u */
+      mpm_hourglass_q(s, (size_t)q, s->cx, h->qh[q]);
+      if (u) {
+        mpm_real du[4][3];
+        mpm_hourglass_q(s, (size_t)q, h->cu, du);
+        for (int al = 0; al < 4; ++al)
+          for (int d = 0; d < 3; ++d) h->qh[q][al][d] += du[al][d];
+      }
+    }
     if (!s->active[q] || !u) continue;
     mpm_real dF[9];
     corner_gradient(h, q, dF);
@@ -97,6 +117,9 @@ static void corners_to_dofs(mpm_domain_hessian *h, mpm_real scale, mpm_real *con
       const mpm_real *g = s->g[q][a], *M = h->dP[q];
       for (int d = 0; d < 3; ++d)
         f[d] += M[3 * d] * g[0] + M[3 * d + 1] * g[1] + M[3 * d + 2] * g[2];
+      if (h->kappa) /* + sum_alpha h_alpha,a kappa q_alpha */
+        for (int al = 0; al < 4; ++al)
+          for (int d = 0; d < 3; ++d) f[d] += mpm_hourglass_modes[al][a] * h->Q[q][al][d];
     }
     for (int d = 0; d < 3; ++d) h->cy[d][c] = (mpm_real)(scale * f[d]);
   }
@@ -120,6 +143,11 @@ void mpm_domain_hessian_apply(mpm_domain_hessian *h, mpm_real scale, mpm_real *c
     corner_gradient(h, q, dF);
     action(h, q, dF, dP);
     for (int e = 0; e < 9; ++e) h->dP[q][e] = p->vol0[q] * dP[e];
+    if (h->kappa) { /* the hourglass Hessian kappa sum_alpha h_alpha h_alpha^T, on E x */
+      mpm_hourglass_q(s, (size_t)q, h->cu, h->Q[q]);
+      for (int al = 0; al < 4; ++al)
+        for (int d = 0; d < 3; ++d) h->Q[q][al][d] *= h->kappa[q];
+    }
   }
   corners_to_dofs(h, scale, y);
 }
@@ -138,6 +166,9 @@ void mpm_domain_hessian_forces(mpm_domain_hessian *h, mpm_real *const f[3]) {
     mpm_real P[9];
     m.model->pk1(&m, h->Fh[q], P);
     for (int e = 0; e < 9; ++e) h->dP[q][e] = p->vol0[q] * P[e];
+    if (h->kappa) /* the hourglass forces -kappa sum_alpha h_alpha q_alpha */
+      for (int al = 0; al < 4; ++al)
+        for (int d = 0; d < 3; ++d) h->Q[q][al][d] = h->kappa[q] * h->qh[q][al][d];
   }
   corners_to_dofs(h, -1, f);
 }
@@ -150,6 +181,12 @@ double mpm_domain_hessian_energy(const mpm_domain_hessian *h) {
     if (!s->active[q]) continue;
     const mpm_material m = material_of(h, (long)q);
     e += (double)p->vol0[q] * (double)m.model->energy(&m, h->Fh[q]);
+    if (h->kappa && h->kappa[q] > 0) {
+      double q2 = 0;
+      for (int al = 0; al < 4; ++al)
+        for (int d = 0; d < 3; ++d) q2 += (double)h->qh[q][al][d] * (double)h->qh[q][al][d];
+      e += 0.5 * (double)h->kappa[q] * q2;
+    }
   }
   return e;
 }
@@ -172,7 +209,7 @@ void mpm_domain_hessian_diagonal(mpm_domain_hessian *h, mpm_real scale, mpm_real
   const mpm_particles *p = &s->particles;
   const mpm_embedding *E = &s->corner_grid;
   uint32_t col[MAX_NODES];
-  mpm_real b[MAX_NODES][3];
+  mpm_real b[MAX_NODES][3], hs[MAX_NODES][4];
   for (size_t q = 0; q < p->count; ++q) {
     if (!s->active[q]) continue;
     /* b_i = sum_a E_ai g_qa over the union of the corners' stencils */
@@ -187,20 +224,27 @@ void mpm_domain_hessian_diagonal(mpm_domain_hessian *h, mpm_real scale, mpm_real
           if (count == MAX_NODES) continue;
           col[count] = E->col[e];
           b[count][0] = b[count][1] = b[count][2] = 0;
+          hs[count][0] = hs[count][1] = hs[count][2] = hs[count][3] = 0;
           ++count;
         }
         for (int t = 0; t < 3; ++t) b[k][t] += E->w[e] * g[t];
+        /* the hourglass vectors seen by the DOF: sum_a E_ai h_alpha,a */
+        for (int al = 0; al < 4; ++al) hs[k][al] += E->w[e] * mpm_hourglass_modes[al][a];
       }
     }
     mpm_real S[3][9];
     diagonal_blocks(h, (long)q, S);
     const mpm_real v = scale * p->vol0[q];
-    for (int k = 0; k < count; ++k)
+    const mpm_real kap = h->kappa ? scale * h->kappa[q] : 0;
+    for (int k = 0; k < count; ++k) {
+      mpm_real hg = 0; /* kappa sum_alpha (sum_a E_ai h_alpha,a)^2, the same for every component */
+      for (int al = 0; al < 4; ++al) hg += hs[k][al] * hs[k][al];
       for (int c = 0; c < 3; ++c) {
         mpm_real sum = 0;
         for (int j = 0; j < 3; ++j)
           for (int l = 0; l < 3; ++l) sum += b[k][j] * S[c][3 * j + l] * b[k][l];
-        d[c][col[k]] += v * sum;
+        d[c][col[k]] += v * sum + kap * hg;
       }
+    }
   }
 }

@@ -10,6 +10,9 @@
  *   Hessian     K u = E^T (sum_p V_p^0 (C_p : sum_b u_b g_pb^T) g_pa)      (eqs. 14-15)
  *   diagonal    K_ii,cc = sum_p V_p^0 b_ip^T S_p^c b_ip,  b_ip = sum_a E_ai g_pa = grad_X w_ip,
  *               S^c_jl = C_cj,cl                                           (eqs. 17-19)
+ * Particles touching enriched corners add the hourglass energy 1/2 kappa sum |q_alpha|^2
+ * (domain/enrich.h), quadratic in the corner positions: its forces, its constant Hessian
+ * kappa sum_alpha h_alpha h_alpha^T and its diagonal go with the terms above.
  * The corner sums go through the corner adjacency (race-free, deterministic); E^T through the
  * embedding's coloured schedule. The diagonal's cross-corner terms are summed particle by
  * particle, serially (it is built once per Newton iteration). */
@@ -29,6 +32,11 @@ typedef struct mpm_domain_hessian {
   mpm_real *cu[3];       /* per corner: displacement */
   mpm_real *cy[3];       /* per corner: force */
   int exact;             /* 1: the model's own dP/dF at F^ (tests), not the definite one */
+  /* hourglass control of particles touching enriched corners (domain/enrich.h; NULL without
+   * enriched corners): kappa, q_alpha at the displacement, and per-action scratch kappa q */
+  mpm_real *kappa;
+  mpm_real (*qh)[4][3];
+  mpm_real (*Q)[4][3];
 } mpm_domain_hessian;
 
 /* Scratch from the step's arena for the set's particles and corners (after mpm_domain_p2g has

@@ -3,6 +3,7 @@
 #include "domain/domain_transfer.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
+#include "domain/enrich.h"
 
 #include <math.h>
 #include <string.h>
@@ -80,8 +81,18 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   /* 0. V0 P of every active particle, once (each is gathered by its 8 corners) */
   mpm_real(*vP)[9] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
   if (!vP) return -1;
+  /* hourglass control of particles touching enriched corners (domain/enrich.h): kappa q */
+  const int hourglass = s->enrich.count > 0;
+  mpm_real(*Q)[4][3] = hourglass ? mpm_arena_alloc(scratch, (p->count + 1) * sizeof *Q) : NULL;
+  if (hourglass && !Q) return -1;
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < np; ++q) {
+    if (hourglass) {
+      const mpm_real kappa = mpm_hourglass_kappa(s, ctx->materials, (size_t)q);
+      mpm_hourglass_q(s, (size_t)q, s->cx, Q[q]);
+      for (int al = 0; al < 4; ++al)
+        for (int d = 0; d < 3; ++d) Q[q][al][d] *= kappa;
+    }
     if (!s->active[q]) continue;
     mpm_real F[9], P[9];
     for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
@@ -104,6 +115,9 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
       const mpm_real *gq = s->g[q][a], *vPq = vP[q];
       for (int d = 0; d < 3; ++d)
         f[d] -= vPq[3 * d] * gq[0] + vPq[3 * d + 1] * gq[1] + vPq[3 * d + 2] * gq[2];
+      if (hourglass) /* f_a -= kappa sum_alpha h_alpha,a q_alpha */
+        for (int al = 0; al < 4; ++al)
+          for (int d = 0; d < 3; ++d) f[d] -= mpm_hourglass_modes[al][a] * Q[q][al][d];
     }
     s->cm[c] = (mpm_real)m;
     for (int d = 0; d < 3; ++d) {

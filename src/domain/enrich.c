@@ -9,6 +9,22 @@
 #include <math.h>
 #include <string.h>
 
+/* corner a = (i, j, k) in bits 0, 1, 2 (hex.h), s = +-1 per bit: s_i s_j, s_j s_k, s_i s_k and
+ * s_i s_j s_k, each orthogonal to 1, x, y and z over the cube's corners */
+const mpm_real mpm_hourglass_modes[4][MPM_HEX_CORNERS] = {
+    {1, -1, -1, 1, 1, -1, -1, 1},
+    {1, 1, -1, -1, -1, -1, 1, 1},
+    {1, -1, 1, -1, -1, 1, -1, 1},
+    {-1, 1, 1, -1, 1, -1, -1, 1},
+};
+
+mpm_real mpm_hourglass_kappa(const mpm_domain_set *s, const mpm_material *materials, size_t q) {
+  const mpm_domain_enrichment *e = &s->enrich;
+  if (!s->active[q] || !e->count || e->category[q] == MPM_DOMAIN_UNENRICHED) return 0;
+  const mpm_real h = (mpm_real)cbrt((double)s->particles.vol0[q]);
+  return materials[s->particles.material[q]].mu * h / 80;
+}
+
 mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c) {
   const double J = (double)mpm_m3_det(F), f2 = (double)mpm_m3_ddot(F, F);
   /* sigma_min >= 2 J / ||F||^2 (sigma_1 sigma_2 <= ||F||^2 / 2): when that is >= c no singular

@@ -59,4 +59,33 @@ int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_r
 
 void mpm_enrichment_free(mpm_domain_enrichment *e);
 
+/* Hourglass control of enriched domains (beyond Zhu: a domain has one quadrature point, its
+ * particle, so the four hourglass modes of its hexahedron cost no energy; the grid's smooth
+ * field keeps them small while it carries the corners, enriched corners are free).
+ * Flanagan and Belytschko 1981, stiffness form, on the reference lattice cube (where the
+ * hourglass vectors h_alpha are orthogonal to every linear field, so gamma = h): with
+ *   q_alpha = sum_a h_alpha,a x_a   (m; zero for every affine motion, rotations included),
+ *   E_hg = 1/2 kappa sum_alpha |q_alpha|^2,  kappa = mu h / 80 (N/m),
+ *   f_a  = -kappa sum_alpha h_alpha,a q_alpha,
+ * an hourglass pattern of corner amplitude d costs 0.4 mu h d^2, about what a smooth
+ * deformation of the same amplitude costs. Applied to the particles that touch an enriched
+ * corner (category other than unenriched), so the unenriched path is unchanged. */
+extern const mpm_real mpm_hourglass_modes[4][MPM_HEX_CORNERS];
+
+/* kappa of particle q (0 for unenriched particles and inactive ones). */
+mpm_real mpm_hourglass_kappa(const mpm_domain_set *s, const mpm_material *materials, size_t q);
+
+/* q_alpha of particle q from per-corner values v[3] (positions or displacements). */
+static inline void mpm_hourglass_q(const mpm_domain_set *s, size_t q, mpm_real *const v[3],
+                                   mpm_real out[4][3]) {
+  for (int al = 0; al < 4; ++al) {
+    out[al][0] = out[al][1] = out[al][2] = 0;
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+      const uint32_t c = s->corner[q][a];
+      const mpm_real w = mpm_hourglass_modes[al][a];
+      for (int d = 0; d < 3; ++d) out[al][d] += w * v[d][c];
+    }
+  }
+}
+
 #endif
