@@ -143,10 +143,12 @@ void mpm_domain_hessian_apply(mpm_domain_hessian *h, mpm_real scale, mpm_real *c
     corner_gradient(h, q, dF);
     action(h, q, dF, dP);
     for (int e = 0; e < 9; ++e) h->dP[q][e] = p->vol0[q] * dP[e];
-    if (h->kappa) { /* the hourglass Hessian kappa sum_alpha h_alpha h_alpha^T, on E x */
+    if (h->kappa && h->kappa[q] > 0) { /* the hourglass Hessian kappa sum h_alpha h_alpha^T */
       mpm_hourglass_q(s, (size_t)q, h->cu, h->Q[q]);
       for (int al = 0; al < 4; ++al)
         for (int d = 0; d < 3; ++d) h->Q[q][al][d] *= h->kappa[q];
+    } else if (h->kappa) {
+      memset(h->Q[q], 0, sizeof h->Q[q]);
     }
   }
   corners_to_dofs(h, scale, y);

@@ -87,11 +87,15 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   if (hourglass && !Q) return -1;
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < np; ++q) {
-    if (hourglass) {
+    if (hourglass) { /* only particles touching an enriched corner have kappa > 0 */
       const mpm_real kappa = mpm_hourglass_kappa(s, ctx->materials, (size_t)q);
-      mpm_hourglass_q(s, (size_t)q, s->cx, Q[q]);
-      for (int al = 0; al < 4; ++al)
-        for (int d = 0; d < 3; ++d) Q[q][al][d] *= kappa;
+      if (kappa > 0) {
+        mpm_hourglass_q(s, (size_t)q, s->cx, Q[q]);
+        for (int al = 0; al < 4; ++al)
+          for (int d = 0; d < 3; ++d) Q[q][al][d] *= kappa;
+      } else {
+        memset(Q[q], 0, sizeof Q[q]);
+      }
     }
     if (!s->active[q]) continue;
     mpm_real F[9], P[9];

@@ -321,13 +321,9 @@ mpm_status mpm_sim_mark_enrichment(mpm_sim *sim) {
   return MPM_OK;
 }
 
-static mpm_status mark_enrichment(mpm_sim *sim) {
-  return mpm_sim_mark_enrichment(sim);
-}
-
 mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   mpm_sim_apply_strength(sim, sim->time); /* the moduli of this step (strength schedules) */
-  const mpm_status marked = mark_enrichment(sim);
+  const mpm_status marked = mpm_sim_mark_enrichment(sim);
   if (marked != MPM_OK) return marked;
   double dt = mpm_sim_cfl_dt(sim);
   const mpm_solver_desc *sd = &sim->scene.solver;
@@ -379,7 +375,7 @@ mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, mpm_implicit *s) {
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
   step_ctx *c = mpm_arena_alloc(&sim->step_arena, sizeof *c);
   if (!c) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
-  const mpm_status marked = mark_enrichment(sim);
+  const mpm_status marked = mpm_sim_mark_enrichment(sim);
   if (marked != MPM_OK) return marked;
   step_setup(sim, dt, c);
   c->p2g_output = MPM_P2G_MOMENTUM_FORCE;
