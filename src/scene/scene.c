@@ -64,6 +64,14 @@ mpm_collider_desc mpm_collider_desc_default(void) {
   return c;
 }
 
+mpm_force_desc mpm_force_desc_default(void) {
+  mpm_force_desc f;
+  memset(&f, 0, sizeof f);
+  f.region = mpm_collider_desc_default();
+  f.region.shape = shape_default(MPM_SHAPE_BOX);
+  return f;
+}
+
 void mpm_scene_default(mpm_scene *scene) {
   memset(scene, 0, sizeof *scene);
   snprintf(scene->name, sizeof scene->name, "scene");
@@ -111,13 +119,17 @@ void mpm_scene_free(mpm_scene *scene) {
       scene->colliders[c].motion.keyframes = NULL;
       scene->colliders[c].motion.keyframe_count = 0;
     }
+  if (scene->forces)
+    for (int f = 0; f < scene->force_count; ++f) free(scene->forces[f].region.motion.keyframes);
   free(scene->materials);
   free(scene->bodies);
   free(scene->colliders);
+  free(scene->forces);
   scene->materials = NULL;
   scene->bodies = NULL;
   scene->colliders = NULL;
-  scene->material_count = scene->body_count = scene->collider_count = 0;
+  scene->forces = NULL;
+  scene->material_count = scene->body_count = scene->collider_count = scene->force_count = 0;
 }
 
 void mpm_lame(double E, double nu, double *mu, double *lambda) {
@@ -130,15 +142,18 @@ double mpm_solver_cg_tolerance(const mpm_solver_desc *d) {
   return d->newton_iterations == 1 ? 1e-4 : 1e-2;
 }
 
-double mpm_material_strength(const mpm_material_desc *m, double t) {
-  const int n = m->strength_count;
+double mpm_schedule_at(const double (*keys)[2], int n, double t) {
   if (n <= 0) return 1;
-  if (t <= m->strength[0][0]) return m->strength[0][1];
+  if (t <= keys[0][0]) return keys[0][1];
   for (int k = 1; k < n; ++k)
-    if (t < m->strength[k][0]) {
-      const double t0 = m->strength[k - 1][0], t1 = m->strength[k][0];
+    if (t < keys[k][0]) {
+      const double t0 = keys[k - 1][0], t1 = keys[k][0];
       const double a = (t - t0) / (t1 - t0);
-      return (1 - a) * m->strength[k - 1][1] + a * m->strength[k][1];
+      return (1 - a) * keys[k - 1][1] + a * keys[k][1];
     }
-  return m->strength[n - 1][1];
+  return keys[n - 1][1];
+}
+
+double mpm_material_strength(const mpm_material_desc *m, double t) {
+  return mpm_schedule_at((const double(*)[2])m->strength, m->strength_count, t);
 }

@@ -157,6 +157,18 @@ typedef struct mpm_collider_desc {
                        go); default [0, infinity) */
 } mpm_collider_desc;
 
+/* A body-force region (Zhu Fig. 9: a rabbit sucked up a straw): inside the region (a
+ * collider's shape, with its motion and its `active` window; the rule and friction are unused)
+ * every DOF gets `acceleration` times the schedule's factor at the step's end, on top of
+ * gravity. */
+typedef struct mpm_force_desc {
+  mpm_collider_desc region;
+  double acceleration[3]; /* m/s^2 */
+  int schedule_count;     /* keyframes (time s, factor), interpolated linearly, held outside;
+                             none: factor 1 */
+  double schedule[MPM_STRENGTH_KEYS][2];
+} mpm_force_desc;
+
 typedef struct mpm_output_desc {
   char directory[MPM_PATH_MAX]; /* default "out"; `mpm run -o` overrides */
   int vtu;                      /* per-frame VTU + PVD index */
@@ -226,10 +238,11 @@ typedef struct mpm_scene {
   double end_time; /* s */
   double fps;      /* frames per second */
   mpm_solver_desc solver;
-  int material_count, body_count, collider_count;
+  int material_count, body_count, collider_count, force_count;
   mpm_material_desc *materials;
   mpm_body_desc *bodies;
   mpm_collider_desc *colliders;
+  mpm_force_desc *forces;
   mpm_output_desc output;
   mpm_camera_desc camera;
 } mpm_scene;
@@ -239,6 +252,9 @@ typedef struct mpm_scene {
  * iterations (inexact Newton: the line search and the next iteration correct a loose solve). */
 double mpm_solver_cg_tolerance(const mpm_solver_desc *d);
 
+/* A schedule's factor at time t: keyframes (time, factor) with increasing times, linear between
+ * them, held before the first and after the last; 1 without keyframes (n = 0). */
+double mpm_schedule_at(const double (*keys)[2], int n, double t);
 /* A material's strength factor at time t (1 without a schedule). */
 double mpm_material_strength(const mpm_material_desc *m, double t);
 
@@ -248,6 +264,7 @@ void mpm_scene_default(mpm_scene *scene);
 mpm_material_desc mpm_material_desc_default(void);
 mpm_body_desc mpm_body_desc_default(void);
 mpm_collider_desc mpm_collider_desc_default(void);
+mpm_force_desc mpm_force_desc_default(void);
 /* Free the arrays a scene owns (not the struct). */
 void mpm_scene_free(mpm_scene *scene);
 

@@ -34,7 +34,7 @@
 
 static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
                                        "solver", "materials", "bodies",  "colliders",
-                                       "output", "camera",    NULL};
+                                       "forces", "output",    "camera",  NULL};
 static const char *const DOMAIN_KEYS[] = {"min", "max", "dx", "resolution", "walls", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
@@ -84,6 +84,40 @@ int mpm_sj_get_array(mpm_json_ctx *c, const cJSON *obj, const char *key, int req
 }
 
 /* ---- domain, time, solver, output ----------------------------------------------------- */
+
+int mpm_sj_parse_schedule(mpm_json_ctx *c, const cJSON *node, const char *key,
+                          double keys[MPM_STRENGTH_KEYS][2], int *count) {
+  const cJSON *a = mpm_json_get(node, key);
+  if (!a) return 0;
+  char buf[64];
+  const int n = cJSON_IsArray(a) ? cJSON_GetArraySize(a) : 0;
+  if (n < 1 || n > MPM_STRENGTH_KEYS)
+    return mpm_json_fail_at(c, key, MPM_ERR_INVALID,
+                            "expected an array of 1 to %d [time, factor] keyframes, got %s",
+                            MPM_STRENGTH_KEYS, mpm_json_describe(a, buf, sizeof buf));
+  size_t old = mpm_json_push_key(c, key);
+  int k = 0;
+  for (const cJSON *e = a->child; e; e = e->next, ++k) {
+    const int ok = cJSON_IsArray(e) && cJSON_GetArraySize(e) == 2 && cJSON_IsNumber(e->child) &&
+                   cJSON_IsNumber(e->child->next);
+    const double t = ok ? e->child->valuedouble : 0, f = ok ? e->child->next->valuedouble : 0;
+    size_t o2 = mpm_json_push_index(c, k);
+    if (!ok)
+      return mpm_json_fail(c, MPM_ERR_INVALID, "expected [time, factor] (two numbers), got %s",
+                           mpm_json_describe(e, buf, sizeof buf));
+    if (!isfinite(t) || t < 0 || (k > 0 && !(t > keys[k - 1][0])))
+      return mpm_json_fail(c, MPM_ERR_INVALID,
+                           "expected a time >= 0 (s) after the previous keyframe's, got %g", t);
+    if (!isfinite(f) || f < 0 || f > 1e6)
+      return mpm_json_fail(c, MPM_ERR_INVALID, "expected a factor from 0 to 1e6, got %g", f);
+    keys[k][0] = t;
+    keys[k][1] = f;
+    mpm_json_pop(c, o2);
+  }
+  *count = n;
+  mpm_json_pop(c, old);
+  return 0;
+}
 
 static int parse_walls(mpm_json_ctx *c, const cJSON *domain, mpm_scene *s) {
   const cJSON *w = mpm_json_get(domain, "walls");
@@ -332,7 +366,8 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_vec3(c, root, "gravity", 0, mpm_json_any("m/s^2"), s->gravity) < 0 ||
       parse_time(c, root, s) < 0 || parse_solver(c, root, s) < 0 ||
       mpm_sj_parse_materials(c, root, s) < 0 || mpm_sj_parse_bodies(c, root, s) < 0 ||
-      mpm_sj_parse_colliders(c, root, s) < 0 || parse_output(c, root, s) < 0 ||
+      mpm_sj_parse_colliders(c, root, s) < 0 || mpm_sj_parse_forces(c, root, s) < 0 ||
+      parse_output(c, root, s) < 0 ||
       parse_camera(c, root, s) < 0)
     return -1;
   return 0;

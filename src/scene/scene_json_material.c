@@ -74,39 +74,9 @@ static int check_model_keys(mpm_json_ctx *c, const cJSON *node, int model) {
   return 0;
 }
 
-/* "strength": [[t, factor], ...], 1 to MPM_STRENGTH_KEYS keyframes, times increasing, factors
- * >= 0 (Zhu Fig. 5: a body's strength switched off and on). */
+/* "strength": Zhu Fig. 5: a body's strength switched off and on. */
 static int parse_strength(mpm_json_ctx *c, const cJSON *node, mpm_material_desc *m) {
-  const cJSON *a = mpm_json_get(node, "strength");
-  if (!a) return 0;
-  char buf[64];
-  const int n = cJSON_IsArray(a) ? cJSON_GetArraySize(a) : 0;
-  if (n < 1 || n > MPM_STRENGTH_KEYS)
-    return mpm_json_fail_at(c, "strength", MPM_ERR_INVALID,
-                            "expected an array of 1 to %d [time, factor] keyframes, got %s",
-                            MPM_STRENGTH_KEYS, mpm_json_describe(a, buf, sizeof buf));
-  size_t old = mpm_json_push_key(c, "strength");
-  int k = 0;
-  for (const cJSON *e = a->child; e; e = e->next, ++k) {
-    const int ok = cJSON_IsArray(e) && cJSON_GetArraySize(e) == 2 && cJSON_IsNumber(e->child) &&
-                   cJSON_IsNumber(e->child->next);
-    const double t = ok ? e->child->valuedouble : 0, f = ok ? e->child->next->valuedouble : 0;
-    size_t o2 = mpm_json_push_index(c, k);
-    if (!ok)
-      return mpm_json_fail(c, MPM_ERR_INVALID, "expected [time, factor] (two numbers), got %s",
-                           mpm_json_describe(e, buf, sizeof buf));
-    if (!isfinite(t) || t < 0 || (k > 0 && !(t > m->strength[k - 1][0])))
-      return mpm_json_fail(c, MPM_ERR_INVALID,
-                           "expected a time >= 0 (s) after the previous keyframe's, got %g", t);
-    if (!isfinite(f) || f < 0 || f > 1e6)
-      return mpm_json_fail(c, MPM_ERR_INVALID, "expected a factor from 0 to 1e6, got %g", f);
-    m->strength[k][0] = t;
-    m->strength[k][1] = f;
-    mpm_json_pop(c, o2);
-  }
-  m->strength_count = n;
-  mpm_json_pop(c, old);
-  return 0;
+  return mpm_sj_parse_schedule(c, node, "strength", m->strength, &m->strength_count);
 }
 
 /* One material object at the current path. */

@@ -1,6 +1,6 @@
 /* scene_json_parts.h - what the parts of the JSON scene parser share: scene_json.c (entry
  * points, top level, domain, time, solver, output), scene_json_material.c (materials) and
- * scene_json_shape.c (shapes, bodies, colliders).
+ * scene_json_shape.c (shapes, bodies, colliders, force regions).
  *
  * Each parse function reads its key of `root` (or of `body`) at the current key path of the
  * context, fills the scene and returns 0, or writes the error and returns -1; on an error
@@ -25,6 +25,10 @@ int mpm_sj_fail_nomem(mpm_json_ctx *c, const char *what);
 /* The array at obj[key] (required or not); 0 absent, 1 present, -1 wrong type. */
 int mpm_sj_get_array(mpm_json_ctx *c, const cJSON *obj, const char *key, int required,
                      const char *what, const cJSON **out);
+/* node[key] as a schedule [[time, factor], ...]: 1 to MPM_STRENGTH_KEYS keyframes, times >= 0
+ * and increasing, factors in [0, 1e6]; absent: 0 and *count untouched. */
+int mpm_sj_parse_schedule(mpm_json_ctx *c, const cJSON *node, const char *key,
+                          double keys[MPM_STRENGTH_KEYS][2], int *count);
 
 /* ---- materials (scene_json_material.c) ------------------------------------------------- */
 
@@ -39,5 +43,8 @@ int mpm_sj_parse_body_material(mpm_json_ctx *c, const cJSON *body, int named, mp
 
 int mpm_sj_parse_bodies(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
 int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
+/* root.forces: body-force regions (a collider's shape, motion and window; an acceleration and
+ * a schedule). */
+int mpm_sj_parse_forces(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
 
 #endif

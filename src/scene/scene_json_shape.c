@@ -2,7 +2,8 @@
  * objects (box, sphere, cylinder and mesh for bodies; box, sphere, cylinder and halfspace for
  * colliders) with mesh files resolved against the scene file's directory, the check that each
  * body's bounding box lies inside the domain minus the wall band, the 'bodies' array and the
- * 'colliders' array with their motion (velocity and spin, or keyframes).
+ * 'colliders' array with their motion (velocity and spin, or keyframes), and the 'forces' array
+ * (body-force regions: a collider's shape, motion and window with an acceleration).
  * Part of the scene parser of scene_json.c (shared declarations: scene_json_parts.h). */
 #include "scene/json_check.h"
 #include "scene/mesh.h"
@@ -22,6 +23,8 @@ static const char *const BODY_KEYS[] = {
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", "active",     NULL};
+static const char *const FORCE_KEYS[] = {"name",   "shape",        "inside_out", "motion",
+                                         "active", "acceleration", "schedule",   NULL};
 static const char *const MOTION_KEYS[] = {"velocity", "axis", "angular_speed", "keyframes", NULL};
 static const char *const KEYFRAME_KEYS[] = {"time", "translation", "angle", NULL};
 
@@ -552,6 +555,40 @@ int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
         parse_motion(c, e, &d->motion) < 0 || parse_active(c, e, d->active) < 0)
       return -1;
     d->rule = (mpm_boundary_rule)rule;
+    mpm_json_pop(c, o2);
+  }
+  mpm_json_pop(c, old);
+  return 0;
+}
+
+/* ---- body-force regions ----------------------------------------------------------------- */
+
+int mpm_sj_parse_forces(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
+  const cJSON *arr = NULL;
+  int has = mpm_sj_get_array(c, root, "forces", 0, "an array of body-force region objects", &arr);
+  if (has <= 0) return has;
+  int n = cJSON_GetArraySize(arr);
+  if (n == 0) return 0;
+  s->forces = malloc((size_t)n * sizeof *s->forces);
+  if (!s->forces) return mpm_sj_fail_nomem(c, "forces");
+  size_t old = mpm_json_push_key(c, "forces");
+  int i = 0;
+  for (const cJSON *e = arr->child; e; e = e->next, ++i) {
+    size_t o2 = mpm_json_push_index(c, i);
+    /* counted before parsing so that mpm_scene_free releases its keyframes on error */
+    mpm_force_desc *f = &s->forces[s->force_count++];
+    *f = mpm_force_desc_default();
+    mpm_collider_desc *d = &f->region;
+    snprintf(d->name, sizeof d->name, "force%d", i);
+    if (mpm_json_expect_object(c, e, "a body-force region object") < 0 ||
+        mpm_json_check_keys(c, e, FORCE_KEYS, NULL) < 0 ||
+        mpm_json_string(c, e, "name", 0, d->name, sizeof d->name) < 0 ||
+        parse_shape(c, e, 0, s->path, &d->shape) < 0 ||
+        mpm_json_bool(c, e, "inside_out", 0, &d->inside_out) < 0 ||
+        parse_motion(c, e, &d->motion) < 0 || parse_active(c, e, d->active) < 0 ||
+        mpm_json_vec3(c, e, "acceleration", 1, mpm_json_any("m/s^2"), f->acceleration) < 0 ||
+        mpm_sj_parse_schedule(c, e, "schedule", f->schedule, &f->schedule_count) < 0)
+      return -1;
     mpm_json_pop(c, o2);
   }
   mpm_json_pop(c, old);

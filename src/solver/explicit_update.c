@@ -14,11 +14,11 @@ MPM_ALWAYS_INLINE void update_dof(const mpm_explicit_update *u, const int impuls
     return;
   }
   const mpm_real inv_m = 1 / mass;
-  mpm_real v0[3], v[3];
+  mpm_real v0[3], v[3], g[3] = {u->gravity[0], u->gravity[1], u->gravity[2]};
+  if (u->region_count) mpm_force_regions_add(u->regions, u->region_count, x, g);
   for (int c = 0; c < 3; ++c) {
     v0[c] = d->v0[c][i] * inv_m;
-    v[c] = impulse ? v0[c] + u->dt * u->gravity[c]
-                   : v0[c] + u->dt * (d->f[c][i] * inv_m + u->gravity[c]);
+    v[c] = impulse ? v0[c] + u->dt * g[c] : v0[c] + u->dt * (d->f[c][i] * inv_m + g[c]);
   }
   mpm_boundary_apply(&u->boundary, x, depth, v);
   if (ahead) {

@@ -1,13 +1,15 @@
 /* explicit_update.h - the explicit update of the DOF set (Gao sec. 3.2 steps 3-4), and the
  * boundary rules every DOF and every domain corner obeys.
  *
- * For each DOF with mass: v^n = p / m, v^{n+1} = v^n + dt (f / m + g), then the colliders and
+ * For each DOF with mass: v^n = p / m, v^{n+1} = v^n + dt (f / m + g), g gravity plus the
+ * body-force regions at the DOF, then the colliders and
  * the domain walls act on v^{n+1} at the DOF's position. Positions come from the DOF set (a
  * grid node of any level, a corner), so the same update serves every level and kind. A DOF
  * without mass gets zero velocities. */
 #ifndef MPM_SOLVER_EXPLICIT_UPDATE_H
 #define MPM_SOLVER_EXPLICIT_UPDATE_H
 
+#include "collide/body_force.h"
 #include "collide/boundary.h"
 #include "solver/dofs.h"
 
@@ -22,6 +24,8 @@ typedef enum mpm_p2g_output {
 typedef struct mpm_explicit_update {
   mpm_real dt;         /* s */
   mpm_real gravity[3]; /* m/s^2 */
+  int region_count;    /* body-force regions acting on top of gravity (collide/body_force.h) */
+  const mpm_force_region *regions;
   mpm_boundary boundary;
 } mpm_explicit_update;
 

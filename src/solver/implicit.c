@@ -153,9 +153,31 @@ static void cg_project(void *user, mpm_real *const v[3]) {
   mpm_implicit_project(user, v);
 }
 
-/* v0 <- v^n = momentum / m, v <- v* = v^n + dt (f / m + g); massless DOFs get 0. */
-static void predictor(mpm_implicit *s) {
+/* With body-force regions, each DOF's acceleration (gravity plus the regions at its
+ * position) into s->accel. 0, or -1 when out of memory. */
+static int dof_accelerations(mpm_implicit *s) {
   mpm_dofs *d = s->dofs;
+  if (!s->px[0] && dof_positions(s, s->px, &s->depth)) return -1;
+  for (int c = 0; c < 3; ++c) {
+    s->accel[c] = mpm_arena_alloc(s->arena, (d->count + 1) * sizeof(mpm_real));
+    if (!s->accel[c]) return -1;
+  }
+  const long n = (long)d->count;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
+    mpm_real g[3] = {s->gravity[0], s->gravity[1], s->gravity[2]};
+    mpm_force_regions_add(s->regions, s->region_count, x, g);
+    for (int c = 0; c < 3; ++c) s->accel[c][i] = g[c];
+  }
+  return 0;
+}
+
+/* v0 <- v^n = momentum / m, v <- v* = v^n + dt (f / m + g); massless DOFs get 0. g is gravity,
+ * or with body-force regions each DOF's own acceleration. 0, or -1 when out of memory. */
+static int predictor(mpm_implicit *s) {
+  mpm_dofs *d = s->dofs;
+  if (s->region_count > 0 && dof_accelerations(s)) return -1;
   const long n = (long)d->count;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
@@ -166,10 +188,12 @@ static void predictor(mpm_implicit *s) {
         continue;
       }
       const mpm_real vn = d->v0[c][i] / m;
+      const mpm_real g = s->accel[c] ? s->accel[c][i] : s->gravity[c];
       d->v0[c][i] = vn;
-      d->v[c][i] = vn + s->dt * (d->f[c][i] / m + s->gravity[c]);
+      d->v[c][i] = vn + s->dt * (d->f[c][i] / m + g);
     }
   }
+  return 0;
 }
 
 /* E(v) up to a constant: 1/2 sum m |v - v^n - dt g|^2 + Phi(x + dt v), with F^ already
@@ -178,9 +202,15 @@ static double incremental_potential(mpm_implicit *s, mpm_real *const v[3], mpm_r
   mpm_dofs *d = s->dofs;
   const long n = (long)d->count;
   for (int c = 0; c < 3; ++c) {
-    const mpm_real dg = s->dt * s->gravity[c];
+    const mpm_real dg = s->dt * s->gravity[c], dt = s->dt;
+    const mpm_real *restrict a = s->accel[c];
+    if (a) {
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
-    for (long i = 0; i < n; ++i) t[c][i] = v[c][i] - d->v0[c][i] - dg;
+      for (long i = 0; i < n; ++i) t[c][i] = v[c][i] - d->v0[c][i] - dt * a[i];
+    } else {
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+      for (long i = 0; i < n; ++i) t[c][i] = v[c][i] - d->v0[c][i] - dg;
+    }
   }
   return 0.5 * mpm_dofs_dot(d, d->mass, t, t) + mpm_implicit_energy(s);
 }
@@ -281,7 +311,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   mpm_real **vstar = mpm_dofs_vector(d, "imp.vstar"), **b = mpm_dofs_vector(d, "imp.b");
   mpm_real **diag = mpm_dofs_vector(d, "imp.diag"), **t = mpm_dofs_vector(d, "imp.t");
   if (!vstar || !b || !diag || !t) return -1;
-  predictor(s);
+  if (predictor(s)) return -1;
   mpm_dofs_copy(d, d->v, vstar);
   if (mpm_implicit_constraints(s, d->v)) return -1; /* the initial guess obeys them */
   const mpm_cg_options cg_opt = {o->cg_tolerance, o->cg_max_iterations};

@@ -31,6 +31,7 @@
 #ifndef MPM_SOLVER_IMPLICIT_H
 #define MPM_SOLVER_IMPLICIT_H
 
+#include "collide/body_force.h"
 #include "collide/boundary.h"
 #include "core/arena.h"
 #include "domain/domain_hessian.h"
@@ -58,6 +59,8 @@ typedef struct mpm_implicit {
   /* inputs */
   mpm_real dt;
   mpm_real gravity[3];
+  int region_count; /* body-force regions on top of gravity (collide/body_force.h) */
+  const mpm_force_region *regions;
   mpm_dofs *dofs; /* after P2G: mass, momentum (v0), force at u = 0 (f) */
   const mpm_transfer_ctx *tc;
   const mpm_grid *grid; /* material points: one level, its DOFs from grid->dof_begin */
@@ -83,6 +86,7 @@ typedef struct mpm_implicit {
   mpm_real *px[3];      /* DOF positions (built with the constraints), m */
   size_t corner_begin;  /* the first corner DOF (DOFs from here are constrained ahead) */
   mpm_real *depth;      /* DOF wall-band depths (solver/dofs.h) */
+  mpm_real *accel[3];   /* with body-force regions: each DOF's gravity plus regions, m/s^2 */
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). 0, or -1 when out of memory. */

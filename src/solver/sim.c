@@ -120,6 +120,18 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       st = oom(err, "collider keyframes");
       goto fail;
     }
+  /* body-force regions (their count set as each is built, so that destroy frees what is) */
+  sim->force_colliders = calloc((size_t)(sc->force_count + 1), sizeof *sim->force_colliders);
+  sim->force_regions = calloc((size_t)(sc->force_count + 1), sizeof *sim->force_regions);
+  if (!sim->force_colliders || !sim->force_regions) {
+    st = oom(err, "body-force regions");
+    goto fail;
+  }
+  for (int f = 0; f < sc->force_count; ++f, ++sim->force_count)
+    if (mpm_collider_init(&sim->force_colliders[f], &sc->forces[f].region)) {
+      st = oom(err, "body-force region keyframes");
+      goto fail;
+    }
 
   /* grid geometry */
   for (int d = 0; d < 3; ++d) {
@@ -311,6 +323,10 @@ void mpm_sim_destroy(mpm_sim *sim) {
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);
   free(sim->colliders);
   free(sim->poses);
+  if (sim->force_colliders)
+    for (int f = 0; f < sim->force_count; ++f) mpm_collider_free(&sim->force_colliders[f]);
+  free(sim->force_colliders);
+  free(sim->force_regions);
   free(sim->base_materials);
   mpm_grid_free(&sim->grid);
   mpm_dofs_free(&sim->dofs);

@@ -4,6 +4,7 @@
 #ifndef MPM_SOLVER_SIM_H
 #define MPM_SOLVER_SIM_H
 
+#include "collide/body_force.h"
 #include "collide/collider.h"
 #include "domain/domain.h"
 #include "core/particles.h"
@@ -43,6 +44,9 @@ struct mpm_sim {
   mpm_collider *colliders;
   mpm_collider_pose *poses;
   int collider_count;
+  mpm_collider *force_colliders;   /* body-force regions: their level sets and motion */
+  mpm_force_region *force_regions; /* those acting this step (step.c) */
+  int force_count;
   mpm_kernel kernel;
   /* Zhu's particle domains: the domain particles, their corners, and the corner kernel */
   mpm_domain_set domains;

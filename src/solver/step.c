@@ -152,6 +152,8 @@ static void implicit_system(mpm_sim *sim, step_ctx *c, mpm_implicit *s) {
   memset(s, 0, sizeof *s);
   s->dt = c->update.dt;
   for (int d = 0; d < 3; ++d) s->gravity[d] = c->update.gravity[d];
+  s->region_count = c->update.region_count;
+  s->regions = c->update.regions;
   s->dofs = &sim->dofs;
   s->tc = &c->tc;
   s->grid = &sim->grid;
@@ -276,6 +278,19 @@ static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
   }
   u->boundary.collider_count = active;
   u->boundary.poses = sim->poses;
+  /* the body-force regions acting then, with their scheduled accelerations */
+  int regions = 0;
+  for (int k = 0; k < sim->force_count; ++k) {
+    const mpm_force_desc *fd = &sc->forces[k];
+    const mpm_collider_desc *cd = &sim->force_colliders[k].desc;
+    const double f = mpm_schedule_at((const double(*)[2])fd->schedule, fd->schedule_count, t_end);
+    if (!(t_end >= cd->active[0] && t_end < cd->active[1]) || f == 0) continue;
+    mpm_force_region *r = &sim->force_regions[regions++];
+    r->pose = mpm_collider_pose_at(&sim->force_colliders[k], t_end);
+    for (int d = 0; d < 3; ++d) r->acceleration[d] = (mpm_real)(f * fd->acceleration[d]);
+  }
+  u->region_count = regions;
+  u->regions = sim->force_regions;
 }
 
 static const char *bad_quantity(const mpm_particles *p, long i) {
