@@ -15,7 +15,7 @@ void mpm_domain_set_init(mpm_domain_set *s) {
 }
 
 /* The real-valued corner arrays, for loops that treat them alike (grow, free). */
-static void corner_arrays(mpm_domain_set *s, mpm_real **out[22]) {
+static void corner_arrays(mpm_domain_set *s, mpm_real **out[31]) {
   int k = 0;
   for (int d = 0; d < 3; ++d) out[k++] = &s->cX[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cx[d];
@@ -25,8 +25,9 @@ static void corner_arrays(mpm_domain_set *s, mpm_real **out[22]) {
   for (int d = 0; d < 3; ++d) out[k++] = &s->cp[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cf[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cvg[d];
+  for (int e = 0; e < 9; ++e) out[k++] = &s->cB[e];
 }
-#define CORNER_REAL_ARRAYS 22
+#define CORNER_REAL_ARRAYS 31
 
 void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_particles_free(&s->particles);
@@ -217,6 +218,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
           s->cxc[d][c] = 0;
           s->cv[d][c] = p->v[d][i]; /* the body's initial velocity field at the vertex, below */
         }
+        for (int e = 0; e < 9; ++e) s->cB[e][c] = 0; /* no grid affine before the first G2P */
       }
       s->corner[q][a] = *slot;
     }

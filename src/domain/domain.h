@@ -67,7 +67,11 @@ typedef struct mpm_domain_set {
    * moves, Kahan): a body drifting slowly does not round differently on either side of a
    * power of two in float (issue 13) */
   mpm_real *cxc[3];
-  mpm_real *cv[3]; /* velocity, m/s (hybrid PIC/FLIP of the grid's) */
+  mpm_real *cv[3]; /* velocity, m/s (hybrid PIC/FLIP of the grid's, or APIC's grid velocity) */
+  /* APIC (solver.transfer "apic"): the corner's affine moment from the grid, B_a = sum_i
+   * omega_i(x_a) v_i (x_i - x_a)^T (Jiang et al. 2015 at the corner -> grid step), m^2/s,
+   * row-major; 0 for enriched corners (their own DOF: no grid stencil) */
+  mpm_real *cB[9];
   /* per step: rasterized mass, momentum and force; the grid (PIC) velocity at the corner */
   mpm_real *cm, *cp[3], *cf[3], *cvg[3];
   /* corner -> particle slots (p * 8 + a), CSR, for race-free particle -> corner gathers */
@@ -77,6 +81,10 @@ typedef struct mpm_domain_set {
    * nodes of corner a's stencil and their weights omega_i(x_a); rows of unused corners are
    * empty), and its scatter schedule: corners keyed by base block, blocks coloured by parity */
   mpm_embedding corner_grid;
+  /* per step, with APIC (step scratch, set by P2G for G2P): per entry e of corner_grid the
+   * APIC factor a_e = D_a^-1 omega_i(x_a) (x_i - x_a), 1/m, and per corner D_a's diagonal, m^2
+   * (interp/kernel.h) */
+  mpm_real *apic_a[3], *apic_d[3];
   mpm_domain_enrichment enrich;
 } mpm_domain_set;
 

@@ -22,11 +22,18 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
  * says (grid.h, stencil_nodes: for the sparse grid the base block and its parity, as the
  * standard P2G colours blocks), so that the groups of one colour never touch the same node. */
 static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const mpm_grid *g,
-                                  mpm_arena *scratch) {
+                                  int apic, mpm_arena *scratch) {
   const size_t nc = s->corner_count, nk = g->ops->scatter_key_count(g);
   const int W = k->width;
   mpm_embedding *E = &s->corner_grid;
   if (mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W))) return -1;
+  /* APIC: the factors of every entry and D of every corner (step scratch) */
+  for (int d = 0; d < 3; ++d) {
+    s->apic_a[d] = apic ? mpm_arena_alloc(scratch, (E->entry_capacity + 1) * sizeof(mpm_real))
+                        : NULL;
+    s->apic_d[d] = apic ? mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real)) : NULL;
+    if (apic && (!s->apic_a[d] || !s->apic_d[d])) return -1;
+  }
   int32_t *key = mpm_arena_alloc(scratch, (nc + 1) * sizeof *key);
   uint8_t *colour = mpm_arena_alloc(scratch, nc + 1),
           *key_colour = mpm_arena_alloc(scratch, nk + 1);
@@ -45,6 +52,8 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
       key[c] = -1;
       if (!s->corner_use[c]) continue;
       if (enriched && en->enriched[c]) { /* its own DOF: an identity row (Zhu sec. 5.2) */
+        if (apic) /* no offset to its node: no affine part, and B_a = 0 */
+          for (int d = 0; d < 3; ++d) s->apic_a[d][E->row_start[c]] = s->apic_d[d][c] = 0;
         mpm_embedding_push(E, (size_t)c, corner_dofs + en->slot[c], 1);
         key[c] = MPM_EMBEDDING_OWN_COLUMNS;
         continue;
@@ -59,12 +68,28 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
         key[c] = -1;
         continue;
       }
+      if (apic) /* D's diagonal: sum_i w_i (x_i - x_a)^2 per axis (interp/kernel.h) */
+        for (int d = 0; d < 3; ++d) {
+          mpm_real D = 0;
+          for (int i = 0; i < W; ++i) {
+            const mpm_real r = (mpm_real)(st.base[d] + i) * k->dx - xr[d];
+            D += st.w[d][i] * r * r;
+          }
+          s->apic_d[d][c] = D;
+        }
       int e = 0;
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
           for (int l = 0; l < W; ++l, ++e) {
             const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
-            if (w != 0) mpm_embedding_push(E, (size_t)c, dof_begin + nodes[e], w);
+            if (w == 0) continue;
+            if (apic) {
+              const uint32_t at = E->row_start[c] + E->row_len[c];
+              s->apic_a[0][at] = st.a[0][i] * st.w[1][j] * st.w[2][l];
+              s->apic_a[1][at] = st.w[0][i] * st.a[1][j] * st.w[2][l];
+              s->apic_a[2][at] = st.w[0][i] * st.w[1][j] * st.a[2][l];
+            }
+            mpm_embedding_push(E, (size_t)c, dof_begin + nodes[e], w);
           }
     }
   }
@@ -85,6 +110,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   const int hourglass = s->enrich.count > 0;
   mpm_real(*Q)[4][3] = hourglass ? mpm_arena_alloc(scratch, (p->count + 1) * sizeof *Q) : NULL;
   if (hourglass && !Q) return -1;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC;
 #pragma omp parallel for schedule(static)
   for (long q = 0; q < np; ++q) {
     if (hourglass) { /* only particles touching an enriched corner have kappa > 0 */
@@ -114,7 +140,8 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
       const double w = s->w[q][a];
       const double mq = p->mass[q];
       m += w * mq;
-      for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
+      if (!apic)
+        for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
       /* f_a = -V0 P g_ap (Zhu eq. 8 with eq. 5) */
       const mpm_real *gq = s->g[q][a], *vPq = vP[q];
       for (int d = 0; d < 3; ++d)
@@ -123,6 +150,11 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
         for (int al = 0; al < 4; ++al)
           for (int d = 0; d < 3; ++d) f[d] -= mpm_hourglass_modes[al][a] * Q[q][al][d];
     }
+    /* APIC: the corner carries its own velocity (and its affine moment to the grid below); its
+     * particles' velocities are its interpolants (v_p = sum_a omega_ap v_a), so the momentum is
+     * the same, sum_a m_a v_a = sum_p m_p v_p, and nothing is averaged away */
+    if (apic)
+      for (int d = 0; d < 3; ++d) mv[d] = m * s->cv[d][c];
     s->cm[c] = (mpm_real)m;
     for (int d = 0; d < 3; ++d) {
       s->cp[d][c] = (mpm_real)mv[d];
@@ -132,11 +164,28 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
    *    order: the same sums for any number of threads */
-  if (build_corner_embedding(&ctx->kernel, s, g, scratch)) return -1;
+  if (build_corner_embedding(&ctx->kernel, s, g, apic, scratch)) return -1;
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};
-  mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
+  if (!apic) {
+    mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
+    return 0;
+  }
+  /* APIC at the corner -> grid step: the corner's affine moment m_a B_a (B_a from the last
+   * G2P) spread with the entries' APIC factors */
+  mpm_real *mB[9];
+  for (int e = 0; e < 9; ++e) {
+    mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
+    if (!mB[e]) return -1;
+  }
+#pragma omp parallel for schedule(static)
+  for (long c = 0; c < nc; ++c)
+    for (int e = 0; e < 9; ++e) mB[e][c] = s->cm[c] * s->cB[e][c];
+  const mpm_real *const a[3] = {s->apic_a[0], s->apic_a[1], s->apic_a[2]};
+  const mpm_real *const cm[9] = {mB[0], mB[1], mB[2], mB[3], mB[4], mB[5], mB[6], mB[7], mB[8]};
+  mpm_real *const um[3] = {dof->v0[0], dof->v0[1], dof->v0[2]};
+  mpm_embedding_scatter_moments(&s->corner_grid, 7, carrier, values, a, cm, um);
   return 0;
 }
 
@@ -155,7 +204,10 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
                               const mpm_grid_values *dof, const mpm_boundary *boundary) {
   const long nc = (long)s->corner_count;
   const mpm_embedding *E = &s->corner_grid;
-  const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC && s->apic_a[0];
+  /* APIC: the corner takes the grid's velocity (PIC) and its affine moment; otherwise the
+   * scene's PIC/FLIP blend */
+  const mpm_real dt = ctx->dt, alpha = apic ? 0 : ctx->flip_alpha;
   const mpm_domain_enrichment *en = &s->enrich;
   const int enriched = en->count > 0;
   /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
@@ -177,10 +229,21 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
         dv[d] += w * (vn - vo);
       }
     }
+    if (apic) { /* B_a = sum_i w_i v_i (x_i - x_a)^T = (sum_i v_i a_i^T) D_a */
+      mpm_real S[9] = {0};
+      for (uint32_t e = e0; e < e1; ++e) {
+        const uint32_t n = E->col[e];
+        const mpm_real a[3] = {s->apic_a[0][e], s->apic_a[1][e], s->apic_a[2][e]};
+        for (int r = 0; r < 3; ++r)
+          for (int t = 0; t < 3; ++t) S[3 * r + t] += dof->v[r][n] * a[t];
+      }
+      for (int r = 0; r < 3; ++r)
+        for (int t = 0; t < 3; ++t) s->cB[3 * r + t][c] = S[3 * r + t] * s->apic_d[t][c];
+    }
     mpm_real v[3];
     for (int d = 0; d < 3; ++d) {
       s->cvg[d][c] = vnew[d];
-      v[d] = alpha * (s->cv[d][c] + dv[d]) + (1 - alpha) * vnew[d];
+      v[d] = apic ? vnew[d] : alpha * (s->cv[d][c] + dv[d]) + (1 - alpha) * vnew[d];
     }
     /* colliders and walls on the corners (Zhu sec. 7, Algorithm 1 line 24): the corner
      * velocity obeys the boundary rules, and the particles take their velocities from the

@@ -8,6 +8,14 @@
  *        particle:            F_p += dt sum_a v^g_a g_ap^T           (Zhu eq. 7)
  *        corner:              x_a += dt v^g_a                        (Zhu eq. 9)
  *        particle:            x_p = sum_a omega_ap x_a, v_p = sum_a omega_ap v_a
+ * With solver.transfer "flip" the corner velocity is the scene's PIC/FLIP blend (flip_alpha 0:
+ * PIC). With "apic" (Jiang et al. 2015) the corners are the carriers of the grid transfer: a
+ * corner keeps its own velocity v_a and an affine moment B_a = sum_i omega_i(x_a) v_i (x_i -
+ * x_a)^T from the grid, P2G gives it the momentum m_a v_a (= sum_p omega_ap m_p v_p, as v_p
+ * interpolates the corners: no average over its particles) and spreads m_a (v_a + C_a (x_i -
+ * x_a)) to the grid, C_a = B_a D_a^-1; G2P gives it the grid's velocity and B_a. Linear and
+ * angular momentum then pass corner -> grid -> corner as through APIC's particles; an
+ * enriched corner, its own DOF, keeps its velocity exactly (B_a = 0).
  * omega_i is the engine's kernel given (Zhu's linear hat by default). The particle -> corner
  * gathers go through the corner adjacency (race-free, deterministic); corner -> grid and grid
  * -> corner are the embedding operator E (grid/embedding.h) with rows omega_i(x_a), applied as

@@ -143,7 +143,9 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
     mpm_real F[9];
     for (int k = 0; k < 9; ++k) F[k] = p->F[k][q];
     const mpm_real c = materials[p->material[q]].min_stretch;
-    e->flag[q] = mpm_enrichment_metric(F, c > 0 ? c : (mpm_real)1e-6) <= eps;
+    /* K <= 1 always: epsilon 1 enriches every particle, even where rounding puts K a hair
+     * above 1 (F = I) */
+    e->flag[q] = eps >= 1 || mpm_enrichment_metric(F, c > 0 ? c : (mpm_real)1e-6) <= eps;
   }
   /* 2. a corner is enriched when one of its particles is (gathered per corner: no races) */
 #pragma omp parallel for schedule(static) if (nc >= MPM_PARALLEL_MIN)

@@ -125,21 +125,34 @@ int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_coun
   return 0;
 }
 
+/* The first moments of a scatter (NULL: none): per entry a[j][e], per carrier cm[3 k + j][row],
+ * added to um[k] (mpm_embedding_scatter_moments). */
+typedef struct scatter_moments {
+  const mpm_real *const *a, *const *cm;
+  mpm_real *const *um;
+} scatter_moments;
+
 /* The scatter of row a. */
 static inline void scatter_row(const mpm_embedding *E, size_t a, int fields,
-                               const mpm_real *const *c, mpm_real *const *u) {
+                               const mpm_real *const *c, mpm_real *const *u,
+                               const scatter_moments *m) {
   const uint32_t e0 = E->row_start[a], e1 = e0 + E->row_len[a];
   for (uint32_t e = e0; e < e1; ++e) {
     const uint32_t i = E->col[e];
     const mpm_real w = E->w[e];
     for (int k = 0; k < fields; ++k) u[k][i] += w * c[k][a];
+    if (m) {
+      const mpm_real a0 = m->a[0][e], a1 = m->a[1][e], a2 = m->a[2][e];
+      for (int k = 0; k < 3; ++k)
+        m->um[k][i] += a0 * m->cm[3 * k][a] + a1 * m->cm[3 * k + 1][a] + a2 * m->cm[3 * k + 2][a];
+    }
   }
 }
 
-void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
-                           mpm_real *const *u) {
+static void scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
+                    mpm_real *const *u, const scatter_moments *m) {
   if (!E->scheduled) {
-    for (size_t a = 0; a < E->rows; ++a) scatter_row(E, a, fields, c, u);
+    for (size_t a = 0; a < E->rows; ++a) scatter_row(E, a, fields, c, u, m);
     return;
   }
   for (int colour = 0; colour < MPM_EMBEDDING_COLOURS; ++colour) {
@@ -147,11 +160,23 @@ void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *c
 #pragma omp parallel for schedule(dynamic, 4)
     for (long q = g0; q < g1; ++q)
       for (uint32_t j = E->group_start[q]; j < E->group_start[q + 1]; ++j)
-        scatter_row(E, E->group_row[j], fields, c, u);
+        scatter_row(E, E->group_row[j], fields, c, u, m);
   }
   const long own = (long)E->own_rows;
 #pragma omp parallel for schedule(static) if (own >= MPM_PARALLEL_MIN)
-  for (long j = 0; j < own; ++j) scatter_row(E, E->own_row[j], fields, c, u);
+  for (long j = 0; j < own; ++j) scatter_row(E, E->own_row[j], fields, c, u, m);
+}
+
+void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
+                           mpm_real *const *u) {
+  scatter(E, fields, c, u, NULL);
+}
+
+void mpm_embedding_scatter_moments(const mpm_embedding *E, int fields, const mpm_real *const *c,
+                                   mpm_real *const *u, const mpm_real *const a[3],
+                                   const mpm_real *const cm[9], mpm_real *const um[3]) {
+  const scatter_moments m = {a, cm, um};
+  scatter(E, fields, c, u, &m);
 }
 
 void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,

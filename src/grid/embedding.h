@@ -87,6 +87,15 @@ int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_coun
 void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
                            mpm_real *const *u);
 
+/* The scatter with first moments, in the same pass and order: besides mpm_embedding_scatter's
+ * sums, um[k][col] += sum_j a[j][e] cm[3 k + j][a] for k = 0..2, where a[j][e] is given per
+ * entry e and cm per carrier. APIC through an embedding (Jiang et al. 2015 at the carrier):
+ * with a_e = D_a^-1 E_ai (x_i - x_a) and cm = m_a B_a (row-major), the affine part
+ * m_a C_a E_ai (x_i - x_a) of carrier a's momentum, C_a = B_a D_a^-1. */
+void mpm_embedding_scatter_moments(const mpm_embedding *E, int fields, const mpm_real *const *c,
+                                   mpm_real *const *u, const mpm_real *const a[3],
+                                   const mpm_real *const cm[9], mpm_real *const um[3]);
+
 /* c[k][a] = sum over row a of w u[k][col], for every row, the `fields` pairs of arrays.
  * Parallel over rows, deterministic. */
 void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,

@@ -11,8 +11,8 @@
  *               with particle domains (attributes domain_particles nd, domain_corners nc):
  *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active
  *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
- *               corner_reals [12][nc] (reference position, position, velocity, position
- *               compensation)
+ *               corner_reals [21][nc] (reference position, position, velocity, position
+ *               compensation, APIC affine moment)
  * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
  * must exist with the right class and shape, each dataset must have exactly the dimensions
  * the attributes announce, counts are bounded by the file's size before anything is
@@ -113,9 +113,10 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
         weights[a * nd + i] = s->w[i][a];
         for (int d = 0; d < 3; ++d) weights[(8 + 3 * a + d) * nd + i] = s->g[i][a][d];
       }
-    const void *cr[MPM_CKPT_CORNER_REAL_ROWS] = {s->cX[0], s->cX[1],  s->cX[2],  s->cx[0],
-                                                 s->cx[1], s->cx[2],  s->cv[0],  s->cv[1],
-                                                 s->cv[2], s->cxc[0], s->cxc[1], s->cxc[2]};
+    const void *cr[MPM_CKPT_CORNER_REAL_ROWS] = {
+        s->cX[0],  s->cX[1],  s->cX[2], s->cx[0], s->cx[1], s->cx[2], s->cv[0],
+        s->cv[1],  s->cv[2],  s->cxc[0], s->cxc[1], s->cxc[2], s->cB[0], s->cB[1],
+        s->cB[2],  s->cB[3],  s->cB[4], s->cB[5], s->cB[6], s->cB[7], s->cB[8]};
     rc = put_dataset(f, "domain_reals", mpm_ckpt_real_type(), MPM_PARTICLE_REAL_ARRAYS, nd, rows) ||
                  put_dataset(f, "domain_material", H5T_NATIVE_INT32, 0, nd, &material) ||
                  put_dataset(f, "domain_body", H5T_NATIVE_INT32, 0, nd, &body) ||

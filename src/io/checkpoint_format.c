@@ -119,6 +119,7 @@ uint64_t mpm_ckpt_content_checksum(const mpm_checkpoint *c) {
       h = mpm_hash64_words(ds->cx[d], nc * sizeof(mpm_real), h);
       h = mpm_hash64_words(ds->cv[d], nc * sizeof(mpm_real), h);
     }
+    for (int e = 0; e < 9; ++e) h = mpm_hash64_words(ds->cB[e], nc * sizeof(mpm_real), h);
   }
   const size_t r = (size_t)c->records;
   h = mpm_hash64_words(c->frame_times, r * sizeof *c->frame_times, h);

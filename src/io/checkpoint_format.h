@@ -16,9 +16,9 @@
 #define MPM_CKPT_MAX_RECORDS 10000001
 /* Rows of a domain set's per-particle tables, structure of arrays for the file: corner slot a
  * of every particle (8 rows), omega_ap (8 rows) then g_ap (24 rows); the corners' reference
- * position, position and velocity (9 rows). */
+ * position, position, velocity, position compensation (12 rows) and APIC affine moment (9). */
 #define MPM_CKPT_DOMAIN_WEIGHT_ROWS 32
-#define MPM_CKPT_CORNER_REAL_ROWS 12
+#define MPM_CKPT_CORNER_REAL_ROWS 21
 /* The guard header: the first bytes of the file, HDF5's user block (checkpoint_format.c). */
 #define MPM_CKPT_HEADER_BYTES 512
 extern const char mpm_ckpt_magic[8];

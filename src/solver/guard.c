@@ -158,14 +158,16 @@ static int copy_particles(mpm_particles *dst, const mpm_particles *src) {
   return 0;
 }
 
-/* The corner arrays a step changes: positions (with their compensation) and velocities. */
-#define CORNER_STATE 9
+/* The corner arrays a step changes: positions (with their compensation), velocities and APIC
+ * affine moments. */
+#define CORNER_STATE 18
 static void corner_state(mpm_domain_set *s, mpm_real *out[CORNER_STATE]) {
   for (int d = 0; d < 3; ++d) {
     out[d] = s->cx[d];
     out[3 + d] = s->cv[d];
     out[6 + d] = s->cxc[d];
   }
+  for (int e = 0; e < 9; ++e) out[9 + e] = s->cB[e];
 }
 
 /* Save what a step changes: the particles, the domain particles and their corners (the clock

@@ -314,7 +314,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_particles_free(&sim->particles);
   mpm_particles_free(&sim->backup);
   mpm_particles_free(&sim->domain_backup);
-  for (int k = 0; k < 9; ++k) mpm_free(sim->corner_backup[k]);
+  for (int k = 0; k < 18; ++k) mpm_free(sim->corner_backup[k]);
   mpm_domain_set_free(&sim->domains);
   for (int i = 0; i < sim->surface_count; ++i) mpm_embedded_surface_free(&sim->surfaces[i]);
   free(sim->surfaces);

@@ -85,7 +85,7 @@ struct mpm_sim {
   long long retries;           /* steps redone with a smaller dt, over the run */
   mpm_particles backup;        /* the particles at the start of a step (retry mode) */
   mpm_particles domain_backup; /* the domain particles and corners at the start of a step */
-  mpm_real *corner_backup[9];
+  mpm_real *corner_backup[18];
   size_t corner_backup_capacity;
   const volatile int *interrupt;
   char last_checkpoint[MPM_PATH_MAX + 32];
