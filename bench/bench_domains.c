@@ -45,7 +45,7 @@ int mpm_bench_domains(int argc, char **argv) {
          repeats, steps);
   for (int t = 0; t < nthreads; ++t) {
     mpm_set_threads(threads[t]);
-    double ns[2] = {0, 0};
+    double ns[2] = {0, 0}, stage[2][4] = {{0}};
     size_t n = 0, corners = 0;
     for (int domains = 0; domains < 2; ++domains) {
       mpm_error err;
@@ -58,6 +58,7 @@ int mpm_bench_domains(int argc, char **argv) {
       corners = sim->domains.corner_count ? sim->domains.corner_count : corners;
       for (int k = 0; k < 2; ++k) mpm_sim_step(sim, 1e-3);
       double runs[100];
+      const mpm_stage_times t0s = sim->times;
       for (int r = 0; r < repeats; ++r) {
         const double t0 = mpm_wall_seconds();
         for (int k = 0; k < steps; ++k)
@@ -69,11 +70,21 @@ int mpm_bench_domains(int argc, char **argv) {
         runs[r] = (mpm_wall_seconds() - t0) * 1e9 / ((double)n * steps);
       }
       ns[domains] = bench_median(runs, repeats);
+      /* where the time goes, averaged over every repeat */
+      const double per = 1e9 / ((double)n * steps * repeats);
+      stage[domains][0] = (sim->times.sort - t0s.sort) * per;
+      stage[domains][1] = (sim->times.p2g - t0s.p2g) * per;
+      stage[domains][2] = (sim->times.grid - t0s.grid) * per;
+      stage[domains][3] = (sim->times.g2p - t0s.g2p) * per;
       mpm_sim_destroy(sim);
     }
     printf("  %d threads, %zu particles (%zu corners): material points %.1f ns, particle domains "
            "%.1f ns per particle-step (%.2fx)\n",
            threads[t], n, corners, ns[0], ns[1], ns[1] / ns[0]);
+    for (int k = 0; k < 2; ++k)
+      printf("    %s: activation and layout %.1f, P2G %.1f, grid update %.1f, G2P %.1f ns\n",
+             k ? "particle domains" : "material points", stage[k][0], stage[k][1], stage[k][2],
+             stage[k][3]);
     fflush(stdout);
   }
   return MPM_EXIT_OK;
