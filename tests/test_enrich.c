@@ -183,12 +183,29 @@ static void test_categories(void **state) {
     assert_int_equal(e->slot[e->corner[k]], k);
     for (int d = 0; d < 3; ++d) assert_true(e->x[d][k] == s->cx[d][e->corner[k]]);
   }
-  /* a stretch of 1.5 (K = 0.93) enriches nothing; epsilon 0 never enriches */
+  /* hysteresis (enrichment_exit 0.95 by default): relaxed to a stretch of 1.5 (K = 0.93), the
+   * enriched particle stays enriched; at rest (K = 1) it returns to the grid, and from there a
+   * stretch of 1.5 enriches nothing */
+  stretch_particle(sim, q0, 1.5);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 8);
+  stretch_particle(sim, q0, 1);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 0);
   stretch_particle(sim, q0, 1.5);
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 0);
+  /* without hysteresis (enrichment_exit = enrichment) the stretch of 1.5 releases it at once */
+  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, (mpm_real)0.6, (mpm_real)0.6, (mpm_real)0.02), 0);
   stretch_particle(sim, q0, 4);
-  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, 0, (mpm_real)0.02), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 8);
+  stretch_particle(sim, q0, 1.5);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 0);
+  /* epsilon 0 never enriches */
+  stretch_particle(sim, q0, 4);
+  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, 0, 0, (mpm_real)0.02), 0);
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 0);
   assert_int_equal(e->particles[MPM_DOMAIN_UNENRICHED], 40);
@@ -357,6 +374,11 @@ static void test_twist_release(void **state) {
   const char *damped = "\"transfer\": \"flip\", \"flip_alpha\": 0.5";
   const double enriched = twist_and_release(", \"enrichment\": 1", damped, 4);
   const double unenriched = twist_and_release(", \"enrichment\": 0", damped, 4);
+  /* dynamic enrichment (Zhu's 0.6), with the exit threshold's hysteresis and without */
+  const double dynamic = twist_and_release(", \"enrichment\": 0.9", damped, 4);
+  const double no_hysteresis =
+      twist_and_release(", \"enrichment\": 0.9, \"enrichment_exit\": 0.9", damped, 4);
+  (void)dynamic, (void)no_hysteresis;
   assert_true(enriched < TOL(1e-4, 1e-6));
   assert_true(enriched < 0.1 * unenriched);
 }

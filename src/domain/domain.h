@@ -28,10 +28,13 @@
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */
 typedef struct mpm_domain_enrichment {
   mpm_real *epsilon; /* per body: enriched when K(F) <= epsilon (0: never) */
+  mpm_real *exit_k;  /* per body: an enriched particle stays enriched while K(F) <= exit_k
+                        (>= epsilon: hysteresis) */
   mpm_real *spacing; /* per body: the domain lattice's spacing h, m */
   int body_count;
   int any;             /* some body has epsilon > 0 */
-  uint8_t *flag;       /* per particle: K(F_p) <= epsilon of its body */
+  uint8_t *flag;       /* per particle: enriched this step (K(F_p) <= epsilon, or <= exit_k
+                          when it was last step): state, kept in checkpoints */
   uint8_t *category;   /* per particle: MPM_DOMAIN_UNENRICHED / TRANSITIONAL / ENRICHED */
   uint8_t *enriched;   /* per corner: 1 when it is a DOF of its own this step */
   uint8_t *on_grid;    /* per corner: used and not enriched (it is embedded in the grid) */

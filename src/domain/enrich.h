@@ -54,10 +54,17 @@ static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
   return b >= 0 && b < s->enrich.body_count ? s->enrich.epsilon[b] : 0;
 }
 
-/* Set body b's threshold and lattice spacing h (sim setup). 0, or -1 when out of memory. */
-int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real h);
+/* Set body b's threshold epsilon, its exit threshold (an enriched particle stays enriched while
+ * K <= exit_k; raised to epsilon when below) and lattice spacing h (sim setup). 0, or -1 when
+ * out of memory. */
+int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
+                               mpm_real h);
 
 void mpm_enrichment_free(mpm_domain_enrichment *e);
+
+/* Room for the marks of `particles` particles and `corners` corners; the flags already held
+ * are kept (checkpoint reading fills them). 0, or -1 when out of memory. */
+int mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t corners);
 
 /* Hourglass control of enriched domains (beyond Zhu: a domain has one quadrature point, its
  * particle, so the four hourglass modes of its hexahedron cost no energy; the grid's smooth

@@ -9,7 +9,8 @@
  *               particle_material [n], particle_body [n], particle_id [n],
  *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][21];
  *               with particle domains (attributes domain_particles nd, domain_corners nc):
- *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active
+ *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active,
+ *               domain_enriched (the enrichment flags: state, for their hysteresis)
  *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
  *               corner_reals [21][nc] (reference position, position, velocity, position
  *               compensation, APIC affine moment)
@@ -102,8 +103,11 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
              *active = s->active;
   uint32_t *corner = malloc(nd * MPM_HEX_CORNERS * sizeof *corner);
   mpm_real *weights = malloc(nd * MPM_CKPT_DOMAIN_WEIGHT_ROWS * sizeof *weights);
+  uint8_t *flag = calloc(nd + 1, 1); /* the enrichment flags (state: their hysteresis) */
   int rc = -1;
-  if (corner && weights) {
+  if (corner && weights && flag) {
+    if (s->enrich.flag && s->enrich.particle_capacity >= nd) memcpy(flag, s->enrich.flag, nd);
+    const void *flags = flag;
     const void *crows[MPM_HEX_CORNERS], *wrows[MPM_CKPT_DOMAIN_WEIGHT_ROWS];
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) crows[a] = corner + a * nd;
     for (int k = 0; k < MPM_CKPT_DOMAIN_WEIGHT_ROWS; ++k) wrows[k] = weights + k * nd;
@@ -122,6 +126,7 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
                  put_dataset(f, "domain_body", H5T_NATIVE_INT32, 0, nd, &body) ||
                  put_dataset(f, "domain_id", H5T_NATIVE_UINT32, 0, nd, &id) ||
                  put_dataset(f, "domain_active", H5T_NATIVE_UINT8, 0, nd, &active) ||
+                 put_dataset(f, "domain_enriched", H5T_NATIVE_UINT8, 0, nd, &flags) ||
                  put_dataset(f, "domain_corner", H5T_NATIVE_UINT32, MPM_HEX_CORNERS, nd, crows) ||
                  put_dataset(f, "domain_weights", mpm_ckpt_real_type(), MPM_CKPT_DOMAIN_WEIGHT_ROWS,
                              nd, wrows) ||
@@ -132,6 +137,7 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
   }
   free(corner);
   free(weights);
+  free(flag);
   return rc;
 }
 

@@ -3,6 +3,7 @@
  * count and value checked before it is used. */
 #define _POSIX_C_SOURCE 200809L
 
+#include "domain/enrich.h"
 #include "io/checkpoint_format.h"
 #include "scene/scene.h"
 
@@ -166,8 +167,13 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *da[k];
   for (int a = 0; a < MPM_HEX_CORNERS; ++a) crows[a] = corner + a * nd;
   for (int k = 0; k < MPM_CKPT_DOMAIN_WEIGHT_ROWS; ++k) wrows[k] = weights + k * nd;
+  if (mpm_enrichment_reserve(&s->enrich, (size_t)nd + 1, (size_t)nc + 1)) {
+    mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %llu particle domains", r->path,
+                  (unsigned long long)nd);
+    goto done;
+  }
   void *material = s->particles.material, *body = s->particles.body, *id = s->particles.id,
-       *active = s->active;
+       *active = s->active, *flags = s->enrich.flag;
   void *cr[MPM_CKPT_CORNER_REAL_ROWS] = {
         s->cX[0],  s->cX[1],  s->cX[2], s->cx[0], s->cx[1], s->cx[2], s->cv[0],
         s->cv[1],  s->cv[2],  s->cxc[0], s->cxc[1], s->cxc[2], s->cB[0], s->cB[1],
@@ -179,6 +185,7 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
       get_dataset(r, "domain_body", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, nd, &body) ||
       get_dataset(r, "domain_id", H5T_INTEGER, 4, H5T_NATIVE_UINT32, 0, nd, &id) ||
       get_dataset(r, "domain_active", H5T_INTEGER, 1, H5T_NATIVE_UINT8, 0, nd, &active) ||
+      get_dataset(r, "domain_enriched", H5T_INTEGER, 1, H5T_NATIVE_UINT8, 0, nd, &flags) ||
       get_dataset(r, "domain_corner", H5T_INTEGER, 4, H5T_NATIVE_UINT32, MPM_HEX_CORNERS, nd,
                   crows) ||
       get_dataset(r, "domain_weights", H5T_FLOAT, R, mpm_ckpt_real_type(),
@@ -188,8 +195,8 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
     goto done;
   s->active_count = 0;
   for (uint64_t i = 0; i < nd; ++i) {
-    if (s->active[i] > 1) {
-      bad(r, "%s", "a domain's active flag is neither 0 nor 1");
+    if (s->active[i] > 1 || s->enrich.flag[i] > 1) {
+      bad(r, "%s", "a domain's active or enriched flag is neither 0 nor 1");
       goto done;
     }
     s->active_count += s->active[i];

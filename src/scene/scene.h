@@ -124,6 +124,8 @@ typedef struct mpm_body_desc {
   int domains;                /* 1: particle domains (Zhu et al. 2017 sec. 4); needs jitter 0 */
   double enrichment;          /* domains: enrich where K(F) <= this (Zhu sec. 5); default 0:
                                  never (Zhu: 0.6) */
+  double enrichment_exit;     /* domains: an enriched particle stays enriched while K(F) <= this
+                                 (hysteresis); default 0.95, or `enrichment` when larger */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
 } mpm_body_desc;

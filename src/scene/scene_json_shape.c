@@ -19,7 +19,8 @@
 
 static const char *const BODY_KEYS[] = {
     "name",   "shape", "material", "velocity",       "angular_velocity", "particles_per_cell",
-    "jitter", "seed",  "domains",  "domain_release", "enrichment",       NULL};
+    "jitter", "seed",  "domains",  "domain_release", "enrichment",
+    "enrichment_exit", NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", "active",     NULL};
@@ -403,16 +404,24 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   b->seed = (unsigned)seed;
   if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 || parse_releases(c, node, b) < 0)
     return -1;
-  /* Zhu sec. 5.1 uses epsilon = 0.6; off by default until enriched domains have hourglass
-   * control (one quadrature point per hexahedron leaves its hourglass modes free once no
-   * grid carries its corners: see docs/scene-format.md) */
+  /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
+   * enrichment) */
   b->enrichment = 0;
-  if (mpm_json_get(node, "enrichment") && !b->domains)
-    return mpm_json_fail_at(c, "enrichment", MPM_ERR_INVALID,
-                            "applies only to a body with \"domains\": true");
+  for (int k = 0; k < 2; ++k)
+    if (mpm_json_get(node, k ? "enrichment_exit" : "enrichment") && !b->domains)
+      return mpm_json_fail_at(c, k ? "enrichment_exit" : "enrichment", MPM_ERR_INVALID,
+                              "applies only to a body with \"domains\": true");
   if (mpm_json_number(c, node, "enrichment", 0,
                       mpm_json_in('[', 0, 1, ']', "threshold on the enrichment metric K(F)"),
                       &b->enrichment) < 0)
+    return -1;
+  b->enrichment_exit = b->enrichment > 0.95 ? b->enrichment : 0.95;
+  char exit_note[96];
+  snprintf(exit_note, sizeof exit_note,
+           "K(F) above which an enriched particle returns to the grid, at least enrichment (%g)",
+           b->enrichment);
+  if (mpm_json_number(c, node, "enrichment_exit", 0, mpm_json_in('[', b->enrichment, 1, ']', exit_note),
+                      &b->enrichment_exit) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,

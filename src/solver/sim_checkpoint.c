@@ -151,17 +151,19 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   /* the enrichment thresholds and spacings are the scene's (they stay); the marks are made
    * anew from the state, as every step makes them */
   mpm_domain_enrichment *was = &sim->domains.enrich;
-  mpm_real *epsilon = was->epsilon, *spacing = was->spacing;
+  mpm_real *epsilon = was->epsilon, *spacing = was->spacing, *exit_k = was->exit_k;
   const int body_count = was->body_count, any = was->any;
-  was->epsilon = was->spacing = NULL;
+  was->epsilon = was->spacing = was->exit_k = NULL;
   mpm_domain_set_free(&sim->domains);
   sim->domains = c->domains;
   memset(&c->domains, 0, sizeof c->domains);
   mpm_domain_enrichment *e = &sim->domains.enrich;
   mpm_free(e->epsilon);
   mpm_free(e->spacing);
+  mpm_free(e->exit_k);
   e->epsilon = epsilon;
   e->spacing = spacing;
+  e->exit_k = exit_k;
   e->body_count = body_count;
   e->any = any;
   e->valid = 0;
