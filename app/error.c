@@ -1,9 +1,11 @@
 /* error.c - `mpm error`: the rest-state error of a run (Zhu et al. 2017 sec. 7; see
  * src/analysis/rest_error.h).
  *
- *   mpm error REST.vtu FINAL.vtu
- *   mpm error OUTDIR REST_FRAME FINAL_FRAME     (OUTDIR/frame_NNNN.vtu)
+ *   mpm error REST.vtu FINAL.vtu [--body N]
+ *   mpm error OUTDIR REST_FRAME FINAL_FRAME [--body N]    (OUTDIR/frame_NNNN.vtu)
  *
+ * --body N keeps the particles of body N only (the frames' `body` array): the error of the
+ * armadillo, not of the ball that hit it.
  * Reads both frames (positions, ids and masses), matches particles by id, removes the rigid
  * motion by shape matching and prints the mean and largest distance over the rest shape's
  * bounding-box diagonal, the particles matched and the rotation removed. Input errors (a file
@@ -34,7 +36,7 @@ static void cloud_free(cloud_data *c) {
   memset(c, 0, sizeof *c);
 }
 
-static int load(const char *path, cloud_data *c) {
+static int load(const char *path, int body, cloud_data *c) {
   memset(c, 0, sizeof *c);
   mpm_vtu_frame f;
   mpm_error err;
@@ -45,9 +47,13 @@ static int load(const char *path, cloud_data *c) {
   const mpm_vtu_array *pts = mpm_vtu_frame_array(&f, "Points");
   const mpm_vtu_array *id = mpm_vtu_frame_array(&f, "id");
   const mpm_vtu_array *mass = mpm_vtu_frame_array(&f, "mass");
+  const mpm_vtu_array *bodies = mpm_vtu_frame_array(&f, "body");
   int rc = 0;
   if (!id || id->components != 1 || pts->components != 3) {
     fprintf(stderr, "mpm error: %s: expected the Points and the id array of an mpm frame\n", path);
+    rc = -1;
+  } else if (body >= 0 && (!bodies || bodies->components != 1)) {
+    fprintf(stderr, "mpm error: %s: --body needs the frame's body array, which it lacks\n", path);
     rc = -1;
   }
   const size_t n = f.point_count > 0 ? (size_t)f.point_count : 0;
@@ -60,8 +66,10 @@ static int load(const char *path, cloud_data *c) {
       rc = -1;
     }
   }
+  size_t k = 0;
   for (size_t i = 0; !rc && i < n; ++i) {
-    for (int d = 0; d < 3; ++d) c->x[i][d] = pts->data[3 * i + (size_t)d];
+    if (body >= 0 && bodies->data[i] != body) continue;
+    for (int d = 0; d < 3; ++d) c->x[k][d] = pts->data[3 * i + (size_t)d];
     const double v = id->data[i];
     if (!(v >= 0 && v < MAX_EXACT_ID)) {
       fprintf(stderr,
@@ -69,10 +77,11 @@ static int load(const char *path, cloud_data *c) {
               i, v);
       rc = -1;
     }
-    c->id[i] = (uint32_t)v;
-    if (c->mass) c->mass[i] = mass->data[i];
+    c->id[k] = (uint32_t)v;
+    if (c->mass) c->mass[k] = mass->data[i];
+    ++k;
   }
-  c->n = n;
+  c->n = k;
   mpm_vtu_frame_free(&f);
   if (rc) cloud_free(c);
   return rc;
@@ -80,6 +89,22 @@ static int load(const char *path, cloud_data *c) {
 
 int mpm_cmd_error(int argc, char **argv) {
   char rest_path[4200], final_path[4200];
+  int body = -1;
+  char *args[3];
+  int nargs = 0;
+  for (int i = 0; i < argc; ++i) {
+    if (!strcmp(argv[i], "--body")) {
+      if (mpm_cli_parse_int("--body", i + 1 < argc ? argv[i + 1] : NULL, 0, 1000000, &body))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (nargs < 3) {
+      args[nargs++] = argv[i];
+    } else {
+      nargs = 4;
+    }
+  }
+  argc = nargs;
+  argv = args;
   if (argc == 2) {
     snprintf(rest_path, sizeof rest_path, "%s", argv[0]);
     snprintf(final_path, sizeof final_path, "%s", argv[1]);
@@ -91,13 +116,13 @@ int mpm_cmd_error(int argc, char **argv) {
     snprintf(rest_path, sizeof rest_path, "%s/frame_%04d.vtu", argv[0], a);
     snprintf(final_path, sizeof final_path, "%s/frame_%04d.vtu", argv[0], b);
   } else {
-    fprintf(stderr, "usage: mpm error REST.vtu FINAL.vtu | mpm error OUTDIR REST_FRAME "
-                    "FINAL_FRAME\n");
+    fprintf(stderr, "usage: mpm error REST.vtu FINAL.vtu [--body N] | mpm error OUTDIR "
+                    "REST_FRAME FINAL_FRAME [--body N]\n");
     return MPM_EXIT_USAGE;
   }
   cloud_data r, f;
-  if (load(rest_path, &r)) return MPM_EXIT_USAGE;
-  if (load(final_path, &f)) {
+  if (load(rest_path, body, &r)) return MPM_EXIT_USAGE;
+  if (load(final_path, body, &f)) {
     cloud_free(&r);
     return MPM_EXIT_USAGE;
   }

@@ -43,7 +43,7 @@ static void usage(FILE *out) {
           "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
           "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
           "      to OUTDIR/plots/*.png with gnuplot\n"
-          "  mpm error REST.vtu FINAL.vtu | mpm error OUTDIR REST_FRAME FINAL_FRAME\n"
+          "  mpm error REST.vtu FINAL.vtu | mpm error OUTDIR REST_FRAME FINAL_FRAME [--body N]\n"
           "      the rest-state error (Zhu et al. 2017): particles matched by id, rigid\n"
           "      motion removed by shape matching, mean and max distance over the rest\n"
           "      shape's bounding-box diagonal\n"

@@ -162,8 +162,10 @@ static void test_command(void **state) {
                     " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
                     " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
                     "\"nu\": 0.3, \"density\": 1000}],"
-                    " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.3,0.3],"
-                    " \"radius\": 0.1}, \"material\": \"m\", \"velocity\": [0.5, 0, 0]}]}");
+                    " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.3,0.25],"
+                    " \"radius\": 0.08}, \"material\": \"m\", \"velocity\": [0.5, 0, 0]},"
+                    " {\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.3,0.4], \"radius\": "
+                    "0.04}, \"material\": \"m\"}]}");
   snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
   if (mpm(args) != 0) fail_msg("%s", output);
   snprintf(args, sizeof args, "error '%s/out' 0 2", dir);
@@ -173,6 +175,24 @@ static void test_command(void **state) {
   snprintf(args, sizeof args, "error '%s/out/frame_0000.vtu' '%s/out/frame_0000.vtu'", dir, dir);
   assert_int_equal(mpm(args), 0);
   expect_output("mean 0.000e+00");
+  /* one body: the small sphere alone (its 8 cells' particles, fewer than the two bodies') */
+  snprintf(args, sizeof args, "error '%s/out' 0 2", dir);
+  assert_int_equal(mpm(args), 0);
+  const char *all = strstr(output, "(");
+  assert_non_null(all);
+  const long n_all = strtol(all + 1, NULL, 10);
+  snprintf(args, sizeof args, "error '%s/out' 0 2 --body 1", dir);
+  assert_int_equal(mpm(args), 0);
+  const char *one = strstr(output, "(");
+  assert_non_null(one);
+  const long n_one = strtol(one + 1, NULL, 10);
+  print_message("particles matched: %ld of both bodies, %ld of body 1\n", n_all, n_one);
+  assert_true(n_one > 0 && n_one < n_all / 4);
+  snprintf(args, sizeof args, "error '%s/out' 0 2 --body 7", dir);
+  assert_int_equal(mpm(args), 2);
+  expect_output("no particle id is in both frames");
+  snprintf(args, sizeof args, "error '%s/out' 0 2 --body x", dir);
+  assert_int_equal(mpm(args), 2);
   snprintf(args, sizeof args, "error '%s/out'", dir);
   assert_int_equal(mpm(args), 2);
   expect_output("usage: mpm error");
