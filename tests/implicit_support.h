@@ -29,7 +29,7 @@ static inline mpm_sim *implicit_block(const char *model, const char *material_ex
            "0.59, 0.61], \"half_extent\": [%g, %g, %g]}, \"material\": \"m\", "
            "\"particles_per_cell\": %d, \"jitter\": 0, \"domains\": %s}]}",
            kernel, solver_extra, model, material_extra, half, half * 0.8, half * 0.9, ppc,
-           domains == 2 ? "true, \"enrichment\": 0.92"
+           domains == 2 ? "true, \"enrichment\": 0.92, \"enrichment_metric\": \"frobenius\""
            : domains    ? "true"
                         : "false");
   return test_sim_from_json(text, "block.json");

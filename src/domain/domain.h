@@ -30,6 +30,7 @@ typedef struct mpm_domain_enrichment {
   mpm_real *epsilon; /* per body: enriched when K(F) <= epsilon (0: never) */
   mpm_real *exit_k;  /* per body: an enriched particle stays enriched while K(F) <= exit_k
                         (>= epsilon: hysteresis) */
+  int *metric;       /* per body: MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
   mpm_real *spacing; /* per body: the domain lattice's spacing h, m */
   int body_count;
   int any;             /* some body has epsilon > 0 */

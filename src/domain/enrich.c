@@ -46,36 +46,54 @@ mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c) {
   return (mpm_real)(3 / sqrt(a * b));
 }
 
+mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c) {
+  mpm_real U[9], sigma[3], V[9];
+  mpm_svd3(F, U, sigma, V);
+  double lo = HUGE_VAL, hi = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double s = sigma[i] > c ? (double)sigma[i] : (double)c; /* signed: inverted -> c */
+    lo = s < lo ? s : lo;
+    hi = s > hi ? s : hi;
+  }
+  return (mpm_real)(lo / hi);
+}
+
 int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
-                               mpm_real h) {
+                               int metric, mpm_real h) {
   mpm_domain_enrichment *e = &s->enrich;
   if (b < 0) return -1;
   if (b >= e->body_count) {
     mpm_real *grown = mpm_alloc((size_t)(b + 1) * sizeof *grown);
     mpm_real *grown_x = mpm_alloc((size_t)(b + 1) * sizeof *grown_x);
     mpm_real *grown_h = mpm_alloc((size_t)(b + 1) * sizeof *grown_h);
-    if (!grown || !grown_x || !grown_h) {
+    int *grown_m = mpm_alloc((size_t)(b + 1) * sizeof *grown_m);
+    if (!grown || !grown_x || !grown_h || !grown_m) {
       mpm_free(grown);
       mpm_free(grown_x);
       mpm_free(grown_h);
+      mpm_free(grown_m);
       return -1;
     }
     for (int k = 0; k <= b; ++k) {
       grown[k] = k < e->body_count ? e->epsilon[k] : 0;
       grown_x[k] = k < e->body_count ? e->exit_k[k] : 0;
       grown_h[k] = k < e->body_count ? e->spacing[k] : 0;
+      grown_m[k] = k < e->body_count ? e->metric[k] : MPM_ENRICHMENT_CONDITION;
     }
     mpm_free(e->epsilon);
     mpm_free(e->exit_k);
     mpm_free(e->spacing);
+    mpm_free(e->metric);
     e->epsilon = grown;
     e->exit_k = grown_x;
     e->spacing = grown_h;
+    e->metric = grown_m;
     e->body_count = b + 1;
   }
   e->epsilon[b] = epsilon;
   e->exit_k[b] = exit_k > epsilon ? exit_k : epsilon;
   e->spacing[b] = h;
+  e->metric[b] = metric;
   e->any = 0;
   for (int k = 0; k < e->body_count; ++k)
     if (e->epsilon[k] > 0) e->any = 1;
@@ -85,6 +103,7 @@ int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_r
 void mpm_enrichment_free(mpm_domain_enrichment *e) {
   mpm_free(e->epsilon);
   mpm_free(e->exit_k);
+  mpm_free(e->metric);
   mpm_free(e->spacing);
   mpm_free(e->flag);
   mpm_free(e->category);
@@ -165,7 +184,11 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
      * particle released while still deformed leaves its corners where no grid motion can
      * move them apart (a cell's 8 nodes carry its 27 corners), and the body locks in that
      * shape (measured: 2.2e-3 rest-state error against 1.7e-4 with exit_k = 0.95) */
-    const mpm_real K = eps >= 1 ? 1 : mpm_enrichment_metric(F, c > 0 ? c : (mpm_real)1e-6);
+    const mpm_real cc = c > 0 ? c : (mpm_real)1e-6;
+    const int kind = b >= 0 && b < e->body_count ? e->metric[b] : MPM_ENRICHMENT_CONDITION;
+    const mpm_real K = eps >= 1                              ? 1
+                       : kind == MPM_ENRICHMENT_FROBENIUS ? mpm_enrichment_metric(F, cc)
+                                                          : mpm_enrichment_condition(F, cc);
     e->flag[q] = eps >= 1 || K <= eps || (was && K <= exit_k);
   }
   /* 2. a corner is enriched when one of its particles is (gathered per corner: no races) */

@@ -17,15 +17,19 @@
  * in domain_transfer.c and domain_hessian.c is unchanged, because it goes through the
  * embedding. A corner that is no longer marked returns to its grid row the next step.
  *
- * The metric. Eq. 10 reads K = 1 / (||F^-1||_F ||F||_F), but the paper calls K a value in
- * (0, 1] with greater values for better conditioned F, and enriches below epsilon = 0.6;
- * with Frobenius norms in 3D, ||F^-1||_F ||F||_F >= 3 (equality for F = s R), so the literal
- * formula is at most 1/3 and would enrich every particle at rest. We use the normalized form
- *   K(F) = 3 / (||F^-1||_F ||F||_F)  in (0, 1],  K(s R) = 1,
- * which is what the paper's range and threshold describe: a uniaxial stretch of 1.5 gives
- * K = 0.93, of 3 gives 0.62, a compression to 1/3 gives 0.62. F is clamped first (sec. 5.3):
- * its signed singular values below the material's min_stretch c are raised to c, so that
- * flat and inverted particles get a small finite K.
+ * The metric. The paper calls K "the reciprocal of the condition number" of F, a value in
+ * (0, 1] with greater values for better conditioned F, and enriches below epsilon = 0.6; eq. 10
+ * writes it K = 1 / (||F^-1||_F ||F||_F), but with Frobenius norms in 3D ||F^-1||_F ||F||_F >= 3
+ * (equality for F = s R), so that literal formula is at most 1/3 and would enrich every
+ * particle at rest. Two readings, per body (bodies[].enrichment_metric):
+ *   condition (default)  K(F) = sigma_min / sigma_max, the reciprocal of the 2-norm condition
+ *                        number: 0.67 for a uniaxial stretch of 1.5, 0.33 for a stretch of 3;
+ *   frobenius            K(F) = 3 / (||F^-1||_F ||F||_F), normalized so that K(s R) = 1: 0.93
+ *                        for a stretch of 1.5, 0.62 for 3 or a compression to 1/3.
+ * F is clamped first (sec. 5.3): its signed singular values below the material's min_stretch c
+ * are raised to c, so that flat and inverted particles get a small finite K. An enriched
+ * particle stays enriched while K <= the body's exit threshold (bodies[].enrichment_exit >=
+ * epsilon): the flags are state.
  *
  * The explicit time step. Grid nodes are dx apart whatever the material does, but enriched
  * corners are the material's own nodes: h apart at rest, h sigma_min apart in a compressed
@@ -40,8 +44,15 @@
 
 enum { MPM_DOMAIN_UNENRICHED = 0, MPM_DOMAIN_TRANSITIONAL = 1, MPM_DOMAIN_ENRICHED = 2 };
 
-/* K(F) as above with singular values clamped at c > 0. */
+/* The metric's two readings (the scene's bodies[].enrichment_metric, scene.h's values). */
+enum { MPM_ENRICHMENT_CONDITION = 0, MPM_ENRICHMENT_FROBENIUS = 1 };
+
+/* K(F) = 3 / (||F^-1||_F ||F||_F) as above, singular values clamped at c > 0. */
 mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c);
+
+/* K(F) = sigma_min / sigma_max, the reciprocal of the (2-norm) condition number, singular
+ * values clamped at c > 0 (signed: an inverted direction counts as c). */
+mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c);
 
 /* Mark the corners and classify the particles of the set from their current F (materials: the
  * clamp of each particle's material; s->enrich.epsilon per body), and list the enriched
@@ -55,10 +66,11 @@ static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
 }
 
 /* Set body b's threshold epsilon, its exit threshold (an enriched particle stays enriched while
- * K <= exit_k; raised to epsilon when below) and lattice spacing h (sim setup). 0, or -1 when
+ * K <= exit_k; raised to epsilon when below), metric (MPM_ENRICHMENT_*) and lattice spacing h
+ * (sim setup). 0, or -1 when
  * out of memory. */
 int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
-                               mpm_real h);
+                               int metric, mpm_real h);
 
 void mpm_enrichment_free(mpm_domain_enrichment *e);
 

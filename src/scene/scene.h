@@ -126,6 +126,8 @@ typedef struct mpm_body_desc {
                                  never (Zhu: 0.6) */
   double enrichment_exit;     /* domains: an enriched particle stays enriched while K(F) <= this
                                  (hysteresis); default 0.95, or `enrichment` when larger */
+  int enrichment_metric;      /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
+                                 Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
 } mpm_body_desc;

@@ -20,7 +20,7 @@
 static const char *const BODY_KEYS[] = {
     "name",   "shape", "material", "velocity",       "angular_velocity", "particles_per_cell",
     "jitter", "seed",  "domains",  "domain_release", "enrichment",
-    "enrichment_exit", NULL};
+    "enrichment_exit", "enrichment_metric", NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", "active",     NULL};
@@ -407,10 +407,16 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
    * enrichment) */
   b->enrichment = 0;
-  for (int k = 0; k < 2; ++k)
-    if (mpm_json_get(node, k ? "enrichment_exit" : "enrichment") && !b->domains)
-      return mpm_json_fail_at(c, k ? "enrichment_exit" : "enrichment", MPM_ERR_INVALID,
+  static const char *const enrichment_keys[] = {"enrichment", "enrichment_exit",
+                                               "enrichment_metric"};
+  for (int k = 0; k < 3; ++k)
+    if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
+      return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
+  static const char *const metric_names[] = {"condition", "frobenius", NULL};
+  b->enrichment_metric = 0;
+  if (mpm_json_enum(c, node, "enrichment_metric", 0, metric_names, &b->enrichment_metric) < 0)
+    return -1;
   if (mpm_json_number(c, node, "enrichment", 0,
                       mpm_json_in('[', 0, 1, ']', "threshold on the enrichment metric K(F)"),
                       &b->enrichment) < 0)

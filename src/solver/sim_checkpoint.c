@@ -152,8 +152,10 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
    * anew from the state, as every step makes them */
   mpm_domain_enrichment *was = &sim->domains.enrich;
   mpm_real *epsilon = was->epsilon, *spacing = was->spacing, *exit_k = was->exit_k;
+  int *metric = was->metric;
   const int body_count = was->body_count, any = was->any;
   was->epsilon = was->spacing = was->exit_k = NULL;
+  was->metric = NULL;
   mpm_domain_set_free(&sim->domains);
   sim->domains = c->domains;
   memset(&c->domains, 0, sizeof c->domains);
@@ -161,6 +163,8 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   mpm_free(e->epsilon);
   mpm_free(e->spacing);
   mpm_free(e->exit_k);
+  mpm_free(e->metric);
+  e->metric = metric;
   e->epsilon = epsilon;
   e->spacing = spacing;
   e->exit_k = exit_k;
