@@ -4,6 +4,7 @@
 #include "support.h"
 #include "cli_support.h"
 
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,18 +74,27 @@ static void test_bad_scenes_exit_2_and_write_nothing(void **state) {
   }
 }
 
+/* Every scene shipped in examples/ and examples/zhu/ passes `mpm check`. */
 static void test_check_examples(void **state) {
   (void)state;
-  const char *examples[] = {
-      "examples/jello_cubes.json",       "examples/sphere_bounce.json",
-      "examples/block_on_cylinder.json", "examples/bunny_drop.json",
-      "examples/stiff_bar_bending.json", "examples/rubber_bunny_implicit.json"};
-  for (size_t i = 0; i < sizeof examples / sizeof examples[0]; ++i) {
-    char args[600];
-    snprintf(args, sizeof args, "check %s", examples[i]);
-    if (mpm(args) != 0) fail_msg("%s: %s", examples[i], output);
-    expect_output("ok");
+  static const char *const dirs[] = {"examples", "examples/zhu"};
+  int checked = 0;
+  for (size_t k = 0; k < sizeof dirs / sizeof dirs[0]; ++k) {
+    DIR *d = opendir(dirs[k]);
+    if (!d) fail_msg("cannot list %s", dirs[k]);
+    for (struct dirent *e = readdir(d); e; e = readdir(d)) {
+      const size_t n = strlen(e->d_name);
+      if (n < 6 || strcmp(e->d_name + n - 5, ".json")) continue;
+      char args[600];
+      snprintf(args, sizeof args, "check %s/%s", dirs[k], e->d_name);
+      if (mpm(args) != 0) fail_msg("%s/%s: %s", dirs[k], e->d_name, output);
+      expect_output("ok");
+      ++checked;
+    }
+    closedir(d);
   }
+  print_message("%d example scenes checked\n", checked);
+  assert_true(checked >= 25);
 }
 
 static long count_occurrences(const char *text, const char *needle) {

@@ -1,0 +1,80 @@
+#!/bin/bash
+# tools/zhu_table1.sh - Zhu et al. 2017's Table 1 scenes (examples/zhu/) with enrichment as the
+# scene gives it (Zhu's 0.6), off (0) and everywhere (1): particles, grid, seconds per frame on
+# 1 thread (and 2 for the scene's own setting) and the rest-state error of the body with
+# domains (body 0) between its REST and FINAL frames. Prints a markdown table.
+#
+#   tools/zhu_table1.sh [BUILD_DIR] [OUT_DIR]       (defaults: build, /tmp/zhu-table1)
+#   REPORT_ONLY=1 tools/zhu_table1.sh ...           the table from the runs already in OUT_DIR
+#
+# Runs the variants two at a time on this machine's cores; about ten minutes on two cores.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+mpm=$root/${1:-build}/mpm
+out=${2:-/tmp/zhu-table1}
+mkdir -p "$out/zhu"
+ln -sfn "$root/examples/meshes" "$out/meshes" # the scenes name ../meshes/bunny.obj
+# scene  rest-frame  final-frame  paper: name particles grid min/frame error
+scenes=(
+  "bar_twist_compress_release 0 48 Buddha 2918 32x40x32 6.34 2.4e-4"
+  "bunny_hit_by_ball 9 180 Armadillo 3134 30x16x13 6.15 2.5e-3"
+  "bunny_tunnel_squeeze 12 240 Egea 4269 24x64x24 14.94 2.3e-5"
+  "bunny_collapse_recover 12 240 Gorilla 4649 32x80x32 8.42 5.4e-3"
+  "bunny_funnel 3 240 Kitty 5226 96x88x96 13.85 3.7e-3"
+  "bunny_rolled_by_cylinder 12 240 Bunny 3559 56x16x16 12.38 1.2e-3"
+  "rabbit_straw 12 240 Rabbit 2635 24x104x24 7.15 1.8e-4"
+  "melting_bunny 3 150 Melting_bunny 60000 24x22x24 15.10 N/A"
+  "bunny_snowball 9 90 Armadillo_snowball 16587 120x72x52 15.17 N/A"
+)
+jobs_running() { jobs -rp | wc -l; }
+run() { # scene-file out-name threads
+  local t0 t1
+  t0=$(date +%s.%N)
+  "$mpm" run "$1" -o "$out/$2" --threads "$3" --quiet > "$out/$2.log" 2>&1 || echo "FAILED" >> "$out/$2.log"
+  t1=$(date +%s.%N)
+  echo "$t0 $t1" | awk '{printf "%.2f\n", $2 - $1}' > "$out/$2.seconds"
+}
+if [ -z "${REPORT_ONLY:-}" ]; then
+for line in "${scenes[@]}"; do
+  read -r s rest final _ <<< "$line"
+  src=$root/examples/zhu/$s.json
+  cp "$src" "$out/zhu/on_$s.json"
+  sed -E 's/"enrichment": [0-9.]+/"enrichment": 0/' "$src" > "$out/zhu/off_$s.json"
+  sed -E 's/"enrichment": [0-9.]+/"enrichment": 1/' "$src" > "$out/zhu/all_$s.json"
+  for v in on off all; do
+    rm -rf "${out:?}/${v}_$s"
+    run "$out/zhu/${v}_$s.json" "${v}_$s" 1 &
+    while [ "$(jobs_running)" -ge 2 ]; do sleep 0.5; done
+  done
+done
+wait
+# two threads, the scene as given, one at a time (the machine's two cores)
+for line in "${scenes[@]}"; do
+  read -r s _ <<< "$line"
+  rm -rf "${out:?}/two_$s"
+  run "$out/zhu/on_$s.json" "two_$s" 2
+done
+fi
+err() { # dir rest final
+  "$mpm" error "$1" "$2" "$3" --body 0 2> /dev/null | sed -E 's/rest-state error: mean ([^,]*),.*/\1/' || echo "-"
+}
+enriched() { awk -F, 'NR > 1 { if ($21 > m) m = $21 } END { printf "%.0f%%", m }' "$1/stats.csv"; }
+echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; mpm at $(git -C "$root" rev-parse --short HEAD)"
+echo
+echo "| scene (paper's) | particles (paper) | grid (paper) | s/frame 1 thread | 2 threads | paper min/frame | speed-up, 1 thread | error on (enriched at most) | off | all enriched | paper |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for line in "${scenes[@]}"; do
+  read -r s rest final pname pparts pgrid pmin perr <<< "$line"
+  frames=$(($(ls "$out/on_$s"/frame_*.vtu | wc -l) - 1))
+  parts=$("$mpm" check "$out/zhu/on_$s.json" | sed -E 's/.*ok \(([0-9]+) particles.*/\1/')
+  grid=$(python3 - "$out/zhu/on_$s.json" << 'PY'
+import json, sys
+s = json.load(open(sys.argv[1])); d = s["domain"]
+print("x".join(str(round((d["max"][k] - d["min"][k]) / d["dx"])) for k in range(3)))
+PY
+)
+  s1=$(awk -v t="$(cat "$out/on_$s.seconds")" -v f="$frames" 'BEGIN { printf "%.3f", t / f }')
+  s2=$(awk -v t="$(cat "$out/two_$s.seconds")" -v f="$frames" 'BEGIN { printf "%.3f", t / f }')
+  up=$(awk -v a="$pmin" -v b="$s1" 'BEGIN { printf "%.0fx", a * 60 / b }')
+  echo "| $s (${pname//_/ }) | $parts ($pparts) | $grid ($pgrid) | $s1 | $s2 | $pmin | $up | $(err "$out/on_$s" "$rest" "$final") ($(enriched "$out/on_$s")) | $(err "$out/off_$s" "$rest" "$final") | $(err "$out/all_$s" "$rest" "$final") | $perr |"
+done
