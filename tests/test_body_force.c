@@ -29,8 +29,7 @@ static const char *ACCELERATION = ", \"acceleration\": [0, 2, 0]";
 
 /* mean velocity and centre of mass of the particles of one body */
 static void body_motion(const mpm_sim *sim, int body, double v[3], double x[3]) {
-  const mpm_particles *p = sim->domains.particles.count ? &sim->domains.particles
-                                                        : &sim->particles;
+  const mpm_particles *p = sim->domains.particles.count ? &sim->domains.particles : &sim->particles;
   double m = 0;
   for (int d = 0; d < 3; ++d) v[d] = x[d] = 0;
   for (size_t i = 0; i < p->count; ++i) {
@@ -45,8 +44,8 @@ static void body_motion(const mpm_sim *sim, int body, double v[3], double x[3]) 
 }
 
 /* Runs the scene to its end; expects body 0's velocity vy (within rel) and body 1 at rest. */
-static void run_case(const char *solver, const char *body, const char *force, double vy,
-                     double rel, const char *what) {
+static void run_case(const char *solver, const char *body, const char *force, double vy, double rel,
+                     const char *what) {
   char text[4096], f[512];
   snprintf(f, sizeof f, "%s%s", ACCELERATION, force);
   snprintf(text, sizeof text, SCENE, solver, body, body, f);

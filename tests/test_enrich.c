@@ -262,7 +262,9 @@ static void test_categories(void **state) {
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 0);
   /* without hysteresis (enrichment_exit = enrichment) the stretch of 1.5 releases it at once */
-  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, (mpm_real)0.6, (mpm_real)0.6, MPM_ENRICHMENT_FROBENIUS, (mpm_real)0.02), 0);
+  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, (mpm_real)0.6, (mpm_real)0.6,
+                                              MPM_ENRICHMENT_FROBENIUS, (mpm_real)0.02),
+                   0);
   stretch_particle(sim, q0, 4);
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 8);
@@ -271,7 +273,8 @@ static void test_categories(void **state) {
   assert_int_equal(e->count, 0);
   /* epsilon 0 never enriches */
   stretch_particle(sim, q0, 4);
-  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, 0, 0, MPM_ENRICHMENT_FROBENIUS, (mpm_real)0.02), 0);
+  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, 0, 0, MPM_ENRICHMENT_FROBENIUS, (mpm_real)0.02),
+                   0);
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 0);
   assert_int_equal(e->particles[MPM_DOMAIN_UNENRICHED], 40);

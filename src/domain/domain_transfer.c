@@ -29,8 +29,8 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
   if (mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W))) return -1;
   /* APIC: the factors of every entry and D of every corner (step scratch) */
   for (int d = 0; d < 3; ++d) {
-    s->apic_a[d] = apic ? mpm_arena_alloc(scratch, (E->entry_capacity + 1) * sizeof(mpm_real))
-                        : NULL;
+    s->apic_a[d] =
+        apic ? mpm_arena_alloc(scratch, (E->entry_capacity + 1) * sizeof(mpm_real)) : NULL;
     s->apic_d[d] = apic ? mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real)) : NULL;
     if (apic && (!s->apic_a[d] || !s->apic_d[d])) return -1;
   }
@@ -52,7 +52,7 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
       key[c] = -1;
       if (!s->corner_use[c]) continue;
       if (enriched && en->enriched[c]) { /* its own DOF: an identity row (Zhu sec. 5.2) */
-        if (apic) /* no offset to its node: no affine part, and B_a = 0 */
+        if (apic)                        /* no offset to its node: no affine part, and B_a = 0 */
           for (int d = 0; d < 3; ++d) s->apic_a[d][E->row_start[c]] = s->apic_d[d][c] = 0;
         mpm_embedding_push(E, (size_t)c, corner_dofs + en->slot[c], 1);
         key[c] = MPM_EMBEDDING_OWN_COLUMNS;

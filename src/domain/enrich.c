@@ -186,7 +186,7 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
      * shape (measured: 2.2e-3 rest-state error against 1.7e-4 with exit_k = 0.95) */
     const mpm_real cc = c > 0 ? c : (mpm_real)1e-6;
     const int kind = b >= 0 && b < e->body_count ? e->metric[b] : MPM_ENRICHMENT_CONDITION;
-    const mpm_real K = eps >= 1                              ? 1
+    const mpm_real K = eps >= 1                           ? 1
                        : kind == MPM_ENRICHMENT_FROBENIUS ? mpm_enrichment_metric(F, cc)
                                                           : mpm_enrichment_condition(F, cc);
     e->flag[q] = eps >= 1 || K <= eps || (was && K <= exit_k);

@@ -118,9 +118,9 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
         for (int d = 0; d < 3; ++d) weights[(8 + 3 * a + d) * nd + i] = s->g[i][a][d];
       }
     const void *cr[MPM_CKPT_CORNER_REAL_ROWS] = {
-        s->cX[0],  s->cX[1],  s->cX[2], s->cx[0], s->cx[1], s->cx[2], s->cv[0],
-        s->cv[1],  s->cv[2],  s->cxc[0], s->cxc[1], s->cxc[2], s->cB[0], s->cB[1],
-        s->cB[2],  s->cB[3],  s->cB[4], s->cB[5], s->cB[6], s->cB[7], s->cB[8]};
+        s->cX[0], s->cX[1], s->cX[2],  s->cx[0],  s->cx[1],  s->cx[2], s->cv[0],
+        s->cv[1], s->cv[2], s->cxc[0], s->cxc[1], s->cxc[2], s->cB[0], s->cB[1],
+        s->cB[2], s->cB[3], s->cB[4],  s->cB[5],  s->cB[6],  s->cB[7], s->cB[8]};
     rc = put_dataset(f, "domain_reals", mpm_ckpt_real_type(), MPM_PARTICLE_REAL_ARRAYS, nd, rows) ||
                  put_dataset(f, "domain_material", H5T_NATIVE_INT32, 0, nd, &material) ||
                  put_dataset(f, "domain_body", H5T_NATIVE_INT32, 0, nd, &body) ||

@@ -175,9 +175,9 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
   void *material = s->particles.material, *body = s->particles.body, *id = s->particles.id,
        *active = s->active, *flags = s->enrich.flag;
   void *cr[MPM_CKPT_CORNER_REAL_ROWS] = {
-        s->cX[0],  s->cX[1],  s->cX[2], s->cx[0], s->cx[1], s->cx[2], s->cv[0],
-        s->cv[1],  s->cv[2],  s->cxc[0], s->cxc[1], s->cxc[2], s->cB[0], s->cB[1],
-        s->cB[2],  s->cB[3],  s->cB[4], s->cB[5], s->cB[6], s->cB[7], s->cB[8]};
+      s->cX[0], s->cX[1], s->cX[2],  s->cx[0],  s->cx[1],  s->cx[2], s->cv[0],
+      s->cv[1], s->cv[2], s->cxc[0], s->cxc[1], s->cxc[2], s->cB[0], s->cB[1],
+      s->cB[2], s->cB[3], s->cB[4],  s->cB[5],  s->cB[6],  s->cB[7], s->cB[8]};
   const size_t R = sizeof(mpm_real);
   if (get_dataset(r, "domain_reals", H5T_FLOAT, R, mpm_ckpt_real_type(), MPM_PARTICLE_REAL_ARRAYS,
                   nd, rows) ||

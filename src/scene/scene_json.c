@@ -367,8 +367,7 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       parse_time(c, root, s) < 0 || parse_solver(c, root, s) < 0 ||
       mpm_sj_parse_materials(c, root, s) < 0 || mpm_sj_parse_bodies(c, root, s) < 0 ||
       mpm_sj_parse_colliders(c, root, s) < 0 || mpm_sj_parse_forces(c, root, s) < 0 ||
-      parse_output(c, root, s) < 0 ||
-      parse_camera(c, root, s) < 0)
+      parse_output(c, root, s) < 0 || parse_camera(c, root, s) < 0)
     return -1;
   return 0;
 }

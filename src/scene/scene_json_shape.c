@@ -17,10 +17,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const BODY_KEYS[] = {
-    "name",   "shape", "material", "velocity",       "angular_velocity", "particles_per_cell",
-    "jitter", "seed",  "domains",  "domain_release", "enrichment",
-    "enrichment_exit", "enrichment_metric", NULL};
+static const char *const BODY_KEYS[] = {"name",
+                                        "shape",
+                                        "material",
+                                        "velocity",
+                                        "angular_velocity",
+                                        "particles_per_cell",
+                                        "jitter",
+                                        "seed",
+                                        "domains",
+                                        "domain_release",
+                                        "enrichment",
+                                        "enrichment_exit",
+                                        "enrichment_metric",
+                                        NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
                                             "friction", "motion", "active",     NULL};
@@ -408,7 +418,7 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
    * enrichment) */
   b->enrichment = 0;
   static const char *const enrichment_keys[] = {"enrichment", "enrichment_exit",
-                                               "enrichment_metric"};
+                                                "enrichment_metric"};
   for (int k = 0; k < 3; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
@@ -426,8 +436,8 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   snprintf(exit_note, sizeof exit_note,
            "K(F) above which an enriched particle returns to the grid, at least enrichment (%g)",
            b->enrichment);
-  if (mpm_json_number(c, node, "enrichment_exit", 0, mpm_json_in('[', b->enrichment, 1, ']', exit_note),
-                      &b->enrichment_exit) < 0)
+  if (mpm_json_number(c, node, "enrichment_exit", 0,
+                      mpm_json_in('[', b->enrichment, 1, ']', exit_note), &b->enrichment_exit) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,
