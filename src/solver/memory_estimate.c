@@ -68,17 +68,27 @@ double mpm_scene_memory_estimate(const mpm_scene *s, double *particles) {
          64.0 * 1024 * 1024; /* plus the program itself */
 }
 
+/* MPM_MEMORY_LIMIT's value in bytes: a positive number with an optional K, M or G suffix
+ * (powers of 1024); -1 when it is anything else. */
+static double parse_limit(const char *env) {
+  char *end;
+  double v = strtod(env, &end);
+  if (end == env || !(v > 0) || !isfinite(v)) return -1;
+  const char u = *end;
+  if (u == 'K' || u == 'k') v *= 1024, ++end;
+  else if (u == 'M' || u == 'm') v *= 1024.0 * 1024, ++end;
+  else if (u == 'G' || u == 'g') v *= 1024.0 * 1024 * 1024, ++end;
+  if (*end == 'B' || *end == 'b') ++end; /* 20MB, 4GB */
+  return *end ? -1 : v;
+}
+
 /* MPM_MEMORY_LIMIT (bytes, with an optional K, M or G suffix) if set, else MemAvailable from
- * /proc/meminfo, else the physical memory; 0 when none is known. */
+ * /proc/meminfo, else the physical memory; 0 when none is known (a malformed variable counts
+ * as unset here: mpm_scene_check_memory reports it). */
 double mpm_available_memory(void) {
   const char *env = getenv("MPM_MEMORY_LIMIT");
   if (env && *env) {
-    char *end;
-    double v = strtod(env, &end);
-    const char u = *end;
-    if (u == 'K' || u == 'k') v *= 1024;
-    if (u == 'M' || u == 'm') v *= 1024.0 * 1024;
-    if (u == 'G' || u == 'g') v *= 1024.0 * 1024 * 1024;
+    const double v = parse_limit(env);
     if (v > 0) return v;
   }
   FILE *f = fopen("/proc/meminfo", "r");
@@ -94,25 +104,44 @@ double mpm_available_memory(void) {
   return pages > 0 && size > 0 ? (double)pages * (double)size : 0;
 }
 
+/* bytes as "20 MiB", "1.5 GiB" (three significant digits, never rounded to 0) */
+static const char *human_bytes(double b, char *buf, size_t cap) {
+  static const char *const unit[] = {"bytes", "KiB", "MiB", "GiB", "TiB"};
+  int u = 0;
+  while (b >= 1024 && u < 4) b /= 1024, ++u;
+  snprintf(buf, cap, "%.3g %s", b, unit[u]);
+  return buf;
+}
+
 mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
+  const char *env = getenv("MPM_MEMORY_LIMIT");
+  if (env && *env && parse_limit(env) < 0)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "MPM_MEMORY_LIMIT: expected a positive number of bytes with an optional "
+                         "K, M or G suffix (e.g. 512M, 4G), got '%.64s'",
+                         env);
   double n;
   const double need = mpm_scene_memory_estimate(s, &n), have = mpm_available_memory();
   if (have > 0 && need > have) {
-    const double gib = 1024.0 * 1024 * 1024;
     const double dense = dense_nodes(s);
-    char grid[160] = "";
+    char grid[160] = "", need_s[32], have_s[32], dense_s[32];
     if (dense > 0)
-      snprintf(grid, sizeof grid, ", and a dense grid (solver.grid) of %.3g nodes: %.3g GiB", dense,
-               dense * DOF_REALS * sizeof(mpm_real) / gib);
+      snprintf(grid, sizeof grid, ", and a dense grid (solver.grid) of %.3g nodes: %s", dense,
+               human_bytes(dense * DOF_REALS * sizeof(mpm_real), dense_s, sizeof dense_s));
+    const int limited = env && *env;
     return mpm_error_set(err, MPM_ERR_INVALID,
-                         "%s: the scene needs about %.3g GiB (%.3g particles at about %.0f bytes "
-                         "each%s) but this machine has %.1f GiB available; use a larger dx, fewer "
-                         "particles_per_cell or smaller bodies%s",
-                         s->path[0] ? s->path : "scene", need / gib, n,
+                         "%s: the scene needs about %s (%.3g particles at about %.0f bytes "
+                         "each%s) but %s %s; use a larger dx, fewer particles_per_cell or "
+                         "smaller bodies%s",
+                         s->path[0] ? s->path : "scene", human_bytes(need, need_s, sizeof need_s),
+                         n,
                          BYTES_PER_PARTICLE + (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT
                                                    ? IMPLICIT_BYTES_PER_PARTICLE
                                                    : 0),
-                         grid, have / gib, dense > 0 ? ", or the sparse grid" : "");
+                         grid,
+                         limited ? "MPM_MEMORY_LIMIT allows" : "this machine has available",
+                         human_bytes(have, have_s, sizeof have_s),
+                         dense > 0 ? ", or the sparse grid" : "");
   }
   return MPM_OK;
 }
