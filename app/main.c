@@ -7,51 +7,83 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The usage of each subcommand: `mpm --help` prints them all, `mpm CMD --help` its own. */
+typedef struct usage_section {
+  const char *cmd, *text;
+} usage_section;
+
+static const usage_section SECTIONS[] = {
+    {"run",
+     "  mpm run SCENE.json [-o DIR | --resume DIR] [--threads N] [--frames N] [--render]\n"
+     "          [--quiet]\n"
+     "      simulate the scene, writing frames (VTU + PVD, PLY, stats.csv), checkpoints\n"
+     "      (checkpoint_*.h5) and a copy of the scene (scene.json) to DIR (default: the\n"
+     "      scene's output.directory); --resume continues the run in DIR from its newest\n"
+     "      checkpoint; --threads sets the OpenMP threads; --frames stops after N frames;\n"
+     "      --render then runs `mpm render DIR`; --quiet prints no progress;\n"
+     "      Ctrl-C or SIGTERM writes a checkpoint and stops (exit 130 or 143)\n"},
+    {"check", "  mpm check SCENE.json\n"
+              "      validate a scene only: nothing is simulated or written\n"},
+    {"bench",
+     "  mpm bench transfer [--threads LIST] [--repeats N] [--kernel K] [--grid G]\n"
+     "                     [--spacing-scale S]\n"
+     "      Gao et al. 2017 Table 1 transfer benchmark (P2G and G2P ns per particle)\n"
+     "  mpm bench step [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
+     "      full explicit steps of a falling neo-Hookean block (ns per particle-step)\n"
+     "  mpm bench stress [--particles N] [--threads LIST] [--repeats N]\n"
+     "      each material model's batch stress and return map (ns per particle), and\n"
+     "      ns per 3x3 SVD (mpm_svd3)\n"
+     "  mpm bench checkpoint [--particles N] [--repeats N] [--dir DIR]\n"
+     "      checkpoint write/read/resume seconds and MB/s, cost of the guards per step\n"
+     "  mpm bench domains [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
+     "      ns per particle-step with particle domains against material points, and\n"
+     "      where the time goes (activation and layout, P2G, grid update, G2P)\n"
+     "  mpm bench implicit [--particles N] [--drop-particles N] [--threads LIST]\n"
+     "                     [--repeats N] [--only action|drop]\n"
+     "      the Hessian action against explicit P2G + G2P, CG iterations with and\n"
+     "      without the preconditioner, time to simulate 1 s explicit and implicit\n"},
+    {"render",
+     "  mpm render OUTDIR [--field velocity|J|stress|plastic|material|body] [--size WxH]\n"
+     "                    [--colormap viridis|coolwarm|category] [--range LO:HI] [--every N]\n"
+     "                    [--scene SCENE.json] [--out DIR] [--movie] [--quiet]\n"
+     "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed):\n"
+     "      particles coloured by --field (default velocity) with --colormap over --range\n"
+     "      (default: percentiles of the run), every N-th frame, the colliders of\n"
+     "      --scene (default OUTDIR/scene.json), to --out; --movie also makes movie.mp4\n"
+     "      with ffmpeg\n"},
+    {"plot", "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
+             "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
+             "      to OUTDIR/plots/*.png (or --out DIR) with gnuplot\n"},
+    {"error", "  mpm error REST.vtu FINAL.vtu [--body N]\n"
+              "  mpm error OUTDIR REST_FRAME FINAL_FRAME [--body N]\n"
+              "      the rest-state error (Zhu et al. 2017): particles matched by id, rigid\n"
+              "      motion removed by shape matching, mean and max distance over the rest\n"
+              "      shape's bounding-box diagonal; --body N: the particles of body N only\n"},
+};
+#define SECTION_COUNT (sizeof SECTIONS / sizeof SECTIONS[0])
+
+/* The whole usage (cmd NULL) or one subcommand's. Returns 0, -1 for an unknown cmd. */
+static int usage_of(FILE *out, const char *cmd) {
+  int known = !cmd;
+  for (size_t k = 0; k < SECTION_COUNT; ++k) known |= cmd && !strcmp(cmd, SECTIONS[k].cmd);
+  if (!known) return -1;
+  fprintf(out, "mpm %s - Material Point Method simulation engine (%s build)\n\n", mpm_version(),
+          mpm_real_type());
+  if (!cmd) fputs("usage:\n", out);
+  for (size_t k = 0; k < SECTION_COUNT; ++k)
+    if (!cmd)
+      fputs(SECTIONS[k].text, out);
+    else if (!strcmp(cmd, SECTIONS[k].cmd)) /* "usage: mpm CMD ..." on its first line */
+      fprintf(out, "usage: %s", SECTIONS[k].text + 2);
+  if (!cmd) fputs("  mpm --help | CMD --help | --version\n", out);
+  fputs("\nexit codes: 0 success, 1 simulation failure, 2 usage or input error,\n"
+        "            128 + N stopped by signal N after writing a checkpoint\n",
+        out);
+  return 0;
+}
+
 static void usage(FILE *out) {
-  fprintf(out,
-          "mpm %s - Material Point Method simulation engine (%s build)\n"
-          "\n"
-          "usage:\n"
-          "  mpm run SCENE.json [-o DIR | --resume DIR] [--threads N] [--frames N] [--render]\n"
-          "          [--quiet]\n"
-          "      simulate the scene, writing frames (VTU + PVD, PLY, stats.csv), checkpoints\n"
-          "      (checkpoint_*.h5) and a copy of the scene (scene.json) to DIR (default: the\n"
-          "      scene's output.directory); --resume continues the run in DIR from its newest\n"
-          "      checkpoint; --frames stops after N frames; --render then runs `mpm render DIR`;\n"
-          "      Ctrl-C or SIGTERM writes a checkpoint and stops (exit 130 or 143)\n"
-          "  mpm check SCENE.json\n"
-          "      validate a scene only: nothing is simulated or written\n"
-          "  mpm bench transfer [--threads LIST] [--repeats N] [--kernel K] [--grid G]\n"
-          "                     [--spacing-scale S]\n"
-          "      Gao et al. 2017 Table 1 transfer benchmark (P2G and G2P ns per particle)\n"
-          "  mpm bench step [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
-          "      full explicit steps of a falling neo-Hookean block (ns per particle-step)\n"
-          "  mpm bench stress [--particles N] [--threads LIST] [--repeats N]\n"
-          "      each material model's batch stress and return map (ns per particle), and\n"
-          "      ns per 3x3 SVD (mpm_svd3)\n"
-          "  mpm bench checkpoint [--particles N] [--repeats N] [--dir DIR]\n"
-          "      checkpoint write/read/resume seconds and MB/s, cost of the guards per step\n"
-          "  mpm bench domains [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
-          "      ns per particle-step with particle domains against material points\n"
-          "  mpm bench implicit [--particles N] [--drop-particles N] [--threads LIST]\n"
-          "                     [--repeats N] [--only action|drop]\n"
-          "      the Hessian action against explicit P2G + G2P, CG iterations with and\n"
-          "      without the preconditioner, time to simulate 1 s explicit and implicit\n"
-          "  mpm render OUTDIR [--field F] [--size WxH] [--colormap C] [--every N] [--movie]\n"
-          "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed);\n"
-          "      F: velocity (default), J, stress, plastic, material, body\n"
-          "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
-          "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
-          "      to OUTDIR/plots/*.png with gnuplot\n"
-          "  mpm error REST.vtu FINAL.vtu | mpm error OUTDIR REST_FRAME FINAL_FRAME [--body N]\n"
-          "      the rest-state error (Zhu et al. 2017): particles matched by id, rigid\n"
-          "      motion removed by shape matching, mean and max distance over the rest\n"
-          "      shape's bounding-box diagonal\n"
-          "  mpm --help | --version\n"
-          "\n"
-          "exit codes: 0 success, 1 simulation failure, 2 usage or input error,\n"
-          "            128 + N stopped by signal N after writing a checkpoint\n",
-          mpm_version(), mpm_real_type());
+  usage_of(out, NULL);
 }
 
 int mpm_cli_parse_int(const char *opt, const char *value, int lo, int hi, int *out) {
@@ -84,6 +116,12 @@ int main(int argc, char **argv) {
     printf("mpm %s (%s)\n", mpm_version(), mpm_real_type());
     return MPM_EXIT_OK;
   }
+  /* `mpm CMD --help` (anywhere among CMD's arguments): CMD's usage, exit 0 */
+  for (int k = 2; k < argc; ++k)
+    if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
+      if (usage_of(stdout, cmd) == 0) return MPM_EXIT_OK;
+      break;
+    }
   if (!strcmp(cmd, "run")) return mpm_cmd_run(argc - 2, argv + 2);
   if (!strcmp(cmd, "check")) return mpm_cmd_check(argc - 2, argv + 2);
   if (!strcmp(cmd, "bench")) return mpm_cmd_bench(argc - 2, argv + 2);

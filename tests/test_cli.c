@@ -133,6 +133,38 @@ static void test_meshes_readme_shape(void **state) {
   mpm_scene_free(&sc);
 }
 
+/* Every subcommand answers --help with exit 0 and all of its options (issue 17); `mpm --help`
+ * lists render's options too. */
+static void test_subcommand_help(void **state) {
+  (void)state;
+  static const struct {
+    const char *cmd, *options[10];
+  } subs[] = {
+      {"run", {"-o DIR", "--resume", "--threads", "--frames", "--render", "--quiet", NULL}},
+      {"check", {"SCENE.json", NULL}},
+      {"render",
+       {"--field", "--size", "--colormap", "--range", "--every", "--scene", "--out", "--movie",
+        "--quiet", NULL}},
+      {"plot", {"--out", "--quiet", NULL}},
+      {"error", {"REST_FRAME", "--body", NULL}},
+      {"bench", {"transfer", "step", "stress", "checkpoint", "domains", "implicit", NULL}},
+  };
+  for (size_t k = 0; k < sizeof subs / sizeof subs[0]; ++k) {
+    char args[64];
+    snprintf(args, sizeof args, "%s --help", subs[k].cmd);
+    if (mpm(args) != 0) fail_msg("mpm %s: exit %s", args, output);
+    char head[32];
+    snprintf(head, sizeof head, "mpm %s", subs[k].cmd);
+    expect_output(head);
+    for (int o = 0; subs[k].options[o]; ++o) expect_output(subs[k].options[o]);
+  }
+  assert_int_equal(mpm("--help"), 0);
+  expect_output("--range LO:HI");
+  expect_output("--colormap");
+  assert_int_equal(mpm("nonsense --help"), 2);
+  expect_output("unknown command 'nonsense'");
+}
+
 static long count_occurrences(const char *text, const char *needle) {
   long n = 0;
   for (const char *p = strstr(text, needle); p; p = strstr(p + 1, needle)) ++n;
@@ -287,6 +319,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_meshes_readme_shape),
+      cmocka_unit_test(test_subcommand_help),
       cmocka_unit_test(test_run_writes_frames),
       cmocka_unit_test(test_run_example_scene),
       cmocka_unit_test(test_blow_up_is_reported),
