@@ -163,6 +163,18 @@ int mpm_cmd_run(int argc, char **argv) {
       mpm_sim_destroy(sim);
       return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
     }
+    /* a finished run: its last frame is written; resuming would redo the frames after the
+     * last checkpoint */
+    char last[MPM_PATH_MAX + 32];
+    snprintf(last, sizeof last, "%s/frame_%04d.vtu", sim->output_dir, sim->frame_count);
+    if (sim->frame < sim->frame_count && access(last, F_OK) == 0) {
+      fprintf(stderr,
+              "mpm: the run in %s is complete: its %d frames are written (the last, %s); "
+              "nothing to resume (run again with -o DIR to simulate it anew)\n",
+              resume_dir, sim->frame_count, last);
+      mpm_sim_destroy(sim);
+      return MPM_EXIT_OK;
+    }
   } else {
     st = mpm_sim_enable_output(sim, out_dir);
     if (st == MPM_OK) st = mpm_write_scene_copy(scene_path, &sim->scene, sim->output_dir, &err);

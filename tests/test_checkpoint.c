@@ -38,6 +38,14 @@ static const char *SCENE =
     "   {\"shape\": {\"type\": \"sphere\", \"center\": [0.4,0.3,0.4], \"radius\": 0.03}, "
     "\"motion\": {\"velocity\": [-0.1, 0, 0]}}]}\n";
 
+static void read_text(const char *path, char *buf, size_t cap) {
+  FILE *f = fopen(path, "r");
+  if (!f) fail_msg("cannot read %s", path);
+  const size_t n = fread(buf, 1, cap - 1, f);
+  buf[n] = '\0';
+  fclose(f);
+}
+
 static void write_scene(const char *path, double end, int every) {
   char text[4096];
   snprintf(text, sizeof text, SCENE, end, every);
@@ -465,6 +473,17 @@ static void test_resume_fallbacks_and_refusals(void **state) {
   char damaged[920];
   snprintf(damaged, sizeof damaged, "%s.damaged", newest);
   assert_true(exists(damaged));
+
+  /* the run is now complete: resuming it again says so and simulates nothing (issue 17: it
+   * re-simulated the frames after the last checkpoint) */
+  char stats[700], before[65536], after[65536];
+  snprintf(stats, sizeof stats, "%s/stats.csv", out);
+  read_text(stats, before, sizeof before);
+  snprintf(args, sizeof args, "run '%s' --resume '%s'", scene, out);
+  assert_int_equal(mpm(args), 0);
+  expect_output("is complete");
+  read_text(stats, after, sizeof after);
+  assert_string_equal(before, after);
 
   /* another scene */
   char other[512];
