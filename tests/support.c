@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 double test_rand(uint64_t *s, double lo, double hi) {
@@ -25,13 +26,35 @@ void assert_close_msg(double a, double b, double tol, const char *what) {
   }
 }
 
+/* the folders test_temp_dir made, for test_cleanup */
+#define TEMP_DIRS_MAX 64
+static char temp_dirs[TEMP_DIRS_MAX][512];
+static int temp_dir_count;
+
 const char *test_temp_dir(const char *name) {
   static char buf[512];
   snprintf(buf, sizeof buf, "/tmp/mpm-test-%d-%s", (int)getpid(), name);
   char cmd[1100];
   snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s'", buf, buf);
   if (system(cmd) != 0) fail_msg("cannot create %s", buf);
+  int known = 0;
+  for (int k = 0; k < temp_dir_count; ++k) known |= !strcmp(temp_dirs[k], buf);
+  if (!known && temp_dir_count < TEMP_DIRS_MAX)
+    snprintf(temp_dirs[temp_dir_count++], sizeof temp_dirs[0], "%s", buf);
   return buf;
+}
+
+int test_cleanup(int failures) {
+  for (int k = 0; k < temp_dir_count; ++k) {
+    if (failures) {
+      fprintf(stderr, "test files kept in %s\n", temp_dirs[k]);
+      continue;
+    }
+    char cmd[1100];
+    snprintf(cmd, sizeof cmd, "rm -rf '%.512s'", temp_dirs[k]);
+    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", temp_dirs[k]);
+  }
+  return failures;
 }
 
 const char *test_mpm_bin(void) {

@@ -27,6 +27,10 @@ void assert_close_msg(double a, double b, double tol, const char *what);
 
 /* A fresh empty directory under /tmp for a test's files; returns a static buffer. */
 const char *test_temp_dir(const char *name);
+/* At the end of main: removes the folders test_temp_dir made when no test failed (failures
+ * == 0), else names them on stderr, where the failing test's files are; returns failures. Use
+ * as return test_cleanup(cmocka_run_group_tests(...)). */
+int test_cleanup(int failures);
 
 /* A simulation of the scene text (`name` for messages); fails the test with the loader's or
  * the constructor's message. */

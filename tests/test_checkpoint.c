@@ -573,5 +573,5 @@ int main(void) {
       cmocka_unit_test(test_resume_fallbacks_and_refusals),
       cmocka_unit_test(test_resume_with_domains),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

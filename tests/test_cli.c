@@ -324,5 +324,5 @@ int main(void) {
       cmocka_unit_test(test_run_example_scene),
       cmocka_unit_test(test_blow_up_is_reported),
   };
-  return cmocka_run_group_tests_name("cli", tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests_name("cli", tests, NULL, NULL));
 }

@@ -281,5 +281,5 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_corpus),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

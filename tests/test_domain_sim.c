@@ -326,5 +326,5 @@ int main(void) {
       cmocka_unit_test(test_embedded_surface),           cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_slow_drift_keeps_shape),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

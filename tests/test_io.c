@@ -552,5 +552,5 @@ int main(void) {
   };
   const int failed = cmocka_run_group_tests(tests, NULL, NULL);
   remove_io_temp_dirs(failed);
-  return failed;
+  return test_cleanup(failed);
 }

@@ -244,5 +244,5 @@ int main(void) {
       cmocka_unit_test(test_gnuplot_missing_or_failing),
       cmocka_unit_test(test_usage),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -203,5 +203,5 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_render_frames), cmocka_unit_test(test_camera_and_splat),
       cmocka_unit_test(test_scene_camera), cmocka_unit_test(test_errors)};
-  return cmocka_run_group_tests_name("render", tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests_name("render", tests, NULL, NULL));
 }

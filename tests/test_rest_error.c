@@ -215,5 +215,5 @@ int main(void) {
       cmocka_unit_test(test_reflections_and_rank),
       cmocka_unit_test(test_command),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -709,5 +709,5 @@ int main(void) {
       cmocka_unit_test(test_malformed_files),
       cmocka_unit_test(test_parse_from_memory),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -571,5 +571,5 @@ int main(void) {
       cmocka_unit_test(test_load_files),
       cmocka_unit_test(test_camera),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

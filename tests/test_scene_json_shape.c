@@ -193,5 +193,5 @@ int main(void) {
       cmocka_unit_test(test_revolve_profile),     cmocka_unit_test(test_error_after_allocation),
       cmocka_unit_test(test_mesh_bodies),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }
