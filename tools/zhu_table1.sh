@@ -6,7 +6,11 @@
 #
 #   tools/zhu_table1.sh [BUILD_DIR] [OUT_DIR]       (defaults: build, /tmp/zhu-table1)
 #   REPORT_ONLY=1 tools/zhu_table1.sh ...           the table from the runs already in OUT_DIR
+#   PPC=27 VARIANTS=on tools/zhu_table1.sh ...       27 particles per cell on the bodies with
+#                                                    domains (the paper's counts), one variant
 #
+# Seconds per frame are per 1/30 s of simulated time (the paper's timings are at 30 frames per
+# second), whatever the scene's fps.
 # Runs the variants two at a time on this machine's cores; about ten minutes on two cores.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -35,13 +39,21 @@ run() { # scene-file out-name threads
   echo "$t0 $t1" | awk '{printf "%.2f\n", $2 - $1}' > "$out/$2.seconds"
 }
 if [ -z "${REPORT_ONLY:-}" ]; then
+variants=${VARIANTS:-on off all}
 for line in "${scenes[@]}"; do
   read -r s rest final _ <<< "$line"
   src=$root/examples/zhu/$s.json
-  cp "$src" "$out/zhu/on_$s.json"
-  sed -E 's/"enrichment": [0-9.]+/"enrichment": 0/' "$src" > "$out/zhu/off_$s.json"
-  sed -E 's/"enrichment": [0-9.]+/"enrichment": 1/' "$src" > "$out/zhu/all_$s.json"
-  for v in on off all; do
+  python3 - "$src" "$out/zhu/on_$s.json" "${PPC:-}" << 'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+if sys.argv[3]:
+    for b in d["bodies"]:
+        if b.get("domains"): b["particles_per_cell"] = int(sys.argv[3])
+json.dump(d, open(sys.argv[2], "w"), indent=1)
+PY
+  sed -E 's/"enrichment": [0-9.]+/"enrichment": 0/' "$out/zhu/on_$s.json" > "$out/zhu/off_$s.json"
+  sed -E 's/"enrichment": [0-9.]+/"enrichment": 1/' "$out/zhu/on_$s.json" > "$out/zhu/all_$s.json"
+  for v in $variants; do
     rm -rf "${out:?}/${v}_$s"
     run "$out/zhu/${v}_$s.json" "${v}_$s" 1 &
     while [ "$(jobs_running)" -ge 2 ]; do sleep 0.5; done
@@ -56,16 +68,23 @@ for line in "${scenes[@]}"; do
 done
 fi
 err() { # dir rest final
+  [ -d "$1" ] || { echo "-"; return; }
   "$mpm" error "$1" "$2" "$3" --body 0 2> /dev/null | sed -E 's/rest-state error: mean ([^,]*),.*/\1/' || echo "-"
 }
 enriched() { awk -F, 'NR > 1 { if ($21 > m) m = $21 } END { printf "%.0f%%", m }' "$1/stats.csv"; }
+per30() { # seconds-file scene-file: wall seconds per 1/30 s of simulated time
+  python3 - "$1" "$2" << 'PY'
+import json, sys
+t = float(open(sys.argv[1]).read()); d = json.load(open(sys.argv[2]))
+print("%.3f" % (t / (d["time"]["end"] * 30)))
+PY
+}
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; mpm at $(git -C "$root" rev-parse --short HEAD)"
 echo
 echo "| scene (paper's) | particles (paper) | grid (paper) | s/frame 1 thread | 2 threads | paper min/frame | speed-up, 1 thread | error on (enriched at most) | off | all enriched | paper |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for line in "${scenes[@]}"; do
   read -r s rest final pname pparts pgrid pmin perr <<< "$line"
-  frames=$(($(ls "$out/on_$s"/frame_*.vtu | wc -l) - 1))
   parts=$("$mpm" check "$out/zhu/on_$s.json" | sed -E 's/.*ok \(([0-9]+) particles.*/\1/')
   grid=$(python3 - "$out/zhu/on_$s.json" << 'PY'
 import json, sys
@@ -73,8 +92,8 @@ s = json.load(open(sys.argv[1])); d = s["domain"]
 print("x".join(str(round((d["max"][k] - d["min"][k]) / d["dx"])) for k in range(3)))
 PY
 )
-  s1=$(awk -v t="$(cat "$out/on_$s.seconds")" -v f="$frames" 'BEGIN { printf "%.3f", t / f }')
-  s2=$(awk -v t="$(cat "$out/two_$s.seconds")" -v f="$frames" 'BEGIN { printf "%.3f", t / f }')
+  s1=$(per30 "$out/on_$s.seconds" "$out/zhu/on_$s.json")
+  s2=$(per30 "$out/two_$s.seconds" "$out/zhu/on_$s.json")
   up=$(awk -v a="$pmin" -v b="$s1" 'BEGIN { printf "%.0fx", a * 60 / b }')
   echo "| $s (${pname//_/ }) | $parts ($pparts) | $grid ($pgrid) | $s1 | $s2 | $pmin | $up | $(err "$out/on_$s" "$rest" "$final") ($(enriched "$out/on_$s")) | $(err "$out/off_$s" "$rest" "$final") | $(err "$out/all_$s" "$rest" "$final") | $perr |"
 done
