@@ -62,6 +62,10 @@ int64_t mpm_sim_steps(const mpm_sim *sim);
 int mpm_sim_frame(const mpm_sim *sim);
 int mpm_sim_frame_count(const mpm_sim *sim);
 
+/// Turn per-frame output on into `dir` (created if missing; the scene's `output` keys choose the
+/// files) and write frame 0. Checkpoints need it: mpm_sim_write_checkpoint writes into `dir`.
+mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
+
 /// Checkpoints (HDF5, see docs/scene-format.md "Checkpoints"). Write the complete state into
 /// the output directory as checkpoint_<steps>.h5, atomically, keeping the two newest; the
 /// path written is copied to `path` (of `cap` bytes, may be NULL). Needs output enabled.
@@ -82,9 +86,11 @@ void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag);
 mpm_status mpm_sim_release_domains(mpm_sim *sim, const double lo[3], const double hi[3],
                                    size_t *count);
 
-/// Read-only view of the particles, valid until the next call that advances sim.
-/// Components are separate arrays (structure of arrays) of `count` entries each, in the
-/// engine's real type (float or double, see real_size).
+/// Read-only view of every particle, valid until the next call that advances sim or asks for
+/// the view again: the standard material points, then the particles with domains (Zhu et al.)
+/// whose domains are on. Without domains the arrays are the simulation's own; with them, a
+/// copy the simulation owns. Components are separate arrays (structure of arrays) of `count`
+/// entries each, in the engine's real type (float or double, see real_size).
 typedef struct mpm_particle_view {
   size_t count;
   size_t real_size;    /* sizeof the real type: 4 or 8 */

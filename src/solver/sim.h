@@ -88,6 +88,7 @@ struct mpm_sim {
   mpm_real *corner_backup[18];
   size_t corner_backup_capacity;
   const volatile int *interrupt;
+  mpm_particles view; /* mpm_sim_particles' copy of every particle when there are domains */
   char last_checkpoint[MPM_PATH_MAX + 32];
   mpm_error error;
 };
@@ -96,8 +97,7 @@ struct mpm_sim {
  * caller's struct is emptied). */
 mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error *err);
 
-/* Turn per-frame writing on into `dir` (created if missing) and write frame 0. */
-mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
+/* mpm_sim_enable_output (per-frame writing into `dir`, frame 0 written) is public: mpm/mpm.h. */
 
 /* Memory (memory_estimate.c): the bytes a scene will need (its expected particle count in
  * *particles when not NULL), the memory this process may use (MPM_MEMORY_LIMIT, else the
