@@ -358,37 +358,13 @@ int mpm_sim_frame_count(const mpm_sim *sim) {
   return sim->frame_count;
 }
 
-/* Every particle in one set: the standard points, then the active domain particles, into
- * sim->view (a cache of the view, not state: hence the cast). 0, or -1 when out of memory. */
-static int gather_view(mpm_sim *sim) {
-  const mpm_particles *a = &sim->particles, *b = &sim->domains.particles;
-  mpm_particles *v = &sim->view;
-  if (!v->x[0] && mpm_particles_init(v, 16)) return -1;
-  if (mpm_particles_reserve(v, a->count + sim->domains.active_count + 1)) return -1;
-  v->count = 0;
-  for (int set = 0; set < 2; ++set) {
-    const mpm_particles *p = set ? b : a;
-    for (size_t i = 0; i < p->count; ++i) {
-      if (set && !sim->domains.active[i]) continue;
-      const size_t k = v->count++;
-      for (int d = 0; d < 3; ++d) v->x[d][k] = p->x[d][i], v->v[d][k] = p->v[d][i];
-      for (int c = 0; c < 9; ++c) v->F[c][k] = p->F[c][i];
-      v->mass[k] = p->mass[i];
-      v->vol0[k] = p->vol0[i];
-      v->material[k] = p->material[i];
-      v->body[k] = p->body[i];
-      v->id[k] = p->id[i];
-    }
-  }
-  return 0;
-}
-
 mpm_particle_view mpm_sim_particles(const mpm_sim *sim) {
   const mpm_particles *p = &sim->particles;
   mpm_particle_view v;
   memset(&v, 0, sizeof v);
   if (sim->domains.active_count > 0) {
-    if (gather_view((mpm_sim *)sim)) return v; /* out of memory: an empty view */
+    /* the view's copy is a cache, not state: hence the cast */
+    if (mpm_sim_all_particles(sim, (mpm_particles *)&sim->view)) return v; /* no memory: empty */
     p = &sim->view;
   }
   v.count = p->count;

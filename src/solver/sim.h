@@ -99,6 +99,11 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
 
 /* mpm_sim_enable_output (per-frame writing into `dir`, frame 0 written) is public: mpm/mpm.h. */
 
+/* The standard and the active domain particles in one set (`all`: zeroed, or a set this made
+ * before, whose arrays it reuses): for the frame files and the public particle view. 0, or -1
+ * when out of memory. */
+int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
+
 /* Memory (memory_estimate.c): the bytes a scene will need (its expected particle count in
  * *particles when not NULL), the memory this process may use (MPM_MEMORY_LIMIT, else the
  * machine's available memory), and the check mpm_sim_create_from_scene makes before it

@@ -32,10 +32,10 @@ mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   return mpm_sim_write_frame(sim);
 }
 
-/* The standard and the active domain particles in one set, for the frame files. */
-static int combine_particles(const mpm_sim *sim, mpm_particles *all) {
+int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
   const mpm_particles *a = &sim->particles, *d = &sim->domains.particles;
-  if (mpm_particles_init(all, a->count + sim->domains.active_count + 1)) return -1;
+  if (!all->x[0] && mpm_particles_init(all, a->count + sim->domains.active_count + 1)) return -1;
+  all->count = 0;
   for (int pass = 0; pass < 2; ++pass) {
     const mpm_particles *p = pass ? d : a;
     for (size_t i = 0; i < p->count; ++i) {
@@ -60,7 +60,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   memset(&combined, 0, sizeof combined);
   const int has_domains = sim->domains.particles.count > 0;
   /* the enrichment categories of the state written (the marks the next step will use) */
-  if (has_domains && combine_particles(sim, &combined))
+  if (has_domains && mpm_sim_all_particles(sim, &combined))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d",
                          sim->written_frames);
   if (has_domains) {
@@ -99,7 +99,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
       stress[i] = mpm_von_mises(tau, J[i]);
     }
   }
-  if (category) { /* as combine_particles orders them: material points, then active domains */
+  if (category) { /* as mpm_sim_all_particles orders them: material points, then active domains */
     size_t j = 0;
     for (; j < sim->particles.count; ++j) category[j] = -1;
     for (size_t q = 0; q < sim->domains.particles.count; ++q)
