@@ -74,7 +74,7 @@ build-tsan: deps-tsan
 	cmake --build $(BUILD_TSAN) -j $(JOBS) --target $(subst |, ,$(TSAN_TESTS))
 
 demo: build
-	./$(BUILD)/mpm run $(DEMO_SCENE) -o out
+	./$(BUILD)/mpm run $(DEMO_SCENE) -o out --overwrite
 
 # The whole suite: the default float build, the double build, float under ASan + UBSan, the
 # parallel tests under ThreadSanitizer, a short fuzz run of the scene, mesh and checkpoint

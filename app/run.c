@@ -9,6 +9,8 @@
 #include "solver/sim.h"
 
 #include <signal.h>
+#include <dirent.h>
+#include <errno.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -96,9 +98,52 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
   return 128 + sig;
 }
 
+/* A file a run writes into its output folder (frames, domain and surface meshes, checkpoints,
+ * their damaged copies, stats, the PVD index, the scene copy). */
+static int is_run_file(const char *name) {
+  static const char *const prefix[] = {"frame_", "domains_", "surface_", "checkpoint_"};
+  for (size_t k = 0; k < sizeof prefix / sizeof prefix[0]; ++k)
+    if (!strncmp(name, prefix[k], strlen(prefix[k]))) return 1;
+  return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "scene.json");
+}
+
+/* An output folder belongs to one run (issue 17: a second run into a folder left the first
+ * one's later frames and checkpoints, which render and --resume then mixed in). Without
+ * `overwrite`, a folder holding a run's files is refused, naming some of them; with it, those
+ * files are removed first (nothing else in the folder is touched). 0, or an exit code. */
+static int claim_output_dir(const char *dir, int overwrite) {
+  DIR *d = opendir(dir);
+  if (!d) return 0; /* a new folder */
+  char names[3][128];
+  int found = 0, failed = 0;
+  for (struct dirent *e = readdir(d); e; e = readdir(d)) {
+    if (!is_run_file(e->d_name)) continue;
+    if (found < 3) snprintf(names[found], sizeof names[0], "%.127s", e->d_name);
+    ++found;
+    if (overwrite) {
+      char path[4400];
+      snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+      if (remove(path) != 0) {
+        fprintf(stderr, "mpm run: cannot remove %s to overwrite it: %s\n", path, strerror(errno));
+        failed = 1;
+      }
+    }
+  }
+  closedir(d);
+  if (failed) return MPM_EXIT_FAILURE;
+  if (!found || overwrite) return 0;
+  fprintf(stderr,
+          "mpm run: %s holds the files of a run (%s%s%s%s%s, %d in all); an output folder holds "
+          "one run: continue that one with --resume %s, replace it with --overwrite, or write "
+          "this one elsewhere with -o DIR\n",
+          dir, names[0], found > 1 ? ", " : "", found > 1 ? names[1] : "", found > 2 ? ", " : "",
+          found > 2 ? names[2] : "", found, dir);
+  return MPM_EXIT_USAGE;
+}
+
 int mpm_cmd_run(int argc, char **argv) {
   const char *scene_path = NULL, *out_dir = NULL, *resume_dir = NULL;
-  int threads = 0, quiet = 0, max_frames = 0, render = 0;
+  int threads = 0, quiet = 0, max_frames = 0, render = 0, overwrite = 0;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
       if (i + 1 >= argc) {
@@ -124,6 +169,8 @@ int mpm_cmd_run(int argc, char **argv) {
       quiet = 1;
     } else if (!strcmp(argv[i], "--render")) {
       render = 1;
+    } else if (!strcmp(argv[i], "--overwrite")) {
+      overwrite = 1;
     } else if (argv[i][0] == '-') {
       fprintf(stderr, "mpm run: unknown option '%s' (try 'mpm --help')\n", argv[i]);
       return MPM_EXIT_USAGE;
@@ -135,8 +182,8 @@ int mpm_cmd_run(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR | --resume DIR] [--threads N] [--frames N] "
-                    "[--render] [--quiet]\n");
+    fprintf(stderr, "usage: mpm run SCENE.json [-o DIR [--overwrite] | --resume DIR] [--threads N] "
+                    "[--frames N] [--render] [--quiet]\n");
     return MPM_EXIT_USAGE;
   }
   if (resume_dir && out_dir && strcmp(resume_dir, out_dir) != 0) {
@@ -176,6 +223,11 @@ int mpm_cmd_run(int argc, char **argv) {
       return MPM_EXIT_OK;
     }
   } else {
+    const int claim = claim_output_dir(out_dir ? out_dir : sim->output_dir, overwrite);
+    if (claim) {
+      mpm_sim_destroy(sim);
+      return claim;
+    }
     st = mpm_sim_enable_output(sim, out_dir);
     if (st == MPM_OK) st = mpm_write_scene_copy(scene_path, &sim->scene, sim->output_dir, &err);
     if (st != MPM_OK) {

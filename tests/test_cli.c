@@ -119,18 +119,53 @@ static void test_meshes_readme_shape(void **state) {
   for (char *c = shape; *c; ++c)
     if (*c == '\n') *c = ' ';
   char scene[2048];
-  snprintf(scene, sizeof scene,
-           "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05}, \"time\": "
-           "{\"end\": 0.1}, \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
-           "\"nu\": 0.3, \"density\": 1000}],"
-           " \"bodies\": [{%s, \"material\": \"m\"}]}",
-           shape);
+  snprintf(
+      scene, sizeof scene,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05}, \"time\": "
+      "{\"end\": 0.1}, \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{%s, \"material\": \"m\"}]}",
+      shape);
   mpm_scene sc;
   mpm_error err;
   /* mesh paths resolve against the scene's directory: examples/ */
   if (mpm_scene_parse(scene, "examples/readme.json", &sc, &err) != MPM_OK)
     fail_msg("%s: %s", shape, err.message);
   mpm_scene_free(&sc);
+}
+
+/* An output folder holds one run (issue 17: a second run into a folder left the first one's
+ * later frames and checkpoints behind, and render and --resume mixed them in): a folder with a
+ * run's files is refused, naming them and --overwrite; --overwrite removes them first; files
+ * that are not a run's are kept. */
+static void test_output_folder_holds_one_run(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("one_run");
+  char scene[600], args[1600], path[900];
+  snprintf(scene, sizeof scene, "%s/s.json", dir);
+  write_file(scene, good_scene);
+  snprintf(path, sizeof path, "%s/out/notes.txt", dir);
+  char out[700];
+  snprintf(out, sizeof out, "%s/out", dir);
+  mkdir(out, 0755);
+  write_file(path, "mine");
+  snprintf(args, sizeof args, "run '%s' -o '%s' --quiet --frames 4", scene, out);
+  assert_int_equal(mpm(args), 0); /* a folder without a run's files is fine */
+  char frame4[900], frame2[900];
+  snprintf(frame4, sizeof frame4, "%s/frame_0004.vtu", out);
+  snprintf(frame2, sizeof frame2, "%s/frame_0002.vtu", out);
+  assert_true(exists(frame4));
+  snprintf(args, sizeof args, "run '%s' -o '%s' --quiet --frames 2", scene, out);
+  assert_int_equal(mpm(args), 2);
+  expect_output("holds the files of a run");
+  expect_output("--overwrite");
+  expect_output("--resume");
+  assert_true(exists(frame4)); /* nothing touched */
+  snprintf(args, sizeof args, "run '%s' -o '%s' --quiet --frames 2 --overwrite", scene, out);
+  assert_int_equal(mpm(args), 0);
+  assert_true(exists(frame2));
+  assert_false(exists(frame4)); /* the old run's later frames are gone, */
+  assert_true(exists(path));    /* the user's file is kept */
 }
 
 /* Every subcommand answers --help with exit 0 and all of its options (issue 17); `mpm --help`
@@ -140,7 +175,8 @@ static void test_subcommand_help(void **state) {
   static const struct {
     const char *cmd, *options[10];
   } subs[] = {
-      {"run", {"-o DIR", "--resume", "--threads", "--frames", "--render", "--quiet", NULL}},
+      {"run",
+       {"-o DIR", "--overwrite", "--resume", "--threads", "--frames", "--render", "--quiet", NULL}},
       {"check", {"SCENE.json", NULL}},
       {"render",
        {"--field", "--size", "--colormap", "--range", "--every", "--scene", "--out", "--movie",
@@ -320,6 +356,7 @@ int main(void) {
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_meshes_readme_shape),
       cmocka_unit_test(test_subcommand_help),
+      cmocka_unit_test(test_output_folder_holds_one_run),
       cmocka_unit_test(test_run_writes_frames),
       cmocka_unit_test(test_run_example_scene),
       cmocka_unit_test(test_blow_up_is_reported),

@@ -75,9 +75,12 @@ static double parse_limit(const char *env) {
   double v = strtod(env, &end);
   if (end == env || !(v > 0) || !isfinite(v)) return -1;
   const char u = *end;
-  if (u == 'K' || u == 'k') v *= 1024, ++end;
-  else if (u == 'M' || u == 'm') v *= 1024.0 * 1024, ++end;
-  else if (u == 'G' || u == 'g') v *= 1024.0 * 1024 * 1024, ++end;
+  if (u == 'K' || u == 'k')
+    v *= 1024, ++end;
+  else if (u == 'M' || u == 'm')
+    v *= 1024.0 * 1024, ++end;
+  else if (u == 'G' || u == 'g')
+    v *= 1024.0 * 1024 * 1024, ++end;
   if (*end == 'B' || *end == 'b') ++end; /* 20MB, 4GB */
   return *end ? -1 : v;
 }
@@ -129,19 +132,16 @@ mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
       snprintf(grid, sizeof grid, ", and a dense grid (solver.grid) of %.3g nodes: %s", dense,
                human_bytes(dense * DOF_REALS * sizeof(mpm_real), dense_s, sizeof dense_s));
     const int limited = env && *env;
-    return mpm_error_set(err, MPM_ERR_INVALID,
-                         "%s: the scene needs about %s (%.3g particles at about %.0f bytes "
-                         "each%s) but %s %s; use a larger dx, fewer particles_per_cell or "
-                         "smaller bodies%s",
-                         s->path[0] ? s->path : "scene", human_bytes(need, need_s, sizeof need_s),
-                         n,
-                         BYTES_PER_PARTICLE + (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT
-                                                   ? IMPLICIT_BYTES_PER_PARTICLE
-                                                   : 0),
-                         grid,
-                         limited ? "MPM_MEMORY_LIMIT allows" : "this machine has available",
-                         human_bytes(have, have_s, sizeof have_s),
-                         dense > 0 ? ", or the sparse grid" : "");
+    return mpm_error_set(
+        err, MPM_ERR_INVALID,
+        "%s: the scene needs about %s (%.3g particles at about %.0f bytes "
+        "each%s) but %s %s; use a larger dx, fewer particles_per_cell or "
+        "smaller bodies%s",
+        s->path[0] ? s->path : "scene", human_bytes(need, need_s, sizeof need_s), n,
+        BYTES_PER_PARTICLE +
+            (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT ? IMPLICIT_BYTES_PER_PARTICLE : 0),
+        grid, limited ? "MPM_MEMORY_LIMIT allows" : "this machine has available",
+        human_bytes(have, have_s, sizeof have_s), dense > 0 ? ", or the sparse grid" : "");
   }
   return MPM_OK;
 }

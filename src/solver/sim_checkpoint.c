@@ -68,8 +68,9 @@ static void free_names(char **names, int n) {
 
 mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   if (!sim->output_enabled)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                         "a checkpoint needs an output directory: call mpm_sim_enable_output first");
+    return mpm_error_set(
+        &sim->error, MPM_ERR_INVALID,
+        "a checkpoint needs an output directory: call mpm_sim_enable_output first");
   mpm_checkpoint c;
   memset(&c, 0, sizeof c);
   c.scene_hash = sim->scene.source_hash;
