@@ -207,7 +207,7 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
   const int apic = ctx->transfer == MPM_TRANSFER_APIC && s->apic_a[0];
   /* APIC: the corner takes the grid's velocity (PIC) and its affine moment; otherwise the
    * scene's PIC/FLIP blend */
-  const mpm_real dt = ctx->dt, alpha = apic ? 0 : ctx->flip_alpha;
+  const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
   const mpm_domain_enrichment *en = &s->enrich;
   const int enriched = en->count > 0;
   /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
