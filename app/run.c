@@ -63,6 +63,8 @@ int mpm_cmd_check(int argc, char **argv) {
     fprintf(stderr, "mpm: %s\n", err.message);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
+  const char *advice = mpm_scene_advice(&sim->scene);
+  if (advice) fprintf(stderr, "mpm: warning: %s: %s\n", argv[0], advice);
   printf("%s: ok (%zu particles, %zu of them with domains, %d materials, %d colliders, dx = %g "
          "m, %d frames, about %.0f MiB)\n",
          argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
@@ -201,6 +203,8 @@ int mpm_cmd_run(int argc, char **argv) {
     fprintf(stderr, "mpm: %s\n", err.message);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
+  const char *advice = mpm_scene_advice(&sim->scene);
+  if (advice) fprintf(stderr, "mpm: warning: %s: %s\n", scene_path, advice);
   if (max_frames > 0 && max_frames < sim->frame_count) sim->frame_count = max_frames;
   char checkpoint[MPM_PATH_MAX + 32] = "";
   if (resume_dir) {

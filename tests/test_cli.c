@@ -98,6 +98,41 @@ static void test_check_examples(void **state) {
   assert_true(checked >= 25);
 }
 
+/* Issue 17 defect 7: the linear kernel on material points is the cell-crossing instability;
+ * check and run warn and say why (with domains, or another kernel, no warning). */
+static void test_linear_kernel_warning(void **state) {
+  (void)state;
+  char dir[400];
+  snprintf(dir, sizeof dir, "%s", test_temp_dir("linwarn"));
+  char path[512], args[1200];
+  static const char *const scenes[] = {"linear", "quadratic"};
+  for (int c = 0; c < 2; ++c) {
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.1}, "
+             "\"time\": {\"end\": 0.02, \"fps\": 100}, \"solver\": {\"kernel\": \"%s\"}, "
+             "\"materials\": [{\"name\": \"jelly\", \"model\": \"fixed_corotated\", "
+             "\"E\": 1e4, \"nu\": 0.3, \"density\": 1000}], "
+             "\"bodies\": [{\"material\": \"jelly\", \"shape\": {\"type\": \"box\", "
+             "\"center\": [0.5, 0.5, 0.5], \"half_extent\": [0.15, 0.15, 0.15]}}]}",
+             scenes[c]);
+    snprintf(path, sizeof path, "%s/%s.json", dir, scenes[c]);
+    write_file(path, json);
+    snprintf(args, sizeof args, "check '%s'", path);
+    assert_int_equal(mpm(args), 0);
+    if (c == 0) {
+      expect_output("warning");
+      expect_output("cell-crossing");
+      expect_output("ugimp");
+      snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", path, dir);
+      assert_int_equal(mpm(args), 0);
+      expect_output("cell-crossing");
+    } else {
+      assert_null(strstr(output, "warning"));
+    }
+  }
+}
+
 /* The shape object examples/meshes/README.md shows parses (issue 17: it once documented a key,
  * mesh_scale, that the parser rejects). */
 static void test_meshes_readme_shape(void **state) {
@@ -354,6 +389,7 @@ int main(void) {
       cmocka_unit_test(test_missing_file),
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
       cmocka_unit_test(test_check_examples),
+      cmocka_unit_test(test_linear_kernel_warning),
       cmocka_unit_test(test_meshes_readme_shape),
       cmocka_unit_test(test_subcommand_help),
       cmocka_unit_test(test_output_folder_holds_one_run),

@@ -72,6 +72,18 @@ mpm_force_desc mpm_force_desc_default(void) {
   return f;
 }
 
+const char *mpm_scene_advice(const mpm_scene *scene) {
+  if (scene->solver.kernel != MPM_KERNEL_LINEAR) return NULL;
+  for (int b = 0; b < scene->body_count; ++b)
+    if (!scene->bodies[b].domains)
+      return "solver.kernel \"linear\": the linear kernel's weight gradient jumps when a particle "
+             "crosses a cell face (the cell-crossing instability), so stressed bodies of material "
+             "points ring and can blow up once their particles cross into new cells, whatever the "
+             "transfer or time step; use \"ugimp\" (as cheap on this grid, Gao et al. 2017) or "
+             "\"quadratic\" for anything but a quick preview";
+  return NULL;
+}
+
 void mpm_scene_default(mpm_scene *scene) {
   memset(scene, 0, sizeof *scene);
   snprintf(scene->name, sizeof scene->name, "scene");
