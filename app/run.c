@@ -11,6 +11,7 @@
 #include <signal.h>
 #include <dirent.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -70,6 +71,24 @@ int mpm_cmd_check(int argc, char **argv) {
          argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
          sim->material_count, sim->collider_count, sim->scene.dx, sim->frame_count,
          mpm_scene_memory_estimate(&sim->scene, NULL) / (1024.0 * 1024.0));
+  /* the first step, as the frame loop will plan it: a frame needing very many steps is
+     usually a unit slip (E in Pa, dx in m) or a far too fine grid for the material's stiffness */
+  st = mpm_sim_mark_enrichment(sim);
+  if (st == MPM_OK) {
+    const double dt = mpm_sim_cfl_dt(sim);
+    const double per_frame = dt > 0 ? ceil(sim->frame_dt / dt - 1e-9) : 0;
+    printf("%s: first step dt = %.3g s, about %.0f steps per frame (%g frames per second)%s\n",
+           argv[0], dt, per_frame, sim->scene.fps,
+           sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT && sim->scene.solver.dt > 0
+               ? ""
+               : "; the step follows the material's wave speed and shrinks as it speeds up");
+    if (per_frame > 1e4)
+      fprintf(stderr,
+              "mpm: warning: %s: a frame will need about %.0f steps (more than 10^4): check the "
+              "units of E (Pa) and dx (m), or use a coarser dx, a softer material or the "
+              "implicit integrator (solver.integrator)\n",
+              argv[0], per_frame);
+  }
   mpm_sim_destroy(sim);
   return MPM_EXIT_OK;
 }

@@ -99,7 +99,8 @@ static void test_check_examples(void **state) {
 }
 
 /* Issue 17 defect 7: the linear kernel on material points is the cell-crossing instability;
- * check and run warn and say why (with domains, or another kernel, no warning). */
+ * check and run warn and say why (with another kernel, no warning). And check prints the first
+ * step's dt and the steps per frame, with a warning past 10^4. */
 static void test_linear_kernel_warning(void **state) {
   (void)state;
   char dir[400];
@@ -129,8 +130,21 @@ static void test_linear_kernel_warning(void **state) {
       expect_output("cell-crossing");
     } else {
       assert_null(strstr(output, "warning"));
+      expect_output("steps per frame");
     }
   }
+  /* issue 17: past 10^4 steps per frame check warns (a modulus typed in the wrong unit, E = 1e13
+     Pa, on a 1 cm grid) */
+  write_file(path, "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.01}, "
+                   "\"time\": {\"end\": 0.1, \"fps\": 24}, "
+                   "\"materials\": [{\"name\": \"steel\", \"model\": \"fixed_corotated\", "
+                   "\"E\": 1e13, \"nu\": 0.3, \"density\": 1000}], "
+                   "\"bodies\": [{\"material\": \"steel\", \"shape\": {\"type\": \"box\", "
+                   "\"center\": [0.5, 0.5, 0.5], \"half_extent\": [0.02, 0.02, 0.02]}}]}");
+  snprintf(args, sizeof args, "check '%s'", path);
+  assert_int_equal(mpm(args), 0);
+  expect_output("steps per frame");
+  expect_output("more than 10^4");
 }
 
 /* The shape object examples/meshes/README.md shows parses (issue 17: it once documented a key,
