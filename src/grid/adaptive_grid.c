@@ -1,0 +1,257 @@
+/* adaptive_grid.c - the level stack of the multi-level grid and its ghost slots (Gao et al.
+ * 2017, sec. 6.1); see adaptive_grid.h. */
+#include "grid/adaptive_grid.h"
+
+#include "core/alloc.h"
+
+#include <string.h>
+
+void mpm_adaptive_grid_init(mpm_adaptive_grid *g, int levels, const mpm_real origin[3],
+                            mpm_real dx0) {
+  memset(g, 0, sizeof *g);
+  mpm_refinement_init(&g->tree, levels, origin, dx0);
+  for (int L = 0; L < levels; ++L)
+    mpm_grid_init_sparse(&g->level[L], L, origin, mpm_refinement_dx(&g->tree, L));
+  mpm_embedding_init(&g->ghosts);
+}
+
+void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
+  for (int L = 0; L < g->tree.levels; ++L) mpm_grid_free(&g->level[L]);
+  mpm_refinement_free(&g->tree);
+  mpm_embedding_free(&g->ghosts);
+  mpm_free(g->ghost_slot);
+  mpm_free(g->scratch);
+  for (int L = 0; L < MPM_LEVELS_MAX; ++L) {
+    mpm_free(g->used[L]);
+    mpm_free(g->done[L]);
+  }
+  memset(g, 0, sizeof *g);
+}
+
+static int32_t block_of(int32_t n) { return n >> MPM_BLOCK_BITS; } /* arithmetic: floor */
+
+/* The masks of level L cover its blocks (new blocks start unused). */
+static int ensure_masks(mpm_adaptive_grid *g, int L) {
+  const size_t n = g->level[L].impl.sparse.block_count;
+  if (n <= g->mask_capacity[L]) return 0;
+  size_t cap = g->mask_capacity[L] ? g->mask_capacity[L] : 256;
+  while (cap < n) cap *= 2;
+  uint64_t *u = mpm_calloc(cap, sizeof *u), *d = mpm_calloc(cap, sizeof *d);
+  if (!u || !d) {
+    mpm_free(u);
+    mpm_free(d);
+    return -1;
+  }
+  if (g->mask_capacity[L]) {
+    memcpy(u, g->used[L], g->mask_capacity[L] * sizeof *u);
+    memcpy(d, g->done[L], g->mask_capacity[L] * sizeof *d);
+  }
+  mpm_free(g->used[L]);
+  mpm_free(g->done[L]);
+  g->used[L] = u;
+  g->done[L] = d;
+  g->mask_capacity[L] = cap;
+  return 0;
+}
+
+static inline int local_of(const int32_t idx[3]) {
+  return ((idx[0] & 3) << 4) | ((idx[1] & 3) << 2) | (idx[2] & 3);
+}
+
+/* Activate node idx of level L and mark it used; 1 when the mark is new, 0, or -1. */
+static int mark(mpm_adaptive_grid *g, int L, const int32_t idx[3]) {
+  const int32_t bc[3] = {idx[0] >> MPM_BLOCK_BITS, idx[1] >> MPM_BLOCK_BITS,
+                         idx[2] >> MPM_BLOCK_BITS};
+  const int32_t b = mpm_sparse_grid_touch(&g->level[L].impl.sparse, bc);
+  if (b < 0 || ensure_masks(g, L)) return -1;
+  const uint64_t bit = (uint64_t)1 << local_of(idx);
+  if (g->used[L][b] & bit) return 0;
+  g->used[L][b] |= bit;
+  return 1;
+}
+
+void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g) {
+  for (int L = 0; L < g->tree.levels; ++L)
+    if (g->mask_capacity[L]) {
+      memset(g->used[L], 0, g->mask_capacity[L] * sizeof(uint64_t));
+      memset(g->done[L], 0, g->mask_capacity[L] * sizeof(uint64_t));
+    }
+  g->ghost_count = 0;
+}
+
+int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
+                                   const int32_t hi[3]) {
+  for (int32_t a = lo[0]; a <= hi[0]; ++a)
+    for (int32_t b = lo[1]; b <= hi[1]; ++b)
+      for (int32_t c = lo[2]; c <= hi[2]; ++c) {
+        const int32_t idx[3] = {a, b, c};
+        if (mark(g, level, idx) < 0) return -1;
+      }
+  return 0;
+}
+
+static void node_of(const mpm_sparse_grid *sg, size_t b, int local, int32_t idx[3]) {
+  const int32_t *c = sg->coord[b];
+  idx[0] = c[0] * MPM_BLOCK + ((local >> 4) & 3);
+  idx[1] = c[1] * MPM_BLOCK + ((local >> 2) & 3);
+  idx[2] = c[2] * MPM_BLOCK + (local & 3);
+}
+
+/* The row of a slot, or 0 when the slot is a real node owned by its level. -1 past MPM_ROW_MAX. */
+static int slot_row(const mpm_adaptive_grid *g, int level, const int32_t idx[3],
+                    mpm_row_term *row) {
+  mpm_row_term own;
+  if (mpm_refinement_node_is_real(&g->tree, level, idx, &own) && own.level == level) return 0;
+  return mpm_refinement_node_row(&g->tree, level, idx, row, MPM_ROW_MAX);
+}
+
+int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
+  mpm_row_term row[MPM_ROW_MAX];
+  for (int L = 0; L < g->tree.levels; ++L) {
+    if (ensure_masks(g, L)) return -1;
+    const mpm_sparse_grid *sg = &g->level[L].impl.sparse;
+    for (size_t b = 0; b < sg->block_count; ++b) {
+      uint64_t pending = g->used[L][b] & ~g->done[L][b];
+      g->done[L][b] |= pending;
+      while (pending) {
+        const int local = __builtin_ctzll(pending);
+        pending &= pending - 1;
+        int32_t idx[3];
+        node_of(sg, b, local, idx);
+        const int n = slot_row(g, L, idx, row);
+        if (n < 0) return -1;
+        /* parents are real: their own rows are empty, so nothing more follows from them */
+        for (int t = 0; t < n; ++t)
+          if (mark(g, row[t].level, row[t].idx) < 0) return -1;
+      }
+    }
+  }
+  return 0;
+}
+
+int64_t mpm_adaptive_grid_slot(const mpm_adaptive_grid *g, int level, const int32_t idx[3]) {
+  const mpm_grid *lv = &g->level[level];
+  const int32_t bc[3] = {block_of(idx[0]), block_of(idx[1]), block_of(idx[2])};
+  const int32_t b = mpm_sparse_grid_find(&lv->impl.sparse, bc);
+  if (b < 0) return -1;
+  const int local = local_of(idx);
+  return (int64_t)lv->dof_begin + (int64_t)b * MPM_BLOCK_NODES + local;
+}
+
+static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
+  if (n <= g->ghost_capacity) return 0;
+  size_t cap = g->ghost_capacity ? g->ghost_capacity : 1024;
+  while (cap < n) cap *= 2;
+  uint32_t *slot = mpm_alloc(cap * sizeof *slot);
+  mpm_real *scratch = mpm_alloc(3 * cap * sizeof *scratch);
+  if (!slot || !scratch) {
+    mpm_free(slot);
+    mpm_free(scratch);
+    return -1;
+  }
+  if (g->ghost_count) memcpy(slot, g->ghost_slot, g->ghost_count * sizeof *slot);
+  mpm_free(g->ghost_slot);
+  mpm_free(g->scratch);
+  g->ghost_slot = slot;
+  g->scratch = scratch;
+  g->ghost_capacity = cap;
+  return 0;
+}
+
+int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
+  mpm_row_term row[MPM_ROW_MAX];
+  /* pass 1: the ghosts, their slots and row lengths (lengths kept in the scratch for now) */
+  g->ghost_count = 0;
+  uint32_t *len = NULL;
+  size_t len_cap = 0;
+  for (int L = 0; L < g->tree.levels; ++L) {
+    const mpm_grid *lv = &g->level[L];
+    const mpm_sparse_grid *sg = &lv->impl.sparse;
+    for (size_t b = 0; b < sg->block_count; ++b)
+      for (uint64_t m = g->used[L][b]; m; m &= m - 1) {
+        const int local = __builtin_ctzll(m);
+        int32_t idx[3];
+        node_of(sg, b, local, idx);
+        const int n = slot_row(g, L, idx, row);
+        if (n < 0) goto fail;
+        if (n == 0) continue;
+        if (reserve_ghosts(g, g->ghost_count + 1)) goto fail;
+        if (g->ghost_count >= len_cap) {
+          const size_t cap = len_cap ? 2 * len_cap : 1024;
+          uint32_t *l2 = mpm_alloc(cap * sizeof *l2);
+          if (!l2) goto fail;
+          if (len) memcpy(l2, len, g->ghost_count * sizeof *l2);
+          mpm_free(len);
+          len = l2;
+          len_cap = cap;
+        }
+        len[g->ghost_count] = (uint32_t)n;
+        g->ghost_slot[g->ghost_count++] = (uint32_t)(lv->dof_begin + b * MPM_BLOCK_NODES + local);
+      }
+  }
+  if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto fail;
+  /* pass 2: the entries, in the same order */
+  size_t a = 0;
+  for (int L = 0; L < g->tree.levels; ++L) {
+    const mpm_sparse_grid *sg = &g->level[L].impl.sparse;
+    for (size_t b = 0; b < sg->block_count; ++b)
+      for (uint64_t m = g->used[L][b]; m; m &= m - 1) {
+        const int local = __builtin_ctzll(m);
+        int32_t idx[3];
+        node_of(sg, b, local, idx);
+        const int n = slot_row(g, L, idx, row);
+        if (n == 0) continue;
+        for (int t = 0; t < n; ++t) {
+          const int64_t col = mpm_adaptive_grid_slot(g, row[t].level, row[t].idx);
+          if (col < 0) goto fail; /* a parent not active: close() was not called */
+          mpm_embedding_push(&g->ghosts, a, (uint32_t)col, (mpm_real)row[t].w);
+        }
+        ++a;
+      }
+  }
+  mpm_free(len);
+  return 0;
+fail:
+  mpm_free(len);
+  return -1;
+}
+
+void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
+  const size_t n = g->ghost_count;
+  for (int f0 = 0; f0 < fields; f0 += 3) {
+    const int k = fields - f0 < 3 ? fields - f0 : 3;
+    const mpm_real *c[3];
+    for (int j = 0; j < k; ++j) {
+      mpm_real *cj = g->scratch + (size_t)j * g->ghost_capacity;
+      for (size_t a = 0; a < n; ++a) {
+        cj[a] = u[f0 + j][g->ghost_slot[a]];
+        u[f0 + j][g->ghost_slot[a]] = 0;
+      }
+      c[j] = cj;
+    }
+    mpm_embedding_scatter(&g->ghosts, k, c, u + f0);
+  }
+}
+
+void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
+  const size_t n = g->ghost_count;
+  for (int f0 = 0; f0 < fields; f0 += 3) {
+    const int k = fields - f0 < 3 ? fields - f0 : 3;
+    mpm_real *c[3];
+    const mpm_real *uu[3];
+    for (int j = 0; j < k; ++j) {
+      c[j] = g->scratch + (size_t)j * g->ghost_capacity;
+      uu[j] = u[f0 + j];
+    }
+    mpm_embedding_gather(&g->ghosts, k, uu, c);
+    for (int j = 0; j < k; ++j)
+      for (size_t a = 0; a < n; ++a) u[f0 + j][g->ghost_slot[a]] = c[j][a];
+  }
+}
+
+size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
+  size_t b = mpm_refinement_bytes(&g->tree) + mpm_embedding_bytes(&g->ghosts) +
+             g->ghost_capacity * (sizeof(uint32_t) + 3 * sizeof(mpm_real));
+  for (int L = 0; L < g->tree.levels; ++L) b += g->level[L].ops->bytes(&g->level[L]);
+  return b;
+}

@@ -1,0 +1,81 @@
+/* adaptive_grid.h - Gao et al.'s multi-level sparse grid (sec. 6.1, Fig. 10): one sparse level
+ * per refinement level, and the ghost slots that carry values between them.
+ *
+ * Every active node of every level is a slot of the DOF set (level L's slots are DOFs
+ * level[L].dof_begin + node). A slot that is a real node owned by its level (grid/refinement.h)
+ * is an unknown of the step. Every other slot is a *ghost*: a T-junction, a refined node inside
+ * a coarser leaf, or a duplicate of a real node owned by another level. A ghost has an embedding
+ * row over real slots, its node's row E_gi (Gao eq. 15), fully resolved, so one pass carries
+ * every ghost at once.
+ *   after P2G   mpm_adaptive_grid_scatter: u_i += sum_g E_gi u_g over ghosts g, then u_g = 0
+ *   before G2P  mpm_adaptive_grid_gather:  u_g = sum_i E_gi u_i
+ * Particles transfer on the finest level their box meets; what they scatter there reaches the
+ * real nodes exactly (the basis is piecewise trilinear on that level; tests/test_refinement.c).
+ *
+ * Only *used* slots take part: those a particle's stencil reaches, and the parents of used
+ * ghosts. A sparse block activates 64 nodes at once, and most of a block's other nodes near a
+ * level change are ghosts; giving them rows (and activating their parents, whose blocks hold
+ * more ghosts) would spread the active region far beyond the material.
+ *
+ * Per step: the levels are activated from their particles, their stencils' nodes marked used
+ * (mpm_adaptive_grid_activate_box for boxes of nodes does both), mpm_adaptive_grid_close
+ * activates and marks every used ghost's parents, the caller lays out the DOF set with the
+ * levels, and mpm_adaptive_grid_build_rows fills the ghost rows with DOF indices. */
+#ifndef MPM_GRID_ADAPTIVE_GRID_H
+#define MPM_GRID_ADAPTIVE_GRID_H
+
+#include "grid/embedding.h"
+#include "grid/grid.h"
+#include "grid/refinement.h"
+
+typedef struct mpm_adaptive_grid {
+  mpm_refinement tree;
+  mpm_grid level[MPM_LEVELS_MAX]; /* sparse; level[L].dx = dx_0 / 2^L, one origin */
+  mpm_embedding ghosts;           /* row a: ghost a; columns: DOF indices of real slots */
+  uint32_t *ghost_slot;           /* DOF index of ghost a's own slot */
+  size_t ghost_count, ghost_capacity;
+  /* per level and block, a bit per node: the slot is used (a particle's stencil reaches it, or
+   * it is a ghost's parent), and its ghost row's parents are active (done) */
+  uint64_t *used[MPM_LEVELS_MAX], *done[MPM_LEVELS_MAX];
+  size_t mask_capacity[MPM_LEVELS_MAX];
+  mpm_real *scratch;                    /* 3 x ghost_capacity values for scatter and gather */
+  size_t scratch_capacity;
+} mpm_adaptive_grid;
+
+/* levels in 1..MPM_LEVELS_MAX, all cells leaves; refine through g->tree. */
+void mpm_adaptive_grid_init(mpm_adaptive_grid *g, int levels, const mpm_real origin[3],
+                            mpm_real dx0);
+void mpm_adaptive_grid_free(mpm_adaptive_grid *g);
+
+static inline int mpm_adaptive_grid_levels(const mpm_adaptive_grid *g) { return g->tree.levels; }
+
+/* Forget every used mark (a new step: the levels' blocks are activated anew). */
+void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g);
+
+/* Activate the nodes lo .. hi (inclusive, node indices of `level`) and mark them used. Serial.
+ * 0, or -1 when out of memory. */
+int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
+                                   const int32_t hi[3]);
+
+/* Activate and mark the parents of every used ghost. Parents are real, so one pass over the
+ * used slots suffices. Serial. 0, or -1 when out of memory or when a row needs more than
+ * MPM_ROW_MAX entries. */
+int mpm_adaptive_grid_close(mpm_adaptive_grid *g);
+
+/* After the DOF layout (each level's dof_begin set): the ghost rows. 0, or -1 when out of
+ * memory. */
+int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g);
+
+/* The slot (DOF index) of node idx of `level`, or -1 when it is not active. */
+int64_t mpm_adaptive_grid_slot(const mpm_adaptive_grid *g, int level, const int32_t idx[3]);
+
+/* u_i += sum_g E_gi u_g for the `fields` DOF arrays u[k], then u_g = 0 at every ghost. Serial in
+ * row order (deterministic). */
+void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const *u);
+
+/* u_g = sum_i E_gi u_i at every ghost, for the `fields` DOF arrays u[k]. */
+void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const *u);
+
+size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g);
+
+#endif
