@@ -1,8 +1,10 @@
 /* test_kernel.c - weight kernels against their defining properties (Gao sec. 3.3):
  * partition of unity, linear reproduction, non-negativity, sum of gradients zero, gradients
  * equal finite differences of the weights, uGIMP with L_p = dx equals the quadratic B-spline,
+ * the wide uGIMP (dx < L_p <= 2 dx, 4 nodes) equals the general box average of interp/gimp.h,
  * and the APIC factors reproduce D_p^{-1} (sum a_i (x_i - x_p) = 1, sum a_i = 0). */
 #include "support.h"
+#include "interp/gimp.h"
 #include "interp/kernel.h"
 #include "transfer/transfer_lanes.h"
 
@@ -77,6 +79,73 @@ static void test_ugimp(void **state) {
   check_kernel(MPM_KERNEL_UGIMP, 0.037 * 0.5);
   check_kernel(MPM_KERNEL_UGIMP, 0.037 * 0.3);
   check_kernel(MPM_KERNEL_UGIMP, 0.037);
+  /* the wide box, 4 nodes per axis (a particle one level coarser than its transfer level) */
+  check_kernel(MPM_KERNEL_UGIMP, 0.037 * 1.01);
+  check_kernel(MPM_KERNEL_UGIMP, 0.037 * 1.5);
+  check_kernel(MPM_KERNEL_UGIMP, 0.037 * 2);
+}
+
+/* The wide uGIMP (dx < L_p <= 2 dx) against the general box average of interp/gimp.h, its
+ * gradients against finite differences, and its SIMD lanes against the scalar kernel. */
+static void test_wide_ugimp(void **state) {
+  (void)state;
+  const double dx = 0.05;
+  static const double lengths[] = {1.01, 1.3, 1.5, 1.77, 2.0};
+  for (size_t c = 0; c < sizeof lengths / sizeof lengths[0]; ++c) {
+    const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)(lengths[c] * dx));
+    assert_int_equal(k.width, 4);
+    uint64_t rng = 5 + c;
+    for (int trial = 0; trial < 2000; ++trial) {
+      const double xg = test_rand(&rng, -6, 6);
+      mpm_real w[4], dw[4], a[4];
+      const int base = mpm_kernel_1d(&k, (mpm_real)xg, w, dw, a);
+      mpm_real gw[MPM_GIMP_NODES_MAX], gdw[MPM_GIMP_NODES_MAX];
+      int gbase;
+      const int gn = mpm_gimp_1d((mpm_real)xg, k.half_len, &gbase, gw, gdw);
+      for (int i = 0; i < gn; ++i) {
+        const int j = gbase + i - base;
+        if (j < 0 || j > 3) {
+          assert_true(fabs((double)gw[i]) < TOL(1e-6, 1e-14)); /* outside: no weight */
+          continue;
+        }
+        assert_close(w[j], gw[i], TOL(2e-6, 1e-13));
+        assert_close(dw[j] * dx, gdw[i], TOL(2e-5, 1e-12));
+      }
+      /* finite differences where the stencil stays */
+      const double h = TOL(1e-3, 1e-6);
+      mpm_real wp[4], wm[4], scratch[4];
+      if (mpm_kernel_1d(&k, (mpm_real)(xg + h), wp, scratch, a) != base ||
+          mpm_kernel_1d(&k, (mpm_real)(xg - h), wm, scratch, a) != base)
+        continue;
+      for (int i = 0; i < 4; ++i)
+        assert_close(((double)wp[i] - wm[i]) / (2 * h), (double)dw[i] * dx, TOL(5e-3, 1e-6));
+    }
+    /* lanes */
+    for (int trial = 0; trial < 100; ++trial) {
+      mpm_real xs[3][MPM_LANES];
+      uint32_t idx[MPM_LANES];
+      for (int l = 0; l < MPM_LANES; ++l) {
+        idx[l] = (uint32_t)l;
+        for (int d = 0; d < 3; ++d)
+          xs[d][l] = (mpm_real)((10 + d + k.shift + test_rand(&rng, 0.01, 0.99)) * dx);
+      }
+      const mpm_real *x[3] = {xs[0], xs[1], xs[2]};
+      const mpm_real origin[3] = {0, 0, 0};
+      int lb[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(&k, x, origin, idx, MPM_LANES, 1, 1, lb, &s);
+      for (int l = 0; l < MPM_LANES; ++l)
+        for (int d = 0; d < 3; ++d) {
+          mpm_real w[4], dw[4], a[4];
+          assert_int_equal(mpm_kernel_1d(&k, xs[d][l] / (mpm_real)dx, w, dw, a), lb[d]);
+          for (int q = 0; q < 4; ++q) {
+            assert_close(s.w[d][q][l], w[q], TOL(2e-6, 1e-13));
+            assert_close(s.dw[d][q][l] * dx, dw[q] * dx, TOL(2e-5, 1e-12));
+            assert_close(s.a[d][q][l] * dx, a[q] * dx, TOL(2e-4, 1e-11));
+          }
+        }
+    }
+  }
 }
 
 /* Gradients equal central differences of the weights (1D factors, in double builds tight). */
@@ -218,6 +287,7 @@ int main(void) {
       cmocka_unit_test(test_quadratic),
       cmocka_unit_test(test_cubic),
       cmocka_unit_test(test_ugimp),
+      cmocka_unit_test(test_wide_ugimp),
       cmocka_unit_test(test_gradients_match_finite_differences),
       cmocka_unit_test(test_ugimp_equals_quadratic),
       cmocka_unit_test(test_quadratic_apic_factor),

@@ -34,12 +34,13 @@ mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_leng
     k.shift = 1;
     break;
   case MPM_KERNEL_UGIMP:
-    /* support |x_i - x_p| < dx + L_p/2 <= 1.5 dx: three nodes from floor(x/dx - 1/2) */
-    k.width = 3;
-    k.shift = R_(0.5);
+    /* support |x_i - x_p| < dx + L_p/2: up to 1.5 dx, three nodes from floor(x/dx - 1/2); up
+       to 2 dx, four nodes from floor(x/dx - 1) */
     k.half_len = gimp_length / (2 * dx);
     if (!(k.half_len > 0)) k.half_len = R_(0.5);
-    if (k.half_len > R_(0.5)) k.half_len = R_(0.5);
+    if (k.half_len > 1) k.half_len = 1;
+    k.width = k.half_len > R_(0.5) ? 4 : 3;
+    k.shift = k.half_len > R_(0.5) ? 1 : R_(0.5);
     break;
   }
   return k;

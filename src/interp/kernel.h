@@ -8,11 +8,13 @@
  *  quadratic  quadratic B-spline, 3 nodes per axis
  *  cubic      cubic B-spline, 4 nodes per axis
  *  ugimp      undeformed GIMP (Gao eqs. 5-6): the hat averaged over the particle's box of side
- *             L_p <= dx, in closed form. In 1D the average of a hat over [x - L/2, x + L/2] is a
- *             difference of the hat's antiderivative; the 3D weight of Gao sec. 6.2 is the
+ *             L_p <= 2 dx, in closed form. In 1D the average of a hat over [x - L/2, x + L/2] is
+ *             a difference of the hat's antiderivative; the 3D weight of Gao sec. 6.2 is the
  *             product of three such factors (the box integral of a separable N_i is separable),
  *             so we never form the per-cell W(a..f) expression of sec. 6.2 explicitly.
- *             3 nodes per axis; with L_p = dx it equals the quadratic B-spline (Gao sec. 3.3).
+ *             3 nodes per axis for L_p <= dx (with L_p = dx it equals the quadratic B-spline,
+ *             Gao sec. 3.3); 4 for dx < L_p <= 2 dx, the box of a particle one level coarser
+ *             than the level it transfers on (Gao sec. 6.1 on the multi-level grid).
  *
  * APIC (Jiang et al. 2015) needs D_p = sum_i w_ip (x_i - x_p)(x_i - x_p)^T. For tensor kernels
  * D_p is diagonal with 1D entries d = sum_i w_i (x_i - x_p)^2, so the APIC factor per node is
@@ -33,7 +35,7 @@ typedef struct mpm_kernel {
   int width;      /* nodes per axis: 2, 3 or 4 */
   mpm_real shift; /* base = floor(x/dx - shift) */
   mpm_real dx, inv_dx;
-  mpm_real half_len; /* uGIMP: L_p / (2 dx), in (0, 1/2] */
+  mpm_real half_len; /* uGIMP: L_p / (2 dx), in (0, 1]; above 1/2 the stencil is 4 wide */
 } mpm_kernel;
 
 /* 1D factors of one particle's stencil. */
@@ -44,7 +46,7 @@ typedef struct mpm_stencil {
   mpm_real a[3][MPM_STENCIL_MAX];  /* APIC factor w (x_i - x_p) / d, 1/m */
 } mpm_stencil;
 
-/* gimp_length: L_p for uGIMP (ignored otherwise); must be in (0, dx]. */
+/* gimp_length: L_p for uGIMP (ignored otherwise), in (0, 2 dx]. */
 mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_length);
 
 const char *mpm_kernel_name(mpm_kernel_kind kind);
@@ -67,6 +69,31 @@ static inline mpm_real mpm_ugimp_outer(mpm_real d, mpm_real h, mpm_real *dw_dd) 
   const mpm_real q = x + h > 0 ? x + h : 0;
   *dw_dd = -q / (2 * h);
   return q * q / (4 * h);
+}
+
+/* The wide uGIMP box, half width h in (1/2, 1] (cells): the weight of a node at distance d
+ * in [1, 2) (an outer node) is (1 + h - d)^2 / 4h, or 0 past 1 + h; derivative in *dw_dd. */
+static inline mpm_real mpm_ugimp_wide_outer(mpm_real d, mpm_real h, mpm_real *dw_dd) {
+  const mpm_real x = 1 + h - d, q = x > 0 ? x : 0;
+  *dw_dd = -q / (2 * h);
+  return q * q / (4 * h);
+}
+
+/* ... and of a node at distance d in [0, 1] (an inner node): three pieces, by whether the box
+ * holds the hat's peak (d < h) and reaches past its foot (d + h > 1):
+ *   d >= h             (1 + h - d)^2 / 4h
+ *   d < h, d + h <= 1  1 - (d^2 + h^2) / 2h
+ *   d < h, d + h > 1   (1/2 - a - a^2/2) / 2h with a = d - h
+ * (continuous where they meet: 1/4h at d = h). */
+static inline mpm_real mpm_ugimp_wide_inner(mpm_real d, mpm_real h, mpm_real *dw_dd) {
+  if (d >= h) return mpm_ugimp_wide_outer(d, h, dw_dd);
+  if (d + h <= 1) {
+    *dw_dd = -d / h;
+    return 1 - (d * d + h * h) / (2 * h);
+  }
+  const mpm_real a = d - h;
+  *dw_dd = -(1 + a) / (2 * h);
+  return (R_(0.5) - a - R_(0.5) * a * a) / (2 * h);
 }
 
 /* APIC factor a_i = w_i (x_i - x_p) / sum_j w_j (x_j - x_p)^2 (see the header comment). */
@@ -125,9 +152,24 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
     break;
   }
   case MPM_KERNEL_UGIMP: {
+    const mpm_real h = k->half_len;
+    if (k->width == 4) {
+      /* the wide box: f in [1, 2), nodes at distances f, f - 1, 2 - f, 3 - f; node 2 by
+         partition of unity */
+      mpm_real g0, g1, g3;
+      w[0] = mpm_ugimp_wide_outer(f, h, &g0);
+      w[1] = mpm_ugimp_wide_inner(f - 1, h, &g1);
+      w[3] = mpm_ugimp_wide_outer(3 - f, h, &g3);
+      w[2] = 1 - w[0] - w[1] - w[3];
+      dw[0] = g0 * inv_dx; /* distance grows with x for nodes 0 and 1 */
+      dw[1] = g1 * inv_dx;
+      dw[3] = -g3 * inv_dx;
+      dw[2] = -dw[0] - dw[1] - dw[3];
+      mpm_apic_factors(4, w, f, inv_dx, a);
+      break;
+    }
     /* Gao eqs. 5-6 in 1D. The support |x_i - x_p| < dx + L_p/2 <= 1.5 dx covers three nodes;
        the outer two in closed form, the middle one by partition of unity. */
-    const mpm_real h = k->half_len;
     mpm_real g0, g2;
     w[0] = mpm_ugimp_outer(f, h, &g0);
     w[2] = mpm_ugimp_outer(2 - f, h, &g2);

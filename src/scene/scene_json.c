@@ -261,7 +261,7 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_number(c, sv, "max_dt", 0, mpm_json_ge(0, "s, 0 = no limit"), &d->max_dt) < 0 ||
       mpm_json_enum(c, sv, "grid", 0, GRID_NAMES, &grid) < 0 ||
       mpm_json_number(c, sv, "gimp_length", 0,
-                      mpm_json_in('[', 0, s->dx, ']', "m, at most dx; 0 = automatic"),
+                      mpm_json_in('[', 0, 2 * s->dx, ']', "m, at most 2 dx; 0 = automatic"),
                       &d->gimp_length) < 0 ||
       mpm_json_enum(c, sv, "on_instability", 0, INSTABILITY_NAMES, &on_instability) < 0 ||
       mpm_json_integer(c, sv, "max_retries", 0, mpm_json_in('[', 1, 30, ']', "halvings of dt"),
