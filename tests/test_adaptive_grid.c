@@ -7,7 +7,12 @@
  *   - every ghost's parents are active (close works to a fixed point across levels);
  *   - a linear velocity field on the real nodes, gathered to the ghosts, is exact at every ghost
  *     and the G2P of it is exact at every particle;
- *   - one level: no ghosts at all. */
+ *   - one level: no ghosts at all;
+ *   - APIC across levels (docs/adaptive-grid.md): with the ghosts' affine moments A_g in P2G
+ *     every real node gets exactly sum_p w_ip m_p (v_p + C_p (x_i - x_p)), and the grid's angular
+ *     momentum equals the particles' (x_p x m_p v_p plus the affine part m_p eps : (C_p D_p)^T);
+ *     without the moments it does not. In G2P the ghosts' moments M_g and spreads S_g give the
+ *     real-node B_p and D_p exactly. */
 #include "support.h"
 #include "grid/adaptive_grid.h"
 #include "interp/adaptive_weights.h"
@@ -211,6 +216,226 @@ static void run(int levels, uint64_t seed) {
   mpm_adaptive_grid_free(&g);
 }
 
+/* The tree, the cloud and the activated, closed, laid-out grid of run(), for the APIC test. */
+static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed) {
+  const mpm_real o[3] = {R_(0.1), R_(-0.2), R_(0.05)};
+  mpm_adaptive_grid_init(g, levels, o, R_(0.25));
+  uint64_t rng = seed;
+  for (int32_t i = -REGION; i < REGION; ++i)
+    for (int32_t j = -REGION; j < REGION; ++j)
+      for (int32_t k = -REGION; k < REGION; ++k) {
+        const int32_t cc[3] = {i, j, k};
+        refine_random(&g->tree, 0, cc, 0.5, &rng);
+      }
+  for (int p = 0; p < PARTICLES; ++p) {
+    for (int d = 0; d < 3; ++d) {
+      c->x[p][d] = o[d] + (mpm_real)(test_rand(&rng, -REGION + 0.3, REGION - 0.3) * 0.25);
+      c->v[p][d] = (mpm_real)test_rand(&rng, -1, 1);
+    }
+    c->m[p] = (mpm_real)test_rand(&rng, 0.5, 2);
+    int32_t cell[3];
+    c->Lp[p] = mpm_refinement_dx(&g->tree, mpm_refinement_leaf_at(&g->tree, c->x[p], cell));
+    mpm_real lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = c->x[p][d] - c->Lp[p] / 2;
+      hi[d] = c->x[p][d] + c->Lp[p] / 2;
+    }
+    c->level[p] = mpm_refinement_finest_level_in(&g->tree, lo, hi);
+    int base[3], n[3];
+    mpm_real w[3][MPM_GIMP_NODES_MAX];
+    stencil(g, c, p, base, n, w);
+    const int32_t blo[3] = {base[0], base[1], base[2]};
+    const int32_t bhi[3] = {base[0] + n[0] - 1, base[1] + n[1] - 1, base[2] + n[2] - 1};
+    assert_int_equal(mpm_adaptive_grid_activate_box(g, c->level[p], blo, bhi), 0);
+  }
+  assert_int_equal(mpm_adaptive_grid_close(g), 0);
+  size_t total = 0;
+  for (int L = 0; L < levels; ++L) {
+    g->level[L].dof_begin = total;
+    total += g->level[L].ops->node_count(&g->level[L]);
+  }
+  assert_int_equal(mpm_adaptive_grid_build_rows(g), 0);
+  return total;
+}
+
+static void cross_add(double L[3], const double a[3], const double b[3], double s) {
+  L[0] += s * (a[1] * b[2] - a[2] * b[1]);
+  L[1] += s * (a[2] * b[0] - a[0] * b[2]);
+  L[2] += s * (a[0] * b[1] - a[1] * b[0]);
+}
+
+static void test_apic_across_levels(void **state) {
+  (void)state;
+  static mpm_adaptive_grid g;
+  static cloud c;
+  const size_t total = setup(&g, &c, 3, 41);
+  uint64_t rng = 77;
+  static double C[PARTICLES][9];
+  for (int p = 0; p < PARTICLES; ++p)
+    for (int q = 0; q < 9; ++q) C[p][q] = test_rand(&rng, -2, 2);
+  int32_t *ghost_of = malloc(total * sizeof *ghost_of);
+  for (size_t s = 0; s < total; ++s) ghost_of[s] = -1;
+  for (size_t a = 0; a < g.ghost_count; ++a) ghost_of[g.ghost_slot[a]] = (int32_t)a;
+  mpm_real *u[4], *u_plain[4], *A[9];
+  for (int k = 0; k < 4; ++k) {
+    u[k] = calloc(total, sizeof(mpm_real));
+    u_plain[k] = calloc(total, sizeof(mpm_real));
+  }
+  for (int q = 0; q < 9; ++q) A[q] = calloc(g.ghost_count + 1, sizeof(mpm_real));
+  double *ref[3];
+  for (int d = 0; d < 3; ++d) ref[d] = calloc(total, sizeof(double));
+  static mpm_adaptive_weight rw[1024];
+  static double D[PARTICLES][9];
+  double Lp[3] = {0, 0, 0};
+  for (int p = 0; p < PARTICLES; ++p) {
+    int base[3], n[3];
+    mpm_real w[3][MPM_GIMP_NODES_MAX];
+    stencil(&g, &c, p, base, n, w);
+    for (int i = 0; i < n[0]; ++i)
+      for (int j = 0; j < n[1]; ++j)
+        for (int k = 0; k < n[2]; ++k) {
+          const int32_t idx[3] = {base[0] + i, base[1] + j, base[2] + k};
+          const int64_t s = mpm_adaptive_grid_slot(&g, c.level[p], idx);
+          double xs[3];
+          slot_position(&g, (size_t)s, xs);
+          const double mw = (double)c.m[p] * w[0][i] * w[1][j] * w[2][k];
+          for (int e = 0; e < 2; ++e) (e ? u_plain : u)[0][s] += (mpm_real)mw;
+          for (int d = 0; d < 3; ++d) {
+            double pd = c.v[p][d];
+            for (int q = 0; q < 3; ++q) pd += C[p][3 * d + q] * (xs[q] - c.x[p][q]);
+            u[1 + d][s] += (mpm_real)(mw * pd);
+            u_plain[1 + d][s] += (mpm_real)(mw * pd);
+          }
+          if (ghost_of[s] >= 0)
+            for (int q = 0; q < 9; ++q) A[q][ghost_of[s]] += (mpm_real)(mw * C[p][q]);
+        }
+    /* the reference over real nodes, and D_p there */
+    const int nr = mpm_adaptive_weights(&g.tree, c.x[p], c.Lp[p], -1, rw, 1024, NULL);
+    memset(D[p], 0, sizeof D[p]);
+    for (int e = 0; e < nr; ++e) {
+      const int64_t s = mpm_adaptive_grid_slot(&g, rw[e].level, rw[e].idx);
+      double xi[3], r[3];
+      slot_position(&g, (size_t)s, xi);
+      for (int d = 0; d < 3; ++d) r[d] = xi[d] - c.x[p][d];
+      for (int d = 0; d < 3; ++d) {
+        double pd = c.v[p][d];
+        for (int q = 0; q < 3; ++q) pd += C[p][3 * d + q] * r[q];
+        ref[d][s] += c.m[p] * rw[e].w * pd;
+        for (int q = 0; q < 3; ++q) D[p][3 * d + q] += rw[e].w * r[d] * r[q];
+      }
+    }
+    /* the particle's angular momentum: x_p x m_p v_p + m_p eps_abc (C_p D_p)_cb */
+    const double xp[3] = {c.x[p][0], c.x[p][1], c.x[p][2]};
+    const double vp[3] = {c.v[p][0], c.v[p][1], c.v[p][2]};
+    cross_add(Lp, xp, vp, c.m[p]);
+    double CD[9] = {0};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        for (int q = 0; q < 3; ++q) CD[3 * a + b] += C[p][3 * a + q] * D[p][3 * q + b];
+    Lp[0] += c.m[p] * (CD[3 * 2 + 1] - CD[3 * 1 + 2]);
+    Lp[1] += c.m[p] * (CD[3 * 0 + 2] - CD[3 * 2 + 0]);
+    Lp[2] += c.m[p] * (CD[3 * 1 + 0] - CD[3 * 0 + 1]);
+  }
+  const mpm_real *const Ac[9] = {A[0], A[1], A[2], A[3], A[4], A[5], A[6], A[7], A[8]};
+  mpm_adaptive_grid_scatter_apic(&g, 4, u, Ac);
+  mpm_adaptive_grid_scatter(&g, 4, u_plain);
+  double worst = 0, worst_plain = 0, Lg[3] = {0, 0, 0}, Lg_plain[3] = {0, 0, 0}, scale = 0;
+  for (size_t s = 0; s < total; ++s) {
+    if (ghost_of[s] >= 0) continue;
+    double xs[3];
+    slot_position(&g, s, xs);
+    const double pi[3] = {u[1][s], u[2][s], u[3][s]};
+    const double pp[3] = {u_plain[1][s], u_plain[2][s], u_plain[3][s]};
+    cross_add(Lg, xs, pi, 1);
+    cross_add(Lg_plain, xs, pp, 1);
+    for (int d = 0; d < 3; ++d) {
+      worst = fmax(worst, fabs(pi[d] - ref[d][s]));
+      worst_plain = fmax(worst_plain, fabs(pp[d] - ref[d][s]));
+      scale = fmax(scale, fabs(ref[d][s]));
+    }
+  }
+  double dL = 0, dL_plain = 0, Ln = 0;
+  for (int d = 0; d < 3; ++d) {
+    dL = fmax(dL, fabs(Lg[d] - Lp[d]));
+    dL_plain = fmax(dL_plain, fabs(Lg_plain[d] - Lp[d]));
+    Ln = fmax(Ln, fabs(Lp[d]));
+  }
+  print_message("APIC P2G across levels: largest |p_i - ref| %.2e (without ghost moments %.2e) of "
+                "%.2e; angular momentum error %.2e (without %.2e) of %.2e\n",
+                worst, worst_plain, scale, dL, dL_plain, Ln);
+  const double tol = is_double ? 1e-12 : 3e-5;
+  assert_true(worst < tol * scale);
+  assert_true(dL < tol * 10 * Ln);
+  assert_true(worst_plain > 1e3 * tol * scale && dL_plain > 1e3 * tol * Ln);
+
+  /* G2P: a random velocity on the real slots; B_p and D_p through the ghosts */
+  for (size_t s = 0; s < total; ++s)
+    for (int d = 0; d < 3; ++d)
+      u[1 + d][s] = ghost_of[s] >= 0 ? 0 : (mpm_real)test_rand(&rng, -1, 1);
+  mpm_adaptive_grid_gather(&g, 3, u + 1);
+  mpm_real *M[9];
+  for (int q = 0; q < 9; ++q) M[q] = calloc(g.ghost_count + 1, sizeof(mpm_real));
+  const mpm_real *const vv[3] = {u[1], u[2], u[3]};
+  mpm_adaptive_grid_gather_moments(&g, vv, M);
+  double worst_B = 0, worst_D = 0, Bscale = 0;
+  for (int p = 0; p < PARTICLES; ++p) {
+    int base[3], n[3];
+    mpm_real w[3][MPM_GIMP_NODES_MAX];
+    stencil(&g, &c, p, base, n, w);
+    double B[9] = {0}, Dg[9] = {0};
+    for (int i = 0; i < n[0]; ++i)
+      for (int j = 0; j < n[1]; ++j)
+        for (int k = 0; k < n[2]; ++k) {
+          const int32_t idx[3] = {base[0] + i, base[1] + j, base[2] + k};
+          const int64_t s = mpm_adaptive_grid_slot(&g, c.level[p], idx);
+          double xs[3], r[3];
+          slot_position(&g, (size_t)s, xs);
+          for (int d = 0; d < 3; ++d) r[d] = xs[d] - c.x[p][d];
+          const double wg = (double)w[0][i] * w[1][j] * w[2][k];
+          const int32_t a = ghost_of[s];
+          const double Sg[9] = {a >= 0 ? g.spread[0][a] : 0, a >= 0 ? g.spread[3][a] : 0,
+                                a >= 0 ? g.spread[4][a] : 0, a >= 0 ? g.spread[3][a] : 0,
+                                a >= 0 ? g.spread[1][a] : 0, a >= 0 ? g.spread[5][a] : 0,
+                                a >= 0 ? g.spread[4][a] : 0, a >= 0 ? g.spread[5][a] : 0,
+                                a >= 0 ? g.spread[2][a] : 0};
+          for (int d = 0; d < 3; ++d)
+            for (int q = 0; q < 3; ++q) {
+              B[3 * d + q] += wg * (u[1 + d][s] * r[q] + (a >= 0 ? M[3 * d + q][a] : 0));
+              Dg[3 * d + q] += wg * (r[d] * r[q] + Sg[3 * d + q]);
+            }
+        }
+    const int nr = mpm_adaptive_weights(&g.tree, c.x[p], c.Lp[p], -1, rw, 1024, NULL);
+    double Bref[9] = {0};
+    for (int e = 0; e < nr; ++e) {
+      const int64_t s = mpm_adaptive_grid_slot(&g, rw[e].level, rw[e].idx);
+      double xi[3];
+      slot_position(&g, (size_t)s, xi);
+      for (int d = 0; d < 3; ++d)
+        for (int q = 0; q < 3; ++q) Bref[3 * d + q] += rw[e].w * u[1 + d][s] * (xi[q] - c.x[p][q]);
+    }
+    for (int q = 0; q < 9; ++q) {
+      worst_B = fmax(worst_B, fabs(B[q] - Bref[q]));
+      worst_D = fmax(worst_D, fabs(Dg[q] - D[p][q]));
+      Bscale = fmax(Bscale, fabs(Bref[q]));
+    }
+  }
+  print_message("APIC G2P across levels: largest |B_p - ref| %.2e of %.2e, |D_p - ref| %.2e\n",
+                worst_B, Bscale, worst_D);
+  assert_true(worst_B < tol * 10 * Bscale);
+  assert_true(worst_D < tol * 0.25 * 0.25);
+  for (int q = 0; q < 9; ++q) {
+    free(A[q]);
+    free(M[q]);
+  }
+  for (int k = 0; k < 4; ++k) {
+    free(u[k]);
+    free(u_plain[k]);
+  }
+  for (int d = 0; d < 3; ++d) free(ref[d]);
+  free(ghost_of);
+  mpm_adaptive_grid_free(&g);
+}
+
 static void test_one_level(void **state) {
   (void)state;
   run(1, 3);
@@ -231,6 +456,7 @@ int main(void) {
       cmocka_unit_test(test_one_level),
       cmocka_unit_test(test_three_levels),
       cmocka_unit_test(test_four_levels),
+      cmocka_unit_test(test_apic_across_levels),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

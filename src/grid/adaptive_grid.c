@@ -25,6 +25,8 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
     mpm_free(g->used[L]);
     mpm_free(g->done[L]);
   }
+  for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
+  for (int q = 0; q < 6; ++q) mpm_free(g->spread[q]);
   memset(g, 0, sizeof *g);
 }
 
@@ -143,11 +145,19 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
   size_t cap = g->ghost_capacity ? g->ghost_capacity : 1024;
   while (cap < n) cap *= 2;
   uint32_t *slot = mpm_alloc(cap * sizeof *slot);
-  mpm_real *scratch = mpm_alloc(3 * cap * sizeof *scratch);
-  if (!slot || !scratch) {
+  mpm_real *scratch = mpm_alloc(4 * cap * sizeof *scratch);
+  mpm_real *spread[6];
+  int failed = !slot || !scratch;
+  for (int q = 0; q < 6; ++q) failed |= !(spread[q] = mpm_alloc(cap * sizeof(mpm_real)));
+  if (failed) {
     mpm_free(slot);
     mpm_free(scratch);
+    for (int q = 0; q < 6; ++q) mpm_free(spread[q]);
     return -1;
+  }
+  for (int q = 0; q < 6; ++q) {
+    mpm_free(g->spread[q]);
+    g->spread[q] = spread[q]; /* filled by build_rows after every ghost is known */
   }
   if (g->ghost_count) memcpy(slot, g->ghost_slot, g->ghost_count * sizeof *slot);
   mpm_free(g->ghost_slot);
@@ -190,6 +200,20 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
       }
   }
   if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto fail;
+  const size_t entries = g->ghosts.row_start[g->ghost_count];
+  if (entries > g->offset_capacity) {
+    size_t cap = g->offset_capacity ? g->offset_capacity : 4096;
+    while (cap < entries) cap *= 2;
+    for (int d = 0; d < 3; ++d) {
+      mpm_free(g->offset[d]);
+      g->offset[d] = mpm_alloc(cap * sizeof(mpm_real));
+    }
+    g->offset_capacity = cap;
+    if (!g->offset[0] || !g->offset[1] || !g->offset[2]) {
+      g->offset_capacity = 0;
+      goto fail;
+    }
+  }
   /* pass 2: the entries, in the same order */
   size_t a = 0;
   for (int L = 0; L < g->tree.levels; ++L) {
@@ -201,11 +225,30 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
         node_of(sg, b, local, idx);
         const int n = slot_row(g, L, idx, row);
         if (n == 0) continue;
+        double S[6] = {0, 0, 0, 0, 0, 0};
         for (int t = 0; t < n; ++t) {
           const int64_t col = mpm_adaptive_grid_slot(g, row[t].level, row[t].idx);
           if (col < 0) goto fail; /* a parent not active: close() was not called */
+          const uint32_t e = g->ghosts.row_start[a] + g->ghosts.row_len[a];
           mpm_embedding_push(&g->ghosts, a, (uint32_t)col, (mpm_real)row[t].w);
+          /* x_i - x_g exactly: both on the finest lattice */
+          double r[3];
+          const int sp = L, si = row[t].level;
+          for (int d = 0; d < 3; ++d) {
+            const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
+            const int64_t Xi = (int64_t)row[t].idx[d] << (g->tree.levels - 1 - si);
+            const int64_t Xg = (int64_t)idx[d] << (g->tree.levels - 1 - sp);
+            r[d] = (double)(Xi - Xg) * fine;
+            g->offset[d][e] = (mpm_real)(row[t].w * r[d]);
+          }
+          S[0] += row[t].w * r[0] * r[0];
+          S[1] += row[t].w * r[1] * r[1];
+          S[2] += row[t].w * r[2] * r[2];
+          S[3] += row[t].w * r[0] * r[1];
+          S[4] += row[t].w * r[0] * r[2];
+          S[5] += row[t].w * r[1] * r[2];
         }
+        for (int q = 0; q < 6; ++q) g->spread[q][a] = (mpm_real)S[q];
         ++a;
       }
   }
@@ -218,6 +261,7 @@ fail:
 
 void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
   const size_t n = g->ghost_count;
+  if (!n) return;
   for (int f0 = 0; f0 < fields; f0 += 3) {
     const int k = fields - f0 < 3 ? fields - f0 : 3;
     const mpm_real *c[3];
@@ -235,6 +279,7 @@ void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const
 
 void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
   const size_t n = g->ghost_count;
+  if (!n) return;
   for (int f0 = 0; f0 < fields; f0 += 3) {
     const int k = fields - f0 < 3 ? fields - f0 : 3;
     mpm_real *c[3];
@@ -249,9 +294,39 @@ void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const 
   }
 }
 
+void mpm_adaptive_grid_scatter_apic(mpm_adaptive_grid *g, int fields, mpm_real *const *u,
+                                    const mpm_real *const A[9]) {
+  const size_t n = g->ghost_count;
+  if (!n) return;
+  /* mass and momentum with the moments in one pass (the order of a plain scatter), the rest
+     plainly after */
+  const int k = fields < 4 ? fields : 4;
+  const mpm_real *c[4];
+  for (int j = 0; j < k; ++j) {
+    mpm_real *cj = g->scratch + (size_t)j * g->ghost_capacity;
+    for (size_t a = 0; a < n; ++a) {
+      cj[a] = u[j][g->ghost_slot[a]];
+      u[j][g->ghost_slot[a]] = 0;
+    }
+    c[j] = cj;
+  }
+  const mpm_real *const off[3] = {g->offset[0], g->offset[1], g->offset[2]};
+  mpm_real *const um[3] = {u[1], u[2], u[3]};
+  mpm_embedding_scatter_moments(&g->ghosts, k, c, u, off, A, um);
+  if (fields > 4) mpm_adaptive_grid_scatter(g, fields - 4, u + 4);
+}
+
+void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real *const v[3],
+                                      mpm_real *const M[9]) {
+  if (!g->ghost_count) return;
+  const mpm_real *const off[3] = {g->offset[0], g->offset[1], g->offset[2]};
+  mpm_embedding_gather_moments(&g->ghosts, v, off, M);
+}
+
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
   size_t b = mpm_refinement_bytes(&g->tree) + mpm_embedding_bytes(&g->ghosts) +
-             g->ghost_capacity * (sizeof(uint32_t) + 3 * sizeof(mpm_real));
+             g->ghost_capacity * (sizeof(uint32_t) + 10 * sizeof(mpm_real)) +
+             3 * g->offset_capacity * sizeof(mpm_real);
   for (int L = 0; L < g->tree.levels; ++L) b += g->level[L].ops->bytes(&g->level[L]);
   return b;
 }

@@ -38,8 +38,13 @@ typedef struct mpm_adaptive_grid {
    * it is a ghost's parent), and its ghost row's parents are active (done) */
   uint64_t *used[MPM_LEVELS_MAX], *done[MPM_LEVELS_MAX];
   size_t mask_capacity[MPM_LEVELS_MAX];
-  mpm_real *scratch;                    /* 3 x ghost_capacity values for scatter and gather */
-  size_t scratch_capacity;
+  mpm_real *scratch; /* 4 x ghost_capacity values for scatter and gather */
+  /* APIC across levels (docs/adaptive-grid.md): per row entry e of ghost g and real slot i,
+   * offset[j][e] = E_gi (x_i - x_g)_j; per ghost, spread S_g = sum_i E_gi (x_i - x_g)(x_i - x_g)^T
+   * as xx, yy, zz, xy, xz, yz */
+  mpm_real *offset[3];
+  size_t offset_capacity;
+  mpm_real *spread[6];
 } mpm_adaptive_grid;
 
 /* levels in 1..MPM_LEVELS_MAX, all cells leaves; refine through g->tree. */
@@ -75,6 +80,19 @@ void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const
 
 /* u_g = sum_i E_gi u_i at every ghost, for the `fields` DOF arrays u[k]. */
 void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const *u);
+
+/* APIC P2G through the ghosts: besides the scatter of the `fields` arrays u (which must hold
+ * the momentum in u[1..3]), u[1 + k][i] += sum_j offset[j][e] A[3 k + j][g] for each ghost g,
+ * where A_g = sum_p w_gp m_p C_p (row-major, per ghost) is the affine moment the particles left
+ * at the ghost: the real nodes get m_p C_p (x_i - x_p) exactly. Ghosts are zeroed after. */
+void mpm_adaptive_grid_scatter_apic(mpm_adaptive_grid *g, int fields, mpm_real *const *u,
+                                    const mpm_real *const A[9]);
+
+/* APIC G2P through the ghosts: M[3 k + j][g] = sum_i E_gi v_k,i (x_i - x_g)_j for each ghost g
+ * (after mpm_adaptive_grid_gather has set v_g), so that B_p = sum_g w_gp (v_g (x_g - x_p)^T +
+ * M_g) is the exact sum over real nodes; with the spread S_g, D_p likewise. */
+void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real *const v[3],
+                                      mpm_real *const M[9]);
 
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g);
 

@@ -199,6 +199,20 @@ void mpm_embedding_scatter_moments(const mpm_embedding *E, int fields, const mpm
   scatter(E, fields, c, u, &m);
 }
 
+void mpm_embedding_gather_moments(const mpm_embedding *E, const mpm_real *const u[3],
+                                  const mpm_real *const a[3], mpm_real *const cm[9]) {
+  const long rows = (long)E->rows;
+#pragma omp parallel for schedule(static)
+  for (long r = 0; r < rows; ++r) {
+    const uint32_t e0 = E->row_start[r], e1 = e0 + E->row_len[r];
+    mpm_real m[9] = {0};
+    for (uint32_t e = e0; e < e1; ++e)
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j) m[3 * k + j] += u[k][E->col[e]] * a[j][e];
+    for (int q = 0; q < 9; ++q) cm[q][r] = m[q];
+  }
+}
+
 void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,
                           mpm_real *const *c) {
   const long rows = (long)E->rows;

@@ -101,6 +101,14 @@ void mpm_embedding_scatter_moments(const mpm_embedding *E, int fields, const mpm
 void mpm_embedding_gather(const mpm_embedding *E, int fields, const mpm_real *const *u,
                           mpm_real *const *c);
 
+/* The gather's first moments, the twin of mpm_embedding_scatter_moments: for every row a,
+ * cm[3 k + j][a] = sum over row a's entries e of u[k][col] a[j][e] (k, j = 0..2). With
+ * a_e = E_ai (x_i - x_a) this is M_a = sum_i E_ai u_i (x_i - x_a)^T, what a carrier must pass on
+ * besides its gathered value for APIC's B_p to be the exact sum over the DOFs behind it
+ * (docs/adaptive-grid.md). Parallel over rows, deterministic. */
+void mpm_embedding_gather_moments(const mpm_embedding *E, const mpm_real *const u[3],
+                                  const mpm_real *const a[3], mpm_real *const cm[9]);
+
 /* Bytes held. */
 size_t mpm_embedding_bytes(const mpm_embedding *E);
 
