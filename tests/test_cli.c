@@ -147,6 +147,23 @@ static void test_linear_kernel_warning(void **state) {
   expect_output("more than 10^4");
 }
 
+/* Issue 17: a user's clone has no ../shared/, so the README cites both papers itself, and the
+ * licence and citation files are there. */
+static void test_readme_cites_papers(void **state) {
+  (void)state;
+  static char text[65536];
+  FILE *f = fopen("README.md", "r");
+  assert_non_null(f);
+  const size_t n = fread(text, 1, sizeof text - 1, f);
+  fclose(f);
+  text[n] = '\0';
+  assert_null(strstr(text, "../shared"));
+  assert_non_null(strstr(text, "10.1145/3130800.3130879"));
+  assert_non_null(strstr(text, "Dynamically Enriched MPM for\n  Invertible Elasticity"));
+  assert_non_null(strstr(text, "What is built, and what is not yet"));
+  assert_true(exists("LICENSE") && exists("CITATION.cff"));
+}
+
 /* The shape object examples/meshes/README.md shows parses (issue 17: it once documented a key,
  * mesh_scale, that the parser rejects). */
 static void test_meshes_readme_shape(void **state) {
@@ -404,6 +421,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_linear_kernel_warning),
+      cmocka_unit_test(test_readme_cites_papers),
       cmocka_unit_test(test_meshes_readme_shape),
       cmocka_unit_test(test_subcommand_help),
       cmocka_unit_test(test_output_folder_holds_one_run),
