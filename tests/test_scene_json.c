@@ -363,8 +363,8 @@ static void test_out_of_range(void **state) {
                MPM_ERR_INVALID, "materials[0].nu: expected a number in (-1, 0.5), got 0.5", NULL);
   expect_error(SCENE_WITH(", 'solver': {'cfl': 0}"), MPM_ERR_INVALID,
                "solver.cfl: expected a number in (0, 1], got 0", NULL);
-  expect_error(SCENE_WITH(", 'solver': {'gimp_length': 0.06}"), MPM_ERR_INVALID,
-               "solver.gimp_length: expected a number in [0, 0.05] (m, at most dx", "got 0.06",
+  expect_error(SCENE_WITH(", 'solver': {'gimp_length': 0.11}"), MPM_ERR_INVALID,
+               "solver.gimp_length: expected a number in [0, 0.1] (m, at most 2 dx", "got 0.11",
                NULL);
   expect_error("{'domain': {'min': [0, 0, 0], 'max': [1, 1, 1], 'dx': 0.05, 'walls': {'cells': "
                "1}}, " TIME ", " MATS ", " BODIES "}",
