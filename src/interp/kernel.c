@@ -10,6 +10,7 @@ const char *mpm_kernel_name(mpm_kernel_kind kind) {
   case MPM_KERNEL_CUBIC:
     return "cubic";
   case MPM_KERNEL_UGIMP:
+  case MPM_KERNEL_UGIMP_WIDE:
     return "ugimp";
   }
   return "unknown";
@@ -34,11 +35,14 @@ mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_leng
     k.shift = 1;
     break;
   case MPM_KERNEL_UGIMP:
+  case MPM_KERNEL_UGIMP_WIDE:
     /* support |x_i - x_p| < dx + L_p/2: up to 1.5 dx, three nodes from floor(x/dx - 1/2); up
        to 2 dx, four nodes from floor(x/dx - 1) */
     k.half_len = gimp_length / (2 * dx);
     if (!(k.half_len > 0)) k.half_len = R_(0.5);
     if (k.half_len > 1) k.half_len = 1;
+    /* the wide box is a kind of its own, so that the common one's code stays as it is */
+    k.kind = k.half_len > R_(0.5) ? MPM_KERNEL_UGIMP_WIDE : MPM_KERNEL_UGIMP;
     k.width = k.half_len > R_(0.5) ? 4 : 3;
     k.shift = k.half_len > R_(0.5) ? 1 : R_(0.5);
     break;

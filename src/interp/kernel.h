@@ -151,25 +151,26 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
     for (int i = 0; i < 4; ++i) a[i] = 3 * inv_dx * w[i] * ((mpm_real)i - f); /* D = dx^2/3 */
     break;
   }
-  case MPM_KERNEL_UGIMP: {
+  case MPM_KERNEL_UGIMP_WIDE: {
+    /* the wide box: f in [1, 2), nodes at distances f, f - 1, 2 - f, 3 - f; node 2 by
+       partition of unity */
     const mpm_real h = k->half_len;
-    if (k->width == 4) {
-      /* the wide box: f in [1, 2), nodes at distances f, f - 1, 2 - f, 3 - f; node 2 by
-         partition of unity */
-      mpm_real g0, g1, g3;
-      w[0] = mpm_ugimp_wide_outer(f, h, &g0);
-      w[1] = mpm_ugimp_wide_inner(f - 1, h, &g1);
-      w[3] = mpm_ugimp_wide_outer(3 - f, h, &g3);
-      w[2] = 1 - w[0] - w[1] - w[3];
-      dw[0] = g0 * inv_dx; /* distance grows with x for nodes 0 and 1 */
-      dw[1] = g1 * inv_dx;
-      dw[3] = -g3 * inv_dx;
-      dw[2] = -dw[0] - dw[1] - dw[3];
-      mpm_apic_factors(4, w, f, inv_dx, a);
-      break;
-    }
+    mpm_real g0, g1, g3;
+    w[0] = mpm_ugimp_wide_outer(f, h, &g0);
+    w[1] = mpm_ugimp_wide_inner(f - 1, h, &g1);
+    w[3] = mpm_ugimp_wide_outer(3 - f, h, &g3);
+    w[2] = 1 - w[0] - w[1] - w[3];
+    dw[0] = g0 * inv_dx; /* distance grows with x for nodes 0 and 1 */
+    dw[1] = g1 * inv_dx;
+    dw[3] = -g3 * inv_dx;
+    dw[2] = -dw[0] - dw[1] - dw[3];
+    mpm_apic_factors(4, w, f, inv_dx, a);
+    break;
+  }
+  case MPM_KERNEL_UGIMP: {
     /* Gao eqs. 5-6 in 1D. The support |x_i - x_p| < dx + L_p/2 <= 1.5 dx covers three nodes;
        the outer two in closed form, the middle one by partition of unity. */
+    const mpm_real h = k->half_len;
     mpm_real g0, g2;
     w[0] = mpm_ugimp_outer(f, h, &g0);
     w[2] = mpm_ugimp_outer(2 - f, h, &g2);

@@ -155,40 +155,42 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
         for (int q = 0; q < 4; ++q) a[q] = (3 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/3 */
       break;
     }
-    case MPM_KERNEL_UGIMP: {
+    case MPM_KERNEL_UGIMP_WIDE: {
+      /* the wide box (mpm_ugimp_wide_outer and _inner in kernel.h), the three pieces of the
+         inner node as selects; node 2 by partition of unity */
       const mpm_real h = k->half_len, inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
       const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
-      if (k->width == 4) {
-        /* the wide box (mpm_ugimp_wide_outer and _inner in kernel.h), the three pieces of the
-           inner node as selects; node 2 by partition of unity */
-        const mpm_vl x0 = (1 + h) - f, x3 = f + (h - 2);
-        const mpm_vl q0 = mpm_vl_max(x0, zero), q3 = mpm_vl_max(x3, zero);
-        w[0] = q0 * q0 * inv_4h;
-        w[3] = q3 * q3 * inv_4h;
-        dw[0] = q0 * (-inv_2h * inv_dx);
-        dw[3] = q3 * (inv_2h * inv_dx);
-        const mpm_vl d1 = f - 1, a1 = d1 - h, x1 = (1 + h) - d1;
-        const mpm_vl wA = x1 * x1 * inv_4h, dA = x1 * (-inv_2h);
-        const mpm_vl wB = 1 - (d1 * d1 + h * h) * inv_2h, dB = d1 * (-1 / h);
-        const mpm_vl wC = (R_(0.5) - a1 - R_(0.5) * a1 * a1) * inv_2h, dC = (1 + a1) * (-inv_2h);
-        const mpm_vl_index peak = d1 < hv, foot = d1 + h <= mpm_vl_splat(1);
-        w[1] = mpm_vl_select(peak, mpm_vl_select(foot, wB, wC), wA);
-        dw[1] = mpm_vl_select(peak, mpm_vl_select(foot, dB, dC), dA) * inv_dx;
-        w[2] = 1 - w[0] - w[1] - w[3];
-        dw[2] = -dw[0] - dw[1] - dw[3];
-        if (need_a) {
-          mpm_vl dsum = {0};
-          for (int q = 0; q < 4; ++q) {
-            const mpm_vl r = (mpm_real)q - f;
-            dsum += w[q] * r * r;
-          }
-          const mpm_vl sc = inv_dx / dsum;
-          for (int q = 0; q < 4; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
+      const mpm_vl x0 = (1 + h) - f, x3 = f + (h - 2);
+      const mpm_vl q0 = mpm_vl_max(x0, zero), q3 = mpm_vl_max(x3, zero);
+      w[0] = q0 * q0 * inv_4h;
+      w[3] = q3 * q3 * inv_4h;
+      dw[0] = q0 * (-inv_2h * inv_dx);
+      dw[3] = q3 * (inv_2h * inv_dx);
+      const mpm_vl d1 = f - 1, a1 = d1 - h, x1 = (1 + h) - d1;
+      const mpm_vl wA = x1 * x1 * inv_4h, dA = x1 * (-inv_2h);
+      const mpm_vl wB = 1 - (d1 * d1 + h * h) * inv_2h, dB = d1 * (-1 / h);
+      const mpm_vl wC = (R_(0.5) - a1 - R_(0.5) * a1 * a1) * inv_2h, dC = (1 + a1) * (-inv_2h);
+      const mpm_vl_index peak = d1 < hv, foot = d1 + h <= mpm_vl_splat(1);
+      w[1] = mpm_vl_select(peak, mpm_vl_select(foot, wB, wC), wA);
+      dw[1] = mpm_vl_select(peak, mpm_vl_select(foot, dB, dC), dA) * inv_dx;
+      w[2] = 1 - w[0] - w[1] - w[3];
+      dw[2] = -dw[0] - dw[1] - dw[3];
+      if (need_a) {
+        mpm_vl dsum = {0};
+        for (int q = 0; q < 4; ++q) {
+          const mpm_vl r = (mpm_real)q - f;
+          dsum += w[q] * r * r;
         }
-        break;
+        const mpm_vl sc = inv_dx / dsum;
+        for (int q = 0; q < 4; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
       }
+      break;
+    }
+    case MPM_KERNEL_UGIMP: {
       /* see mpm_ugimp_outer in kernel.h: outer nodes in closed form, the middle one by
          partition of unity */
+      const mpm_real h = k->half_len, inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
+      const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
       const mpm_vl x0 = 1 - f, x2 = f - 1; /* 1 - distance to nodes 0 and 2 */
       const mpm_vl q0 = mpm_vl_max(x0 + h, zero), q2 = mpm_vl_max(x2 + h, zero);
       w[0] = mpm_vl_select(x0 >= hv, x0, q0 * q0 * inv_4h);
