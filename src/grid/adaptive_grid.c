@@ -236,8 +236,8 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
           const int sp = L, si = row[t].level;
           for (int d = 0; d < 3; ++d) {
             const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
-            const int64_t Xi = (int64_t)row[t].idx[d] << (g->tree.levels - 1 - si);
-            const int64_t Xg = (int64_t)idx[d] << (g->tree.levels - 1 - sp);
+            const int64_t Xi = (int64_t)row[t].idx[d] * ((int64_t)1 << (g->tree.levels - 1 - si));
+            const int64_t Xg = (int64_t)idx[d] * ((int64_t)1 << (g->tree.levels - 1 - sp));
             r[d] = (double)(Xi - Xg) * fine;
             g->offset[d][e] = (mpm_real)(row[t].w * r[d]);
           }
