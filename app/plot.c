@@ -2,15 +2,17 @@
  * (io/stats_csv.c) and draw them with gnuplot to PNG files in OUTDIR/plots/.
  *
  * The CSV is read and checked completely before anything is written: the header must be the
- * one mpm_write_stats_csv writes (21 columns; the 20 of files from before dynamic enrichment
- * and the 15 of files from before the implicit integrator are read too), every row must have its
+ * one mpm_write_stats_csv writes (25 columns; the 21 of files from before the step range and
+ * the gravitational energy, the 20 of files from before dynamic enrichment and the 15 of files
+ * from before the implicit integrator are read too), every row must have its
  * fields and every field must be a finite number (a bad file is an input error, exit 2, with the
  * file and line named). Then:
  *   1. find gnuplot on PATH (not found: exit 1, nothing written);
  *   2. create the plots directory and write two temporaries into it: a whitespace-separated
- *      data file with the derived columns (total energy; steps per frame, the difference of
- *      the cumulative step count; '?' where a value is undefined: the per-frame values of
- *      frame 0, dt <= 0 on the log scale) and the gnuplot script;
+ *      data file with the derived columns (steps per frame, the difference of the cumulative
+ *      step count; the total energy of an older file, kinetic + elastic; '?' where a value is
+ *      undefined: the per-frame values of frame 0, dt <= 0 on the log scale, the columns an
+ *      older file lacks) and the gnuplot script;
  *   3. run gnuplot on the script in the plots directory (fork + execv; its messages are
  *      collected and shown if it fails), each PNG going to the temporary name of an
  *      mpm_atomic_file (io/io.h);
@@ -19,8 +21,9 @@
  *      removed.
  * The script picks the pngcairo terminal when this gnuplot has it (GPVAL_TERMINALS), else png.
  *
- * Columns as mpm_write_stats_csv writes them: `steps` is cumulative, `dt` the frame's last
- * step, `wall_seconds` the wall time of that frame alone (io.h), so it is plotted as it is.
+ * Columns as mpm_write_stats_csv writes them: `steps` is cumulative, `dt` the frame's typical
+ * step with `dt_min` and `dt_max` its range (files from before them have the frame's last step
+ * in `dt`), `wall_seconds` the wall time of that frame alone (io.h), so it is plotted as it is.
  * Frame 0 is the initial state (no steps; its wall time is only writing the first frame), so
  * the per-frame plots start at frame 1. */
 #define _XOPEN_SOURCE 700 /* POSIX 2008 with realpath */
@@ -65,6 +68,11 @@ enum {
   COL_CG_UNCONVERGED,
   COL_SOLVER_COUNT, /* files written before dynamic enrichment end here */
   COL_ENRICHED = COL_SOLVER_COUNT,
+  COL_ENRICHED_COUNT, /* files written before the step range and gravitational energy end here */
+  COL_DT_MIN = COL_ENRICHED_COUNT,
+  COL_DT_MAX,
+  COL_GRAVITATIONAL,
+  COL_TOTAL,
   COL_COUNT
 };
 
@@ -88,11 +96,16 @@ static const char *const column_names[COL_COUNT] = {"frame",
                                                     "cg_residual_max",
                                                     "newton_iterations_mean",
                                                     "cg_unconverged",
-                                                    "enriched_percent"};
+                                                    "enriched_percent",
+                                                    "dt_min",
+                                                    "dt_max",
+                                                    "gravitational_energy",
+                                                    "total_energy"};
 
 typedef struct stats_table {
   double (*rows)[COL_COUNT];
   size_t count, capacity;
+  int columns; /* the file's: fewer than COL_COUNT for a file of an earlier version */
 } stats_table;
 
 static void stats_table_free(stats_table *t) {
@@ -127,8 +140,8 @@ static int split_fields(char *line, char **fields, int max) {
   return n;
 }
 
-/* The header's columns: COL_COUNT, or COL_SOLVER_COUNT or COL_LEGACY_COUNT for a file of an
- * earlier version (the columns it lacks read as 0). */
+/* The header's columns: COL_COUNT, or COL_ENRICHED_COUNT, COL_SOLVER_COUNT or COL_LEGACY_COUNT
+ * for a file of an earlier version (the columns it lacks read as 0). */
 static mpm_status check_header(const char *path, char *line, int *columns, mpm_error *err) {
   char *fields[COL_COUNT];
   const int n = split_fields(line, fields, COL_COUNT);
@@ -139,12 +152,14 @@ static mpm_status check_header(const char *path, char *line, int *columns, mpm_e
                            "%s: line 1: not an mpm stats header: column %d is '%.60s', expected "
                            "'%s'",
                            path, c + 1, fields[c], column_names[c]);
-  if (n != COL_COUNT && n != COL_SOLVER_COUNT && n != COL_LEGACY_COUNT)
+  if (n != COL_COUNT && n != COL_ENRICHED_COUNT && n != COL_SOLVER_COUNT && n != COL_LEGACY_COUNT)
     return mpm_error_set(err, MPM_ERR_PARSE,
                          "%s: line 1: not an mpm stats header: %d columns, expected %d (frame, "
-                         "time, ..., enriched_percent), %d (frame, time, ..., cg_unconverged) or "
-                         "%d (frame, time, ..., wall_seconds)",
-                         path, n, COL_COUNT, COL_SOLVER_COUNT, COL_LEGACY_COUNT);
+                         "time, ..., total_energy), %d (frame, time, ..., enriched_percent), %d "
+                         "(frame, time, ..., cg_unconverged) or %d (frame, time, ..., "
+                         "wall_seconds)",
+                         path, n, COL_COUNT, COL_ENRICHED_COUNT, COL_SOLVER_COUNT,
+                         COL_LEGACY_COUNT);
   return MPM_OK;
 }
 
@@ -210,6 +225,7 @@ static mpm_status read_stats(const char *path, stats_table *t, mpm_error *err) {
     if (st != MPM_OK) break;
     ++t->count;
   }
+  t->columns = columns;
   const int read_error = ferror(f);
   const int read_errno = errno;
   free(line);
@@ -290,7 +306,10 @@ enum {
   DAT_LZ,
   DAT_STEPS,
   DAT_WALL,
-  DAT_ENRICHED
+  DAT_ENRICHED,
+  DAT_DT_MIN,
+  DAT_DT_MAX,
+  DAT_GRAVITATIONAL
 };
 
 /* One PNG: its curves are `using X:Y title T` items over the data file. */
@@ -302,7 +321,7 @@ typedef struct plot_curve {
 typedef struct plot_spec {
   const char *file, *title, *xlabel, *ylabel;
   int log_y;
-  plot_curve curves[3];
+  plot_curve curves[4];
 } plot_spec;
 
 enum { PLOT_COUNT = 7 };
@@ -315,7 +334,8 @@ static const plot_spec plots[PLOT_COUNT] = {
      0,
      {{DAT_TIME, DAT_KINETIC, "kinetic"},
       {DAT_TIME, DAT_ELASTIC, "elastic"},
-      {DAT_TIME, DAT_TOTAL, "kinetic + elastic"}}},
+      {DAT_TIME, DAT_GRAVITATIONAL, "gravitational"},
+      {DAT_TIME, DAT_TOTAL, "total"}}},
     {"momentum.png",
      "linear momentum",
      "time (s)",
@@ -329,11 +349,13 @@ static const plot_spec plots[PLOT_COUNT] = {
      0,
      {{DAT_TIME, DAT_LX, "L_x"}, {DAT_TIME, DAT_LY, "L_y"}, {DAT_TIME, DAT_LZ, "L_z"}}},
     {"dt.png",
-     "time step (last step of each frame)",
+     "time step per frame",
      "time (s)",
      "dt (s)",
      1,
-     {{DAT_TIME, DAT_DT, NULL}}},
+     {{DAT_TIME, DAT_DT, "typical"},
+      {DAT_TIME, DAT_DT_MIN, "shortest"},
+      {DAT_TIME, DAT_DT_MAX, "longest"}}},
     {"steps_per_frame.png", "steps per frame", "frame", "steps", 0, {{DAT_FRAME, DAT_STEPS, NULL}}},
     {"wall_per_frame.png",
      "wall time per frame",
@@ -350,23 +372,37 @@ static const plot_spec plots[PLOT_COUNT] = {
      {{DAT_TIME, DAT_ENRICHED, NULL}}},
 };
 
+/* A step for the dt plot: '?' where it is undefined (frame 0, or a log scale and dt <= 0). */
+static void put_dt(FILE *f, double dt, int have, int dt_log) {
+  if (!have || (dt_log && !(dt > 0)))
+    fputs(" ?", f);
+  else
+    fprintf(f, " %.17g", dt);
+}
+
 /* Derived data: one line per frame, '?' (gnuplot's missing value here) where undefined. */
 static void write_data(FILE *f, const stats_table *t, int dt_log) {
+  const int current = t->columns >= COL_COUNT; /* step range and gravitational energy */
   for (size_t i = 0; i < t->count; ++i) {
     const double *r = t->rows[i];
-    fprintf(f, "%.17g %.17g ", r[COL_FRAME], r[COL_TIME]);
-    if (dt_log && !(r[COL_DT] > 0))
-      fputs("? ", f);
-    else
-      fprintf(f, "%.17g ", r[COL_DT]);
+    fprintf(f, "%.17g %.17g", r[COL_FRAME], r[COL_TIME]);
+    put_dt(f, r[COL_DT], 1, dt_log);
+    fputc(' ', f);
+    /* an older file's total is kinetic + elastic, all it knows */
     fprintf(f, "%.17g %.17g %.17g", r[COL_KINETIC], r[COL_ELASTIC],
-            r[COL_KINETIC] + r[COL_ELASTIC]);
+            current ? r[COL_TOTAL] : r[COL_KINETIC] + r[COL_ELASTIC]);
     for (int c = COL_PX; c <= COL_LZ; ++c) fprintf(f, " %.17g", r[c]);
     if (i == 0)
       fputs(" ? ?", f);
     else
       fprintf(f, " %.17g %.17g", r[COL_STEPS] - t->rows[i - 1][COL_STEPS], r[COL_WALL]);
-    fprintf(f, " %.17g\n", r[COL_ENRICHED]);
+    fprintf(f, " %.17g", r[COL_ENRICHED]);
+    put_dt(f, r[COL_DT_MIN], current && i > 0, dt_log);
+    put_dt(f, r[COL_DT_MAX], current && i > 0, dt_log);
+    if (current)
+      fprintf(f, " %.17g\n", r[COL_GRAVITATIONAL]);
+    else
+      fputs(" ?\n", f);
   }
 }
 
@@ -378,13 +414,15 @@ typedef struct plot_ranges {
 
 static plot_ranges find_ranges(const stats_table *t) {
   plot_ranges r = {0, INFINITY, 0};
-  for (size_t i = 0; i < t->count; ++i) {
-    const double dt = t->rows[i][COL_DT];
-    if (!(dt > 0)) continue;
-    r.dt_log = 1;
-    r.dt_lo = fmin(r.dt_lo, dt);
-    r.dt_hi = fmax(r.dt_hi, dt);
-  }
+  for (size_t i = 0; i < t->count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const int col = c == 0 ? COL_DT : c == 1 ? COL_DT_MIN : COL_DT_MAX;
+      const double dt = t->rows[i][col]; /* 0 where a file lacks the column */
+      if (!(dt > 0)) continue;
+      r.dt_log = 1;
+      r.dt_lo = fmin(r.dt_lo, dt);
+      r.dt_hi = fmax(r.dt_hi, dt);
+    }
   return r;
 }
 
@@ -453,7 +491,7 @@ static void write_script(FILE *f, const char *data_name, const char *const *png_
     else
       fputs("set xtics autofreq\nset offsets 0, 0, graph 0.05, graph 0.05\n", f);
     fputs("plot ", f);
-    for (int c = 0; c < 3 && s->curves[c].x; ++c) {
+    for (int c = 0; c < 4 && s->curves[c].x; ++c) {
       fprintf(f, "%sdata using %d:%d lw 2 ", c ? ", \\\n     " : "", s->curves[c].x,
               s->curves[c].y);
       if (s->curves[c].title)

@@ -15,6 +15,7 @@
 #include "core/alloc.h"
 #include "io/io.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -454,7 +455,7 @@ static const char csv_header[] =
     "frame,time,steps,dt,kinetic_energy,elastic_energy,momentum_x,momentum_y,momentum_z,"
     "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds,"
     "cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,cg_unconverged,"
-    "enriched_percent";
+    "enriched_percent,dt_min,dt_max,gravitational_energy,total_energy";
 
 static void test_stats_csv(void **state) {
   (void)state;
@@ -482,6 +483,10 @@ static void test_stats_csv(void **state) {
     r->newton_iterations_mean = 1.5;
     r->cg_unconverged = i;
     r->enriched_percent = 12.5 * i;
+    r->dt_min = 1e-5 / 7.0;
+    r->dt_max = 1e-4 / 2.9;
+    r->gravitational = test_rand(&rng, -1e3, 1e3);
+    r->total_energy = r->kinetic + r->elastic + r->gravitational;
   }
   const char *dir = test_temp_dir("io-csv");
   char path[600];
@@ -500,16 +505,16 @@ static void test_stats_csv(void **state) {
   while ((line = strtok_r(NULL, "\n", &save))) {
     assert_true(k < ROWS);
     const mpm_stats_row *r = &rows[k++];
-    double f[21];
+    double f[25];
     int nf = 0;
     char *save2 = NULL;
     for (char *c = strtok_r(line, ",", &save2); c; c = strtok_r(NULL, ",", &save2)) {
-      assert_true(nf < 21);
+      assert_true(nf < 25);
       f[nf++] = strtod(c, NULL);
       if (nf == 3) assert_int_equal(strtoll(c, NULL, 10), r->steps);
       if (nf == 14) assert_int_equal(strtoull(c, NULL, 10), r->particles);
     }
-    assert_int_equal(nf, 21);
+    assert_int_equal(nf, 25);
     assert_int_equal((int)f[0], r->frame);
     const double rel = 1e-8;
     assert_close(f[1], r->time, rel * r->time);
@@ -528,6 +533,11 @@ static void test_stats_csv(void **state) {
     assert_close(f[18], r->newton_iterations_mean, 1e-5);
     assert_int_equal((long long)f[19], r->cg_unconverged);
     assert_close(f[20], r->enriched_percent, 1e-9);
+    /* the columns added at the end of the row */
+    assert_close(f[21], r->dt_min, rel * r->dt_min);
+    assert_close(f[22], r->dt_max, rel * r->dt_max);
+    assert_close(f[23], r->gravitational, rel * fabs(r->gravitational));
+    assert_close(f[24], r->total_energy, rel * fabs(r->total_energy));
   }
   assert_int_equal(k, ROWS);
   free(text);

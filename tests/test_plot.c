@@ -1,8 +1,9 @@
-/* test_plot.c - `mpm plot OUTDIR` as users run it: the seven PNGs from a synthetic stats.csv and
- * from a real short run, exit code 2 with the file and line named for a missing directory or a
- * corrupt stats.csv (and no plots directory made), exit code 1 when gnuplot is not on PATH or
- * fails (its messages shown, earlier plots kept, no temporaries left), usage errors.
- * The parts that need gnuplot are skipped, with a message, where it is not installed. */
+/* test_plot.c - `mpm plot OUTDIR` as users run it: the seven PNGs from a synthetic stats.csv (of
+ * every column layout mpm run has written) and from a real short run, exit code 2 with the file and
+ * line named for a missing directory or a corrupt stats.csv (and no plots directory made), exit
+ * code 1 when gnuplot is not on PATH or fails (its messages shown, earlier plots kept, no
+ * temporaries left), usage errors. The parts that need gnuplot are skipped, with a message, where
+ * it is not installed. */
 #include "support.h"
 #include "cli_support.h"
 
@@ -43,6 +44,38 @@ static void write_stats(const char *dir, int frames) {
     steps += i ? 50 + 3 * i : 0;
     fprintf(f, "%d,%.9g,%ld,%.9g,%.9g,%.9g,0,%.17g,1e-15,%.17g,0,-2e-14,2,1000,%.9g\n", i, t, steps,
             i ? 1e-3 / (1 + i) : 0.0, 0.5 * 2 * v * v, 0.01 * i, -2 * v, 0.5 * v, 0.03 + 0.1 * i);
+  }
+  fclose(f);
+}
+
+/* A stats.csv of every layout mpm run has written: 15 columns (before the implicit solver's), 20
+ * (before enriched_percent), 21 (before dt_min, dt_max, gravitational_energy, total_energy) and
+ * today's 25; each later one adds columns at the end of the row. */
+static void write_stats_layout(const char *dir, int frames, int columns) {
+  char path[700];
+  snprintf(path, sizeof path, "%s/stats.csv", dir);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  static const char *const extra[] = {
+      ",cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,"
+      "cg_unconverged",
+      ",enriched_percent", ",dt_min,dt_max,gravitational_energy,total_energy"};
+  const int parts = columns >= 25 ? 3 : columns >= 21 ? 2 : columns >= 20 ? 1 : 0;
+  fprintf(f, "%.*s", (int)strlen(stats_header) - 1, stats_header);
+  for (int k = 0; k < parts; ++k) fputs(extra[k], f);
+  fputc('\n', f);
+  long steps = 0;
+  for (int i = 0; i < frames; ++i) {
+    const double t = i / 24.0, v = 9.81 * t, ke = 0.5 * 2 * v * v, g = 2 * 9.81 * (1 - 0.5 * v * t);
+    steps += i ? 50 + 3 * i : 0;
+    fprintf(f, "%d,%.9g,%ld,%.9g,%.9g,%.9g,0,%.17g,1e-15,%.17g,0,-2e-14,2,1000,%.9g", i, t, steps,
+            i ? 1e-3 / (1 + i) : 0.0, ke, 0.01 * i, -2 * v, 0.5 * v, 0.03 + 0.1 * i);
+    if (parts > 0) fputs(",0,0,0,0,0", f);
+    if (parts > 1) fprintf(f, ",%g", 2.5 * i);
+    if (parts > 2)
+      fprintf(f, ",%.9g,%.9g,%.9g,%.9g", i ? 0.6e-3 / (1 + i) : 0.0, i ? 1.1e-3 / (1 + i) : 0.0, g,
+              ke + 0.01 * i + g);
+    fputc('\n', f);
   }
   fclose(f);
 }
@@ -100,6 +133,38 @@ static void test_synthetic_stats(void **state) {
   snprintf(args, sizeof args, "plot '%s' -q", dir);
   if (mpm(args) != 0) fail_msg("mpm plot of 2 frames failed:\n%s", output);
   assert_int_equal((int)strlen(output), 0); /* gnuplot's warnings about one point stay quiet */
+}
+
+/* Files of every layout plot (the columns an older file lacks are left out of the plots). */
+static void test_every_layout(void **state) {
+  (void)state;
+  static const int layouts[] = {15, 20, 21, 25};
+  for (int k = 0; k < 4; ++k) {
+    char name[64], args[1400], plots[700];
+    snprintf(name, sizeof name, "plot-layout-%d", layouts[k]);
+    const char *dir = test_temp_dir(name);
+    write_stats_layout(dir, 6, layouts[k]);
+    if (!have_gnuplot()) return;
+    snprintf(args, sizeof args, "plot '%s' --quiet", dir);
+    if (mpm(args) != 0) fail_msg("mpm plot of a %d-column file failed:\n%s", layouts[k], output);
+    snprintf(plots, sizeof plots, "%s/plots", dir);
+    expect_pngs(plots);
+  }
+  /* a header of 22 columns is no layout mpm wrote */
+  const char *dir = test_temp_dir("plot-layout-22");
+  write_stats_layout(dir, 3, 21);
+  char path[700], args[1400];
+  snprintf(path, sizeof path, "%s/stats.csv", dir);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fprintf(f,
+          "%.*s,cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,"
+          "cg_unconverged,enriched_percent,dt_min\n0",
+          (int)strlen(stats_header) - 1, stats_header);
+  fclose(f);
+  snprintf(args, sizeof args, "plot '%s'", dir);
+  assert_int_equal(mpm(args), 2);
+  expect_output("22 columns");
 }
 
 static void test_missing_directory(void **state) {
@@ -238,6 +303,7 @@ static void test_usage(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_synthetic_stats),
+      cmocka_unit_test(test_every_layout),
       cmocka_unit_test(test_missing_directory),
       cmocka_unit_test(test_corrupt_stats),
       cmocka_unit_test(test_real_run),

@@ -7,7 +7,7 @@
  *               every array and record as read back)
  *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
  *               particle_material [n], particle_body [n], particle_id [n],
- *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][21];
+ *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25];
  *               with particle domains (attributes domain_particles nd, domain_corners nc):
  *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active,
  *               domain_enriched (the enrichment flags: state, for their hysteresis)

@@ -21,9 +21,9 @@
 
 #include <stdint.h>
 
-#define MPM_CHECKPOINT_VERSION 4
+#define MPM_CHECKPOINT_VERSION 5
 #define MPM_FRAME_NAME_MAX 64
-#define MPM_CKPT_SOLVER_FIGURES 6
+#define MPM_CKPT_SOLVER_FIGURES 12
 
 typedef struct mpm_checkpoint {
   uint64_t scene_hash; /* FNV-1a of the scene text */
@@ -35,7 +35,9 @@ typedef struct mpm_checkpoint {
   int dt_level;       /* the retry guard's current halvings of dt */
   int threads;        /* threads of the run that wrote it (informative) */
   /* the implicit solver's figures of the frame in progress (stats.csv): steps, CG iterations,
-   * Newton iterations, unconverged steps, most CG iterations of a step, largest residual */
+   * Newton iterations, unconverged steps, most CG iterations of a step, largest residual; then
+   * the frame's step figures (stats.csv's dt columns): steps, full (not shortened) steps, the
+   * sums of both, the shortest and the longest step */
   double solver_figures[MPM_CKPT_SOLVER_FIGURES];
   mpm_particles particles;
   mpm_domain_set domains; /* Zhu's particle domains: particles, corners, weights, active */

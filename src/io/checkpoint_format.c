@@ -8,7 +8,9 @@
 
 const char *const mpm_ckpt_solver_figure_names[MPM_CKPT_SOLVER_FIGURES] = {
     "solver_steps",          "solver_cg_iterations", "solver_newton_iterations",
-    "solver_cg_unconverged", "solver_cg_max",        "solver_residual_max"};
+    "solver_cg_unconverged", "solver_cg_max",        "solver_residual_max",
+    "frame_steps",           "frame_full_steps",     "frame_dt_sum",
+    "frame_full_dt_sum",     "frame_dt_min",         "frame_dt_max"};
 
 /* HDF5 prints its error stack on stderr by default; our messages say what went wrong. */
 void mpm_ckpt_quiet_hdf5(void) {
@@ -40,7 +42,11 @@ void mpm_ckpt_stats_to_row(const mpm_stats_row *s, double out[MPM_CKPT_STATS_COL
                                             s->cg_residual_max,
                                             s->newton_iterations_mean,
                                             (double)s->cg_unconverged,
-                                            s->enriched_percent};
+                                            s->enriched_percent,
+                                            s->dt_min,
+                                            s->dt_max,
+                                            s->gravitational,
+                                            s->total_energy};
   memcpy(out, v, sizeof v);
 }
 
@@ -64,21 +70,16 @@ void mpm_ckpt_row_to_stats(const double v[MPM_CKPT_STATS_COLUMNS], mpm_stats_row
   s->newton_iterations_mean = v[18];
   s->cg_unconverged = (long long)v[19];
   s->enriched_percent = v[20];
+  s->dt_min = v[21];
+  s->dt_max = v[22];
+  s->gravitational = v[23];
+  s->total_energy = v[24];
 }
 
 /* Datasets carry Fletcher-32 checksums; the scalar attributes are covered by this one. */
 uint64_t mpm_ckpt_attributes_checksum(const mpm_checkpoint *c, uint64_t n) {
-  const double d[3 + MPM_CKPT_SOLVER_FIGURES] = {
-      c->time,
-      c->last_dt,
-      c->max_speed,
-      c->solver_figures[0],
-      c->solver_figures[1],
-      c->solver_figures[2],
-      c->solver_figures[3],
-      c->solver_figures[4],
-      c->solver_figures[5],
-  };
+  double d[3 + MPM_CKPT_SOLVER_FIGURES] = {c->time, c->last_dt, c->max_speed};
+  memcpy(d + 3, c->solver_figures, sizeof c->solver_figures);
   const int64_t i[8] = {c->steps,   c->frame,   c->written_frames, c->dt_level,
                         c->threads, c->records, (int64_t)n,        (int64_t)sizeof(mpm_real)};
   uint64_t h[3] = {c->scene_hash, mpm_fnv1a64(d, sizeof d), mpm_fnv1a64(i, sizeof i)};

@@ -11,7 +11,7 @@
 #include <stdint.h>
 
 #define MPM_CKPT_FORMAT_NAME "mpm checkpoint"
-#define MPM_CKPT_STATS_COLUMNS 21
+#define MPM_CKPT_STATS_COLUMNS 25
 #define MPM_CKPT_CHUNK_ELEMENTS 65536
 #define MPM_CKPT_MAX_RECORDS 10000001
 /* Rows of a domain set's per-particle tables, structure of arrays for the file: corner slot a

@@ -58,9 +58,16 @@ mpm_status mpm_write_domain_vtu(const char *path, const struct mpm_domain_set *s
 /* ---- stats CSV ---- */
 typedef struct mpm_stats_row {
   int frame;
-  double time, dt;
+  double time;
+  /* the frame's steps, s: dt is the typical one, the mean of those the frame's end did not
+   * shorten (of all of them when it shortened every one); dt_min and dt_max the shortest and
+   * longest (the shortest is usually a step cut short to land on the frame time). All 0 for a
+   * frame without steps (frame 0). */
+  double dt, dt_min, dt_max;
   long long steps;
   double kinetic, elastic;    /* J */
+  double gravitational;       /* -sum m g.x, zero at the origin, J */
+  double total_energy;        /* kinetic + elastic + gravitational, J */
   double momentum[3];         /* kg m/s */
   double angular_momentum[3]; /* kg m^2/s about the origin */
   double mass;                /* kg */

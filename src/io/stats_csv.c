@@ -3,7 +3,11 @@
  * One header line and one row per frame, comma separated, no quoting needed (all fields are
  * numbers). Times and energies use %.9g; mass and the linear and angular momenta use %.17g so
  * that conservation checks read back the exact doubles. The caller keeps the rows and the
- * whole file is rewritten atomically after each frame. */
+ * whole file is rewritten atomically after each frame.
+ *
+ * Columns are only ever added at the end of the row (readers such as `mpm plot` find the
+ * older ones at their old places): dt_min, dt_max, gravitational_energy and total_energy came
+ * after enriched_percent. */
 #include "io/io.h"
 
 #include <errno.h>
@@ -13,7 +17,7 @@ static const char stats_header[] =
     "frame,time,steps,dt,kinetic_energy,elastic_energy,momentum_x,momentum_y,momentum_z,"
     "angular_momentum_x,angular_momentum_y,angular_momentum_z,mass,particles,wall_seconds,"
     "cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,"
-    "cg_unconverged,enriched_percent\n";
+    "cg_unconverged,enriched_percent,dt_min,dt_max,gravitational_energy,total_energy\n";
 
 mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row *rows,
                                mpm_error *err) {
@@ -31,12 +35,13 @@ mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row 
     errno = 0;
     if (fprintf(af.fp,
                 "%d,%.9g,%lld,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%zu,"
-                "%.9g,%.6g,%d,%.6g,%.6g,%lld,%.6g\n",
+                "%.9g,%.6g,%d,%.6g,%.6g,%lld,%.6g,%.9g,%.9g,%.9g,%.9g\n",
                 r->frame, r->time, r->steps, r->dt, r->kinetic, r->elastic, r->momentum[0],
                 r->momentum[1], r->momentum[2], r->angular_momentum[0], r->angular_momentum[1],
                 r->angular_momentum[2], r->mass, r->particles, r->wall_seconds,
                 r->cg_iterations_mean, r->cg_iterations_max, r->cg_residual_max,
-                r->newton_iterations_mean, r->cg_unconverged, r->enriched_percent) < 0)
+                r->newton_iterations_mean, r->cg_unconverged, r->enriched_percent, r->dt_min,
+                r->dt_max, r->gravitational, r->total_energy) < 0)
       werr = errno ? errno : EIO;
   }
   if (werr) {

@@ -1,6 +1,7 @@
-/* diagnostics.c - conserved and monitored quantities over the particles: mass, kinetic and
- * elastic energy, linear and angular momentum. Accumulated in double, in particle-id order
- * independent chunks summed in a fixed order, so the result does not depend on threads.
+/* diagnostics.c - conserved and monitored quantities over the particles: mass, kinetic,
+ * elastic and gravitational energy, linear and angular momentum. Accumulated in double, in
+ * particle-id order independent chunks summed in a fixed order, so the result does not depend
+ * on threads.
  *
  * With APIC a particle carries angular momentum in its affine field too (Jiang et al. 2015):
  * L_p = x_p x m_p v_p + m_p eps : B_p^T with the particle's affine moment B_p = C_p D_p. Domain
@@ -20,6 +21,10 @@ static void accumulate(const mpm_sim *sim, const mpm_particles *p, const uint8_t
     const double v[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
     out->mass += m;
     out->kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    /* the potential of the uniform gravity field, zero at the origin: only its changes mean
+     * anything, and the origin is a reference every run of the scene shares */
+    const double *g = sim->scene.gravity;
+    out->gravitational -= m * (g[0] * x[0] + g[1] * x[1] + g[2] * x[2]);
     for (int d = 0; d < 3; ++d) out->momentum[d] += m * v[d];
     out->angular_momentum[0] += m * (x[1] * v[2] - x[2] * v[1]);
     out->angular_momentum[1] += m * (x[2] * v[0] - x[0] * v[2]);

@@ -27,10 +27,27 @@ mpm_status mpm_sim_between_steps(mpm_sim *sim) {
   return MPM_OK;
 }
 
-mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
-  const mpm_status st = mpm_sim_between_steps(sim);
+/* One step, counted into the frame's step figures; `shortened`: the frame loop cut the step
+ * short to land on the frame's time, so it does not count towards the typical step. */
+static mpm_status counted_step(mpm_sim *sim, double max_dt, int shortened) {
+  mpm_status st = mpm_sim_between_steps(sim);
+  if (st == MPM_OK) st = mpm_sim_guarded_step(sim, max_dt);
   if (st != MPM_OK) return st;
-  return mpm_sim_guarded_step(sim, max_dt);
+  mpm_step_figures *f = &sim->step_figures;
+  const double dt = sim->last_dt;
+  if (f->steps == 0 || dt < f->min) f->min = dt;
+  if (f->steps == 0 || dt > f->max) f->max = dt;
+  f->steps++;
+  f->sum += dt;
+  if (!shortened) {
+    f->full_steps++;
+    f->full_sum += dt;
+  }
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
+  return counted_step(sim, max_dt, 0);
 }
 
 mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
@@ -51,7 +68,8 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     /* after an unstable step the retry guard runs on halved steps for a while */
     const mpm_status marked = mpm_sim_mark_enrichment(sim); /* they bound dt */
     if (marked != MPM_OK) return marked;
-    double dt = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
+    const double nominal = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
+    double dt = nominal;
     const mpm_solver_desc *sd = &sim->scene.solver;
     if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) {
       /* a fixed step: the frame's remaining time in equal steps no longer than dt */
@@ -61,7 +79,8 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     } else if (dt > 0.5 * remaining) {
       dt = 0.5 * remaining;
     }
-    mpm_status st = mpm_sim_step(sim, dt);
+    /* the relative margin: the fixed step's even division may round a hair below dt */
+    mpm_status st = counted_step(sim, dt, dt < nominal * (1 - 1e-9));
     if (st != MPM_OK) return st;
   }
   sim->time = end;
@@ -72,6 +91,7 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
    * checkpoint taken mid-frame carries them) */
   sim->last_frame_solver = sim->solver_figures;
   memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
+  memset(&sim->step_figures, 0, sizeof sim->step_figures);
   if (!sim->output_enabled) return st;
   const int every = sim->scene.output.checkpoint_every;
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&

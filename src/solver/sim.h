@@ -34,6 +34,15 @@ typedef struct mpm_solver_figures {
   double last_residual;
 } mpm_solver_figures;
 
+/* The steps of the current frame (stats.csv's dt columns). A frame's last step or two are
+ * shortened so that the steps land on the frame's time; `full` counts the others, whose mean
+ * is the frame's typical step. min and max are 0 before the frame's first step. */
+typedef struct mpm_step_figures {
+  long long steps, full_steps;
+  double sum, full_sum; /* s */
+  double min, max;      /* s */
+} mpm_step_figures;
+
 struct mpm_sim {
   mpm_scene scene;
   mpm_particles particles;
@@ -70,6 +79,7 @@ struct mpm_sim {
   mpm_stage_times times;
   mpm_solver_figures solver_figures;       /* implicit steps of this frame */
   mpm_solver_figures last_frame_solver;    /* the same for the last frame completed (progress) */
+  mpm_step_figures step_figures;           /* the steps of this frame (frame.c) */
   long long implicit_steps, cg_iterations; /* implicit steps and their CG iterations since
                                               creation (benchmarks) */
   /* outputs */
@@ -118,6 +128,7 @@ double mpm_sim_cfl_dt(const mpm_sim *sim);
 /* Diagnostics over the particles (double accumulation, fixed order => deterministic). */
 typedef struct mpm_diagnostics {
   double mass, kinetic, elastic;
+  double gravitational;                    /* -sum m g.x: zero at the origin, J */
   double momentum[3], angular_momentum[3]; /* about the origin; APIC affine part included */
 } mpm_diagnostics;
 mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim);

@@ -83,9 +83,19 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   c.dt_level = sim->dt_level;
   c.threads = mpm_thread_count();
   const mpm_solver_figures *sf = &sim->solver_figures;
-  const double figures[MPM_CKPT_SOLVER_FIGURES] = {
-      (double)sf->steps,          (double)sf->cg_iterations, (double)sf->newton_iterations,
-      (double)sf->cg_unconverged, (double)sf->cg_max,        sf->residual_max};
+  const mpm_step_figures *sp = &sim->step_figures;
+  const double figures[MPM_CKPT_SOLVER_FIGURES] = {(double)sf->steps,
+                                                   (double)sf->cg_iterations,
+                                                   (double)sf->newton_iterations,
+                                                   (double)sf->cg_unconverged,
+                                                   (double)sf->cg_max,
+                                                   sf->residual_max,
+                                                   (double)sp->steps,
+                                                   (double)sp->full_steps,
+                                                   sp->sum,
+                                                   sp->full_sum,
+                                                   sp->min,
+                                                   sp->max};
   memcpy(c.solver_figures, figures, sizeof figures);
   c.particles = sim->particles; /* borrowed, not freed */
   c.domains = sim->domains;
@@ -187,6 +197,13 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   sf->cg_unconverged = (long long)c->solver_figures[3];
   sf->cg_max = (int)c->solver_figures[4];
   sf->residual_max = c->solver_figures[5];
+  mpm_step_figures *sp = &sim->step_figures;
+  sp->steps = (long long)c->solver_figures[6];
+  sp->full_steps = (long long)c->solver_figures[7];
+  sp->sum = c->solver_figures[8];
+  sp->full_sum = c->solver_figures[9];
+  sp->min = c->solver_figures[10];
+  sp->max = c->solver_figures[11];
   for (int i = 0; i < c->records; ++i) {
     sim->frame_times[i] = c->frame_times[i];
     memcpy(sim->frame_files[i], c->frame_files[i], sizeof sim->frame_files[i]);

