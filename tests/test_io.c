@@ -418,12 +418,13 @@ static void test_ply(void **state) {
   snprintf(header, sizeof header,
            "ply\nformat binary_little_endian 1.0\ncomment mpm particles, time 0.25 s\n"
            "element vertex %zu\nproperty %s x\nproperty %s y\nproperty %s z\n"
-           "property %s vx\nproperty %s vy\nproperty %s vz\nproperty uint id\nend_header\n",
-           n, t, t, t, t, t, t);
+           "property %s vx\nproperty %s vy\nproperty %s vz\nproperty %s pscale\n"
+           "property uint id\nproperty int material\nproperty int body\nend_header\n",
+           n, t, t, t, t, t, t, t);
   const size_t hl = strlen(header);
   assert_true(len > hl);
   assert_memory_equal(buf, header, hl);
-  const size_t rs = sizeof(mpm_real), rec = 6 * rs + 4;
+  const size_t rs = sizeof(mpm_real), rec = 7 * rs + 12;
   assert_int_equal(len, hl + n * rec);
   for (size_t i = 0; i < n; ++i) {
     const unsigned char *r = buf + hl + i * rec;
@@ -434,9 +435,22 @@ static void test_ply(void **state) {
       memcpy(&val, r + (size_t)(3 + d) * rs, rs);
       assert_true(val == p.v[d][i]);
     }
+    /* pscale: the sphere of the current volume V0 det F (det F from F: no J given) */
+    memcpy(&val, r + 6 * rs, rs);
+    double F[9];
+    for (int c = 0; c < 9; ++c) F[c] = p.F[c][i];
+    const double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+                     F[2] * (F[3] * F[7] - F[4] * F[6]);
+    const double radius = cbrt(3 * J * p.vol0[i] / (4 * 3.14159265358979324));
+    assert_close(val, radius, TOL(1e-6, 1e-14) * radius);
     uint32_t id;
-    memcpy(&id, r + 6 * rs, 4);
+    memcpy(&id, r + 7 * rs, 4);
     assert_int_equal(id, p.id[i]);
+    int32_t material, body;
+    memcpy(&material, r + 7 * rs + 4, 4);
+    memcpy(&body, r + 7 * rs + 8, 4);
+    assert_int_equal(material, p.material[i]);
+    assert_int_equal(body, p.body[i]);
   }
   free(buf);
 

@@ -47,7 +47,8 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
 mpm_status mpm_write_pvd(const char *path, int count, const double *times, const char *const *files,
                          mpm_error *err);
 
-/* Binary little-endian PLY point cloud: x y z, vx vy vz, and id. */
+/* Binary little-endian PLY point cloud: x y z, vx vy vz, pscale (the radius of the sphere of
+ * the particle's current volume), id, material and body. */
 mpm_status mpm_write_ply_points(const char *path, const mpm_frame_fields *f, mpm_error *err);
 
 /* The particle domains of a frame as hexahedral cells over their corners (vtu_domains.c). */

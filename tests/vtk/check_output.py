@@ -19,7 +19,11 @@ frame, that what ParaView would load is what the engine computed:
               and, for bodies naming a material of the scene's list, that material's index.
   frame_NNNN.ply
               an independent writer (src/io/ply_points.c), parsed with the struct module:
-              positions, velocities and ids equal the VTU's exactly, particle by particle.
+              properties x y z vx vy vz pscale (the build's real) id (uint) material body
+              (int); positions, velocities, ids, materials and bodies equal the VTU's exactly,
+              particle by particle, and pscale is the radius of the sphere of the VTU's volume
+              (1e-6 relative). Read again with VTK's own vtkPLYReader: the same point count and
+              positions, and nothing printed.
   stats.csv   sum(mass) within 1e-6 relative; 0.5 sum(m |v|^2) from the VTU arrays within
               1e-4 relative; sum(m v) within 1e-6 of sum(m |v|).
   domains_NNNN.vtu (scenes with particle domains)
@@ -54,6 +58,7 @@ try:
                                           vtkVersion)
     from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_VERTEX
     from vtkmodules.vtkFiltersVerdict import vtkMeshQuality
+    from vtkmodules.vtkIOPLY import vtkPLYReader
     from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 except ImportError as e:
     print("check_output.py: FAIL: cannot import VTK in %s (%s); install it with "
@@ -72,7 +77,8 @@ POINT_ARRAYS = {"id": (1, "UInt32"), "velocity": (3, REAL), "mass": (1, REAL),
                 "volume": (1, REAL), "J": (1, REAL), "stress": (1, REAL),
                 "plastic": (1, REAL), "material": (1, "Int32"), "body": (1, "Int32"),
                 "enrichment": (1, "Int32")}
-PLY_PROPERTIES = ["x", "y", "z", "vx", "vy", "vz", "id"]
+PLY_PROPERTIES = ["x", "y", "z", "vx", "vy", "vz", "pscale", "id", "material", "body"]
+PLY_INTS = {"id": "uint", "material": "int", "body": "int"}
 PLY_STRUCT = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i",
               "uint": "I", "float": "f", "double": "d", "int32": "i", "uint32": "I",
               "float32": "f", "float64": "d"}
@@ -212,9 +218,36 @@ def read_ply(where, path):
         where.fail(None, "%d bytes of vertex data, expected %d x %d" % (len(body), count, size))
     cols = list(zip(*struct.iter_unpack(fmt, body))) if count else [()] * len(props)
     real = props[0][1]
-    if any(t != real for _, t in props[:6]) or real not in ("float", "double"):
-        where.fail(None, "x..vz are not all float or all double")
+    if any(t != real for _, t in props[:7]) or real not in ("float", "double"):
+        where.fail(None, "x..pscale are not all float or all double")
+    for name, t in props[7:]:
+        if t != PLY_INTS[name]:
+            where.fail(name, "type %s, expected %s" % (t, PLY_INTS[name]))
     return real, comment_time, {n: list(c) for n, c in zip(names, cols)}
+
+
+def read_ply_with_vtk(where, path, cols, messages):
+    """VTK's own PLY reader takes the file: the same points, in order, and no message."""
+    reader = vtkPLYReader()
+    if not reader.CanReadFile(path):
+        where.fail(None, "vtkPLYReader cannot read it: %s" % messages.new())
+    reader.SetFileName(path)
+    reader.Update()
+    said = messages.new()
+    if said:
+        where.fail(None, "vtkPLYReader reported:\n%s" % said)
+    poly = reader.GetOutput()
+    n = len(cols["x"])
+    if poly.GetNumberOfPoints() != n:
+        where.fail("Points", "vtkPLYReader read %d points, the file has %d"
+                   % (poly.GetNumberOfPoints(), n))
+    if n:
+        pts = values(poly.GetPoints().GetData())
+        for k, axis in enumerate("xyz"):
+            i = first_difference(pts[k::3], cols[axis])
+            if i is not None:
+                where.fail("Points", "vtkPLYReader's point %d %s is %r, the file's %r"
+                           % (i, axis, pts[3 * i + k], cols[axis][i]))
 
 
 # ---- frame_NNNN.vtu -----------------------------------------------------------------------
@@ -361,6 +394,18 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
             where.fail(name, "particle %d: VTU %s, PLY %s %s"
                        % (i, mine[i] if i < len(mine) else "nothing", col, theirs))
 
+    mat, body = values(pd["material"]), values(pd["body"])
+    for name, mine in (("material", mat), ("body", body)):
+        i = first_difference(mine, ply_cols[name])
+        if i is not None:
+            where.fail(name, "particle %d: VTU %s, PLY %s" % (i, mine[i], ply_cols[name][i]))
+    # pscale: the radius of the sphere of the particle's current volume
+    for i, (vol, r) in enumerate(zip(reals["volume"], ply_cols["pscale"])):
+        want = (3 * vol / (4 * math.pi)) ** (1 / 3)
+        if not rel_close(r, want, 1e-6):
+            where.fail("pscale", "particle %d: PLY pscale %r, the sphere of the VTU volume %r "
+                       "has radius %r" % (i, r, vol, want))
+
     if len(set(ids)) != n:
         where.fail("id", "ids are not unique")
 
@@ -370,7 +415,6 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
             where.fail("enrichment", "particle %d has category %d, expected -1, 0, 1 or 2" % (i, e))
 
     # material and body against the scene
-    mat, body = values(pd["material"]), values(pd["body"])
     if scene_info is not None:
         bodies, named = scene_info
         body_mat = {}
@@ -483,6 +527,7 @@ def check_scene(mpm, scene, outdir, frames, messages):
         grid = read_vtu(where, vtu, messages)
         ply_path = vtu[:-4] + ".ply"
         ply = read_ply(Where(name, ply_path, k), ply_path)
+        read_ply_with_vtk(Where(name, ply_path, k), ply_path, ply[2], messages)
         real, ids = check_frame(where, grid, ply, step, stats[k], info, real)
         dom = os.path.join(outdir, "domains_%04d.vtu" % k)
         if os.path.exists(dom):
