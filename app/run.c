@@ -120,12 +120,13 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
 }
 
 /* A file a run writes into its output folder (frames, domain and surface meshes, checkpoints,
- * their damaged copies, stats, the PVD index, the scene copy). */
+ * their damaged copies, stats, the PVD indexes, the scene copy). */
 static int is_run_file(const char *name) {
   static const char *const prefix[] = {"frame_", "domains_", "surface_", "checkpoint_"};
   for (size_t k = 0; k < sizeof prefix / sizeof prefix[0]; ++k)
     if (!strncmp(name, prefix[k], strlen(prefix[k]))) return 1;
-  return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "scene.json");
+  return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "run.pvd") ||
+         !strcmp(name, "scene.json");
 }
 
 /* An output folder belongs to one run (issue 17: a second run into a folder left the first
@@ -315,7 +316,7 @@ int mpm_cmd_run(int argc, char **argv) {
     mpm_progress_end(&pr);
     if (!quiet)
       fprintf(stderr,
-              "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/frames.pvd in ParaView\n",
+              "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/run.pvd in ParaView\n",
               sim->frame, (long long)sim->steps, pr.elapsed, sim->output_dir);
   }
   if (code == MPM_EXIT_OK && render) { /* pictures of every frame: `mpm render DIR` */

@@ -3,6 +3,8 @@
  * which is cut short to land on the frame time; dt_min and dt_max its range), its energies
  * (gravitational and total: a body falling freely keeps the total), the PLY point fields
  * (pscale, material, body) and the run index run.pvd that names every file of a frame. */
+#define _POSIX_C_SOURCE 200809L /* io_support.h lists directories */
+
 #include "support.h"
 #include "io_support.h"
 #include "solver/sim.h"
@@ -173,11 +175,143 @@ static void test_stats_energy_free_fall(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* ---- run.pvd ------------------------------------------------------------------------------ */
+
+typedef struct pvd_entry {
+  double time;
+  int part;
+  char name[64], file[128];
+} pvd_entry;
+
+/* The DataSets of a .pvd as this project writes it (one per line); returns their count. */
+static int read_pvd(const char *path, pvd_entry *out, int max) {
+  FILE *fp = fopen(path, "r");
+  if (!fp) fail_msg("cannot open %s", path);
+  char line[512];
+  int n = 0;
+  while (fgets(line, sizeof line, fp)) {
+    const char *d = strstr(line, "<DataSet ");
+    if (!d) continue;
+    assert_true(n < max);
+    pvd_entry *e = &out[n++];
+    memset(e, 0, sizeof *e);
+    const char *t = strstr(d, "timestep=\""), *p = strstr(d, "part=\""), *f = strstr(d, "file=\"");
+    const char *nm = strstr(d, "name=\"");
+    assert_non_null(t);
+    assert_non_null(p);
+    assert_non_null(f);
+    e->time = strtod(t + 10, NULL);
+    e->part = atoi(p + 6);
+    if (nm) sscanf(nm + 6, "%63[^\"]", e->name);
+    assert_int_equal(sscanf(f + 6, "%127[^\"]", e->file), 1);
+  }
+  fclose(fp);
+  return n;
+}
+
+/* A mesh body with particle domains writes, per frame, its particles, its domains and its
+ * embedded surface; run.pvd names all three for every frame (part 0, 1, 2, in that order),
+ * each file exists and is VTK XML of the kind ParaView needs (UnstructuredGrid for the
+ * particles and domains, PolyData for the surface); frames.pvd still lists the particle
+ * frames alone. tests/vtk/check_output.py reads them with VTK's readers. */
+static void test_run_pvd_names_every_file(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("outputs-run-pvd");
+  char text[2048];
+  snprintf(
+      text, sizeof text,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04}, \"gravity\": [0,0,0],"
+      " \"time\": {\"end\": 0.02, \"fps\": 100},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"mesh\", \"file\": \"%s/examples/meshes/torus.obj\","
+      " \"center\": [0.5, 0.5, 0.5], \"scale\": 0.15}, \"material\": \"m\", \"domains\": true,"
+      " \"velocity\": [0.5, 0, 0]}]}",
+      MPM_SOURCE_DIR);
+  mpm_sim *sim = test_sim_from_json(text, "torus.json");
+  assert_int_equal(sim->surface_count, 1);
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  const int frames = mpm_sim_frame_count(sim) + 1;
+  assert_int_equal(frames, 3);
+  char path[800];
+  snprintf(path, sizeof path, "%s/run.pvd", dir);
+  pvd_entry e[16];
+  assert_int_equal(read_pvd(path, e, 16), 3 * frames);
+  static const char *const part_name[3] = {"particles", "domains", "surface_body0"};
+  static const char *const part_file[3] = {"frame_%04d.vtu", "domains_%04d.vtu",
+                                           "surface_body0_%04d.vtp"};
+  static const char *const part_type[3] = {"UnstructuredGrid", "UnstructuredGrid", "PolyData"};
+  for (int f = 0; f < frames; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const pvd_entry *d = &e[3 * f + k];
+      char want[64];
+      snprintf(want, sizeof want, part_file[k], f);
+      assert_string_equal(d->file, want);
+      assert_string_equal(d->name, part_name[k]);
+      assert_int_equal(d->part, k);
+      assert_close(d->time, sim->frame_times[f], 1e-8 * (1 + sim->frame_times[f]));
+      snprintf(path, sizeof path, "%s/%s", dir, d->file);
+      size_t len = 0;
+      char *body = (char *)slurp(path, &len);
+      if (!body) fail_msg("run.pvd names %s, which cannot be read", path);
+      char type[64];
+      snprintf(type, sizeof type, "<VTKFile type=\"%s\"", part_type[k]);
+      if (!strstr(body, type)) fail_msg("%s is not a VTK %s file", path, part_type[k]);
+      free(body);
+    }
+  /* the surface's points are the embedded surface's, as the OBJ has them */
+  snprintf(path, sizeof path, "%s/surface_body0_0002.vtp", dir);
+  size_t len = 0;
+  char *vtp = (char *)slurp(path, &len);
+  assert_non_null(vtp);
+  char tag[128];
+  snprintf(tag, sizeof tag, "NumberOfPoints=\"%d\"", sim->surfaces[0].vertex_count);
+  assert_non_null(strstr(vtp, tag));
+  snprintf(tag, sizeof tag, "NumberOfPolys=\"%d\"", sim->surfaces[0].triangle_count);
+  assert_non_null(strstr(vtp, tag));
+  free(vtp);
+  /* frames.pvd: the particle frames only, as before */
+  snprintf(path, sizeof path, "%s/frames.pvd", dir);
+  const int n = read_pvd(path, e, 16);
+  assert_int_equal(n, frames);
+  for (int f = 0; f < n; ++f) assert_int_equal(e[f].part, 0);
+  mpm_sim_destroy(sim);
+}
+
+/* A frame without a part (NULL) has no DataSet for it; names are escaped as XML attributes. */
+static void test_pvd_parts(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("outputs-pvd-parts");
+  char path[700];
+  snprintf(path, sizeof path, "%s/run.pvd", dir);
+  const double times[2] = {0, 0.5};
+  const char *names[2] = {"a&b", "c"};
+  const char *files[4] = {"f0.vtu", NULL, "f1.vtu", "g\"1.vtp"};
+  mpm_error err = {0};
+  assert_int_equal(mpm_write_pvd_parts(path, 2, 2, times, names, files, &err), MPM_OK);
+  assert_file_text(path,
+                   "<?xml version=\"1.0\"?>\n"
+                   "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                   "  <Collection>\n"
+                   "    <DataSet timestep=\"0\" group=\"\" part=\"0\" name=\"a&amp;b\" "
+                   "file=\"f0.vtu\"/>\n"
+                   "    <DataSet timestep=\"0.5\" group=\"\" part=\"0\" name=\"a&amp;b\" "
+                   "file=\"f1.vtu\"/>\n"
+                   "    <DataSet timestep=\"0.5\" group=\"\" part=\"1\" name=\"c\" "
+                   "file=\"g&quot;1.vtp\"/>\n"
+                   "  </Collection>\n</VTKFile>\n");
+  assert_int_equal(mpm_write_pvd_parts(path, 1, 0, times, names, files, &err), MPM_ERR_INVALID);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_stats_dt_columns),
       cmocka_unit_test(test_stats_dt_range_cfl),
       cmocka_unit_test(test_stats_energy_free_fall),
+      cmocka_unit_test(test_run_pvd_names_every_file),
+      cmocka_unit_test(test_pvd_parts),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

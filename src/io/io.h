@@ -46,6 +46,10 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
  * PVD's directory). */
 mpm_status mpm_write_pvd(const char *path, int count, const double *times, const char *const *files,
                          mpm_error *err);
+/* The same with `parts` files per frame: files[i * parts + k] is frame i's part k (NULL: the
+ * frame has none), each written with part="k" and, when names is not NULL, name="names[k]". */
+mpm_status mpm_write_pvd_parts(const char *path, int count, int parts, const double *times,
+                               const char *const *names, const char *const *files, mpm_error *err);
 
 /* Binary little-endian PLY point cloud: x y z, vx vy vz, pscale (the radius of the sphere of
  * the particle's current volume), id, material and body. */

@@ -1,5 +1,7 @@
-/* sim_output.c - per-frame outputs of a simulation: frame_NNNN.vtu (+ frames.pvd),
- * frame_NNNN.ply, stats.csv, each written atomically by the io module. */
+/* sim_output.c - per-frame outputs of a simulation: frame_NNNN.vtu (+ frames.pvd), with
+ * particle domains domains_NNNN.vtu, the embedded surfaces (OBJ, PLY and VTP), run.pvd (every
+ * VTK file of every frame), frame_NNNN.ply, stats.csv, each written atomically by the io
+ * module. */
 #include "solver/sim.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
@@ -53,6 +55,47 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
     }
   }
   return 0;
+}
+
+/* run.pvd: per frame its particles, its domains and its embedded surfaces, one part each, so
+ * that ParaView opens every file of the run from one index. The names follow from the frame
+ * number (as the writers below make them), so a resumed run lists its earlier frames too. */
+static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
+  const int parts = 1 + has_domains + sim->surface_count;
+  enum { NAME = 64 };
+  char(*names)[NAME] = malloc((size_t)parts * NAME);
+  char(*text)[NAME] = malloc((size_t)frames * (size_t)parts * NAME);
+  const char **name_of = malloc((size_t)parts * sizeof *name_of);
+  const char **files = malloc((size_t)frames * (size_t)parts * sizeof *files);
+  mpm_status st = MPM_OK;
+  if (!names || !text || !name_of || !files) {
+    st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing run.pvd");
+    goto done;
+  }
+  int k = 0;
+  snprintf(names[k++], NAME, "particles");
+  if (has_domains) snprintf(names[k++], NAME, "domains");
+  for (int s = 0; s < sim->surface_count; ++s)
+    snprintf(names[k++], NAME, "surface_body%d", sim->surfaces[s].body);
+  for (k = 0; k < parts; ++k) name_of[k] = names[k];
+  for (int f = 0; f < frames; ++f) {
+    char(*row)[NAME] = text + (size_t)f * (size_t)parts;
+    k = 0;
+    snprintf(row[k++], NAME, "%s", sim->frame_files[f]);
+    if (has_domains) snprintf(row[k++], NAME, "domains_%04d.vtu", f);
+    for (int s = 0; s < sim->surface_count; ++s)
+      snprintf(row[k++], NAME, "surface_body%d_%04d.vtp", sim->surfaces[s].body, f);
+    for (k = 0; k < parts; ++k) files[(size_t)f * (size_t)parts + (size_t)k] = row[k];
+  }
+  char path[MPM_PATH_MAX + 64];
+  snprintf(path, sizeof path, "%s/run.pvd", sim->output_dir);
+  st = mpm_write_pvd_parts(path, frames, parts, sim->frame_times, name_of, files, &sim->error);
+done:
+  free(names);
+  free(text);
+  free(name_of);
+  free(files);
+  return st;
 }
 
 mpm_status mpm_sim_write_frame(mpm_sim *sim) {
@@ -137,7 +180,16 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
       snprintf(path, sizeof path, "%s/surface_body%d_%04d.ply", sim->output_dir, e->body, frame);
       st = mpm_write_surface_ply(path, e, x, &sim->error);
     }
+    if (st == MPM_OK && o->vtu) { /* for ParaView, with the VTU files */
+      snprintf(path, sizeof path, "%s/surface_body%d_%04d.vtp", sim->output_dir, e->body, frame);
+      st = mpm_write_surface_vtp(path, e, x, sim->time, &sim->error);
+    }
     free(x);
+    if (st != MPM_OK) goto done;
+  }
+  /* after every file it names exists */
+  if (o->vtu) {
+    st = write_run_pvd(sim, frame + 1, has_domains);
     if (st != MPM_OK) goto done;
   }
   if (o->ply) {

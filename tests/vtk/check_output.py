@@ -29,6 +29,13 @@ frame, that what ParaView would load is what the engine computed:
   domains_NNNN.vtu (scenes with particle domains)
               every cell a VTK_HEXAHEDRON, one per domain particle, ids among the frame's;
               frame 0's hexahedra all of one positive volume by VTK's HexVolume (corner order).
+  run.pvd     parsed with xml.etree: per timestep of frames.pvd, part 0 "particles" is that
+              frame's VTU, part 1 "domains" its domains_NNNN.vtu exactly when the run wrote
+              one, then one "surface_body<i>" part per surface_body<i>_NNNN.obj the run wrote,
+              naming surface_body<i>_NNNN.vtp; nothing else. Every file it names exists and
+              VTK's XML readers read it without a message (vtkXMLUnstructuredGridReader,
+              vtkXMLPolyDataReader: a surface has triangles only, as many points and triangles
+              as its OBJ, and the OBJ's positions within 1e-6 m).
 
 Run with Debian's interpreter, which has python3-vtk9 (a pyenv `python3` on PATH has no vtk):
 
@@ -59,7 +66,7 @@ try:
     from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_VERTEX
     from vtkmodules.vtkFiltersVerdict import vtkMeshQuality
     from vtkmodules.vtkIOPLY import vtkPLYReader
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
 except ImportError as e:
     print("check_output.py: FAIL: cannot import VTK in %s (%s); install it with "
           "`apt-get install python3-vtk9` and run this script with /usr/bin/python3"
@@ -503,6 +510,93 @@ def check_domains(where, path, frame_ids, first, messages):
     return cells
 
 
+def read_obj(path):
+    """(vertices [(x, y, z)], triangle count) of a surface OBJ as the engine writes it."""
+    verts, tris = [], 0
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if w and w[0] == "v":
+                verts.append(tuple(float(c) for c in w[1:4]))
+            elif w and w[0] == "f":
+                tris += 1
+    return verts, tris
+
+
+def check_run_pvd(name, outdir, entries, messages):
+    """run.pvd against frames.pvd and the files of the output folder; (parts, files read)."""
+    path = os.path.join(outdir, "run.pvd")
+    where = Where(name, path)
+    if not os.path.isfile(path):
+        where.fail(None, "missing")
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as e:
+        where.fail(None, "not well-formed XML: %s" % e)
+    coll = root.find("Collection")
+    if root.tag != "VTKFile" or root.get("type") != "Collection" or coll is None:
+        where.fail(None, "not a VTKFile Collection")
+    by_step = {}
+    order = []
+    for ds in coll.findall("DataSet"):
+        step = ds.get("timestep")
+        if step not in by_step:
+            order.append(step)
+        by_step.setdefault(step, []).append(ds)
+    if order != [step for step, _ in entries]:
+        where.fail(None, "timesteps %s, frames.pvd has %s" % (order, [s for s, _ in entries]))
+    read, parts = 0, 0
+    for k, (step, vtu) in enumerate(entries):
+        want = [("particles", os.path.basename(vtu))]
+        if os.path.exists(os.path.join(outdir, "domains_%04d.vtu" % k)):
+            want.append(("domains", "domains_%04d.vtu" % k))
+        for obj in sorted(os.listdir(outdir)):
+            m = re.fullmatch(r"surface_body(\d+)_%04d\.obj" % k, obj)
+            if m:
+                want.append(("surface_body" + m.group(1), obj[:-4] + ".vtp"))
+        got = [(ds.get("name"), ds.get("file")) for ds in by_step[step]]
+        if got != want:
+            where.fail(None, "timestep %s lists %s, expected %s" % (step, got, want))
+        for p, ds in enumerate(by_step[step]):
+            if ds.get("part") != str(p):
+                where.fail(None, "timestep %s: %s has part %s, expected %d"
+                           % (step, ds.get("file"), ds.get("part"), p))
+        parts = max(parts, len(want))
+        for part, file in want[1:]:
+            full = os.path.join(outdir, file)
+            fw = Where(name, full, k)
+            if not os.path.isfile(full):
+                fw.fail(None, "run.pvd names it, but it does not exist")
+            if file.endswith(".vtu"):
+                if read_vtu(fw, full, messages).GetNumberOfCells() == 0:
+                    fw.fail(None, "no cells")
+            else:
+                reader = vtkXMLPolyDataReader()
+                if not reader.CanReadFile(full):
+                    fw.fail(None, "vtkXMLPolyDataReader cannot read it: %s" % messages.new())
+                reader.SetFileName(full)
+                reader.Update()
+                said = messages.new()
+                if said:
+                    fw.fail(None, "VTK reader reported:\n%s" % said)
+                poly = reader.GetOutput()
+                verts, tris = read_obj(full[:-4] + ".obj")
+                if (poly.GetNumberOfPoints(), poly.GetNumberOfPolys()) != (len(verts), tris):
+                    fw.fail(None, "%d points, %d polygons; its OBJ has %d and %d"
+                            % (poly.GetNumberOfPoints(), poly.GetNumberOfPolys(), len(verts),
+                               tris))
+                if poly.GetNumberOfCells() != tris or any(
+                        poly.GetCell(c).GetNumberOfPoints() != 3 for c in range(tris)):
+                    fw.fail(None, "cells other than triangles")
+                pts = values(poly.GetPoints().GetData())
+                for i, v in enumerate(verts):
+                    if any(abs(pts[3 * i + d] - v[d]) > 1e-6 for d in range(3)):
+                        fw.fail("Points", "vertex %d at %s, the OBJ's %s"
+                                % (i, pts[3 * i:3 * i + 3], v))
+            read += 1
+    return parts, read
+
+
 def check_scene(mpm, scene, outdir, frames, messages):
     name = os.path.splitext(os.path.basename(scene))[0]
     t0 = time.monotonic()
@@ -535,11 +629,13 @@ def check_scene(mpm, scene, outdir, frames, messages):
         if ids0 is not None and ids != ids0:
             where.fail("id", "the set of ids differs from frame 0's")
         ids0, n = ids, len(ids)
+    parts, extra = check_run_pvd(name, outdir, entries, messages)
     t2 = time.monotonic()
     bodies = "%d bodies" % len(info[0]) if info else "bodies not checked (scene unreadable)"
     domains = ", %d domain hexahedra" % domain_cells if domain_cells else ""
-    print("%s: %d frames x %d particles%s, %s, %s; run %.1f s, check %.1f s: ok"
-          % (name, len(entries), n, domains, real, bodies, t1 - t0, t2 - t1))
+    print("%s: %d frames x %d particles%s, %s, %s, run.pvd %d parts (%d more files read); "
+          "run %.1f s, check %.1f s: ok"
+          % (name, len(entries), n, domains, real, bodies, parts, extra, t1 - t0, t2 - t1))
     return len(entries)
 
 
