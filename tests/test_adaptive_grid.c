@@ -13,6 +13,7 @@
  *     momentum equals the particles' (x_p x m_p v_p plus the affine part m_p eps : (C_p D_p)^T);
  *     without the moments it does not. In G2P the ghosts' moments M_g and spreads S_g give the
  *     real-node B_p and D_p exactly. */
+#include "refinement_support.h"
 #include "support.h"
 #include "grid/adaptive_grid.h"
 #include "interp/adaptive_weights.h"
@@ -31,15 +32,6 @@ typedef struct cloud {
   mpm_real x[PARTICLES][3], v[PARTICLES][3], m[PARTICLES], Lp[PARTICLES];
   int level[PARTICLES]; /* transfer level */
 } cloud;
-
-static void refine_random(mpm_refinement *r, int L, const int32_t c[3], double p, uint64_t *rng) {
-  if (L >= r->levels - 1 || test_rand(rng, 0, 1) >= p) return;
-  assert_int_equal(mpm_refinement_refine(r, L, c), 0);
-  for (int k = 0; k < 8; ++k) {
-    const int32_t ch[3] = {2 * c[0] + (k & 1), 2 * c[1] + ((k >> 1) & 1), 2 * c[2] + (k >> 2)};
-    refine_random(r, L + 1, ch, p, rng);
-  }
-}
 
 /* The uGIMP stencil of particle p on its transfer level: base and width per axis, weights. */
 static void stencil(const mpm_adaptive_grid *g, const cloud *c, int p, int base[3], int n[3],
@@ -69,46 +61,12 @@ static void slot_position(const mpm_adaptive_grid *g, size_t slot, double x[3]) 
   fail_msg("slot %zu is on no level", slot);
 }
 
+static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed);
+
 static void run(int levels, uint64_t seed) {
-  mpm_adaptive_grid g;
-  const mpm_real o[3] = {R_(0.1), R_(-0.2), R_(0.05)};
-  mpm_adaptive_grid_init(&g, levels, o, R_(0.25));
-  uint64_t rng = seed;
-  for (int32_t i = -REGION; i < REGION; ++i)
-    for (int32_t j = -REGION; j < REGION; ++j)
-      for (int32_t k = -REGION; k < REGION; ++k) {
-        const int32_t c[3] = {i, j, k};
-        refine_random(&g.tree, 0, c, 0.5, &rng);
-      }
+  static mpm_adaptive_grid g;
   static cloud c;
-  for (int p = 0; p < PARTICLES; ++p) {
-    for (int d = 0; d < 3; ++d) {
-      c.x[p][d] = o[d] + (mpm_real)(test_rand(&rng, -REGION + 0.3, REGION - 0.3) * 0.25);
-      c.v[p][d] = (mpm_real)test_rand(&rng, -1, 1);
-    }
-    c.m[p] = (mpm_real)test_rand(&rng, 0.5, 2);
-    int32_t cell[3];
-    c.Lp[p] = mpm_refinement_dx(&g.tree, mpm_refinement_leaf_at(&g.tree, c.x[p], cell));
-    mpm_real lo[3], hi[3];
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = c.x[p][d] - c.Lp[p] / 2;
-      hi[d] = c.x[p][d] + c.Lp[p] / 2;
-    }
-    c.level[p] = mpm_refinement_finest_level_in(&g.tree, lo, hi);
-    int base[3], n[3];
-    mpm_real w[3][MPM_GIMP_NODES_MAX];
-    stencil(&g, &c, p, base, n, w);
-    const int32_t blo[3] = {base[0], base[1], base[2]};
-    const int32_t bhi[3] = {base[0] + n[0] - 1, base[1] + n[1] - 1, base[2] + n[2] - 1};
-    assert_int_equal(mpm_adaptive_grid_activate_box(&g, c.level[p], blo, bhi), 0);
-  }
-  assert_int_equal(mpm_adaptive_grid_close(&g), 0);
-  size_t total = 0;
-  for (int L = 0; L < levels; ++L) {
-    g.level[L].dof_begin = total;
-    total += g.level[L].ops->node_count(&g.level[L]);
-  }
-  assert_int_equal(mpm_adaptive_grid_build_rows(&g), 0);
+  const size_t total = setup(&g, &c, levels, seed);
   print_message("%d levels: %zu slots, %zu ghosts, %zu row entries, %zu bytes\n", levels, total,
                 g.ghost_count, (size_t)g.ghosts.row_start[g.ghost_count],
                 mpm_adaptive_grid_bytes(&g));
@@ -225,7 +183,7 @@ static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed) {
     for (int32_t j = -REGION; j < REGION; ++j)
       for (int32_t k = -REGION; k < REGION; ++k) {
         const int32_t cc[3] = {i, j, k};
-        refine_random(&g->tree, 0, cc, 0.5, &rng);
+        test_refine_random(&g->tree, 0, cc, 0.5, &rng);
       }
   for (int p = 0; p < PARTICLES; ++p) {
     for (int d = 0; d < 3; ++d) {

@@ -15,6 +15,7 @@
  *   - Lian et al.'s free T-junction basis (sec. 5.1, eqs. 8-10), built here in 2D as a
  *     reference only: in the configuration of Fig. 5b it gives a negative N_c, a negative
  *     GIMP weight and a negative nodal mass; ours on the same grid gives none. */
+#include "refinement_support.h"
 #include "support.h"
 #include "grid/refinement.h"
 #include "interp/adaptive_weights.h"
@@ -139,16 +140,6 @@ static void test_tjunction_rows(void **state) {
   mpm_refinement_free(&r);
 }
 
-/* Refines at random below cell c of level L (probability p per cell): non-graded trees. */
-static void refine_random(mpm_refinement *r, int L, const int32_t c[3], double p, uint64_t *rng) {
-  if (L >= r->levels - 1 || test_rand(rng, 0, 1) >= p) return;
-  assert_int_equal(mpm_refinement_refine(r, L, c), 0);
-  for (int k = 0; k < 8; ++k) {
-    const int32_t ch[3] = {2 * c[0] + (k & 1), 2 * c[1] + ((k >> 1) & 1), 2 * c[2] + (k >> 2)};
-    refine_random(r, L + 1, ch, p, rng);
-  }
-}
-
 #define REGION 3 /* level-0 cells -REGION .. REGION - 1 per axis */
 
 static void random_tree(mpm_refinement *r, int levels, uint64_t seed) {
@@ -159,7 +150,7 @@ static void random_tree(mpm_refinement *r, int levels, uint64_t seed) {
     for (int32_t j = -REGION; j < REGION; ++j)
       for (int32_t k = -REGION; k < REGION; ++k) {
         const int32_t c[3] = {i, j, k};
-        refine_random(r, 0, c, 0.45, &rng);
+        test_refine_random(r, 0, c, 0.45, &rng);
       }
 }
 
