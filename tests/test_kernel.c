@@ -133,7 +133,7 @@ static void test_wide_ugimp(void **state) {
       const mpm_real origin[3] = {0, 0, 0};
       int lb[3];
       mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&k, x, origin, idx, MPM_LANES, 1, 1, lb, &s);
+      mpm_lane_stencil_eval(k.width, &k, x, origin, idx, MPM_LANES, 1, 1, lb, &s);
       for (int l = 0; l < MPM_LANES; ++l)
         for (int d = 0; d < 3; ++d) {
           mpm_real w[4], dw[4], a[4];
@@ -265,7 +265,7 @@ static void test_lane_stencils_match_scalar(void **state) {
       const int n = 1 + trial % MPM_LANES;
       int base[3];
       mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&k, x, origin, idx, n, trial % 2, 1, base, &s);
+      mpm_lane_stencil_eval(k.width, &k, x, origin, idx, n, trial % 2, 1, base, &s);
       for (int l = 0; l < n; ++l)
         for (int d = 0; d < 3; ++d) {
           mpm_real w[4], dw[4], a[4];

@@ -175,7 +175,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       const int contiguous = mpm_batch_contiguous(idx, n);
       int base[3];
       mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
+      mpm_lane_stencil_eval(W, &ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
       mpm_g2p_lanes_out o;
       mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
                     MPM_PAD, &o);

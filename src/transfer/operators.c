@@ -60,7 +60,7 @@ ALWAYS_INLINE void scatter_block(const int W, const int stress, const mpm_transf
       const int contiguous = mpm_batch_contiguous(idx, n);
       int base[3];
       mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
+      mpm_lane_stencil_eval(W, &ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
       mpm_vl Mv[9];
       batch_matrices(stress, p, idx, j, n, contiguous, M, &w, Mv);
       mpm_scatter_lanes(W, &s, Mv, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
@@ -133,7 +133,7 @@ ALWAYS_INLINE void gather_block(const int W, const mpm_transfer_ctx *ctx, const 
       const int contiguous = mpm_batch_contiguous(idx, n);
       int base[3];
       mpm_lane_stencil s;
-      mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
+      mpm_lane_stencil_eval(W, &ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
       mpm_vl Gv[9];
       mpm_gradient_lanes(W, &s, pad, STRIDE, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD, MPM_PAD,
                          Gv);

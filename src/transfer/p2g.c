@@ -73,11 +73,12 @@ ALWAYS_INLINE void batch_inputs(const mpm_particles *p, const uint32_t *idx, int
  * and lane inputs (see batch_inputs), with the stresses from the window, which is filled ahead as
  * the batches need it (the caller restarts it at every material); without force, no stresses
  * (K = 0). The particles two batches ahead are asked for meanwhile. */
-ALWAYS_INLINE void batch_prepare(const int apic, const int force, const mpm_transfer_ctx *ctx,
-                                 const mpm_sparse_grid *g, const mpm_particles *p, stress_window *w,
-                                 int material, uint32_t range_end, uint32_t j, uint32_t end,
-                                 int base[3], mpm_lane_stencil *s, mpm_vl *mass, mpm_vl mv[3],
-                                 mpm_vl mB[9], mpm_vl K[9]) {
+ALWAYS_INLINE void batch_prepare(const int W, const int apic, const int force,
+                                 const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                                 const mpm_particles *p, stress_window *w, int material,
+                                 uint32_t range_end, uint32_t j, uint32_t end, int base[3],
+                                 mpm_lane_stencil *s, mpm_vl *mass, mpm_vl mv[3], mpm_vl mB[9],
+                                 mpm_vl K[9]) {
   const uint32_t *idx = g->perm + j;
   const int n = mpm_batch_size(j, end);
   if (j + 2 * MPM_LANES < g->particle_count) MPM_PREFETCH_PARTICLE(p, idx[2 * MPM_LANES], 0);
@@ -87,7 +88,7 @@ ALWAYS_INLINE void batch_prepare(const int apic, const int force, const mpm_tran
   const mpm_real *tau[9];
   for (int c = 0; c < 9; ++c) tau[c] = force ? w->tau[c] + (j - w->begin) : zero;
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
-  mpm_lane_stencil_eval(&ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, s);
+  mpm_lane_stencil_eval(W, &ctx->kernel, x, ctx->origin, idx, n, contiguous, apic, base, s);
   batch_inputs(p, idx, n, contiguous, ctx->dt, apic, tau, mass, mv, mB, K);
 }
 
@@ -130,7 +131,8 @@ ALWAYS_INLINE void p2g_block(const int W, const int apic, const int force,
       int base[3];
       mpm_lane_stencil s;
       mpm_vl mass, mv[3], mB[9], K[9];
-      batch_prepare(apic, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB, K);
+      batch_prepare(W, apic, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB,
+                    K);
       mpm_p2g_lanes(W, apic, &s, mass, mv, mB, K, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
                     MPM_PAD);
     }
@@ -168,7 +170,7 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const int force, const mpm_transf
       int base[3];
       mpm_lane_stencil s;
       mpm_vl mass, mv[3], mB[9], K[9];
-      batch_prepare(1, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB, K);
+      batch_prepare(W, 1, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB, K);
       const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
       mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
     }

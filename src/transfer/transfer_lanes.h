@@ -110,10 +110,10 @@ typedef struct mpm_lane_stencil {
  * n copy lane 0 so that every value stays finite). Because the base is common, the weights are
  * polynomials of the lane's offset f from it and vectorize without branches (uGIMP's piecewise
  * integrals become selects). */
-MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real *const x[3],
-                                             const mpm_real origin[3], const uint32_t *idx, int n,
-                                             int contiguous, const int need_a, int base[3],
-                                             mpm_lane_stencil *s) {
+MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const int W, const mpm_kernel *k,
+                                             const mpm_real *const x[3], const mpm_real origin[3],
+                                             const uint32_t *idx, int n, int contiguous,
+                                             const int need_a, int base[3], mpm_lane_stencil *s) {
   const mpm_real inv_dx = k->inv_dx;
   for (int d = 0; d < 3; ++d) {
     const mpm_vl xg = (mpm_lanes_load(x[d], idx, n, contiguous) - origin[d]) * inv_dx;
@@ -121,6 +121,38 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
     const mpm_vl f = xg - (mpm_real)base[d];
     s->f[d] = f;
     mpm_vl *w = s->w[d], *dw = s->dw[d], *a = s->a[d];
+    if (W == 4 && k->kind == MPM_KERNEL_UGIMP_WIDE) {
+      /* the wide box (mpm_ugimp_wide_outer and _inner in kernel.h), the three pieces of the
+         inner node as selects, node 2 by partition of unity; outside the switch and behind the
+         compile-time width, so that the code of the 3-wide kernels is what it was without it */
+      const mpm_real h = k->half_len, inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
+      const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
+      const mpm_vl x0 = (1 + h) - f, x3 = f + (h - 2);
+      const mpm_vl q0 = mpm_vl_max(x0, zero), q3 = mpm_vl_max(x3, zero);
+      w[0] = q0 * q0 * inv_4h;
+      w[3] = q3 * q3 * inv_4h;
+      dw[0] = q0 * (-inv_2h * inv_dx);
+      dw[3] = q3 * (inv_2h * inv_dx);
+      const mpm_vl d1 = f - 1, a1 = d1 - h, x1 = (1 + h) - d1;
+      const mpm_vl wA = x1 * x1 * inv_4h, dA = x1 * (-inv_2h);
+      const mpm_vl wB = 1 - (d1 * d1 + h * h) * inv_2h, dB = d1 * (-1 / h);
+      const mpm_vl wC = (R_(0.5) - a1 - R_(0.5) * a1 * a1) * inv_2h, dC = (1 + a1) * (-inv_2h);
+      const mpm_vl_index peak = d1 < hv, foot = d1 + h <= mpm_vl_splat(1);
+      w[1] = mpm_vl_select(peak, mpm_vl_select(foot, wB, wC), wA);
+      dw[1] = mpm_vl_select(peak, mpm_vl_select(foot, dB, dC), dA) * inv_dx;
+      w[2] = 1 - w[0] - w[1] - w[3];
+      dw[2] = -dw[0] - dw[1] - dw[3];
+      if (need_a) {
+        mpm_vl dsum = {0};
+        for (int q = 0; q < 4; ++q) {
+          const mpm_vl r = (mpm_real)q - f;
+          dsum += w[q] * r * r;
+        }
+        const mpm_vl sc = inv_dx / dsum;
+        for (int q = 0; q < 4; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
+      }
+      continue;
+    }
     switch (k->kind) {
     default: /* MPM_KERNEL_LINEAR */
       w[0] = 1 - f;
@@ -153,37 +185,6 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const mpm_kernel *k, const mpm_real
       dw[3] = (R_(0.5) * inv_dx) * u3 * u3;
       if (need_a)
         for (int q = 0; q < 4; ++q) a[q] = (3 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/3 */
-      break;
-    }
-    case MPM_KERNEL_UGIMP_WIDE: {
-      /* the wide box (mpm_ugimp_wide_outer and _inner in kernel.h), the three pieces of the
-         inner node as selects; node 2 by partition of unity */
-      const mpm_real h = k->half_len, inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
-      const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
-      const mpm_vl x0 = (1 + h) - f, x3 = f + (h - 2);
-      const mpm_vl q0 = mpm_vl_max(x0, zero), q3 = mpm_vl_max(x3, zero);
-      w[0] = q0 * q0 * inv_4h;
-      w[3] = q3 * q3 * inv_4h;
-      dw[0] = q0 * (-inv_2h * inv_dx);
-      dw[3] = q3 * (inv_2h * inv_dx);
-      const mpm_vl d1 = f - 1, a1 = d1 - h, x1 = (1 + h) - d1;
-      const mpm_vl wA = x1 * x1 * inv_4h, dA = x1 * (-inv_2h);
-      const mpm_vl wB = 1 - (d1 * d1 + h * h) * inv_2h, dB = d1 * (-1 / h);
-      const mpm_vl wC = (R_(0.5) - a1 - R_(0.5) * a1 * a1) * inv_2h, dC = (1 + a1) * (-inv_2h);
-      const mpm_vl_index peak = d1 < hv, foot = d1 + h <= mpm_vl_splat(1);
-      w[1] = mpm_vl_select(peak, mpm_vl_select(foot, wB, wC), wA);
-      dw[1] = mpm_vl_select(peak, mpm_vl_select(foot, dB, dC), dA) * inv_dx;
-      w[2] = 1 - w[0] - w[1] - w[3];
-      dw[2] = -dw[0] - dw[1] - dw[3];
-      if (need_a) {
-        mpm_vl dsum = {0};
-        for (int q = 0; q < 4; ++q) {
-          const mpm_vl r = (mpm_real)q - f;
-          dsum += w[q] * r * r;
-        }
-        const mpm_vl sc = inv_dx / dsum;
-        for (int q = 0; q < 4; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
-      }
       break;
     }
     case MPM_KERNEL_UGIMP: {
