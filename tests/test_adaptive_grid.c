@@ -39,8 +39,8 @@ static void stencil(const mpm_adaptive_grid *g, const cloud *c, int p, int base[
   const mpm_real dx = mpm_refinement_dx(&g->tree, c->level[p]);
   mpm_real dw[MPM_GIMP_NODES_MAX];
   for (int d = 0; d < 3; ++d) {
-    n[d] = mpm_gimp_1d((c->x[p][d] - g->tree.origin[d]) / dx, c->Lp[p] / (2 * dx), &base[d], w[d],
-                       dw);
+    n[d] =
+        mpm_gimp_1d((c->x[p][d] - g->tree.origin[d]) / dx, c->Lp[p] / (2 * dx), &base[d], w[d], dw);
     assert_true(n[d] > 0);
   }
 }
@@ -135,7 +135,8 @@ static void run(int levels, uint64_t seed) {
     double x[3];
     slot_position(&g, s, x);
     for (int d = 0; d < 3; ++d)
-      u[1 + d][s] = ghost[s] ? 1e30f : (mpm_real)(A[d][0] * x[0] + A[d][1] * x[1] + A[d][2] * x[2] + b[d]);
+      u[1 + d][s] =
+          ghost[s] ? 1e30f : (mpm_real)(A[d][0] * x[0] + A[d][1] * x[1] + A[d][2] * x[2] + b[d]);
   }
   mpm_adaptive_grid_gather(&g, 3, u + 1);
   double worst_ghost = 0;
@@ -143,8 +144,9 @@ static void run(int levels, uint64_t seed) {
     double x[3];
     slot_position(&g, g.ghost_slot[a], x);
     for (int d = 0; d < 3; ++d)
-      worst_ghost = fmax(worst_ghost, fabs(u[1 + d][g.ghost_slot[a]] -
-                                           (A[d][0] * x[0] + A[d][1] * x[1] + A[d][2] * x[2] + b[d])));
+      worst_ghost =
+          fmax(worst_ghost, fabs(u[1 + d][g.ghost_slot[a]] -
+                                 (A[d][0] * x[0] + A[d][1] * x[1] + A[d][2] * x[2] + b[d])));
   }
   double worst_g2p = 0;
   for (int p = 0; p < PARTICLES; ++p) {

@@ -92,7 +92,8 @@ static void test_wide_ugimp(void **state) {
   const double dx = 0.05;
   static const double lengths[] = {1.01, 1.3, 1.5, 1.77, 2.0};
   for (size_t c = 0; c < sizeof lengths / sizeof lengths[0]; ++c) {
-    const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)(lengths[c] * dx));
+    const mpm_kernel k =
+        mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)(lengths[c] * dx));
     assert_int_equal(k.width, 4);
     uint64_t rng = 5 + c;
     for (int trial = 0; trial < 2000; ++trial) {

@@ -347,11 +347,9 @@ static void test_gimp_c1_along_lines(void **state) {
       for (int k = 0; k < n; ++k) {
         double wm = 0, wp = 0;
         for (int j = 0; j < nm; ++j)
-          if (b[j].level == a[k].level && !memcmp(b[j].idx, a[k].idx, sizeof b[j].idx))
-            wm = b[j].w;
+          if (b[j].level == a[k].level && !memcmp(b[j].idx, a[k].idx, sizeof b[j].idx)) wm = b[j].w;
         for (int j = 0; j < np; ++j)
-          if (c[j].level == a[k].level && !memcmp(c[j].idx, a[k].idx, sizeof c[j].idx))
-            wp = c[j].w;
+          if (c[j].level == a[k].level && !memcmp(c[j].idx, a[k].idx, sizeof c[j].idx)) wp = c[j].w;
         const double fd = (wp - wm) / (2 * h);
         const double an = a[k].dw[0] * e[0] + a[k].dw[1] * e[1] + a[k].dw[2] * e[2];
         worst = fmax(worst, fabs(fd - an));
@@ -449,8 +447,8 @@ static void test_lian_negative_ours_not(void **state) {
       const int m = mpm_adaptive_weights(&r, x, R_(0.04), -1, w, MAXT, NULL);
       for (int e = 0; e < m; ++e) {
         int k = 0;
-        while (k < na && !(acc[k].level == w[e].level &&
-                           !memcmp(acc[k].idx, w[e].idx, sizeof acc[k].idx)))
+        while (k < na &&
+               !(acc[k].level == w[e].level && !memcmp(acc[k].idx, w[e].idx, sizeof acc[k].idx)))
           ++k;
         if (k == na) {
           acc[na] = w[e];
@@ -460,8 +458,8 @@ static void test_lian_negative_ours_not(void **state) {
       }
     }
   for (int k = 0; k < na; ++k) least_m = fmin(least_m, acc[k].w);
-  print_message("ours: least N %.3g, least GIMP weight %.3g, least nodal mass %.3g kg\n",
-                least_N, least_w, least_m);
+  print_message("ours: least N %.3g, least GIMP weight %.3g, least nodal mass %.3g kg\n", least_N,
+                least_w, least_m);
   assert_true(least_N >= 0 && least_w >= -1e-7 && least_m >= -1e-7);
   mpm_refinement_free(&r);
 }
@@ -491,12 +489,9 @@ static void test_gimp_matches_ugimp(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_single_level),
-      cmocka_unit_test(test_tjunction_rows),
-      cmocka_unit_test(test_random_rows_and_basis),
-      cmocka_unit_test(test_gimp_weights),
-      cmocka_unit_test(test_gimp_c1_along_lines),
-      cmocka_unit_test(test_lian_negative_ours_not),
+      cmocka_unit_test(test_single_level),          cmocka_unit_test(test_tjunction_rows),
+      cmocka_unit_test(test_random_rows_and_basis), cmocka_unit_test(test_gimp_weights),
+      cmocka_unit_test(test_gimp_c1_along_lines),   cmocka_unit_test(test_lian_negative_ours_not),
       cmocka_unit_test(test_gimp_matches_ugimp),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

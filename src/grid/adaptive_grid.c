@@ -30,7 +30,9 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   memset(g, 0, sizeof *g);
 }
 
-static int32_t block_of(int32_t n) { return n >> MPM_BLOCK_BITS; } /* arithmetic: floor */
+static int32_t block_of(int32_t n) {
+  return n >> MPM_BLOCK_BITS;
+} /* arithmetic: floor */
 
 /* The masks of level L cover its blocks (new blocks start unused). */
 static int ensure_masks(mpm_adaptive_grid *g, int L) {

@@ -52,7 +52,9 @@ void mpm_adaptive_grid_init(mpm_adaptive_grid *g, int levels, const mpm_real ori
                             mpm_real dx0);
 void mpm_adaptive_grid_free(mpm_adaptive_grid *g);
 
-static inline int mpm_adaptive_grid_levels(const mpm_adaptive_grid *g) { return g->tree.levels; }
+static inline int mpm_adaptive_grid_levels(const mpm_adaptive_grid *g) {
+  return g->tree.levels;
+}
 
 /* Forget every used mark (a new step: the levels' blocks are activated anew). */
 void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g);

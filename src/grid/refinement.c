@@ -86,7 +86,9 @@ static inline int32_t shr_floor(int32_t c, int s) {
 }
 
 /* Levels below `level` in finest-lattice units: a level-L index times 2^fine_shift(L). */
-static inline int fine_shift(const mpm_refinement *r, int level) { return r->levels - 1 - level; }
+static inline int fine_shift(const mpm_refinement *r, int level) {
+  return r->levels - 1 - level;
+}
 
 int mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]) {
   if (level < 0 || level >= r->levels - 1) return -1;

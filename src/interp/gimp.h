@@ -35,8 +35,9 @@ static inline mpm_real mpm_gimp_hat_integral(mpm_real u0, mpm_real u1) {
 
 /* 1D weights of a box of half width a (node units, 0 < a <= (MPM_GIMP_NODES_MAX - 2) / 2) around
  * xg (node units): nodes *base .. *base + n - 1, weights w and d w / d xg (per node unit: the
- * caller multiplies by 1/dx). Returns n, or -1 when the box is too wide for MPM_GIMP_NODES_MAX. The largest weight is set to one minus the others
- * (and its derivative to minus theirs), so that the weights sum to one in any precision. */
+ * caller multiplies by 1/dx). Returns n, or -1 when the box is too wide for MPM_GIMP_NODES_MAX. The
+ * largest weight is set to one minus the others (and its derivative to minus theirs), so that the
+ * weights sum to one in any precision. */
 static inline int mpm_gimp_1d(mpm_real xg, mpm_real a, int *base, mpm_real *w, mpm_real *dw) {
   const int b = (int)mpm_floor(xg - a);
   int n = (int)mpm_floor(xg + a) - b + 2;
