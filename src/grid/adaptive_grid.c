@@ -30,6 +30,11 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   memset(g, 0, sizeof *g);
 }
 
+/* Finest-lattice units per index of `level`, as a shift. */
+static inline int fine_shift(const mpm_refinement *r, int level) {
+  return r->levels - 1 - level;
+}
+
 static int32_t block_of(int32_t n) {
   return n >> MPM_BLOCK_BITS;
 } /* arithmetic: floor */
@@ -170,12 +175,28 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
   return 0;
 }
 
+/* Room for n items of `size` bytes in *buf (capacity *cap items, doubled as needed, contents
+ * kept). 0, or -1 when out of memory. */
+static int grow(void **buf, size_t *cap, size_t n, size_t size) {
+  if (n <= *cap) return 0;
+  size_t c = *cap ? *cap : 1024;
+  while (c < n) c *= 2;
+  void *b = mpm_alloc(c * size);
+  if (!b) return -1;
+  if (*buf) memcpy(b, *buf, *cap * size);
+  mpm_free(*buf);
+  *buf = b;
+  *cap = c;
+  return 0;
+}
+
 int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
-  mpm_row_term row[MPM_ROW_MAX];
-  /* pass 1: the ghosts, their slots and row lengths (lengths kept in the scratch for now) */
+  /* pass 1: the ghosts, their slots, nodes and rows (each row resolved once) */
   g->ghost_count = 0;
   uint32_t *len = NULL;
-  size_t len_cap = 0;
+  mpm_row_term *node = NULL, *terms = NULL; /* ghost a's node; all rows, back to back */
+  size_t len_cap = 0, node_cap = 0, terms_cap = 0, term_count = 0;
+  int status = -1;
   for (int L = 0; L < g->tree.levels; ++L) {
     const mpm_grid *lv = &g->level[L];
     const mpm_sparse_grid *sg = &lv->impl.sparse;
@@ -184,24 +205,22 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
         const int local = __builtin_ctzll(m);
         int32_t idx[3];
         node_of(sg, b, local, idx);
-        const int n = slot_row(g, L, idx, row);
-        if (n < 0) goto fail;
+        if (grow((void **)&terms, &terms_cap, term_count + MPM_ROW_MAX, sizeof *terms)) goto done;
+        const int n = slot_row(g, L, idx, terms + term_count);
+        if (n < 0) goto done;
         if (n == 0) continue;
-        if (reserve_ghosts(g, g->ghost_count + 1)) goto fail;
-        if (g->ghost_count >= len_cap) {
-          const size_t cap = len_cap ? 2 * len_cap : 1024;
-          uint32_t *l2 = mpm_alloc(cap * sizeof *l2);
-          if (!l2) goto fail;
-          if (len) memcpy(l2, len, g->ghost_count * sizeof *l2);
-          mpm_free(len);
-          len = l2;
-          len_cap = cap;
-        }
-        len[g->ghost_count] = (uint32_t)n;
+        const size_t a = g->ghost_count;
+        if (reserve_ghosts(g, a + 1) || grow((void **)&len, &len_cap, a + 1, sizeof *len) ||
+            grow((void **)&node, &node_cap, a + 1, sizeof *node))
+          goto done;
+        len[a] = (uint32_t)n;
+        node[a].level = L;
+        for (int d = 0; d < 3; ++d) node[a].idx[d] = idx[d];
+        term_count += (size_t)n;
         g->ghost_slot[g->ghost_count++] = (uint32_t)(lv->dof_begin + b * MPM_BLOCK_NODES + local);
       }
   }
-  if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto fail;
+  if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto done;
   const size_t entries = g->ghosts.row_start[g->ghost_count];
   if (entries > g->offset_capacity) {
     size_t cap = g->offset_capacity ? g->offset_capacity : 4096;
@@ -213,52 +232,44 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     g->offset_capacity = cap;
     if (!g->offset[0] || !g->offset[1] || !g->offset[2]) {
       g->offset_capacity = 0;
-      goto fail;
+      goto done;
     }
   }
-  /* pass 2: the entries, in the same order */
-  size_t a = 0;
-  for (int L = 0; L < g->tree.levels; ++L) {
-    const mpm_sparse_grid *sg = &g->level[L].impl.sparse;
-    for (size_t b = 0; b < sg->block_count; ++b)
-      for (uint64_t m = g->used[L][b]; m; m &= m - 1) {
-        const int local = __builtin_ctzll(m);
-        int32_t idx[3];
-        node_of(sg, b, local, idx);
-        const int n = slot_row(g, L, idx, row);
-        if (n == 0) continue;
-        double S[6] = {0, 0, 0, 0, 0, 0};
-        for (int t = 0; t < n; ++t) {
-          const int64_t col = mpm_adaptive_grid_slot(g, row[t].level, row[t].idx);
-          if (col < 0) goto fail; /* a parent not active: close() was not called */
-          const uint32_t e = g->ghosts.row_start[a] + g->ghosts.row_len[a];
-          mpm_embedding_push(&g->ghosts, a, (uint32_t)col, (mpm_real)row[t].w);
-          /* x_i - x_g exactly: both on the finest lattice */
-          double r[3];
-          const int sp = L, si = row[t].level;
-          for (int d = 0; d < 3; ++d) {
-            const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
-            const int64_t Xi = (int64_t)row[t].idx[d] * ((int64_t)1 << (g->tree.levels - 1 - si));
-            const int64_t Xg = (int64_t)idx[d] * ((int64_t)1 << (g->tree.levels - 1 - sp));
-            r[d] = (double)(Xi - Xg) * fine;
-            g->offset[d][e] = (mpm_real)(row[t].w * r[d]);
-          }
-          S[0] += row[t].w * r[0] * r[0];
-          S[1] += row[t].w * r[1] * r[1];
-          S[2] += row[t].w * r[2] * r[2];
-          S[3] += row[t].w * r[0] * r[1];
-          S[4] += row[t].w * r[0] * r[2];
-          S[5] += row[t].w * r[1] * r[2];
-        }
-        for (int q = 0; q < 6; ++q) g->spread[q][a] = (mpm_real)S[q];
-        ++a;
+  /* pass 2: the entries, their APIC offsets and the spreads */
+  const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
+  const mpm_row_term *row = terms;
+  for (size_t a = 0; a < g->ghost_count; row += len[a], ++a) {
+    double S[6] = {0, 0, 0, 0, 0, 0};
+    for (uint32_t t = 0; t < len[a]; ++t) {
+      const int64_t col = mpm_adaptive_grid_slot(g, row[t].level, row[t].idx);
+      if (col < 0) goto done; /* a parent not active: close() was not called */
+      const uint32_t e = g->ghosts.row_start[a] + g->ghosts.row_len[a];
+      mpm_embedding_push(&g->ghosts, a, (uint32_t)col, (mpm_real)row[t].w);
+      /* x_i - x_g exactly: both on the finest lattice */
+      double r[3];
+      for (int d = 0; d < 3; ++d) {
+        const int64_t Xi =
+            (int64_t)row[t].idx[d] * ((int64_t)1 << fine_shift(&g->tree, row[t].level));
+        const int64_t Xg =
+            (int64_t)node[a].idx[d] * ((int64_t)1 << fine_shift(&g->tree, node[a].level));
+        r[d] = (double)(Xi - Xg) * fine;
+        g->offset[d][e] = (mpm_real)(row[t].w * r[d]);
       }
+      S[0] += row[t].w * r[0] * r[0];
+      S[1] += row[t].w * r[1] * r[1];
+      S[2] += row[t].w * r[2] * r[2];
+      S[3] += row[t].w * r[0] * r[1];
+      S[4] += row[t].w * r[0] * r[2];
+      S[5] += row[t].w * r[1] * r[2];
+    }
+    for (int q = 0; q < 6; ++q) g->spread[q][a] = (mpm_real)S[q];
   }
+  status = 0;
+done:
   mpm_free(len);
-  return 0;
-fail:
-  mpm_free(len);
-  return -1;
+  mpm_free(node);
+  mpm_free(terms);
+  return status;
 }
 
 void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
