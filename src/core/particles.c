@@ -33,6 +33,7 @@ int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
     if (regrow((void **)arrays[k], p->count, capacity, sizeof(mpm_real))) return -1;
   if (regrow((void **)&p->material, p->count, capacity, sizeof(int32_t)) ||
       regrow((void **)&p->body, p->count, capacity, sizeof(int32_t)) ||
+      regrow((void **)&p->level, p->count, capacity, sizeof(int32_t)) ||
       regrow((void **)&p->id, p->count, capacity, sizeof(uint32_t)))
     return -1;
   p->capacity = capacity;
@@ -50,6 +51,7 @@ void mpm_particles_free(mpm_particles *p) {
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) mpm_free(*arrays[k]);
   mpm_free(p->material);
   mpm_free(p->body);
+  mpm_free(p->level);
   mpm_free(p->id);
   memset(p, 0, sizeof *p);
 }
@@ -71,6 +73,7 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
   p->vol0[i] = vol0;
   p->material[i] = material;
   p->body[i] = body;
+  p->level[i] = 0;
   p->id[i] = (uint32_t)i;
   return (long)i;
 }
@@ -90,8 +93,9 @@ void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **sc
     *arrays[k] = dst;
   }
   /* integer arrays go through the integer scratch the same way */
-  uint32_t *iarrays[3] = {(uint32_t *)p->material, (uint32_t *)p->body, p->id};
-  for (int k = 0; k < 3; ++k) {
+  uint32_t *iarrays[4] = {(uint32_t *)p->material, (uint32_t *)p->body, (uint32_t *)p->level,
+                          p->id};
+  for (int k = 0; k < 4; ++k) {
     const uint32_t *src = iarrays[k];
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) iscratch[i] = src[perm[i]];

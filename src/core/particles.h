@@ -24,6 +24,8 @@ typedef struct mpm_particles {
   mpm_real *vol0;    /* initial volume V_p^0, m^3 */
   int32_t *material;
   int32_t *body;
+  int32_t *level; /* particle type (Gao et al. sec. 7.1): the grid level whose spacing its box
+                     matches, L_p = dx_level; 0 on a uniform grid */
   uint32_t *id;
 } mpm_particles;
 
@@ -34,7 +36,7 @@ int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
 void mpm_particles_free(mpm_particles *p);
 int mpm_particles_reserve(mpm_particles *p, size_t capacity);
 
-/* Append one particle at rest state (F = I, B = 0); returns its index or -1 on OOM. */
+/* Append one particle at rest state (F = I, B = 0, level 0); returns its index or -1 on OOM. */
 long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3], mpm_real mass,
                         mpm_real vol0, int32_t material, int32_t body);
 

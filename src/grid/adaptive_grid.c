@@ -10,20 +10,22 @@ void mpm_adaptive_grid_init(mpm_adaptive_grid *g, int levels, const mpm_real ori
                             mpm_real dx0) {
   memset(g, 0, sizeof *g);
   mpm_refinement_init(&g->tree, levels, origin, dx0);
-  for (int L = 0; L < levels; ++L)
+  for (int L = 0; L < levels; ++L) {
     mpm_grid_init_sparse(&g->level[L], L, origin, mpm_refinement_dx(&g->tree, L));
+  }
   mpm_embedding_init(&g->ghosts);
 }
 
 void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   for (int L = 0; L < g->tree.levels; ++L) mpm_grid_free(&g->level[L]);
+  for (int e = 0; e < g->extra_count; ++e) mpm_grid_free(&g->extra[e]);
   mpm_refinement_free(&g->tree);
   mpm_embedding_free(&g->ghosts);
   mpm_free(g->ghost_slot);
   mpm_free(g->scratch);
-  for (int L = 0; L < MPM_LEVELS_MAX; ++L) {
-    mpm_free(g->used[L]);
-    mpm_free(g->done[L]);
+  for (int G = 0; G < MPM_TRANSFER_GRIDS_MAX; ++G) {
+    mpm_free(g->used[G]);
+    mpm_free(g->done[G]);
   }
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
   for (int q = 0; q < 6; ++q) mpm_free(g->spread[q]);
@@ -39,11 +41,44 @@ static int32_t block_of(int32_t n) {
   return n >> MPM_BLOCK_BITS;
 } /* arithmetic: floor */
 
-/* The masks of level L cover its blocks (new blocks start unused). */
-static int ensure_masks(mpm_adaptive_grid *g, int L) {
-  const size_t n = g->level[L].impl.sparse.block_count;
-  if (n <= g->mask_capacity[L]) return 0;
-  size_t cap = g->mask_capacity[L] ? g->mask_capacity[L] : 256;
+static inline int level_of(const mpm_adaptive_grid *g, int G) {
+  return G < MPM_LEVELS_MAX ? G : g->extra_level[G - MPM_LEVELS_MAX];
+}
+static inline mpm_grid *grid_of(mpm_adaptive_grid *g, int G) {
+  return G < MPM_LEVELS_MAX ? &g->level[G] : &g->extra[G - MPM_LEVELS_MAX];
+}
+/* The transfer grid after G in use (the levels, then the extra grids), or -1. */
+static int next_grid(const mpm_adaptive_grid *g, int G) {
+  const int n = g->tree.levels;
+  if (G < n - 1) return G + 1;
+  if (G < MPM_LEVELS_MAX) return g->extra_count ? MPM_LEVELS_MAX : -1;
+  return G + 1 < MPM_LEVELS_MAX + g->extra_count ? G + 1 : -1;
+}
+#define FOR_GRIDS(g, G) for (int G = 0; G >= 0; G = next_grid(g, G))
+
+int mpm_adaptive_grid_add_extra(mpm_adaptive_grid *g, int level) {
+  if (g->extra_count == MPM_EXTRA_GRIDS_MAX || level < 0 || level >= g->tree.levels) return -1;
+  const int e = g->extra_count++;
+  mpm_grid_init_sparse(&g->extra[e], level, g->tree.origin, mpm_refinement_dx(&g->tree, level));
+  g->extra_level[e] = level;
+  return MPM_LEVELS_MAX + e;
+}
+
+mpm_grid *mpm_adaptive_grid_at(mpm_adaptive_grid *g, int G) {
+  return grid_of(g, G);
+}
+int mpm_adaptive_grid_level_of(const mpm_adaptive_grid *g, int G) {
+  return level_of(g, G);
+}
+int mpm_adaptive_grid_next(const mpm_adaptive_grid *g, int G) {
+  return next_grid(g, G);
+}
+
+/* The masks of transfer grid G cover its blocks (new blocks start unused). */
+static int ensure_masks(mpm_adaptive_grid *g, int G) {
+  const size_t n = grid_of(g, G)->impl.sparse.block_count;
+  if (n <= g->mask_capacity[G]) return 0;
+  size_t cap = g->mask_capacity[G] ? g->mask_capacity[G] : 256;
   while (cap < n) cap *= 2;
   uint64_t *u = mpm_calloc(cap, sizeof *u), *d = mpm_calloc(cap, sizeof *d);
   if (!u || !d) {
@@ -51,15 +86,15 @@ static int ensure_masks(mpm_adaptive_grid *g, int L) {
     mpm_free(d);
     return -1;
   }
-  if (g->mask_capacity[L]) {
-    memcpy(u, g->used[L], g->mask_capacity[L] * sizeof *u);
-    memcpy(d, g->done[L], g->mask_capacity[L] * sizeof *d);
+  if (g->mask_capacity[G]) {
+    memcpy(u, g->used[G], g->mask_capacity[G] * sizeof *u);
+    memcpy(d, g->done[G], g->mask_capacity[G] * sizeof *d);
   }
-  mpm_free(g->used[L]);
-  mpm_free(g->done[L]);
-  g->used[L] = u;
-  g->done[L] = d;
-  g->mask_capacity[L] = cap;
+  mpm_free(g->used[G]);
+  mpm_free(g->done[G]);
+  g->used[G] = u;
+  g->done[G] = d;
+  g->mask_capacity[G] = cap;
   return 0;
 }
 
@@ -67,23 +102,23 @@ static inline int local_of(const int32_t idx[3]) {
   return ((idx[0] & 3) << 4) | ((idx[1] & 3) << 2) | (idx[2] & 3);
 }
 
-/* Activate node idx of level L and mark it used; 1 when the mark is new, 0, or -1. */
-static int mark(mpm_adaptive_grid *g, int L, const int32_t idx[3]) {
+/* Activate node idx of transfer grid G and mark it used; 1 when the mark is new, 0, or -1. */
+static int mark(mpm_adaptive_grid *g, int G, const int32_t idx[3]) {
   const int32_t bc[3] = {idx[0] >> MPM_BLOCK_BITS, idx[1] >> MPM_BLOCK_BITS,
                          idx[2] >> MPM_BLOCK_BITS};
-  const int32_t b = mpm_sparse_grid_touch(&g->level[L].impl.sparse, bc);
-  if (b < 0 || ensure_masks(g, L)) return -1;
+  const int32_t b = mpm_sparse_grid_touch(&grid_of(g, G)->impl.sparse, bc);
+  if (b < 0 || ensure_masks(g, G)) return -1;
   const uint64_t bit = (uint64_t)1 << local_of(idx);
-  if (g->used[L][b] & bit) return 0;
-  g->used[L][b] |= bit;
+  if (g->used[G][b] & bit) return 0;
+  g->used[G][b] |= bit;
   return 1;
 }
 
 void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g) {
-  for (int L = 0; L < g->tree.levels; ++L)
-    if (g->mask_capacity[L]) {
-      memset(g->used[L], 0, g->mask_capacity[L] * sizeof(uint64_t));
-      memset(g->done[L], 0, g->mask_capacity[L] * sizeof(uint64_t));
+  for (int G = 0; G < MPM_TRANSFER_GRIDS_MAX; ++G)
+    if (g->mask_capacity[G]) {
+      memset(g->used[G], 0, g->mask_capacity[G] * sizeof(uint64_t));
+      memset(g->done[G], 0, g->mask_capacity[G] * sizeof(uint64_t));
     }
   g->ghost_count = 0;
 }
@@ -99,6 +134,32 @@ int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_
   return 0;
 }
 
+int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
+  mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
+  if (ensure_masks(g, G)) return -1;
+  /* particles of one (block, material, cell) share their stencil: mark it once */
+  const size_t owners = sg->owner_count, nmat = (size_t)sg->material_count;
+  for (size_t b = 0; b < owners; ++b)
+    for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
+      int any = 0;
+      for (size_t m = 0; m < nmat && !any; ++m) {
+        const size_t q = (b * nmat + m) * MPM_BLOCK_NODES + (size_t)c;
+        any = sg->cell_start[q + 1] > sg->cell_start[q];
+      }
+      if (!any) continue;
+      const int32_t base[3] = {sg->coord[b][0] * MPM_BLOCK + ((c >> 4) & 3),
+                               sg->coord[b][1] * MPM_BLOCK + ((c >> 2) & 3),
+                               sg->coord[b][2] * MPM_BLOCK + (c & 3)};
+      for (int i = 0; i < W; ++i)
+        for (int j = 0; j < W; ++j)
+          for (int k = 0; k < W; ++k) {
+            const int32_t idx[3] = {base[0] + i, base[1] + j, base[2] + k};
+            if (mark(g, G, idx) < 0) return -1;
+          }
+    }
+  return 0;
+}
+
 static void node_of(const mpm_sparse_grid *sg, size_t b, int local, int32_t idx[3]) {
   const int32_t *c = sg->coord[b];
   idx[0] = c[0] * MPM_BLOCK + ((local >> 4) & 3);
@@ -106,30 +167,38 @@ static void node_of(const mpm_sparse_grid *sg, size_t b, int local, int32_t idx[
   idx[2] = c[2] * MPM_BLOCK + (local & 3);
 }
 
-/* The row of a slot, or 0 when the slot is a real node owned by its level. -1 past MPM_ROW_MAX. */
-static int slot_row(const mpm_adaptive_grid *g, int level, const int32_t idx[3],
-                    mpm_row_term *row) {
+/* The row of a slot of transfer grid G, or 0 when the slot is a real node owned by its level
+ * on the level's own grid. On an extra grid every slot is a ghost: a real node owned by the
+ * level is a duplicate of the level grid's slot. -1 past MPM_ROW_MAX. */
+static int slot_row(const mpm_adaptive_grid *g, int G, const int32_t idx[3], mpm_row_term *row) {
+  const int level = level_of(g, G);
   mpm_row_term own;
-  if (mpm_refinement_node_is_real(&g->tree, level, idx, &own) && own.level == level) return 0;
+  if (mpm_refinement_node_is_real(&g->tree, level, idx, &own) && own.level == level) {
+    if (G < MPM_LEVELS_MAX) return 0;
+    row[0] = own;
+    row[0].w = 1;
+    return 1;
+  }
   return mpm_refinement_node_row(&g->tree, level, idx, row, MPM_ROW_MAX);
 }
 
 int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
   mpm_row_term row[MPM_ROW_MAX];
-  for (int L = 0; L < g->tree.levels; ++L) {
-    if (ensure_masks(g, L)) return -1;
-    const mpm_sparse_grid *sg = &g->level[L].impl.sparse;
+  FOR_GRIDS(g, G) {
+    if (ensure_masks(g, G)) return -1;
+    const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
     for (size_t b = 0; b < sg->block_count; ++b) {
-      uint64_t pending = g->used[L][b] & ~g->done[L][b];
-      g->done[L][b] |= pending;
+      uint64_t pending = g->used[G][b] & ~g->done[G][b];
+      g->done[G][b] |= pending;
       while (pending) {
         const int local = __builtin_ctzll(pending);
         pending &= pending - 1;
         int32_t idx[3];
         node_of(sg, b, local, idx);
-        const int n = slot_row(g, L, idx, row);
+        const int n = slot_row(g, G, idx, row);
         if (n < 0) return -1;
-        /* parents are real: their own rows are empty, so nothing more follows from them */
+        /* parents are real nodes of the level grids: their own rows are empty, so nothing more
+         * follows from them */
         for (int t = 0; t < n; ++t)
           if (mark(g, row[t].level, row[t].idx) < 0) return -1;
       }
@@ -197,16 +266,18 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   mpm_row_term *node = NULL, *terms = NULL; /* ghost a's node; all rows, back to back */
   size_t len_cap = 0, node_cap = 0, terms_cap = 0, term_count = 0;
   int status = -1;
-  for (int L = 0; L < g->tree.levels; ++L) {
-    const mpm_grid *lv = &g->level[L];
+  FOR_GRIDS(g, G) {
+    const mpm_grid *lv = grid_of(g, G);
     const mpm_sparse_grid *sg = &lv->impl.sparse;
+    if (!sg->block_count) continue;
+    if (ensure_masks(g, G)) goto done;
     for (size_t b = 0; b < sg->block_count; ++b)
-      for (uint64_t m = g->used[L][b]; m; m &= m - 1) {
+      for (uint64_t m = g->used[G][b]; m; m &= m - 1) {
         const int local = __builtin_ctzll(m);
         int32_t idx[3];
         node_of(sg, b, local, idx);
         if (grow((void **)&terms, &terms_cap, term_count + MPM_ROW_MAX, sizeof *terms)) goto done;
-        const int n = slot_row(g, L, idx, terms + term_count);
+        const int n = slot_row(g, G, idx, terms + term_count);
         if (n < 0) goto done;
         if (n == 0) continue;
         const size_t a = g->ghost_count;
@@ -214,7 +285,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
             grow((void **)&node, &node_cap, a + 1, sizeof *node))
           goto done;
         len[a] = (uint32_t)n;
-        node[a].level = L;
+        node[a].level = level_of(g, G);
         for (int d = 0; d < 3; ++d) node[a].idx[d] = idx[d];
         term_count += (size_t)n;
         g->ghost_slot[g->ghost_count++] = (uint32_t)(lv->dof_begin + b * MPM_BLOCK_NODES + local);
@@ -340,6 +411,7 @@ size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
   size_t b = mpm_refinement_bytes(&g->tree) + mpm_embedding_bytes(&g->ghosts) +
              g->ghost_capacity * (sizeof(uint32_t) + 10 * sizeof(mpm_real)) +
              3 * g->offset_capacity * sizeof(mpm_real);
-  for (int L = 0; L < g->tree.levels; ++L) b += g->level[L].ops->bytes(&g->level[L]);
+  FOR_GRIDS(g, G)
+  b += grid_of((mpm_adaptive_grid *)g, G)->ops->bytes(grid_of((mpm_adaptive_grid *)g, G));
   return b;
 }

@@ -28,16 +28,27 @@
 #include "grid/grid.h"
 #include "grid/refinement.h"
 
+/* Transfer grids beside the levels' own: a sparse grid runs one kernel (so the lane kernels
+ * serve as they are), and particles whose box differs from the one of their level's grid
+ * (another particle type, Gao et al. sec. 7.1) transfer on a grid of their own at that level.
+ * Every slot of such a grid is a ghost: a real node of the level is a duplicate whose row is
+ * the level grid's slot, with weight 1. */
+#define MPM_EXTRA_GRIDS_MAX 26
+#define MPM_TRANSFER_GRIDS_MAX (MPM_LEVELS_MAX + MPM_EXTRA_GRIDS_MAX)
+
 typedef struct mpm_adaptive_grid {
   mpm_refinement tree;
   mpm_grid level[MPM_LEVELS_MAX]; /* sparse; level[L].dx = dx_0 / 2^L, one origin */
-  mpm_embedding ghosts;           /* row a: ghost a; columns: DOF indices of real slots */
-  uint32_t *ghost_slot;           /* DOF index of ghost a's own slot */
+  mpm_grid extra[MPM_EXTRA_GRIDS_MAX];
+  int extra_level[MPM_EXTRA_GRIDS_MAX];
+  int extra_count;
+  mpm_embedding ghosts; /* row a: ghost a; columns: DOF indices of real slots */
+  uint32_t *ghost_slot; /* DOF index of ghost a's own slot */
   size_t ghost_count, ghost_capacity;
   /* per level and block, a bit per node: the slot is used (a particle's stencil reaches it, or
    * it is a ghost's parent), and its ghost row's parents are active (done) */
-  uint64_t *used[MPM_LEVELS_MAX], *done[MPM_LEVELS_MAX];
-  size_t mask_capacity[MPM_LEVELS_MAX];
+  uint64_t *used[MPM_TRANSFER_GRIDS_MAX], *done[MPM_TRANSFER_GRIDS_MAX];
+  size_t mask_capacity[MPM_TRANSFER_GRIDS_MAX]; /* by transfer grid (mpm_adaptive_grid_at) */
   mpm_real *scratch; /* 4 x ghost_capacity values for scatter and gather */
   /* APIC across levels (docs/adaptive-grid.md): per row entry e of ghost g and real slot i,
    * offset[j][e] = E_gi (x_i - x_g)_j; per ghost, spread S_g = sum_i E_gi (x_i - x_g)(x_i - x_g)^T
@@ -63,6 +74,20 @@ void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g);
  * 0, or -1 when out of memory. */
 int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
                                    const int32_t hi[3]);
+
+/* Transfer grids are numbered G: level L's own grid is G = L; extra grids follow from
+ * G = MPM_LEVELS_MAX. A new extra grid at `level` (no nodes yet): its number, or -1 when
+ * MPM_EXTRA_GRIDS_MAX are in use. */
+int mpm_adaptive_grid_add_extra(mpm_adaptive_grid *g, int level);
+/* Transfer grid G, its level, and the one after G (start at 0; -1 after the last). */
+mpm_grid *mpm_adaptive_grid_at(mpm_adaptive_grid *g, int G);
+int mpm_adaptive_grid_level_of(const mpm_adaptive_grid *g, int G);
+int mpm_adaptive_grid_next(const mpm_adaptive_grid *g, int G);
+
+/* After transfer grid G's particles were sorted into it (mpm_sparse_grid_sort, which resets its
+ * blocks, so before any other activation of it this step): mark the W^3 stencil of every
+ * occupied base node used. 0, or -1 when out of memory. */
+int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W);
 
 /* Activate and mark the parents of every used ghost. Parents are real, so one pass over the
  * used slots suffices. Serial. 0, or -1 when out of memory or when a row needs more than

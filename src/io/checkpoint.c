@@ -6,7 +6,7 @@
  *               records, checksum (FNV-1a over all the others), content_checksum (over
  *               every array and record as read back)
  *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
- *               particle_material [n], particle_body [n], particle_id [n],
+ *               particle_material [n], particle_body [n], particle_level [n], particle_id [n],
  *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25];
  *               with particle domains (attributes domain_particles nd, domain_corners nc):
  *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active,
@@ -170,10 +170,11 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
   mpm_particles_real_arrays(p, arrays);
   const void *rows[MPM_PARTICLE_REAL_ARRAYS];
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *arrays[k];
-  const void *material = p->material, *body = p->body, *id = p->id;
+  const void *material = p->material, *body = p->body, *level = p->level, *id = p->id;
   if (put_dataset(f, "particle_reals", mpm_ckpt_real_type(), MPM_PARTICLE_REAL_ARRAYS, n, rows) ||
       put_dataset(f, "particle_material", H5T_NATIVE_INT32, 0, n, &material) ||
       put_dataset(f, "particle_body", H5T_NATIVE_INT32, 0, n, &body) ||
+      put_dataset(f, "particle_level", H5T_NATIVE_INT32, 0, n, &level) ||
       put_dataset(f, "particle_id", H5T_NATIVE_UINT32, 0, n, &id) || write_domains(f, &c->domains))
     return -1;
   const hsize_t r = (hsize_t)c->records;

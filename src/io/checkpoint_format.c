@@ -98,6 +98,7 @@ uint64_t mpm_ckpt_content_checksum(const mpm_checkpoint *c) {
     h = mpm_hash64_words(*a[k], n * sizeof(mpm_real), h);
   h = mpm_hash64_words(p->material, n * sizeof *p->material, h);
   h = mpm_hash64_words(p->body, n * sizeof *p->body, h);
+  h = mpm_hash64_words(p->level, n * sizeof *p->level, h);
   h = mpm_hash64_words(p->id, n * sizeof *p->id, h);
   const mpm_domain_set *ds = &c->domains;
   const uint64_t counts[2] = {ds->particles.count, ds->corner_count};

@@ -309,17 +309,21 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
   mpm_particles_real_arrays(p, arrays);
   void *rows[MPM_PARTICLE_REAL_ARRAYS];
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *arrays[k];
-  void *material = p->material, *body = p->body, *id = p->id;
+  void *material = p->material, *body = p->body, *level = p->level, *id = p->id;
   if (get_dataset(r, "particle_reals", H5T_FLOAT, sizeof(mpm_real), mpm_ckpt_real_type(),
                   MPM_PARTICLE_REAL_ARRAYS, n, rows) ||
       get_dataset(r, "particle_material", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, n, &material) ||
       get_dataset(r, "particle_body", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, n, &body) ||
+      get_dataset(r, "particle_level", H5T_INTEGER, 4, H5T_NATIVE_INT32, 0, n, &level) ||
       get_dataset(r, "particle_id", H5T_INTEGER, 4, H5T_NATIVE_UINT32, 0, n, &id))
     return -1;
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
     for (size_t i = 0; i < p->count; ++i)
       if (!isfinite((*arrays[k])[i])) return bad(r, "%s", "a particle value is not finite");
   if (read_domains(r, c)) return -1;
+  /* domain particles transfer through their corners, on the coarsest level */
+  if (c->domains.particles.count)
+    memset(c->domains.particles.level, 0, c->domains.particles.count * sizeof(int32_t));
 
   const size_t rc = (size_t)(c->records ? c->records : 1);
   c->frame_times = calloc(rc, sizeof *c->frame_times);

@@ -376,6 +376,34 @@ double mpm_sample_spacing(const mpm_scene *scene, int body_index) {
 }
 
 mpm_status mpm_sample_body(const mpm_scene *scene, int bi, mpm_particles *p, mpm_error *err) {
+  const size_t start = p->count;
+  const mpm_status st = mpm_sample_body_kept(scene, bi, 1, NULL, NULL, p, err);
+  if (st == MPM_OK) mpm_sample_spin(scene, bi, p, start);
+  return st;
+}
+
+void mpm_sample_spin(const mpm_scene *scene, int bi, mpm_particles *p, size_t start) {
+  const mpm_body_desc *body = &scene->bodies[bi];
+  const size_t count = p->count - start;
+  /* rigid rotation about the centroid of the particles as stored: sum (x - c) = 0, so the
+   * rotation adds no net linear momentum */
+  const double *w = body->angular_velocity;
+  if (!count || (w[0] == 0 && w[1] == 0 && w[2] == 0)) return;
+  double c[3] = {0, 0, 0};
+  for (size_t q = start; q < p->count; ++q)
+    for (int d = 0; d < 3; ++d) c[d] += (double)p->x[d][q];
+  for (int d = 0; d < 3; ++d) c[d] /= (double)count;
+  for (size_t q = start; q < p->count; ++q) {
+    double r[3] = {(double)p->x[0][q] - c[0], (double)p->x[1][q] - c[1], (double)p->x[2][q] - c[2]};
+    p->v[0][q] = (mpm_real)(body->velocity[0] + w[1] * r[2] - w[2] * r[1]);
+    p->v[1][q] = (mpm_real)(body->velocity[1] + w[2] * r[0] - w[0] * r[2]);
+    p->v[2][q] = (mpm_real)(body->velocity[2] + w[0] * r[1] - w[1] * r[0]);
+  }
+}
+
+mpm_status mpm_sample_body_kept(const mpm_scene *scene, int bi, double scale,
+                                mpm_sample_keep_fn keep, const void *ctx, mpm_particles *p,
+                                mpm_error *err) {
   assert(bi >= 0 && bi < scene->body_count);
   const mpm_body_desc *body = &scene->bodies[bi];
   const char *file = scene->path[0] ? scene->path : "scene";
@@ -392,7 +420,7 @@ mpm_status mpm_sample_body(const mpm_scene *scene, int bi, mpm_particles *p, mpm
     return mpm_error_set(err, MPM_ERR_INVALID, "%s: bodies[%d].jitter is %g, expected 0..1", file,
                          bi, body->jitter);
   const double density = scene->materials[body->material].density;
-  const double h = mpm_sample_spacing(scene, bi);
+  const double h = mpm_sample_spacing(scene, bi) * scale;
   const double *dmin = scene->domain_min, *dmax = scene->domain_max;
 
   shape_ctx sc;
@@ -450,6 +478,7 @@ mpm_status mpm_sample_body(const mpm_scene *scene, int bi, mpm_particles *p, mpm
       for (long i = 0; i < n[0]; ++i) {
         if (!inside[i]) continue;
         x[0] = dmin[0] + ((double)(i0[0] + i) + 0.5) * h;
+        if (keep && !keep(ctx, x)) continue;
         const long idx[3] = {i0[0] + i, i0[1] + j, i0[2] + k};
         for (int d = 0; d < 3; ++d)
           if (idx[d] < 0 || dmin[d] + (double)(idx[d] + 1) * h > dmax[d] + 1e-9 * h) {
@@ -469,29 +498,12 @@ mpm_status mpm_sample_body(const mpm_scene *scene, int bi, mpm_particles *p, mpm
       }
     }
 
-  const size_t count = p->count - start;
-  if (count == 0) {
+  if (p->count == start && !keep) {
     st = mpm_error_set(err, MPM_ERR_INVALID,
                        "%s: bodies[%d] (\"%s\"): no particle lies inside the shape at lattice "
                        "spacing %g m; use a smaller dx or more particles_per_cell",
                        file, bi, body->name, h);
     goto done;
-  }
-  /* rigid rotation about the centroid of the particles as stored: sum (x - c) = 0, so the
-   * rotation adds no net linear momentum */
-  const double *w = body->angular_velocity;
-  if (w[0] != 0 || w[1] != 0 || w[2] != 0) {
-    double c[3] = {0, 0, 0};
-    for (size_t q = start; q < p->count; ++q)
-      for (int d = 0; d < 3; ++d) c[d] += (double)p->x[d][q];
-    for (int d = 0; d < 3; ++d) c[d] /= (double)count;
-    for (size_t q = start; q < p->count; ++q) {
-      double r[3] = {(double)p->x[0][q] - c[0], (double)p->x[1][q] - c[1],
-                     (double)p->x[2][q] - c[2]};
-      p->v[0][q] = (mpm_real)(body->velocity[0] + w[1] * r[2] - w[2] * r[1]);
-      p->v[1][q] = (mpm_real)(body->velocity[1] + w[2] * r[0] - w[0] * r[2]);
-      p->v[2][q] = (mpm_real)(body->velocity[2] + w[0] * r[1] - w[1] * r[0]);
-    }
   }
   goto done;
 oom:

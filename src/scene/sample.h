@@ -36,6 +36,22 @@ double mpm_sample_spacing(const mpm_scene *scene, int body_index);
 mpm_status mpm_sample_body(const mpm_scene *scene, int body_index, mpm_particles *p,
                            mpm_error *err);
 
+/* Which lattice points a sampling keeps: keep(ctx, x) on a point's position before jitter. */
+typedef int (*mpm_sample_keep_fn)(const void *ctx, const double x[3]);
+
+/* mpm_sample_body on the lattice of spacing `scale` times the body's (mass and volume per
+ * particle scaled with it), keeping the points `keep` accepts: the multi-level grid samples each
+ * level's leaves at that level's spacing (Gao et al. sec. 7.1). No point kept is not an error
+ * here, and the body's angular velocity is not applied (mpm_sample_spin does it over all the
+ * levels' particles). */
+mpm_status mpm_sample_body_kept(const mpm_scene *scene, int body_index, double scale,
+                                mpm_sample_keep_fn keep, const void *ctx, mpm_particles *p,
+                                mpm_error *err);
+
+/* The body's rigid rotation (bodies[].angular_velocity) about the centroid of particles
+ * start .. p->count, added to their velocities. */
+void mpm_sample_spin(const mpm_scene *scene, int body_index, mpm_particles *p, size_t start);
+
 /// The triangle mesh of a mesh body, in world coordinates (scaled and placed as the sampler
 /// places it). The caller frees it with mpm_mesh_free.
 mpm_status mpm_sample_body_mesh(const mpm_scene *scene, int body_index, mpm_mesh *mesh,

@@ -137,6 +137,9 @@ void mpm_scene_free(mpm_scene *scene) {
   free(scene->bodies);
   free(scene->colliders);
   free(scene->forces);
+  free(scene->refine);
+  scene->refine = NULL;
+  scene->refine_count = 0;
   scene->materials = NULL;
   scene->bodies = NULL;
   scene->colliders = NULL;

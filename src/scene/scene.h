@@ -229,15 +229,38 @@ typedef struct mpm_solver_desc {
   mpm_cg_failure_action on_cg_failure; /* implicit: warn (default) or stop */
 } mpm_solver_desc;
 
+/* Most levels of the multi-level grid (MPM_LEVELS_MAX of grid/refinement.h). */
+#define MPM_SCENE_LEVELS_MAX 6
+
+/* A static refinement rule of the multi-level grid (Gao et al. sec. 7.1; docs/adaptive-grid.md):
+ * the cells it selects are refined until their leaves are of `level`. */
+typedef enum mpm_refine_kind {
+  MPM_REFINE_BOX,      /* cells meeting the box [min, max] */
+  MPM_REFINE_COLLIDER, /* cells within `distance` of collider `collider`'s surface at t = 0 */
+  MPM_REFINE_BODY,     /* cells holding body `body`'s material (sampled at the level's spacing) */
+} mpm_refine_kind;
+
+typedef struct mpm_refine_desc {
+  mpm_refine_kind kind;
+  int level;             /* 1 .. levels - 1 */
+  double min[3], max[3]; /* box, m */
+  int collider, body;
+  double distance; /* collider: m */
+} mpm_refine_desc;
+
 typedef struct mpm_scene {
   char path[MPM_PATH_MAX]; /* the scene file, for messages; mesh paths resolve against it */
   uint64_t source_hash;    /* FNV-1a of the scene text: a checkpoint resumes only the same scene */
   char name[MPM_NAME_MAX];
   /* domain */
   double domain_min[3], domain_max[3]; /* m */
-  double dx;                           /* grid cell size, m */
-  double gravity[3];                   /* m/s^2, default (0, -9.81, 0) */
-  mpm_boundary_rule wall_rule;         /* domain walls */
+  double dx;                           /* grid cell size, m (of level 0 on a multi-level grid) */
+  int levels;                          /* domain.levels: 0 = the uniform grid; 1..6 = Gao's
+                                          multi-level grid (1: one level, through its path) */
+  int refine_count;
+  mpm_refine_desc *refine;     /* domain.refine */
+  double gravity[3];           /* m/s^2, default (0, -9.81, 0) */
+  mpm_boundary_rule wall_rule; /* domain walls */
   double wall_friction;
   int wall_cells; /* thickness of the wall band in cells, default 3 */
   /* time */

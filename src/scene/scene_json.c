@@ -35,7 +35,8 @@
 static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
                                        "solver", "materials", "bodies",  "colliders",
                                        "forces", "output",    "camera",  NULL};
-static const char *const DOMAIN_KEYS[] = {"min", "max", "dx", "resolution", "walls", NULL};
+static const char *const DOMAIN_KEYS[] = {"min",   "max",    "dx",     "resolution",
+                                          "walls", "levels", "refine", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
 static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha", "cfl", "max_dt",
@@ -367,7 +368,8 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       parse_time(c, root, s) < 0 || parse_solver(c, root, s) < 0 ||
       mpm_sj_parse_materials(c, root, s) < 0 || mpm_sj_parse_bodies(c, root, s) < 0 ||
       mpm_sj_parse_colliders(c, root, s) < 0 || mpm_sj_parse_forces(c, root, s) < 0 ||
-      parse_output(c, root, s) < 0 || parse_camera(c, root, s) < 0)
+      parse_output(c, root, s) < 0 || parse_camera(c, root, s) < 0 ||
+      mpm_sj_parse_refinement(c, root, s) < 0)
     return -1;
   return 0;
 }

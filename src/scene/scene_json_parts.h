@@ -30,6 +30,12 @@ int mpm_sj_get_array(mpm_json_ctx *c, const cJSON *obj, const char *key, int req
 int mpm_sj_parse_schedule(mpm_json_ctx *c, const cJSON *node, const char *key,
                           double keys[MPM_STRENGTH_KEYS][2], int *count);
 
+/* ---- the multi-level grid (scene_json_refine.c) ------------------------------------------ */
+
+/* domain.levels and domain.refine, and what the multi-level grid asks of the solver and the
+ * bodies. Runs last (rules name colliders and bodies). */
+int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
+
 /* ---- materials (scene_json_material.c) ------------------------------------------------- */
 
 /* root.materials; leaves room in s->materials for one inline material per body. Runs

@@ -48,8 +48,8 @@ static guard_hit scan(const mpm_sim *sim, const mpm_particles *p, const uint8_t 
   int fragile[64] = {0}, any_fragile = 0;
   for (int m = 0; m < sim->material_count && m < 64; ++m)
     any_fragile |= fragile[m] = !model_takes_inversion(&sim->materials[m]);
-  /* a particle moved more than a cell: |v| dt > dx */
-  const double vmax = dx / dt;
+  /* a particle moved more than a cell (of the finest level): |v| dt > dx */
+  const double vmax = mpm_sim_finest_dx(sim) / dt;
   const mpm_real vmax2 = (mpm_real)(vmax * vmax);
   long first_domain = n, first_cfl = n, first_inv = n;
 #pragma omp parallel for schedule(static) reduction(min : first_domain, first_cfl, first_inv)
@@ -116,7 +116,7 @@ static mpm_status report(mpm_sim *sim, const mpm_particles *p, const guard_hit *
                          "%s violated the CFL condition: it moved %.3g cells in one step (speed "
                          "%.3g m/s); try a smaller solver.cfl or solver.max_dt, or "
                          "solver.on_instability = \"retry\"",
-                         where, h->value, h->value * sim->scene.dx / dt);
+                         where, h->value, h->value * mpm_sim_finest_dx(sim) / dt);
   case GUARD_INVERSION:
     return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
                          "%s has an inverted deformation gradient (det F = %.3g) that the "
@@ -153,6 +153,7 @@ static int copy_particles(mpm_particles *dst, const mpm_particles *src) {
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) memcpy(*b[k], *a[k], n * sizeof(mpm_real));
   memcpy(dst->material, src->material, n * sizeof *src->material);
   memcpy(dst->body, src->body, n * sizeof *src->body);
+  memcpy(dst->level, src->level, n * sizeof *src->level);
   memcpy(dst->id, src->id, n * sizeof *src->id);
   dst->count = n;
   return 0;

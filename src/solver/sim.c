@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 
 #include "solver/sim.h"
+#include "solver/adaptive.h"
 #include "domain/enrich.h"
 #include "core/alloc.h"
 #include "scene/sample.h"
@@ -144,10 +145,12 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     goto fail;
   }
   mpm_domain_set_init(&sim->domains);
+  if (sc->levels > 0 && (st = mpm_adaptive_setup(sim, err)) != MPM_OK) goto fail;
   uint32_t next_id = 0;
   for (int b = 0; b < sc->body_count; ++b) {
     const size_t first = sim->particles.count;
-    st = mpm_sample_body(sc, b, &sim->particles, err);
+    st = sim->adaptive ? mpm_adaptive_sample_body(sim, b, err)
+                       : mpm_sample_body(sc, b, &sim->particles, err);
     if (st != MPM_OK) goto fail;
     for (size_t i = first; i < sim->particles.count; ++i) {
       sim->particles.id[i] = next_id++;
@@ -331,6 +334,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim->force_regions);
   free(sim->base_materials);
   mpm_grid_free(&sim->grid);
+  mpm_adaptive_free(sim->adaptive);
   mpm_dofs_free(&sim->dofs);
   mpm_arena_free(&sim->step_arena);
   mpm_free(sim->scratch);

@@ -63,11 +63,13 @@ struct mpm_sim {
   mpm_embedded_surface *surfaces; /* meshes of mesh bodies with domains (Zhu sec. 4.1) */
   int surface_count;
   mpm_real origin[3];
-  int cells[3];         /* grid cells per axis over the domain */
-  mpm_grid grid;        /* the grid level (sparse or dense; one level until the adaptive grid) */
-  mpm_dofs dofs;        /* the unknowns of the step: the values at the grid's nodes */
-  mpm_arena step_arena; /* the step's scratch, taken back when the next step begins */
-  mpm_real *scratch;    /* per-particle buffers for the periodic reorder */
+  int cells[3];                  /* grid cells per axis over the domain */
+  mpm_grid grid;                 /* the uniform grid level (sparse or dense) */
+  struct mpm_adaptive *adaptive; /* Gao's multi-level grid (scene.levels > 0; solver/adaptive.h)
+                                    in place of `grid`, else NULL */
+  mpm_dofs dofs;                 /* the unknowns of the step: the values at the grid's nodes */
+  mpm_arena step_arena;          /* the step's scratch, taken back when the next step begins */
+  mpm_real *scratch;             /* per-particle buffers for the periodic reorder */
   uint32_t *iscratch;
   size_t scratch_capacity;
   int reorder_interval; /* physically reorder particles every this many steps */
@@ -121,6 +123,12 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
 double mpm_scene_memory_estimate(const mpm_scene *scene, double *particles);
 double mpm_available_memory(void);
 mpm_status mpm_scene_check_memory(const mpm_scene *scene, mpm_error *err);
+
+/* Room for the periodic reorder's per-particle buffers. 0, or -1 when out of memory. */
+int mpm_sim_ensure_scratch(mpm_sim *sim);
+
+/* The cell size the CFL condition uses: dx, or the finest level's spacing on a multi-level grid. */
+double mpm_sim_finest_dx(const mpm_sim *sim);
 
 /* The time step the CFL condition allows now (before clipping to the frame end). */
 double mpm_sim_cfl_dt(const mpm_sim *sim);

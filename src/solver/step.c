@@ -24,6 +24,7 @@
 #include "core/alloc.h"
 #include "domain/domain_transfer.h"
 #include "domain/enrich.h"
+#include "solver/adaptive.h"
 #include "solver/explicit_update.h"
 #include "solver/implicit.h"
 #include "transfer/operators.h"
@@ -33,12 +34,18 @@
 #include <stdio.h>
 #include <string.h>
 
+double mpm_sim_finest_dx(const mpm_sim *sim) {
+  return sim->adaptive ? mpm_adaptive_finest_dx(sim) : sim->scene.dx;
+}
+
 double mpm_sim_cfl_dt(const mpm_sim *sim) {
   const mpm_solver_desc *sd = &sim->scene.solver;
   if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) return sd->dt;
   /* implicit: sim->wave_speed is 0, so the step follows particle speed alone */
   const double speed = (double)sim->wave_speed + (double)sim->max_speed;
-  double dt = speed > 0 ? sim->scene.solver.cfl * sim->scene.dx / speed : sim->frame_dt;
+  /* the multi-level grid: the finest level's spacing bounds the step */
+  const double dx = mpm_sim_finest_dx(sim);
+  double dt = speed > 0 ? sim->scene.solver.cfl * dx / speed : sim->frame_dt;
   /* enriched corners are the material's own nodes (domain/enrich.h) */
   const double rate = sim->domains.active_count ? sim->domains.enrich.rate : 0;
   if (sd->integrator == MPM_INTEGRATOR_EXPLICIT && rate > 0 && sd->cfl / rate < dt)
@@ -70,7 +77,7 @@ typedef struct stage {
   size_t timer; /* offset of its seconds in mpm_stage_times */
 } stage;
 
-static int ensure_scratch(mpm_sim *sim) {
+int mpm_sim_ensure_scratch(mpm_sim *sim) {
   const size_t cap = sim->particles.capacity;
   if (sim->scratch_capacity >= cap) return 0;
   mpm_free(sim->scratch);
@@ -83,6 +90,7 @@ static int ensure_scratch(mpm_sim *sim) {
 }
 
 static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
+  if (sim->adaptive) return mpm_adaptive_sort(sim);
   mpm_grid *g = &sim->grid;
   mpm_particles *p = &sim->particles;
   if (g->ops->activate(g, &c->tc.kernel, sim->material_count, p, &sim->step_arena))
@@ -92,7 +100,7 @@ static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
   uint32_t *perm = g->ops->particle_order(g);
   if (perm && sim->steps % sim->reorder_interval == 0) {
     /* move particles into block order now and then, so transfers stream through memory */
-    if (ensure_scratch(sim))
+    if (mpm_sim_ensure_scratch(sim))
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
     mpm_particles_permute(p, perm, &sim->scratch, sim->iscratch);
     for (size_t j = 0; j < p->count; ++j) perm[j] = (uint32_t)j;
@@ -109,6 +117,11 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
   mpm_dofs_begin_layout(d);
   const int impulse = c->p2g_output == MPM_P2G_IMPULSE;
   const unsigned fields = impulse ? MPM_DOF_MASS | MPM_DOF_V0 | MPM_DOF_V : MPM_DOF_ALL;
+  if (sim->adaptive) {
+    const mpm_status st = mpm_adaptive_layout(sim, fields);
+    c->all = mpm_dofs_values(d);
+    return st;
+  }
   mpm_domain_enrichment *en = &sim->domains.enrich;
   int failed = mpm_dofs_add_grid(d, &sim->grid);
   if (c->domains && en->count) { /* enriched corners: DOFs of their own (Zhu eq. 12) */
@@ -127,6 +140,10 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
 }
 
 static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
+  if (sim->adaptive) {
+    mpm_adaptive_p2g(sim, &c->tc, c->p2g_output == MPM_P2G_IMPULSE);
+    return MPM_OK;
+  }
   if (sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT &&
       mpm_p2g_fuses_force(&c->tc, &sim->grid)) {
     /* the implicit solve needs v^n and f^n apart (the Newton gradient), not the fused impulse */
@@ -201,6 +218,11 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
 }
 
 static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
+  if (sim->adaptive) {
+    c->r = mpm_adaptive_g2p(sim, &c->tc);
+    c->bad_set = &sim->particles;
+    return MPM_OK;
+  }
   c->r = mpm_g2p(&c->tc, &sim->grid, &c->val, &sim->particles);
   c->bad_set = &sim->particles;
   if (c->domains) {

@@ -1,0 +1,175 @@
+/* scene_json_refine.c - the multi-level grid's keys (Gao et al. 2017 sec. 5-7.1;
+ * docs/adaptive-grid.md):
+ *
+ *   "domain": { ..., "levels": 3,
+ *               "refine": [ {"level": 2, "box": {"min": [..], "max": [..]}},
+ *                           {"level": 2, "collider": "blade", "distance": 0.05},
+ *                           {"level": 1, "body": "jello"} ] }
+ *
+ * dx is the spacing of level 0, the coarsest; level L has dx / 2^L. A rule refines the cells it
+ * selects until their leaves are of its level. The grid's transfers are uGIMP's (the basis the
+ * levels share is the trilinear hat, Gao sec. 4), on the sparse grid, with the explicit
+ * integrator, and bodies without particle domains: what is not built on the multi-level grid is
+ * refused here, naming the key. */
+#include "scene/scene_json_parts.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const REFINE_KEYS[] = {"level", "box", "collider", "distance", "body", NULL};
+static const char *const BOX_KEYS[] = {"min", "max", NULL};
+
+/* obj[key] as an index of one of `count` named things (an integer, or one of their names). 1,
+ * or -1 with the message written. */
+static int parse_reference(mpm_json_ctx *c, const cJSON *obj, const char *key, const char *what,
+                           int count, const char *(*name_of)(const mpm_scene *, int),
+                           const mpm_scene *s, int *out) {
+  const cJSON *n = mpm_json_get(obj, key);
+  if (count == 0) return mpm_json_fail_at(c, key, MPM_ERR_INVALID, "the scene has no %s", what);
+  if (cJSON_IsString(n)) {
+    for (int k = 0; k < count; ++k)
+      if (!strcmp(name_of(s, k), n->valuestring)) {
+        *out = k;
+        return 1;
+      }
+    return mpm_json_fail_at(c, key, MPM_ERR_INVALID,
+                            "expected the name of one of the scene's %d %s, got '%s'", count, what,
+                            n->valuestring);
+  }
+  long long k = 0;
+  if (count == 0) return mpm_json_fail_at(c, key, MPM_ERR_INVALID, "the scene has no %s", what);
+  if (mpm_json_integer(c, obj, key, 1, mpm_json_in('[', 0, count - 1, ']', what), &k) < 0)
+    return -1;
+  *out = (int)k;
+  return 1;
+}
+
+static const char *collider_name(const mpm_scene *s, int k) {
+  return s->colliders[k].name;
+}
+static const char *body_name(const mpm_scene *s, int k) {
+  return s->bodies[k].name;
+}
+
+static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_desc *r) {
+  memset(r, 0, sizeof *r);
+  if (mpm_json_expect_object(c, e,
+                             "a refinement rule: {\"level\": L, and one of \"box\", "
+                             "\"collider\" (with \"distance\") or \"body\"}") < 0 ||
+      mpm_json_check_keys(c, e, REFINE_KEYS, NULL) < 0)
+    return -1;
+  long long level = 0;
+  if (mpm_json_integer(c, e, "level", 1,
+                       mpm_json_in('[', 1, s->levels - 1, ']',
+                                   "a level finer than 0, below "
+                                   "domain.levels"),
+                       &level) < 0)
+    return -1;
+  r->level = (int)level;
+  const int kinds =
+      !!mpm_json_get(e, "box") + !!mpm_json_get(e, "collider") + !!mpm_json_get(e, "body");
+  if (kinds != 1)
+    return mpm_json_fail(c, MPM_ERR_INVALID,
+                         "expected exactly one of 'box', 'collider' or 'body', got %d", kinds);
+  if (mpm_json_get(e, "distance") && !mpm_json_get(e, "collider"))
+    return mpm_json_fail_at(c, "distance", MPM_ERR_INVALID,
+                            "a key of collider rules only; add 'collider' or remove it");
+  if (mpm_json_get(e, "box")) {
+    r->kind = MPM_REFINE_BOX;
+    const cJSON *b = mpm_json_get(e, "box");
+    size_t o = mpm_json_push_key(c, "box");
+    if (mpm_json_expect_object(c, b, "an object with keys min and max") < 0 ||
+        mpm_json_check_keys(c, b, BOX_KEYS, NULL) < 0 ||
+        mpm_json_vec3(c, b, "min", 1, mpm_json_any("m"), r->min) < 0 ||
+        mpm_json_vec3(c, b, "max", 1, mpm_json_any("m"), r->max) < 0)
+      return -1;
+    for (int d = 0; d < 3; ++d)
+      if (!(r->max[d] > r->min[d]))
+        return mpm_json_fail_at(c, "max", MPM_ERR_INVALID,
+                                "expected max greater than min on every axis, got %g <= %g along "
+                                "%c",
+                                r->max[d], r->min[d], mpm_sj_axis_name[d]);
+    mpm_json_pop(c, o);
+  } else if (mpm_json_get(e, "collider")) {
+    r->kind = MPM_REFINE_COLLIDER;
+    if (parse_reference(c, e, "collider", "colliders", s->collider_count, collider_name, s,
+                        &r->collider) < 0 ||
+        mpm_json_number(c, e, "distance", 1, mpm_json_ge(0, "m from the collider's surface"),
+                        &r->distance) < 0)
+      return -1;
+  } else {
+    r->kind = MPM_REFINE_BODY;
+    if (parse_reference(c, e, "body", "bodies", s->body_count, body_name, s, &r->body) < 0)
+      return -1;
+  }
+  return 0;
+}
+
+int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
+  const cJSON *dom = mpm_json_get(root, "domain");
+  size_t old = mpm_json_push_key(c, "domain");
+  long long levels = 0;
+  const int has = mpm_json_integer(
+      c, dom, "levels", 0,
+      mpm_json_in('[', 1, MPM_SCENE_LEVELS_MAX, ']', "grid levels, dx_L = dx / 2^L"), &levels);
+  if (has < 0) return -1;
+  const cJSON *arr = NULL;
+  const int has_refine =
+      mpm_sj_get_array(c, dom, "refine", 0, "an array of refinement rules", &arr);
+  if (has_refine < 0) return -1;
+  if (has_refine && !has)
+    return mpm_json_fail_at(c, "refine", MPM_ERR_INVALID,
+                            "refinement needs a multi-level grid: set domain.levels (2 or more)");
+  s->levels = (int)levels;
+  if (has_refine && cJSON_GetArraySize(arr) > 0) {
+    const int n = cJSON_GetArraySize(arr);
+    s->refine = calloc((size_t)n, sizeof *s->refine);
+    if (!s->refine) return mpm_sj_fail_nomem(c, "refinement rules");
+    size_t o = mpm_json_push_key(c, "refine");
+    int i = 0;
+    for (const cJSON *e = arr->child; e; e = e->next, ++i) {
+      size_t o2 = mpm_json_push_index(c, i);
+      if (s->levels < 2)
+        return mpm_json_fail(c, MPM_ERR_INVALID,
+                             "a refinement rule needs domain.levels of 2 or more, got %d",
+                             s->levels);
+      if (parse_rule(c, e, s, &s->refine[i]) < 0) return -1;
+      s->refine_count = i + 1;
+      mpm_json_pop(c, o2);
+    }
+    mpm_json_pop(c, o);
+  }
+  mpm_json_pop(c, old);
+  if (!s->levels) return 0;
+
+  /* what the multi-level grid asks of the rest of the scene */
+  const cJSON *sv = mpm_json_get(root, "solver");
+  size_t o = mpm_json_push_key(c, "solver");
+  if (!mpm_json_get(sv, "kernel"))
+    s->solver.kernel = MPM_KERNEL_UGIMP; /* Gao's transfers, the default on levels */
+  else if (s->solver.kernel != MPM_KERNEL_UGIMP)
+    return mpm_json_fail_at(c, "kernel", MPM_ERR_INVALID,
+                            "expected \"ugimp\" with domain.levels: the levels share the "
+                            "trilinear basis whose box average uGIMP is (Gao et al. sec. 4)");
+  if (s->solver.grid != MPM_GRID_SPARSE)
+    return mpm_json_fail_at(c, "grid", MPM_ERR_INVALID,
+                            "expected \"sparse\" with domain.levels: the levels are sparse grids");
+  if (s->solver.integrator != MPM_INTEGRATOR_EXPLICIT)
+    return mpm_json_fail_at(c, "integrator", MPM_ERR_INVALID,
+                            "expected \"explicit\" with domain.levels: the implicit step on the "
+                            "multi-level grid is not built yet");
+  if (s->solver.gimp_length > 0)
+    return mpm_json_fail_at(c, "gimp_length", MPM_ERR_INVALID,
+                            "not with domain.levels: a particle's box is the spacing of its "
+                            "level (its particle type, Gao et al. sec. 7.1)");
+  mpm_json_pop(c, o);
+  for (int b = 0; b < s->body_count; ++b)
+    if (s->bodies[b].domains) {
+      mpm_json_push_key(c, "bodies");
+      mpm_json_push_index(c, b);
+      return mpm_json_fail_at(c, "domains", MPM_ERR_INVALID,
+                              "not with domain.levels: particle domains on the multi-level grid "
+                              "are not built yet");
+    }
+  return 0;
+}

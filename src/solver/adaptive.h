@@ -1,0 +1,67 @@
+/* adaptive.h - the step on Gao et al.'s multi-level grid (sec. 6.1; docs/adaptive-grid.md).
+ *
+ * Setup (adaptive_setup.c): the scene's refinement rules (domain.refine) refine the tree, and
+ * each body is sampled leaf by leaf at the spacing of the leaf's level, so a particle's type (its
+ * `level`) is the level of the leaf it was born in (Gao sec. 7.1).
+ *
+ * Each step (adaptive_step.c):
+ *   sort    every particle's box (side L_p: its body's particle spacing at its type) finds the
+ *           finest level its leaves meet (mpm_refinement_finest_level_in); the pair (level, L_p)
+ *           is a *transfer grid*, one sparse grid with one uGIMP kernel (a level's own grid, or
+ *           an extra grid at that level whose slots are all ghosts). Particles are kept grouped
+ *           by transfer grid (contiguous ranges, regrouped when one changes grid), each range is
+ *           sorted into its grid, the stencils' nodes are marked used and the ghosts' parents
+ *           activated (mpm_adaptive_grid_close)
+ *   layout  every transfer grid is a segment of the DOF set; the ghost rows are built
+ *   p2g     each range scatters on its grid with the lane kernels as on the uniform grid, then
+ *           the ghosts' mass, momentum (and force) go to their real parents (Gao eq. 15)
+ *   update  the explicit update of the DOF set (ghosts hold no mass: they are skipped)
+ *   g2p     the ghosts take their parents' velocities, then each range gathers from its grid
+ * One level and one particle type: one transfer grid without ghosts, the uniform step bitwise.
+ *
+ * Not yet: APIC's ghost moments inside the step (mpm_adaptive_grid_scatter_apic and
+ * _gather_moments exist and are tested; their per-particle pass is next), particle domains and
+ * the implicit step on levels (refused by the scene parser). */
+#ifndef MPM_SOLVER_ADAPTIVE_H
+#define MPM_SOLVER_ADAPTIVE_H
+
+#include "grid/adaptive_grid.h"
+#include "transfer/transfer.h"
+
+typedef struct mpm_sim mpm_sim;
+
+/* One transfer grid: particles on `level` with box side `box`. */
+typedef struct mpm_transfer_grid {
+  int level;
+  double box; /* L_p, m */
+  int G;      /* its sparse grid (mpm_adaptive_grid_at) */
+  mpm_kernel kernel;
+} mpm_transfer_grid;
+
+typedef struct mpm_adaptive {
+  mpm_adaptive_grid grid;
+  double *body_box; /* per body: L_p of its type-0 particles (its particle spacing), m */
+  mpm_transfer_grid tgrid[MPM_TRANSFER_GRIDS_MAX];
+  int tgrid_count;
+  size_t range[MPM_TRANSFER_GRIDS_MAX + 1]; /* transfer grid t's particles: range[t] .. [t+1) */
+  uint8_t *of;                              /* per particle: its transfer grid this step */
+  uint32_t *perm;
+  size_t capacity;
+} mpm_adaptive;
+
+/* The tree from the scene's rules (colliders must exist), and the per-body boxes. */
+mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err);
+void mpm_adaptive_free(mpm_adaptive *a);
+/* Sample body b level by level (sim->particles grows; types set). */
+mpm_status mpm_adaptive_sample_body(mpm_sim *sim, int b, mpm_error *err);
+
+/* The stages (step.c calls them for a multi-level grid). */
+mpm_status mpm_adaptive_sort(mpm_sim *sim);
+mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields);
+void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse);
+mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc);
+
+/* The finest spacing in use (the CFL step's dx). */
+double mpm_adaptive_finest_dx(const mpm_sim *sim);
+
+#endif

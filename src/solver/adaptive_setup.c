@@ -1,0 +1,239 @@
+/* adaptive_setup.c - the multi-level grid of a scene: the tree its refinement rules make, and
+ * its bodies sampled leaf by leaf (see adaptive.h). */
+#include "solver/adaptive.h"
+
+#include "core/alloc.h"
+#include "scene/sample.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+_Static_assert(MPM_SCENE_LEVELS_MAX == MPM_LEVELS_MAX, "scene and grid agree on the levels");
+
+static mpm_status oom(mpm_error *err, const char *what) {
+  return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for %s", what);
+}
+
+/* The cell of `level` holding x. */
+static void cell_of(const mpm_refinement *r, int level, const double x[3], int32_t cell[3]) {
+  const double dx = (double)mpm_refinement_dx(r, level);
+  for (int d = 0; d < 3; ++d) cell[d] = (int32_t)floor((x[d] - (double)r->origin[d]) / dx);
+}
+
+static int refine_box(mpm_refinement *r, const mpm_refine_desc *rule) {
+  const int L = rule->level - 1; /* cells of this level get children of the rule's level */
+  const double dx = (double)mpm_refinement_dx(r, L);
+  int32_t lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) { /* cells overlapping the box, not only touching it */
+    lo[d] = (int32_t)floor((rule->min[d] - (double)r->origin[d]) / dx);
+    hi[d] = (int32_t)ceil((rule->max[d] - (double)r->origin[d]) / dx) - 1;
+  }
+  for (int32_t a = lo[0]; a <= hi[0]; ++a)
+    for (int32_t b = lo[1]; b <= hi[1]; ++b)
+      for (int32_t c = lo[2]; c <= hi[2]; ++c) {
+        const int32_t cell[3] = {a, b, c};
+        if (mpm_refinement_refine(r, L, cell)) return -1;
+      }
+  return 0;
+}
+
+/* Cells within rule->distance of the collider's surface: from level 0 down, a cell whose centre
+ * is within the distance plus its half diagonal is refined and its children tested. */
+static int refine_collider(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule) {
+  const mpm_collider_pose pose = mpm_collider_pose_at(&sim->colliders[rule->collider], 0);
+  size_t n = (size_t)sim->cells[0] * (size_t)sim->cells[1] * (size_t)sim->cells[2], cap = n;
+  int32_t(*cur)[3] = malloc(cap * sizeof *cur);
+  if (!cur) return -1;
+  size_t k = 0;
+  for (int32_t a = 0; a < sim->cells[0]; ++a)
+    for (int32_t b = 0; b < sim->cells[1]; ++b)
+      for (int32_t c = 0; c < sim->cells[2]; ++c) {
+        cur[k][0] = a;
+        cur[k][1] = b;
+        cur[k][2] = c;
+        ++k;
+      }
+  int status = 0;
+  for (int L = 0; L < rule->level && n; ++L) {
+    const double dx = (double)mpm_refinement_dx(r, L), reach = rule->distance + 0.5 * sqrt(3) * dx;
+    size_t kept = 0;
+    for (size_t i = 0; i < n; ++i) {
+      mpm_real x[3], normal[3];
+      for (int d = 0; d < 3; ++d) x[d] = (mpm_real)((double)r->origin[d] + (cur[i][d] + 0.5) * dx);
+      if (fabs((double)mpm_collider_phi(&pose, x, normal)) > reach) continue;
+      if (mpm_refinement_refine(r, L, cur[i])) {
+        status = -1;
+        goto done;
+      }
+      for (int d = 0; d < 3; ++d) cur[kept][d] = cur[i][d];
+      ++kept;
+    }
+    /* the children of the refined cells are the next level's candidates */
+    if (L + 1 < rule->level) {
+      if (kept * 8 > cap) {
+        cap = kept * 8;
+        int32_t(*grown)[3] = realloc(cur, cap * sizeof *cur);
+        if (!grown) {
+          status = -1;
+          goto done;
+        }
+        cur = grown;
+      }
+      for (size_t i = kept; i-- > 0;) {
+        const int32_t parent[3] = {cur[i][0], cur[i][1], cur[i][2]};
+        for (int o = 0; o < 8; ++o)
+          for (int d = 0; d < 3; ++d)
+            cur[8 * i + (size_t)o][d] = 2 * parent[d] + ((o >> (2 - d)) & 1);
+      }
+      n = kept * 8;
+    }
+  }
+done:
+  free(cur);
+  return status;
+}
+
+/* Cells holding the body's particles when it is sampled at the rule's level. */
+static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
+                              mpm_error *err) {
+  mpm_particles p;
+  if (mpm_particles_init(&p, 1024)) return oom(err, "a refinement rule's samples");
+  mpm_status st =
+      mpm_sample_body_kept(&sim->scene, rule->body, ldexp(1, -rule->level), NULL, NULL, &p, err);
+  for (size_t i = 0; st == MPM_OK && i < p.count; ++i) {
+    const double x[3] = {p.x[0][i], p.x[1][i], p.x[2][i]};
+    int32_t cell[3];
+    cell_of(r, rule->level - 1, x, cell);
+    if (mpm_refinement_refine(r, rule->level - 1, cell)) st = oom(err, "the refined cells");
+  }
+  mpm_particles_free(&p);
+  return st;
+}
+
+static int by_level_and_box(const void *x, const void *y) {
+  const mpm_transfer_grid *a = x, *b = y;
+  if (a->level != b->level) return a->level < b->level ? -1 : 1;
+  return a->box < b->box ? -1 : a->box > b->box;
+}
+
+/* Every transfer grid a particle can need, made once from the scene alone, in order of level
+ * and box, so that a run and its resumed continuation lay the DOF set out alike: for each
+ * distinct body spacing h and type q, box h / 2^q on levels q .. while the box is at most 2
+ * cells. A level's own grid goes to its smallest box (the finest body's particles of the
+ * level's type); the others get extra grids. */
+static mpm_status make_transfer_grids(mpm_sim *sim, mpm_error *err) {
+  mpm_adaptive *a = sim->adaptive;
+  const mpm_scene *sc = &sim->scene;
+  const mpm_refinement *r = &a->grid.tree;
+  int n = 0;
+  for (int b = 0; b < sc->body_count; ++b)
+    for (int q = 0; q < r->levels; ++q)
+      for (int L = q; L < r->levels; ++L) {
+        const double box = ldexp(a->body_box[b], -q);
+        if (box > 2 * (double)mpm_refinement_dx(r, L) * (1 + 1e-6)) break;
+        int seen = 0;
+        for (int t = 0; t < n; ++t) seen |= a->tgrid[t].level == L && a->tgrid[t].box == box;
+        if (seen) continue;
+        if (n == MPM_TRANSFER_GRIDS_MAX)
+          return mpm_error_set(err, MPM_ERR_INVALID,
+                               "%s: the bodies' particle spacings need more than %d transfer "
+                               "grids on %d levels; give more bodies the same particles_per_cell",
+                               sc->path, MPM_TRANSFER_GRIDS_MAX, r->levels);
+        a->tgrid[n].level = L;
+        a->tgrid[n].box = box;
+        ++n;
+      }
+  qsort(a->tgrid, (size_t)n, sizeof *a->tgrid, by_level_and_box);
+  for (int t = 0; t < n; ++t) {
+    mpm_transfer_grid *tg = &a->tgrid[t];
+    const int own = t == 0 || a->tgrid[t - 1].level != tg->level;
+    tg->G = own ? tg->level : mpm_adaptive_grid_add_extra(&a->grid, tg->level);
+    if (tg->G < 0)
+      return mpm_error_set(err, MPM_ERR_INVALID,
+                           "%s: the bodies' particle spacings need more than %d extra transfer "
+                           "grids; give more bodies the same particles_per_cell",
+                           sc->path, MPM_EXTRA_GRIDS_MAX);
+    tg->kernel =
+        mpm_kernel_make(MPM_KERNEL_UGIMP, mpm_refinement_dx(r, tg->level), (mpm_real)tg->box);
+  }
+  a->tgrid_count = n;
+  return MPM_OK;
+}
+
+mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
+  const mpm_scene *sc = &sim->scene;
+  mpm_adaptive *a = calloc(1, sizeof *a);
+  if (!a) return oom(err, "the multi-level grid");
+  sim->adaptive = a;
+  mpm_adaptive_grid_init(&a->grid, sc->levels, sim->origin, (mpm_real)sc->dx);
+  a->body_box = calloc((size_t)sc->body_count + 1, sizeof *a->body_box);
+  if (!a->body_box) return oom(err, "the multi-level grid");
+  for (int b = 0; b < sc->body_count; ++b) a->body_box[b] = mpm_sample_spacing(sc, b);
+  mpm_refinement *r = &a->grid.tree;
+  const mpm_status made = make_transfer_grids(sim, err);
+  if (made != MPM_OK) return made;
+  for (int k = 0; k < sc->refine_count; ++k) {
+    const mpm_refine_desc *rule = &sc->refine[k];
+    if (rule->kind == MPM_REFINE_BODY) {
+      const mpm_status st = refine_body(sim, r, rule, err);
+      if (st != MPM_OK) return st;
+      continue;
+    }
+    if (rule->kind == MPM_REFINE_BOX ? refine_box(r, rule) : refine_collider(sim, r, rule))
+      return mpm_error_set(err, MPM_ERR_NOMEM,
+                           "%s: domain.refine[%d]: out of memory for the refined cells (or a cell "
+                           "outside the %d-level grid's coordinate range)",
+                           sc->path, k, sc->levels);
+  }
+  return MPM_OK;
+}
+
+void mpm_adaptive_free(mpm_adaptive *a) {
+  if (!a) return;
+  mpm_adaptive_grid_free(&a->grid);
+  free(a->body_box);
+  mpm_free(a->of);
+  mpm_free(a->perm);
+  free(a);
+}
+
+typedef struct keep_level {
+  const mpm_refinement *tree;
+  int level;
+} keep_level;
+
+static int in_leaf_of_level(const void *ctx, const double x[3]) {
+  const keep_level *k = ctx;
+  const mpm_real xr[3] = {(mpm_real)x[0], (mpm_real)x[1], (mpm_real)x[2]};
+  int32_t cell[3];
+  return mpm_refinement_leaf_at(k->tree, xr, cell) == k->level;
+}
+
+mpm_status mpm_adaptive_sample_body(mpm_sim *sim, int b, mpm_error *err) {
+  const mpm_scene *sc = &sim->scene;
+  mpm_particles *p = &sim->particles;
+  const size_t start = p->count;
+  for (int q = 0; q < sc->levels; ++q) {
+    const size_t first = p->count;
+    const keep_level k = {&sim->adaptive->grid.tree, q};
+    const mpm_status st = mpm_sample_body_kept(sc, b, ldexp(1, -q), in_leaf_of_level, &k, p, err);
+    if (st != MPM_OK) {
+      p->count = start;
+      return st;
+    }
+    for (size_t i = first; i < p->count; ++i) p->level[i] = q;
+  }
+  if (p->count == start)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: bodies[%d] (\"%s\"): no particle lies inside the shape at lattice "
+                         "spacing %g m (level 0); use a smaller dx or more particles_per_cell",
+                         sc->path, b, sc->bodies[b].name, mpm_sample_spacing(sc, b));
+  mpm_sample_spin(sc, b, p, start);
+  return MPM_OK;
+}
+
+double mpm_adaptive_finest_dx(const mpm_sim *sim) {
+  return sim->scene.dx / (double)(1 << (sim->scene.levels - 1));
+}

@@ -1,0 +1,212 @@
+/* adaptive_step.c - the stages of a step on the multi-level grid (see adaptive.h). */
+#include "solver/adaptive.h"
+
+#include "core/alloc.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Particles i .. i + n of p, as a set of their own (the arrays are shared). */
+static mpm_particles view_of(const mpm_particles *p, size_t i, size_t n) {
+  mpm_particles v = *p;
+  v.count = v.capacity = n;
+  for (int d = 0; d < 3; ++d) v.x[d] = p->x[d] + i, v.v[d] = p->v[d] + i;
+  for (int d = 0; d < 9; ++d) v.F[d] = p->F[d] + i, v.B[d] = p->B[d] + i;
+  v.plastic = p->plastic + i;
+  v.mass = p->mass + i;
+  v.vol0 = p->vol0 + i;
+  v.material = p->material + i;
+  v.body = p->body + i;
+  v.level = p->level + i;
+  v.id = p->id + i;
+  return v;
+}
+
+static int reserve(mpm_adaptive *a, size_t n) {
+  if (n <= a->capacity) return 0;
+  mpm_free(a->of);
+  mpm_free(a->perm);
+  a->capacity = n + n / 2 + 16;
+  a->of = mpm_alloc(a->capacity);
+  a->perm = mpm_alloc(a->capacity * sizeof *a->perm);
+  if (!a->of || !a->perm) {
+    a->capacity = 0;
+    return -1;
+  }
+  return 0;
+}
+
+/* The transfer grid of particles with box side `box` on `level` (made by
+ * mpm_adaptive_make_transfer_grids), or -1. */
+static int transfer_grid(const mpm_adaptive *a, int level, double box) {
+  for (int t = 0; t < a->tgrid_count; ++t)
+    if (a->tgrid[t].level == level && a->tgrid[t].box == box) return t;
+  return -1;
+}
+
+/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. */
+static mpm_status classify(mpm_sim *sim) {
+  mpm_adaptive *a = sim->adaptive;
+  const mpm_particles *p = &sim->particles;
+  const mpm_refinement *r = &a->grid.tree;
+  for (size_t i = 0; i < p->count; ++i) {
+    const int q = p->level[i];
+    const double box = ldexp(a->body_box[p->body[i]], -q);
+    mpm_real lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = p->x[d][i] - (mpm_real)(0.5 * box);
+      hi[d] = p->x[d][i] + (mpm_real)(0.5 * box);
+    }
+    const int level = r->levels > 1 ? mpm_refinement_finest_level_in(r, lo, hi) : 0;
+    if (box > 2 * (double)mpm_refinement_dx(r, level) * (1 + 1e-6))
+      return mpm_error_set(
+          &sim->error, MPM_ERR_INVALID,
+          "step %lld: particle id %u (body %d) of type %d (box %g m) at (%g, %g, %g) meets a "
+          "leaf of level %d, whose spacing %g m is less than half its box: the multi-level grid "
+          "transfers boxes of at most 2 cells; let the refinement change by one level at a time "
+          "near the material (domain.refine)",
+          (long long)sim->steps, p->id[i], p->body[i], q, box, (double)p->x[0][i],
+          (double)p->x[1][i], (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
+    const int t = transfer_grid(a, level, box);
+    if (t < 0) /* every pair a type can meet was made at setup */
+      return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                           "step %lld: particle id %u has type %d, outside the grid's %d levels",
+                           (long long)sim->steps, p->id[i], q, r->levels);
+    a->of[i] = (uint8_t)t;
+  }
+  return MPM_OK;
+}
+
+/* Keep the particles grouped by transfer grid: a stable counting sort when some particle
+ * changed grid. The ranges in a.range. */
+static mpm_status group(mpm_sim *sim) {
+  mpm_adaptive *a = sim->adaptive;
+  mpm_particles *p = &sim->particles;
+  size_t count[MPM_TRANSFER_GRIDS_MAX + 1] = {0};
+  int grouped = 1;
+  for (size_t i = 0; i < p->count; ++i) {
+    count[a->of[i] + 1]++;
+    grouped &= i == 0 || a->of[i] >= a->of[i - 1];
+  }
+  for (int t = 0; t < a->tgrid_count; ++t) count[t + 1] += count[t];
+  for (int t = 0; t <= a->tgrid_count; ++t) a->range[t] = count[t];
+  if (grouped) return MPM_OK;
+  for (size_t i = 0; i < p->count; ++i) a->perm[count[a->of[i]]++] = (uint32_t)i;
+  if (mpm_sim_ensure_scratch(sim))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
+  mpm_particles_permute(p, a->perm, &sim->scratch, sim->iscratch);
+  return MPM_OK;
+}
+
+mpm_status mpm_adaptive_sort(mpm_sim *sim) {
+  mpm_adaptive *a = sim->adaptive;
+  mpm_adaptive_grid *ag = &a->grid;
+  mpm_particles *p = &sim->particles;
+  if (reserve(a, p->count + 1))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory sorting particles");
+  mpm_status st = classify(sim);
+  if (st == MPM_OK) st = group(sim);
+  if (st != MPM_OK) return st;
+  /* every grid is sorted (an empty one too: that resets its blocks), then marked */
+  int sorted[MPM_TRANSFER_GRIDS_MAX] = {0};
+  for (int t = 0; t < a->tgrid_count; ++t) {
+    const mpm_transfer_grid *tg = &a->tgrid[t];
+    const mpm_particles v = view_of(p, a->range[t], a->range[t + 1] - a->range[t]);
+    mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
+    if (g->ops->activate(g, &tg->kernel, sim->material_count, &v, &sim->step_arena)) goto nomem;
+    sorted[tg->G] = 1;
+  }
+  for (int G = 0; G >= 0; G = mpm_adaptive_grid_next(ag, G)) {
+    if (sorted[G]) continue;
+    const mpm_particles none = view_of(p, 0, 0);
+    mpm_grid *g = mpm_adaptive_grid_at(ag, G);
+    const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, g->dx, 0);
+    if (g->ops->activate(g, &k, sim->material_count, &none, &sim->step_arena)) goto nomem;
+  }
+  if (sim->steps % sim->reorder_interval == 0 && p->count) {
+    /* into block order now and then, every range in its grid's order */
+    for (int t = 0; t < a->tgrid_count; ++t) {
+      uint32_t *perm = mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm;
+      for (size_t j = a->range[t]; j < a->range[t + 1]; ++j)
+        a->perm[j] = (uint32_t)a->range[t] + perm[j - a->range[t]];
+    }
+    if (mpm_sim_ensure_scratch(sim))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
+    mpm_particles_permute(p, a->perm, &sim->scratch, sim->iscratch);
+    for (int t = 0; t < a->tgrid_count; ++t) {
+      uint32_t *perm = mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm;
+      for (size_t j = 0; j < a->range[t + 1] - a->range[t]; ++j) perm[j] = (uint32_t)j;
+    }
+  }
+  if (ag->tree.levels == 1) return MPM_OK; /* one level: no ghosts */
+  mpm_adaptive_grid_clear_marks(ag);
+  for (int t = 0; t < a->tgrid_count; ++t)
+    if (mpm_adaptive_grid_mark_sorted(ag, a->tgrid[t].G, a->tgrid[t].kernel.width)) goto nomem;
+  if (mpm_adaptive_grid_close(ag))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory activating the parents of the ghost nodes (or "
+                         "a node constrained through more than %d real nodes)",
+                         (long long)sim->steps, MPM_ROW_MAX);
+  return MPM_OK;
+nomem:
+  return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                       "step %lld: out of memory sorting %zu particles into grid blocks",
+                       (long long)sim->steps, p->count);
+}
+
+mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
+  mpm_adaptive_grid *ag = &sim->adaptive->grid;
+  mpm_dofs *d = &sim->dofs;
+  mpm_dofs_begin_layout(d);
+  int failed = 0;
+  for (int G = 0; G >= 0 && !failed; G = mpm_adaptive_grid_next(ag, G)) {
+    mpm_grid *g = mpm_adaptive_grid_at(ag, G);
+    failed = mpm_dofs_add_grid(d, g);
+  }
+  if (failed || mpm_dofs_end_layout(d, fields) ||
+      (ag->tree.levels > 1 && mpm_adaptive_grid_build_rows(ag)))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory for the values of %zu grid nodes",
+                         (long long)sim->steps, d->count);
+  mpm_dofs_clear(d, fields & ~(unsigned)MPM_DOF_V);
+  return MPM_OK;
+}
+
+void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
+  mpm_adaptive *a = sim->adaptive;
+  mpm_transfer_ctx t = *tc;
+  for (int k = 0; k < a->tgrid_count; ++k) {
+    const mpm_transfer_grid *tg = &a->tgrid[k];
+    const mpm_particles v = view_of(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
+    const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
+    const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
+    t.kernel = tg->kernel;
+    mpm_p2g(&t, g, &val, &v);
+  }
+  /* the ghosts' sums go to their real parents (Gao eq. 15) */
+  mpm_dofs *d = &sim->dofs;
+  mpm_real *u[7] = {d->mass, d->v0[0], d->v0[1], d->v0[2], d->f[0], d->f[1], d->f[2]};
+  mpm_adaptive_grid_scatter(&a->grid, impulse ? 4 : 7, u);
+}
+
+mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
+  mpm_adaptive *a = sim->adaptive;
+  mpm_dofs *d = &sim->dofs;
+  mpm_real *u[6] = {d->v[0], d->v[1], d->v[2], d->v0[0], d->v0[1], d->v0[2]};
+  mpm_adaptive_grid_gather(&a->grid, tc->transfer == MPM_TRANSFER_APIC ? 3 : 6, u);
+  mpm_g2p_result r = {0, -1};
+  mpm_transfer_ctx t = *tc;
+  for (int k = 0; k < a->tgrid_count; ++k) {
+    const mpm_transfer_grid *tg = &a->tgrid[k];
+    mpm_particles v = view_of(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
+    const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
+    const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
+    t.kernel = tg->kernel;
+    const mpm_g2p_result rk = mpm_g2p(&t, g, &val, &v);
+    if (rk.max_speed > r.max_speed || rk.max_speed != rk.max_speed) r.max_speed = rk.max_speed;
+    if (rk.bad_particle >= 0 && r.bad_particle < 0)
+      r.bad_particle = rk.bad_particle + (long)a->range[k];
+  }
+  return r;
+}

@@ -1,0 +1,268 @@
+/* test_adaptive_step.c - the step on the multi-level grid (solver/adaptive.h) and its scene keys
+ * (domain.levels, domain.refine):
+ *   - one level through the multi-level path gives bitwise the uniform grid's particles (APIC
+ *     and FLIP), for 1 and 2 threads;
+ *   - two levels: particles are sampled per leaf at their level's spacing, a body flying from
+ *     the coarse into the fine half keeps its mass exactly and its linear momentum to round-off
+ *     while it crosses (ghost nodes carry every P2G sum to real nodes, Gao eq. 15), and the step
+ *     is the same for 1 and 2 threads;
+ *   - the refinement rules (box, collider distance, body) refine where they say;
+ *   - a particle meeting a leaf two levels finer than its type is refused, naming it;
+ *   - key mistakes name the key path. */
+#include "scene_json_support.h"
+#include "support.h"
+
+#include "core/parallel.h"
+#include "solver/adaptive.h"
+#include "solver/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static mpm_sim *sim_from_json(const char *json) {
+  mpm_scene scene;
+  mpm_error err;
+  mpm_error_clear(&err);
+  if (mpm_scene_parse(json, "test.json", &scene, &err) != MPM_OK)
+    fail_msg("scene: %s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("sim: %s", err.message);
+  mpm_scene_free(&scene);
+  return sim;
+}
+
+static void run_steps(mpm_sim *sim, int n) {
+  for (int i = 0; i < n; ++i)
+    if (mpm_sim_step(sim, 0.01) != MPM_OK) fail_msg("step %d: %s", i, mpm_sim_last_error(sim));
+}
+
+/* A spinning jello box flying along x, no gravity, far from walls; `grid` is spliced into the
+ * domain object. */
+static const char *flying_box(const char *grid, const char *transfer, double cx) {
+  static char buf[2048];
+  snprintf(buf, sizeof buf,
+           "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04%s},"
+           " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
+           " \"solver\": {\"kernel\": \"ugimp\", \"transfer\": \"%s\", \"cfl\": 0.5},"
+           " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 4e4, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%g,0.5,0.5], "
+           "\"half_extent\": [0.12,0.1,0.1]}, \"material\": \"j\", \"velocity\": [0.8,0.1,0], "
+           "\"angular_velocity\": [0,0,2]}]}",
+           grid, transfer, cx);
+  return buf;
+}
+
+static void assert_same_particles(const mpm_particles *a, const mpm_particles *b) {
+  assert_int_equal(a->count, b->count);
+  for (int d = 0; d < 3; ++d) {
+    assert_memory_equal(a->x[d], b->x[d], a->count * sizeof(mpm_real));
+    assert_memory_equal(a->v[d], b->v[d], a->count * sizeof(mpm_real));
+  }
+  for (int d = 0; d < 9; ++d) {
+    assert_memory_equal(a->F[d], b->F[d], a->count * sizeof(mpm_real));
+    assert_memory_equal(a->B[d], b->B[d], a->count * sizeof(mpm_real));
+  }
+  assert_memory_equal(a->id, b->id, a->count * sizeof(uint32_t));
+}
+
+static void test_single_level_is_uniform_bitwise(void **state) {
+  (void)state;
+  const char *transfers[2] = {"apic", "flip"};
+  for (int t = 0; t < 2; ++t)
+    for (int threads = 1; threads <= 2; ++threads) {
+      mpm_set_threads(threads);
+      mpm_sim *u = sim_from_json(flying_box("", transfers[t], 0.45));
+      mpm_sim *a = sim_from_json(flying_box(", \"levels\": 1", transfers[t], 0.45));
+      assert_null(u->adaptive);
+      assert_non_null(a->adaptive);
+      run_steps(u, 40); /* past two periodic reorders */
+      run_steps(a, 40);
+      assert_true(a->time == u->time);
+      assert_same_particles(&a->particles, &u->particles);
+      mpm_sim_destroy(u);
+      mpm_sim_destroy(a);
+    }
+  mpm_set_threads(1);
+}
+
+#define FINE_HALF                                                                                  \
+  ", \"levels\": 2, \"refine\": [{\"level\": 1, \"box\": {\"min\": [0.5,0,0], \"max\": [1,1,1]}}]"
+
+typedef struct sums {
+  double mass, p[3];
+} sums;
+
+static sums sum_of(const mpm_particles *p) {
+  sums s = {0, {0, 0, 0}};
+  for (size_t i = 0; i < p->count; ++i) {
+    s.mass += (double)p->mass[i];
+    for (int d = 0; d < 3; ++d) s.p[d] += (double)p->mass[i] * (double)p->v[d][i];
+  }
+  return s;
+}
+
+static void test_two_levels_conserve_across_the_level_change(void **state) {
+  (void)state;
+  const char *transfers[2] = {"apic", "flip"};
+  for (int t = 0; t < 2; ++t) {
+    mpm_sim *sim = sim_from_json(flying_box(FINE_HALF, transfers[t], 0.45));
+    const mpm_particles *p = &sim->particles;
+    /* the box spans x in [0.33, 0.57]: coarse particles (h = 0.02) left of 0.48 (the level-0
+     * cell holding x = 0.5 is refined), fine ones (0.01) right of it, up to their jitter, each
+     * with its level's mass */
+    size_t coarse = 0, fine = 0;
+    for (size_t i = 0; i < p->count; ++i) {
+      if (p->level[i] == 0) {
+        assert_true(p->x[0][i] < 0.48f + 0.01f);
+        assert_float_equal(p->mass[i], 1000 * 0.02 * 0.02 * 0.02, 1e-9);
+        ++coarse;
+      } else {
+        assert_int_equal(p->level[i], 1);
+        assert_true(p->x[0][i] > 0.48f - 0.005f);
+        assert_float_equal(p->mass[i], 1000 * 0.01 * 0.01 * 0.01, 1e-10);
+        ++fine;
+      }
+    }
+    assert_true(coarse > 0 && fine > 0);
+    const sums s0 = sum_of(p);
+    run_steps(sim, 1);
+    const mpm_adaptive *a = sim->adaptive;
+    assert_true(a->grid.ghost_count > 0);
+    assert_true(a->tgrid_count >= 3); /* (0, coarse), (1, fine), (1, coarse at the change) */
+    run_steps(sim, 80);
+    const sums s1 = sum_of(p);
+    assert_float_equal(s1.mass, s0.mass, 1e-12 * s0.mass);
+    const double pn = sqrt(s0.p[0] * s0.p[0] + s0.p[1] * s0.p[1]);
+    for (int d = 0; d < 3; ++d)
+      if (fabs(s1.p[d] - s0.p[d]) > 2e-5 * pn)
+        fail_msg("%s: momentum[%d] %.9g -> %.9g", transfers[t], d, s0.p[d], s1.p[d]);
+    /* the body moved on: part of the coarse particles now transfer on the fine level */
+    int crossed = 0;
+    for (int k = 0; k < a->tgrid_count; ++k)
+      crossed |= a->tgrid[k].level == 1 && a->tgrid[k].box > 0.015 && a->range[k + 1] > a->range[k];
+    assert_true(crossed);
+    mpm_sim_destroy(sim);
+  }
+}
+
+static void test_two_levels_threads_bitwise(void **state) {
+  (void)state;
+  mpm_set_threads(1);
+  mpm_sim *a = sim_from_json(flying_box(FINE_HALF, "apic", 0.45));
+  run_steps(a, 40);
+  mpm_set_threads(2);
+  mpm_sim *b = sim_from_json(flying_box(FINE_HALF, "apic", 0.45));
+  run_steps(b, 40);
+  mpm_set_threads(1);
+  assert_same_particles(&a->particles, &b->particles);
+  mpm_sim_destroy(a);
+  mpm_sim_destroy(b);
+}
+
+static int leaf_level(const mpm_sim *sim, double x, double y, double z) {
+  const mpm_real p[3] = {(mpm_real)x, (mpm_real)y, (mpm_real)z};
+  int32_t cell[3];
+  return mpm_refinement_leaf_at(&sim->adaptive->grid.tree, p, cell);
+}
+
+static void test_refinement_rules(void **state) {
+  (void)state;
+  /* a sphere collider of radius 0.1 at (0.5, 0.3, 0.5): refined to level 2 within 0.05 of its
+   * surface; the body refined to level 1 where it is */
+  mpm_sim *sim = sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04, \"levels\": 3,"
+      "  \"refine\": [{\"level\": 2, \"collider\": \"ball\", \"distance\": 0.05},"
+      "              {\"level\": 1, \"body\": 0}]},"
+      " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
+      " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 4e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.7,0.5], "
+      "\"half_extent\": [0.1,0.1,0.1]}, \"material\": \"j\"}],"
+      " \"colliders\": [{\"name\": \"ball\", \"shape\": {\"type\": \"sphere\", \"center\": "
+      "[0.5,0.3,0.5], \"radius\": 0.1}}]}");
+  assert_int_equal(leaf_level(sim, 0.5, 0.41, 0.5), 2); /* just above the ball's surface */
+  assert_int_equal(leaf_level(sim, 0.5, 0.18, 0.5), 2); /* just below it */
+  assert_int_equal(leaf_level(sim, 0.5, 0.3, 0.5), 0);  /* its centre, 0.1 deep */
+  assert_int_equal(leaf_level(sim, 0.9, 0.9, 0.9), 0);  /* far away */
+  assert_int_equal(leaf_level(sim, 0.5, 0.7, 0.5), 1);  /* inside the body */
+  /* the body's particles have the type of their leaf */
+  const mpm_particles *p = &sim->particles;
+  for (size_t i = 0; i < p->count; ++i)
+    assert_int_equal(p->level[i], leaf_level(sim, p->x[0][i], p->x[1][i], p->x[2][i]));
+  mpm_sim_destroy(sim);
+}
+
+static void test_steep_refinement_is_refused(void **state) {
+  (void)state;
+  /* level 0 beside level 3 (the box starts on a level-0 cell face, so no level between): the
+   * coarse particles (box 0.02 m) at the change meet leaves of 0.005 m */
+  mpm_sim *sim = sim_from_json(flying_box(
+      ", \"levels\": 4, \"refine\": [{\"level\": 3, \"box\": {\"min\": [0.52,0,0], \"max\": "
+      "[1,1,1]}}]",
+      "apic", 0.45));
+  mpm_status st = MPM_OK;
+  for (int k = 0; k < 50 && st == MPM_OK; ++k) st = mpm_sim_step(sim, 0.01); /* moving on */
+  assert_int_equal(st, MPM_ERR_INVALID);
+  const char *m = mpm_sim_last_error(sim);
+  if (!strstr(m, "of type 0") || !strstr(m, "meets a leaf of level 3") ||
+      !strstr(m, "domain.refine"))
+    fail_msg("message: %s", m);
+  mpm_sim_destroy(sim);
+}
+
+#define LEVELS_DOMAIN "'domain': {'min': [0, 0, 0], 'max': [1, 1, 1], 'dx': 0.05, "
+#define LEVELS_SCENE(D, X) "{" LEVELS_DOMAIN D "}, " TIME ", " MATS ", " BODIES X "}"
+
+static void test_key_errors(void **state) {
+  (void)state;
+  expect_error(LEVELS_SCENE("'levels': 7", ""), MPM_ERR_INVALID, "domain.levels", "[1, 6]", NULL);
+  expect_error(LEVELS_SCENE("'refine': []", ""), MPM_ERR_INVALID, "domain.refine", "domain.levels",
+               NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 2, 'box': {'min': [0,0,0], "
+                            "'max': [1,1,1]}}]",
+                            ""),
+               MPM_ERR_INVALID, "domain.refine[0].level", "[1, 1]", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1}]", ""), MPM_ERR_INVALID,
+               "domain.refine[0]", "exactly one of 'box', 'collider' or 'body'", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'box': {'min': [0,0,0], "
+                            "'max': [1,0,1]}}]",
+                            ""),
+               MPM_ERR_INVALID, "domain.refine[0].box.max", "along y", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'collider': 'wall', "
+                            "'distance': 0.1}]",
+                            ""),
+               MPM_ERR_INVALID, "domain.refine[0].collider", "no colliders", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 'nobody'}]", ""),
+               MPM_ERR_INVALID, "domain.refine[0].body", "'nobody'", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 0, 'distance': 1}]", ""),
+               MPM_ERR_INVALID, "domain.refine[0].distance", "collider rules only", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'kernel': 'quadratic'}"), MPM_ERR_INVALID,
+               "solver.kernel", "\"ugimp\"", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'integrator': 'implicit'}"),
+               MPM_ERR_INVALID, "solver.integrator", "not built yet", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'grid': 'dense'}"), MPM_ERR_INVALID,
+               "solver.grid", "sparse", NULL);
+  /* the default kernel on levels is uGIMP */
+  mpm_scene s;
+  parse_ok(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 0}]", ""), &s);
+  assert_int_equal(s.levels, 2);
+  assert_int_equal(s.refine_count, 1);
+  assert_int_equal(s.refine[0].kind, MPM_REFINE_BODY);
+  assert_int_equal(s.solver.kernel, MPM_KERNEL_UGIMP);
+  mpm_scene_free(&s);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_single_level_is_uniform_bitwise),
+      cmocka_unit_test(test_two_levels_conserve_across_the_level_change),
+      cmocka_unit_test(test_two_levels_threads_bitwise),
+      cmocka_unit_test(test_refinement_rules),
+      cmocka_unit_test(test_steep_refinement_is_refused),
+      cmocka_unit_test(test_key_errors),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
