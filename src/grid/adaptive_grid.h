@@ -33,7 +33,7 @@
  * (another particle type, Gao et al. sec. 7.1) transfer on a grid of their own at that level.
  * Every slot of such a grid is a ghost: a real node of the level is a duplicate whose row is
  * the level grid's slot, with weight 1. */
-#define MPM_EXTRA_GRIDS_MAX 26
+#define MPM_EXTRA_GRIDS_MAX 58
 #define MPM_TRANSFER_GRIDS_MAX (MPM_LEVELS_MAX + MPM_EXTRA_GRIDS_MAX)
 
 typedef struct mpm_adaptive_grid {

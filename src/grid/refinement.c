@@ -23,6 +23,14 @@ static int pack(const int32_t c[3], uint64_t *key) {
   return 0;
 }
 
+static void unpack(uint64_t key, int32_t c[3]) {
+  const uint64_t mask = ((uint64_t)1 << MPM_REFINEMENT_COORD_BITS) - 1;
+  for (int d = 2; d >= 0; --d) {
+    c[d] = (int32_t)((int64_t)(key & mask) - COORD_OFFSET);
+    key >>= MPM_REFINEMENT_COORD_BITS;
+  }
+}
+
 static size_t slot_of(uint64_t key, size_t size) {
   uint64_t h = key * 0x9e3779b97f4a7c15ull;
   h ^= h >> 29;
@@ -307,4 +315,26 @@ size_t mpm_refinement_bytes(const mpm_refinement *r) {
   size_t b = 0;
   for (int L = 0; L < MPM_LEVELS_MAX; ++L) b += r->refined[L].size * sizeof(uint64_t);
   return b;
+}
+
+size_t mpm_refinement_fine_leaves(const mpm_refinement *r,
+                                  void (*visit)(void *ctx, int level, const int32_t cell[3]),
+                                  void *ctx) {
+  size_t n = 0;
+  for (int L = 0; L + 1 < r->levels; ++L) {
+    const mpm_cell_set *s = &r->refined[L];
+    for (size_t i = 0; i < s->size; ++i) {
+      if (s->keys[i] == EMPTY_KEY) continue;
+      int32_t c[3];
+      unpack(s->keys[i], c);
+      for (int o = 0; o < 8; ++o) {
+        const int32_t child[3] = {2 * c[0] + ((o >> 2) & 1), 2 * c[1] + ((o >> 1) & 1),
+                                  2 * c[2] + (o & 1)};
+        if (L + 2 < r->levels && set_contains(&r->refined[L + 1], child)) continue;
+        if (visit) visit(ctx, L + 1, child);
+        ++n;
+      }
+    }
+  }
+  return n;
 }

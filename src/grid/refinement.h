@@ -93,6 +93,13 @@ int mpm_refinement_node_row(const mpm_refinement *r, int level, const int32_t id
 int mpm_refinement_basis_at(const mpm_refinement *r, const mpm_real x[3], mpm_row_term *terms,
                             int max);
 
+/* Call visit(ctx, level, cell) for every leaf of level 1 and finer (the children of refined
+ * cells that are not refined themselves), level by level in the cell sets' order. The leaves of
+ * level 0 (the rest of space) are not visited. Returns their count. */
+size_t mpm_refinement_fine_leaves(const mpm_refinement *r,
+                                  void (*visit)(void *ctx, int level, const int32_t cell[3]),
+                                  void *ctx);
+
 size_t mpm_refinement_bytes(const mpm_refinement *r);
 
 #endif

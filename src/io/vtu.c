@@ -110,6 +110,10 @@ static void fill_body(const mpm_frame_fields *f, size_t first, size_t n, void *o
   memcpy(out, f->particles->body + first, n * sizeof(int32_t));
 }
 
+static void fill_level(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->level + first, n * sizeof(int32_t));
+}
+
 static void fill_enrichment(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
   int32_t *o = out;
   for (size_t i = 0; i < n; ++i) o[i] = f->enrichment ? f->enrichment[first + i] : -1;
@@ -134,7 +138,7 @@ static void fill_types(const mpm_frame_fields *f, size_t first, size_t n, void *
 }
 
 /* In order of appearance in the appended block; the header groups them by section. */
-#define VTU_ARRAYS 15
+#define VTU_ARRAYS 16
 static const vtu_array vtu_arrays[VTU_ARRAYS] = {
     {"field", "TIME", "Float64", sizeof(double), 1, 0, fill_time},
     {"points", "Points", NULL, sizeof(mpm_real), 3, 1, fill_points},
@@ -147,6 +151,7 @@ static const vtu_array vtu_arrays[VTU_ARRAYS] = {
     {"point", "plastic", NULL, sizeof(mpm_real), 1, 1, fill_plastic},
     {"point", "material", "Int32", sizeof(int32_t), 1, 1, fill_material},
     {"point", "body", "Int32", sizeof(int32_t), 1, 1, fill_body},
+    {"point", "level", "Int32", sizeof(int32_t), 1, 1, fill_level},
     {"point", "enrichment", "Int32", sizeof(int32_t), 1, 1, fill_enrichment},
     {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, fill_connectivity},
     {"cells", "offsets", "Int64", sizeof(int64_t), 1, 1, fill_offsets},

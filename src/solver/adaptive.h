@@ -19,9 +19,9 @@
  *   g2p     the ghosts take their parents' velocities, then each range gathers from its grid
  * One level and one particle type: one transfer grid without ghosts, the uniform step bitwise.
  *
- * Not yet: APIC's ghost moments inside the step (mpm_adaptive_grid_scatter_apic and
- * _gather_moments exist and are tested; their per-particle pass is next), particle domains and
- * the implicit step on levels (refused by the scene parser). */
+ * APIC carries the ghosts' moments besides (adaptive_apic.c), so that angular momentum is
+ * conserved across level changes. Not yet: particle domains and the implicit step on levels
+ * (refused by the scene parser). */
 #ifndef MPM_SOLVER_ADAPTIVE_H
 #define MPM_SOLVER_ADAPTIVE_H
 
@@ -47,6 +47,18 @@ typedef struct mpm_adaptive {
   uint8_t *of;                              /* per particle: its transfer grid this step */
   uint32_t *perm;
   size_t capacity;
+  /* APIC across levels (adaptive_apic.c): per DOF slot its ghost when the ghost's row has
+   * several real nodes (else -1); the particles whose stencils reach such ghosts; the ghosts'
+   * moments (9 planes of ghost_count) and the boundary particles' B corrections */
+  int32_t *ghost_of;
+  size_t ghost_of_capacity;
+  struct mpm_boundary_particle {
+    uint32_t particle, block; /* its index, and its owner block on its transfer grid */
+    uint16_t tgrid;
+  } *boundary;
+  size_t boundary_count, boundary_capacity;
+  mpm_real *moment, *dB;
+  size_t moment_capacity, dB_capacity;
 } mpm_adaptive;
 
 /* The tree from the scene's rules (colliders must exist), and the per-body boxes. */
@@ -60,6 +72,16 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim);
 mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields);
 void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse);
 mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc);
+
+/* APIC across levels (adaptive_apic.c), for steps with solver.transfer = apic: after the
+ * layout, the boundary particles; after the lanes' P2G, their corrections and the ghosts' affine
+ * moments; the ghost scatter with those moments (in place of mpm_adaptive_grid_scatter); before
+ * the lanes' G2P (the ghosts' velocities gathered), the B corrections, added after it. */
+mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim);
+void mpm_adaptive_apic_p2g(mpm_sim *sim);
+void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse);
+void mpm_adaptive_apic_g2p_before(mpm_sim *sim);
+void mpm_adaptive_apic_g2p_after(mpm_sim *sim);
 
 /* The finest spacing in use (the CFL step's dx). */
 double mpm_adaptive_finest_dx(const mpm_sim *sim);

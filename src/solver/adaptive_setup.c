@@ -22,13 +22,16 @@ static void cell_of(const mpm_refinement *r, int level, const double x[3], int32
   for (int d = 0; d < 3; ++d) cell[d] = (int32_t)floor((x[d] - (double)r->origin[d]) / dx);
 }
 
-static int refine_box(mpm_refinement *r, const mpm_refine_desc *rule) {
+static int refine_box(const mpm_scene *sc, mpm_refinement *r, const mpm_refine_desc *rule) {
   const int L = rule->level - 1; /* cells of this level get children of the rule's level */
   const double dx = (double)mpm_refinement_dx(r, L);
   int32_t lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) { /* cells overlapping the box, not only touching it */
-    lo[d] = (int32_t)floor((rule->min[d] - (double)r->origin[d]) / dx);
-    hi[d] = (int32_t)ceil((rule->max[d] - (double)r->origin[d]) / dx) - 1;
+  for (int d = 0; d < 3; ++d) { /* cells overlapping the box inside the domain */
+    const double a = fmax(rule->min[d], sc->domain_min[d]),
+                 b = fmin(rule->max[d], sc->domain_max[d]);
+    /* a box face on a cell face (up to the rounding of dx in float) takes no cell beyond it */
+    lo[d] = (int32_t)floor((a - (double)r->origin[d]) / dx + 1e-5);
+    hi[d] = (int32_t)ceil((b - (double)r->origin[d]) / dx - 1e-5) - 1;
   }
   for (int32_t a = lo[0]; a <= hi[0]; ++a)
     for (int32_t b = lo[1]; b <= hi[1]; ++b)
@@ -120,9 +123,10 @@ static int by_level_and_box(const void *x, const void *y) {
 
 /* Every transfer grid a particle can need, made once from the scene alone, in order of level
  * and box, so that a run and its resumed continuation lay the DOF set out alike: for each
- * distinct body spacing h and type q, box h / 2^q on levels q .. while the box is at most 2
- * cells. A level's own grid goes to its smallest box (the finest body's particles of the
- * level's type); the others get extra grids. */
+ * distinct body spacing h and type q, box h / 2^q on every level where it is at most 2 cells
+ * (finer levels: the particle's box meets finer leaves; coarser: it moved into coarser ones). A
+ * level's own grid goes to its smallest box (the finest body's particles of the level's type); the
+ * others get extra grids. */
 static mpm_status make_transfer_grids(mpm_sim *sim, mpm_error *err) {
   mpm_adaptive *a = sim->adaptive;
   const mpm_scene *sc = &sim->scene;
@@ -130,7 +134,7 @@ static mpm_status make_transfer_grids(mpm_sim *sim, mpm_error *err) {
   int n = 0;
   for (int b = 0; b < sc->body_count; ++b)
     for (int q = 0; q < r->levels; ++q)
-      for (int L = q; L < r->levels; ++L) {
+      for (int L = 0; L < r->levels; ++L) { /* a particle may move into coarser leaves too */
         const double box = ldexp(a->body_box[b], -q);
         if (box > 2 * (double)mpm_refinement_dx(r, L) * (1 + 1e-6)) break;
         int seen = 0;
@@ -181,7 +185,7 @@ mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
       if (st != MPM_OK) return st;
       continue;
     }
-    if (rule->kind == MPM_REFINE_BOX ? refine_box(r, rule) : refine_collider(sim, r, rule))
+    if (rule->kind == MPM_REFINE_BOX ? refine_box(sc, r, rule) : refine_collider(sim, r, rule))
       return mpm_error_set(err, MPM_ERR_NOMEM,
                            "%s: domain.refine[%d]: out of memory for the refined cells (or a cell "
                            "outside the %d-level grid's coordinate range)",
@@ -196,6 +200,10 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   free(a->body_box);
   mpm_free(a->of);
   mpm_free(a->perm);
+  mpm_free(a->ghost_of);
+  mpm_free(a->boundary);
+  mpm_free(a->moment);
+  mpm_free(a->dB);
   free(a);
 }
 

@@ -69,10 +69,11 @@ static mpm_status classify(mpm_sim *sim) {
           (long long)sim->steps, p->id[i], p->body[i], q, box, (double)p->x[0][i],
           (double)p->x[1][i], (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
     const int t = transfer_grid(a, level, box);
-    if (t < 0) /* every pair a type can meet was made at setup */
+    if (t < 0) /* every pair a type can meet was made at setup: a type outside the levels */
       return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                           "step %lld: particle id %u has type %d, outside the grid's %d levels",
-                           (long long)sim->steps, p->id[i], q, r->levels);
+                           "step %lld: particle id %u has type %d, expected 0 .. %d (the grid's "
+                           "levels)",
+                           (long long)sim->steps, p->id[i], q, r->levels - 1);
     a->of[i] = (uint8_t)t;
   }
   return MPM_OK;
@@ -108,17 +109,18 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim) {
   mpm_status st = classify(sim);
   if (st == MPM_OK) st = group(sim);
   if (st != MPM_OK) return st;
-  /* every grid is sorted (an empty one too: that resets its blocks), then marked */
+  /* every grid is sorted (an empty one that held blocks too: that resets them), then marked */
   int sorted[MPM_TRANSFER_GRIDS_MAX] = {0};
   for (int t = 0; t < a->tgrid_count; ++t) {
     const mpm_transfer_grid *tg = &a->tgrid[t];
     const mpm_particles v = view_of(p, a->range[t], a->range[t + 1] - a->range[t]);
     mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
-    if (g->ops->activate(g, &tg->kernel, sim->material_count, &v, &sim->step_arena)) goto nomem;
     sorted[tg->G] = 1;
+    if (!v.count && !g->impl.sparse.block_count) continue; /* empty, and already clear */
+    if (g->ops->activate(g, &tg->kernel, sim->material_count, &v, &sim->step_arena)) goto nomem;
   }
   for (int G = 0; G >= 0; G = mpm_adaptive_grid_next(ag, G)) {
-    if (sorted[G]) continue;
+    if (sorted[G] || !mpm_adaptive_grid_at(ag, G)->impl.sparse.block_count) continue;
     const mpm_particles none = view_of(p, 0, 0);
     mpm_grid *g = mpm_adaptive_grid_at(ag, G);
     const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, g->dx, 0);
@@ -162,7 +164,10 @@ mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
   int failed = 0;
   for (int G = 0; G >= 0 && !failed; G = mpm_adaptive_grid_next(ag, G)) {
     mpm_grid *g = mpm_adaptive_grid_at(ag, G);
-    failed = mpm_dofs_add_grid(d, g);
+    if (g->impl.sparse.block_count)
+      failed = mpm_dofs_add_grid(d, g);
+    else
+      g->dof_begin = d->count; /* no nodes, no segment */
   }
   if (failed || mpm_dofs_end_layout(d, fields) ||
       (ag->tree.levels > 1 && mpm_adaptive_grid_build_rows(ag)))
@@ -170,6 +175,8 @@ mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
                          "step %lld: out of memory for the values of %zu grid nodes",
                          (long long)sim->steps, d->count);
   mpm_dofs_clear(d, fields & ~(unsigned)MPM_DOF_V);
+  if (ag->tree.levels > 1 && sim->scene.solver.transfer == MPM_TRANSFER_APIC)
+    return mpm_adaptive_apic_prepare(sim);
   return MPM_OK;
 }
 
@@ -185,6 +192,11 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
     mpm_p2g(&t, g, &val, &v);
   }
   /* the ghosts' sums go to their real parents (Gao eq. 15) */
+  if (a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC) {
+    mpm_adaptive_apic_p2g(sim);
+    mpm_adaptive_apic_scatter(sim, impulse);
+    return;
+  }
   mpm_dofs *d = &sim->dofs;
   mpm_real *u[7] = {d->mass, d->v0[0], d->v0[1], d->v0[2], d->f[0], d->f[1], d->f[2]};
   mpm_adaptive_grid_scatter(&a->grid, impulse ? 4 : 7, u);
@@ -194,7 +206,9 @@ mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
   mpm_adaptive *a = sim->adaptive;
   mpm_dofs *d = &sim->dofs;
   mpm_real *u[6] = {d->v[0], d->v[1], d->v[2], d->v0[0], d->v0[1], d->v0[2]};
-  mpm_adaptive_grid_gather(&a->grid, tc->transfer == MPM_TRANSFER_APIC ? 3 : 6, u);
+  const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
+  mpm_adaptive_grid_gather(&a->grid, apic ? 3 : 6, u);
+  if (apic) mpm_adaptive_apic_g2p_before(sim);
   mpm_g2p_result r = {0, -1};
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
@@ -208,5 +222,6 @@ mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
     if (rk.bad_particle >= 0 && r.bad_particle < 0)
       r.bad_particle = rk.bad_particle + (long)a->range[k];
   }
+  if (apic) mpm_adaptive_apic_g2p_after(sim);
   return r;
 }

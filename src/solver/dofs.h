@@ -52,7 +52,7 @@ typedef struct mpm_dof_segment {
                               corners */
 } mpm_dof_segment;
 
-#define MPM_DOF_MAX_SEGMENTS 16
+#define MPM_DOF_MAX_SEGMENTS 72 /* the multi-level grid's transfer grids, and corners */
 #define MPM_DOF_MAX_VECTORS 16
 #define MPM_DOF_VECTOR_NAME 16
 #define MPM_DOF_CHUNK 4096

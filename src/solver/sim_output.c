@@ -3,6 +3,7 @@
  * VTK file of every frame), frame_NNNN.ply, stats.csv, each written atomically by the io
  * module. */
 #include "solver/sim.h"
+#include "solver/adaptive.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "domain/enrich.h"
@@ -51,6 +52,7 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
         all->B[c][j] = p->B[c][i];
       }
       all->plastic[j] = p->plastic[i];
+      all->level[j] = p->level[i];
       all->id[j] = p->id[i];
     }
   }
@@ -159,6 +161,11 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     for (int f = 0; f <= frame; ++f) files[f] = sim->frame_files[f];
     snprintf(path, sizeof path, "%s/frames.pvd", sim->output_dir);
     st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
+    if (st != MPM_OK) goto done;
+  }
+  if (o->vtu && sim->adaptive && frame == 0) { /* the static refinement, once */
+    snprintf(path, sizeof path, "%s/grid_cells.vtu", sim->output_dir);
+    st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
     if (st != MPM_OK) goto done;
   }
   if (o->vtu && has_domains) {

@@ -13,7 +13,8 @@ frame, that what ParaView would load is what the engine computed:
               the point of its own index; the arrays are exactly FieldData TIME (Float64) and
               PointData id (UInt32), velocity (3 comps), mass, volume, J, stress, plastic
               (the build's real, Float32 or Float64 as read from the Points) and material,
-              body, enrichment (Int32; -1 for material points, 0-2 for domain particles). Values: TIME equals the PVD timestep and stats.csv time as written
+              body, level (the particle type: 0 .. domain.levels - 1), enrichment (Int32; -1
+              for material points, 0-2 for domain particles). Values: TIME equals the PVD timestep and stats.csv time as written
               (%.9g or exact); all reals finite; mass, volume, J > 0; stress >= 0; ids unique
               and the same set in every frame; body indices 0..bodies-1, one material per body
               and, for bodies naming a material of the scene's list, that material's index.
@@ -26,6 +27,11 @@ frame, that what ParaView would load is what the engine computed:
               positions (rounded to float, which that reader makes them), nothing printed.
   stats.csv   sum(mass) within 1e-6 relative; 0.5 sum(m |v|^2) from the VTU arrays within
               1e-4 relative; sum(m v) within 1e-6 of sum(m |v|).
+  grid_cells.vtu (scenes with domain.levels)
+              every cell a VTK_VOXEL of edge dx / 2^level with CellData level in
+              1 .. levels - 1, inside the domain; their total volume is what the refine boxes
+              of the scene cover (box rules only; cells overlapping a box, clipped to the
+              domain).
   domains_NNNN.vtu (scenes with particle domains)
               every cell a VTK_HEXAHEDRON, one per domain particle, ids among the frame's;
               frame 0's hexahedra all of one positive volume by VTK's HexVolume (corner order).
@@ -63,7 +69,7 @@ try:
     from vtkmodules.vtkCommonCore import (VTK_DOUBLE, VTK_FLOAT, VTK_INT, VTK_UNSIGNED_INT,
                                           vtkLogger, vtkOutputWindow, vtkStringOutputWindow,
                                           vtkVersion)
-    from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_VERTEX
+    from vtkmodules.vtkCommonDataModel import VTK_HEXAHEDRON, VTK_VERTEX, VTK_VOXEL
     from vtkmodules.vtkFiltersVerdict import vtkMeshQuality
     from vtkmodules.vtkIOPLY import vtkPLYReader
     from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLUnstructuredGridReader
@@ -83,7 +89,7 @@ FIELD_ARRAYS = {"TIME": (1, "Float64")}
 POINT_ARRAYS = {"id": (1, "UInt32"), "velocity": (3, REAL), "mass": (1, REAL),
                 "volume": (1, REAL), "J": (1, REAL), "stress": (1, REAL),
                 "plastic": (1, REAL), "material": (1, "Int32"), "body": (1, "Int32"),
-                "enrichment": (1, "Int32")}
+                "level": (1, "Int32"), "enrichment": (1, "Int32")}
 PLY_PROPERTIES = ["x", "y", "z", "vx", "vy", "vz", "pscale", "id", "material", "body"]
 PLY_INTS = {"id": "uint", "material": "int", "body": "int"}
 PLY_STRUCT = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i",
@@ -420,6 +426,13 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
     if len(set(ids)) != n:
         where.fail("id", "ids are not unique")
 
+    # the particle type: a level of the scene's grid
+    levels = scene_info[2] if scene_info is not None else None
+    for i, q in enumerate(values(pd["level"])):
+        if q < 0 or (levels is not None and q >= max(levels, 1)):
+            where.fail("level", "particle %d has type %d, expected 0 .. %d"
+                       % (i, q, max(levels or 1, 1) - 1))
+
     # the enrichment category: -1 (material point), 0, 1, 2 (Zhu sec. 5.2)
     for i, e in enumerate(values(pd["enrichment"])):
         if e not in (-1, 0, 1, 2):
@@ -427,7 +440,7 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
 
     # material and body against the scene
     if scene_info is not None:
-        bodies, named = scene_info
+        bodies, named = scene_info[0], scene_info[1]
         body_mat = {}
         for i, (b, mt) in enumerate(zip(body, mat)):
             if not 0 <= b < len(bodies):
@@ -471,16 +484,56 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
 # ---- one scene ----------------------------------------------------------------------------
 
 def scene_bodies(path):
-    """(bodies, {material name: index}) from the scene JSON, or None when it cannot be read."""
+    """(bodies, {material name: index}, domain.levels, domain) from the scene JSON, or None
+    when it cannot be read."""
     try:
         with open(path) as f:
             s = json.load(f)
         bodies = s["bodies"]
         named = {mt["name"]: k for k, mt in enumerate(s.get("materials", []))
                  if isinstance(mt, dict) and "name" in mt}
-        return (bodies, named) if isinstance(bodies, list) else None
+        return (bodies, named, s["domain"].get("levels", 0), s["domain"]) \
+            if isinstance(bodies, list) else None
     except (OSError, ValueError, KeyError, TypeError):
         return None
+
+
+def check_cells(where, path, domain, messages):
+    """grid_cells.vtu: the leaves finer than level 0 as voxels of their level's size."""
+    grid = read_vtu(where, path, messages)
+    cells = grid.GetNumberOfCells()
+    level = grid.GetCellData().GetArray("level")
+    if cells == 0 or level is None or level.GetNumberOfTuples() != cells:
+        where.fail("level", "expected one level per cell, and cells")
+    levels, dx = domain["levels"], domain["dx"]
+    lo, hi = domain["min"], domain["max"]
+    volume = 0.0
+    for c in range(cells):
+        if grid.GetCellType(c) != VTK_VOXEL:
+            where.fail("types", "cell %d has type %d, expected VTK_VOXEL (11)"
+                       % (c, grid.GetCellType(c)))
+        q = int(level.GetValue(c))
+        if not 1 <= q < levels:
+            where.fail("level", "cell %d has level %d, expected 1 .. %d" % (c, q, levels - 1))
+        b = grid.GetCell(c).GetBounds()
+        for d in range(3):
+            if abs((b[2 * d + 1] - b[2 * d]) - dx / 2 ** q) > 1e-6:
+                where.fail("Points", "cell %d of level %d has edge %r along axis %d, expected %r"
+                           % (c, q, b[2 * d + 1] - b[2 * d], d, dx / 2 ** q))
+            if b[2 * d] < lo[d] - 1e-6 or b[2 * d + 1] > hi[d] + 1e-6:
+                where.fail("Points", "cell %d lies outside the domain" % c)
+        volume += (dx / 2 ** q) ** 3
+    rules = domain.get("refine", [])
+    if rules and all("box" in r for r in rules) and len(rules) == 1:
+        box = rules[0]["box"]
+        want = 1.0
+        for d in range(3):  # cells of the coarser level overlapping the clipped box
+            c0 = dx / 2 ** (rules[0]["level"] - 1)
+            a, e = max(box["min"][d], lo[d]), min(box["max"][d], hi[d])
+            want *= (math.ceil((e - lo[d]) / c0 - 1e-5) - math.floor((a - lo[d]) / c0 + 1e-5)) * c0
+        if not rel_close(volume, want, 1e-6):
+            where.fail(None, "the leaves cover %r m^3, the refine box's cells %r" % (volume, want))
+    return cells
 
 
 def check_domains(where, path, frame_ids, first, messages):
@@ -633,10 +686,17 @@ def check_scene(mpm, scene, outdir, frames, messages):
         if ids0 is not None and ids != ids0:
             where.fail("id", "the set of ids differs from frame 0's")
         ids0, n = ids, len(ids)
+    cells_path = os.path.join(outdir, "grid_cells.vtu")
+    grid_cells = 0
+    if info is not None and info[2]:
+        if not os.path.exists(cells_path):
+            Where(name, "grid_cells.vtu").fail(None, "missing for a scene with domain.levels")
+        grid_cells = check_cells(Where(name, "grid_cells.vtu"), cells_path, info[3], messages)
     parts, extra = check_run_pvd(name, outdir, entries, messages)
     t2 = time.monotonic()
     bodies = "%d bodies" % len(info[0]) if info else "bodies not checked (scene unreadable)"
     domains = ", %d domain hexahedra" % domain_cells if domain_cells else ""
+    domains += ", %d grid cells finer than level 0" % grid_cells if grid_cells else ""
     print("%s: %d frames x %d particles%s, %s, %s, run.pvd %d parts (%d more files read); "
           "run %.1f s, check %.1f s: ok"
           % (name, len(entries), n, domains, real, bodies, parts, extra, t1 - t0, t2 - t1))
