@@ -207,6 +207,36 @@ static void test_refinement_rules(void **state) {
   for (size_t i = 0; i < p->count; ++i)
     assert_int_equal(p->level[i], leaf_level(sim, p->x[0][i], p->x[1][i], p->x[2][i]));
   mpm_sim_destroy(sim);
+
+  /* a band of 0.03 m under a ball's surface at level 2: coarse inside, fine at the surface, and
+   * every particle's type its leaf's */
+  sim = sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04, \"levels\": 3,"
+      "  \"refine\": [{\"level\": 2, \"body\": \"ball\", \"distance\": 0.03}]},"
+      " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
+      " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 4e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"name\": \"ball\", \"shape\": {\"type\": \"sphere\", \"center\": "
+      "[0.5,0.5,0.5], \"radius\": 0.2}, \"material\": \"j\"}]}");
+  assert_int_equal(leaf_level(sim, 0.5, 0.5, 0.5), 0);
+  assert_int_equal(leaf_level(sim, 0.5, 0.69, 0.5), 2);
+  assert_int_equal(leaf_level(sim, 0.31, 0.5, 0.5), 2);
+  p = &sim->particles;
+  size_t fine = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    const double r =
+        sqrt(pow(p->x[0][i] - 0.5, 2) + pow(p->x[1][i] - 0.5, 2) + pow(p->x[2][i] - 0.5, 2));
+    if (p->level[i] == 2) {
+      ++fine;
+      /* the band (the distance in the max norm: up to sqrt(3) of it deep), up to the level-1
+       * cell a band sample refines */
+      assert_true(r > 0.2 - sqrt(3) * 0.03 - sqrt(3) * 0.02);
+    }
+    if (r > 0.19) assert_int_equal(p->level[i], 2);
+    assert_int_equal(p->level[i], leaf_level(sim, p->x[0][i], p->x[1][i], p->x[2][i]));
+  }
+  assert_true(fine > 0 && fine < p->count);
+  mpm_sim_destroy(sim);
 }
 
 static void test_steep_refinement_is_refused(void **state) {
@@ -251,8 +281,12 @@ static void test_key_errors(void **state) {
                MPM_ERR_INVALID, "domain.refine[0].collider", "no colliders", NULL);
   expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 'nobody'}]", ""),
                MPM_ERR_INVALID, "domain.refine[0].body", "'nobody'", NULL);
-  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 0, 'distance': 1}]", ""),
-               MPM_ERR_INVALID, "domain.refine[0].distance", "collider rules only", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'box': {'min': [0,0,0], "
+                            "'max': [1,1,1]}, 'distance': 1}]",
+                            ""),
+               MPM_ERR_INVALID, "domain.refine[0].distance", "collider and body rules only", NULL);
+  expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 0, 'distance': 0}]", ""),
+               MPM_ERR_INVALID, "domain.refine[0].distance", "> 0", NULL);
   expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'kernel': 'quadratic'}"), MPM_ERR_INVALID,
                "solver.kernel", "\"ugimp\"", NULL);
   expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'integrator': 'implicit'}"),

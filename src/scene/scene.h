@@ -237,7 +237,8 @@ typedef struct mpm_solver_desc {
 typedef enum mpm_refine_kind {
   MPM_REFINE_BOX,      /* cells meeting the box [min, max] */
   MPM_REFINE_COLLIDER, /* cells within `distance` of collider `collider`'s surface at t = 0 */
-  MPM_REFINE_BODY,     /* cells holding body `body`'s material (sampled at the level's spacing) */
+  MPM_REFINE_BODY,     /* cells holding body `body`'s material (sampled at the level's spacing),
+                          with distance > 0 only those within it of the body's surface */
 } mpm_refine_kind;
 
 typedef struct mpm_refine_desc {
@@ -245,7 +246,7 @@ typedef struct mpm_refine_desc {
   int level;             /* 1 .. levels - 1 */
   double min[3], max[3]; /* box, m */
   int collider, body;
-  double distance; /* collider: m */
+  double distance; /* collider (required), body (0: all of it): m */
 } mpm_refine_desc;
 
 typedef struct mpm_scene {

@@ -4,10 +4,13 @@
  *   "domain": { ..., "levels": 3,
  *               "refine": [ {"level": 2, "box": {"min": [..], "max": [..]}},
  *                           {"level": 2, "collider": "blade", "distance": 0.05},
- *                           {"level": 1, "body": "jello"} ] }
+ *                           {"level": 1, "body": "jello"},
+ *                           {"level": 2, "body": "jello", "distance": 0.02} ] }
  *
  * dx is the spacing of level 0, the coarsest; level L has dx / 2^L. A rule refines the cells it
- * selects until their leaves are of its level. The grid's transfers are uGIMP's (the basis the
+ * selects until their leaves are of its level. A body rule with a distance refines only the
+ * cells of the body's material within that distance of its surface (Gao sec. 7.1: fine near the
+ * surface, coarse inside). The grid's transfers are uGIMP's (the basis the
  * levels share is the trilinear hat, Gao sec. 4), on the sparse grid, with the explicit
  * integrator, and bodies without particle domains: what is not built on the multi-level grid is
  * refused here, naming the key. */
@@ -71,9 +74,9 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
   if (kinds != 1)
     return mpm_json_fail(c, MPM_ERR_INVALID,
                          "expected exactly one of 'box', 'collider' or 'body', got %d", kinds);
-  if (mpm_json_get(e, "distance") && !mpm_json_get(e, "collider"))
+  if (mpm_json_get(e, "distance") && mpm_json_get(e, "box"))
     return mpm_json_fail_at(c, "distance", MPM_ERR_INVALID,
-                            "a key of collider rules only; add 'collider' or remove it");
+                            "a key of collider and body rules only; remove it from a box rule");
   if (mpm_json_get(e, "box")) {
     r->kind = MPM_REFINE_BOX;
     const cJSON *b = mpm_json_get(e, "box");
@@ -99,7 +102,10 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
       return -1;
   } else {
     r->kind = MPM_REFINE_BODY;
-    if (parse_reference(c, e, "body", "bodies", s->body_count, body_name, s, &r->body) < 0)
+    if (parse_reference(c, e, "body", "bodies", s->body_count, body_name, s, &r->body) < 0 ||
+        mpm_json_number(c, e, "distance", 0,
+                        mpm_json_gt(0, "m: only cells within it of the body's surface"),
+                        &r->distance) < 0)
       return -1;
   }
   return 0;

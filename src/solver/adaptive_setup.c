@@ -6,6 +6,7 @@
 #include "scene/sample.h"
 #include "solver/sim.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,19 +99,84 @@ done:
   return status;
 }
 
-/* Cells holding the body's particles when it is sampled at the rule's level. */
+/* One pass of a separable L-infinity erosion: along axis `axis` of the n[0] x n[1] x n[2]
+ * bitmap, a point stays set only when every point within k of it along the axis is set (points
+ * past the ends count as unset). */
+static void erode_axis(uint8_t *m, const long n[3], int axis, long k, uint8_t *line, long *left) {
+  const long stride[3] = {n[1] * n[2], n[2], 1};
+  const long len = n[axis];
+  const int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
+  for (long a = 0; a < n[u]; ++a)
+    for (long b = 0; b < n[v]; ++b) {
+      uint8_t *row = m + a * stride[u] + b * stride[v];
+      long run = 0; /* set points ending here */
+      for (long i = 0; i < len; ++i) line[i] = row[i * stride[axis]];
+      /* left-to-right and right-to-left runs of set points */
+      for (long i = 0; i < len; ++i) left[i] = run = line[i] ? run + 1 : 0;
+      run = 0;
+      for (long i = len - 1; i >= 0; --i) {
+        run = line[i] ? run + 1 : 0;
+        row[i * stride[axis]] = (uint8_t)(left[i] > k && run > k);
+      }
+    }
+}
+
+/* Cells holding the body's particles when it is sampled at the rule's level; with a distance,
+ * only those within it of the body's surface: the sample lattice as a bitmap, eroded by the
+ * distance (in the max norm, rounded up to lattice steps: a sample is in the band when the cube
+ * of that half-side around it reaches outside the body, so up to sqrt(3) times the distance
+ * deep); the samples that the erosion removes are the band. */
 static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
                               mpm_error *err) {
+  const mpm_scene *sc = &sim->scene;
+  const double scale = ldexp(1, -rule->level), h = mpm_sample_spacing(sc, rule->body) * scale;
   mpm_particles p;
   if (mpm_particles_init(&p, 1024)) return oom(err, "a refinement rule's samples");
-  mpm_status st =
-      mpm_sample_body_kept(&sim->scene, rule->body, ldexp(1, -rule->level), NULL, NULL, &p, err);
+  mpm_status st = mpm_sample_body_kept(sc, rule->body, scale, NULL, NULL, &p, err);
+  uint8_t *map = NULL, *line = NULL;
+  long *left = NULL;
+  long lo[3] = {0, 0, 0}, n[3] = {1, 1, 1};
+  if (st == MPM_OK && rule->distance > 0 && p.count) {
+    long hi[3];
+    for (int d = 0; d < 3; ++d) lo[d] = LONG_MAX, hi[d] = LONG_MIN;
+    for (size_t i = 0; i < p.count; ++i)
+      for (int d = 0; d < 3; ++d) {
+        const long q = (long)floor(((double)p.x[d][i] - sc->domain_min[d]) / h);
+        lo[d] = q < lo[d] ? q : lo[d];
+        hi[d] = q > hi[d] ? q : hi[d];
+      }
+    long longest = 0;
+    for (int d = 0; d < 3; ++d) {
+      n[d] = hi[d] - lo[d] + 1;
+      longest = n[d] > longest ? n[d] : longest;
+    }
+    map = calloc((size_t)(n[0] * n[1] * n[2]), 1);
+    line = malloc((size_t)longest);
+    left = malloc((size_t)longest * sizeof *left);
+    if (!map || !line || !left) st = oom(err, "a refinement rule's band");
+    for (size_t i = 0; st == MPM_OK && i < p.count; ++i) {
+      long q[3];
+      for (int d = 0; d < 3; ++d)
+        q[d] = (long)floor(((double)p.x[d][i] - sc->domain_min[d]) / h) - lo[d];
+      map[(q[0] * n[1] + q[1]) * n[2] + q[2]] = 1;
+    }
+    const long k = (long)ceil(rule->distance / h - 1e-9);
+    for (int axis = 0; st == MPM_OK && axis < 3; ++axis) erode_axis(map, n, axis, k, line, left);
+  }
   for (size_t i = 0; st == MPM_OK && i < p.count; ++i) {
     const double x[3] = {p.x[0][i], p.x[1][i], p.x[2][i]};
+    if (map) { /* inside the eroded body: deeper than the distance */
+      long q[3];
+      for (int d = 0; d < 3; ++d) q[d] = (long)floor((x[d] - sc->domain_min[d]) / h) - lo[d];
+      if (map[(q[0] * n[1] + q[1]) * n[2] + q[2]]) continue;
+    }
     int32_t cell[3];
     cell_of(r, rule->level - 1, x, cell);
     if (mpm_refinement_refine(r, rule->level - 1, cell)) st = oom(err, "the refined cells");
   }
+  free(map);
+  free(line);
+  free(left);
   mpm_particles_free(&p);
   return st;
 }
