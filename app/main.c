@@ -27,8 +27,9 @@ static const usage_section SECTIONS[] = {
     {"check", "  mpm check SCENE.json\n"
               "      validate a scene only: nothing is simulated or written\n"},
     {"bench", "  mpm bench transfer [--threads LIST] [--repeats N] [--kernel K] [--grid G]\n"
-              "                     [--spacing-scale S]\n"
-              "      Gao et al. 2017 Table 1 transfer benchmark (P2G and G2P ns per particle)\n"
+              "                     [--spacing-scale S] [--levels N]\n"
+              "      Gao et al. 2017 Table 1 transfer benchmark (P2G and G2P ns per particle);\n"
+              "      --levels N: the block on N levels, fine near its surface, beside uniform\n"
               "  mpm bench step [--particles N] [--threads LIST] [--steps N] [--repeats N]\n"
               "      full explicit steps of a falling neo-Hookean block (ns per particle-step)\n"
               "  mpm bench stress [--particles N] [--threads LIST] [--repeats N]\n"

@@ -4,6 +4,7 @@
  *   lattice filling [1/8, 7/8]^3 (192^3 = 7.08M particles) - P2G and G2P nanoseconds per
  *   particle (median of repeats) for each weight kernel, sparse and dense grid, at the thread
  *   counts asked. P2G includes the stress evaluation (neo-Hookean at rest takes its fast path).
+ *   With --levels N the same block on N levels, fine near its surface (bench_levels.c).
  * step: a falling neo-Hookean block of ~1M particles, 8 per cell, quadratic B-spline, APIC:
  *   ns per particle-step with the stage breakdown, for 1 and 2 threads, and memory.
  * stress: per-model batch stress and return map, and the SVD (bench_stress.c). */
@@ -55,6 +56,7 @@ static void block_scene(mpm_scene *s, double dx, double lo, double hi, double do
 static int bench_transfer(int argc, char **argv) {
   int threads[16] = {1, 2}, nthreads = 2, repeats = 5;
   double scale = 1;
+  int levels = 0;
   const char *only_kernel = NULL, *only_grid = NULL;
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
@@ -65,6 +67,10 @@ static int bench_transfer(int argc, char **argv) {
       }
     } else if (!strcmp(argv[i], "--repeats")) {
       if (mpm_cli_parse_int("--repeats", i + 1 < argc ? argv[i + 1] : NULL, 1, 100, &repeats))
+        return MPM_EXIT_USAGE;
+      ++i;
+    } else if (!strcmp(argv[i], "--levels")) {
+      if (mpm_cli_parse_int("--levels", i + 1 < argc ? argv[i + 1] : NULL, 2, 6, &levels))
         return MPM_EXIT_USAGE;
       ++i;
     } else if (!strcmp(argv[i], "--kernel") && i + 1 < argc) {
@@ -83,6 +89,14 @@ static int bench_transfer(int argc, char **argv) {
     }
   }
   bench_print_machine();
+  if (levels) {
+    if (only_kernel || only_grid) {
+      fprintf(stderr, "mpm bench transfer: --levels runs uGIMP on the sparse grid; drop --kernel "
+                      "and --grid\n");
+      return MPM_EXIT_USAGE;
+    }
+    return mpm_bench_levels(threads, nthreads, repeats, scale, levels);
+  }
   const double dx = scale / 128.0;
   printf("transfer benchmark (Gao et al. 2017, Table 1): dx = 1/%g, particles on a 1/%g lattice "
          "in [1/8, 7/8]^3, median of %d repeats\n",

@@ -19,4 +19,8 @@ int mpm_bench_domains(int argc, char **argv);
  * implicit (bench_implicit.c). */
 int mpm_bench_implicit(int argc, char **argv);
 
+/* `mpm bench transfer --levels N`: Table 1's block on N levels, fine near its surface, beside
+ * the uniform grid at the finest dx (bench_levels.c). */
+int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale, int levels);
+
 #endif

@@ -16,6 +16,8 @@ void mpm_adaptive_grid_init(mpm_adaptive_grid *g, int levels, const mpm_real ori
   mpm_embedding_init(&g->ghosts);
 }
 
+static void rows_free(struct mpm_row_cache *c);
+
 void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   for (int L = 0; L < g->tree.levels; ++L) mpm_grid_free(&g->level[L]);
   for (int e = 0; e < g->extra_count; ++e) mpm_grid_free(&g->extra[e]);
@@ -29,6 +31,7 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   }
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
   for (int q = 0; q < 6; ++q) mpm_free(g->spread[q]);
+  rows_free(&g->rows);
   memset(g, 0, sizeof *g);
 }
 
@@ -167,19 +170,128 @@ static void node_of(const mpm_sparse_grid *sg, size_t b, int local, int32_t idx[
   idx[2] = c[2] * MPM_BLOCK + (local & 3);
 }
 
+/* Room for n items of `size` bytes in *buf (capacity *cap items, doubled as needed, contents
+ * kept). 0, or -1 when out of memory. */
+static int grow(void **buf, size_t *cap, size_t n, size_t size) {
+  if (n <= *cap) return 0;
+  size_t c = *cap ? *cap : 1024;
+  while (c < n) c *= 2;
+  void *b = mpm_alloc(c * size);
+  if (!b) return -1;
+  if (*buf) memcpy(b, *buf, *cap * size);
+  mpm_free(*buf);
+  *buf = b;
+  *cap = c;
+  return 0;
+}
+
+/* ---- the row cache ---- */
+
+#define ROW_EMPTY UINT64_MAX
+
+static void rows_free(struct mpm_row_cache *c) {
+  mpm_free(c->keys);
+  mpm_free(c->entry);
+  mpm_free(c->entries);
+  mpm_free(c->terms);
+  memset(c, 0, sizeof *c);
+}
+
+static inline size_t row_slot(uint64_t key, size_t size) {
+  uint64_t h = key * 0x9e3779b97f4a7c15ull;
+  h ^= h >> 31;
+  return (size_t)h & (size - 1);
+}
+
+/* The cache's entry for node idx of `level` at finest-lattice position key, made on first use
+ * (a real node: its owner level; else its row). NULL when out of memory or when the row needs
+ * more than MPM_ROW_MAX entries. */
+static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const int32_t idx[3],
+                                          uint64_t key) {
+  struct mpm_row_cache *c = &g->rows;
+  if (c->version != g->tree.version) { /* the tree changed: forget every row */
+    if (c->size) memset(c->keys, 0xff, c->size * sizeof *c->keys);
+    c->count = c->term_count = 0;
+    c->version = g->tree.version;
+  }
+  if (c->size)
+    for (size_t s = row_slot(key, c->size);; s = (s + 1) & (c->size - 1)) {
+      if (c->keys[s] == key) return &c->entries[c->entry[s]];
+      if (c->keys[s] == ROW_EMPTY) break;
+    }
+  if (2 * (c->count + 1) > c->size) { /* grow the table, keep the entries */
+    const size_t size = c->size ? 2 * c->size : 4096;
+    uint64_t *keys = mpm_alloc(size * sizeof *keys);
+    uint32_t *entry = mpm_alloc(size * sizeof *entry);
+    if (!keys || !entry) {
+      mpm_free(keys);
+      mpm_free(entry);
+      return NULL;
+    }
+    memset(keys, 0xff, size * sizeof *keys);
+    for (size_t s = 0; s < c->size; ++s)
+      if (c->keys[s] != ROW_EMPTY) {
+        size_t t = row_slot(c->keys[s], size);
+        while (keys[t] != ROW_EMPTY) t = (t + 1) & (size - 1);
+        keys[t] = c->keys[s];
+        entry[t] = c->entry[s];
+      }
+    mpm_free(c->keys);
+    mpm_free(c->entry);
+    c->keys = keys;
+    c->entry = entry;
+    c->size = size;
+  }
+  if (grow((void **)&c->entries, &c->entry_capacity, c->count + 1, sizeof *c->entries) ||
+      grow((void **)&c->terms, &c->term_capacity, c->term_count + MPM_ROW_MAX, sizeof *c->terms))
+    return NULL;
+  struct mpm_row_entry *e = &c->entries[c->count];
+  mpm_row_term own;
+  if (mpm_refinement_node_is_real(&g->tree, level, idx, &own)) {
+    e->owner = own.level;
+    e->start = e->len = 0;
+  } else {
+    const int n =
+        mpm_refinement_node_row(&g->tree, level, idx, c->terms + c->term_count, MPM_ROW_MAX);
+    if (n < 0) return NULL;
+    e->owner = -1;
+    e->start = (uint32_t)c->term_count;
+    e->len = (uint32_t)n;
+    c->term_count += (size_t)n;
+  }
+  size_t s = row_slot(key, c->size);
+  while (c->keys[s] != ROW_EMPTY) s = (s + 1) & (c->size - 1);
+  c->keys[s] = key;
+  c->entry[s] = (uint32_t)c->count;
+  return &c->entries[c->count++];
+}
+
 /* The row of a slot of transfer grid G, or 0 when the slot is a real node owned by its level
  * on the level's own grid. On an extra grid every slot is a ghost: a real node owned by the
- * level is a duplicate of the level grid's slot. -1 past MPM_ROW_MAX. */
-static int slot_row(const mpm_adaptive_grid *g, int G, const int32_t idx[3], mpm_row_term *row) {
-  const int level = level_of(g, G);
-  mpm_row_term own;
-  if (mpm_refinement_node_is_real(&g->tree, level, idx, &own) && own.level == level) {
-    if (G < MPM_LEVELS_MAX) return 0;
-    row[0] = own;
+ * level is a duplicate of the level grid's slot; a real node owned by a coarser level is a
+ * duplicate of that level's slot on any grid. -1 past MPM_ROW_MAX or when out of memory. */
+static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], mpm_row_term *row) {
+  const int level = level_of(g, G), shift = fine_shift(&g->tree, level);
+  uint64_t key = 0; /* the position on the finest lattice, 21 bits per axis */
+  for (int d = 0; d < 3; ++d) {
+    const int64_t u =
+        (int64_t)idx[d] * ((int64_t)1 << shift) + ((int64_t)1 << (MPM_REFINEMENT_COORD_BITS - 1));
+    if (u < 0 || u >= ((int64_t)1 << MPM_REFINEMENT_COORD_BITS)) return -1;
+    key = (key << MPM_REFINEMENT_COORD_BITS) | (uint64_t)u;
+  }
+  const struct mpm_row_entry *e = row_of(g, level, idx, key);
+  if (!e) return -1;
+  if (e->owner >= 0) { /* real */
+    if (e->owner == level && G < MPM_LEVELS_MAX) return 0;
+    row[0].level = e->owner;    /* a duplicate: the owner's node, the same position */
+    for (int d = 0; d < 3; ++d) /* exact: the same position as a node of the owner */
+      row[0].idx[d] = e->owner < level ? idx[d] / (1 << (level - e->owner))
+                                       : idx[d] * (1 << (e->owner - level));
     row[0].w = 1;
     return 1;
   }
-  return mpm_refinement_node_row(&g->tree, level, idx, row, MPM_ROW_MAX);
+  memcpy(row, g->rows.terms + e->start, e->len * sizeof *row);
+  return (int)e->len;
 }
 
 int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
@@ -241,21 +353,6 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
   g->ghost_slot = slot;
   g->scratch = scratch;
   g->ghost_capacity = cap;
-  return 0;
-}
-
-/* Room for n items of `size` bytes in *buf (capacity *cap items, doubled as needed, contents
- * kept). 0, or -1 when out of memory. */
-static int grow(void **buf, size_t *cap, size_t n, size_t size) {
-  if (n <= *cap) return 0;
-  size_t c = *cap ? *cap : 1024;
-  while (c < n) c *= 2;
-  void *b = mpm_alloc(c * size);
-  if (!b) return -1;
-  if (*buf) memcpy(b, *buf, *cap * size);
-  mpm_free(*buf);
-  *buf = b;
-  *cap = c;
   return 0;
 }
 

@@ -56,6 +56,22 @@ typedef struct mpm_adaptive_grid {
   mpm_real *offset[3];
   size_t offset_capacity;
   mpm_real *spread[6];
+  /* the nodes' rows, kept from step to step while the tree does not change (tree.version):
+   * keyed by the node's position on the finest lattice, the owner level of a real node (row
+   * empty) or the row of a constrained one, terms[start .. start + len) */
+  struct mpm_row_cache {
+    uint64_t version;
+    uint64_t *keys;
+    uint32_t *entry;
+    size_t size, count;
+    struct mpm_row_entry {
+      int32_t owner; /* real: its owner level; constrained: -1 */
+      uint32_t start, len;
+    } * entries;
+    size_t entry_capacity;
+    mpm_row_term *terms;
+    size_t term_count, term_capacity;
+  } rows;
 } mpm_adaptive_grid;
 
 /* levels in 1..MPM_LEVELS_MAX, all cells leaves; refine through g->tree. */

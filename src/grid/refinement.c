@@ -106,6 +106,7 @@ int mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]) {
     const int rc = set_insert(&r->refined[L], c);
     if (rc < 0) return -1;
     if (rc == 0) break; /* its ancestors are refined already */
+    r->version++;
   }
   return 0;
 }

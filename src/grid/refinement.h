@@ -47,6 +47,7 @@ typedef struct mpm_refinement {
   mpm_real origin[3];
   mpm_real dx0;
   mpm_cell_set refined[MPM_LEVELS_MAX]; /* level L's cells that have children (L < levels - 1) */
+  uint64_t version; /* counts the refinements: caches of rows are valid while it stays */
 } mpm_refinement;
 
 /* A real node (level, idx) and a weight: one entry of an embedding row or of a basis list. */

@@ -49,14 +49,23 @@ typedef struct mpm_adaptive {
   size_t capacity;
   /* APIC across levels (adaptive_apic.c): per DOF slot its ghost when the ghost's row has
    * several real nodes (else -1); the particles whose stencils reach such ghosts; the ghosts'
-   * moments (9 planes of ghost_count) and the boundary particles' B corrections */
+   * moments (9 per ghost interleaved, then 9 planes of ghost_count) and the boundary particles'
+   * B corrections */
   int32_t *ghost_of;
   size_t ghost_of_capacity;
   struct mpm_boundary_particle {
-    uint32_t particle, block; /* its index, and its owner block on its transfer grid */
+    uint32_t particle, cell; /* its index, and its cell (below) */
     uint16_t tgrid;
-  } *boundary;
+  } * boundary;
   size_t boundary_count, boundary_capacity;
+  /* per occupied cell of a transfer grid whose stencil reaches such ghosts, its entries
+   * cell_ghost[cell[c] .. cell[c + 1]): the stencil node (i, j, k order) and the ghost */
+  uint32_t *cell;
+  size_t cell_count, cell_capacity;
+  struct mpm_cell_ghost {
+    uint32_t node, ghost;
+  } * cell_ghost;
+  size_t cell_ghost_count, cell_ghost_capacity;
   mpm_real *moment, *dB;
   size_t moment_capacity, dB_capacity;
 } mpm_adaptive;
@@ -74,11 +83,13 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse);
 mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc);
 
 /* APIC across levels (adaptive_apic.c), for steps with solver.transfer = apic: after the
- * layout, the boundary particles; after the lanes' P2G, their corrections and the ghosts' affine
- * moments; the ghost scatter with those moments (in place of mpm_adaptive_grid_scatter); before
- * the lanes' G2P (the ghosts' velocities gathered), the B corrections, added after it. */
+ * layout, the boundary particles; before the lanes' P2G, the ghosts' affine moments and the
+ * boundary particles' B in the form the lanes need (restored after them); the ghost scatter
+ * with those moments (in place of mpm_adaptive_grid_scatter); before the lanes' G2P (the
+ * ghosts' velocities gathered), the B corrections, added after it. */
 mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim);
-void mpm_adaptive_apic_p2g(mpm_sim *sim);
+void mpm_adaptive_apic_before_p2g(mpm_sim *sim);
+void mpm_adaptive_apic_after_p2g(mpm_sim *sim);
 void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse);
 void mpm_adaptive_apic_g2p_before(mpm_sim *sim);
 void mpm_adaptive_apic_g2p_after(mpm_sim *sim);

@@ -3,17 +3,19 @@
  * as future work).
  *
  * A particle whose stencil reaches a ghost with a row of several real nodes (a T-junction or a
- * refined node inside a coarser leaf) is a *boundary particle*. For it the lane kernels are not
- * the real-node APIC transfer:
- *   P2G  the lanes add m B_p D~^-1 (x_g - x_p) w_gp with D~ the ghost-level D_p, while the real
- *        nodes need C_p = B_p D_p^-1 with D_p = sum_g w_gp ((x_g - x_p)(x_g - x_p)^T + S_g) and,
- *        at each ghost, the affine moment A_g = sum_p w_gp m_p C_p, which
- *        mpm_adaptive_grid_scatter_apic carries to the real nodes as m_p C_p (x_i - x_g);
+ * refined node inside a coarser leaf) is a *boundary particle*. For it the lane kernels alone are
+ * not the real-node APIC transfer:
+ *   P2G  the real nodes need C_p = B_p D_p^-1 with D_p = D~_p + sum_g w_gp S_g (D~_p the ghost
+ *        level's, diagonal, which the lanes divide by), and at each ghost the affine moment
+ *        A_g = sum_p w_gp m_p C_p, which mpm_adaptive_grid_scatter_apic carries to the real nodes
+ *        as m_p C_p (x_i - x_g). The lanes add m B D~^-1 (x_g - x_p) w_gp, so for the P2G the
+ *        particle's B is replaced by C_p D~_p (restored after): the lanes then add exactly
+ *        m C_p (x_g - x_p) w_gp, and only the ghost nodes of the stencil need scalar work;
  *   G2P  the lanes give sum_g w_gp v_g (x_g - x_p)^T, and B_p needs sum_g w_gp M_g besides, the
  *        ghosts' velocity moments (mpm_adaptive_grid_gather_moments).
- * This scalar pass makes both corrections for the boundary particles only, so the lane kernels
- * stay as they are. It runs serially in a fixed order (the boundary particles' writes overlap),
- * so results do not depend on the thread count. */
+ * Boundary particles are found per occupied cell of a transfer grid (its particles share the
+ * stencil), with the cell's list of (stencil node, ghost). The accumulation of A_g runs serially
+ * in a fixed order (stencils overlap), so results do not depend on the thread count. */
 #include "solver/adaptive.h"
 
 #include "core/alloc.h"
@@ -56,7 +58,7 @@ static void stencil_slots(const mpm_grid *g, size_t b, const int32_t base[3], in
 mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   mpm_adaptive_grid *ag = &a->grid;
-  a->boundary_count = 0;
+  a->boundary_count = a->cell_count = a->cell_ghost_count = 0;
   const size_t dofs = sim->dofs.count;
   if (grow((void **)&a->ghost_of, &a->ghost_of_capacity, dofs + 1, sizeof *a->ghost_of)) goto nomem;
   memset(a->ghost_of, 0xff, dofs * sizeof *a->ghost_of);
@@ -68,9 +70,9 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     }
   /* the ghosts' affine moments (P2G) and velocity moments (G2P), zero at ghosts no boundary
    * particle reaches */
-  if (grow((void **)&a->moment, &a->moment_capacity, 9 * ag->ghost_count + 1, sizeof *a->moment))
+  if (grow((void **)&a->moment, &a->moment_capacity, 18 * ag->ghost_count + 1, sizeof *a->moment))
     goto nomem;
-  memset(a->moment, 0, 9 * ag->ghost_count * sizeof *a->moment);
+  memset(a->moment, 0, 18 * ag->ghost_count * sizeof *a->moment);
   if (!multi) return MPM_OK;
   uint32_t slot[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
   for (int t = 0; t < a->tgrid_count; ++t) {
@@ -91,9 +93,22 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
                                  sg->coord[b][1] * MPM_BLOCK + ((c >> 2) & 3),
                                  sg->coord[b][2] * MPM_BLOCK + (c & 3)};
         stencil_slots(g, b, base, W, slot);
-        int reaches = 0;
-        for (int n = 0; n < nodes && !reaches; ++n) reaches = a->ghost_of[slot[n]] >= 0;
-        if (!reaches) continue;
+        const size_t first = a->cell_ghost_count;
+        for (int n = 0; n < nodes; ++n) {
+          const int32_t gh = a->ghost_of[slot[n]];
+          if (gh < 0) continue;
+          if (grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, a->cell_ghost_count + 1,
+                   sizeof *a->cell_ghost))
+            goto nomem;
+          a->cell_ghost[a->cell_ghost_count].node = (uint32_t)n;
+          a->cell_ghost[a->cell_ghost_count].ghost = (uint32_t)gh;
+          a->cell_ghost_count++;
+        }
+        if (a->cell_ghost_count == first) continue;
+        if (grow((void **)&a->cell, &a->cell_capacity, a->cell_count + 2, sizeof *a->cell))
+          goto nomem;
+        a->cell[a->cell_count] = (uint32_t)first;
+        a->cell[a->cell_count + 1] = (uint32_t)a->cell_ghost_count; /* the next cell's first */
         for (size_t m = 0; m < nmat; ++m) {
           const size_t q = q0 + m * MPM_BLOCK_NODES;
           for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j) {
@@ -102,13 +117,14 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
               goto nomem;
             a->boundary[a->boundary_count].particle = (uint32_t)a->range[t] + sg->perm[j];
             a->boundary[a->boundary_count].tgrid = (uint16_t)t;
-            a->boundary[a->boundary_count].block = (uint32_t)b;
+            a->boundary[a->boundary_count].cell = (uint32_t)a->cell_count;
             a->boundary_count++;
           }
         }
+        a->cell_count++;
       }
   }
-  /* per boundary particle its B correction */
+  /* per boundary particle its B (kept over the P2G) and its B correction (G2P) */
   if (grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB)) goto nomem;
   return MPM_OK;
 nomem:
@@ -117,27 +133,42 @@ nomem:
                        (long long)sim->steps);
 }
 
-/* A boundary particle's stencil on its transfer grid: weights, offsets x_g - x_p and slots. */
+/* A boundary particle's 1D stencil factors, the distances f from its base node (cells), and
+ * the ghost level's diagonal D~ (m^2) as the lanes compute it. */
 typedef struct boundary_stencil {
   int W;
+  double dx;
   mpm_stencil s;
-  double f[3]; /* distance from the base node, cells */
-  uint32_t slot[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
+  double f[3], d[3];
 } boundary_stencil;
 
 static void boundary_stencil_of(const mpm_adaptive *a, const mpm_sim *sim, size_t k,
                                 boundary_stencil *bs) {
   const mpm_particles *p = &sim->particles;
   const mpm_transfer_grid *tg = &a->tgrid[a->boundary[k].tgrid];
-  const mpm_grid *g = mpm_adaptive_grid_at((mpm_adaptive_grid *)&a->grid, tg->G);
   const size_t i = a->boundary[k].particle;
   mpm_real x[3];
-  for (int d = 0; d < 3; ++d) x[d] = p->x[d][i] - g->origin[d];
+  for (int d = 0; d < 3; ++d) x[d] = p->x[d][i] - sim->origin[d];
   mpm_kernel_stencil(&tg->kernel, x, &bs->s);
-  for (int d = 0; d < 3; ++d) bs->f[d] = (double)(x[d] * tg->kernel.inv_dx) - bs->s.base[d];
   bs->W = tg->kernel.width;
-  const int32_t base[3] = {bs->s.base[0], bs->s.base[1], bs->s.base[2]};
-  stencil_slots(g, a->boundary[k].block, base, bs->W, bs->slot);
+  bs->dx = (double)tg->kernel.dx;
+  for (int d = 0; d < 3; ++d) {
+    bs->f[d] = (double)(x[d] * tg->kernel.inv_dx) - bs->s.base[d];
+    double sum = 0;
+    for (int q = 0; q < bs->W; ++q) sum += (double)bs->s.w[d][q] * (q - bs->f[d]) * (q - bs->f[d]);
+    bs->d[d] = sum * bs->dx * bs->dx;
+  }
+}
+
+/* Stencil node n (in (i, j, k) order) of a W-wide stencil: its weight and offset x_g - x_p. */
+static double node_weight(const boundary_stencil *bs, uint32_t n, double r[3]) {
+  const int W = bs->W, idx[3] = {(int)n / (W * W), (int)n / W % W, (int)n % W};
+  double w = 1;
+  for (int d = 0; d < 3; ++d) {
+    w *= (double)bs->s.w[d][idx[d]];
+    r[d] = (idx[d] - bs->f[d]) * bs->dx;
+  }
+  return w;
 }
 
 /* 3x3 inverse (row-major, double); 0 when singular. */
@@ -159,65 +190,58 @@ static int invert3(const double A[9], double R[9]) {
   return 1;
 }
 
-void mpm_adaptive_apic_p2g(mpm_sim *sim) {
+void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   const mpm_adaptive_grid *ag = &a->grid;
-  mpm_dofs *dofs = &sim->dofs;
-  const mpm_particles *p = &sim->particles;
+  mpm_particles *p = &sim->particles;
+  const size_t ng = ag->ghost_count;
+  const mpm_real *const *S = (const mpm_real *const *)ag->spread;
   boundary_stencil bs;
   for (size_t k = 0; k < a->boundary_count; ++k) {
     boundary_stencil_of(a, sim, k, &bs);
     const size_t i = a->boundary[k].particle;
-    const double dx = (double)a->tgrid[a->boundary[k].tgrid].kernel.dx, m = (double)p->mass[i];
-    const int W = bs.W;
-    double B[9], D[9] = {0}, Dinv[9], C[9];
-    for (int c = 0; c < 9; ++c) B[c] = (double)p->B[c][i];
+    const double m = (double)p->mass[i];
+    double B[9], D[9] = {bs.d[0], 0, 0, 0, bs.d[1], 0, 0, 0, bs.d[2]}, Dinv[9], C[9];
+    for (int c = 0; c < 9; ++c) {
+      B[c] = (double)p->B[c][i];
+      a->dB[9 * k + (size_t)c] = p->B[c][i]; /* kept over the P2G */
+    }
     /* the real-node D_p: the ghost level's plus the ghosts' spreads */
-    int n = 0;
-    for (int ii = 0; ii < W; ++ii)
-      for (int jj = 0; jj < W; ++jj)
-        for (int kk = 0; kk < W; ++kk, ++n) {
-          const double w = (double)bs.s.w[0][ii] * bs.s.w[1][jj] * bs.s.w[2][kk];
-          const double r[3] = {(ii - bs.f[0]) * dx, (jj - bs.f[1]) * dx, (kk - bs.f[2]) * dx};
-          for (int u = 0; u < 3; ++u)
-            for (int v = 0; v < 3; ++v) D[3 * u + v] += w * r[u] * r[v];
-          const int32_t gh = a->ghost_of[bs.slot[n]];
-          if (gh < 0) continue;
-          const mpm_real *const *S = (const mpm_real *const *)ag->spread;
-          const double s6[6] = {S[0][gh], S[1][gh], S[2][gh], S[3][gh], S[4][gh], S[5][gh]};
-          const double Sg[9] = {s6[0], s6[3], s6[4], s6[3], s6[1], s6[5], s6[4], s6[5], s6[2]};
-          for (int c = 0; c < 9; ++c) D[c] += w * Sg[c];
-        }
+    const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
+    double r[3];
+    for (uint32_t e = c0; e < c1; ++e) {
+      const double w = node_weight(&bs, a->cell_ghost[e].node, r);
+      const uint32_t gh = a->cell_ghost[e].ghost;
+      const double xx = S[0][gh], yy = S[1][gh], zz = S[2][gh], xy = S[3][gh], xz = S[4][gh],
+                   yz = S[5][gh];
+      D[0] += w * xx, D[1] += w * xy, D[2] += w * xz;
+      D[3] += w * xy, D[4] += w * yy, D[5] += w * yz;
+      D[6] += w * xz, D[7] += w * yz, D[8] += w * zz;
+    }
     if (!invert3(D, Dinv)) continue;
     for (int u = 0; u < 3; ++u)
       for (int v = 0; v < 3; ++v)
         C[3 * u + v] = B[3 * u] * Dinv[v] + B[3 * u + 1] * Dinv[3 + v] + B[3 * u + 2] * Dinv[6 + v];
-    /* at every stencil node: the real-node affine momentum minus what the lanes added; at the
-     * ghosts the affine moment */
-    n = 0;
-    for (int ii = 0; ii < W; ++ii)
-      for (int jj = 0; jj < W; ++jj)
-        for (int kk = 0; kk < W; ++kk, ++n) {
-          const double wx = bs.s.w[0][ii], wy = bs.s.w[1][jj], wz = bs.s.w[2][kk];
-          const double w = wx * wy * wz;
-          const double r[3] = {(ii - bs.f[0]) * dx, (jj - bs.f[1]) * dx, (kk - bs.f[2]) * dx};
-          const double lane[3] = {bs.s.a[0][ii] * wy * wz, wx * bs.s.a[1][jj] * wz,
-                                  wx * wy * bs.s.a[2][kk]};
-          const uint32_t s = bs.slot[n];
-          for (int u = 0; u < 3; ++u) {
-            double want = 0, had = 0;
-            for (int v = 0; v < 3; ++v) {
-              want += C[3 * u + v] * r[v];
-              had += B[3 * u + v] * lane[v];
-            }
-            dofs->v0[u][s] += (mpm_real)(m * (w * want - had));
-          }
-          const int32_t gh = a->ghost_of[s];
-          if (gh < 0) continue;
-          for (int c = 0; c < 9; ++c)
-            a->moment[(size_t)c * ag->ghost_count + (size_t)gh] += (mpm_real)(w * m * C[c]);
-        }
+    /* the lanes divide by D~: B' = C D~ makes them add m C (x_g - x_p) w */
+    for (int u = 0; u < 3; ++u)
+      for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs.d[v]);
+    for (uint32_t e = c0; e < c1; ++e) {
+      const mpm_real w = (mpm_real)(node_weight(&bs, a->cell_ghost[e].node, r) * m);
+      mpm_real *A = a->moment + 9 * (size_t)a->cell_ghost[e].ghost; /* interleaved here */
+      for (int c = 0; c < 9; ++c) A[c] += w * (mpm_real)C[c];
+    }
   }
+  /* one plane per component for the scatter */
+  mpm_real *planes = a->moment + 9 * ng;
+  for (size_t g = 0; g < ng; ++g)
+    for (int c = 0; c < 9; ++c) planes[(size_t)c * ng + g] = a->moment[9 * g + (size_t)c];
+}
+
+void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
+  mpm_adaptive *a = sim->adaptive;
+  mpm_particles *p = &sim->particles;
+  for (size_t k = 0; k < a->boundary_count; ++k)
+    for (int c = 0; c < 9; ++c) p->B[c][a->boundary[k].particle] = a->dB[9 * k + (size_t)c];
 }
 
 void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse) {
@@ -226,7 +250,7 @@ void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse) {
   mpm_dofs *d = &sim->dofs;
   mpm_real *u[7] = {d->mass, d->v0[0], d->v0[1], d->v0[2], d->f[0], d->f[1], d->f[2]};
   const mpm_real *A[9]; /* the ghosts' affine moments, one plane per component */
-  for (int c = 0; c < 9; ++c) A[c] = a->moment + (size_t)c * ag->ghost_count;
+  for (int c = 0; c < 9; ++c) A[c] = a->moment + (size_t)(9 + c) * ag->ghost_count;
   mpm_adaptive_grid_scatter_apic(ag, impulse ? 4 : 7, u, A);
 }
 
@@ -236,23 +260,22 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
   if (!a->boundary_count) return;
   const size_t n = ag->ghost_count;
   mpm_real *M[9];
-  for (int c = 0; c < 9; ++c) M[c] = a->moment + (size_t)c * n; /* P2G's are spent */
+  for (int c = 0; c < 9; ++c) M[c] = a->moment + (size_t)(9 + c) * n; /* P2G's are spent */
   const mpm_real *const v[3] = {sim->dofs.v[0], sim->dofs.v[1], sim->dofs.v[2]};
   mpm_adaptive_grid_gather_moments(ag, v, M);
+  mpm_real *Mi = a->moment; /* interleaved, for the particles' reads */
+  for (size_t g = 0; g < n; ++g)
+    for (int c = 0; c < 9; ++c) Mi[9 * g + (size_t)c] = M[c][g];
   boundary_stencil bs;
   for (size_t k = 0; k < a->boundary_count; ++k) {
     boundary_stencil_of(a, sim, k, &bs);
-    double dB[9] = {0};
-    const int W = bs.W;
-    int q = 0;
-    for (int ii = 0; ii < W; ++ii)
-      for (int jj = 0; jj < W; ++jj)
-        for (int kk = 0; kk < W; ++kk, ++q) {
-          const int32_t gh = a->ghost_of[bs.slot[q]];
-          if (gh < 0) continue;
-          const double w = (double)bs.s.w[0][ii] * bs.s.w[1][jj] * bs.s.w[2][kk];
-          for (int c = 0; c < 9; ++c) dB[c] += w * (double)M[c][gh];
-        }
+    double dB[9] = {0}, r[3];
+    const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
+    for (uint32_t e = c0; e < c1; ++e) {
+      const double w = node_weight(&bs, a->cell_ghost[e].node, r);
+      const mpm_real *Mg = Mi + 9 * (size_t)a->cell_ghost[e].ghost;
+      for (int c = 0; c < 9; ++c) dB[c] += w * (double)Mg[c];
+    }
     for (int c = 0; c < 9; ++c) a->dB[9 * k + (size_t)c] = (mpm_real)dB[c];
   }
 }

@@ -99,21 +99,22 @@ done:
   return status;
 }
 
-/* One pass of a separable L-infinity erosion: along axis `axis` of the n[0] x n[1] x n[2]
- * bitmap, a point stays set only when every point within k of it along the axis is set (points
- * past the ends count as unset). */
-static void erode_axis(uint8_t *m, const long n[3], int axis, long k, uint8_t *line, long *left) {
+/* One pass of a separable erosion in the max norm: along axis `axis` of the n[0] x n[1] x n[2]
+ * bitmap, a point stays set only when every point within k of it along the axis is set; points
+ * past the ends count as `edge`. */
+static void erode_axis(uint8_t *m, const long n[3], int axis, long k, int edge, uint8_t *line,
+                       long *left) {
   const long stride[3] = {n[1] * n[2], n[2], 1};
   const long len = n[axis];
   const int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
   for (long a = 0; a < n[u]; ++a)
     for (long b = 0; b < n[v]; ++b) {
       uint8_t *row = m + a * stride[u] + b * stride[v];
-      long run = 0; /* set points ending here */
       for (long i = 0; i < len; ++i) line[i] = row[i * stride[axis]];
-      /* left-to-right and right-to-left runs of set points */
+      /* runs of set points ending at i from the left, and from the right */
+      long run = edge ? k + 1 : 0;
       for (long i = 0; i < len; ++i) left[i] = run = line[i] ? run + 1 : 0;
-      run = 0;
+      run = edge ? k + 1 : 0;
       for (long i = len - 1; i >= 0; --i) {
         run = line[i] ? run + 1 : 0;
         row[i * stride[axis]] = (uint8_t)(left[i] > k && run > k);
@@ -121,11 +122,15 @@ static void erode_axis(uint8_t *m, const long n[3], int axis, long k, uint8_t *l
     }
 }
 
-/* Cells holding the body's particles when it is sampled at the rule's level; with a distance,
- * only those within it of the body's surface: the sample lattice as a bitmap, eroded by the
- * distance (in the max norm, rounded up to lattice steps: a sample is in the band when the cube
- * of that half-side around it reaches outside the body, so up to sqrt(3) times the distance
- * deep); the samples that the erosion removes are the band. */
+static void erode(uint8_t *m, const long n[3], long k, int edge, uint8_t *line, long *left) {
+  for (int axis = 0; axis < 3; ++axis) erode_axis(m, n, axis, k, edge, line, left);
+}
+
+/* Cells holding the body's material when it is sampled at the rule's level; with a distance,
+ * the cells within it of the body's surface, on both sides (material leaving the surface stays
+ * on the fine level): the sample lattice as a bitmap; the band is the lattice points of the
+ * body dilated by the distance and not in the body eroded by it (the max norm, rounded up to
+ * lattice steps: up to sqrt(3) times the distance away). */
 static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
                               mpm_error *err) {
   const mpm_scene *sc = &sim->scene;
@@ -133,48 +138,74 @@ static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_
   mpm_particles p;
   if (mpm_particles_init(&p, 1024)) return oom(err, "a refinement rule's samples");
   mpm_status st = mpm_sample_body_kept(sc, rule->body, scale, NULL, NULL, &p, err);
-  uint8_t *map = NULL, *line = NULL;
+  uint8_t *in = NULL, *out = NULL, *line = NULL;
   long *left = NULL;
-  long lo[3] = {0, 0, 0}, n[3] = {1, 1, 1};
-  if (st == MPM_OK && rule->distance > 0 && p.count) {
-    long hi[3];
-    for (int d = 0; d < 3; ++d) lo[d] = LONG_MAX, hi[d] = LONG_MIN;
-    for (size_t i = 0; i < p.count; ++i)
-      for (int d = 0; d < 3; ++d) {
-        const long q = (long)floor(((double)p.x[d][i] - sc->domain_min[d]) / h);
-        lo[d] = q < lo[d] ? q : lo[d];
-        hi[d] = q > hi[d] ? q : hi[d];
-      }
-    long longest = 0;
-    for (int d = 0; d < 3; ++d) {
-      n[d] = hi[d] - lo[d] + 1;
-      longest = n[d] > longest ? n[d] : longest;
-    }
-    map = calloc((size_t)(n[0] * n[1] * n[2]), 1);
-    line = malloc((size_t)longest);
-    left = malloc((size_t)longest * sizeof *left);
-    if (!map || !line || !left) st = oom(err, "a refinement rule's band");
+  if (st != MPM_OK || !p.count) goto done;
+  if (!(rule->distance > 0)) { /* all of the body */
     for (size_t i = 0; st == MPM_OK && i < p.count; ++i) {
-      long q[3];
-      for (int d = 0; d < 3; ++d)
-        q[d] = (long)floor(((double)p.x[d][i] - sc->domain_min[d]) / h) - lo[d];
-      map[(q[0] * n[1] + q[1]) * n[2] + q[2]] = 1;
+      const double x[3] = {p.x[0][i], p.x[1][i], p.x[2][i]};
+      int32_t cell[3];
+      cell_of(r, rule->level - 1, x, cell);
+      if (mpm_refinement_refine(r, rule->level - 1, cell)) st = oom(err, "the refined cells");
     }
-    const long k = (long)ceil(rule->distance / h - 1e-9);
-    for (int axis = 0; st == MPM_OK && axis < 3; ++axis) erode_axis(map, n, axis, k, line, left);
+    goto done;
   }
-  for (size_t i = 0; st == MPM_OK && i < p.count; ++i) {
-    const double x[3] = {p.x[0][i], p.x[1][i], p.x[2][i]};
-    if (map) { /* inside the eroded body: deeper than the distance */
-      long q[3];
-      for (int d = 0; d < 3; ++d) q[d] = (long)floor((x[d] - sc->domain_min[d]) / h) - lo[d];
-      if (map[(q[0] * n[1] + q[1]) * n[2] + q[2]]) continue;
+  const long k = (long)ceil(rule->distance / h - 1e-9);
+  long lo[3], hi[3], n[3], longest = 0;
+  for (int d = 0; d < 3; ++d) lo[d] = LONG_MAX, hi[d] = LONG_MIN;
+  for (size_t i = 0; i < p.count; ++i)
+    for (int d = 0; d < 3; ++d) {
+      const long q = (long)floor(((double)p.x[d][i] - sc->domain_min[d]) / h);
+      lo[d] = q < lo[d] ? q : lo[d];
+      hi[d] = q > hi[d] ? q : hi[d];
     }
-    int32_t cell[3];
-    cell_of(r, rule->level - 1, x, cell);
-    if (mpm_refinement_refine(r, rule->level - 1, cell)) st = oom(err, "the refined cells");
+  for (int d = 0; d < 3; ++d) { /* room for the dilation */
+    lo[d] -= k + 1;
+    hi[d] += k + 1;
+    n[d] = hi[d] - lo[d] + 1;
+    longest = n[d] > longest ? n[d] : longest;
   }
-  free(map);
+  const size_t cells = (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
+  in = calloc(cells, 1);
+  out = malloc(cells);
+  line = malloc((size_t)longest);
+  left = malloc((size_t)longest * sizeof *left);
+  if (!in || !out || !line || !left) {
+    st = oom(err, "a refinement rule's band");
+    goto done;
+  }
+  for (size_t i = 0; i < p.count; ++i) {
+    long q[3];
+    for (int d = 0; d < 3; ++d)
+      q[d] = (long)floor(((double)p.x[d][i] - sc->domain_min[d]) / h) - lo[d];
+    in[(q[0] * n[1] + q[1]) * n[2] + q[2]] = 1;
+  }
+  for (size_t c = 0; c < cells; ++c) out[c] = !in[c];
+  erode(in, n, k, 0, line, left);  /* the body deeper than the distance */
+  erode(out, n, k, 1, line, left); /* the outside farther than the distance */
+  for (long a = 0; a < n[0] && st == MPM_OK; ++a)
+    for (long b = 0; b < n[1] && st == MPM_OK; ++b)
+      for (long c = 0; c < n[2]; ++c) {
+        const size_t q = ((size_t)a * (size_t)n[1] + (size_t)b) * (size_t)n[2] + (size_t)c;
+        if (in[q] || out[q]) continue;
+        const long idx[3] = {lo[0] + a, lo[1] + b, lo[2] + c};
+        double x[3];
+        int inside = 1;
+        for (int d = 0; d < 3; ++d) {
+          x[d] = sc->domain_min[d] + ((double)idx[d] + 0.5) * h;
+          inside &= x[d] > sc->domain_min[d] && x[d] < sc->domain_max[d];
+        }
+        if (!inside) continue;
+        int32_t cell[3];
+        cell_of(r, rule->level - 1, x, cell);
+        if (mpm_refinement_refine(r, rule->level - 1, cell)) {
+          st = oom(err, "the refined cells");
+          break;
+        }
+      }
+done:
+  free(in);
+  free(out);
   free(line);
   free(left);
   mpm_particles_free(&p);
@@ -268,6 +299,8 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->perm);
   mpm_free(a->ghost_of);
   mpm_free(a->boundary);
+  mpm_free(a->cell);
+  mpm_free(a->cell_ghost);
   mpm_free(a->moment);
   mpm_free(a->dB);
   free(a);

@@ -46,37 +46,55 @@ static int transfer_grid(const mpm_adaptive *a, int level, double box) {
 }
 
 /* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. */
+/* Particle i's transfer grid, or -1 when its box meets leaves more than 2 box widths finer,
+ * -2 when its type is outside the levels; its level in *level. */
+static int transfer_grid_of(const mpm_adaptive *a, const mpm_particles *p, size_t i, int *level) {
+  const mpm_refinement *r = &a->grid.tree;
+  const int q = p->level[i];
+  if (q < 0 || q >= r->levels) return -2;
+  const double box = ldexp(a->body_box[p->body[i]], -q);
+  mpm_real lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = p->x[d][i] - (mpm_real)(0.5 * box);
+    hi[d] = p->x[d][i] + (mpm_real)(0.5 * box);
+  }
+  *level = r->levels > 1 ? mpm_refinement_finest_level_in(r, lo, hi) : 0;
+  if (box > 2 * (double)mpm_refinement_dx(r, *level) * (1 + 1e-6)) return -1;
+  return transfer_grid(a, *level, box); /* every pair a type can meet was made at setup */
+}
+
+/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. */
 static mpm_status classify(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   const mpm_particles *p = &sim->particles;
-  const mpm_refinement *r = &a->grid.tree;
-  for (size_t i = 0; i < p->count; ++i) {
-    const int q = p->level[i];
-    const double box = ldexp(a->body_box[p->body[i]], -q);
-    mpm_real lo[3], hi[3];
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = p->x[d][i] - (mpm_real)(0.5 * box);
-      hi[d] = p->x[d][i] + (mpm_real)(0.5 * box);
-    }
-    const int level = r->levels > 1 ? mpm_refinement_finest_level_in(r, lo, hi) : 0;
-    if (box > 2 * (double)mpm_refinement_dx(r, level) * (1 + 1e-6))
-      return mpm_error_set(
-          &sim->error, MPM_ERR_INVALID,
-          "step %lld: particle id %u (body %d) of type %d (box %g m) at (%g, %g, %g) meets a "
-          "leaf of level %d, whose spacing %g m is less than half its box: the multi-level grid "
-          "transfers boxes of at most 2 cells; let the refinement change by one level at a time "
-          "near the material (domain.refine)",
-          (long long)sim->steps, p->id[i], p->body[i], q, box, (double)p->x[0][i],
-          (double)p->x[1][i], (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
-    const int t = transfer_grid(a, level, box);
-    if (t < 0) /* every pair a type can meet was made at setup: a type outside the levels */
-      return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                           "step %lld: particle id %u has type %d, expected 0 .. %d (the grid's "
-                           "levels)",
-                           (long long)sim->steps, p->id[i], q, r->levels - 1);
-    a->of[i] = (uint8_t)t;
+  const long n = (long)p->count;
+  long bad = n;
+#pragma omp parallel for schedule(static) reduction(min : bad)
+  for (long i = 0; i < n; ++i) {
+    int level;
+    const int t = transfer_grid_of(a, p, (size_t)i, &level);
+    if (t < 0 && i < bad) bad = i;
+    a->of[i] = (uint8_t)(t < 0 ? 0 : t);
   }
-  return MPM_OK;
+  if (bad == n) return MPM_OK;
+  const mpm_refinement *r = &a->grid.tree;
+  int level = 0;
+  const size_t i = (size_t)bad;
+  const int q = p->level[i];
+  if (transfer_grid_of(a, p, i, &level) == -2)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "step %lld: particle id %u has type %d, expected 0 .. %d (the grid's "
+                         "levels)",
+                         (long long)sim->steps, p->id[i], q, r->levels - 1);
+  return mpm_error_set(
+      &sim->error, MPM_ERR_INVALID,
+      "step %lld: particle id %u (body %d) of type %d (box %g m) at (%g, %g, %g) meets a leaf of "
+      "level %d, whose spacing %g m is less than half its box: the multi-level grid transfers "
+      "boxes of at most 2 cells; let the refinement change by one level at a time near the "
+      "material (domain.refine)",
+      (long long)sim->steps, p->id[i], p->body[i], q, ldexp(a->body_box[p->body[i]], -q),
+      (double)p->x[0][i], (double)p->x[1][i], (double)p->x[2][i], level,
+      (double)mpm_refinement_dx(r, level));
 }
 
 /* Keep the particles grouped by transfer grid: a stable counting sort when some particle
@@ -182,6 +200,8 @@ mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
 
 void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
   mpm_adaptive *a = sim->adaptive;
+  const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
+  if (apic) mpm_adaptive_apic_before_p2g(sim);
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
@@ -192,8 +212,8 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
     mpm_p2g(&t, g, &val, &v);
   }
   /* the ghosts' sums go to their real parents (Gao eq. 15) */
-  if (a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC) {
-    mpm_adaptive_apic_p2g(sim);
+  if (apic) {
+    mpm_adaptive_apic_after_p2g(sim);
     mpm_adaptive_apic_scatter(sim, impulse);
     return;
   }
