@@ -487,12 +487,51 @@ static void test_gimp_matches_ugimp(void **state) {
   }
 }
 
+/* The dense index answers as the hash does, inside its box and outside (it covers only part of
+ * the tree here, and refinements after indexing keep it in step). */
+static void test_dense_index_agrees(void **state) {
+  (void)state;
+  mpm_refinement r;
+  random_tree(&r, 4, 31);
+  enum { N = 4000 };
+  int32_t cell[N][3], level[N], leaf[N];
+  uint64_t rng = 7;
+  for (int q = 0; q < N; ++q) {
+    level[q] = (int32_t)test_rand(&rng, 0, 3);
+    for (int d = 0; d < 3; ++d)
+      cell[q][d] = (int32_t)floor(test_rand(&rng, -REGION - 1, REGION + 1) * (1 << level[q]));
+  }
+  int refined[N];
+  for (int q = 0; q < N; ++q) refined[q] = mpm_refinement_is_refined(&r, level[q], cell[q]);
+  for (int q = 0; q < N; ++q) {
+    int32_t c[3];
+    for (int d = 0; d < 3; ++d) c[d] = cell[q][d] * (1 << (3 - level[q]));
+    leaf[q] = mpm_refinement_leaf_level(&r, c);
+  }
+  const int32_t lo0[3] = {-REGION, -2, -REGION}, n0[3] = {2 * REGION, 3, 2 * REGION - 1};
+  assert_int_equal(mpm_refinement_index_dense(&r, lo0, n0, (size_t)1 << 20), 0);
+  assert_non_null(r.refined[0].bits);
+  for (int q = 0; q < N; ++q) {
+    assert_int_equal(mpm_refinement_is_refined(&r, level[q], cell[q]), refined[q]);
+    int32_t c[3];
+    for (int d = 0; d < 3; ++d) c[d] = cell[q][d] * (1 << (3 - level[q]));
+    assert_int_equal(mpm_refinement_leaf_level(&r, c), leaf[q]);
+  }
+  /* a refinement after indexing shows in the index */
+  const int32_t fresh[3] = {REGION - 1, 0, REGION - 2};
+  assert_int_equal(mpm_refinement_refine(&r, 2, fresh), 0);
+  assert_true(mpm_refinement_is_refined(&r, 2, fresh));
+  const int32_t parent[3] = {fresh[0] / 2, 0, fresh[2] / 2};
+  assert_true(mpm_refinement_is_refined(&r, 1, parent));
+  mpm_refinement_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_single_level),          cmocka_unit_test(test_tjunction_rows),
       cmocka_unit_test(test_random_rows_and_basis), cmocka_unit_test(test_gimp_weights),
       cmocka_unit_test(test_gimp_c1_along_lines),   cmocka_unit_test(test_lian_negative_ours_not),
-      cmocka_unit_test(test_gimp_matches_ugimp),
+      cmocka_unit_test(test_gimp_matches_ugimp),    cmocka_unit_test(test_dense_index_agrees),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

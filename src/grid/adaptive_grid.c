@@ -28,6 +28,7 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   for (int G = 0; G < MPM_TRANSFER_GRIDS_MAX; ++G) {
     mpm_free(g->used[G]);
     mpm_free(g->done[G]);
+    mpm_free(g->ghost[G]);
   }
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
   for (int q = 0; q < 6; ++q) mpm_free(g->spread[q]);
@@ -83,20 +84,18 @@ static int ensure_masks(mpm_adaptive_grid *g, int G) {
   if (n <= g->mask_capacity[G]) return 0;
   size_t cap = g->mask_capacity[G] ? g->mask_capacity[G] : 256;
   while (cap < n) cap *= 2;
-  uint64_t *u = mpm_calloc(cap, sizeof *u), *d = mpm_calloc(cap, sizeof *d);
-  if (!u || !d) {
-    mpm_free(u);
-    mpm_free(d);
-    return -1;
+  uint64_t **masks[3] = {&g->used[G], &g->done[G], &g->ghost[G]};
+  uint64_t *grown[3];
+  for (int k = 0; k < 3; ++k)
+    if (!(grown[k] = mpm_calloc(cap, sizeof(uint64_t)))) {
+      for (int j = 0; j < k; ++j) mpm_free(grown[j]);
+      return -1;
+    }
+  for (int k = 0; k < 3; ++k) {
+    if (g->mask_capacity[G]) memcpy(grown[k], *masks[k], g->mask_capacity[G] * sizeof(uint64_t));
+    mpm_free(*masks[k]);
+    *masks[k] = grown[k];
   }
-  if (g->mask_capacity[G]) {
-    memcpy(u, g->used[G], g->mask_capacity[G] * sizeof *u);
-    memcpy(d, g->done[G], g->mask_capacity[G] * sizeof *d);
-  }
-  mpm_free(g->used[G]);
-  mpm_free(g->done[G]);
-  g->used[G] = u;
-  g->done[G] = d;
   g->mask_capacity[G] = cap;
   return 0;
 }
@@ -122,6 +121,7 @@ void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g) {
     if (g->mask_capacity[G]) {
       memset(g->used[G], 0, g->mask_capacity[G] * sizeof(uint64_t));
       memset(g->done[G], 0, g->mask_capacity[G] * sizeof(uint64_t));
+      memset(g->ghost[G], 0, g->mask_capacity[G] * sizeof(uint64_t));
     }
   g->ghost_count = 0;
 }
@@ -150,14 +150,14 @@ int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
         any = sg->cell_start[q + 1] > sg->cell_start[q];
       }
       if (!any) continue;
-      const int32_t base[3] = {sg->coord[b][0] * MPM_BLOCK + ((c >> 4) & 3),
-                               sg->coord[b][1] * MPM_BLOCK + ((c >> 2) & 3),
-                               sg->coord[b][2] * MPM_BLOCK + (c & 3)};
+      /* through the owner block's pad (its blocks are active since the sort): no lookups */
+      uint64_t *used = g->used[G];
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
           for (int k = 0; k < W; ++k) {
-            const int32_t idx[3] = {base[0] + i, base[1] + j, base[2] + k};
-            if (mark(g, G, idx) < 0) return -1;
+            const int px = ((c >> 4) & 3) + i, py = ((c >> 2) & 3) + j, pz = (c & 3) + k;
+            const int32_t nb = sg->neighbor[b][(px >> 2) << 2 | (py >> 2) << 1 | (pz >> 2)];
+            used[nb] |= (uint64_t)1 << ((px & 3) << 4 | (py & 3) << 2 | (pz & 3));
           }
     }
   return 0;
@@ -309,6 +309,7 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
         node_of(sg, b, local, idx);
         const int n = slot_row(g, G, idx, row);
         if (n < 0) return -1;
+        if (n) g->ghost[G][b] |= (uint64_t)1 << local;
         /* parents are real nodes of the level grids: their own rows are empty, so nothing more
          * follows from them */
         for (int t = 0; t < n; ++t)
@@ -369,7 +370,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     if (!sg->block_count) continue;
     if (ensure_masks(g, G)) goto done;
     for (size_t b = 0; b < sg->block_count; ++b)
-      for (uint64_t m = g->used[G][b]; m; m &= m - 1) {
+      for (uint64_t m = g->used[G][b] & g->ghost[G][b]; m; m &= m - 1) { /* close() found them */
         const int local = __builtin_ctzll(m);
         int32_t idx[3];
         node_of(sg, b, local, idx);

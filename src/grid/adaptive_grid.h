@@ -48,6 +48,7 @@ typedef struct mpm_adaptive_grid {
   /* per level and block, a bit per node: the slot is used (a particle's stencil reaches it, or
    * it is a ghost's parent), and its ghost row's parents are active (done) */
   uint64_t *used[MPM_TRANSFER_GRIDS_MAX], *done[MPM_TRANSFER_GRIDS_MAX];
+  uint64_t *ghost[MPM_TRANSFER_GRIDS_MAX];      /* the used slots close() found to be ghosts */
   size_t mask_capacity[MPM_TRANSFER_GRIDS_MAX]; /* by transfer grid (mpm_adaptive_grid_at) */
   mpm_real *scratch; /* 4 x ghost_capacity values for scatter and gather */
   /* APIC across levels (docs/adaptive-grid.md): per row entry e of ghost g and real slot i,

@@ -37,8 +37,23 @@ static size_t slot_of(uint64_t key, size_t size) {
   return (size_t)h & (size - 1);
 }
 
+/* The bit of cell c in the dense index, or -1 when c lies outside it. */
+static inline int64_t dense_bit(const mpm_cell_set *s, const int32_t c[3]) {
+  int64_t b = 0;
+  for (int d = 0; d < 3; ++d) {
+    const int64_t u = (int64_t)c[d] - s->lo[d];
+    if (u < 0 || u >= s->n[d]) return -1;
+    b = b * s->n[d] + u;
+  }
+  return b;
+}
+
 static int set_contains(const mpm_cell_set *s, const int32_t c[3]) {
   uint64_t key;
+  if (s->bits) {
+    const int64_t b = dense_bit(s, c);
+    if (b >= 0) return (int)(s->bits[b >> 6] >> (b & 63) & 1);
+  }
   if (s->count == 0 || pack(c, &key)) return 0;
   for (size_t i = slot_of(key, s->size);; i = (i + 1) & (s->size - 1)) {
     if (s->keys[i] == key) return 1;
@@ -70,6 +85,10 @@ static int set_insert(mpm_cell_set *s, const int32_t c[3]) {
   }
   set_put(s->keys, s->size, key);
   s->count++;
+  if (s->bits) {
+    const int64_t b = dense_bit(s, c);
+    if (b >= 0) s->bits[b >> 6] |= (uint64_t)1 << (b & 63);
+  }
   return 1;
 }
 
@@ -84,7 +103,10 @@ void mpm_refinement_init(mpm_refinement *r, int levels, const mpm_real origin[3]
 }
 
 void mpm_refinement_free(mpm_refinement *r) {
-  for (int L = 0; L < MPM_LEVELS_MAX; ++L) mpm_free(r->refined[L].keys);
+  for (int L = 0; L < MPM_LEVELS_MAX; ++L) {
+    mpm_free(r->refined[L].keys);
+    mpm_free(r->refined[L].bits);
+  }
   memset(r->refined, 0, sizeof r->refined);
 }
 
@@ -154,6 +176,51 @@ static int finest_under(const mpm_refinement *r, int L, const int32_t c[3], cons
     const int f = finest_under(r, L + 1, child, clo, chi);
     if (f > best) best = f;
   }
+  return best;
+}
+
+/* The coarsest level of the leaves under cell c of level L that meet [lo, hi] (in level L's
+ * cell units), stopping once it is `floor`. */
+static int coarsest_under(const mpm_refinement *r, int L, const int32_t c[3], const double lo[3],
+                          const double hi[3]) {
+  if (L == r->levels - 1 || !set_contains(&r->refined[L], c)) return L;
+  int best = r->levels - 1;
+  for (int k = 0; k < 8 && best > L + 1; ++k) {
+    int32_t child[3];
+    double clo[3], chi[3];
+    int meets = 1;
+    for (int d = 0; d < 3; ++d) {
+      child[d] = 2 * c[d] + ((k >> d) & 1);
+      clo[d] = 2 * lo[d];
+      chi[d] = 2 * hi[d];
+      if (chi[d] < (double)child[d] || clo[d] > (double)child[d] + 1) meets = 0;
+    }
+    if (!meets) continue;
+    const int f = coarsest_under(r, L + 1, child, clo, chi);
+    if (f < best) best = f;
+  }
+  return best;
+}
+
+int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[3],
+                                     const mpm_real hi[3]) {
+  double a[3], b[3];
+  int32_t c0[3], c1[3];
+  for (int d = 0; d < 3; ++d) {
+    a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
+    b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
+    c0[d] = (int32_t)floor(a[d]);
+    c1[d] = (int32_t)floor(b[d]);
+  }
+  int best = r->levels - 1;
+  for (int32_t i = c0[0]; i <= c1[0]; ++i)
+    for (int32_t j = c0[1]; j <= c1[1]; ++j)
+      for (int32_t k = c0[2]; k <= c1[2]; ++k) {
+        const int32_t c[3] = {i, j, k};
+        const int f = coarsest_under(r, 0, c, a, b);
+        if (f < best) best = f;
+        if (best == 0) return 0;
+      }
   return best;
 }
 
@@ -338,4 +405,38 @@ size_t mpm_refinement_fine_leaves(const mpm_refinement *r,
     }
   }
   return n;
+}
+
+int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
+                               size_t max_bytes) {
+  size_t total = 0;
+  for (int L = 0; L + 1 < r->levels; ++L) {
+    mpm_cell_set *s = &r->refined[L];
+    uint64_t cells = 1;
+    int32_t lo[3], n[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = lo0[d] * (1 << L);
+      n[d] = n0[d] * (1 << L);
+      cells *= (uint64_t)n[d];
+    }
+    const size_t bytes = (size_t)((cells + 63) / 64) * sizeof(uint64_t);
+    if (total + bytes > max_bytes) break; /* finer levels stay on the hash */
+    uint64_t *bits = mpm_calloc((size_t)((cells + 63) / 64), sizeof(uint64_t));
+    if (!bits) return -1;
+    mpm_free(s->bits);
+    s->bits = bits;
+    for (int d = 0; d < 3; ++d) {
+      s->lo[d] = lo[d];
+      s->n[d] = n[d];
+    }
+    for (size_t i = 0; i < s->size; ++i) {
+      if (s->keys[i] == EMPTY_KEY) continue;
+      int32_t c[3];
+      unpack(s->keys[i], c);
+      const int64_t b = dense_bit(s, c);
+      if (b >= 0) bits[b >> 6] |= (uint64_t)1 << (b & 63);
+    }
+    total += bytes;
+  }
+  return 0;
 }

@@ -40,6 +40,10 @@
 typedef struct mpm_cell_set {
   uint64_t *keys;
   size_t size, count; /* size: a power of two, or 0 */
+  /* optional dense index of the cells lo .. lo + n (a bit per cell), which lookups inside that
+   * box use instead of the hash: a step asks the tree several times per particle */
+  uint64_t *bits;
+  int32_t lo[3], n[3];
 } mpm_cell_set;
 
 typedef struct mpm_refinement {
@@ -81,6 +85,10 @@ int mpm_refinement_leaf_at(const mpm_refinement *r, const mpm_real x[3], int32_t
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]);
 
+/* The coarsest level of the leaves that meet the box [lo, hi] (closed, as above). */
+int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[3],
+                                     const mpm_real hi[3]);
+
 /* Whether node idx of `level` is real; its owner (level, index) in *owner when it is. */
 int mpm_refinement_node_is_real(const mpm_refinement *r, int level, const int32_t idx[3],
                                 mpm_row_term *owner);
@@ -100,6 +108,12 @@ int mpm_refinement_basis_at(const mpm_refinement *r, const mpm_real x[3], mpm_ro
 size_t mpm_refinement_fine_leaves(const mpm_refinement *r,
                                   void (*visit)(void *ctx, int level, const int32_t cell[3]),
                                   void *ctx);
+
+/* Index the refined cells of the levels densely over the level-0 cells lo0 .. lo0 + n0 (each
+ * level's box scaled to its cells), from the coarsest level down while the bitmaps stay within
+ * max_bytes together. Lookups give the same answers, faster. 0, or -1 when out of memory. */
+int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
+                               size_t max_bytes);
 
 size_t mpm_refinement_bytes(const mpm_refinement *r);
 

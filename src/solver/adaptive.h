@@ -45,6 +45,18 @@ typedef struct mpm_adaptive {
   int tgrid_count;
   size_t range[MPM_TRANSFER_GRIDS_MAX + 1]; /* transfer grid t's particles: range[t] .. [t+1) */
   uint8_t *of;                              /* per particle: its transfer grid this step */
+  /* per particle: it stays on its transfer grid next step (its block's region, 3 cells around,
+   * holds leaves of the block's level only: a particle moves less than a cell per step), valid
+   * for the step numbered stable_step; per (level, block) the region's answer, kept while the
+   * tree stands */
+  uint8_t *stable;
+  int64_t stable_step;
+  struct mpm_block_flags {
+    uint64_t version;
+    uint64_t *keys;
+    uint8_t *uniform;
+    size_t size, count;
+  } blocks;
   uint32_t *perm;
   size_t capacity;
   /* APIC across levels (adaptive_apic.c): per DOF slot its ghost when the ghost's row has
@@ -66,8 +78,8 @@ typedef struct mpm_adaptive {
     uint32_t node, ghost;
   } * cell_ghost;
   size_t cell_ghost_count, cell_ghost_capacity;
-  mpm_real *moment, *dB;
-  size_t moment_capacity, dB_capacity;
+  mpm_real *moment, *dB, *work;
+  size_t moment_capacity, dB_capacity, work_capacity;
 } mpm_adaptive;
 
 /* The tree from the scene's rules (colliders must exist), and the per-body boxes. */

@@ -100,7 +100,9 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
           if (grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, a->cell_ghost_count + 1,
                    sizeof *a->cell_ghost))
             goto nomem;
-          a->cell_ghost[a->cell_ghost_count].node = (uint32_t)n;
+          /* the node as (i, j, k), 4 bits each */
+          a->cell_ghost[a->cell_ghost_count].node =
+              (uint32_t)(n / (W * W) | (n / W % W) << 4 | (n % W) << 8);
           a->cell_ghost[a->cell_ghost_count].ghost = (uint32_t)gh;
           a->cell_ghost_count++;
         }
@@ -124,8 +126,11 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
         a->cell_count++;
       }
   }
-  /* per boundary particle its B (kept over the P2G) and its B correction (G2P) */
-  if (grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB)) goto nomem;
+  /* per boundary particle its B (kept over the P2G) and its B correction (G2P), and the P2G's
+   * work (m C and the 1D weights) */
+  if (grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB) ||
+      grow((void **)&a->work, &a->work_capacity, 21 * a->boundary_count + 1, sizeof *a->work))
+    goto nomem;
   return MPM_OK;
 nomem:
   return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
@@ -160,15 +165,20 @@ static void boundary_stencil_of(const mpm_adaptive *a, const mpm_sim *sim, size_
   }
 }
 
-/* Stencil node n (in (i, j, k) order) of a W-wide stencil: its weight and offset x_g - x_p. */
-static double node_weight(const boundary_stencil *bs, uint32_t n, double r[3]) {
-  const int W = bs->W, idx[3] = {(int)n / (W * W), (int)n / W % W, (int)n % W};
+/* Stencil node (i, j, k) packed 4 bits each: its weight and offset x_g - x_p. */
+static inline double node_weight(const boundary_stencil *bs, uint32_t n, double r[3]) {
+  const int idx[3] = {(int)(n & 15), (int)(n >> 4 & 15), (int)(n >> 8 & 15)};
   double w = 1;
   for (int d = 0; d < 3; ++d) {
     w *= (double)bs->s.w[d][idx[d]];
     r[d] = (idx[d] - bs->f[d]) * bs->dx;
   }
   return w;
+}
+
+/* Its weight alone, from 1D weights w[3][MPM_STENCIL_MAX]. */
+static inline mpm_real packed_weight(const mpm_real *w, uint32_t n) {
+  return w[n & 15] * w[MPM_STENCIL_MAX + (n >> 4 & 15)] * w[2 * MPM_STENCIL_MAX + (n >> 8 & 15)];
 }
 
 /* 3x3 inverse (row-major, double); 0 when singular. */
@@ -196,15 +206,19 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   mpm_particles *p = &sim->particles;
   const size_t ng = ag->ghost_count;
   const mpm_real *const *S = (const mpm_real *const *)ag->spread;
-  boundary_stencil bs;
-  for (size_t k = 0; k < a->boundary_count; ++k) {
-    boundary_stencil_of(a, sim, k, &bs);
+  mpm_real *Cw = a->work; /* per boundary particle: m C (9), then its 1D weights (12) */
+  const long nb = (long)a->boundary_count;
+  /* C_p and the lanes' B' = C D~ per particle, in parallel */
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < nb; ++k) {
+    boundary_stencil bs;
+    boundary_stencil_of(a, sim, (size_t)k, &bs);
     const size_t i = a->boundary[k].particle;
     const double m = (double)p->mass[i];
     double B[9], D[9] = {bs.d[0], 0, 0, 0, bs.d[1], 0, 0, 0, bs.d[2]}, Dinv[9], C[9];
     for (int c = 0; c < 9; ++c) {
       B[c] = (double)p->B[c][i];
-      a->dB[9 * k + (size_t)c] = p->B[c][i]; /* kept over the P2G */
+      a->dB[9 * (size_t)k + (size_t)c] = p->B[c][i]; /* kept over the P2G */
     }
     /* the real-node D_p: the ghost level's plus the ghosts' spreads */
     const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
@@ -218,17 +232,30 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
       D[3] += w * xy, D[4] += w * yy, D[5] += w * yz;
       D[6] += w * xz, D[7] += w * yz, D[8] += w * zz;
     }
-    if (!invert3(D, Dinv)) continue;
+    mpm_real *out = Cw + 21 * (size_t)k;
+    if (!invert3(D, Dinv)) { /* no affine part from this particle (cannot happen for uGIMP) */
+      memset(out, 0, 21 * sizeof *out);
+      continue;
+    }
     for (int u = 0; u < 3; ++u)
       for (int v = 0; v < 3; ++v)
         C[3 * u + v] = B[3 * u] * Dinv[v] + B[3 * u + 1] * Dinv[3 + v] + B[3 * u + 2] * Dinv[6 + v];
     /* the lanes divide by D~: B' = C D~ makes them add m C (x_g - x_p) w */
     for (int u = 0; u < 3; ++u)
       for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs.d[v]);
+    for (int c = 0; c < 9; ++c) out[c] = (mpm_real)(m * C[c]);
+    for (int d = 0; d < 3; ++d)
+      for (int q = 0; q < MPM_STENCIL_MAX; ++q)
+        out[9 + MPM_STENCIL_MAX * d + q] = q < bs.W ? bs.s.w[d][q] : 0;
+  }
+  /* the ghosts' affine moments A_g = sum w m C, serially in a fixed order (stencils overlap) */
+  for (long k = 0; k < nb; ++k) {
+    const mpm_real *mC = Cw + 21 * (size_t)k, *w = mC + 9;
+    const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
     for (uint32_t e = c0; e < c1; ++e) {
-      const mpm_real w = (mpm_real)(node_weight(&bs, a->cell_ghost[e].node, r) * m);
+      const mpm_real we = packed_weight(w, a->cell_ghost[e].node);
       mpm_real *A = a->moment + 9 * (size_t)a->cell_ghost[e].ghost; /* interleaved here */
-      for (int c = 0; c < 9; ++c) A[c] += w * (mpm_real)C[c];
+      for (int c = 0; c < 9; ++c) A[c] += we * mC[c];
     }
   }
   /* one plane per component for the scatter */
@@ -266,9 +293,11 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
   mpm_real *Mi = a->moment; /* interleaved, for the particles' reads */
   for (size_t g = 0; g < n; ++g)
     for (int c = 0; c < 9; ++c) Mi[9 * g + (size_t)c] = M[c][g];
-  boundary_stencil bs;
-  for (size_t k = 0; k < a->boundary_count; ++k) {
-    boundary_stencil_of(a, sim, k, &bs);
+  const long nb = (long)a->boundary_count;
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < nb; ++k) {
+    boundary_stencil bs;
+    boundary_stencil_of(a, sim, (size_t)k, &bs);
     double dB[9] = {0}, r[3];
     const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
     for (uint32_t e = c0; e < c1; ++e) {
@@ -276,7 +305,7 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
       const mpm_real *Mg = Mi + 9 * (size_t)a->cell_ghost[e].ghost;
       for (int c = 0; c < 9; ++c) dB[c] += w * (double)Mg[c];
     }
-    for (int c = 0; c < 9; ++c) a->dB[9 * k + (size_t)c] = (mpm_real)dB[c];
+    for (int c = 0; c < 9; ++c) a->dB[9 * (size_t)k + (size_t)c] = (mpm_real)dB[c];
   }
 }
 

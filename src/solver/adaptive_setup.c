@@ -288,6 +288,12 @@ mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
                            "outside the %d-level grid's coordinate range)",
                            sc->path, k, sc->levels);
   }
+  /* the refined cells over the domain densely (a bit per cell, up to 64 MiB for all levels):
+   * the step asks the tree for every particle */
+  const int32_t lo0[3] = {-1, -1, -1},
+                n0[3] = {sim->cells[0] + 2, sim->cells[1] + 2, sim->cells[2] + 2};
+  if (mpm_refinement_index_dense(r, lo0, n0, (size_t)64 << 20))
+    return oom(err, "the refined cells");
   return MPM_OK;
 }
 
@@ -297,12 +303,16 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   free(a->body_box);
   mpm_free(a->of);
   mpm_free(a->perm);
+  mpm_free(a->stable);
+  mpm_free(a->blocks.keys);
+  mpm_free(a->blocks.uniform);
   mpm_free(a->ghost_of);
   mpm_free(a->boundary);
   mpm_free(a->cell);
   mpm_free(a->cell_ghost);
   mpm_free(a->moment);
   mpm_free(a->dB);
+  mpm_free(a->work);
   free(a);
 }
 
