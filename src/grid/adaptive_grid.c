@@ -33,6 +33,8 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
   for (int q = 0; q < 6; ++q) mpm_free(g->spread[q]);
   rows_free(&g->rows);
+  mpm_free(g->blocks.keys);
+  mpm_free(g->blocks.uniform);
   memset(g, 0, sizeof *g);
 }
 
@@ -302,6 +304,11 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
     for (size_t b = 0; b < sg->block_count; ++b) {
       uint64_t pending = g->used[G][b] & ~g->done[G][b];
       g->done[G][b] |= pending;
+      if (pending && G < MPM_LEVELS_MAX) { /* a block of owned real nodes has no rows */
+        const int u = mpm_adaptive_grid_block_uniform(g, G, sg->coord[b]);
+        if (u < 0) return -1;
+        if (u) continue;
+      }
       while (pending) {
         const int local = __builtin_ctzll(pending);
         pending &= pending - 1;
@@ -503,6 +510,58 @@ void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real
   if (!g->ghost_count) return;
   const mpm_real *const off[3] = {g->offset[0], g->offset[1], g->offset[2]};
   mpm_embedding_gather_moments(&g->ghosts, v, off, M);
+}
+
+int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
+  struct mpm_block_flags *f = &g->blocks;
+  const mpm_refinement *r = &g->tree;
+  if (f->version != r->version + 1) { /* + 1: a fresh cache is never valid */
+    if (f->size) memset(f->keys, 0xff, f->size * sizeof *f->keys);
+    f->count = 0;
+    f->version = r->version + 1;
+  }
+  uint64_t key = (uint64_t)level;
+  for (int d = 0; d < 3; ++d) key = key << 20 | ((uint64_t)(bc[d] + (1 << 19)) & 0xfffff);
+  if (2 * (f->count + 1) > f->size) {
+    const size_t size = f->size ? 2 * f->size : 4096;
+    uint64_t *keys = mpm_alloc(size * sizeof *keys);
+    uint8_t *uniform = mpm_alloc(size);
+    if (!keys || !uniform) {
+      mpm_free(keys);
+      mpm_free(uniform);
+      return -1;
+    }
+    memset(keys, 0xff, size * sizeof *keys);
+    for (size_t s = 0; s < f->size; ++s)
+      if (f->keys[s] != UINT64_MAX) {
+        size_t t = (size_t)((f->keys[s] * 0x9e3779b97f4a7c15ull) >> 20) & (size - 1);
+        while (keys[t] != UINT64_MAX) t = (t + 1) & (size - 1);
+        keys[t] = f->keys[s];
+        uniform[t] = f->uniform[s];
+      }
+    mpm_free(f->keys);
+    mpm_free(f->uniform);
+    f->keys = keys;
+    f->uniform = uniform;
+    f->size = size;
+  }
+  size_t s = (size_t)((key * 0x9e3779b97f4a7c15ull) >> 20) & (f->size - 1);
+  for (; f->keys[s] != UINT64_MAX; s = (s + 1) & (f->size - 1))
+    if (f->keys[s] == key) return f->uniform[s];
+  const double dx = (double)mpm_refinement_dx(r, level);
+  mpm_real lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] =
+        (mpm_real)((double)r->origin[d] + ((double)bc[d] * MPM_BLOCK - MPM_UNIFORM_MARGIN) * dx);
+    hi[d] = (mpm_real)((double)r->origin[d] +
+                       ((double)bc[d] * MPM_BLOCK + MPM_BLOCK + MPM_UNIFORM_MARGIN) * dx);
+  }
+  const int u = mpm_refinement_finest_level_in(r, lo, hi) == level &&
+                mpm_refinement_coarsest_level_in(r, lo, hi) == level;
+  f->keys[s] = key;
+  f->uniform[s] = (uint8_t)u;
+  f->count++;
+  return u;
 }
 
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {

@@ -73,6 +73,14 @@ typedef struct mpm_adaptive_grid {
     mpm_row_term *terms;
     size_t term_count, term_capacity;
   } rows;
+  /* per (level, block) whether its region holds leaves of the level only, while the tree stands
+   * (mpm_adaptive_grid_block_uniform) */
+  struct mpm_block_flags {
+    uint64_t version;
+    uint64_t *keys;
+    uint8_t *uniform;
+    size_t size, count;
+  } blocks;
 } mpm_adaptive_grid;
 
 /* levels in 1..MPM_LEVELS_MAX, all cells leaves; refine through g->tree. */
@@ -137,6 +145,14 @@ void mpm_adaptive_grid_scatter_apic(mpm_adaptive_grid *g, int fields, mpm_real *
  * M_g) is the exact sum over real nodes; with the spread S_g, D_p likewise. */
 void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real *const v[3],
                                       mpm_real *const M[9]);
+
+/* Whether the region of block bc (block coordinates) of `level`, widened by
+ * MPM_UNIFORM_MARGIN cells on every side, holds leaves of that level only: then every node of the
+ * block is a real node owned by the level, and a particle whose stencil's base node lies in the
+ * block and moves less than a cell keeps meeting leaves of that level only. Cached while the
+ * tree stands. 1, 0, or -1 when out of memory. */
+#define MPM_UNIFORM_MARGIN 3
+int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]);
 
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g);
 

@@ -45,18 +45,11 @@ typedef struct mpm_adaptive {
   int tgrid_count;
   size_t range[MPM_TRANSFER_GRIDS_MAX + 1]; /* transfer grid t's particles: range[t] .. [t+1) */
   uint8_t *of;                              /* per particle: its transfer grid this step */
-  /* per particle: it stays on its transfer grid next step (its block's region, 3 cells around,
-   * holds leaves of the block's level only: a particle moves less than a cell per step), valid
-   * for the step numbered stable_step; per (level, block) the region's answer, kept while the
-   * tree stands */
+  /* per particle: it stays on its transfer grid next step (its block's region holds leaves of
+   * the block's level only, mpm_adaptive_grid_block_uniform: a particle moves less than a cell
+   * per step), valid for the step numbered stable_step */
   uint8_t *stable;
   int64_t stable_step;
-  struct mpm_block_flags {
-    uint64_t version;
-    uint64_t *keys;
-    uint8_t *uniform;
-    size_t size, count;
-  } blocks;
   uint32_t *perm;
   size_t capacity;
   /* APIC across levels (adaptive_apic.c): per DOF slot its ghost when the ghost's row has

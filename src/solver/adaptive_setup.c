@@ -304,8 +304,6 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->of);
   mpm_free(a->perm);
   mpm_free(a->stable);
-  mpm_free(a->blocks.keys);
-  mpm_free(a->blocks.uniform);
   mpm_free(a->ghost_of);
   mpm_free(a->boundary);
   mpm_free(a->cell);

@@ -40,58 +40,6 @@ static int reserve(mpm_adaptive *a, size_t n) {
   return 0;
 }
 
-/* Whether the region of owner block bc of `level` and 3 cells around it holds leaves of the level
- * only (cached per block while the tree stands). -1 when out of memory. */
-static int block_uniform(mpm_adaptive *a, int level, const int32_t bc[3]) {
-  struct mpm_block_flags *f = &a->blocks;
-  const mpm_refinement *r = &a->grid.tree;
-  if (f->version != r->version + 1) { /* + 1: a fresh cache is never valid */
-    if (f->size) memset(f->keys, 0xff, f->size * sizeof *f->keys);
-    f->count = 0;
-    f->version = r->version + 1;
-  }
-  uint64_t key = (uint64_t)level;
-  for (int d = 0; d < 3; ++d) key = key << 20 | ((uint64_t)(bc[d] + (1 << 19)) & 0xfffff);
-  if (2 * (f->count + 1) > f->size) {
-    const size_t size = f->size ? 2 * f->size : 4096;
-    uint64_t *keys = mpm_alloc(size * sizeof *keys);
-    uint8_t *uniform = mpm_alloc(size);
-    if (!keys || !uniform) {
-      mpm_free(keys);
-      mpm_free(uniform);
-      return -1;
-    }
-    memset(keys, 0xff, size * sizeof *keys);
-    for (size_t s = 0; s < f->size; ++s)
-      if (f->keys[s] != UINT64_MAX) {
-        size_t t = (size_t)((f->keys[s] * 0x9e3779b97f4a7c15ull) >> 20) & (size - 1);
-        while (keys[t] != UINT64_MAX) t = (t + 1) & (size - 1);
-        keys[t] = f->keys[s];
-        uniform[t] = f->uniform[s];
-      }
-    mpm_free(f->keys);
-    mpm_free(f->uniform);
-    f->keys = keys;
-    f->uniform = uniform;
-    f->size = size;
-  }
-  size_t s = (size_t)((key * 0x9e3779b97f4a7c15ull) >> 20) & (f->size - 1);
-  for (; f->keys[s] != UINT64_MAX; s = (s + 1) & (f->size - 1))
-    if (f->keys[s] == key) return f->uniform[s];
-  const double dx = (double)mpm_refinement_dx(r, level);
-  mpm_real lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) {
-    lo[d] = (mpm_real)((double)r->origin[d] + ((double)bc[d] * MPM_BLOCK - 3) * dx);
-    hi[d] = (mpm_real)((double)r->origin[d] + ((double)bc[d] * MPM_BLOCK + MPM_BLOCK + 3) * dx);
-  }
-  const int u = mpm_refinement_finest_level_in(r, lo, hi) == level &&
-                mpm_refinement_coarsest_level_in(r, lo, hi) == level;
-  f->keys[s] = key;
-  f->uniform[s] = (uint8_t)u;
-  f->count++;
-  return u;
-}
-
 /* After the sorts and the reorder, in the particles' order now: whether each particle stays on
  * its transfer grid next step (its owner block's region is uniform). */
 static mpm_status mark_stable(mpm_sim *sim) {
@@ -103,7 +51,7 @@ static mpm_status mark_stable(mpm_sim *sim) {
     const size_t nmat = (size_t)sg->material_count;
     if (a->range[t + 1] == a->range[t]) continue;
     for (size_t b = 0; b < sg->owner_count; ++b) {
-      const int u = block_uniform(a, tg->level, sg->coord[b]);
+      const int u = mpm_adaptive_grid_block_uniform(&a->grid, tg->level, sg->coord[b]);
       if (u < 0)
         return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
       const uint32_t j0 = sg->cell_start[b * nmat * MPM_BLOCK_NODES],
