@@ -47,12 +47,12 @@ static const usage_section SECTIONS[] = {
     {"render",
      "  mpm render OUTDIR [--field velocity|J|stress|plastic|material|body] [--size WxH]\n"
      "                    [--colormap viridis|coolwarm|category] [--range LO:HI] [--every N]\n"
-     "                    [--scene SCENE.json] [--out DIR] [--movie] [--quiet]\n"
+     "                    [--scene SCENE.json] [--out DIR] [--movie] [--grid] [--quiet]\n"
      "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed):\n"
      "      particles coloured by --field (default velocity) with --colormap over --range\n"
      "      (default: percentiles of the run), every N-th frame, the colliders of\n"
      "      --scene (default OUTDIR/scene.json), to --out; --movie also makes movie.mp4\n"
-     "      with ffmpeg\n"},
+     "      with ffmpeg; --grid draws the multi-level grid's fine cells over them\n"},
     {"plot", "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
              "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
              "      to OUTDIR/plots/*.png (or --out DIR) with gnuplot\n"},

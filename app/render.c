@@ -27,7 +27,7 @@ static const char *const FIELD_NAMES[FIELDS] = {"velocity", "J",        "stress"
 
 typedef struct render_opts {
   const char *dir, *scene, *out;
-  int field, colormap, width, height, every, movie, quiet;
+  int field, colormap, width, height, every, movie, quiet, grid;
   double lo, hi; /* colour range; lo > hi: automatic */
 } render_opts;
 
@@ -91,7 +91,7 @@ static int usage(void) {
   fprintf(stderr, "usage: mpm render OUTDIR [--field velocity|J|stress|plastic|material|body]\n"
                   "                  [--size WxH] [--colormap viridis|coolwarm|category]\n"
                   "                  [--range LO:HI] [--every N] [--scene SCENE.json] [--out DIR]\n"
-                  "                  [--movie] [--quiet]\n");
+                  "                  [--movie] [--grid] [--quiet]\n");
   return MPM_EXIT_USAGE;
 }
 
@@ -145,6 +145,8 @@ static int parse_args(int argc, char **argv, render_opts *o) {
       o->scene = argv[++i];
     } else if (!strcmp(a, "--out") && v) {
       o->out = argv[++i];
+    } else if (!strcmp(a, "--grid")) {
+      o->grid = 1;
     } else if (!strcmp(a, "--movie")) {
       o->movie = 1;
     } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
@@ -164,6 +166,94 @@ static int parse_args(int argc, char **argv, render_opts *o) {
     o->colormap = o->field == FIELD_MATERIAL || o->field == FIELD_BODY ? MPM_CMAP_CATEGORY
                   : o->field == FIELD_J                                ? MPM_CMAP_COOLWARM
                                                                        : MPM_CMAP_VIRIDIS;
+  return 0;
+}
+
+static int cmp_u64(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
+/* The edges of the multi-level grid's fine leaves (OUTDIR/grid_cells.vtu: 8 corners per voxel)
+ * on the surfaces of the levels' regions, each once, coloured by level (the edge length):
+ * segments for mpm_render_lines. 0 with
+ * *n = 0 when the run has no such file; -1 with `why` on a bad file. */
+static int grid_edges(const char *dir, float **ab, float **rgb, size_t *n, char *why, size_t cap) {
+  *n = 0;
+  char path[4200];
+  snprintf(path, sizeof path, "%s/grid_cells.vtu", dir);
+  FILE *probe = fopen(path, "rb");
+  if (!probe) return 0;
+  fclose(probe);
+  mpm_vtu_frame fr;
+  mpm_error err;
+  mpm_error_clear(&err);
+  if (mpm_read_vtu(path, &fr, &err) != MPM_OK) {
+    snprintf(why, cap, "%s", err.message);
+    return -1;
+  }
+  const mpm_vtu_array *pts = mpm_vtu_frame_array(&fr, "Points");
+  const size_t cells = pts ? (size_t)fr.point_count / 8 : 0;
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, h = INFINITY;
+  for (size_t c = 0; c < cells; ++c) {
+    const float *p = pts->data + 24 * c;
+    h = fmin(h, (double)(p[3] - p[0])); /* corner 1 is corner 0 + x */
+    for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], (double)p[d]);
+  }
+  /* an edge: its start on the finest lattice (18 bits per axis), axis and length exponent */
+  uint64_t *key = malloc((12 * cells + 1) * sizeof *key);
+  if (!key) {
+    mpm_vtu_frame_free(&fr);
+    snprintf(why, cap, "out of memory for the grid's edges");
+    return -1;
+  }
+  size_t m = 0;
+  static const int from[12] = {0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3};
+  static const int axis[12] = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2};
+  for (size_t c = 0; c < cells; ++c) {
+    const float *p = pts->data + 24 * c;
+    const double size = (double)(p[3] - p[0]);
+    const int e = (int)lround(log2(size / h));
+    for (int k = 0; k < 12; ++k) {
+      uint64_t q = 0;
+      for (int d = 0; d < 3; ++d)
+        q = q << 18 | ((uint64_t)lround(((double)p[3 * from[k] + d] - lo[d]) / h) & 0x3ffff);
+      key[m++] = (q << 2 | (uint64_t)axis[k]) << 4 | (uint64_t)(e & 15);
+    }
+  }
+  qsort(key, m, sizeof *key, cmp_u64);
+  /* each edge once, and only those on the surface of a level's region: an edge inside one is
+   * shared by 4 cells of its size */
+  size_t u = 0;
+  for (size_t k = 0; k < m;) {
+    size_t j = k;
+    while (j < m && key[j] == key[k]) ++j;
+    if (j - k < 4) key[u++] = key[k];
+    k = j;
+  }
+  *ab = malloc((6 * u + 1) * sizeof **ab);
+  *rgb = malloc((3 * u + 1) * sizeof **rgb);
+  if (!*ab || !*rgb) {
+    free(key);
+    mpm_vtu_frame_free(&fr);
+    snprintf(why, cap, "out of memory for the grid's edges");
+    return -1;
+  }
+  for (size_t k = 0; k < u; ++k) {
+    const int e = (int)(key[k] & 15), ax = (int)(key[k] >> 4 & 3);
+    const uint64_t q = key[k] >> 6;
+    const double len = h * (double)(1 << e);
+    for (int d = 0; d < 3; ++d) {
+      const double x = lo[d] + h * (double)((q >> (18 * (2 - d))) & 0x3ffff);
+      (*ab)[6 * k + d] = (float)x;
+      (*ab)[6 * k + 3 + d] = (float)(x + (d == ax ? len : 0));
+    }
+    /* the finest level light, coarser ones darker */
+    mpm_colormap_eval(MPM_CMAP_VIRIDIS, 1 - 0.3 * e, *rgb + 3 * k);
+  }
+  *n = u;
+  free(key);
+  mpm_vtu_frame_free(&fr);
   return 0;
 }
 
@@ -284,6 +374,8 @@ int mpm_cmd_render(int argc, char **argv) {
   mpm_image img = {0}, bg = {0};
   mpm_vtu_frame fr = {0};
   float *xyz = NULL, *rad = NULL, *rgb = NULL, *val = NULL;
+  float *edges = NULL, *edge_rgb = NULL; /* --grid: the multi-level grid's cell edges */
+  size_t edge_count = 0;
   double lo[3], hi[3], floor_y;
   if (auto_range(&o, frames, nf, why, sizeof why)) {
     fprintf(stderr, "mpm render: %s\n", why);
@@ -295,6 +387,21 @@ int mpm_cmd_render(int argc, char **argv) {
     fprintf(stderr, "mpm render: %s\n", err.message);
     code = MPM_EXIT_FAILURE;
     goto done;
+  }
+  if (o.grid) {
+    if (grid_edges(o.dir, &edges, &edge_rgb, &edge_count, why, sizeof why)) {
+      fprintf(stderr, "mpm render: %s\n", why);
+      code = MPM_EXIT_USAGE;
+      goto done;
+    }
+    if (!edge_count) {
+      fprintf(stderr,
+              "mpm render: --grid: %s has no grid_cells.vtu (a run on a multi-level grid "
+              "with output.vtu writes it)\n",
+              o.dir);
+      code = MPM_EXIT_USAGE;
+      goto done;
+    }
   }
   double bg_key = NAN; /* colliders' poses of the cached background */
   int rendered = 0;
@@ -388,6 +495,7 @@ int mpm_cmd_render(int argc, char **argv) {
       code = MPM_EXIT_FAILURE;
       goto done;
     }
+    if (edge_count) mpm_render_lines(&img, &cam, edge_count, edges, edge_rgb, 0.3f);
     char png[4400];
     snprintf(png, sizeof png, "%s/frame_%04d.png", out, frames[fi]);
     if (mpm_image_write_png(&img, png, &err) != MPM_OK) {
@@ -411,6 +519,7 @@ int mpm_cmd_render(int argc, char **argv) {
 done:
   mpm_vtu_frame_free(&fr);
   free(xyz), free(rad), free(rgb), free(val);
+  free(edges), free(edge_rgb);
   mpm_image_free(&img);
   mpm_image_free(&bg);
   for (int k = 0; k < nc; ++k) mpm_collider_free(&colliders[k]);

@@ -117,6 +117,57 @@ static void test_render_frames(void **state) {
   free(b.px);
 }
 
+/* --grid draws the multi-level grid's fine cells over a run on levels (the pixels change, the
+ * picture stays mostly sky and ground there), and on a uniform run it says why it cannot. */
+static void test_render_grid(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("render_grid");
+  char scene[600], args[1600], png[700];
+  snprintf(scene, sizeof scene, "%s/levels.json", dir);
+  FILE *f = fopen(scene, "w");
+  assert_non_null(f);
+  fputs(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05, \"levels\": 2,"
+      " \"refine\": [{\"level\": 1, \"body\": 0, \"distance\": 0.05}]},"
+      " \"time\": {\"end\": 0.05, \"fps\": 20},"
+      " \"materials\": [{\"name\": \"a\", \"model\": \"fixed_corotated\", \"E\": 1e4, \"nu\": 0.3,"
+      " \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.5,0.5,0.5],"
+      " \"radius\": 0.15}, \"material\": \"a\"}]}",
+      f);
+  fclose(f);
+  snprintf(args, sizeof args, "run '%s' -o '%s/out' --frames 1 --quiet", scene, dir);
+  if (mpm(args) != 0) fail_msg("mpm run failed:\n%s", output);
+  snprintf(args, sizeof args, "render '%s/out' --size 160x120 --quiet --out '%s/plain'", dir, dir);
+  if (mpm(args) != 0) fail_msg("mpm render failed:\n%s", output);
+  snprintf(args, sizeof args, "render '%s/out' --size 160x120 --quiet --grid --out '%s/grid'", dir,
+           dir);
+  if (mpm(args) != 0) fail_msg("mpm render --grid failed:\n%s", output);
+  snprintf(png, sizeof png, "%s/plain/frame_0000.png", dir);
+  rgb_image a = read_png(png);
+  snprintf(png, sizeof png, "%s/grid/frame_0000.png", dir);
+  rgb_image b = read_png(png);
+  long differ = 0;
+  for (size_t i = 0; i < (size_t)a.w * (size_t)a.h; ++i)
+    differ += memcmp(a.px + 3 * i, b.px + 3 * i, 3) != 0;
+  print_message("--grid changed %ld of %d pixels\n", differ, a.w * a.h);
+  assert_true(differ > 100);
+  assert_true(greyish(&b, 0, 0) && greyish(&b, 159, 119)); /* the corners stay sky and ground */
+  free(a.px);
+  free(b.px);
+  /* a uniform run has no cells to draw */
+  snprintf(scene, sizeof scene, "%s/uniform.json", dir);
+  f = fopen(scene, "w");
+  assert_non_null(f);
+  fputs(scene_json, f);
+  fclose(f);
+  snprintf(args, sizeof args, "run '%s' -o '%s/u' --frames 1 --quiet", scene, dir);
+  assert_int_equal(mpm(args), 0);
+  snprintf(args, sizeof args, "render '%s/u' --quiet --grid", dir);
+  assert_int_equal(mpm(args), 2);
+  if (!strstr(output, "grid_cells.vtu")) fail_msg("message: %s", output);
+}
+
 /* The camera projects the domain's centre to the middle of the picture, and the renderer
  * draws a single particle there in its colour over a background. */
 static void test_camera_and_splat(void **state) {
@@ -201,7 +252,8 @@ static void test_errors(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_render_frames), cmocka_unit_test(test_camera_and_splat),
-      cmocka_unit_test(test_scene_camera), cmocka_unit_test(test_errors)};
+      cmocka_unit_test(test_render_frames), cmocka_unit_test(test_render_grid),
+      cmocka_unit_test(test_camera_and_splat), cmocka_unit_test(test_scene_camera),
+      cmocka_unit_test(test_errors)};
   return test_cleanup(cmocka_run_group_tests_name("render", tests, NULL, NULL));
 }

@@ -127,6 +127,8 @@ mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err) {
     attr(tag, end, "NumberOfComponents", comps, sizeof comps);
     if (!strcmp(name, "connectivity") || !strcmp(name, "offsets") || !strcmp(name, "types"))
       continue; /* vertex cells: nothing a reader needs */
+    const char *cd = strstr(head, "<CellData>"), *cde = cd ? strstr(cd, "</CellData>") : NULL;
+    if (cd && tag > cd && tag < cde) continue; /* cell data (grid_cells.vtu's level) */
     const int tsize = type_size(type), nc = atoi(comps);
     if (!tsize || nc < 1 || nc > 9 || out->array_count == MPM_VTU_ARRAYS_MAX) {
       st = mpm_error_set(err, MPM_ERR_PARSE, "%s: array '%s': unsupported type %s or %s components",

@@ -199,3 +199,44 @@ mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n,
   free(bufs);
   return MPM_OK;
 }
+
+/* Camera-space projection: pixel coordinates and depth; 0 when behind the eye. */
+static int project(const mpm_camera *cam, int w, int h, const float p[3], double out[3]) {
+  double rel[3], x = 0, y = 0, z = 0;
+  for (int d = 0; d < 3; ++d) rel[d] = p[d] - cam->eye[d];
+  for (int d = 0; d < 3; ++d) {
+    x += rel[d] * cam->right[d];
+    y += rel[d] * cam->up[d];
+    z += rel[d] * cam->forward[d];
+  }
+  if (z <= 1e-6) return 0;
+  out[0] = 0.5 * w + cam->focal * x / z;
+  out[1] = 0.5 * h - cam->focal * y / z;
+  out[2] = z;
+  return 1;
+}
+
+void mpm_render_lines(mpm_image *img, const mpm_camera *cam, size_t n, const float *ab,
+                      const float *rgb, float alpha) {
+  const int w = img->width, h = img->height;
+  /* serial: segments overlap and blending is order-dependent, so one order for any threads */
+  for (size_t s = 0; s < n; ++s) {
+    double a[3], b[3];
+    if (!project(cam, w, h, ab + 6 * s, a) || !project(cam, w, h, ab + 6 * s + 3, b)) continue;
+    const double len = fmax(fabs(b[0] - a[0]), fabs(b[1] - a[1]));
+    const int steps = (int)fmin(ceil(len), 8192.0);
+    for (int k = 0; k <= steps; ++k) {
+      const double t = steps ? (double)k / steps : 0;
+      const int px = (int)floor(a[0] + t * (b[0] - a[0])),
+                py = (int)floor(a[1] + t * (b[1] - a[1]));
+      if (px < 0 || py < 0 || px >= w || py >= h) continue;
+      const size_t i = (size_t)py * (size_t)w + (size_t)px;
+      /* perspective-correct depth along the segment, a little in front so a face's own edges
+         show */
+      const double z = 1 / ((1 - t) / a[2] + t / b[2]);
+      if (z > img->depth[i] * 1.0005f) continue;
+      for (int c = 0; c < 3; ++c)
+        img->rgb[3 * i + c] = (1 - alpha) * img->rgb[3 * i + c] + alpha * rgb[3 * s + c];
+    }
+  }
+}

@@ -7,6 +7,8 @@
  *   2. the particles as shaded sphere impostors (a disc per particle whose depth and normal
  *      are those of the sphere), depth-tested against each other and the background;
  *   3. tone mapping to 8-bit sRGB and a PNG written atomically with libpng (render_png.c).
+ * Between 2 and 3 an overlay of line segments may be drawn (mpm_render_lines: the multi-level
+ * grid's cells).
  * Particles are spread over threads, each with its own colour and depth buffer, merged by
  * depth at the end, so the image does not depend on the thread count. */
 #ifndef MPM_RENDER_RENDER_H
@@ -65,5 +67,11 @@ void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y
 mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n, const float *xyz,
                                 const float *radius, float radius_all, const float *rgb,
                                 mpm_error *err);
+
+/* Pass 2b, an overlay: the segments from ab[6 s] to ab[6 s + 3] (s < n) blended with alpha over
+ * the image in colour rgb[3 s..], hidden where something nearer is drawn (the depth buffer is
+ * read, not written). */
+void mpm_render_lines(mpm_image *img, const mpm_camera *cam, size_t n, const float *ab,
+                      const float *rgb, float alpha);
 
 #endif
