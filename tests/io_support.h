@@ -69,6 +69,7 @@ static inline void make_particles(mpm_particles *p, size_t n, mpm_real *J, mpm_r
                                       (int32_t)(i % 5) - 1);
     assert_int_equal(k, (long)i);
     p->id[i] = (uint32_t)(1000 + 7 * (n - 1 - i));
+    p->level[i] = (int32_t)(i % 4); /* particle types of a multi-level grid */
     for (int c = 0; c < 9; ++c)
       p->F[c][i] = (mpm_real)((c % 4 == 0 ? 1.0 : 0.0) + test_rand(&rng, -0.2, 0.2));
   }

@@ -224,7 +224,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
   const size_t rs = sizeof(mpm_real);
   assert_int_equal(v.points, (long)n);
   assert_int_equal(v.cells, (long)n);
-  assert_int_equal(v.narrays, 15);
+  assert_int_equal(v.narrays, 16);
 
   const parsed_array *t = find_array(&v, "TIME", "FieldData", "Float64", 1, 1, 8);
   double tv;
@@ -241,6 +241,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
   const parsed_array *pl = find_array(&v, "plastic", "PointData", real_type(), 1, n, rs);
   const parsed_array *mat = find_array(&v, "material", "PointData", "Int32", 1, n, 4);
   const parsed_array *body = find_array(&v, "body", "PointData", "Int32", 1, n, 4);
+  const parsed_array *lvl = find_array(&v, "level", "PointData", "Int32", 1, n, 4);
   const parsed_array *enr = find_array(&v, "enrichment", "PointData", "Int32", 1, n, 4);
   const parsed_array *conn = find_array(&v, "connectivity", "Cells", "Int64", 1, n, 8);
   const parsed_array *offs = find_array(&v, "offsets", "Cells", "Int64", 1, n, 8);
@@ -262,6 +263,7 @@ static void check_vtu(const char *path, const mpm_particles *p, const mpm_real *
     assert_true(real_at(pl, i) == p->plastic[i]);
     assert_int_equal(i32_at(mat, i), p->material[i]);
     assert_int_equal(i32_at(body, i), p->body[i]);
+    assert_int_equal(i32_at(lvl, i), p->level[i]);
     assert_int_equal(i32_at(enr, i), -1); /* no categories given: material points */
     assert_int_equal(i64_at(conn, i), (int64_t)i);
     assert_int_equal(i64_at(offs, i), (int64_t)i + 1);
