@@ -8,6 +8,7 @@
  * step: a falling neo-Hookean block of ~1M particles, 8 per cell, quadratic B-spline, APIC:
  *   ns per particle-step with the stage breakdown, for 1 and 2 threads, and memory.
  * stress: per-model batch stress and return map, and the SVD (bench_stress.c). */
+#define _POSIX_C_SOURCE 200809L /* setenv */
 #include "bench.h"
 #include "bench_util.h"
 #include "cli.h"
@@ -232,6 +233,8 @@ static int bench_step(int argc, char **argv) {
 }
 
 int mpm_cmd_bench(int argc, char **argv) {
+  /* benchmarks measure the thread counts they are given: no tuning (solver/thread_tuner.h) */
+  setenv("MPM_THREADS_TUNE", "0", 1);
   if (argc >= 1 && !strcmp(argv[0], "transfer")) return bench_transfer(argc - 1, argv + 1);
   if (argc >= 1 && !strcmp(argv[0], "step")) return bench_step(argc - 1, argv + 1);
   if (argc >= 1 && !strcmp(argv[0], "stress")) return mpm_bench_stress(argc - 1, argv + 1);

@@ -24,6 +24,11 @@ static void test_help_and_version(void **state) {
   (void)state;
   assert_int_equal(mpm("--version"), 0);
   expect_output("mpm ");
+  /* the program waits passively unless the environment says otherwise (app/main.c) */
+  assert_int_equal(mpm_env("env -u OMP_WAIT_POLICY", "--version"), 0);
+  expect_output("OpenMP threads wait PASSIVE");
+  assert_int_equal(mpm_env("env OMP_WAIT_POLICY=active", "--version"), 0);
+  expect_output("OpenMP threads wait active");
   assert_int_equal(mpm("--help"), 0);
   expect_output("mpm run");
   assert_int_equal(mpm(""), 2);

@@ -213,6 +213,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   mpm_dofs_init(&sim->dofs);
   mpm_arena_init(&sim->step_arena);
   sim->reorder_interval = 16;
+  sim->threads.enabled = -1; /* decided at the first step */
 
   /* time */
   sim->frame_dt = 1.0 / sc->fps;

@@ -15,6 +15,7 @@
 #include "material/material.h"
 #include "scene/scene.h"
 #include "solver/dofs.h"
+#include "solver/thread_tuner.h"
 #include "transfer/transfer.h"
 
 #include <stdint.h>
@@ -72,7 +73,8 @@ struct mpm_sim {
   mpm_real *scratch;             /* per-particle buffers for the periodic reorder */
   uint32_t *iscratch;
   size_t scratch_capacity;
-  int reorder_interval; /* physically reorder particles every this many steps */
+  int reorder_interval;     /* physically reorder particles every this many steps */
+  mpm_thread_tuner threads; /* the step's thread count, measured (solver/thread_tuner.h) */
   /* time */
   double time, frame_dt, last_dt;
   int64_t steps;

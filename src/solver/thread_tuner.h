@@ -1,0 +1,35 @@
+/* thread_tuner.h - the number of threads a step runs on, chosen by measuring (issue 17: fast on a
+ * busy machine by default).
+ *
+ * On a machine whose other cores are busy (a host application, a render, a second simulation),
+ * every barrier of a step waits for the thread the OS has descheduled, and a step on 2 threads
+ * can take twice as long as on 1. The OpenMP wait policy cannot be changed once the runtime is
+ * loaded, and a passive policy costs 40% on an idle machine. So the step measures instead: it
+ * runs on the threads the caller allows (`max`) or on 1, whichever its recent steps found faster,
+ * and now and then probes the other count with one step. A probe that confirms the choice makes
+ * the next probe come twice as late (up to every 640 steps); a probe that wins switches.
+ *
+ * The count is set for the step only: the caller's OpenMP setting is restored after it (a host
+ * application's own parallel regions keep theirs). Results do not depend on the thread count
+ * (every reduction has a fixed order), so switching changes only the time. MPM_THREADS_TUNE=0 in
+ * the environment, or tuner.enabled = 0, keeps the caller's count (benchmarks do). */
+#ifndef MPM_SOLVER_THREAD_TUNER_H
+#define MPM_SOLVER_THREAD_TUNER_H
+
+typedef struct mpm_thread_tuner {
+  int enabled;    /* -1: not decided yet (the environment is read at the first step) */
+  int max;        /* the threads the caller set (mpm_set_threads, --threads, OMP_NUM_THREADS) */
+  int use_max;    /* the choice: max threads (1) or one (0) */
+  int probing;    /* this step runs on the other count */
+  int interval;   /* steps between probes */
+  int countdown;  /* steps until the next probe */
+  double cost[2]; /* seconds per step on 1 thread [0] and on max [1], smoothed; 0: unknown */
+  long long switches;
+} mpm_thread_tuner;
+
+/* Before a step: set the threads it runs on. */
+void mpm_thread_tuner_before(mpm_thread_tuner *t);
+/* After it: its raw step's wall time, seconds. */
+void mpm_thread_tuner_after(mpm_thread_tuner *t, double seconds);
+
+#endif
