@@ -175,7 +175,11 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim) {
     const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, g->dx, 0);
     if (g->ops->activate(g, &k, sim->material_count, &none, &sim->step_arena)) goto nomem;
   }
-  if (sim->steps % sim->reorder_interval == 0 && p->count) {
+  size_t breaks = 0; /* the ranges' orders come apart as the material moves */
+  for (int t = 0; t < a->tgrid_count; ++t)
+    breaks += mpm_order_breaks(mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm,
+                               a->range[t + 1] - a->range[t]);
+  if (p->count && mpm_sim_wants_reorder(sim, breaks, p->count)) {
     /* into block order now and then, every range in its grid's order */
     for (int t = 0; t < a->tgrid_count; ++t) {
       uint32_t *perm = mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm;

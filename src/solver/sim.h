@@ -126,6 +126,12 @@ double mpm_scene_memory_estimate(const mpm_scene *scene, double *particles);
 double mpm_available_memory(void);
 mpm_status mpm_scene_check_memory(const mpm_scene *scene, mpm_error *err);
 
+/* The breaks of a sort's visiting order perm[0 .. n): the j with perm[j] != perm[j - 1] + 1. */
+size_t mpm_order_breaks(const uint32_t *perm, size_t n);
+/* Whether the step moves its n particles into their sorted order: every reorder_interval
+ * steps, and between them when the order has come apart (`breaks` of it, mpm_order_breaks). */
+int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n);
+
 /* Room for the periodic reorder's per-particle buffers. 0, or -1 when out of memory. */
 int mpm_sim_ensure_scratch(mpm_sim *sim);
 
