@@ -12,6 +12,7 @@
  *   - key mistakes name the key path. */
 #include "scene_json_support.h"
 #include "support.h"
+#include "sim_support.h"
 
 #include "core/parallel.h"
 #include "solver/adaptive.h"
@@ -21,18 +22,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static mpm_sim *sim_from_json(const char *json) {
-  mpm_scene scene;
-  mpm_error err;
-  mpm_error_clear(&err);
-  if (mpm_scene_parse(json, "test.json", &scene, &err) != MPM_OK)
-    fail_msg("scene: %s", err.message);
-  mpm_sim *sim = NULL;
-  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("sim: %s", err.message);
-  mpm_scene_free(&scene);
-  return sim;
-}
 
 static void run_steps(mpm_sim *sim, int n) {
   for (int i = 0; i < n; ++i)

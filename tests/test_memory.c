@@ -6,6 +6,7 @@
  *     and the grid keep their capacity, so steps of a body at rest make no mpm_alloc call;
  *   - the arena hands out aligned blocks, serves an overflow and grows to its peak on reset. */
 #include "support.h"
+#include "sim_support.h"
 #include "core/alloc.h"
 #include "core/arena.h"
 #include "solver/sim.h"
@@ -13,18 +14,6 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
-
-static mpm_sim *sim_from_json(const char *json) {
-  mpm_scene scene;
-  mpm_error err;
-  mpm_error_clear(&err);
-  if (mpm_scene_parse(json, "test.json", &scene, &err) != MPM_OK)
-    fail_msg("scene: %s", err.message);
-  mpm_sim *sim = NULL;
-  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("sim: %s", err.message);
-  mpm_scene_free(&scene);
-  return sim;
-}
 
 /* A jelly block and a rubber block with domains in a box; gravity, velocity and the grid kind
  * and transfer are filled in. */

@@ -84,3 +84,16 @@ size_t mpm_alloc_peak_bytes(void) {
 void mpm_alloc_reset_peak(void) {
   atomic_store(&peak_bytes, atomic_load(&live_bytes));
 }
+
+int mpm_grow(void **buf, size_t *cap, size_t n, size_t size) {
+  if (n <= *cap) return 0;
+  size_t c = *cap ? *cap : 1024;
+  while (c < n) c *= 2;
+  void *b = mpm_alloc(c * size);
+  if (!b) return -1;
+  if (*buf && *cap) memcpy(b, *buf, *cap * size);
+  mpm_free(*buf);
+  *buf = b;
+  *cap = c;
+  return 0;
+}

@@ -172,21 +172,6 @@ static void node_of(const mpm_sparse_grid *sg, size_t b, int local, int32_t idx[
   idx[2] = c[2] * MPM_BLOCK + (local & 3);
 }
 
-/* Room for n items of `size` bytes in *buf (capacity *cap items, doubled as needed, contents
- * kept). 0, or -1 when out of memory. */
-static int grow(void **buf, size_t *cap, size_t n, size_t size) {
-  if (n <= *cap) return 0;
-  size_t c = *cap ? *cap : 1024;
-  while (c < n) c *= 2;
-  void *b = mpm_alloc(c * size);
-  if (!b) return -1;
-  if (*buf) memcpy(b, *buf, *cap * size);
-  mpm_free(*buf);
-  *buf = b;
-  *cap = c;
-  return 0;
-}
-
 /* ---- the row cache ---- */
 
 #define ROW_EMPTY UINT64_MAX
@@ -244,8 +229,9 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
     c->entry = entry;
     c->size = size;
   }
-  if (grow((void **)&c->entries, &c->entry_capacity, c->count + 1, sizeof *c->entries) ||
-      grow((void **)&c->terms, &c->term_capacity, c->term_count + MPM_ROW_MAX, sizeof *c->terms))
+  if (mpm_grow((void **)&c->entries, &c->entry_capacity, c->count + 1, sizeof *c->entries) ||
+      mpm_grow((void **)&c->terms, &c->term_capacity, c->term_count + MPM_ROW_MAX,
+               sizeof *c->terms))
     return NULL;
   struct mpm_row_entry *e = &c->entries[c->count];
   mpm_row_term own;
@@ -381,13 +367,14 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
         const int local = __builtin_ctzll(m);
         int32_t idx[3];
         node_of(sg, b, local, idx);
-        if (grow((void **)&terms, &terms_cap, term_count + MPM_ROW_MAX, sizeof *terms)) goto done;
+        if (mpm_grow((void **)&terms, &terms_cap, term_count + MPM_ROW_MAX, sizeof *terms))
+          goto done;
         const int n = slot_row(g, G, idx, terms + term_count);
         if (n < 0) goto done;
         if (n == 0) continue;
         const size_t a = g->ghost_count;
-        if (reserve_ghosts(g, a + 1) || grow((void **)&len, &len_cap, a + 1, sizeof *len) ||
-            grow((void **)&node, &node_cap, a + 1, sizeof *node))
+        if (reserve_ghosts(g, a + 1) || mpm_grow((void **)&len, &len_cap, a + 1, sizeof *len) ||
+            mpm_grow((void **)&node, &node_cap, a + 1, sizeof *node))
           goto done;
         len[a] = (uint32_t)n;
         node[a].level = level_of(g, G);

@@ -156,12 +156,13 @@ int mpm_refinement_leaf_at(const mpm_refinement *r, const mpm_real x[3], int32_t
   return L;
 }
 
-/* The finest leaf level under cell c of level L that meets [lo, hi] (cell units of level L). */
-static int finest_under(const mpm_refinement *r, int L, const int32_t c[3], const double lo[3],
-                        const double hi[3]) {
+/* The finest (or, with finest = 0, the coarsest) level of the leaves under cell c of level L
+ * that meet [lo, hi] (in level L's cell units). */
+static int extreme_under(const mpm_refinement *r, int L, const int32_t c[3], const double lo[3],
+                         const double hi[3], int finest) {
   if (L == r->levels - 1 || !set_contains(&r->refined[L], c)) return L;
-  int best = L + 1;
-  for (int k = 0; k < 8 && best < r->levels - 1; ++k) {
+  int best = finest ? L + 1 : r->levels - 1;
+  for (int k = 0; k < 8 && (finest ? best < r->levels - 1 : best > L + 1); ++k) {
     int32_t child[3];
     double clo[3], chi[3];
     int meets = 1;
@@ -173,77 +174,43 @@ static int finest_under(const mpm_refinement *r, int L, const int32_t c[3], cons
       if (chi[d] < (double)child[d] || clo[d] > (double)child[d] + 1) meets = 0;
     }
     if (!meets) continue;
-    const int f = finest_under(r, L + 1, child, clo, chi);
-    if (f > best) best = f;
+    const int f = extreme_under(r, L + 1, child, clo, chi, finest);
+    if (finest ? f > best : f < best) best = f;
   }
   return best;
 }
 
-/* The coarsest level of the leaves under cell c of level L that meet [lo, hi] (in level L's
- * cell units), stopping once it is `floor`. */
-static int coarsest_under(const mpm_refinement *r, int L, const int32_t c[3], const double lo[3],
-                          const double hi[3]) {
-  if (L == r->levels - 1 || !set_contains(&r->refined[L], c)) return L;
-  int best = r->levels - 1;
-  for (int k = 0; k < 8 && best > L + 1; ++k) {
-    int32_t child[3];
-    double clo[3], chi[3];
-    int meets = 1;
-    for (int d = 0; d < 3; ++d) {
-      child[d] = 2 * c[d] + ((k >> d) & 1);
-      clo[d] = 2 * lo[d];
-      chi[d] = 2 * hi[d];
-      if (chi[d] < (double)child[d] || clo[d] > (double)child[d] + 1) meets = 0;
-    }
-    if (!meets) continue;
-    const int f = coarsest_under(r, L + 1, child, clo, chi);
-    if (f < best) best = f;
+static int extreme_level_in(const mpm_refinement *r, const mpm_real lo[3], const mpm_real hi[3],
+                            int finest) {
+  double a[3], b[3];
+  int32_t c0[3], c1[3];
+  for (int d = 0; d < 3; ++d) {
+    a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
+    b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
+    c0[d] = (int32_t)floor(a[d]);
+    c1[d] = (int32_t)floor(b[d]);
   }
+  const int last = finest ? r->levels - 1 : 0; /* nothing goes past it */
+  int best = finest ? 0 : r->levels - 1;
+  for (int32_t i = c0[0]; i <= c1[0]; ++i)
+    for (int32_t j = c0[1]; j <= c1[1]; ++j)
+      for (int32_t k = c0[2]; k <= c1[2]; ++k) {
+        const int32_t c[3] = {i, j, k};
+        const int f = extreme_under(r, 0, c, a, b, finest);
+        if (finest ? f > best : f < best) best = f;
+        if (best == last) return best;
+      }
   return best;
 }
 
 int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                      const mpm_real hi[3]) {
-  double a[3], b[3];
-  int32_t c0[3], c1[3];
-  for (int d = 0; d < 3; ++d) {
-    a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
-    b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
-    c0[d] = (int32_t)floor(a[d]);
-    c1[d] = (int32_t)floor(b[d]);
-  }
-  int best = r->levels - 1;
-  for (int32_t i = c0[0]; i <= c1[0]; ++i)
-    for (int32_t j = c0[1]; j <= c1[1]; ++j)
-      for (int32_t k = c0[2]; k <= c1[2]; ++k) {
-        const int32_t c[3] = {i, j, k};
-        const int f = coarsest_under(r, 0, c, a, b);
-        if (f < best) best = f;
-        if (best == 0) return 0;
-      }
-  return best;
+  return extreme_level_in(r, lo, hi, 0);
 }
 
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]) {
-  double a[3], b[3];
-  int32_t c0[3], c1[3];
-  for (int d = 0; d < 3; ++d) {
-    a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
-    b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
-    c0[d] = (int32_t)floor(a[d]);
-    c1[d] = (int32_t)floor(b[d]);
-  }
-  int best = 0;
-  for (int32_t i = c0[0]; i <= c1[0]; ++i)
-    for (int32_t j = c0[1]; j <= c1[1]; ++j)
-      for (int32_t k = c0[2]; k <= c1[2]; ++k) {
-        const int32_t c[3] = {i, j, k};
-        const int f = finest_under(r, 0, c, a, b);
-        if (f > best) best = f;
-        if (best == r->levels - 1) return best;
-      }
-  return best;
+  return extreme_level_in(r, lo, hi, 1);
 }
 
 /* ---- nodes and their rows ---- */

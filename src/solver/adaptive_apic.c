@@ -23,19 +23,6 @@
 
 #include <string.h>
 
-static int grow(void **buf, size_t *cap, size_t n, size_t size) {
-  if (n <= *cap) return 0;
-  size_t c = *cap ? *cap : 1024;
-  while (c < n) c *= 2;
-  void *b = mpm_alloc(c * size);
-  if (!b) return -1;
-  if (*buf) memcpy(b, *buf, *cap * size);
-  mpm_free(*buf);
-  *buf = b;
-  *cap = c;
-  return 0;
-}
-
 /* The DOF slots of the W^3 stencil at `base` (node coordinates of the grid) of a particle in
  * owner block b, through the block's pad. */
 static void stencil_slots(const mpm_grid *g, size_t b, const int32_t base[3], int W,
@@ -60,7 +47,8 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
   mpm_adaptive_grid *ag = &a->grid;
   a->boundary_count = a->cell_count = a->cell_ghost_count = 0;
   const size_t dofs = sim->dofs.count;
-  if (grow((void **)&a->ghost_of, &a->ghost_of_capacity, dofs + 1, sizeof *a->ghost_of)) goto nomem;
+  if (mpm_grow((void **)&a->ghost_of, &a->ghost_of_capacity, dofs + 1, sizeof *a->ghost_of))
+    goto nomem;
   memset(a->ghost_of, 0xff, dofs * sizeof *a->ghost_of);
   size_t multi = 0;
   for (size_t g = 0; g < ag->ghost_count; ++g)
@@ -70,7 +58,8 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     }
   /* the ghosts' affine moments (P2G) and velocity moments (G2P), zero at ghosts no boundary
    * particle reaches */
-  if (grow((void **)&a->moment, &a->moment_capacity, 18 * ag->ghost_count + 1, sizeof *a->moment))
+  if (mpm_grow((void **)&a->moment, &a->moment_capacity, 18 * ag->ghost_count + 1,
+               sizeof *a->moment))
     goto nomem;
   memset(a->moment, 0, 18 * ag->ghost_count * sizeof *a->moment);
   if (!multi) return MPM_OK;
@@ -97,8 +86,8 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
         for (int n = 0; n < nodes; ++n) {
           const int32_t gh = a->ghost_of[slot[n]];
           if (gh < 0) continue;
-          if (grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, a->cell_ghost_count + 1,
-                   sizeof *a->cell_ghost))
+          if (mpm_grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, a->cell_ghost_count + 1,
+                       sizeof *a->cell_ghost))
             goto nomem;
           /* the node as (i, j, k), 4 bits each */
           a->cell_ghost[a->cell_ghost_count].node =
@@ -107,15 +96,15 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
           a->cell_ghost_count++;
         }
         if (a->cell_ghost_count == first) continue;
-        if (grow((void **)&a->cell, &a->cell_capacity, a->cell_count + 2, sizeof *a->cell))
+        if (mpm_grow((void **)&a->cell, &a->cell_capacity, a->cell_count + 2, sizeof *a->cell))
           goto nomem;
         a->cell[a->cell_count] = (uint32_t)first;
         a->cell[a->cell_count + 1] = (uint32_t)a->cell_ghost_count; /* the next cell's first */
         for (size_t m = 0; m < nmat; ++m) {
           const size_t q = q0 + m * MPM_BLOCK_NODES;
           for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j) {
-            if (grow((void **)&a->boundary, &a->boundary_capacity, a->boundary_count + 1,
-                     sizeof *a->boundary))
+            if (mpm_grow((void **)&a->boundary, &a->boundary_capacity, a->boundary_count + 1,
+                         sizeof *a->boundary))
               goto nomem;
             a->boundary[a->boundary_count].particle = (uint32_t)a->range[t] + sg->perm[j];
             a->boundary[a->boundary_count].tgrid = (uint16_t)t;
@@ -128,8 +117,8 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
   }
   /* per boundary particle its B (kept over the P2G) and its B correction (G2P), and the P2G's
    * work (m C and the 1D weights) */
-  if (grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB) ||
-      grow((void **)&a->work, &a->work_capacity, 21 * a->boundary_count + 1, sizeof *a->work))
+  if (mpm_grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB) ||
+      mpm_grow((void **)&a->work, &a->work_capacity, 21 * a->boundary_count + 1, sizeof *a->work))
     goto nomem;
   return MPM_OK;
 nomem:
