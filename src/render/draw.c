@@ -127,9 +127,8 @@ void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y
     }
 }
 
-/* One particle into a colour and depth buffer. */
-static void splat(int w, int h, float *rgb, float *depth, const mpm_camera *cam, const float p[3],
-                  float r, const float col[3]) {
+/* Point p in camera space: along right, up and forward from the eye. */
+static void to_camera(const mpm_camera *cam, const float p[3], double c[3]) {
   double rel[3], x = 0, y = 0, z = 0;
   for (int d = 0; d < 3; ++d) rel[d] = p[d] - cam->eye[d];
   for (int d = 0; d < 3; ++d) {
@@ -137,6 +136,15 @@ static void splat(int w, int h, float *rgb, float *depth, const mpm_camera *cam,
     y += rel[d] * cam->up[d];
     z += rel[d] * cam->forward[d];
   }
+  c[0] = x, c[1] = y, c[2] = z;
+}
+
+/* One particle into a colour and depth buffer. */
+static void splat(int w, int h, float *rgb, float *depth, const mpm_camera *cam, const float p[3],
+                  float r, const float col[3]) {
+  double q[3];
+  to_camera(cam, p, q);
+  const double x = q[0], y = q[1], z = q[2];
   if (z <= r) return; /* behind or around the eye */
   const double cx = 0.5 * w + cam->focal * x / z, cy = 0.5 * h - cam->focal * y / z;
   const double rp = fmax(cam->focal * r / z, 0.5);
@@ -202,13 +210,9 @@ mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n,
 
 /* Camera-space projection: pixel coordinates and depth; 0 when behind the eye. */
 static int project(const mpm_camera *cam, int w, int h, const float p[3], double out[3]) {
-  double rel[3], x = 0, y = 0, z = 0;
-  for (int d = 0; d < 3; ++d) rel[d] = p[d] - cam->eye[d];
-  for (int d = 0; d < 3; ++d) {
-    x += rel[d] * cam->right[d];
-    y += rel[d] * cam->up[d];
-    z += rel[d] * cam->forward[d];
-  }
+  double q[3];
+  to_camera(cam, p, q);
+  const double x = q[0], y = q[1], z = q[2];
   if (z <= 1e-6) return 0;
   out[0] = 0.5 * w + cam->focal * x / z;
   out[1] = 0.5 * h - cam->focal * y / z;
