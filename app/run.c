@@ -44,6 +44,18 @@ static mpm_status load(const char *path, mpm_sim **sim, mpm_error *err) {
   return st;
 }
 
+/* Warnings about where the bodies start (overlaps, inside colliders), one line each. */
+static void warn_placement(const mpm_sim *sim, const char *scene) {
+  char text[4096];
+  if (!mpm_sim_placement_report(sim, text, sizeof text)) return;
+  for (char *line = text, *end; *line; line = end + 1) {
+    end = strchr(line, '\n');
+    if (!end) break;
+    *end = 0;
+    fprintf(stderr, "mpm: warning: %s: %s\n", scene, line);
+  }
+}
+
 int mpm_cmd_check(int argc, char **argv) {
   if (argc != 1 || argv[0][0] == '-') {
     fprintf(stderr, "usage: mpm check SCENE.json\n");
@@ -66,6 +78,7 @@ int mpm_cmd_check(int argc, char **argv) {
   }
   const char *advice = mpm_scene_advice(&sim->scene);
   if (advice) fprintf(stderr, "mpm: warning: %s: %s\n", argv[0], advice);
+  warn_placement(sim, argv[0]);
   printf("%s: ok (%zu particles, %zu of them with domains, %d materials, %d colliders, dx = %g "
          "m, %d frames, about %.0f MiB)\n",
          argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
@@ -225,6 +238,7 @@ int mpm_cmd_run(int argc, char **argv) {
   }
   const char *advice = mpm_scene_advice(&sim->scene);
   if (advice) fprintf(stderr, "mpm: warning: %s: %s\n", scene_path, advice);
+  if (!resume_dir) warn_placement(sim, scene_path);
   if (max_frames > 0 && max_frames < sim->frame_count) sim->frame_count = max_frames;
   char checkpoint[MPM_PATH_MAX + 32] = "";
   if (resume_dir) {

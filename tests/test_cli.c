@@ -83,7 +83,7 @@ static void test_bad_scenes_exit_2_and_write_nothing(void **state) {
 /* Every scene shipped in examples/ and examples/zhu/ passes `mpm check`. */
 static void test_check_examples(void **state) {
   (void)state;
-  static const char *const dirs[] = {"examples", "examples/zhu"};
+  static const char *const dirs[] = {"examples", "examples/zhu", "examples/gao"};
   int checked = 0;
   for (size_t k = 0; k < sizeof dirs / sizeof dirs[0]; ++k) {
     DIR *d = opendir(dirs[k]);
@@ -95,6 +95,9 @@ static void test_check_examples(void **state) {
       snprintf(args, sizeof args, "check %s/%s", dirs[k], e->d_name);
       if (mpm(args) != 0) fail_msg("%s/%s: %s", dirs[k], e->d_name, output);
       expect_output("ok");
+      /* the examples start where they mean to (no overlaps, nothing inside an obstacle) */
+      if (strstr(output, "overlap") || strstr(output, "start inside"))
+        fail_msg("%s/%s: %s", dirs[k], e->d_name, output);
       ++checked;
     }
     closedir(d);
@@ -150,6 +153,37 @@ static void test_linear_kernel_warning(void **state) {
   assert_int_equal(mpm(args), 0);
   expect_output("steps per frame");
   expect_output("more than 10^4");
+}
+
+/* Issue 17: check and run report bodies that overlap (twice as dense there) and bodies that
+ * start inside a slip collider; a sticky one holding material is a grip and is not reported. */
+static void test_placement_warnings(void **state) {
+  (void)state;
+  char dir[400], path[512], args[1200];
+  snprintf(dir, sizeof dir, "%s", test_temp_dir("placement"));
+  snprintf(path, sizeof path, "%s/placed.json", dir);
+  write_file(path, "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"
+                   " \"time\": {\"end\": 0.05, \"fps\": 20},"
+                   " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 1e4,"
+                   " \"nu\": 0.3, \"density\": 1000}],"
+                   " \"bodies\": [{\"name\": \"a\", \"shape\": {\"type\": \"box\", \"center\":"
+                   " [0.5,0.5,0.5], \"half_extent\": [0.1,0.1,0.1]}, \"material\": \"j\"},"
+                   " {\"name\": \"b\", \"shape\": {\"type\": \"sphere\", \"center\": [0.6,0.5,0.5],"
+                   " \"radius\": 0.08}, \"material\": \"j\"},"
+                   " {\"name\": \"c\", \"shape\": {\"type\": \"box\", \"center\": [0.5,0.75,0.5],"
+                   " \"half_extent\": [0.1,0.05,0.1]}, \"material\": \"j\"}],"
+                   " \"colliders\": [{\"name\": \"ball\", \"shape\": {\"type\": \"sphere\","
+                   " \"center\": [0.5,0.4,0.5], \"radius\": 0.05}},"
+                   " {\"name\": \"grip\", \"rule\": \"sticky\", \"shape\": {\"type\": \"box\","
+                   " \"center\": [0.5,0.8,0.5], \"half_extent\": [0.2,0.02,0.2]}}]}");
+  snprintf(args, sizeof args, "check '%s'", path);
+  assert_int_equal(mpm(args), 0);
+  expect_output("bodies[0] (\"a\") and bodies[1] (\"b\") overlap");
+  expect_output("start inside colliders[0] (\"ball\")");
+  if (strstr(output, "grip") || strstr(output, "bodies[2]")) fail_msg("output: %s", output);
+  snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", path, dir);
+  assert_int_equal(mpm(args), 0);
+  expect_output("overlap");
 }
 
 /* Issue 17: a user's clone has no ../shared/, so the README cites both papers itself, and the
@@ -426,6 +460,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_linear_kernel_warning),
+      cmocka_unit_test(test_placement_warnings),
       cmocka_unit_test(test_readme_cites_papers),
       cmocka_unit_test(test_meshes_readme_shape),
       cmocka_unit_test(test_subcommand_help),

@@ -135,6 +135,10 @@ int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n);
 /* Room for the periodic reorder's per-particle buffers. 0, or -1 when out of memory. */
 int mpm_sim_ensure_scratch(mpm_sim *sim);
 
+/* What the bodies start in that is likely a mistake (placement.c): bodies overlapping each other
+ * and bodies inside a collider, one line each in out (cap bytes). The number of findings. */
+int mpm_sim_placement_report(const mpm_sim *sim, char *out, size_t cap);
+
 /* The cell size the CFL condition uses: dx, or the finest level's spacing on a multi-level grid. */
 double mpm_sim_finest_dx(const mpm_sim *sim);
 
