@@ -14,46 +14,77 @@ void mpm_progress_begin(mpm_progress *p, mpm_progress_mode mode, int frames, siz
   p->first_frame = 0;
   p->first_steps = 0;
   p->drawn = 0;
+  p->t0 = 0;
+  p->t_end = 0;
 }
 
-static void format_eta(double s, char *buf, size_t n) {
-  if (s < 0 || s > 1e7) {
-    snprintf(buf, n, "--:--");
+void mpm_format_duration(double s, char *buf, size_t n) {
+  if (!(s >= 0) || s > 1e8) {
+    snprintf(buf, n, "--");
     return;
   }
-  long t = (long)(s + 0.5);
+  const long t = (long)(s + 0.5);
   if (t >= 3600)
-    snprintf(buf, n, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+    snprintf(buf, n, "%ld h %02ld min", t / 3600, (t / 60) % 60);
+  else if (t >= 60)
+    snprintf(buf, n, "%ld min %02ld s", t / 60, t % 60);
   else
-    snprintf(buf, n, "%ld:%02ld", t / 60, t % 60);
+    snprintf(buf, n, "%ld s", t);
+}
+
+/* The time left, from the simulated time reached since the start (frames vary in cost, and a
+ * frame in progress counts in part). */
+static double eta_of(const mpm_progress *p, double sim_time) {
+  const double done = sim_time - p->t0, left = p->t_end - sim_time;
+  return done > 0 && p->elapsed > 0 ? p->elapsed / done * left : -1;
+}
+
+static void draw(mpm_progress *p, int frame, double sim_time, int64_t steps, size_t particles,
+                 const char *extra, int within) {
+  const char *sep = extra && extra[0] ? "  " : "";
+  if (!extra) extra = "";
+  const double rate = p->elapsed > 0 ? (double)(steps - p->first_steps) / p->elapsed : 0;
+  char eta_s[32];
+  mpm_format_duration(eta_of(p, sim_time), eta_s, sizeof eta_s);
+  if (p->mode == MPM_PROGRESS_BAR) {
+    const int width = 28;
+    const double f = p->t_end > p->t0 ? (sim_time - p->t0) / (p->t_end - p->t0) : 1;
+    const double whole = (double)p->first_frame / (p->frames > 0 ? p->frames : 1);
+    int fill = (int)((whole + (1 - whole) * f) * width);
+    if (fill > width) fill = width;
+    char bar[64];
+    for (int i = 0; i < width; ++i) bar[i] = i < fill ? '#' : '.';
+    bar[width] = '\0';
+    fprintf(stderr, "\r[%s] frame %d/%d  t=%.4g s  %.0f steps/s  eta %s  %zu particles%s%s\033[K",
+            bar, frame, p->frames, sim_time, rate, eta_s, particles, sep, extra);
+    fflush(stderr);
+    p->drawn = 1;
+  } else if (within) {
+    fprintf(stderr, "frame %d/%d in progress: t=%.6g s steps=%lld steps/s=%.1f eta %s\n", frame,
+            p->frames, sim_time, (long long)steps, rate, eta_s);
+  } else {
+    fprintf(stderr, "frame %d/%d t=%.6g s steps=%lld steps/s=%.1f eta %s particles=%zu%s%s\n",
+            frame, p->frames, sim_time, (long long)steps, rate, eta_s, particles, sep, extra);
+  }
 }
 
 void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t steps,
                          size_t particles, const char *extra) {
-  const char *sep = extra && extra[0] ? "  " : "";
-  if (!extra) extra = "";
   const double now = mpm_wall_seconds();
   p->elapsed = now - p->start;
   if (p->mode == MPM_PROGRESS_QUIET) return;
-  const double rate = p->elapsed > 0 ? (double)(steps - p->first_steps) / p->elapsed : 0;
-  const int done = frame - p->first_frame;
-  const double eta = done > 0 ? p->elapsed / done * (p->frames - frame) : -1;
-  char eta_s[32];
-  format_eta(eta, eta_s, sizeof eta_s);
-  if (p->mode == MPM_PROGRESS_BAR) {
-    const int width = 28;
-    int fill = p->frames > 0 ? (int)((double)frame / p->frames * width) : width;
-    char bar[64];
-    for (int i = 0; i < width; ++i) bar[i] = i < fill ? '#' : '.';
-    bar[width] = '\0';
-    fprintf(stderr, "\r[%s] frame %d/%d  t=%.4g s  %.0f steps/s  ETA %s  %zu particles%s%s\033[K",
-            bar, frame, p->frames, sim_time, rate, eta_s, particles, sep, extra);
-    fflush(stderr);
-    p->drawn = 1;
-  } else {
-    fprintf(stderr, "frame %d/%d t=%.6g s steps=%lld steps/s=%.1f eta=%s particles=%zu%s%s\n",
-            frame, p->frames, sim_time, (long long)steps, rate, eta_s, particles, sep, extra);
-  }
+  draw(p, frame, sim_time, steps, particles, extra, 0);
+  p->last_steps = steps;
+  p->last_time = now;
+}
+
+void mpm_progress_step(mpm_progress *p, int frame, double sim_time, int64_t steps,
+                       size_t particles) {
+  if (p->mode == MPM_PROGRESS_QUIET) return;
+  const double now = mpm_wall_seconds();
+  if (now - p->last_time < (p->mode == MPM_PROGRESS_BAR ? 0.5 : 10)) return;
+  p->elapsed = now - p->start;
+  draw(p, frame + 1, sim_time, steps, particles, NULL, 1); /* the frame being computed */
   p->last_steps = steps;
   p->last_time = now;
 }

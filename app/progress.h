@@ -1,5 +1,7 @@
 /* progress.h - progress display of `mpm run`: a redrawn bar on a terminal, one plain line per
- * frame otherwise, nothing with --quiet. */
+ * frame otherwise, nothing with --quiet. Within a long frame the bar is redrawn every half second
+ * and a line is printed every 10 s (mpm_progress_step). The time left is estimated from the
+ * simulated time reached, and printed as a duration (`eta 3 min 05 s`). */
 #ifndef MPM_APP_PROGRESS_H
 #define MPM_APP_PROGRESS_H
 
@@ -17,12 +19,18 @@ typedef struct mpm_progress {
   int64_t last_steps;
   double last_time;
   int drawn;
+  double t0, t_end; /* simulated time at the start (or resumption) and at the end, s */
 } mpm_progress;
 
 void mpm_progress_begin(mpm_progress *p, mpm_progress_mode mode, int frames, size_t particles);
 /* extra: appended to the line (the implicit solver's figures), or NULL. */
 void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t steps,
                          size_t particles, const char *extra);
+/* After a step inside a frame: redraws (or prints a line) when enough wall time has passed. */
+void mpm_progress_step(mpm_progress *p, int frame, double sim_time, int64_t steps,
+                       size_t particles);
 void mpm_progress_end(mpm_progress *p);
+/* The time left as a duration: "12 s", "3 min 05 s", "1 h 02 min", "--" when unknown. */
+void mpm_format_duration(double seconds, char *buf, size_t n);
 
 #endif

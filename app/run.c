@@ -56,6 +56,12 @@ static void warn_placement(const mpm_sim *sim, const char *scene) {
   }
 }
 
+/* Progress within a frame (sim->on_step). */
+static void progress_on_step(void *ctx, const mpm_sim *sim) {
+  mpm_progress_step(ctx, sim->frame, sim->time, sim->steps,
+                    sim->particles.count + sim->domains.active_count);
+}
+
 int mpm_cmd_check(int argc, char **argv) {
   if (argc != 1 || argv[0][0] == '-') {
     fprintf(stderr, "usage: mpm check SCENE.json\n");
@@ -284,6 +290,12 @@ int mpm_cmd_run(int argc, char **argv) {
                      sim->frame_count, sim->particles.count);
   pr.first_frame = sim->frame;
   pr.first_steps = sim->steps;
+  pr.t0 = sim->time;
+  pr.t_end = sim->frame_count * sim->frame_dt < sim->scene.end_time
+                 ? sim->frame_count * sim->frame_dt
+                 : sim->scene.end_time;
+  sim->on_step = progress_on_step;
+  sim->on_step_ctx = &pr;
   if (!quiet && resume_dir)
     fprintf(stderr, "mpm: resuming %s from %s: frame %d of %d, t = %.6g s, step %lld\n", scene_path,
             checkpoint, sim->frame, sim->frame_count, sim->time, (long long)sim->steps);

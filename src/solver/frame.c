@@ -85,6 +85,7 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
     /* the relative margin: the fixed step's even division may round a hair below dt */
     mpm_status st = counted_step(sim, dt, dt < nominal * (1 - 1e-9));
     if (st != MPM_OK) return st;
+    if (sim->on_step) sim->on_step(sim->on_step_ctx, sim);
   }
   sim->time = end;
   sim->frame++;

@@ -102,6 +102,9 @@ struct mpm_sim {
   mpm_real *corner_backup[18];
   size_t corner_backup_capacity;
   const volatile int *interrupt;
+  /* called after every step inside mpm_sim_advance_frame (the CLI's progress within a frame) */
+  void (*on_step)(void *ctx, const mpm_sim *sim);
+  void *on_step_ctx;
   mpm_particles view; /* mpm_sim_particles' copy of every particle when there are domains */
   char last_checkpoint[MPM_PATH_MAX + 32];
   mpm_error error;
