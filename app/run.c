@@ -89,7 +89,9 @@ int mpm_cmd_check(int argc, char **argv) {
          "m, %d frames, about %.0f MiB)\n",
          argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
          sim->material_count, sim->collider_count, sim->scene.dx, sim->frame_count,
-         mpm_scene_memory_estimate(&sim->scene, NULL) / (1024.0 * 1024.0));
+         mpm_scene_memory_for(&sim->scene,
+                              (double)(sim->particles.count + sim->domains.particles.count)) /
+             (1024.0 * 1024.0));
   /* the first step, as the frame loop will plan it: a frame needing very many steps is
      usually a unit slip (E in Pa, dx in m) or a far too fine grid for the material's stiffness */
   st = mpm_sim_mark_enrichment(sim);

@@ -1,3 +1,4 @@
+#define _POSIX_C_SOURCE 200809L /* setenv, unsetenv */
 /* test_adaptive_step.c - the step on the multi-level grid (solver/adaptive.h) and its scene keys
  * (domain.levels, domain.refine):
  *   - one level through the multi-level path gives bitwise the uniform grid's particles (APIC
@@ -246,6 +247,33 @@ static void test_steep_refinement_is_refused(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* A scene whose refined cells need more memory than allowed is refused before its particles are
+ * sampled, with the count the tree gives (the level-0 estimate alone would pass). */
+static void test_refined_memory_is_checked(void **state) {
+  (void)state;
+  setenv("MPM_MEMORY_LIMIT", "150M", 1);
+  const char *json =
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05, \"levels\": 3,"
+      "  \"refine\": [{\"level\": 2, \"box\": {\"min\": [0.2,0.2,0.2], \"max\": [0.8,0.8,0.8]}}]},"
+      " \"time\": {\"end\": 1, \"fps\": 24},"
+      " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 4e4, "
+      "\"nu\": 0.3, \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
+      "\"half_extent\": [0.3,0.3,0.3]}, \"material\": \"j\"}]}";
+  mpm_scene scene;
+  mpm_error err;
+  mpm_error_clear(&err);
+  assert_int_equal(mpm_scene_parse(json, "big.json", &scene, &err), MPM_OK);
+  mpm_sim *sim = NULL;
+  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, &err);
+  mpm_scene_free(&scene);
+  unsetenv("MPM_MEMORY_LIMIT");
+  assert_int_equal(st, MPM_ERR_INVALID);
+  assert_null(sim);
+  if (!strstr(err.message, "fewer refined cells") || !strstr(err.message, "8.85e+05"))
+    fail_msg("message: %s", err.message);
+}
+
 #define LEVELS_DOMAIN "'domain': {'min': [0, 0, 0], 'max': [1, 1, 1], 'dx': 0.05, "
 #define LEVELS_SCENE(D, X) "{" LEVELS_DOMAIN D "}, " TIME ", " MATS ", " BODIES X "}"
 
@@ -299,6 +327,7 @@ int main(void) {
       cmocka_unit_test(test_two_levels_threads_bitwise),
       cmocka_unit_test(test_refinement_rules),
       cmocka_unit_test(test_steep_refinement_is_refused),
+      cmocka_unit_test(test_refined_memory_is_checked),
       cmocka_unit_test(test_key_errors),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

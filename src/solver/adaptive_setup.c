@@ -263,6 +263,44 @@ static mpm_status make_transfer_grids(mpm_sim *sim, mpm_error *err) {
   return MPM_OK;
 }
 
+typedef struct leaf_count {
+  const mpm_scene *sc;
+  const mpm_refinement *r;
+  double extra; /* particles the fine leaves add to the level-0 estimate */
+} leaf_count;
+
+static void count_leaf(void *ctx, int level, const int32_t cell[3]) {
+  leaf_count *c = ctx;
+  const double dx = (double)mpm_refinement_dx(c->r, level), dx0 = (double)c->r->dx0;
+  for (int b = 0; b < c->sc->body_count; ++b) {
+    const mpm_body_desc *body = &c->sc->bodies[b];
+    const double *lo = body->shape.bounds_lo, *hi = body->shape.bounds_hi;
+    double overlap = 1, box = 1;
+    for (int d = 0; d < 3; ++d) {
+      const double a = (double)c->r->origin[d] + cell[d] * dx;
+      const double w = fmin(a + dx, hi[d]) - fmax(a, lo[d]);
+      overlap *= w > 0 ? w : 0;
+      box *= hi[d] - lo[d];
+    }
+    if (!(overlap > 0) || !(box > 0)) continue;
+    double n0 = 0; /* the body's level-0 count over its box: its fill */
+    mpm_scene one = *c->sc;
+    one.bodies = (mpm_body_desc *)body;
+    one.body_count = 1;
+    mpm_scene_memory_estimate(&one, &n0);
+    const double fill = fmin(1, n0 / (box / (dx0 * dx0 * dx0) * body->particles_per_cell));
+    c->extra +=
+        overlap * fill * body->particles_per_cell / (dx0 * dx0 * dx0) * (ldexp(1, 3 * level) - 1);
+  }
+}
+
+/* The particles the refined leaves add, estimated from the bodies' boxes. */
+static double refined_particles(mpm_sim *sim) {
+  leaf_count c = {&sim->scene, &sim->adaptive->grid.tree, 0};
+  mpm_refinement_fine_leaves(c.r, count_leaf, &c);
+  return c.extra;
+}
+
 mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
   const mpm_scene *sc = &sim->scene;
   mpm_adaptive *a = calloc(1, sizeof *a);
@@ -288,6 +326,13 @@ mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
                            "outside the %d-level grid's coordinate range)",
                            sc->path, k, sc->levels);
   }
+  /* the particles the levels will hold, before any is sampled: each body's level-0 count, and
+   * for every finer leaf inside its bounding box the extra particles of that level, in the share
+   * of the box the body fills */
+  double n = 0;
+  mpm_scene_memory_estimate(sc, &n);
+  const mpm_status fits = mpm_scene_check_memory_for(sc, n + refined_particles(sim), err);
+  if (fits != MPM_OK) return fits;
   /* the refined cells over the domain densely (a bit per cell, up to 64 MiB for all levels):
    * the step asks the tree for every particle */
   const int32_t lo0[3] = {-1, -1, -1},

@@ -57,15 +57,21 @@ static double dense_nodes(const mpm_scene *s) {
   return n;
 }
 
+static double bytes_per_particle(const mpm_scene *s) {
+  return BYTES_PER_PARTICLE +
+         (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT ? IMPLICIT_BYTES_PER_PARTICLE : 0);
+}
+
+double mpm_scene_memory_for(const mpm_scene *s, double particles) {
+  return particles * bytes_per_particle(s) + dense_nodes(s) * DOF_REALS * sizeof(mpm_real) +
+         64.0 * 1024 * 1024; /* plus the program itself */
+}
+
 double mpm_scene_memory_estimate(const mpm_scene *s, double *particles) {
   double n = 0;
   for (int b = 0; b < s->body_count; ++b) n += body_particles(s, b);
   if (particles) *particles = n;
-  const double per_particle =
-      BYTES_PER_PARTICLE +
-      (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT ? IMPLICIT_BYTES_PER_PARTICLE : 0);
-  return n * per_particle + dense_nodes(s) * DOF_REALS * sizeof(mpm_real) +
-         64.0 * 1024 * 1024; /* plus the program itself */
+  return mpm_scene_memory_for(s, n);
 }
 
 /* MPM_MEMORY_LIMIT's value in bytes: a positive number with an optional K, M or G suffix
@@ -117,14 +123,19 @@ static const char *human_bytes(double b, char *buf, size_t cap) {
 }
 
 mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
+  double n;
+  mpm_scene_memory_estimate(s, &n);
+  return mpm_scene_check_memory_for(s, n, err);
+}
+
+mpm_status mpm_scene_check_memory_for(const mpm_scene *s, double n, mpm_error *err) {
   const char *env = getenv("MPM_MEMORY_LIMIT");
   if (env && *env && parse_limit(env) < 0)
     return mpm_error_set(err, MPM_ERR_INVALID,
                          "MPM_MEMORY_LIMIT: expected a positive number of bytes with an optional "
                          "K, M or G suffix (e.g. 512M, 4G), got '%.64s'",
                          env);
-  double n;
-  const double need = mpm_scene_memory_estimate(s, &n), have = mpm_available_memory();
+  const double need = mpm_scene_memory_for(s, n), have = mpm_available_memory();
   if (have > 0 && need > have) {
     const double dense = dense_nodes(s);
     char grid[160] = "", need_s[32], have_s[32], dense_s[32];
@@ -132,16 +143,16 @@ mpm_status mpm_scene_check_memory(const mpm_scene *s, mpm_error *err) {
       snprintf(grid, sizeof grid, ", and a dense grid (solver.grid) of %.3g nodes: %s", dense,
                human_bytes(dense * DOF_REALS * sizeof(mpm_real), dense_s, sizeof dense_s));
     const int limited = env && *env;
-    return mpm_error_set(
-        err, MPM_ERR_INVALID,
-        "%s: the scene needs about %s (%.3g particles at about %.0f bytes "
-        "each%s) but %s %s; use a larger dx, fewer particles_per_cell or "
-        "smaller bodies%s",
-        s->path[0] ? s->path : "scene", human_bytes(need, need_s, sizeof need_s), n,
-        BYTES_PER_PARTICLE +
-            (s->solver.integrator == MPM_INTEGRATOR_IMPLICIT ? IMPLICIT_BYTES_PER_PARTICLE : 0),
-        grid, limited ? "MPM_MEMORY_LIMIT allows" : "this machine has available",
-        human_bytes(have, have_s, sizeof have_s), dense > 0 ? ", or the sparse grid" : "");
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: the scene needs about %s (%.3g particles at about %.0f bytes "
+                         "each%s) but %s %s; use a larger dx, fewer particles_per_cell, "
+                         "smaller bodies%s%s",
+                         s->path[0] ? s->path : "scene", human_bytes(need, need_s, sizeof need_s),
+                         n, bytes_per_particle(s), grid,
+                         limited ? "MPM_MEMORY_LIMIT allows" : "this machine has available",
+                         human_bytes(have, have_s, sizeof have_s),
+                         s->levels > 1 ? ", fewer refined cells" : "",
+                         dense > 0 ? ", or the sparse grid" : "");
   }
   return MPM_OK;
 }

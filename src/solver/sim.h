@@ -128,6 +128,10 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
 double mpm_scene_memory_estimate(const mpm_scene *scene, double *particles);
 double mpm_available_memory(void);
 mpm_status mpm_scene_check_memory(const mpm_scene *scene, mpm_error *err);
+/* The bytes for `particles` particles of the scene, and the check for that many (the
+ * multi-level grid's count from its tree). */
+double mpm_scene_memory_for(const mpm_scene *scene, double particles);
+mpm_status mpm_scene_check_memory_for(const mpm_scene *scene, double particles, mpm_error *err);
 
 /* The breaks of a sort's visiting order perm[0 .. n): the j with perm[j] != perm[j - 1] + 1. */
 size_t mpm_order_breaks(const uint32_t *perm, size_t n);
