@@ -69,21 +69,12 @@ int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale
     snprintf(name, sizeof name, configs[k] ? "%d levels" : "uniform", configs[k]);
     for (int t = 0; t < nthreads; ++t) {
       mpm_set_threads(threads[t]);
-      double sort[100], p2g[100], g2p[100];
-      for (int r = 0; r < repeats + 1; ++r) {
-        const mpm_stage_times before = sim->times;
-        if (mpm_sim_step(sim, 1e-6) != MPM_OK) {
-          fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
-          mpm_sim_destroy(sim);
-          return MPM_EXIT_FAILURE;
-        }
-        if (r == 0) continue; /* warm-up */
-        sort[r - 1] = (sim->times.sort - before.sort) * 1e9 / n;
-        p2g[r - 1] = (sim->times.p2g - before.p2g) * 1e9 / n;
-        g2p[r - 1] = (sim->times.g2p - before.g2p) * 1e9 / n;
+      double m[3];
+      if (bench_transfer_stages(sim, repeats, m)) {
+        mpm_sim_destroy(sim);
+        return MPM_EXIT_FAILURE;
       }
-      const double ms = bench_median(sort, repeats), mp = bench_median(p2g, repeats),
-                   mg = bench_median(g2p, repeats);
+      const double ms = m[0], mp = m[1], mg = m[2];
       printf("%-9s %7d %10.1f %10.1f %10.1f %12.1f %10.1f\n", name, threads[t], ms, mp, mg, mp + mg,
              (double)(mpm_alloc_live_bytes() - live0) / 1048576.0);
       fflush(stdout);

@@ -84,3 +84,23 @@ mpm_sim *bench_block(int n, int domains, const char *on_instability, mpm_error *
   mpm_scene_free(&scene);
   return st == MPM_OK ? sim : NULL;
 }
+
+int bench_transfer_stages(struct mpm_sim *sim, int repeats, double out[3]) {
+  const double n = (double)sim->particles.count;
+  double sort[100], p2g[100], g2p[100];
+  for (int r = 0; r < repeats + 1; ++r) {
+    const mpm_stage_times before = sim->times;
+    if (mpm_sim_step(sim, 1e-6) != MPM_OK) {
+      fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+      return -1;
+    }
+    if (r == 0) continue; /* warm-up */
+    sort[r - 1] = (sim->times.sort - before.sort) * 1e9 / n;
+    p2g[r - 1] = (sim->times.p2g - before.p2g) * 1e9 / n;
+    g2p[r - 1] = (sim->times.g2p - before.g2p) * 1e9 / n;
+  }
+  out[0] = bench_median(sort, repeats);
+  out[1] = bench_median(p2g, repeats);
+  out[2] = bench_median(g2p, repeats);
+  return 0;
+}
