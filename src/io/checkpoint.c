@@ -2,21 +2,18 @@
  *
  * Layout, all at the root of the file:
  *   attributes  format ("mpm checkpoint"), version, real_bytes, scene_hash, time, last_dt,
- *               max_speed, steps, frame, written_frames, dt_level, threads, particle_count,
- *               records, checksum (FNV-1a over all the others), content_checksum (over
- *               every array and record as read back)
- *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
- *               particle_material [n], particle_body [n], particle_level [n], particle_id [n],
- *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25];
- *               with particle domains (attributes domain_particles nd, domain_corners nc):
- *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active,
- *               domain_enriched (the enrichment flags: state, for their hysteresis)
- *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
- *               corner_reals [21][nc] (reference position, position, velocity, position
- *               compensation, APIC affine moment)
- * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
- * must exist with the right class and shape, each dataset must have exactly the dimensions
- * the attributes announce, counts are bounded by the file's size before anything is
+ *               max_speed, steps, frame, written_frames, dt_level, threads, next_id,
+ * particle_count, records, checksum (FNV-1a over all the others), content_checksum (over every
+ * array and record as read back) datasets    particle_reals [27][n] (the real arrays in
+ * mpm_particles_real_arrays order), particle_material [n], particle_body [n], particle_level [n],
+ * particle_id [n], frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25]; with
+ * particle domains (attributes domain_particles nd, domain_corners nc): domain_reals [27][nd],
+ * domain_material, domain_body, domain_id, domain_active, domain_enriched (the enrichment flags:
+ * state, for their hysteresis) [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then
+ * g_ap), corner_reals [21][nc] (reference position, position, velocity, position compensation, APIC
+ * affine moment) Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each
+ * attribute must exist with the right class and shape, each dataset must have exactly the
+ * dimensions the attributes announce, counts are bounded by the file's size before anything is
  * allocated, and every real must be finite. */
 #define _POSIX_C_SOURCE 200809L
 
@@ -155,6 +152,7 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       put_attr(f, "written_frames", H5T_NATIVE_INT, &c->written_frames) ||
       put_attr(f, "dt_level", H5T_NATIVE_INT, &c->dt_level) ||
       put_attr(f, "threads", H5T_NATIVE_INT, &c->threads) ||
+      put_attr(f, "next_id", H5T_NATIVE_UINT32, &c->next_id) ||
       put_attr(f, "particle_count", H5T_NATIVE_UINT64, &n) ||
       put_attr(f, "records", H5T_NATIVE_INT, &c->records))
     return -1;

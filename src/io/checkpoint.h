@@ -21,7 +21,7 @@
 
 #include <stdint.h>
 
-#define MPM_CHECKPOINT_VERSION 6
+#define MPM_CHECKPOINT_VERSION 7
 #define MPM_FRAME_NAME_MAX 64
 #define MPM_CKPT_SOLVER_FIGURES 12
 
@@ -34,6 +34,7 @@ typedef struct mpm_checkpoint {
   int written_frames; /* frames written (frame 0 included) */
   int dt_level;       /* the retry guard's current halvings of dt */
   int threads;        /* threads of the run that wrote it (informative) */
+  uint32_t next_id;   /* the id the next particle made by a split gets (ids are never reused) */
   /* the implicit solver's figures of the frame in progress (stats.csv): steps, CG iterations,
    * Newton iterations, unconverged steps, most CG iterations of a step, largest residual; then
    * the frame's step figures (stats.csv's dt columns): steps, full (not shortened) steps, the

@@ -80,8 +80,9 @@ void mpm_ckpt_row_to_stats(const double v[MPM_CKPT_STATS_COLUMNS], mpm_stats_row
 uint64_t mpm_ckpt_attributes_checksum(const mpm_checkpoint *c, uint64_t n) {
   double d[3 + MPM_CKPT_SOLVER_FIGURES] = {c->time, c->last_dt, c->max_speed};
   memcpy(d + 3, c->solver_figures, sizeof c->solver_figures);
-  const int64_t i[8] = {c->steps,   c->frame,   c->written_frames, c->dt_level,
-                        c->threads, c->records, (int64_t)n,        (int64_t)sizeof(mpm_real)};
+  const int64_t i[9] = {
+      c->steps,   c->frame,   c->written_frames,         c->dt_level,        c->threads,
+      c->records, (int64_t)n, (int64_t)sizeof(mpm_real), (int64_t)c->next_id};
   uint64_t h[3] = {c->scene_hash, mpm_fnv1a64(d, sizeof d), mpm_fnv1a64(i, sizeof i)};
   return mpm_fnv1a64(h, sizeof h);
 }

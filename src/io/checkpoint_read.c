@@ -270,6 +270,7 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       get_attr(r, "written_frames", H5T_INTEGER, H5T_NATIVE_INT, &c->written_frames) ||
       get_attr(r, "dt_level", H5T_INTEGER, H5T_NATIVE_INT, &c->dt_level) ||
       get_attr(r, "threads", H5T_INTEGER, H5T_NATIVE_INT, &c->threads) ||
+      get_attr(r, "next_id", H5T_INTEGER, H5T_NATIVE_UINT32, &c->next_id) ||
       get_attr(r, "particle_count", H5T_INTEGER, H5T_NATIVE_UINT64, &n) ||
       get_attr(r, "records", H5T_INTEGER, H5T_NATIVE_INT, &c->records))
     return -1;

@@ -132,6 +132,8 @@ typedef struct mpm_body_desc {
                                  Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
+  int resample; /* domain.resample on: its particles split and merge (all bodies unless
+                   domain.resample.bodies names some) */
 } mpm_body_desc;
 
 typedef struct mpm_keyframe {
@@ -249,6 +251,23 @@ typedef struct mpm_refine_desc {
   double distance; /* collider (required), body (0: all of it): m */
 } mpm_refine_desc;
 
+/* Particle resampling on the multi-level grid (Gao et al. sec. 7.2; docs/adaptive-grid.md):
+ * particles follow the level of the leaves they are in. A particle of type q in a leaf finer
+ * than q splits into 8 of type q + 1; particles of type q whose box of type q - 1, grown by
+ * merge_margin cells of level q - 1, meets no leaf finer than q - 1 merge 8 at a time, with their
+ * nearest neighbours of their body, material and type in their cell of level q - 1. */
+typedef struct mpm_resample_desc {
+  int enabled;         /* domain.resample given */
+  int split, merge;    /* default both on */
+  int every;           /* steps between resamplings, default 1 */
+  double merge_margin; /* cells of the merged type's level, default 1 */
+  int max_per_cell;    /* a split only into a leaf cell that then holds at most this many
+                          particles; default 0: twice the body's particles_per_cell */
+  int min_per_cell;    /* a merge only where the cell of level q - 1 holds at least this many
+                          of the merging particles; default 0: 4 x the body's particles_per_cell */
+  unsigned seed;       /* of the split cubes' random orientations */
+} mpm_resample_desc;
+
 typedef struct mpm_scene {
   char path[MPM_PATH_MAX]; /* the scene file, for messages; mesh paths resolve against it */
   uint64_t source_hash;    /* FNV-1a of the scene text: a checkpoint resumes only the same scene */
@@ -260,6 +279,7 @@ typedef struct mpm_scene {
                                           multi-level grid (1: one level, through its path) */
   int refine_count;
   mpm_refine_desc *refine;     /* domain.refine */
+  mpm_resample_desc resample;  /* domain.resample */
   double gravity[3];           /* m/s^2, default (0, -9.81, 0) */
   mpm_boundary_rule wall_rule; /* domain walls */
   double wall_friction;

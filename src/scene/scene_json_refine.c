@@ -111,6 +111,81 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
   return 0;
 }
 
+static const char *const RESAMPLE_KEYS[] = {"split",        "merge",        "every",
+                                            "merge_margin", "max_per_cell", "min_per_cell",
+                                            "bodies",       "seed",         NULL};
+
+/* domain.resample (Gao sec. 7.2): {"split": true, "merge": true, "every": 1, "merge_margin": 1,
+ * "max_per_cell": 0, "min_per_cell": 0, "bodies": ["sand"], "seed": 0}, every key optional. */
+static int parse_resample(mpm_json_ctx *c, const cJSON *dom, mpm_scene *s) {
+  const cJSON *r = mpm_json_get(dom, "resample");
+  if (!r) return 0;
+  size_t o = mpm_json_push_key(c, "resample");
+  mpm_resample_desc *d = &s->resample;
+  if (s->levels < 2)
+    return mpm_json_fail(c, MPM_ERR_INVALID,
+                         "particle resampling needs a multi-level grid: set domain.levels (2 or "
+                         "more)");
+  if (mpm_json_expect_object(c, r,
+                             "an object: {\"split\": true, \"merge\": true, \"every\": 1, "
+                             "...}") < 0 ||
+      mpm_json_check_keys(c, r, RESAMPLE_KEYS, NULL) < 0)
+    return -1;
+  d->enabled = d->split = d->merge = 1;
+  d->every = 1;
+  d->merge_margin = 1;
+  long long every = 1, maxc = 0, minc = 0, seed = 0;
+  if (mpm_json_bool(c, r, "split", 0, &d->split) < 0 ||
+      mpm_json_bool(c, r, "merge", 0, &d->merge) < 0 ||
+      mpm_json_integer(c, r, "every", 0, mpm_json_in('[', 1, 1e6, ']', "steps"), &every) < 0 ||
+      mpm_json_number(c, r, "merge_margin", 0,
+                      mpm_json_in('[', 0, 8, ']', "cells of the merged particles' level"),
+                      &d->merge_margin) < 0 ||
+      mpm_json_integer(c, r, "max_per_cell", 0,
+                       mpm_json_in('[', 0, 1e6, ']', "particles; 0: 2 x particles_per_cell"),
+                       &maxc) < 0 ||
+      mpm_json_integer(c, r, "min_per_cell", 0,
+                       mpm_json_in('[', 0, 1e6, ']', "particles; 0: 4 x particles_per_cell"),
+                       &minc) < 0 ||
+      mpm_json_integer(c, r, "seed", 0, mpm_json_in('[', 0, 4294967295.0, ']', "a seed"), &seed) <
+          0)
+    return -1;
+  d->every = (int)every;
+  d->max_per_cell = (int)maxc;
+  d->min_per_cell = (int)minc;
+  d->seed = (unsigned)seed;
+  const cJSON *bodies = NULL;
+  const int has = mpm_sj_get_array(c, r, "bodies", 0, "an array of body names or indices", &bodies);
+  if (has < 0) return -1;
+  for (int b = 0; b < s->body_count; ++b) s->bodies[b].resample = !has;
+  if (has) {
+    size_t ob = mpm_json_push_key(c, "bodies");
+    int i = 0;
+    for (const cJSON *e = bodies->child; e; e = e->next, ++i) {
+      size_t oi = mpm_json_push_index(c, i);
+      int b = -1;
+      if (cJSON_IsString(e)) {
+        for (int k = 0; k < s->body_count; ++k)
+          if (!strcmp(s->bodies[k].name, e->valuestring)) b = k;
+      } else if (cJSON_IsNumber(e) && e->valuedouble == (double)(int)e->valuedouble &&
+                 e->valuedouble >= 0 && e->valuedouble < s->body_count) {
+        b = (int)e->valuedouble;
+      }
+      if (b < 0) {
+        char got[64];
+        return mpm_json_fail(c, MPM_ERR_INVALID,
+                             "expected the name or index of one of the scene's %d bodies, got %s",
+                             s->body_count, mpm_json_describe(e, got, sizeof got));
+      }
+      s->bodies[b].resample = 1;
+      mpm_json_pop(c, oi);
+    }
+    mpm_json_pop(c, ob);
+  }
+  mpm_json_pop(c, o);
+  return 0;
+}
+
 int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   const cJSON *dom = mpm_json_get(root, "domain");
   size_t old = mpm_json_push_key(c, "domain");
@@ -145,6 +220,7 @@ int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
     }
     mpm_json_pop(c, o);
   }
+  if (parse_resample(c, dom, s) < 0) return -1;
   mpm_json_pop(c, old);
   if (!s->levels) return 0;
 

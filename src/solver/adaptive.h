@@ -99,6 +99,10 @@ void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse);
 void mpm_adaptive_apic_g2p_before(mpm_sim *sim);
 void mpm_adaptive_apic_g2p_after(mpm_sim *sim);
 
+/* Particle split and merge at the end of a step (adaptive_resample.c, Gao sec. 7.2), every
+ * domain.resample.every steps; nothing without domain.resample. */
+mpm_status mpm_adaptive_resample(mpm_sim *sim);
+
 /* The finest spacing in use (the CFL step's dx). */
 double mpm_adaptive_finest_dx(const mpm_sim *sim);
 

@@ -7,6 +7,8 @@
  * retry, so a retry never undoes them and never repeats them. */
 #include "solver/sim.h"
 
+#include "solver/adaptive.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -17,6 +19,7 @@ typedef struct between_stage {
 
 static const between_stage between_steps[] = {
     {"domain releases", mpm_sim_apply_domain_releases},
+    {"particle resampling", mpm_adaptive_resample},
 };
 
 mpm_status mpm_sim_between_steps(mpm_sim *sim) {

@@ -190,6 +190,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       }
     }
   }
+  sim->next_id = next_id;
 
   /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
   double lp = sc->solver.gimp_length;

@@ -78,6 +78,11 @@ struct mpm_sim {
   /* time */
   double time, frame_dt, last_dt;
   int64_t steps;
+  uint32_t next_id; /* the id of the next particle a split makes (ids are never reused) */
+  struct mpm_resample_figures { /* since creation (not checkpointed: reporting only) */
+    long long splits, merges;
+    double angular_momentum_change[3]; /* what the resampling changed, kg m^2/s */
+  } resample_figures;
   int frame, frame_count;
   mpm_real max_speed, wave_speed;
   mpm_stage_times times;

@@ -82,6 +82,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   c.written_frames = sim->written_frames;
   c.dt_level = sim->dt_level;
   c.threads = mpm_thread_count();
+  c.next_id = sim->next_id;
   const mpm_solver_figures *sf = &sim->solver_figures;
   const mpm_step_figures *sp = &sim->step_figures;
   const double figures[MPM_CKPT_SOLVER_FIGURES] = {(double)sf->steps,
@@ -186,6 +187,7 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   sim->last_dt = c->last_dt;
   sim->max_speed = (mpm_real)c->max_speed;
   sim->steps = c->steps;
+  sim->next_id = c->next_id;
   sim->frame = c->frame;
   sim->written_frames = c->written_frames;
   sim->dt_level = c->dt_level;
