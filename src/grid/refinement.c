@@ -374,6 +374,20 @@ size_t mpm_refinement_fine_leaves(const mpm_refinement *r,
   return n;
 }
 
+void mpm_refinement_refined_cells(const mpm_refinement *r,
+                                  void (*visit)(void *ctx, int level, const int32_t cell[3]),
+                                  void *ctx) {
+  for (int L = 0; L + 1 < r->levels; ++L) {
+    const mpm_cell_set *s = &r->refined[L];
+    for (size_t i = 0; i < s->size; ++i) {
+      if (s->keys[i] == EMPTY_KEY) continue;
+      int32_t c[3];
+      unpack(s->keys[i], c);
+      visit(ctx, L, c);
+    }
+  }
+}
+
 int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
                                size_t max_bytes) {
   size_t total = 0;

@@ -109,6 +109,12 @@ size_t mpm_refinement_fine_leaves(const mpm_refinement *r,
                                   void (*visit)(void *ctx, int level, const int32_t cell[3]),
                                   void *ctx);
 
+/* Call visit(ctx, level, cell) for every refined cell (a cell with children), coarsest level
+ * first, in the cell sets' order. */
+void mpm_refinement_refined_cells(const mpm_refinement *r,
+                                  void (*visit)(void *ctx, int level, const int32_t cell[3]),
+                                  void *ctx);
+
 /* Index the refined cells of the levels densely over the level-0 cells lo0 .. lo0 + n0 (each
  * level's box scaled to its cells), from the coarsest level down while the bitmaps stay within
  * max_bytes together. Lookups give the same answers, faster. 0, or -1 when out of memory. */

@@ -3,17 +3,21 @@
  * Layout, all at the root of the file:
  *   attributes  format ("mpm checkpoint"), version, real_bytes, scene_hash, time, last_dt,
  *               max_speed, steps, frame, written_frames, dt_level, threads, next_id,
- * particle_count, records, checksum (FNV-1a over all the others), content_checksum (over every
- * array and record as read back) datasets    particle_reals [27][n] (the real arrays in
- * mpm_particles_real_arrays order), particle_material [n], particle_body [n], particle_level [n],
- * particle_id [n], frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25]; with
- * particle domains (attributes domain_particles nd, domain_corners nc): domain_reals [27][nd],
- * domain_material, domain_body, domain_id, domain_active, domain_enriched (the enrichment flags:
- * state, for their hysteresis) [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then
- * g_ap), corner_reals [21][nc] (reference position, position, velocity, position compensation, APIC
- * affine moment) Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each
- * attribute must exist with the right class and shape, each dataset must have exactly the
- * dimensions the attributes announce, counts are bounded by the file's size before anything is
+ *               particle_count, records, refined_cells, checksum (FNV-1a over all the
+ *               others), content_checksum (over every array and record as read back)
+ *   datasets    particle_reals [27][n] (the real arrays in mpm_particles_real_arrays order),
+ *               particle_material [n], particle_body [n], particle_level [n], particle_id [n],
+ *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25];
+ *               with particle domains (attributes domain_particles nd, domain_corners nc):
+ *               domain_reals [27][nd], domain_material, domain_body, domain_id, domain_active,
+ *               domain_enriched (the enrichment flags: state, for their hysteresis)
+ *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
+ *               corner_reals [21][nc] (reference position, position, velocity, position
+ *               compensation, APIC affine moment); with a multi-level grid rebuilt during
+ *               the run (refined_cells t > 0), refined_cells [4][t] (level, i, j, k)
+ * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
+ * must exist with the right class and shape, each dataset must have exactly the dimensions
+ * the attributes announce, counts are bounded by the file's size before anything is
  * allocated, and every real must be finite. */
 #define _POSIX_C_SOURCE 200809L
 
@@ -174,6 +178,10 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       put_dataset(f, "particle_body", H5T_NATIVE_INT32, 0, n, &body) ||
       put_dataset(f, "particle_level", H5T_NATIVE_INT32, 0, n, &level) ||
       put_dataset(f, "particle_id", H5T_NATIVE_UINT32, 0, n, &id) || write_domains(f, &c->domains))
+    return -1;
+  const void *tree[4] = {c->tree[0], c->tree[1], c->tree[2], c->tree[3]};
+  if (put_attr(f, "refined_cells", H5T_NATIVE_UINT64, &c->tree_count) ||
+      (c->tree_count && put_dataset(f, "refined_cells", H5T_NATIVE_INT32, 4, c->tree_count, tree)))
     return -1;
   const hsize_t r = (hsize_t)c->records;
   double *stats = malloc((r ? r : 1) * MPM_CKPT_STATS_COLUMNS * sizeof *stats);

@@ -42,6 +42,10 @@ typedef struct mpm_checkpoint {
   double solver_figures[MPM_CKPT_SOLVER_FIGURES];
   mpm_particles particles;
   mpm_domain_set domains; /* Zhu's particle domains: particles, corners, weights, active */
+  /* the multi-level grid's refined cells when it is rebuilt during the run
+   * (domain.refine_every): level, i, j, k of each, tree_count of them */
+  int32_t *tree[4];
+  uint64_t tree_count;
   /* per-frame records, `records` of them (= written_frames) */
   int records;
   double *frame_times;

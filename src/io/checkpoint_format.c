@@ -101,6 +101,9 @@ uint64_t mpm_ckpt_content_checksum(const mpm_checkpoint *c) {
   h = mpm_hash64_words(p->body, n * sizeof *p->body, h);
   h = mpm_hash64_words(p->level, n * sizeof *p->level, h);
   h = mpm_hash64_words(p->id, n * sizeof *p->id, h);
+  h = mpm_hash64_words(&c->tree_count, sizeof c->tree_count, h);
+  for (int k = 0; k < 4 && c->tree_count; ++k)
+    h = mpm_hash64_words(c->tree[k], c->tree_count * sizeof(int32_t), h);
   const mpm_domain_set *ds = &c->domains;
   const uint64_t counts[2] = {ds->particles.count, ds->corner_count};
   h = mpm_hash64_words(counts, sizeof counts, h);
@@ -178,6 +181,7 @@ void mpm_checkpoint_seal(void *image, size_t size) {
 void mpm_checkpoint_free(mpm_checkpoint *c) {
   mpm_particles_free(&c->particles);
   mpm_domain_set_free(&c->domains);
+  for (int k = 0; k < 4; ++k) free(c->tree[k]);
   free(c->frame_times);
   free(c->frame_files);
   free(c->stats);

@@ -322,6 +322,21 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
     for (size_t i = 0; i < p->count; ++i)
       if (!isfinite((*arrays[k])[i])) return bad(r, "%s", "a particle value is not finite");
   if (read_domains(r, c)) return -1;
+  if (get_attr(r, "refined_cells", H5T_INTEGER, H5T_NATIVE_UINT64, &c->tree_count)) return -1;
+  if (c->tree_count) {
+    if (c->tree_count * 4 * sizeof(int32_t) > r->file_bytes)
+      return bad(r, "%s", "'refined_cells' is larger than the file can hold");
+    void *tree_rows[4];
+    for (int k = 0; k < 4; ++k)
+      if (!(tree_rows[k] = c->tree[k] = malloc(c->tree_count * sizeof(int32_t)))) {
+        mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %llu refined cells", r->path,
+                      (unsigned long long)c->tree_count);
+        return -1;
+      }
+    if (get_dataset(r, "refined_cells", H5T_INTEGER, 4, H5T_NATIVE_INT32, 4, c->tree_count,
+                    tree_rows))
+      return -1;
+  }
   /* domain particles transfer through their corners, on the coarsest level */
   if (c->domains.particles.count)
     memset(c->domains.particles.level, 0, c->domains.particles.count * sizeof(int32_t));

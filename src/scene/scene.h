@@ -240,7 +240,12 @@ typedef enum mpm_refine_kind {
   MPM_REFINE_BOX,      /* cells meeting the box [min, max] */
   MPM_REFINE_COLLIDER, /* cells within `distance` of collider `collider`'s surface at t = 0 */
   MPM_REFINE_BODY,     /* cells holding body `body`'s material (sampled at the level's spacing),
-                          with distance > 0 only those within it of the body's surface */
+                          with distance > 0 only those within it of the body's surface; at
+                          setup only */
+  /* rebuilds only (domain.refine_every), from the particles: */
+  MPM_REFINE_SURFACE, /* cells within `distance` of the material's surface (body, or -1: all) */
+  MPM_REFINE_TYPES,   /* cells of level q - 1 a particle of type q overlaps, q up to `level` */
+  MPM_REFINE_STRAIN,  /* cells within `distance` of particles with ||F - I||_F > strain */
 } mpm_refine_kind;
 
 typedef struct mpm_refine_desc {
@@ -248,7 +253,8 @@ typedef struct mpm_refine_desc {
   int level;             /* 1 .. levels - 1 */
   double min[3], max[3]; /* box, m */
   int collider, body;
-  double distance; /* collider (required), body (0: all of it): m */
+  double distance; /* collider (required), body (0: all of it), surface (required), strain: m */
+  double strain;   /* strain rules: the threshold on ||F - I||_F */
 } mpm_refine_desc;
 
 /* Particle resampling on the multi-level grid (Gao et al. sec. 7.2; docs/adaptive-grid.md):
@@ -280,6 +286,8 @@ typedef struct mpm_scene {
   int refine_count;
   mpm_refine_desc *refine;     /* domain.refine */
   mpm_resample_desc resample;  /* domain.resample */
+  int refine_every;            /* domain.refine_every: steps between trees from the rules (0:
+                                  the tree of setup stays) */
   double gravity[3];           /* m/s^2, default (0, -9.81, 0) */
   mpm_boundary_rule wall_rule; /* domain walls */
   double wall_friction;

@@ -19,7 +19,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const REFINE_KEYS[] = {"level", "box", "collider", "distance", "body", NULL};
+static const char *const REFINE_KEYS[] = {"level",   "box",   "collider", "distance", "body",
+                                          "surface", "types", "strain",   NULL};
 static const char *const BOX_KEYS[] = {"min", "max", NULL};
 
 /* obj[key] as an index of one of `count` named things (an integer, or one of their names). 1,
@@ -58,7 +59,8 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
   memset(r, 0, sizeof *r);
   if (mpm_json_expect_object(c, e,
                              "a refinement rule: {\"level\": L, and one of \"box\", "
-                             "\"collider\" (with \"distance\") or \"body\"}") < 0 ||
+                             "\"collider\" (with \"distance\"), \"body\", \"surface\", "
+                             "\"types\" or \"strain\"}") < 0 ||
       mpm_json_check_keys(c, e, REFINE_KEYS, NULL) < 0)
     return -1;
   long long level = 0;
@@ -69,15 +71,46 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
                        &level) < 0)
     return -1;
   r->level = (int)level;
-  const int kinds =
-      !!mpm_json_get(e, "box") + !!mpm_json_get(e, "collider") + !!mpm_json_get(e, "body");
+  const int on_particles =
+      !!mpm_json_get(e, "surface") + !!mpm_json_get(e, "types") + !!mpm_json_get(e, "strain");
+  /* a surface rule may name its body */
+  const int kinds = !!mpm_json_get(e, "box") + !!mpm_json_get(e, "collider") + on_particles +
+                    (!!mpm_json_get(e, "body") && !mpm_json_get(e, "surface"));
   if (kinds != 1)
     return mpm_json_fail(c, MPM_ERR_INVALID,
-                         "expected exactly one of 'box', 'collider' or 'body', got %d", kinds);
-  if (mpm_json_get(e, "distance") && mpm_json_get(e, "box"))
+                         "expected exactly one of 'box', 'collider', 'body', 'surface', 'types' "
+                         "or 'strain', got %d",
+                         kinds);
+  if (mpm_json_get(e, "distance") &&
+      (mpm_json_get(e, "box") || mpm_json_get(e, "surface") || mpm_json_get(e, "types")))
     return mpm_json_fail_at(c, "distance", MPM_ERR_INVALID,
-                            "a key of collider and body rules only; remove it from a box rule");
-  if (mpm_json_get(e, "box")) {
+                            "a key of collider, body and strain rules only; a surface rule's "
+                            "distance is its value");
+  r->body = -1;
+  if (mpm_json_get(e, "surface")) {
+    r->kind = MPM_REFINE_SURFACE;
+    if (mpm_json_number(c, e, "surface", 1,
+                        mpm_json_gt(0, "m: the band on both sides of the material's surface"),
+                        &r->distance) < 0 ||
+        (mpm_json_get(e, "body") &&
+         parse_reference(c, e, "body", "bodies", s->body_count, body_name, s, &r->body) < 0))
+      return -1;
+  } else if (mpm_json_get(e, "types")) {
+    r->kind = MPM_REFINE_TYPES;
+    int on = 0;
+    if (mpm_json_bool(c, e, "types", 1, &on) < 0) return -1;
+    if (!on)
+      return mpm_json_fail_at(c, "types", MPM_ERR_INVALID,
+                              "expected true (the grid follows the particle types); remove the "
+                              "rule to turn it off");
+  } else if (mpm_json_get(e, "strain")) {
+    r->kind = MPM_REFINE_STRAIN;
+    if (mpm_json_number(c, e, "strain", 1, mpm_json_gt(0, "||F - I||, Frobenius norm"),
+                        &r->strain) < 0 ||
+        mpm_json_number(c, e, "distance", 0, mpm_json_ge(0, "m around the strained particles"),
+                        &r->distance) < 0)
+      return -1;
+  } else if (mpm_json_get(e, "box")) {
     r->kind = MPM_REFINE_BOX;
     const cJSON *b = mpm_json_get(e, "box");
     size_t o = mpm_json_push_key(c, "box");
@@ -221,6 +254,27 @@ int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
     mpm_json_pop(c, o);
   }
   if (parse_resample(c, dom, s) < 0) return -1;
+  long long every = 0;
+  const int has_every = mpm_json_integer(c, dom, "refine_every", 0,
+                                         mpm_json_in('[', 0, 1e6, ']', "steps; 0: static"), &every);
+  if (has_every < 0) return -1;
+  if (has_every && !has)
+    return mpm_json_fail_at(c, "refine_every", MPM_ERR_INVALID,
+                            "refinement needs a multi-level grid: set domain.levels (2 or more)");
+  s->refine_every = (int)every;
+  for (int k = 0; k < s->refine_count; ++k)
+    if (s->refine[k].kind >= MPM_REFINE_SURFACE && !s->refine_every) {
+      size_t o = mpm_json_push_key(c, "refine");
+      mpm_json_push_index(c, k);
+      const char *kind = s->refine[k].kind == MPM_REFINE_SURFACE ? "surface"
+                         : s->refine[k].kind == MPM_REFINE_TYPES ? "types"
+                                                                 : "strain";
+      mpm_json_fail_at(c, kind, MPM_ERR_INVALID,
+                       "a rule on the moving material: set domain.refine_every (steps between "
+                       "rebuilds of the grid)");
+      (void)o;
+      return -1;
+    }
   mpm_json_pop(c, old);
   if (!s->levels) return 0;
 

@@ -73,6 +73,8 @@ typedef struct mpm_adaptive {
   size_t cell_ghost_count, cell_ghost_capacity;
   mpm_real *moment, *dB, *work;
   size_t moment_capacity, dB_capacity, work_capacity;
+  long long rebuilds;     /* trees made by domain.refine_every since creation */
+  double rebuild_seconds; /* their wall time */
 } mpm_adaptive;
 
 /* The tree from the scene's rules (colliders must exist), and the per-body boxes. */
@@ -98,6 +100,20 @@ void mpm_adaptive_apic_after_p2g(mpm_sim *sim);
 void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse);
 void mpm_adaptive_apic_g2p_before(mpm_sim *sim);
 void mpm_adaptive_apic_g2p_after(mpm_sim *sim);
+
+/* The refinement rules (adaptive_refine.c) applied to tree r: at setup (rebuild 0: box,
+ * collider at t = 0, body from its samples) or at a rebuild (box, collider at the time, surface,
+ * types and strain from the particles). */
+mpm_status mpm_adaptive_apply_rules(mpm_sim *sim, mpm_refinement *r, int rebuild, mpm_error *err);
+/* The dense index of tree r over the domain. 0, or -1 when out of memory. */
+int mpm_adaptive_index_tree(mpm_sim *sim, mpm_refinement *r);
+/* Between steps, every domain.refine_every steps: a new tree from the rules. */
+mpm_status mpm_adaptive_refine(mpm_sim *sim);
+/* The refined cells (level, i, j, k), for checkpoints: a new array (free it), NULL when out of
+ * memory or on a uniform grid; and a tree from them in place of the current one. */
+int32_t (*mpm_adaptive_tree_cells(const mpm_sim *sim, size_t *count))[4];
+mpm_status mpm_adaptive_set_tree(mpm_sim *sim, const int32_t (*cells)[4], size_t count,
+                                 mpm_error *err);
 
 /* Particle split and merge at the end of a step (adaptive_resample.c, Gao sec. 7.2), every
  * domain.resample.every steps; nothing without domain.resample. */

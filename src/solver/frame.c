@@ -19,6 +19,7 @@ typedef struct between_stage {
 
 static const between_stage between_steps[] = {
     {"domain releases", mpm_sim_apply_domain_releases},
+    {"refinement", mpm_adaptive_refine},
     {"particle resampling", mpm_adaptive_resample},
 };
 

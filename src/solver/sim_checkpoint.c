@@ -9,8 +9,9 @@
 
 #include "core/parallel.h"
 #include "io/checkpoint.h"
-#include "solver/sim.h"
 #include "core/alloc.h"
+#include "solver/adaptive.h"
+#include "solver/sim.h"
 
 #include <dirent.h>
 #include <stdio.h>
@@ -107,7 +108,25 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   char file[MPM_PATH_MAX + 32];
   snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->output_dir, NAME_DIGITS,
            (long long)sim->steps);
+  /* a tree rebuilt during the run is state: the rules made it from an earlier step's material */
+  int32_t(*cells)[4] = NULL;
+  if (sim->adaptive && sim->scene.refine_every > 0) {
+    size_t count = 0;
+    if (!(cells = mpm_adaptive_tree_cells(sim, &count)))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
+    c.tree_count = count;
+    for (int k = 0; k < 4; ++k) {
+      c.tree[k] = malloc((count + 1) * sizeof(int32_t));
+      for (size_t i = 0; c.tree[k] && i < count; ++i) c.tree[k][i] = cells[i][k];
+    }
+    free(cells);
+    if (!c.tree[0] || !c.tree[1] || !c.tree[2] || !c.tree[3]) {
+      for (int k = 0; k < 4; ++k) free(c.tree[k]);
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
+    }
+  }
   mpm_status st = mpm_checkpoint_write(file, &c, &sim->error);
+  for (int k = 0; k < 4; ++k) free(c.tree[k]);
   if (st != MPM_OK) return st;
   snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
   if (path && cap) snprintf(path, cap, "%s", file);
@@ -157,6 +176,15 @@ static mpm_status check_fits(const mpm_sim *sim, const mpm_checkpoint *c, const 
 static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   mpm_status st = mpm_sim_alloc_output(sim, c->records);
   if (st != MPM_OK) return st;
+  if (sim->adaptive && sim->scene.refine_every > 0) {
+    int32_t(*cells)[4] = malloc((c->tree_count + 1) * sizeof *cells);
+    if (!cells) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the tree");
+    for (size_t i = 0; i < c->tree_count; ++i)
+      for (int k = 0; k < 4; ++k) cells[i][k] = c->tree[k][i];
+    st = mpm_adaptive_set_tree(sim, (const int32_t(*)[4])cells, (size_t)c->tree_count, &sim->error);
+    free(cells);
+    if (st != MPM_OK) return st;
+  }
   mpm_particles_free(&sim->particles);
   sim->particles = c->particles;
   memset(&c->particles, 0, sizeof c->particles);
