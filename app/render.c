@@ -174,15 +174,21 @@ static int cmp_u64(const void *a, const void *b) {
   return x < y ? -1 : x > y;
 }
 
-/* The edges of the multi-level grid's fine leaves (OUTDIR/grid_cells.vtu: 8 corners per voxel)
+/* The edges of the multi-level grid's fine leaves (OUTDIR/grid_cells_NNNN.vtu of a frame when
+ * the run rebuilt its grid, else OUTDIR/grid_cells.vtu: 8 corners per voxel)
  * on the surfaces of the levels' regions, each once, coloured by level (the edge length):
  * segments for mpm_render_lines. 0 with
  * *n = 0 when the run has no such file; -1 with `why` on a bad file. */
-static int grid_edges(const char *dir, float **ab, float **rgb, size_t *n, char *why, size_t cap) {
+static int grid_edges(const char *dir, int frame, float **ab, float **rgb, size_t *n, char *why,
+                      size_t cap) {
   *n = 0;
   char path[4200];
-  snprintf(path, sizeof path, "%s/grid_cells.vtu", dir);
+  snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", dir, frame);
   FILE *probe = fopen(path, "rb");
+  if (!probe) {
+    snprintf(path, sizeof path, "%s/grid_cells.vtu", dir);
+    probe = fopen(path, "rb");
+  }
   if (!probe) return 0;
   fclose(probe);
   mpm_vtu_frame fr;
@@ -389,7 +395,7 @@ int mpm_cmd_render(int argc, char **argv) {
     goto done;
   }
   if (o.grid) {
-    if (grid_edges(o.dir, &edges, &edge_rgb, &edge_count, why, sizeof why)) {
+    if (grid_edges(o.dir, frames[0], &edges, &edge_rgb, &edge_count, why, sizeof why)) {
       fprintf(stderr, "mpm render: %s\n", why);
       code = MPM_EXIT_USAGE;
       goto done;
@@ -411,6 +417,15 @@ int mpm_cmd_render(int argc, char **argv) {
     const double t0 = now();
     char path[4300];
     snprintf(path, sizeof path, "%s/frame_%04d.vtu", o.dir, frames[fi]);
+    if (o.grid && fi > 0) { /* a grid rebuilt during the run has a file per frame */
+      free(edges), free(edge_rgb);
+      edges = edge_rgb = NULL;
+      if (grid_edges(o.dir, frames[fi], &edges, &edge_rgb, &edge_count, why, sizeof why)) {
+        fprintf(stderr, "mpm render: %s\n", why);
+        code = MPM_EXIT_USAGE;
+        goto done;
+      }
+    }
     mpm_vtu_frame_free(&fr);
     if (mpm_read_vtu(path, &fr, &err) != MPM_OK) {
       fprintf(stderr, "mpm render: %s\n", err.message);

@@ -6,6 +6,7 @@
 #include "progress.h"
 #include "scene_copy.h"
 #include "core/parallel.h"
+#include "solver/adaptive.h"
 #include "solver/sim.h"
 
 #include <signal.h>
@@ -143,7 +144,8 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
 /* A file a run writes into its output folder (frames, domain and surface meshes, checkpoints,
  * their damaged copies, stats, the PVD indexes, the scene copy). */
 static int is_run_file(const char *name) {
-  static const char *const prefix[] = {"frame_", "domains_", "surface_", "checkpoint_"};
+  static const char *const prefix[] = {"frame_", "domains_", "surface_", "checkpoint_",
+                                       "grid_cells"};
   for (size_t k = 0; k < sizeof prefix / sizeof prefix[0]; ++k)
     if (!strncmp(name, prefix[k], strlen(prefix[k]))) return 1;
   return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "run.pvd") ||
@@ -346,6 +348,16 @@ int mpm_cmd_run(int argc, char **argv) {
       fprintf(stderr,
               "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/run.pvd in ParaView\n",
               sim->frame, (long long)sim->steps, pr.elapsed, sim->output_dir);
+    if (!quiet && sim->adaptive && sim->scene.refine_every > 0)
+      fprintf(stderr, "mpm: refinement: %lld trees from the rules, %.2f s\n",
+              sim->adaptive->rebuilds, sim->adaptive->rebuild_seconds);
+    if (!quiet && sim->scene.resample.enabled) {
+      const double *dL = sim->resample_figures.angular_momentum_change;
+      fprintf(stderr,
+              "mpm: resampling: %lld splits, %lld merges; angular momentum changed by (%.3g, "
+              "%.3g, %.3g) kg m^2/s\n",
+              sim->resample_figures.splits, sim->resample_figures.merges, dL[0], dL[1], dL[2]);
+    }
   }
   if (code == MPM_EXIT_OK && render) { /* pictures of every frame: `mpm render DIR` */
     char dir[MPM_PATH_MAX];

@@ -253,7 +253,8 @@ typedef struct mpm_refine_desc {
   int level;             /* 1 .. levels - 1 */
   double min[3], max[3]; /* box, m */
   int collider, body;
-  double distance; /* collider (required), body (0: all of it), surface (required), strain: m */
+  double distance; /* collider (required), body (0: all of it), surface (required), types,
+                      strain: m */
   double strain;   /* strain rules: the threshold on ||F - I||_F */
 } mpm_refine_desc;
 

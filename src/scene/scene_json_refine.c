@@ -81,11 +81,10 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
                          "expected exactly one of 'box', 'collider', 'body', 'surface', 'types' "
                          "or 'strain', got %d",
                          kinds);
-  if (mpm_json_get(e, "distance") &&
-      (mpm_json_get(e, "box") || mpm_json_get(e, "surface") || mpm_json_get(e, "types")))
+  if (mpm_json_get(e, "distance") && (mpm_json_get(e, "box") || mpm_json_get(e, "surface")))
     return mpm_json_fail_at(c, "distance", MPM_ERR_INVALID,
-                            "a key of collider, body and strain rules only; a surface rule's "
-                            "distance is its value");
+                            "a key of collider, body, types and strain rules only; a surface "
+                            "rule's distance is its value");
   r->body = -1;
   if (mpm_json_get(e, "surface")) {
     r->kind = MPM_REFINE_SURFACE;
@@ -103,6 +102,10 @@ static int parse_rule(mpm_json_ctx *c, const cJSON *e, mpm_scene *s, mpm_refine_
       return mpm_json_fail_at(c, "types", MPM_ERR_INVALID,
                               "expected true (the grid follows the particle types); remove the "
                               "rule to turn it off");
+    if (mpm_json_number(c, e, "distance", 0,
+                        mpm_json_ge(0, "m around the particles: room to move between rebuilds"),
+                        &r->distance) < 0)
+      return -1;
   } else if (mpm_json_get(e, "strain")) {
     r->kind = MPM_REFINE_STRAIN;
     if (mpm_json_number(c, e, "strain", 1, mpm_json_gt(0, "||F - I||, Frobenius norm"),

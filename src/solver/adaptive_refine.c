@@ -320,11 +320,17 @@ static int refine_surface(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc
 }
 
 /* Types and strain rules: the cells of level `level` - 1 (types: the particle's type - 1,
- * at most the rule's) that the selected particles' boxes overlap. */
+ * at most the rule's) that the selected particles' boxes overlap. Each particle marks its cells
+ * in a bitmap of the level's cells over the domain (many particles share a cell), and the
+ * marked cells are refined once each. */
 static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
                             const double *L) {
   const mpm_particles *p = &sim->particles;
-  for (size_t i = 0; i < p->count; ++i) {
+  const mpm_scene *sc = &sim->scene;
+  uint8_t *marks[MPM_LEVELS_MAX] = {0};
+  long n[MPM_LEVELS_MAX][3];
+  int status = 0;
+  for (size_t i = 0; i < p->count && !status; ++i) {
     int level = rule->level;
     if (rule->kind == MPM_REFINE_TYPES) {
       if (p->level[i] < 1) continue;
@@ -337,14 +343,52 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
       }
       if (!(e > rule->strain * rule->strain)) continue;
     }
-    double lo[3], hi[3];
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = (double)p->x[d][i] - 0.5 * L[i] - rule->distance;
-      hi[d] = (double)p->x[d][i] + 0.5 * L[i] + rule->distance;
+    const int Lc = level - 1; /* the level of the cells refined */
+    const double dx = (double)mpm_refinement_dx(r, Lc);
+    if (!marks[Lc]) {
+      size_t bytes = 1;
+      for (int d = 0; d < 3; ++d) bytes *= (size_t)(n[Lc][d] = (long)sim->cells[d] << Lc);
+      if (bytes > ((size_t)64 << 20) || !(marks[Lc] = calloc(bytes, 1))) {
+        status = -1; /* a grid this fine marks through the tree itself: not built */
+        break;
+      }
     }
-    if (refine_box_cells(&sim->scene, r, level - 1, lo, hi)) return -1;
+    long lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      const double x = (double)p->x[d][i] - sc->domain_min[d], h = 0.5 * L[i] + rule->distance;
+      lo[d] = (long)floor((x - h) / dx);
+      hi[d] = (long)floor((x + h) / dx);
+      lo[d] = lo[d] < 0 ? 0 : lo[d];
+      hi[d] = hi[d] >= n[Lc][d] ? n[Lc][d] - 1 : hi[d];
+    }
+    for (long a = lo[0]; a <= hi[0]; ++a)
+      for (long b = lo[1]; b <= hi[1]; ++b)
+        for (long c = lo[2]; c <= hi[2]; ++c)
+          marks[Lc][((size_t)a * (size_t)n[Lc][1] + (size_t)b) * (size_t)n[Lc][2] + (size_t)c] = 1;
   }
-  return 0;
+  for (int Lc = 0; Lc < MPM_LEVELS_MAX && !status; ++Lc) {
+    if (!marks[Lc]) continue;
+    const int32_t offset[3] = {(int32_t)lround((sc->domain_min[0] - (double)r->origin[0]) /
+                                               (double)mpm_refinement_dx(r, Lc)),
+                               (int32_t)lround((sc->domain_min[1] - (double)r->origin[1]) /
+                                               (double)mpm_refinement_dx(r, Lc)),
+                               (int32_t)lround((sc->domain_min[2] - (double)r->origin[2]) /
+                                               (double)mpm_refinement_dx(r, Lc))};
+    size_t q = 0;
+    for (long a = 0; a < n[Lc][0] && !status; ++a)
+      for (long b = 0; b < n[Lc][1] && !status; ++b)
+        for (long c = 0; c < n[Lc][2]; ++c, ++q) {
+          if (!marks[Lc][q]) continue;
+          const int32_t cell[3] = {(int32_t)a + offset[0], (int32_t)b + offset[1],
+                                   (int32_t)c + offset[2]};
+          if (mpm_refinement_refine(r, Lc, cell)) {
+            status = -1;
+            break;
+          }
+        }
+  }
+  for (int Lc = 0; Lc < MPM_LEVELS_MAX; ++Lc) free(marks[Lc]);
+  return status;
 }
 
 mpm_status mpm_adaptive_apply_rules(mpm_sim *sim, mpm_refinement *r, int rebuild, mpm_error *err) {

@@ -63,7 +63,8 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
  * that ParaView opens every file of the run from one index. The names follow from the frame
  * number (as the writers below make them), so a resumed run lists its earlier frames too. */
 static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
-  const int parts = 1 + has_domains + sim->surface_count;
+  const int grid = sim->adaptive && sim->scene.refine_every > 0; /* a tree per frame */
+  const int parts = 1 + has_domains + sim->surface_count + grid;
   enum { NAME = 64 };
   char(*names)[NAME] = malloc((size_t)parts * NAME);
   char(*text)[NAME] = malloc((size_t)frames * (size_t)parts * NAME);
@@ -79,6 +80,7 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
   if (has_domains) snprintf(names[k++], NAME, "domains");
   for (int s = 0; s < sim->surface_count; ++s)
     snprintf(names[k++], NAME, "surface_body%d", sim->surfaces[s].body);
+  if (grid) snprintf(names[k++], NAME, "grid_cells");
   for (k = 0; k < parts; ++k) name_of[k] = names[k];
   for (int f = 0; f < frames; ++f) {
     char(*row)[NAME] = text + (size_t)f * (size_t)parts;
@@ -87,6 +89,7 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
     if (has_domains) snprintf(row[k++], NAME, "domains_%04d.vtu", f);
     for (int s = 0; s < sim->surface_count; ++s)
       snprintf(row[k++], NAME, "surface_body%d_%04d.vtp", sim->surfaces[s].body, f);
+    if (grid) snprintf(row[k++], NAME, "grid_cells_%04d.vtu", f);
     for (k = 0; k < parts; ++k) files[(size_t)f * (size_t)parts + (size_t)k] = row[k];
   }
   char path[MPM_PATH_MAX + 64];
@@ -163,8 +166,13 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
     if (st != MPM_OK) goto done;
   }
-  if (o->vtu && sim->adaptive && frame == 0) { /* the static refinement, once */
+  if (o->vtu && sim->adaptive && frame == 0) { /* the refinement at the start */
     snprintf(path, sizeof path, "%s/grid_cells.vtu", sim->output_dir);
+    st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
+    if (st != MPM_OK) goto done;
+  }
+  if (o->vtu && sim->adaptive && sim->scene.refine_every > 0) { /* and as it moves */
+    snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", sim->output_dir, frame);
     st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
     if (st != MPM_OK) goto done;
   }

@@ -27,7 +27,8 @@ frame, that what ParaView would load is what the engine computed:
               positions (rounded to float, which that reader makes them), nothing printed.
   stats.csv   sum(mass) within 1e-6 relative; 0.5 sum(m |v|^2) from the VTU arrays within
               1e-4 relative; sum(m v) within 1e-6 of sum(m |v|).
-  grid_cells.vtu (scenes with domain.levels)
+  grid_cells.vtu (scenes with domain.levels), and grid_cells_NNNN.vtu per frame (with
+              domain.refine_every, also a "grid_cells" part of run.pvd)
               every cell a VTK_VOXEL of edge dx / 2^level with CellData level in
               1 .. levels - 1, inside the domain; their total volume is what the refine boxes
               of the scene cover (box rules only; cells overlapping a box, clipped to the
@@ -611,6 +612,8 @@ def check_run_pvd(name, outdir, entries, messages):
             m = re.fullmatch(r"surface_body(\d+)_%04d\.obj" % k, obj)
             if m:
                 want.append(("surface_body" + m.group(1), obj[:-4] + ".vtp"))
+        if os.path.exists(os.path.join(outdir, "grid_cells_%04d.vtu" % k)):
+            want.append(("grid_cells", "grid_cells_%04d.vtu" % k))
         got = [(ds.get("name"), ds.get("file")) for ds in by_step[step]]
         if got != want:
             where.fail(None, "timestep %s lists %s, expected %s" % (step, got, want))
@@ -683,7 +686,13 @@ def check_scene(mpm, scene, outdir, frames, messages):
         dom = os.path.join(outdir, "domains_%04d.vtu" % k)
         if os.path.exists(dom):
             domain_cells = check_domains(Where(name, dom, k), dom, set(ids), k == 0, messages)
-        if ids0 is not None and ids != ids0:
+        cells_k = os.path.join(outdir, "grid_cells_%04d.vtu" % k)
+        if os.path.exists(cells_k):  # a grid rebuilt during the run: its tree per frame
+            check_cells(Where(name, cells_k, k), cells_k, info[3], messages)
+        resampled = info is not None and "resample" in info[3]
+        if len(ids) != len(set(ids)):
+            where.fail("id", "an id appears twice")
+        if ids0 is not None and ids != ids0 and not resampled:
             where.fail("id", "the set of ids differs from frame 0's")
         ids0, n = ids, len(ids)
     cells_path = os.path.join(outdir, "grid_cells.vtu")
