@@ -2,10 +2,11 @@
  * independent truth: the largest eigenvector of M = sum w q q^T from LAPACK's dsyev (Debian
  * liblapacke; Markley et al. 2007 define the average as that vector), the closed form for
  * rotations about one axis (the mean angle), sign invariance, the rotation-matrix round trip,
- * the Jacobi eigen-solver against dsyev, and the uniformity of random rotations (the mean of
- * R is zero). */
+ * the Jacobi eigen-solver (core/sym_eigen.c) against dsyev, and the uniformity of random rotations
+ * (the mean of R is zero). */
 #include "support.h"
 #include "core/quat.h"
+#include "core/sym_eigen.h"
 
 #include <lapacke.h>
 #include <math.h>
@@ -52,22 +53,24 @@ static void test_matrix_round_trip(void **state) {
 static void test_eigen_against_lapack(void **state) {
   (void)state;
   uint64_t s = 11;
-  for (int t = 0; t < 200; ++t) {
+  for (int t = 0; t < 400; ++t) {
+    const int n = 3 + t % 2;
     double A[16], lapack[16], w[4], lambda[4], V[16];
-    for (int i = 0; i < 4; ++i)
-      for (int j = i; j < 4; ++j) A[4 * i + j] = A[4 * j + i] = test_rand(&s, -1, 1);
-    if (t % 4 == 0) A[5] = A[0]; /* near-repeated diagonals too */
+    for (int i = 0; i < n; ++i)
+      for (int j = i; j < n; ++j) A[n * i + j] = A[n * j + i] = test_rand(&s, -1, 1);
+    if (t % 4 < 2) A[n + 1] = A[0]; /* near-repeated diagonals too */
     memcpy(lapack, A, sizeof A);
-    assert_int_equal(LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', 4, lapack, 4, w), 0);
-    mpm_sym4_eigen(A, lambda, V);
-    for (int k = 0; k < 4; ++k) assert_close(lambda[k], w[k], 1e-12);
-    for (int k = 0; k < 4; ++k) { /* A v = lambda v */
-      for (int r = 0; r < 4; ++r) {
-        double Av = 0;
-        for (int c = 0; c < 4; ++c) Av += A[4 * r + c] * V[4 * c + k];
-        assert_close(Av, lambda[k] * V[4 * r + k], 1e-11);
+    assert_int_equal(LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', n, lapack, n, w), 0);
+    mpm_sym_eigen(n, A, lambda, V);
+    for (int k = 0; k < n; ++k) assert_close(lambda[k], w[k], 1e-12);
+    for (int k = 0; k < n; ++k) /* A v = lambda v, |v| = 1 */
+      for (int r = 0; r < n; ++r) {
+        double Av = 0, vv = 0;
+        for (int c = 0; c < n; ++c)
+          Av += A[n * r + c] * V[n * c + k], vv += V[n * c + k] * V[n * c + k];
+        assert_close(Av, lambda[k] * V[n * r + k], 1e-11);
+        assert_close(vv, 1, 1e-12);
       }
-    }
   }
 }
 

@@ -1,57 +1,19 @@
 /* rest_error.c - shape matching and the rest-state error (see rest_error.h). */
 #include "analysis/rest_error.h"
 
+#include "core/sym_eigen.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Eigen-decomposition of the symmetric S (row-major) by cyclic Jacobi: S = Q diag(l) Q^T, the
- * eigenvalues in decreasing order, Q's columns the eigenvectors (Golub and Van Loan 8.5). */
+/* S = Q diag(l) Q^T with the eigenvalues in decreasing order. */
 static void symmetric_eigen(const double S[9], double l[3], double Q[9]) {
-  double a[9];
-  memcpy(a, S, sizeof a);
-  double q[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  static const int pr[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-  for (int sweep = 0; sweep < 32; ++sweep) {
-    const double off = fabs(a[1]) + fabs(a[2]) + fabs(a[5]);
-    const double scale = fabs(a[0]) + fabs(a[4]) + fabs(a[8]);
-    if (!(off > 1e-30 * scale)) break;
-    for (int k = 0; k < 3; ++k) {
-      const int p = pr[k][0], r = pr[k][1];
-      const double apr = a[3 * p + r];
-      if (apr == 0) continue;
-      const double theta = (a[3 * r + r] - a[3 * p + p]) / (2 * apr);
-      const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
-      const double c = 1 / sqrt(t * t + 1), s = t * c;
-      for (int i = 0; i < 3; ++i) {
-        const double aip = a[3 * i + p], air = a[3 * i + r];
-        a[3 * i + p] = c * aip - s * air;
-        a[3 * i + r] = s * aip + c * air;
-      }
-      for (int i = 0; i < 3; ++i) {
-        const double api = a[3 * p + i], ari = a[3 * r + i];
-        a[3 * p + i] = c * api - s * ari;
-        a[3 * r + i] = s * api + c * ari;
-      }
-      for (int i = 0; i < 3; ++i) {
-        const double qip = q[3 * i + p], qir = q[3 * i + r];
-        q[3 * i + p] = c * qip - s * qir;
-        q[3 * i + r] = s * qip + c * qir;
-      }
-    }
-  }
-  int order[3] = {0, 1, 2};
-  const double d[3] = {a[0], a[4], a[8]};
-  for (int i = 0; i < 3; ++i)
-    for (int j = i + 1; j < 3; ++j)
-      if (d[order[j]] > d[order[i]]) {
-        const int t = order[i];
-        order[i] = order[j];
-        order[j] = t;
-      }
+  double up[3], V[9];
+  mpm_sym_eigen(3, S, up, V);
   for (int k = 0; k < 3; ++k) {
-    l[k] = d[order[k]];
-    for (int i = 0; i < 3; ++i) Q[3 * i + k] = q[3 * i + order[k]];
+    l[k] = up[2 - k];
+    for (int i = 0; i < 3; ++i) Q[3 * i + k] = V[3 * i + 2 - k];
   }
 }
 

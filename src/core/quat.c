@@ -1,6 +1,8 @@
 /* quat.c - unit quaternions, their average (Markley et al. 2007) and random rotations. */
 #include "core/quat.h"
 
+#include "core/sym_eigen.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -60,56 +62,6 @@ void mpm_quat_from_matrix(const double R[9], double q[4]) {
   for (int i = 0; i < 4; ++i) q[i] *= sign / n;
 }
 
-void mpm_sym4_eigen(const double A[16], double lambda[4], double V[16]) {
-  double a[16];
-  memcpy(a, A, sizeof a);
-  for (int i = 0; i < 16; ++i) V[i] = i % 5 == 0;
-  for (int sweep = 0; sweep < 50; ++sweep) {
-    double off = 0, diag = 0;
-    for (int i = 0; i < 4; ++i) {
-      diag += a[5 * i] * a[5 * i];
-      for (int j = i + 1; j < 4; ++j) off += a[4 * i + j] * a[4 * i + j];
-    }
-    if (off <= 1e-32 * diag || off == 0) break;
-    for (int p = 0; p < 4; ++p)
-      for (int r = p + 1; r < 4; ++r) {
-        const double apr = a[4 * p + r];
-        if (apr == 0) continue;
-        /* the rotation that zeroes a[p][r] (Golub and Van Loan, sec. 8.5) */
-        const double theta = (a[4 * r + r] - a[4 * p + p]) / (2 * apr);
-        const double t = (theta >= 0 ? 1 : -1) / (fabs(theta) + sqrt(theta * theta + 1));
-        const double c = 1 / sqrt(t * t + 1), s = t * c;
-        for (int k = 0; k < 4; ++k) { /* columns p and r */
-          const double kp = a[4 * k + p], kr = a[4 * k + r];
-          a[4 * k + p] = c * kp - s * kr;
-          a[4 * k + r] = s * kp + c * kr;
-        }
-        for (int k = 0; k < 4; ++k) { /* rows p and r */
-          const double pk = a[4 * p + k], rk = a[4 * r + k];
-          a[4 * p + k] = c * pk - s * rk;
-          a[4 * r + k] = s * pk + c * rk;
-        }
-        for (int k = 0; k < 4; ++k) {
-          const double kp = V[4 * k + p], kr = V[4 * k + r];
-          V[4 * k + p] = c * kp - s * kr;
-          V[4 * k + r] = s * kp + c * kr;
-        }
-      }
-  }
-  for (int i = 0; i < 4; ++i) lambda[i] = a[5 * i];
-  for (int i = 1; i < 4; ++i) /* ascending, columns with them */
-    for (int j = i; j > 0 && lambda[j] < lambda[j - 1]; --j) {
-      const double t = lambda[j];
-      lambda[j] = lambda[j - 1];
-      lambda[j - 1] = t;
-      for (int k = 0; k < 4; ++k) {
-        const double v = V[4 * k + j];
-        V[4 * k + j] = V[4 * k + j - 1];
-        V[4 * k + j - 1] = v;
-      }
-    }
-}
-
 void mpm_quat_average(int n, const double (*q)[4], const double *w, double out[4]) {
   double M[16] = {0};
   for (int i = 0; i < n; ++i) {
@@ -118,7 +70,7 @@ void mpm_quat_average(int n, const double (*q)[4], const double *w, double out[4
       for (int c = 0; c < 4; ++c) M[4 * r + c] += wi * q[i][r] * q[i][c];
   }
   double lambda[4], V[16];
-  mpm_sym4_eigen(M, lambda, V);
+  mpm_sym_eigen(4, M, lambda, V);
   double dot = 0, norm = 0;
   for (int r = 0; r < 4; ++r) {
     out[r] = V[4 * r + 3];

@@ -20,10 +20,6 @@ void mpm_quat_from_matrix(const double R[9], double q[4]);
  * sign that agrees with q[0] (q.q[0] >= 0). */
 void mpm_quat_average(int n, const double (*q)[4], const double *w, double out[4]);
 
-/* The eigenvalues (ascending) and unit eigenvectors (columns of V, row-major 4x4) of the
- * symmetric 4x4 matrix A, by cyclic Jacobi rotations. */
-void mpm_sym4_eigen(const double A[16], double lambda[4], double V[16]);
-
 /* A uniformly distributed random rotation from three uniform numbers in [0, 1) (Shoemake 1992,
  * "Uniform random rotations", Graphics Gems III). */
 void mpm_quat_uniform(const double u[3], double q[4]);
