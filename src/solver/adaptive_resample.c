@@ -225,7 +225,9 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
       ++splits;
       continue;
     }
-    if (!rd->merge || q == 0) continue;
+    /* a merge needs coarser leaves all around, its own leaf included: only a particle in a
+     * leaf coarser than its type asks the tree about its box */
+    if (!rd->merge || q == 0 || leaf[i].level >= q) continue;
     const double box = ldexp(a->body_box[p->body[i]], -(q - 1)),
                  grow = rd->merge_margin * (double)mpm_refinement_dx(r, q - 1);
     mpm_real lo[3], hi[3];
