@@ -6,7 +6,8 @@
  *     (the step conserves it; the splits' change is its closed form, test_resample.c);
  *   - the same box flying out of the fine half merges once a margin away from it: fewer
  *     particles, mass exact, momentum to round-off, angular momentum kept (merges are exact);
- *   - ids stay unique, and every new id is below next_id;
+ *   - ids stay unique, and every new id is below next_id; every particle lies in a leaf of the
+ *     domain, and no fine leaf cell holds more than max_per_cell after the splits;
  *   - 1 and 2 threads give the same particles bit for bit;
  *   - a run checkpointed mid-frame and resumed ends bit-identical to an uninterrupted one;
  *   - key mistakes name the key path. */
@@ -59,6 +60,11 @@ static sums sum_of(const mpm_particles *p) {
     for (int d = 0; d < 3; ++d) s.p[d] += (double)p->mass[i] * (double)p->v[d][i];
   }
   return s;
+}
+
+static int by_key(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
 }
 
 static int by_id(const void *a, const void *b) {
@@ -123,11 +129,42 @@ static void test_split_entering_the_fine_half(void **state) {
     fine += p->level[i] == 1;
   }
   assert_true(fine > n0 / 2);
+  /* every particle in a leaf of the domain, and no fine leaf cell past the limit (2 x 8) */
+  uint64_t *keys = malloc(p->count * sizeof *keys);
+  size_t nk = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    const mpm_real x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+    int32_t c[3];
+    for (int d = 0; d < 3; ++d) assert_true(x[d] > 0 && x[d] < 1);
+    if (mpm_refinement_leaf_at(r, x, c) != 1) continue;
+    keys[nk++] =
+        ((uint64_t)(uint32_t)c[0] << 42) | ((uint64_t)(uint32_t)c[1] << 21) | (uint32_t)c[2];
+  }
+  qsort(keys, nk, sizeof *keys, by_key);
+  size_t most = 0;
+  for (size_t k = 0, run = 0; k < nk; ++k) {
+    run = k && keys[k] == keys[k - 1] ? run + 1 : 1;
+    most = run > most ? run : most;
+  }
+  free(keys);
+  assert_true(most <= 16);
   assert_ids_unique(sim);
   check_conservation(sim, &s0, &d0);
   print_message("split: %zu -> %zu particles, %lld splits, angular momentum change %.3g of %.3g\n",
                 n0, p->count, sim->resample_figures.splits,
                 sim->resample_figures.angular_momentum_change[2], d0.angular_momentum[2]);
+  mpm_sim_destroy(sim);
+}
+
+/* The limit on a cell: a split would put 8 particles in a fine leaf cell; allowing 4 stops
+ * every split. */
+static void test_split_limit(void **state) {
+  (void)state;
+  mpm_sim *sim =
+      sim_from_json(flying_box(0.36, 0.8, "{\"merge\": false, \"max_per_cell\": 4}", ""));
+  run_until(sim, 0.1);
+  assert_int_equal(sim->resample_figures.splits, 0);
+  for (size_t i = 0; i < sim->particles.count; ++i) assert_int_equal(sim->particles.level[i], 0);
   mpm_sim_destroy(sim);
 }
 
@@ -258,11 +295,9 @@ static void test_key_errors(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_split_entering_the_fine_half),
-      cmocka_unit_test(test_merge_leaving_the_fine_half),
-      cmocka_unit_test(test_threads_bitwise),
-      cmocka_unit_test(test_resume_bit_identical),
-      cmocka_unit_test(test_key_errors),
+      cmocka_unit_test(test_split_entering_the_fine_half), cmocka_unit_test(test_split_limit),
+      cmocka_unit_test(test_merge_leaving_the_fine_half),  cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_resume_bit_identical),         cmocka_unit_test(test_key_errors),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }
