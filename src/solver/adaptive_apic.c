@@ -222,8 +222,11 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
       D[6] += w * xz, D[7] += w * yz, D[8] += w * zz;
     }
     mpm_real *out = Cw + 21 * (size_t)k;
+    for (int d = 0; d < 3; ++d) /* its 1D weights, for the ghosts' sums and for G2P */
+      for (int q = 0; q < MPM_STENCIL_MAX; ++q)
+        out[9 + MPM_STENCIL_MAX * d + q] = q < bs.W ? bs.s.w[d][q] : 0;
     if (!invert3(D, Dinv)) { /* no affine part from this particle (cannot happen for uGIMP) */
-      memset(out, 0, 21 * sizeof *out);
+      memset(out, 0, 9 * sizeof *out);
       continue;
     }
     for (int u = 0; u < 3; ++u)
@@ -233,9 +236,6 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
     for (int u = 0; u < 3; ++u)
       for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs.d[v]);
     for (int c = 0; c < 9; ++c) out[c] = (mpm_real)(m * C[c]);
-    for (int d = 0; d < 3; ++d)
-      for (int q = 0; q < MPM_STENCIL_MAX; ++q)
-        out[9 + MPM_STENCIL_MAX * d + q] = q < bs.W ? bs.s.w[d][q] : 0;
   }
   /* the ghosts' affine moments A_g = sum w m C, serially in a fixed order (stencils overlap) */
   for (long k = 0; k < nb; ++k) {
@@ -285,12 +285,14 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
   const long nb = (long)a->boundary_count;
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < nb; ++k) {
-    boundary_stencil bs;
-    boundary_stencil_of(a, sim, (size_t)k, &bs);
-    double dB[9] = {0}, r[3];
+    /* the particle has not moved since P2G: its 1D weights are those kept then */
+    const mpm_real *wk = a->work + 21 * (size_t)k + 9;
+    double dB[9] = {0};
     const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
     for (uint32_t e = c0; e < c1; ++e) {
-      const double w = node_weight(&bs, a->cell_ghost[e].node, r);
+      const uint32_t node = a->cell_ghost[e].node;
+      const double w = (double)wk[node & 15] * (double)wk[MPM_STENCIL_MAX + (node >> 4 & 15)] *
+                       (double)wk[2 * MPM_STENCIL_MAX + (node >> 8 & 15)];
       const mpm_real *Mg = Mi + 9 * (size_t)a->cell_ghost[e].ghost;
       for (int c = 0; c < 9; ++c) dB[c] += w * (double)Mg[c];
     }
