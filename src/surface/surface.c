@@ -12,8 +12,10 @@
 #include <time.h>
 #include <unistd.h>
 
-/* The band's half-width in voxels: the filters need 3 (OpenVDB's LEVEL_SET_HALF_WIDTH). */
-#define SURFACE_HALF_WIDTH 3.0
+/* The band's half-width in voxels when the spheres are drawn: the zero crossing needs only the
+ * voxels next to it, and each particle costs (2 (r + band) + 1)^3 voxels; the band is rebuilt
+ * 3 voxels wide for the filters (vdb_shim.h). */
+#define SURFACE_HALF_WIDTH 2.0
 /* Particles whose spacing is sampled for the median */
 #define SPACING_SAMPLES 4096
 

@@ -100,7 +100,8 @@ int mpm_vdb_smooth(mpm_vdb_grid *g, int passes, mpm_vdb_filter filter, double of
     /* A union of spheres is a signed distance only near its surface: deep inside, each voxel
        holds the distance to its nearest sphere, so the whole interior stays in the band (and
        would be filtered at every pass). The band is rebuilt from the zero isosurface (meshed,
-       then converted back to an exact narrow band) first. */
+       then converted back to an exact narrow band of 3 voxels, what the filters need)
+       first. */
     const float half_width = (float)(g->grid->background() / g->grid->voxelSize()[0]);
     openvdb::FloatGrid::Ptr rebuilt = openvdb::tools::levelSetRebuild(*g->grid, 0.0f, half_width);
     rebuilt->setName(g->grid->getName());

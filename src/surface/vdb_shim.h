@@ -50,9 +50,9 @@ int mpm_vdb_levelset_from_spheres(const double *xyz, const double *radius, size_
                                   double half_width, int threads, mpm_vdb_grid **out, char *msg,
                                   size_t cap);
 
-/// The surface moved inward by `offset` m (outward for offset < 0) and the narrow band rebuilt
-/// as an exact signed distance (openvdb::tools::levelSetRebuild at the isovalue offset), then
-/// `passes` passes of `filter`.
+/// The narrow band rebuilt as an exact signed distance of half-width 3 voxels
+/// (openvdb::tools::levelSetRebuild), `passes` passes of `filter`, then the surface moved inward
+/// by `offset` m (outward for offset < 0).
 int mpm_vdb_smooth(mpm_vdb_grid *grid, int passes, mpm_vdb_filter filter, double offset,
                    int threads, char *msg, size_t cap);
 
