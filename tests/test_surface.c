@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 
 #define PI 3.14159265358979323846
 
@@ -258,7 +259,7 @@ static void test_surface_keys(void **state) {
   mpm_scene_free(&s);
 }
 
-static int exists(const char *dir, const char *name) {
+static int has_file(const char *dir, const char *name) {
   char path[700];
   struct stat sb;
   snprintf(path, sizeof path, "%s/%s", dir, name);
@@ -290,8 +291,8 @@ static void test_run_writes_surfaces(void **state) {
   const char *names[] = {"surface_b0_0000.obj", "surface_b0_0000.ply", "levelset_b0_0000.vdb",
                          "surface_b1_0001.obj", "surface_b1_0001.ply", "levelset_b1_0001.vdb"};
   for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k)
-    if (!exists(dir, names[k])) fail_msg("%s/%s was not written", dir, names[k]);
-  assert_false(exists(dir, "surface_0000.obj")); /* per body: no combined file */
+    if (!has_file(dir, names[k])) fail_msg("%s/%s was not written", dir, names[k]);
+  assert_false(has_file(dir, "surface_0000.obj")); /* per body: no combined file */
   assert_false(dir_has_temp(dir));
   char path[700];
   snprintf(path, sizeof path, "%s/surface_b0_0000.ply", dir);
@@ -310,11 +311,76 @@ static void test_run_writes_surfaces(void **state) {
   mpm_mesh_free(&mesh);
 }
 
+static char printed[65536]; /* what the last mpm command printed */
+
+/* Run the mpm program (MPM_BIN) with args, stderr merged into `printed`; its exit code. */
+static int mpm(const char *args) {
+  const char *bin = test_mpm_bin();
+  if (!bin) fail_msg("MPM_BIN is not set (run through ctest)");
+  char cmd[3000];
+  snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", bin, args);
+  FILE *f = popen(cmd, "r");
+  assert_non_null(f);
+  const size_t n = fread(printed, 1, sizeof printed - 1, f);
+  printed[n] = 0;
+  const int status = pclose(f);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+static void expect_output(const char *needle) {
+  if (!strstr(printed, needle)) fail_msg("expected '%s' in the output:\n%s", needle, printed);
+}
+
+/* `mpm run` with output.surface: the files of every frame and the progress line's surface
+ * figures; a folder holding only a level set of another run is refused, and --overwrite removes
+ * it; `mpm render` draws the surface in place of the particles. */
+static void test_cli_surfaces(void **state) {
+  (void)state;
+  const char *tmp = test_temp_dir("surface-cli");
+  char scene[600], out[600], other[600], args[2400], path[700];
+  snprintf(scene, sizeof scene, "%s/goo.json", tmp);
+  snprintf(out, sizeof out, "%s/out", tmp);
+  snprintf(other, sizeof other, "%s/other", tmp);
+  write_file(scene, q("{'domain': {'min': [0,0,0], 'max': [1,1,1], 'dx': 0.05},"
+                      " 'time': {'end': 0.04, 'fps': 50},"
+                      " 'materials': [{'name': 'goo', 'model': 'neo_hookean', 'E': 1e4, 'nu': 0.3,"
+                      " 'density': 1000}],"
+                      " 'bodies': [{'name': 'ball', 'shape': {'type': 'sphere', 'center': "
+                      "[0.5,0.4,0.5], 'radius': 0.15}, 'material': 'goo'}],"
+                      " 'output': {'surface': {'bodies': ['ball']}, 'vdb': true}}"));
+  snprintf(args, sizeof args, "run '%s' -o '%s'", scene, out);
+  assert_int_equal(mpm(args), 0);
+  expect_output("surface ");
+  expect_output("triangles)");
+  for (int f = 0; f <= 2; ++f) {
+    const char *kinds[] = {"surface_%04d.obj", "surface_%04d.ply", "levelset_%04d.vdb"};
+    for (int k = 0; k < 3; ++k) {
+      char name[64];
+      snprintf(name, sizeof name, kinds[k], f);
+      if (!has_file(out, name)) fail_msg("%s/%s was not written", out, name);
+    }
+  }
+  snprintf(args, sizeof args, "render '%s' --size 160x90", out);
+  assert_int_equal(mpm(args), 0);
+  expect_output("0 particles, 1 surface");
+  /* an output folder holding a level set of another run */
+  assert_int_equal(mkdir(other, 0777), 0);
+  snprintf(path, sizeof path, "%s/levelset_0007.vdb", other);
+  write_file(path, "not a vdb");
+  snprintf(args, sizeof args, "run '%s' -o '%s' --quiet", scene, other);
+  assert_int_equal(mpm(args), 2);
+  expect_output("levelset_0007.vdb");
+  snprintf(args, sizeof args, "run '%s' -o '%s' --quiet --overwrite", scene, other);
+  assert_int_equal(mpm(args), 0);
+  assert_false(has_file(other, "levelset_0007.vdb"));
+  assert_true(has_file(other, "levelset_0002.vdb"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_sphere_surface),      cmocka_unit_test(test_face_height),
       cmocka_unit_test(test_vdb_round_trip),      cmocka_unit_test(test_surface_keys),
-      cmocka_unit_test(test_run_writes_surfaces),
+      cmocka_unit_test(test_run_writes_surfaces), cmocka_unit_test(test_cli_surfaces),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }
