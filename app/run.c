@@ -352,6 +352,10 @@ int mpm_cmd_run(int argc, char **argv) {
       fprintf(stderr,
               "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/run.pvd in ParaView\n",
               sim->frame, (long long)sim->steps, pr.elapsed, sim->output_dir);
+    if (!quiet && sim->surface_frames > 0) /* output.surface's share of the wall time */
+      fprintf(stderr, "mpm: surfaces: %.1f s of it, %.2f s per frame (%d frames)\n",
+              sim->surface_seconds_total, sim->surface_seconds_total / sim->surface_frames,
+              sim->surface_frames);
   }
   if (code == MPM_EXIT_OK && render) { /* pictures of every frame: `mpm render DIR` */
     char dir[MPM_PATH_MAX];

@@ -352,6 +352,8 @@ static void test_cli_surfaces(void **state) {
   assert_int_equal(mpm(args), 0);
   expect_output("surface ");
   expect_output("triangles)");
+  expect_output("mpm: surfaces: "); /* the closing note's share */
+  expect_output("s per frame (3 frames)");
   for (int f = 0; f <= 2; ++f) {
     const char *kinds[] = {"surface_%04d.obj", "surface_%04d.ply", "levelset_%04d.vdb"};
     for (int k = 0; k < 3; ++k) {

@@ -95,8 +95,10 @@ struct mpm_sim {
   mpm_stats_row *stats;
   double frame_wall_start;
   /* output.surface (sim_surface.c): the last frame's reconstruction, for the progress line */
-  double surface_seconds;   /* wall time of the frame's surfaces, files included */
-  size_t surface_triangles; /* triangles over all its surfaces */
+  double surface_seconds;       /* wall time of the frame's surfaces, files included */
+  size_t surface_triangles;     /* triangles over all its surfaces */
+  double surface_seconds_total; /* over the frames written by this process */
+  int surface_frames;
   /* robustness (guard.c, sim_checkpoint.c) */
   int dt_level;                /* dt is halved this many times after an unstable step */
   long long retries;           /* steps redone with a smaller dt, over the run */

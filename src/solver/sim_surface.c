@@ -104,5 +104,7 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int fram
   free(xyz);
   free(vol);
   sim->surface_seconds = mpm_wall_seconds() - t0;
+  sim->surface_seconds_total += sim->surface_seconds;
+  sim->surface_frames++;
   return st;
 }
