@@ -10,7 +10,7 @@ DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
 DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng-dev zlib1g-dev \
-	libhdf5-dev gnuplot-nox python3-vtk9 valgrind
+	libhdf5-dev gnuplot-nox python3-vtk9 valgrind libopenvdb-dev libboost-dev
 # clang and its runtime (libFuzzer, sanitizers): only `make fuzz` and `make test-fuzz` need them
 FUZZ_DEB_PACKAGES = clang libclang-rt-14-dev
 # ThreadSanitizer needs clang and LLVM's OpenMP runtime with its Archer tool (libarcher.so)
@@ -64,12 +64,12 @@ build-sanitize: deps
 # libFuzzer targets (fuzz/): clang, ASan + UBSan + coverage, no OpenMP, no tests
 build-fuzz: deps-fuzz
 	cmake -S . -B $(BUILD_FUZZ) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=Debug -DMPM_FUZZ=ON \
-	  -DMPM_OPENMP=OFF -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
+	  -DMPM_OPENMP=OFF -DMPM_OPENVDB=OFF -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD_FUZZ) -j $(JOBS) --target fuzz_scene fuzz_obj fuzz_ply fuzz_checkpoint
 
 # ThreadSanitizer build (clang, LLVM's OpenMP) of the library and the tests of TSAN_TESTS
 build-tsan: deps-tsan
-	cmake -S . -B $(BUILD_TSAN) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_TSAN=ON \
+	cmake -S . -B $(BUILD_TSAN) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_TSAN=ON -DMPM_OPENVDB=OFF \
 	  $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD_TSAN) -j $(JOBS) --target $(subst |, ,$(TSAN_TESTS))
 

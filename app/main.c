@@ -45,16 +45,22 @@ static const usage_section SECTIONS[] = {
               "  mpm bench implicit [--particles N] [--drop-particles N] [--threads LIST]\n"
               "                     [--repeats N] [--only action|drop]\n"
               "      the Hessian action against explicit P2G + G2P, CG iterations with and\n"
-              "      without the preconditioner, time to simulate 1 s explicit and implicit\n"},
+              "      without the preconditioner, time to simulate 1 s explicit and implicit\n"
+              "  mpm bench surface [--particles N] [--threads LIST] [--smoothing PASSES]\n"
+              "      seconds of one frame's particle surface (output.surface) for a 1M-particle\n"
+              "      cube and ball: level set, filter, mesh, OBJ + PLY\n"},
     {"render",
      "  mpm render OUTDIR [--field velocity|J|stress|plastic|material|body] [--size WxH]\n"
      "                    [--colormap viridis|coolwarm|category] [--range LO:HI] [--every N]\n"
-     "                    [--scene SCENE.json] [--out DIR] [--movie] [--grid] [--quiet]\n"
+     "                    [--scene SCENE.json] [--out DIR] [--movie] [--grid] [--particles]\n"
+     "                    [--quiet]\n"
      "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed):\n"
      "      particles coloured by --field (default velocity) with --colormap over --range\n"
      "      (default: percentiles of the run), every N-th frame, the colliders of\n"
      "      --scene (default OUTDIR/scene.json), to --out; --movie also makes movie.mp4\n"
-     "      with ffmpeg; --grid draws the multi-level grid's fine cells over them\n"},
+     "      with ffmpeg; --grid draws the multi-level grid's fine cells over them; a run's\n"
+     "      particle surfaces (output.surface) are drawn as shaded triangles in place of\n"
+     "      their particles (--particles: the particles too)\n"},
     {"plot", "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
              "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
              "      to OUTDIR/plots/*.png (or --out DIR) with gnuplot\n"},

@@ -10,6 +10,7 @@
 #include "core/parallel.h"
 #include "io/io.h"
 #include "render/render.h"
+#include "scene/mesh.h"
 #include "scene/scene.h"
 
 #include <dirent.h>
@@ -28,6 +29,7 @@ static const char *const FIELD_NAMES[FIELDS] = {"velocity", "J",        "stress"
 typedef struct render_opts {
   const char *dir, *scene, *out;
   int field, colormap, width, height, every, movie, quiet, grid;
+  int particles; /* --particles: draw the particles of bodies that have surfaces too */
   double lo, hi; /* colour range; lo > hi: automatic */
 } render_opts;
 
@@ -91,7 +93,7 @@ static int usage(void) {
   fprintf(stderr, "usage: mpm render OUTDIR [--field velocity|J|stress|plastic|material|body]\n"
                   "                  [--size WxH] [--colormap viridis|coolwarm|category]\n"
                   "                  [--range LO:HI] [--every N] [--scene SCENE.json] [--out DIR]\n"
-                  "                  [--movie] [--grid] [--quiet]\n");
+                  "                  [--movie] [--grid] [--particles] [--quiet]\n");
   return MPM_EXIT_USAGE;
 }
 
@@ -147,6 +149,8 @@ static int parse_args(int argc, char **argv, render_opts *o) {
       o->out = argv[++i];
     } else if (!strcmp(a, "--grid")) {
       o->grid = 1;
+    } else if (!strcmp(a, "--particles")) {
+      o->particles = 1;
     } else if (!strcmp(a, "--movie")) {
       o->movie = 1;
     } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
@@ -261,6 +265,73 @@ static int grid_edges(const char *dir, int frame, float **ab, float **rgb, size_
   free(key);
   mpm_vtu_frame_free(&fr);
   return 0;
+}
+
+/* The particle surfaces of frame k (output.surface): surface_NNNN.ply, or surface_bB_NNNN.ply
+ * per body B < bodies. Each one found is drawn; *drawn counts them. -1 with `why` on a bad
+ * file or no memory. */
+static int draw_surfaces(const char *dir, int k, int bodies, mpm_image *img, const mpm_camera *cam,
+                         int *drawn, char *why, size_t cap) {
+  *drawn = 0;
+  for (int b = -1; b < bodies; ++b) {
+    char path[4300];
+    if (b < 0)
+      snprintf(path, sizeof path, "%s/surface_%04d.ply", dir, k);
+    else
+      snprintf(path, sizeof path, "%s/surface_b%d_%04d.ply", dir, b, k);
+    struct stat sb;
+    if (stat(path, &sb) != 0) continue;
+    mpm_mesh m;
+    mpm_error err;
+    mpm_error_clear(&err);
+    if (mpm_mesh_load(path, &m, &err) != MPM_OK) {
+      if (strstr(err.message, "no faces")) continue; /* an empty surface */
+      snprintf(why, cap, "%s", err.message);
+      return -1;
+    }
+    float *xyz = malloc((3 * (size_t)m.vertex_count + 1) * sizeof *xyz);
+    uint32_t *tri = malloc((3 * (size_t)m.triangle_count + 1) * sizeof *tri);
+    int st = 0;
+    if (!xyz || !tri) {
+      snprintf(why, cap, "out of memory for the surface of frame %d", k);
+      st = -1;
+    } else {
+      for (size_t i = 0; i < 3 * (size_t)m.vertex_count; ++i) xyz[i] = (float)m.vertices[i];
+      for (size_t i = 0; i < 3 * (size_t)m.triangle_count; ++i) tri[i] = (uint32_t)m.triangles[i];
+      float rgb[3] = {0.80f, 0.70f, 0.52f}; /* one surface: sand; one per body: its colour */
+      if (b >= 0) mpm_colormap_eval(MPM_CMAP_CATEGORY, b, rgb);
+      if (mpm_render_triangles(img, cam, (size_t)m.vertex_count, xyz, (size_t)m.triangle_count, tri,
+                               rgb, &err) != MPM_OK) {
+        snprintf(why, cap, "%s", err.message);
+        st = -1;
+      }
+      ++*drawn;
+    }
+    free(xyz);
+    free(tri);
+    mpm_mesh_free(&m);
+    if (st) return st;
+  }
+  return 0;
+}
+
+/* Whether a particle of body b and material m is drawn by a surface (output.surface of the
+ * scene), so that its splat is left out. */
+static int on_surface(const mpm_scene *s, int b, int m) {
+  const mpm_surface_desc *d = &s->output.surface;
+  if (!d->enabled || b < 0 || b >= s->body_count) return 0;
+  if (d->material_count) {
+    for (int k = 0; k < d->material_count; ++k)
+      if (d->materials[k] == m) return 1;
+    return 0;
+  }
+  if (d->body_count) {
+    for (int k = 0; k < d->body_count; ++k)
+      if (d->bodies[k] == b) return 1;
+    return 0;
+  }
+  /* all bodies but those that keep their embedded mesh (a mesh body with domains) */
+  return !(s->bodies[b].domains && s->bodies[b].shape.kind == MPM_SHAPE_MESH);
 }
 
 /* Automatic colour range from a sample of frames (percentiles 2 and 98; J centred on 1). */
@@ -505,7 +576,27 @@ int mpm_cmd_render(int argc, char **argv) {
     const size_t pix = (size_t)o.width * (size_t)o.height;
     memcpy(img.rgb, bg.rgb, 3 * pix * sizeof(float));
     memcpy(img.depth, bg.depth, pix * sizeof(float));
-    if (mpm_render_particles(&img, &cam, n, xyz, rad, 0, rgb, &err) != MPM_OK) {
+    /* the particle surfaces first; the particles they stand for are then left out */
+    int surfaces = 0;
+    if (draw_surfaces(o.dir, frames[fi], have_scene ? scene.body_count : 64, &img, &cam, &surfaces,
+                      why, sizeof why)) {
+      fprintf(stderr, "mpm render: %s\n", why);
+      code = MPM_EXIT_USAGE;
+      goto done;
+    }
+    size_t drawn = n;
+    if (surfaces && have_scene && !o.particles) {
+      const mpm_vtu_array *body = mpm_vtu_frame_array(&fr, "body");
+      const mpm_vtu_array *mat = mpm_vtu_frame_array(&fr, "material");
+      drawn = 0;
+      for (size_t i = 0; i < n; ++i) {
+        if (body && mat && on_surface(&scene, (int)body->data[i], (int)mat->data[i])) continue;
+        memmove(xyz + 3 * drawn, xyz + 3 * i, 3 * sizeof *xyz);
+        memmove(rgb + 3 * drawn, rgb + 3 * i, 3 * sizeof *rgb);
+        rad[drawn++] = rad[i];
+      }
+    }
+    if (mpm_render_particles(&img, &cam, drawn, xyz, rad, 0, rgb, &err) != MPM_OK) {
       fprintf(stderr, "mpm render: %s\n", err.message);
       code = MPM_EXIT_FAILURE;
       goto done;
@@ -521,7 +612,13 @@ int mpm_cmd_render(int argc, char **argv) {
     const double dt = now() - t0;
     total += dt;
     ++rendered;
-    if (!o.quiet) printf("%s (%zu particles, %.2f s)\n", png, n, dt);
+    if (!o.quiet) {
+      if (surfaces)
+        printf("%s (%zu particles, %d surface%s, %.2f s)\n", png, drawn, surfaces,
+               surfaces > 1 ? "s" : "", dt);
+      else
+        printf("%s (%zu particles, %.2f s)\n", png, n, dt);
+    }
   }
   if (!o.quiet)
     printf("mpm render: %d frames, %.2f s per frame (%dx%d, %s %g..%g, %d threads)\n", rendered,

@@ -141,11 +141,11 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
   return 128 + sig;
 }
 
-/* A file a run writes into its output folder (frames, domain and surface meshes, checkpoints,
- * their damaged copies, stats, the PVD indexes, the scene copy). */
+/* A file a run writes into its output folder (frames, domain and surface meshes, level sets,
+ * checkpoints, their damaged copies, stats, the PVD indexes, the scene copy). */
 static int is_run_file(const char *name) {
-  static const char *const prefix[] = {"frame_", "domains_", "surface_", "checkpoint_",
-                                       "grid_cells"};
+  static const char *const prefix[] = {"frame_",      "domains_",   "surface_", "levelset_",
+                                       "checkpoint_", "grid_cells"};
   for (size_t k = 0; k < sizeof prefix / sizeof prefix[0]; ++k)
     if (!strncmp(name, prefix[k], strlen(prefix[k]))) return 1;
   return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "run.pvd") ||
@@ -325,13 +325,18 @@ int mpm_cmd_run(int argc, char **argv) {
       code = MPM_EXIT_FAILURE;
       break;
     }
-    char solver[160] = "";
+    char solver[240] = "";
     const mpm_solver_figures *sf = &sim->last_frame_solver;
     if (sf->steps > 0) /* implicit: CG and Newton iterations per step over the frame */
       snprintf(solver, sizeof solver, "CG %.1f/step (max %d, residual %.2g) Newton %.2f/step%s",
                (double)sf->cg_iterations / (double)sf->steps, sf->cg_max, sf->residual_max,
                (double)sf->newton_iterations / (double)sf->steps,
                sf->cg_unconverged ? " unconverged" : "");
+    if (sim->scene.output.surface.enabled) { /* the frame's surfaces (output.surface) */
+      const size_t len = strlen(solver);
+      snprintf(solver + len, sizeof solver - len, "%ssurface %.2f s (%zu triangles)",
+               len ? ", " : "", sim->surface_seconds, sim->surface_triangles);
+    }
     mpm_progress_update(&pr, sim->frame, sim->time, sim->steps, sim->particles.count, solver);
   }
   /* stopped short of the scene's end by --frames: leave a checkpoint to continue from */
@@ -358,6 +363,10 @@ int mpm_cmd_run(int argc, char **argv) {
               "%.3g, %.3g) kg m^2/s\n",
               sim->resample_figures.splits, sim->resample_figures.merges, dL[0], dL[1], dL[2]);
     }
+    if (!quiet && sim->surface_frames > 0) /* output.surface's share of the wall time */
+      fprintf(stderr, "mpm: surfaces: %.1f s of it, %.2f s per frame (%d frames)\n",
+              sim->surface_seconds_total, sim->surface_seconds_total / sim->surface_frames,
+              sim->surface_frames);
   }
   if (code == MPM_EXIT_OK && render) { /* pictures of every frame: `mpm render DIR` */
     char dir[MPM_PATH_MAX];

@@ -7,8 +7,8 @@
  *   2. the particles as shaded sphere impostors (a disc per particle whose depth and normal
  *      are those of the sphere), depth-tested against each other and the background;
  *   3. tone mapping to 8-bit sRGB and a PNG written atomically with libpng (render_png.c).
- * Between 2 and 3 an overlay of line segments may be drawn (mpm_render_lines: the multi-level
- * grid's cells).
+ * Between 2 and 3 the particle surfaces may be drawn as shaded triangles (mpm_render_triangles)
+ * and an overlay of line segments (mpm_render_lines: the multi-level grid's cells).
  * Particles are spread over threads, each with its own colour and depth buffer, merged by
  * depth at the end, so the image does not depend on the thread count. */
 #ifndef MPM_RENDER_RENDER_H
@@ -18,6 +18,7 @@
 #include "core/error.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
 typedef struct mpm_image {
   int width, height;
@@ -73,5 +74,12 @@ mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n,
  * read, not written). */
 void mpm_render_lines(mpm_image *img, const mpm_camera *cam, size_t n, const float *ab,
                       const float *rgb, float alpha);
+
+/* Pass 2c: a triangle mesh (vertices xyz[3v..], triangles tri[3t..] of vertex indices) shaded
+ * in linear colour rgb with smooth vertex normals, depth-tested against and written into the
+ * image (triangles.c). */
+mpm_status mpm_render_triangles(mpm_image *img, const mpm_camera *cam, size_t vertex_count,
+                                const float *xyz, size_t triangle_count, const uint32_t *tri,
+                                const float rgb[3], mpm_error *err);
 
 #endif

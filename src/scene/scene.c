@@ -110,6 +110,8 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->solver.integrator = MPM_INTEGRATOR_EXPLICIT;
   scene->solver.dt = 0;
   scene->solver.newton_iterations = 2;
+  scene->output.surface.smoothing = 1;
+  scene->output.surface.filter = MPM_SURFACE_MEAN_CURVATURE;
   scene->solver.cg_tolerance = 0; /* automatic: see mpm_solver_desc */
   scene->solver.cg_max_iterations = 500;
   scene->solver.on_cg_failure = MPM_CG_FAILURE_WARN;

@@ -177,12 +177,44 @@ typedef struct mpm_force_desc {
   double schedule[MPM_STRENGTH_KEYS][2];
 } mpm_force_desc;
 
+/* Most bodies or materials output.surface names. */
+#define MPM_SURFACE_SELECT_MAX 32
+
+/* The filter of a smoothing pass of output.surface (the order of vdb_shim.h's mpm_vdb_filter). */
+typedef enum mpm_surface_filter {
+  MPM_SURFACE_MEAN_CURVATURE = 0,
+  MPM_SURFACE_GAUSSIAN = 1,
+  MPM_SURFACE_LAPLACIAN = 2,
+} mpm_surface_filter;
+
+/* output.surface: a triangle surface reconstructed per frame from the particles of some bodies
+ * (src/surface/surface.h): the union of one sphere per particle as an OpenVDB level set,
+ * smoothed, meshed. */
+typedef struct mpm_surface_desc {
+  int enabled;
+  int body_count; /* the bodies named (indices); 0 with material_count 0: every body that has
+                     no embedded mesh of its own (a mesh body with domains keeps that one) */
+  int bodies[MPM_SURFACE_SELECT_MAX];
+  int material_count; /* the materials named (indices): their particles, in any body */
+  int materials[MPM_SURFACE_SELECT_MAX];
+  double voxel;              /* level-set voxel, cells; 0 (default): the particle spacing, the
+                                median cbrt(V) (0.5 cell at 8 particles per cell) */
+  double radius;             /* particle sphere radius, cells; 0 (default): from each particle's
+                                volume (surface.h) */
+  int smoothing;             /* filter passes, default 1 */
+  mpm_surface_filter filter; /* default mean curvature */
+  int per_body;              /* 1: surface_bB_NNNN.obj per body instead of one surface_NNNN */
+} mpm_surface_desc;
+
 typedef struct mpm_output_desc {
   char directory[MPM_PATH_MAX]; /* default "out"; `mpm run -o` overrides */
   int vtu;                      /* per-frame VTU + PVD index */
   int ply;                      /* per-frame PLY points */
   int stats;                    /* stats.csv */
   int checkpoint_every;         /* HDF5 checkpoint every this many frames; 0 = only on a signal */
+  mpm_surface_desc surface;     /* surface_NNNN.obj / .ply per frame */
+  int vdb;                      /* with a surface: its level set as levelset_NNNN.vdb */
+  int vdb_density;              /* and a fog-volume grid "density" beside it */
 } mpm_output_desc;
 
 /* The view `mpm render` uses (the renderer frames the domain when the scene has none). */

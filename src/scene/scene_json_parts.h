@@ -36,6 +36,12 @@ int mpm_sj_parse_schedule(mpm_json_ctx *c, const cJSON *node, const char *key,
  * bodies. Runs last (rules name colliders and bodies). */
 int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
 
+/* ---- output.surface (scene_json_surface.c) ---------------------------------------------- */
+
+/* output.surface (true, false or an object) of the output object `output`. Runs after the
+ * bodies and materials (it names them). */
+int mpm_sj_parse_surface(mpm_json_ctx *c, const cJSON *output, mpm_scene *s);
+
 /* ---- materials (scene_json_material.c) ------------------------------------------------- */
 
 /* root.materials; leaves room in s->materials for one inline material per body. Runs

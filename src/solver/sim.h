@@ -99,6 +99,11 @@ struct mpm_sim {
   char (*frame_files)[64];
   mpm_stats_row *stats;
   double frame_wall_start;
+  /* output.surface (sim_surface.c): the last frame's reconstruction, for the progress line */
+  double surface_seconds;       /* wall time of the frame's surfaces, files included */
+  size_t surface_triangles;     /* triangles over all its surfaces */
+  double surface_seconds_total; /* over the frames written by this process */
+  int surface_frames;
   /* robustness (guard.c, sim_checkpoint.c) */
   int dt_level;                /* dt is halved this many times after an unstable step */
   long long retries;           /* steps redone with a smaller dt, over the run */
@@ -204,6 +209,10 @@ mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim);
 
 /* Write the current state as the next frame (VTU, PLY, PVD, stats) into the output dir. */
 mpm_status mpm_sim_write_frame(mpm_sim *sim);
+/* output.surface of one frame: surface_NNNN.obj and .ply (or surface_bB_NNNN per body), and
+ * with output.vdb levelset_NNNN.vdb, from the particles p (all of them, domains included), in
+ * order of p's bodies (sim_surface.c). */
+mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int frame);
 
 /* Seconds since an arbitrary start, monotonic. */
 double mpm_wall_seconds(void);

@@ -1,7 +1,7 @@
 /* sim_output.c - per-frame outputs of a simulation: frame_NNNN.vtu (+ frames.pvd), with
- * particle domains domains_NNNN.vtu, the embedded surfaces (OBJ, PLY and VTP), run.pvd (every
- * VTK file of every frame), frame_NNNN.ply, stats.csv, each written atomically by the io
- * module. */
+ * particle domains domains_NNNN.vtu, the embedded surfaces (OBJ, PLY and VTP), the particle
+ * surfaces of output.surface (sim_surface.c), run.pvd (every VTK file of every frame),
+ * frame_NNNN.ply, stats.csv, each written atomically by the io module. */
 #include "solver/sim.h"
 #include "solver/adaptive.h"
 #include "core/alloc.h"
@@ -200,6 +200,10 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
       st = mpm_write_surface_vtp(path, e, x, sim->time, &sim->error);
     }
     free(x);
+    if (st != MPM_OK) goto done;
+  }
+  if (o->surface.enabled) { /* particle surfaces (issue 14) */
+    st = mpm_sim_write_surfaces(sim, p, frame);
     if (st != MPM_OK) goto done;
   }
   /* after every file it names exists */

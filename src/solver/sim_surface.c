@@ -1,0 +1,110 @@
+/* sim_surface.c - output.surface per frame (issue 14): the particles of the selected bodies or
+ * materials become a closed triangle surface (src/surface/surface.h), written as
+ * surface_NNNN.obj and surface_NNNN.ply (or surface_bB_NNNN.* per body B with per_body), and
+ * with output.vdb its level set as levelset_NNNN.vdb (levelset_bB_NNNN.vdb). A mesh body with
+ * particle domains keeps its embedded mesh (Zhu sec. 4.1, surface_bodyB_NNNN.*): "all bodies"
+ * leaves it out. */
+#include "solver/sim.h"
+#include "core/mat3.h"
+#include "core/parallel.h"
+#include "surface/surface.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Which bodies and materials make surfaces: flags per body and per material. */
+static void selection(const mpm_sim *sim, unsigned char *body, unsigned char *material) {
+  const mpm_surface_desc *d = &sim->scene.output.surface;
+  const int nb = sim->scene.body_count, nm = sim->scene.material_count;
+  memset(body, 0, (size_t)nb + 1);
+  memset(material, 0, (size_t)nm + 1);
+  if (d->material_count) {
+    for (int k = 0; k < d->material_count; ++k) material[d->materials[k]] = 1;
+    for (int b = 0; b < nb; ++b) body[b] = 1;
+    return;
+  }
+  for (int m = 0; m < nm; ++m) material[m] = 1;
+  if (d->body_count) {
+    for (int k = 0; k < d->body_count; ++k) body[d->bodies[k]] = 1;
+    return;
+  }
+  for (int b = 0; b < nb; ++b) body[b] = 1;
+  for (int s = 0; s < sim->surface_count; ++s) body[sim->surfaces[s].body] = 0;
+}
+
+/* One surface of the particles of p with body == only (or any selected body when only < 0). */
+static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsigned char *body,
+                              const unsigned char *material, int only, int frame, double *xyz,
+                              double *vol) {
+  const mpm_output_desc *o = &sim->scene.output;
+  const double dx = sim->scene.dx;
+  size_t n = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    const int b = p->body[i];
+    if (!(only < 0 ? body[b] : b == only) || !material[p->material[i]]) continue;
+    mpm_real F[9];
+    for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
+    for (int d = 0; d < 3; ++d) xyz[3 * n + (size_t)d] = p->x[d][i];
+    vol[n++] = (double)p->vol0[i] * (double)mpm_m3_det(F);
+  }
+  mpm_surface_params par = mpm_surface_params_default();
+  par.voxel = o->surface.voxel * dx;
+  par.radius = o->surface.radius * dx;
+  par.smoothing = o->surface.smoothing;
+  par.filter = (mpm_vdb_filter)o->surface.filter;
+  par.threads = mpm_thread_count();
+  mpm_surface_mesh mesh;
+  mpm_vdb_grid *grid = NULL;
+  mpm_error err;
+  mpm_error_clear(&err);
+  mpm_status st = mpm_surface_build(xyz, vol, n, &par, &mesh, o->vdb ? &grid : NULL, NULL, &err);
+  if (st != MPM_OK) return mpm_error_set(&sim->error, st, "frame %d: %s", frame, err.message);
+  char tag[32] = "", path[MPM_PATH_MAX + 64];
+  if (only >= 0) snprintf(tag, sizeof tag, "b%d_", only);
+  snprintf(path, sizeof path, "%s/surface_%s%04d.obj", sim->output_dir, tag, frame);
+  st = mpm_surface_write_obj(path, &mesh, &sim->error);
+  if (st == MPM_OK) {
+    snprintf(path, sizeof path, "%s/surface_%s%04d.ply", sim->output_dir, tag, frame);
+    st = mpm_surface_write_ply(path, &mesh, &sim->error);
+  }
+  if (st == MPM_OK && grid) {
+    snprintf(path, sizeof path, "%s/levelset_%s%04d.vdb", sim->output_dir, tag, frame);
+    st = mpm_surface_write_vdb(path, grid, o->vdb_density, &sim->error);
+  }
+  sim->surface_triangles += mesh.triangle_count;
+  mpm_surface_mesh_free(&mesh);
+  mpm_vdb_grid_destroy(grid);
+  return st;
+}
+
+mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int frame) {
+  const double t0 = mpm_wall_seconds();
+  sim->surface_triangles = 0;
+  const int nb = sim->scene.body_count;
+  unsigned char *body = malloc((size_t)nb + 1);
+  unsigned char *material = malloc((size_t)sim->scene.material_count + 1);
+  double *xyz = malloc((3 * p->count + 3) * sizeof *xyz);
+  double *vol = malloc((p->count + 1) * sizeof *vol);
+  mpm_status st = MPM_OK;
+  if (!body || !material || !xyz || !vol) {
+    st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the surfaces of frame %d",
+                       frame);
+  } else {
+    selection(sim, body, material);
+    if (sim->scene.output.surface.per_body) {
+      for (int b = 0; b < nb && st == MPM_OK; ++b)
+        if (body[b]) st = one_surface(sim, p, body, material, b, frame, xyz, vol);
+    } else {
+      st = one_surface(sim, p, body, material, -1, frame, xyz, vol);
+    }
+  }
+  free(body);
+  free(material);
+  free(xyz);
+  free(vol);
+  sim->surface_seconds = mpm_wall_seconds() - t0;
+  sim->surface_seconds_total += sim->surface_seconds;
+  sim->surface_frames++;
+  return st;
+}
