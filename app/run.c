@@ -144,8 +144,8 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
 /* A file a run writes into its output folder (frames, domain and surface meshes, level sets,
  * checkpoints, their damaged copies, stats, the PVD indexes, the scene copy). */
 static int is_run_file(const char *name) {
-  static const char *const prefix[] = {"frame_",      "domains_",   "surface_", "levelset_",
-                                       "checkpoint_", "grid_cells"};
+  static const char *const prefix[] = {"frame_",    "domains_",    "surface_",
+                                       "levelset_", "checkpoint_", "grid_cells"};
   for (size_t k = 0; k < sizeof prefix / sizeof prefix[0]; ++k)
     if (!strncmp(name, prefix[k], strlen(prefix[k]))) return 1;
   return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "run.pvd") ||
