@@ -35,8 +35,8 @@
 static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
                                        "solver", "materials", "bodies",  "colliders",
                                        "forces", "output",    "camera",  NULL};
-static const char *const DOMAIN_KEYS[] = {"min",   "max",    "dx",     "resolution",
-                                          "walls", "levels", "refine", "resample", "refine_every", NULL};
+static const char *const DOMAIN_KEYS[] = {"min",    "max",    "dx",       "resolution",   "walls",
+                                          "levels", "refine", "resample", "refine_every", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
 static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha", "cfl", "max_dt",
