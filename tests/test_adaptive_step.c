@@ -301,7 +301,8 @@ static void test_key_errors(void **state) {
   expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'box': {'min': [0,0,0], "
                             "'max': [1,1,1]}, 'distance': 1}]",
                             ""),
-               MPM_ERR_INVALID, "domain.refine[0].distance", "collider, body, types and strain rules only", NULL);
+               MPM_ERR_INVALID, "domain.refine[0].distance",
+               "collider, body, types and strain rules only", NULL);
   expect_error(LEVELS_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 0, 'distance': 0}]", ""),
                MPM_ERR_INVALID, "domain.refine[0].distance", "> 0", NULL);
   expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'kernel': 'quadratic'}"), MPM_ERR_INVALID,
