@@ -12,6 +12,7 @@
  *   - key mistakes name the key path. */
 #include "scene_json_support.h"
 #include "support.h"
+#include "resume_support.h"
 #include "sim_support.h"
 
 #include "core/parallel.h"
@@ -231,42 +232,20 @@ static void test_threads_bitwise(void **state) {
   mpm_sim_destroy(s[1]);
 }
 
-static mpm_sim *create(const char *scene_path) {
-  mpm_sim *sim = NULL;
-  char err[1024];
-  if (mpm_sim_create_from_file(scene_path, &sim, err, sizeof err) != MPM_OK) fail_msg("%s", err);
-  return sim;
+/* one step past a rebuild: the tree is the rules' of an earlier state */
+static int before_rebuild(const mpm_sim *sim) {
+  return sim->steps % 3 != 1;
 }
 
 static void test_resume_between_rebuilds(void **state) {
   (void)state;
-  const char *dir = test_temp_dir("refine_resume");
-  char scene[512], full[512], part[512];
-  snprintf(scene, sizeof scene, "%s/scene.json", dir);
-  snprintf(full, sizeof full, "%s/full", dir);
-  snprintf(part, sizeof part, "%s/part", dir);
-  write_file(scene, flying_box(", \"refine_every\": 3, \"refine\": [{\"level\": 1, \"body\": "
-                               "\"b\", \"distance\": 0.03}, {\"level\": 1, \"surface\": 0.03}], "
-                               "\"resample\": {}",
-                               ", \"output\": {\"checkpoint_every\": 1}"));
-  mpm_sim *a = create(scene);
-  assert_int_equal(mpm_sim_enable_output(a, full), MPM_OK);
-  while (mpm_sim_frame(a) < mpm_sim_frame_count(a))
-    assert_int_equal(mpm_sim_advance_frame(a), MPM_OK);
-  mpm_sim *b = create(scene);
-  assert_int_equal(mpm_sim_enable_output(b, part), MPM_OK);
-  for (int f = 0; f < 2; ++f) assert_int_equal(mpm_sim_advance_frame(b), MPM_OK);
-  /* stop one step past a rebuild: the tree is the rules' of an earlier state */
-  while (b->steps % 3 != 1)
-    assert_int_equal(mpm_sim_step(b, b->frame_dt - fmod(b->time, b->frame_dt)), MPM_OK);
-  char path[1100], used[1100];
-  assert_int_equal(mpm_sim_write_checkpoint(b, path, sizeof path), MPM_OK);
-  mpm_sim_destroy(b);
-  mpm_sim *c = create(scene);
-  assert_int_equal(mpm_sim_resume(c, part, used, sizeof used), MPM_OK);
-  while (mpm_sim_frame(c) < mpm_sim_frame_count(c))
-    assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
-  assert_int_equal(c->steps, a->steps);
+  mpm_sim *a, *c;
+  resume_pair("refine_resume",
+              flying_box(", \"refine_every\": 3, \"refine\": [{\"level\": 1, \"body\": "
+                         "\"b\", \"distance\": 0.03}, {\"level\": 1, \"surface\": 0.03}], "
+                         "\"resample\": {}",
+                         ", \"output\": {\"checkpoint_every\": 1}"),
+              2, 0, before_rebuild, &a, &c);
   assert_same(a, c);
   mpm_sim_destroy(a);
   mpm_sim_destroy(c);

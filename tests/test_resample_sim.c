@@ -13,6 +13,7 @@
  *   - key mistakes name the key path. */
 #include "scene_json_support.h"
 #include "support.h"
+#include "resume_support.h"
 #include "sim_support.h"
 
 #include "core/parallel.h"
@@ -226,39 +227,13 @@ static void test_threads_bitwise(void **state) {
   mpm_sim_destroy(a[1]);
 }
 
-static mpm_sim *create(const char *scene_path) {
-  mpm_sim *sim = NULL;
-  char err[1024];
-  if (mpm_sim_create_from_file(scene_path, &sim, err, sizeof err) != MPM_OK) fail_msg("%s", err);
-  return sim;
-}
-
 static void test_resume_bit_identical(void **state) {
   (void)state;
-  const char *dir = test_temp_dir("resample_resume");
-  char scene[512], full[512], part[512];
-  snprintf(scene, sizeof scene, "%s/scene.json", dir);
-  snprintf(full, sizeof full, "%s/full", dir);
-  snprintf(part, sizeof part, "%s/part", dir);
-  write_file(scene, flying_box(0.45, 0.8, "{}", ", \"output\": {\"checkpoint_every\": 1}"));
-  mpm_sim *a = create(scene);
-  assert_int_equal(mpm_sim_enable_output(a, full), MPM_OK);
-  while (mpm_sim_frame(a) < mpm_sim_frame_count(a))
-    assert_int_equal(mpm_sim_advance_frame(a), MPM_OK);
+  mpm_sim *a, *c;
+  resume_pair("resample_resume",
+              flying_box(0.45, 0.8, "{}", ", \"output\": {\"checkpoint_every\": 1}"), 2, 3, NULL,
+              &a, &c);
   assert_true(a->resample_figures.splits > 0);
-  mpm_sim *b = create(scene);
-  assert_int_equal(mpm_sim_enable_output(b, part), MPM_OK);
-  for (int f = 0; f < 2; ++f) assert_int_equal(mpm_sim_advance_frame(b), MPM_OK);
-  for (int s = 0; s < 3; ++s)
-    assert_int_equal(mpm_sim_step(b, b->frame_dt - fmod(b->time, b->frame_dt)), MPM_OK);
-  char path[1100], used[1100];
-  assert_int_equal(mpm_sim_write_checkpoint(b, path, sizeof path), MPM_OK);
-  mpm_sim_destroy(b);
-  mpm_sim *c = create(scene);
-  assert_int_equal(mpm_sim_resume(c, part, used, sizeof used), MPM_OK);
-  while (mpm_sim_frame(c) < mpm_sim_frame_count(c))
-    assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
-  assert_int_equal(c->steps, a->steps);
   assert_int_equal(c->next_id, a->next_id);
   assert_same_particles(&a->particles, &c->particles);
   mpm_sim_destroy(a);
