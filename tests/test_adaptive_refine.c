@@ -25,20 +25,21 @@
 #include <string.h>
 
 /* A spinning jello box flying along x, no gravity; `domain` is spliced into the domain. */
-static const char *flying_box(const char *domain, const char *extra) {
+static const char *flying_box_until(const char *domain, const char *extra, double end) {
   static char buf[4096];
   snprintf(buf, sizeof buf,
            "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04, \"levels\": 2%s},"
-           " \"gravity\": [0,0,0], \"time\": {\"end\": 0.3, \"fps\": 20},"
+           " \"gravity\": [0,0,0], \"time\": {\"end\": %g, \"fps\": 20},"
            " \"solver\": {\"transfer\": \"apic\", \"cfl\": 0.5},"
            " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 4e4, "
            "\"nu\": 0.3, \"density\": 1000}],"
            " \"bodies\": [{\"name\": \"b\", \"shape\": {\"type\": \"box\", \"center\": "
            "[0.35,0.5,0.5], \"half_extent\": [0.12,0.12,0.12]}, \"material\": \"j\", "
            "\"velocity\": [1.0,0,0], \"angular_velocity\": [0,0,2]}]%s}",
-           domain, extra);
+           domain, end, extra);
   return buf;
 }
+#define flying_box(domain, extra) flying_box_until(domain, extra, 0.3)
 
 #define TYPES_RULES                                                                                \
   ", \"refine_every\": 1, \"refine\": [{\"level\": 1, \"body\": \"b\", \"distance\": 0.03},"       \
@@ -68,7 +69,7 @@ static void test_types_follow_the_body(void **state) {
   run_until(sim, 0.0001);
   const size_t cells0 = refined_cells(sim);
   const mpm_real x_start = (mpm_real)0.27; /* inside the band at the start, behind it at the end */
-  run_until(sim, 0.25);                    /* 0.25 m along x */
+  run_until(sim, 0.18);                    /* 0.18 m along x */
   assert_true(sim->adaptive->rebuilds >= (long long)sim->steps);
   mpm_sim_between_steps(sim); /* the tree of the particles as they are */
   const mpm_refinement *r = &sim->adaptive->grid.tree;
@@ -84,7 +85,7 @@ static void test_types_follow_the_body(void **state) {
   int32_t cell[3];
   assert_int_equal(mpm_refinement_leaf_at(r, behind, cell), 0);
   const size_t cells1 = refined_cells(sim);
-  print_message("types: %zu refined cells at the start, %zu after 0.25 m (%lld rebuilds, %.3f s)\n",
+  print_message("types: %zu refined cells at the start, %zu after 0.18 m (%lld rebuilds, %.3f s)\n",
                 cells0, cells1, sim->adaptive->rebuilds, sim->adaptive->rebuild_seconds);
   assert_true(cells1 > cells0 / 2 && cells1 < 2 * cells0);
   const mpm_diagnostics d1 = mpm_sim_diagnostics(sim);
@@ -224,7 +225,7 @@ static void test_threads_bitwise(void **state) {
   for (int t = 0; t < 2; ++t) {
     mpm_set_threads(t + 1);
     s[t] = sim_from_json(flying_box(SURFACE_RULES, ""));
-    run_until(s[t], 0.12);
+    run_until(s[t], 0.08);
   }
   mpm_set_threads(1);
   assert_same(s[0], s[1]);
@@ -241,11 +242,11 @@ static void test_resume_between_rebuilds(void **state) {
   (void)state;
   mpm_sim *a, *c;
   resume_pair("refine_resume",
-              flying_box(", \"refine_every\": 3, \"refine\": [{\"level\": 1, \"body\": "
-                         "\"b\", \"distance\": 0.03}, {\"level\": 1, \"surface\": 0.03}], "
-                         "\"resample\": {}",
-                         ", \"output\": {\"checkpoint_every\": 1}"),
-              2, 0, before_rebuild, &a, &c);
+              flying_box_until(", \"refine_every\": 3, \"refine\": [{\"level\": 1, \"body\": "
+                               "\"b\", \"distance\": 0.03}, {\"level\": 1, \"surface\": 0.03}], "
+                               "\"resample\": {}",
+                               ", \"output\": {\"checkpoint_every\": 1}", 0.15),
+              1, 0, before_rebuild, &a, &c);
   assert_same(a, c);
   mpm_sim_destroy(a);
   mpm_sim_destroy(c);

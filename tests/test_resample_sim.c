@@ -29,21 +29,23 @@
   ", \"levels\": 2, \"refine\": [{\"level\": 1, \"box\": {\"min\": [0.5,0,0], \"max\": [1,1,1]}}]"
 
 /* A spinning jello box flying along x at vx, no gravity; `resample` is domain.resample. */
-static const char *flying_box(double cx, double vx, const char *resample, const char *extra) {
+static const char *flying_box_until(double cx, double vx, const char *resample, const char *extra,
+                                    double end) {
   static char buf[2048];
   snprintf(buf, sizeof buf,
            "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.04" FINE_HALF
            ", \"resample\": %s},"
-           " \"gravity\": [0,0,0], \"time\": {\"end\": 0.3, \"fps\": 20},"
+           " \"gravity\": [0,0,0], \"time\": {\"end\": %g, \"fps\": 20},"
            " \"solver\": {\"transfer\": \"apic\", \"cfl\": 0.5},"
            " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 4e4, "
            "\"nu\": 0.3, \"density\": 1000}],"
            " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%g,0.5,0.5], "
            "\"half_extent\": [0.1,0.1,0.1]}, \"material\": \"j\", \"velocity\": [%g,0.1,0], "
            "\"angular_velocity\": [0,0,2]}]%s}",
-           resample, cx, vx, extra);
+           resample, end, cx, vx, extra);
   return buf;
 }
+#define flying_box(cx, vx, resample, extra) flying_box_until(cx, vx, resample, extra, 0.3)
 
 static void run_until(mpm_sim *sim, double t) {
   while (sim->time < t)
@@ -231,8 +233,8 @@ static void test_resume_bit_identical(void **state) {
   (void)state;
   mpm_sim *a, *c;
   resume_pair("resample_resume",
-              flying_box(0.45, 0.8, "{}", ", \"output\": {\"checkpoint_every\": 1}"), 2, 3, NULL,
-              &a, &c);
+              flying_box_until(0.45, 0.8, "{}", ", \"output\": {\"checkpoint_every\": 1}", 0.15), 1,
+              3, NULL, &a, &c);
   assert_true(a->resample_figures.splits > 0);
   assert_int_equal(c->next_id, a->next_id);
   assert_same_particles(&a->particles, &c->particles);
