@@ -50,12 +50,14 @@ static const usage_section SECTIONS[] = {
               "      seconds of one frame's particle surface (output.surface) for a 1M-particle\n"
               "      cube and ball: level set, filter, mesh, OBJ + PLY\n"},
     {"render",
-     "  mpm render OUTDIR [--field velocity|J|stress|plastic|material|body] [--size WxH]\n"
-     "                    [--colormap viridis|coolwarm|category] [--range LO:HI] [--every N]\n"
+     "  mpm render OUTDIR [--field velocity|J|stress|plastic|material|body|temperature|melt]\n"
+     "                    [--size WxH] [--colormap viridis|coolwarm|category] [--range LO:HI]\n"
+     "                    [--every N]\n"
      "                    [--scene SCENE.json] [--out DIR] [--movie] [--grid] [--particles]\n"
      "                    [--quiet]\n"
      "      draw each frame of a run to OUTDIR/render/frame_NNNN.png (no GPU needed):\n"
-     "      particles coloured by --field (default velocity) with --colormap over --range\n"
+     "      particles coloured by --field (default velocity; temperature and melt, the melt\n"
+     "      fraction, in runs with heat) with --colormap over --range\n"
      "      (default: percentiles of the run), every N-th frame, the colliders of\n"
      "      --scene (default OUTDIR/scene.json), to --out; --movie also makes movie.mp4\n"
      "      with ffmpeg; --grid draws the multi-level grid's fine cells over them; a run's\n"

@@ -22,9 +22,19 @@
 #include <sys/stat.h>
 #include <time.h>
 
-enum { FIELD_VELOCITY, FIELD_J, FIELD_STRESS, FIELD_PLASTIC, FIELD_MATERIAL, FIELD_BODY, FIELDS };
-static const char *const FIELD_NAMES[FIELDS] = {"velocity", "J",        "stress",
-                                                "plastic",  "material", "body"};
+enum {
+  FIELD_VELOCITY,
+  FIELD_J,
+  FIELD_STRESS,
+  FIELD_PLASTIC,
+  FIELD_MATERIAL,
+  FIELD_BODY,
+  FIELD_TEMPERATURE, /* runs with heat (scene `heat`) */
+  FIELD_MELT,
+  FIELDS
+};
+static const char *const FIELD_NAMES[FIELDS] = {"velocity", "J",    "stress",      "plastic",
+                                                "material", "body", "temperature", "melt"};
 
 typedef struct render_opts {
   const char *dir, *scene, *out;
@@ -90,7 +100,8 @@ static int field_values(const mpm_vtu_frame *fr, int field, float *out, char *wh
 }
 
 static int usage(void) {
-  fprintf(stderr, "usage: mpm render OUTDIR [--field velocity|J|stress|plastic|material|body]\n"
+  fprintf(stderr, "usage: mpm render OUTDIR [--field velocity|J|stress|plastic|material|body|\n"
+                  "                                     temperature|melt]\n"
                   "                  [--size WxH] [--colormap viridis|coolwarm|category]\n"
                   "                  [--range LO:HI] [--every N] [--scene SCENE.json] [--out DIR]\n"
                   "                  [--movie] [--grid] [--particles] [--quiet]\n");
@@ -114,7 +125,7 @@ static int parse_args(int argc, char **argv, render_opts *o) {
       if (o->field < 0) {
         fprintf(stderr,
                 "mpm render: --field expects one of velocity, J, stress, plastic, "
-                "material, body, got '%s'\n",
+                "material, body, temperature, melt, got '%s'\n",
                 v);
         return -1;
       }
@@ -371,6 +382,7 @@ static int auto_range(render_opts *o, const int *frames, int nf, char *why, size
   }
   if (!isfinite(lo)) lo = 0, hi = 1;
   if (o->field == FIELD_VELOCITY || o->field == FIELD_STRESS) lo = 0;
+  if (o->field == FIELD_MELT) lo = 0, hi = 1;
   if (o->field == FIELD_J) {
     const double d = fmax(fmax(fabs(hi - 1), fabs(1 - lo)), 1e-3);
     lo = 1 - d, hi = 1 + d;

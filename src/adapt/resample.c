@@ -109,7 +109,7 @@ void mpm_merge_F(int n, const double (*F)[9], const double *w, double out[9]) {
 }
 
 void mpm_merge_particles(mpm_particles *p, const uint32_t *idx, int n, int apic) {
-  double M = 0, V = 0, xc[3] = {0}, mv[3] = {0}, plastic = 0, F[64][9], w[64], B[9] = {0};
+  double M = 0, V = 0, xc[3] = {0}, mv[3] = {0}, plastic = 0, heat = 0, F[64][9], w[64], B[9] = {0};
   if (n > 64) n = 64;
   for (int k = 0; k < n; ++k) {
     const size_t j = idx[k];
@@ -117,6 +117,7 @@ void mpm_merge_particles(mpm_particles *p, const uint32_t *idx, int n, int apic)
     M += m;
     V += p->vol0[j];
     plastic += m * p->plastic[j];
+    heat += m * p->temperature[j]; /* one material: heat capacity in proportion to mass */
     w[k] = m;
     for (int d = 0; d < 3; ++d) xc[d] += p->x[d][j], mv[d] += m * p->v[d][j];
     for (int c = 0; c < 9; ++c) F[k][c] = p->F[c][j];
@@ -144,6 +145,7 @@ void mpm_merge_particles(mpm_particles *p, const uint32_t *idx, int n, int apic)
   p->mass[i] = (mpm_real)M;
   p->vol0[i] = (mpm_real)V;
   p->plastic[i] = (mpm_real)(plastic / M);
+  p->temperature[i] = (mpm_real)(heat / M);
   p->level[i] -= 1;
   for (int k = 1; k < n; ++k) p->mass[idx[k]] = 0;
 }

@@ -14,6 +14,7 @@ void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_
   arrays[k++] = &p->plastic;
   arrays[k++] = &p->mass;
   arrays[k++] = &p->vol0;
+  arrays[k++] = &p->temperature;
 }
 
 static int regrow(void **ptr, size_t old_count, size_t new_count, size_t elem) {
@@ -71,6 +72,7 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
   p->plastic[i] = 1;
   p->mass[i] = mass;
   p->vol0[i] = vol0;
+  p->temperature[i] = 0;
   p->material[i] = material;
   p->body[i] = body;
   p->level[i] = 0;

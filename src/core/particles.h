@@ -13,15 +13,17 @@
 
 typedef struct mpm_particles {
   size_t count, capacity;
-  mpm_real *x[3];    /* position, m */
-  mpm_real *v[3];    /* velocity, m/s */
-  mpm_real *F[9];    /* deformation gradient, row-major components */
-  mpm_real *B[9];    /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
-                        Storing B rather than C keeps angular momentum exact for every kernel,
-                        including those whose D_p varies with position (linear, uGIMP). */
-  mpm_real *plastic; /* plastic state of the material's model (snow: J_p), 1 at rest */
-  mpm_real *mass;    /* kg */
-  mpm_real *vol0;    /* initial volume V_p^0, m^3 */
+  mpm_real *x[3];        /* position, m */
+  mpm_real *v[3];        /* velocity, m/s */
+  mpm_real *F[9];        /* deformation gradient, row-major components */
+  mpm_real *B[9];        /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
+                            Storing B rather than C keeps angular momentum exact for every kernel,
+                            including those whose D_p varies with position (linear, uGIMP). */
+  mpm_real *plastic;     /* plastic state of the material's model (snow: J_p), 1 at rest */
+  mpm_real *mass;        /* kg */
+  mpm_real *vol0;        /* initial volume V_p^0, m^3 */
+  mpm_real *temperature; /* heat (heat/heat.h): the scene's temperature unit (K or degrees
+                            C); 0 and unused without a scene `heat` */
   int32_t *material;
   int32_t *body;
   int32_t *level; /* particle type (Gao et al. sec. 7.1): the grid level whose spacing its box
@@ -30,17 +32,18 @@ typedef struct mpm_particles {
 } mpm_particles;
 
 /* All real-valued component arrays, for loops that treat them alike (permute, grow). */
-#define MPM_PARTICLE_REAL_ARRAYS 27
+#define MPM_PARTICLE_REAL_ARRAYS 28
 
 int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
 void mpm_particles_free(mpm_particles *p);
 int mpm_particles_reserve(mpm_particles *p, size_t capacity);
 
-/* Append one particle at rest state (F = I, B = 0, level 0); returns its index or -1 on OOM. */
+/* Append one particle at rest state (F = I, B = 0, level 0, temperature 0); returns its index or -1
+ * on OOM. */
 long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3], mpm_real mass,
                         mpm_real vol0, int32_t material, int32_t body);
 
-/* Pointers to the 27 real arrays, in a fixed order. */
+/* Pointers to the 28 real arrays, in a fixed order. */
 void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]);
 
 /* Reorder all arrays so that new[i] = old[perm[i]]. scratch holds `count` reals and may be

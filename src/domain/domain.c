@@ -237,6 +237,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     mpm_particles_push(dp, pos, vel, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
     for (int c = 0; c < 9; ++c) dp->F[c][q] = p->F[c][i];
     dp->plastic[q] = p->plastic[i];
+    dp->temperature[q] = p->temperature[i];
     dp->id[q] = p->id[i];
     s->active[q] = 1;
     s->active_count++;
@@ -327,6 +328,7 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
   if (j < 0) return -1;
   for (int c = 0; c < 9; ++c) to->F[c][j] = p->F[c][i];
   to->plastic[j] = p->plastic[i];
+  to->temperature[j] = p->temperature[i];
   to->id[j] = p->id[i];
   s->active[i] = 0;
   s->active_count--;

@@ -82,7 +82,8 @@ void mpm_domain_hessian_displace(mpm_domain_hessian *h, mpm_real *const u[3]) {
 
 static mpm_material material_of(const mpm_domain_hessian *h, long q) {
   const mpm_particles *p = &h->s->particles;
-  return mpm_material_at(&h->materials[p->material[q]], p->plastic[q]);
+  return mpm_material_at_temperature(&h->materials[p->material[q]], p->plastic[q],
+                                     p->temperature[q]);
 }
 
 void mpm_domain_hessian_build(mpm_domain_hessian *h) {

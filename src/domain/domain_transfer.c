@@ -126,7 +126,8 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     if (!s->active[q]) continue;
     mpm_real F[9], P[9];
     for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
-    const mpm_material mat = mpm_material_at(&ctx->materials[p->material[q]], p->plastic[q]);
+    const mpm_material mat = mpm_material_at_temperature(&ctx->materials[p->material[q]],
+                                                         p->plastic[q], p->temperature[q]);
     mat.model->pk1(&mat, F, P);
     for (int e = 0; e < 9; ++e) vP[q][e] = p->vol0[q] * P[e];
   }

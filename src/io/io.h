@@ -36,6 +36,8 @@ typedef struct mpm_frame_fields {
   double time;               /* s */
   const int32_t *enrichment; /* Zhu sec. 5.2 category per particle: 0 unenriched, 1
                                 transitional, 2 enriched, -1 a material point; NULL: all -1 */
+  int heat;                  /* the run has heat: write temperature and melt */
+  const mpm_real *melt;      /* melt fraction per particle (material.h), NULL: 0 */
 } mpm_frame_fields;
 
 /* VTK UnstructuredGrid, one vertex cell per particle, binary appended raw data with
@@ -101,7 +103,7 @@ mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row 
 /* ---- reading frames back (vtu_read.c) ------------------------------------------------- */
 
 #define MPM_VTU_NAME_MAX 32
-#define MPM_VTU_ARRAYS_MAX 16
+#define MPM_VTU_ARRAYS_MAX 24
 
 /* One array of a frame, converted to float: point_count tuples of `components` values. */
 typedef struct mpm_vtu_array {

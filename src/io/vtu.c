@@ -11,7 +11,8 @@
  *
  * Arrays: FieldData TIME (Float64); Points; PointData id, velocity, mass, volume (= V0 J, the
  * current volume), J, stress (von Mises, Pa), plastic (the model's plastic state: snow J_p,
- * Drucker-Prager's volume correction), material, body; Cells connectivity, offsets,
+ * Drucker-Prager's volume correction), material, body, level, enrichment, and with heat
+ * temperature and melt (the melt fraction, 0 solid to 1 melted); Cells connectivity, offsets,
  * types. Reals are Float32 or Float64 as the build's mpm_real. When fields->J is NULL, J is
  * det F of each particle; when fields->stress is NULL, stress is written as zero. */
 #include "io/io.h"
@@ -38,6 +39,7 @@ typedef struct vtu_array {
   size_t comp_bytes; /* bytes of one component */
   int comps;
   int per_particle; /* 1: count tuples, 0: a single tuple (TIME) */
+  int heat;         /* written only when the run has heat */
   vtu_fill_fn fill;
 } vtu_array;
 
@@ -119,6 +121,17 @@ static void fill_enrichment(const mpm_frame_fields *f, size_t first, size_t n, v
   for (size_t i = 0; i < n; ++i) o[i] = f->enrichment ? f->enrichment[first + i] : -1;
 }
 
+static void fill_temperature(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  memcpy(out, f->particles->temperature + first, n * sizeof(mpm_real));
+}
+
+static void fill_melt(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  if (f->melt)
+    memcpy(out, f->melt + first, n * sizeof(mpm_real));
+  else
+    memset(out, 0, n * sizeof(mpm_real));
+}
+
 static void fill_connectivity(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
   (void)f;
   int64_t *o = out;
@@ -138,24 +151,26 @@ static void fill_types(const mpm_frame_fields *f, size_t first, size_t n, void *
 }
 
 /* In order of appearance in the appended block; the header groups them by section. */
-#define VTU_ARRAYS 16
+#define VTU_ARRAYS 18
 static const vtu_array vtu_arrays[VTU_ARRAYS] = {
-    {"field", "TIME", "Float64", sizeof(double), 1, 0, fill_time},
-    {"points", "Points", NULL, sizeof(mpm_real), 3, 1, fill_points},
-    {"point", "id", "UInt32", sizeof(uint32_t), 1, 1, fill_id},
-    {"point", "velocity", NULL, sizeof(mpm_real), 3, 1, fill_velocity},
-    {"point", "mass", NULL, sizeof(mpm_real), 1, 1, fill_mass},
-    {"point", "volume", NULL, sizeof(mpm_real), 1, 1, fill_volume},
-    {"point", "J", NULL, sizeof(mpm_real), 1, 1, fill_J},
-    {"point", "stress", NULL, sizeof(mpm_real), 1, 1, fill_stress},
-    {"point", "plastic", NULL, sizeof(mpm_real), 1, 1, fill_plastic},
-    {"point", "material", "Int32", sizeof(int32_t), 1, 1, fill_material},
-    {"point", "body", "Int32", sizeof(int32_t), 1, 1, fill_body},
-    {"point", "level", "Int32", sizeof(int32_t), 1, 1, fill_level},
-    {"point", "enrichment", "Int32", sizeof(int32_t), 1, 1, fill_enrichment},
-    {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, fill_connectivity},
-    {"cells", "offsets", "Int64", sizeof(int64_t), 1, 1, fill_offsets},
-    {"cells", "types", "UInt8", sizeof(uint8_t), 1, 1, fill_types},
+    {"field", "TIME", "Float64", sizeof(double), 1, 0, 0, fill_time},
+    {"points", "Points", NULL, sizeof(mpm_real), 3, 1, 0, fill_points},
+    {"point", "id", "UInt32", sizeof(uint32_t), 1, 1, 0, fill_id},
+    {"point", "velocity", NULL, sizeof(mpm_real), 3, 1, 0, fill_velocity},
+    {"point", "mass", NULL, sizeof(mpm_real), 1, 1, 0, fill_mass},
+    {"point", "volume", NULL, sizeof(mpm_real), 1, 1, 0, fill_volume},
+    {"point", "J", NULL, sizeof(mpm_real), 1, 1, 0, fill_J},
+    {"point", "stress", NULL, sizeof(mpm_real), 1, 1, 0, fill_stress},
+    {"point", "plastic", NULL, sizeof(mpm_real), 1, 1, 0, fill_plastic},
+    {"point", "material", "Int32", sizeof(int32_t), 1, 1, 0, fill_material},
+    {"point", "body", "Int32", sizeof(int32_t), 1, 1, 0, fill_body},
+    {"point", "level", "Int32", sizeof(int32_t), 1, 1, 0, fill_level},
+    {"point", "enrichment", "Int32", sizeof(int32_t), 1, 1, 0, fill_enrichment},
+    {"point", "temperature", NULL, sizeof(mpm_real), 1, 1, 1, fill_temperature},
+    {"point", "melt", NULL, sizeof(mpm_real), 1, 1, 1, fill_melt},
+    {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, 0, fill_connectivity},
+    {"cells", "offsets", "Int64", sizeof(int64_t), 1, 1, 0, fill_offsets},
+    {"cells", "types", "UInt8", sizeof(uint8_t), 1, 1, 0, fill_types},
 };
 
 /* Output stream that remembers the first failure, so that a full disk stops the writer at
@@ -181,11 +196,11 @@ static uint64_t array_bytes(const vtu_array *a, size_t count) {
 
 /* Header lines of every array of one section. */
 static void header_section(vtu_out *o, const char *section, const uint64_t *offsets,
-                           const char *indent) {
+                           const char *indent, int heat) {
   char line[320];
   for (int k = 0; k < VTU_ARRAYS; ++k) {
     const vtu_array *a = &vtu_arrays[k];
-    if (strcmp(a->section, section) != 0) continue;
+    if (strcmp(a->section, section) != 0 || (a->heat && !heat)) continue;
     const char *type = a->type ? a->type : VTU_REAL_TYPE;
     char comps[48] = "";
     if (a->comps > 1) snprintf(comps, sizeof comps, " NumberOfComponents=\"%d\"", a->comps);
@@ -197,24 +212,24 @@ static void header_section(vtu_out *o, const char *section, const uint64_t *offs
   }
 }
 
-static void write_header(vtu_out *o, size_t count, const uint64_t *offsets) {
+static void write_header(vtu_out *o, size_t count, const uint64_t *offsets, int heat) {
   char line[256];
   out_text(o, "<?xml version=\"1.0\"?>\n"
               "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
               "header_type=\"UInt64\">\n"
               "  <UnstructuredGrid>\n"
               "    <FieldData>\n");
-  header_section(o, "field", offsets, "      ");
+  header_section(o, "field", offsets, "      ", heat);
   out_text(o, "    </FieldData>\n");
   snprintf(line, sizeof line, "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n", count,
            count);
   out_text(o, line);
   out_text(o, "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n");
-  header_section(o, "point", offsets, "        ");
+  header_section(o, "point", offsets, "        ", heat);
   out_text(o, "      </PointData>\n      <Points>\n");
-  header_section(o, "points", offsets, "        ");
+  header_section(o, "points", offsets, "        ", heat);
   out_text(o, "      </Points>\n      <Cells>\n");
-  header_section(o, "cells", offsets, "        ");
+  header_section(o, "cells", offsets, "        ", heat);
   out_text(o, "      </Cells>\n"
               "    </Piece>\n"
               "  </UnstructuredGrid>\n"
@@ -242,7 +257,7 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
   uint64_t offsets[VTU_ARRAYS], at = 0;
   for (int k = 0; k < VTU_ARRAYS; ++k) {
     offsets[k] = at;
-    at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], count);
+    if (!vtu_arrays[k].heat || f->heat) at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], count);
   }
 
   /* heap, not stack: the fill functions store reals and integers into it */
@@ -255,8 +270,9 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
     return st;
   }
   vtu_out o = {af.fp, 0};
-  write_header(&o, count, offsets);
-  for (int k = 0; k < VTU_ARRAYS && !o.err; ++k) write_array(&o, &vtu_arrays[k], f, count, buf);
+  write_header(&o, count, offsets, f->heat);
+  for (int k = 0; k < VTU_ARRAYS && !o.err; ++k)
+    if (!vtu_arrays[k].heat || f->heat) write_array(&o, &vtu_arrays[k], f, count, buf);
   out_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
   mpm_free(buf);
   if (o.err) {

@@ -49,6 +49,13 @@ void mpm_material_init(mpm_material *m, const mpm_material_desc *d) {
   m->theta_c = (mpm_real)d->theta_c;
   m->theta_s = (mpm_real)d->theta_s;
   m->hardening = (mpm_real)d->hardening;
+  m->specific_heat = (mpm_real)d->specific_heat;
+  m->conductivity = (mpm_real)d->conductivity;
+  m->melting = d->melting;
+  m->melt_point = (mpm_real)d->melt_point;
+  m->melt_range = (mpm_real)d->melt_range;
+  m->melt_shear = (mpm_real)d->melt_shear;
+  m->melt_bulk = (mpm_real)d->melt_bulk;
 }
 
 /* sqrt(3/2 s:s) with s the deviatoric part of sigma = tau / J. Von Mises is homogeneous of
@@ -82,6 +89,28 @@ mpm_material mpm_material_at(const mpm_material *m, mpm_real plastic) {
     r.mu *= h;
     r.lambda *= h;
     r.wave_speed *= mpm_sqrt(h);
+  }
+  return r;
+}
+
+mpm_real mpm_material_melt_fraction(const mpm_material *m, mpm_real T) {
+  if (!m->melting || !(T > m->melt_point)) return 0;
+  if (!(m->melt_range > 0)) return 1;
+  const mpm_real f = (T - m->melt_point) / m->melt_range;
+  return f < 1 ? f : 1;
+}
+
+mpm_material mpm_material_at_temperature(const mpm_material *m, mpm_real plastic, mpm_real T) {
+  mpm_material r = mpm_material_at(m, plastic);
+  const mpm_real f = mpm_material_melt_fraction(m, T);
+  if (f > 0) {
+    const mpm_real mu = r.mu * (1 + f * (m->melt_shear - 1));
+    const mpm_real lambda = r.lambda * (1 + f * (m->melt_bulk - 1));
+    /* the wave speed goes with sqrt(lambda + 2 mu) */
+    const mpm_real before = r.lambda + 2 * r.mu, after = lambda + 2 * mu;
+    if (before > 0) r.wave_speed *= mpm_sqrt(after / before);
+    r.mu = mu;
+    r.lambda = lambda;
   }
   return r;
 }

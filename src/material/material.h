@@ -40,6 +40,10 @@ typedef struct mpm_material {
   mpm_real cohesion;                    /* Drucker-Prager, Pa */
   mpm_real yield_stress;                /* von Mises, Pa */
   mpm_real theta_c, theta_s, hardening; /* snow (Stomakhin et al. 2013) */
+  /* heat (heat/heat.h) and melting (scene.h, mpm_material_desc) */
+  mpm_real specific_heat, conductivity; /* J/(kg K), W/(m K) */
+  int melting;
+  mpm_real melt_point, melt_range, melt_shear, melt_bulk;
 } mpm_material;
 
 struct mpm_model {
@@ -88,6 +92,15 @@ void mpm_material_init(mpm_material *m, const mpm_material_desc *d);
  * scale their moduli, every other model returns *m. For the per-particle entries (energy,
  * pk1, dpdf_action), which take no plastic state. */
 mpm_material mpm_material_at(const mpm_material *m, mpm_real plastic);
+
+/* How far a particle at temperature T has melted: 0 at or below the melting point, rising
+ * linearly to 1 over melt_range degrees (at once when the range is 0); 0 for a material that
+ * does not melt. */
+mpm_real mpm_material_melt_fraction(const mpm_material *m, mpm_real T);
+
+/* mpm_material_at, then the moduli softened by melting at temperature T: mu scaled by
+ * 1 + f (melt_shear - 1) and lambda by 1 + f (melt_bulk - 1), f the melt fraction. */
+mpm_material mpm_material_at_temperature(const mpm_material *m, mpm_real plastic, mpm_real T);
 
 /* dP = (dP/dF) : dF with a factored derivative: U dP^(U^T dF V) V^T (material/isotropic.h). */
 void mpm_stress_hessian_action(const mpm_stress_hessian *H, const mpm_real dF[9], mpm_real dP[9]);

@@ -494,7 +494,9 @@ mpm_status mpm_sample_body_kept(const mpm_scene *scene, int bi, double scale,
           double off = jit > 0 ? (next_uniform(&rng) - 0.5) * jit : 0;
           xr[d] = (mpm_real)(x[d] + off);
         }
-        if (mpm_particles_push(p, xr, v0, m, vol, body->material, bi) < 0) goto oom;
+        const long pj = mpm_particles_push(p, xr, v0, m, vol, body->material, bi);
+        if (pj < 0) goto oom;
+        p->temperature[pj] = (mpm_real)body->temperature;
       }
     }
 

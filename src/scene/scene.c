@@ -34,6 +34,11 @@ mpm_material_desc mpm_material_desc_default(void) {
   m.theta_c = 2.5e-2;   /* Stomakhin et al. 2013 */
   m.theta_s = 7.5e-3;
   m.hardening = 10.0;
+  m.specific_heat = 1000.0;
+  m.conductivity = 0.0;
+  m.melt_range = 0.0;
+  m.melt_shear = 0.01;
+  m.melt_bulk = 1.0;
   return m;
 }
 

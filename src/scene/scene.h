@@ -83,6 +83,16 @@ typedef struct mpm_material_desc {
    * keyframes (time s, factor >= 0), held before the first and after the last; none: 1 */
   int strength_count;
   double strength[MPM_STRENGTH_KEYS][2];
+  /* heat (scene `heat`; heat/heat.h) */
+  double specific_heat; /* c, J/(kg K), > 0; default 1000 */
+  double conductivity;  /* k, W/(m K), >= 0; default 0 (no conduction) */
+  /* melting (Zhu Fig. 11, a simplified Stomakhin et al. 2014): from `melt_point` on, the shear
+   * modulus falls linearly over `melt_range` degrees to melt_shear times its value, and the
+   * bulk part (lambda) to melt_bulk times its value; domain particles leave their domains when
+   * they pass melt_point. melting 0: none */
+  int melting;
+  double melt_point, melt_range, melt_shear, melt_bulk;
+  int heat_keys; /* the scene gave one of the heat keys (they need `heat`) */
 } mpm_material_desc;
 
 /* A solid shape in world coordinates. Boxes and cylinders may be rotated about `axis`-free
@@ -132,8 +142,10 @@ typedef struct mpm_body_desc {
                                  Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
-  int resample; /* domain.resample on: its particles split and merge (all bodies unless
-                   domain.resample.bodies names some) */
+  int resample;        /* domain.resample on: its particles split and merge (all bodies unless
+                          domain.resample.bodies names some) */
+  int has_temperature; /* `temperature` given (else the scene's heat.temperature) */
+  double temperature;  /* initial temperature of its particles */
 } mpm_body_desc;
 
 typedef struct mpm_keyframe {
@@ -161,8 +173,10 @@ typedef struct mpm_collider_desc {
   mpm_boundary_rule rule;
   double friction; /* Coulomb coefficient >= 0 (slip and separate) */
   mpm_motion_desc motion;
-  double active[2]; /* s: the collider acts while active[0] <= t < active[1] (a grip that lets
-                       go); default [0, infinity) */
+  double active[2];   /* s: the collider acts while active[0] <= t < active[1] (a grip that lets
+                         go); default [0, infinity) */
+  int heat_source;    /* `temperature` given: grid nodes inside the solid are held at it */
+  double temperature; /* a heat source's temperature (a hot plate) */
 } mpm_collider_desc;
 
 /* A body-force region (Zhu Fig. 9: a rabbit sucked up a straw): inside the region (a
@@ -336,6 +350,12 @@ typedef struct mpm_scene {
   mpm_force_desc *forces;
   mpm_output_desc output;
   mpm_camera_desc camera;
+  /* heat transfer (heat/heat.h): the scene's `heat` object turns it on */
+  struct {
+    int enabled;
+    double temperature; /* the initial temperature of bodies without their own */
+    double pic;         /* the PIC fraction of the temperature's G2P, [0, 1]; default 0 */
+  } heat;
 } mpm_scene;
 
 /* The CG tolerance the implicit step uses: solver.cg_tolerance, or when it is 0 (the default)

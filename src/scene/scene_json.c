@@ -32,9 +32,9 @@
 /* The simulation keeps per-frame records. */
 #define MAX_FRAMES 10000000.0
 
-static const char *const TOP_KEYS[] = {"name",   "domain",    "gravity", "time",
-                                       "solver", "materials", "bodies",  "colliders",
-                                       "forces", "output",    "camera",  NULL};
+static const char *const TOP_KEYS[] = {"name",      "domain", "gravity",   "time",   "solver",
+                                       "materials", "bodies", "colliders", "forces", "output",
+                                       "camera",    "heat",   NULL};
 static const char *const DOMAIN_KEYS[] = {"min",    "max",    "dx",       "resolution",   "walls",
                                           "levels", "refine", "resample", "refine_every", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
@@ -376,7 +376,7 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_sj_parse_materials(c, root, s) < 0 || mpm_sj_parse_bodies(c, root, s) < 0 ||
       mpm_sj_parse_colliders(c, root, s) < 0 || mpm_sj_parse_forces(c, root, s) < 0 ||
       parse_output(c, root, s) < 0 || parse_camera(c, root, s) < 0 ||
-      mpm_sj_parse_refinement(c, root, s) < 0)
+      mpm_sj_parse_refinement(c, root, s) < 0 || mpm_sj_parse_heat(c, root, s) < 0)
     return -1;
   return 0;
 }

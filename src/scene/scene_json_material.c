@@ -15,9 +15,23 @@
 #include <math.h>
 #include <string.h>
 
-static const char *const MATERIAL_KEYS[] = {
-    "name",     "model",        "E",       "nu",      "density",   "min_stretch", "friction_angle",
-    "cohesion", "yield_stress", "theta_c", "theta_s", "hardening", "strength",    NULL};
+static const char *const MATERIAL_KEYS[] = {"name",
+                                            "model",
+                                            "E",
+                                            "nu",
+                                            "density",
+                                            "min_stretch",
+                                            "friction_angle",
+                                            "cohesion",
+                                            "yield_stress",
+                                            "theta_c",
+                                            "theta_s",
+                                            "hardening",
+                                            "strength",
+                                            "specific_heat",
+                                            "conductivity",
+                                            "melting",
+                                            NULL};
 
 /* Model spellings, in the order of mpm_model_kind (scene.h). */
 static const char *const MODEL_NAMES[] = {
@@ -101,7 +115,7 @@ static int parse_material(mpm_json_ctx *c, const cJSON *node, int name_required,
       mpm_json_number(c, node, "theta_s", 0, mpm_json_gt(0, "critical stretch"), &m->theta_s) < 0 ||
       mpm_json_number(c, node, "hardening", 0, mpm_json_ge(0, "hardening coefficient"),
                       &m->hardening) < 0 ||
-      parse_strength(c, node, m) < 0)
+      parse_strength(c, node, m) < 0 || mpm_sj_parse_material_heat(c, node, model, m) < 0)
     return -1;
   const mpm_json_range yield = mpm_json_gt(0, "Pa");
   int has_yield = mpm_json_number(c, node, "yield_stress", 0, yield, &m->yield_stress);

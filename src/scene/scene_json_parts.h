@@ -46,6 +46,13 @@ int mpm_sj_parse_surface(mpm_json_ctx *c, const cJSON *output, mpm_scene *s);
 
 /* root.materials; leaves room in s->materials for one inline material per body. Runs
  * before mpm_sj_parse_bodies. */
+/* Heat (scene_json_heat.c): a material's specific_heat, conductivity and melting; a body's
+ * or collider's temperature; the scene's `heat` object, then the checks that tie them
+ * together (run last). */
+int mpm_sj_parse_material_heat(mpm_json_ctx *c, const cJSON *node, int model, mpm_material_desc *m);
+int mpm_sj_parse_temperature(mpm_json_ctx *c, const cJSON *node, int *has, double *temperature);
+int mpm_sj_parse_heat(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
+
 int mpm_sj_parse_materials(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
 /* body.material: a name among materials[] (the first `named` entries) or an inline object. */
 int mpm_sj_parse_body_material(mpm_json_ctx *c, const cJSON *body, int named, mpm_scene *s,

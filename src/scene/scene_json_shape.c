@@ -30,10 +30,11 @@ static const char *const BODY_KEYS[] = {"name",
                                         "enrichment",
                                         "enrichment_exit",
                                         "enrichment_metric",
+                                        "temperature",
                                         NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
-static const char *const COLLIDER_KEYS[] = {"name",     "shape",  "inside_out", "rule",
-                                            "friction", "motion", "active",     NULL};
+static const char *const COLLIDER_KEYS[] = {"name",   "shape",  "inside_out",  "rule", "friction",
+                                            "motion", "active", "temperature", NULL};
 static const char *const FORCE_KEYS[] = {"name",   "shape",        "inside_out", "motion",
                                          "active", "acceleration", "schedule",   NULL};
 static const char *const MOTION_KEYS[] = {"velocity", "axis", "angular_speed", "keyframes", NULL};
@@ -412,7 +413,8 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
       mpm_json_integer(c, node, "seed", 0, mpm_json_in('[', 0, 4294967295.0, ']', NULL), &seed) < 0)
     return -1;
   b->seed = (unsigned)seed;
-  if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 || parse_releases(c, node, b) < 0)
+  if (mpm_json_bool(c, node, "domains", 0, &b->domains) < 0 || parse_releases(c, node, b) < 0 ||
+      mpm_sj_parse_temperature(c, node, &b->has_temperature, &b->temperature) < 0)
     return -1;
   /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
    * enrichment) */
@@ -577,7 +579,8 @@ int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
         mpm_json_enum(c, e, "rule", 0, mpm_sj_rule_names, &rule) < 0 ||
         mpm_json_number(c, e, "friction", 0, mpm_json_ge(0, "Coulomb coefficient"), &d->friction) <
             0 ||
-        parse_motion(c, e, &d->motion) < 0 || parse_active(c, e, d->active) < 0)
+        parse_motion(c, e, &d->motion) < 0 || parse_active(c, e, d->active) < 0 ||
+        mpm_sj_parse_temperature(c, e, &d->heat_source, &d->temperature) < 0)
       return -1;
     d->rule = (mpm_boundary_rule)rule;
     mpm_json_pop(c, o2);

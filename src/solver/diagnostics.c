@@ -36,7 +36,8 @@ static void accumulate(const mpm_sim *sim, const mpm_particles *p, const uint8_t
       out->angular_momentum[1] += m * (B[2] - B[6]);
       out->angular_momentum[2] += m * (B[3] - B[1]);
     }
-    const mpm_material at = mpm_material_at(&sim->materials[p->material[i]], p->plastic[i]);
+    const mpm_material at = mpm_material_at_temperature(&sim->materials[p->material[i]],
+                                                        p->plastic[i], p->temperature[i]);
     const mpm_material *mat = &at;
     mpm_real F[9];
     for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];

@@ -43,7 +43,8 @@ int mpm_implicit_init(mpm_implicit *s) {
 }
 
 static mpm_material material_at(const mpm_implicit *s, size_t i) {
-  return mpm_material_at(&s->tc->materials[s->p->material[i]], s->p->plastic[i]);
+  return mpm_material_at_temperature(&s->tc->materials[s->p->material[i]], s->p->plastic[i],
+                                     s->p->temperature[i]);
 }
 
 /* A DOF-set vector as the grid level's node arrays. */

@@ -212,6 +212,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     mpm_grid_init_sparse(&sim->grid, 0, sim->origin, (mpm_real)sc->dx);
   }
   mpm_dofs_init(&sim->dofs);
+  mpm_heat_init(&sim->heat);
   mpm_arena_init(&sim->step_arena);
   sim->reorder_interval = 16;
   sim->threads.enabled = -1; /* decided at the first step */
@@ -286,6 +287,19 @@ mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim) {
         if (st != MPM_OK) return st;
       }
   }
+  /* melting (Zhu sec. 7: the domains of the particles the heat source reaches are disabled,
+   * so that the topology can change): a domain particle leaves its domain once its
+   * temperature passes its material's melting point */
+  mpm_domain_set *s = &sim->domains;
+  for (size_t i = 0; i < s->particles.count; ++i) {
+    if (!s->active[i]) continue;
+    const mpm_material *m = &sim->materials[s->particles.material[i]];
+    if (!m->melting || !(s->particles.temperature[i] > m->melt_point)) continue;
+    if (mpm_domain_set_release(s, i, &sim->particles))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory switching domains off");
+    ++released;
+    ++sim->melted_domains;
+  }
   if (released && mpm_domain_set_rebuild(&sim->domains))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory switching domains off");
   return MPM_OK;
@@ -338,6 +352,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_grid_free(&sim->grid);
   mpm_adaptive_free(sim->adaptive);
   mpm_dofs_free(&sim->dofs);
+  mpm_heat_free(&sim->heat);
   mpm_arena_free(&sim->step_arena);
   mpm_free(sim->scratch);
   mpm_free(sim->iscratch);

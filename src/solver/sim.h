@@ -4,6 +4,7 @@
 #ifndef MPM_SOLVER_SIM_H
 #define MPM_SOLVER_SIM_H
 
+#include "heat/heat.h"
 #include "collide/body_force.h"
 #include "collide/collider.h"
 #include "domain/domain.h"
@@ -23,7 +24,7 @@
 /* Time spent in the stages of the step (step.c), seconds, accumulated since creation
  * (benchmarks read it): sort = activation and DOF layout, grid = the update on the DOF set. */
 typedef struct mpm_stage_times {
-  double sort, p2g, grid, g2p, total;
+  double sort, p2g, grid, heat, g2p, total;
 } mpm_stage_times;
 
 /* The implicit solver's figures, summed over the steps of the current frame (stats.csv). */
@@ -69,6 +70,8 @@ struct mpm_sim {
   struct mpm_adaptive *adaptive; /* Gao's multi-level grid (scene.levels > 0; solver/adaptive.h)
                                     in place of `grid`, else NULL */
   mpm_dofs dofs;                 /* the unknowns of the step: the values at the grid's nodes */
+  mpm_heat heat;                 /* heat transfer's scratch and figures (scene `heat`) */
+  size_t melted_domains;         /* domain particles switched off by melting so far */
   mpm_arena step_arena;          /* the step's scratch, taken back when the next step begins */
   mpm_real *scratch;             /* per-particle buffers for the periodic reorder */
   uint32_t *iscratch;

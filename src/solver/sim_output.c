@@ -52,6 +52,7 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
         all->B[c][j] = p->B[c][i];
       }
       all->plastic[j] = p->plastic[i];
+      all->temperature[j] = p->temperature[i];
       all->level[j] = p->level[i];
       all->id[j] = p->id[i];
     }
@@ -125,13 +126,15 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "more frames than the scene has");
   char path[MPM_PATH_MAX + 64];
   mpm_status st = MPM_OK;
-  mpm_real *J = NULL, *stress = NULL;
+  mpm_real *J = NULL, *stress = NULL, *melt = NULL;
   int32_t *category = NULL;
+  const int heat = sim->scene.heat.enabled;
   if (o->vtu || o->ply) {
     J = mpm_alloc((p->count + 1) * sizeof(mpm_real));
     stress = mpm_alloc((p->count + 1) * sizeof(mpm_real));
     category = mpm_alloc((p->count + 1) * sizeof(int32_t));
-    if (!J || !stress || !category) {
+    melt = heat ? mpm_alloc((p->count + 1) * sizeof(mpm_real)) : NULL;
+    if (!J || !stress || !category || (heat && !melt)) {
       st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
       goto done;
     }
@@ -140,11 +143,14 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     for (long i = 0; i < n; ++i) {
       mpm_real F[9], P[9], tau[9];
       for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
-      const mpm_material mat = mpm_material_at(&sim->materials[p->material[i]], p->plastic[i]);
+      const mpm_material mat = mpm_material_at_temperature(&sim->materials[p->material[i]],
+                                                           p->plastic[i], p->temperature[i]);
       mat.model->pk1(&mat, F, P);
       mpm_m3_mul_bt(P, F, tau);
       J[i] = mpm_m3_det(F);
       stress[i] = mpm_von_mises(tau, J[i]);
+      if (melt)
+        melt[i] = mpm_material_melt_fraction(&sim->materials[p->material[i]], p->temperature[i]);
     }
   }
   if (category) { /* as mpm_sim_all_particles orders them: material points, then active domains */
@@ -153,7 +159,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     for (size_t q = 0; q < sim->domains.particles.count; ++q)
       if (sim->domains.active[q]) category[j++] = sim->domains.enrich.category[q];
   }
-  mpm_frame_fields ff = {p, J, stress, sim->time, category};
+  mpm_frame_fields ff = {p, J, stress, sim->time, category, heat, melt};
   if (o->vtu) {
     snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "frame_%04d.vtu", frame);
     snprintf(path, sizeof path, "%s/%s", sim->output_dir, sim->frame_files[frame]);
@@ -261,5 +267,6 @@ done:
   mpm_free(J);
   mpm_free(stress);
   mpm_free(category);
+  mpm_free(melt);
   return st;
 }

@@ -130,6 +130,14 @@ static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory activating the grid around domain corners",
                          (long long)sim->steps);
+  if (c->domains && sim->scene.heat.enabled) { /* heat reaches the grid from the particles */
+    const mpm_particles *dp = &sim->domains.particles;
+    const mpm_real *const x[3] = {dp->x[0], dp->x[1], dp->x[2]};
+    if (g->ops->activate_points(g, &c->tc.kernel, dp->count, x, sim->domains.active))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory activating the grid around domain particles",
+                           (long long)sim->steps);
+  }
   return MPM_OK;
 }
 
@@ -257,11 +265,45 @@ static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
   return MPM_OK;
 }
 
+/* Heat (heat/heat.h), after the velocity update and before G2P moves the particles: their
+ * stencils are still those the grid was activated for. */
+static mpm_status stage_heat(mpm_sim *sim, step_ctx *c) {
+  if (!sim->scene.heat.enabled) return MPM_OK;
+  mpm_heat_step_desc h;
+  memset(&h, 0, sizeof h);
+  h.dt = c->dt;
+  h.pic = (mpm_real)sim->scene.heat.pic;
+  h.grid = &sim->grid;
+  h.dofs = &sim->dofs;
+  h.kernel = sim->kernel;
+  for (int d = 0; d < 3; ++d) {
+    h.clamp_lo[d] = c->tc.clamp_lo[d];
+    h.clamp_hi[d] = c->tc.clamp_hi[d];
+  }
+  h.materials = sim->materials;
+  h.sets[h.set_count++] = (mpm_heat_set){&sim->particles, NULL};
+  if (c->domains)
+    h.sets[h.set_count++] = (mpm_heat_set){&sim->domains.particles, sim->domains.active};
+  h.pose_count = c->update.boundary.collider_count;
+  h.poses = c->update.boundary.poses;
+  const int rc = mpm_heat_step(&sim->heat, &h);
+  if (rc == -1)
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for heat transfer",
+                         (long long)sim->steps);
+  if (rc)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "step %lld: a particle's heat stencil reaches a grid node that is not "
+                         "active",
+                         (long long)sim->steps);
+  return MPM_OK;
+}
+
 static const stage explicit_stages[] = {
     {"sort", stage_sort, offsetof(mpm_stage_times, sort)},
     {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
     {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
     {"update", stage_update, offsetof(mpm_stage_times, grid)},
+    {"heat", stage_heat, offsetof(mpm_stage_times, heat)},
     {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
 };
 
@@ -271,6 +313,7 @@ static const stage implicit_stages[] = {
     {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
     {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
     {"solve", stage_solve, offsetof(mpm_stage_times, grid)},
+    {"heat", stage_heat, offsetof(mpm_stage_times, heat)},
     {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
 };
 

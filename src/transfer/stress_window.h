@@ -10,9 +10,31 @@
 #include <stdint.h>
 #include <string.h>
 
+/* A melting material's stresses, one particle at a time: its moduli depend on the particle's
+ * temperature (material.h, mpm_material_at_temperature), so the batch entry's one set of
+ * moduli does not apply. tau = P F^T. */
+static inline void melting_stress(const mpm_material *mat, const mpm_particles *p,
+                                  const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  for (int q = 0; q < n; ++q) {
+    const uint32_t i = idx ? idx[q] : (uint32_t)q;
+    mpm_real F[9], P[9];
+    for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
+    const mpm_material m = mpm_material_at_temperature(mat, p->plastic[i], p->temperature[i]);
+    m.model->pk1(&m, F, P);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        tau[3 * r + c][q] =
+            P[3 * r] * F[3 * c] + P[3 * r + 1] * F[3 * c + 1] + P[3 * r + 2] * F[3 * c + 2];
+  }
+}
+
 /* Kirchhoff stresses of particles idx[0..n) (all of material `mat`) into tau. */
 MPM_ALWAYS_INLINE void chunk_stress(const mpm_material *mat, const mpm_particles *p,
                                     const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK]) {
+  if (mat->melting) {
+    melting_stress(mat, p, idx, n, tau);
+    return;
+  }
   mpm_real Fbuf[9][MPM_STRESS_CHUNK], plastic[MPM_STRESS_CHUNK];
   const mpm_real *Fp[9];
   for (int c = 0; c < 9; ++c) {
@@ -50,7 +72,7 @@ static inline void stress_window_need(stress_window *w, const mpm_material *mat,
     int contiguous = 1; /* positions of several cells: check every one */
     for (int q = 1; q < k; ++q) contiguous &= idx[q] == idx[0] + (uint32_t)q;
     mpm_real tau[9][MPM_STRESS_CHUNK];
-    if (contiguous) { /* the model reads F in place */
+    if (contiguous && !mat->melting) { /* the model reads F in place */
       const mpm_real *Fp[9];
       for (int c = 0; c < 9; ++c) Fp[c] = p->F[c] + idx[0];
       mat->model->kirchhoff_batch(mat, k, Fp, p->plastic + idx[0], tau);
