@@ -363,6 +363,11 @@ int mpm_cmd_run(int argc, char **argv) {
               "%.3g, %.3g) kg m^2/s\n",
               sim->resample_figures.splits, sim->resample_figures.merges, dL[0], dL[1], dL[2]);
     }
+    if (!quiet && sim->scene.heat.enabled)
+      fprintf(stderr,
+              "mpm: heat: %zu domain particles melted off their domains (since this run started "
+              "or resumed); the last step took %d conduction substeps\n",
+              sim->melted_domains, sim->heat.figures.substeps);
     if (!quiet && sim->surface_frames > 0) /* output.surface's share of the wall time */
       fprintf(stderr, "mpm: surfaces: %.1f s of it, %.2f s per frame (%d frames)\n",
               sim->surface_seconds_total, sim->surface_seconds_total / sim->surface_frames,
