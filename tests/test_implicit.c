@@ -94,7 +94,8 @@ static void test_hessian_matches_finite_differences(void **state) {
         for (int st = 0; st < 3; ++st) {
           if (st == STATE_INVERTED && !MODELS[m].inverts) continue;
           char solver[128];
-          snprintf(solver, sizeof solver, domains ? ", \"domain_kernel\": \"%s\"" : "", kernels[k]);
+          solver[0] = '\0';
+          if (domains) snprintf(solver, sizeof solver, ", \"domain_kernel\": \"%s\"", kernels[k]);
           mpm_sim *sim =
               implicit_block(MODELS[m].model, MODELS[m].extra, domains ? "quadratic" : kernels[k],
                              domains, solver, 0.12, 8);

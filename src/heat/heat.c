@@ -1,4 +1,5 @@
 /* heat.c - heat transfer on the DOF set (see heat.h for the equations). */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "heat/heat.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
