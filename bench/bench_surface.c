@@ -2,7 +2,8 @@
  * (output.surface, src/surface) for about N particles (default 1M) on a lattice of spacing
  * 1 cm (8 per cell of 2 cm), shaped as a cube and as a sphere with 10% jitter: seconds for the
  * level set (ParticlesToLevelSet), the filter (rebuild, smoothing, offset), the mesh
- * (volumeToMesh) and the OBJ + PLY writers, per thread count. Figures printed, never asserted. */
+ * (volumeToMesh), the OBJ + PLY writers and the velocity grid of output.vdb_velocity (serial), per
+ * thread count. Figures printed, never asserted. */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 
 #include "bench.h"
@@ -93,6 +94,17 @@ int mpm_bench_surface(int argc, char **argv) {
       free(xyz), free(vol);
       return 1;
     }
+    /* a spin about the vertical axis, for the velocity grid */
+    double *vel = malloc(3 * count * sizeof *vel), *mass = malloc(count * sizeof *mass);
+    if (!vel || !mass) {
+      fprintf(stderr, "mpm bench surface: out of memory for %zu velocities\n", count);
+      free(xyz), free(vol), free(vel), free(mass);
+      return 1;
+    }
+    for (size_t i = 0; i < count; ++i) {
+      vel[3 * i] = -xyz[3 * i + 2], vel[3 * i + 1] = 0, vel[3 * i + 2] = xyz[3 * i];
+      mass[i] = 1000 * vol[i];
+    }
     for (int t = 0; t < nthreads; ++t) {
       mpm_surface_params p = mpm_surface_params_default();
       p.smoothing = smoothing;
@@ -121,14 +133,31 @@ int mpm_bench_surface(int argc, char **argv) {
         snprintf(path, sizeof path, "%s/surface.obj", dir);
         unlink(path);
       }
+      const double v0 = now();
+      mpm_vdb_vector_grid *velocity = NULL;
+      char msg[512];
+      if (mpm_vdb_velocity_from_particles(xyz, vel, mass, count, f.voxel, &velocity, msg,
+                                          sizeof msg) != MPM_VDB_OK) {
+        fprintf(stderr, "mpm bench surface: %s\n", msg);
+        mpm_surface_mesh_free(&mesh);
+        free(xyz), free(vol), free(vel), free(mass);
+        return 1;
+      }
+      const double velocity_seconds = now() - v0;
+      const unsigned long long velocity_voxels = mpm_vdb_vector_active_voxels(velocity);
+      mpm_vdb_vector_grid_destroy(velocity);
       printf("%-6s %zu particles, %d threads: level set %.2f s, filter %.2f s, mesh %.2f s "
-             "(%.2f s in all; %llu voxels, %zu triangles); OBJ + PLY %.2f s\n",
+             "(%.2f s in all; %llu voxels, %zu triangles); OBJ + PLY %.2f s; velocity grid "
+             "%.2f s (%llu voxels)\n",
              shape ? "sphere" : "cube", count, threads[t], f.levelset_seconds, f.filter_seconds,
-             f.mesh_seconds, built, (unsigned long long)f.voxels, mesh.triangle_count, write);
+             f.mesh_seconds, built, (unsigned long long)f.voxels, mesh.triangle_count, write,
+             velocity_seconds, velocity_voxels);
       mpm_surface_mesh_free(&mesh);
     }
     free(xyz);
     free(vol);
+    free(vel);
+    free(mass);
   }
   if (have_dir) rmdir(dir);
   printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());

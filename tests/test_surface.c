@@ -172,7 +172,7 @@ static void test_vdb_round_trip(void **state) {
   const char *dir = test_temp_dir("surface-vdb");
   char path[600];
   snprintf(path, sizeof path, "%s/levelset_0003.vdb", dir);
-  assert_int_equal(mpm_surface_write_vdb(path, grid, 1, &err), MPM_OK);
+  assert_int_equal(mpm_surface_write_vdb(path, grid, 1, NULL, &err), MPM_OK);
   mpm_vdb_grid_destroy(grid);
   assert_false(dir_has_temp(dir));
   mpm_vdb_grid *back = NULL;
@@ -214,6 +214,83 @@ static void test_vdb_round_trip(void **state) {
   free(vol);
 }
 
+/* The velocity grid of a spinning, drifting sphere: v = u + w x (x - c) is linear, and on the
+ * particles' lattice (spacing = voxel, particles at cell centres) each interior voxel averages
+ * eight particles placed symmetrically about it, so the mass-weighted trilinear P2G gives the
+ * field exactly there, and trilinear sampling between voxels keeps it exact. Read back from the
+ * .vdb: name "vel", the field inside to float round-off, zero far outside. */
+static void test_vdb_velocity(void **state) {
+  (void)state;
+  const double c[3] = {0.5, 0.5, 0.5}, R = 0.2, s = 0.02;
+  const double u[3] = {1, -2, 0.5}, w[3] = {0.3, 2, -1};
+  double *xyz, *vol;
+  const size_t n = sphere_particles(c, R, s, &xyz, &vol);
+  double *vel = malloc(3 * n * sizeof *vel), *mass = malloc(n * sizeof *mass);
+  assert_non_null(vel);
+  assert_non_null(mass);
+  for (size_t i = 0; i < n; ++i) {
+    const double r[3] = {xyz[3 * i] - c[0], xyz[3 * i + 1] - c[1], xyz[3 * i + 2] - c[2]};
+    vel[3 * i] = u[0] + w[1] * r[2] - w[2] * r[1];
+    vel[3 * i + 1] = u[1] + w[2] * r[0] - w[0] * r[2];
+    vel[3 * i + 2] = u[2] + w[0] * r[1] - w[1] * r[0];
+    mass[i] = 1000 * vol[i];
+  }
+  mpm_surface_params p = mpm_surface_params_default();
+  p.voxel = s;
+  mpm_surface_mesh mesh;
+  mpm_vdb_grid *grid = NULL;
+  mpm_error err;
+  mpm_error_clear(&err);
+  if (mpm_surface_build(xyz, vol, n, &p, &mesh, &grid, NULL, &err) != MPM_OK)
+    fail_msg("%s", err.message);
+  mpm_vdb_vector_grid *v = NULL;
+  char msg[600];
+  if (mpm_vdb_velocity_from_particles(xyz, vel, mass, n, s, &v, msg, sizeof msg) != MPM_VDB_OK)
+    fail_msg("%s", msg);
+  const char *dir = test_temp_dir("surface-vdb-velocity");
+  char path[600];
+  snprintf(path, sizeof path, "%s/levelset_0000.vdb", dir);
+  assert_int_equal(mpm_surface_write_vdb(path, grid, 0, v, &err), MPM_OK);
+  mpm_vdb_vector_grid_destroy(v);
+  mpm_vdb_grid_destroy(grid);
+  mpm_vdb_vector_grid *back = NULL;
+  if (mpm_vdb_read_vector(path, "vel", &back, msg, sizeof msg) != MPM_VDB_OK) fail_msg("%s", msg);
+  char name[64];
+  mpm_vdb_vector_name(back, name, sizeof name);
+  assert_string_equal(name, "vel");
+  /* every voxel within one voxel of a particle: at least the particles' count */
+  assert_true(mpm_vdb_vector_active_voxels(back) >= n);
+  double worst = 0;
+  int checked = 0;
+  for (int k = 0; k < 200; ++k) { /* points spread through the ball of radius R - 2 s */
+    const double a = 2.39996 * k, z = 1 - 2 * (k + 0.5) / 200, rho = sqrt(1 - z * z);
+    const double rad = (R - 2 * s) * cbrt((k % 10 + 0.5) / 10);
+    const double r[3] = {rad * rho * cos(a), rad * rho * sin(a), rad * z};
+    const double x[3] = {c[0] + r[0], c[1] + r[1], c[2] + r[2]};
+    const double want[3] = {u[0] + w[1] * r[2] - w[2] * r[1], u[1] + w[2] * r[0] - w[0] * r[2],
+                            u[2] + w[0] * r[1] - w[1] * r[0]};
+    double got[3];
+    mpm_vdb_vector_sample(back, x, got);
+    for (int d = 0; d < 3; ++d) worst = fmax(worst, fabs(got[d] - want[d]));
+    ++checked;
+  }
+  print_message("velocity grid: %d points inside, worst error %.2e m/s\n", checked, worst);
+  assert_true(worst < 1e-5); /* |v| ~ 2 m/s in float */
+  const double far[3] = {c[0] + 2 * R, c[1], c[2]};
+  double got[3];
+  mpm_vdb_vector_sample(back, far, got);
+  assert_true(got[0] == 0 && got[1] == 0 && got[2] == 0);
+  mpm_vdb_vector_grid_destroy(back);
+  /* the level set is not a vector grid: the type is named */
+  assert_int_equal(mpm_vdb_read_vector(path, "surface", &back, msg, sizeof msg), MPM_VDB_FAIL);
+  if (!strstr(msg, "surface") || !strstr(msg, "vector")) fail_msg("%s", msg);
+  mpm_surface_mesh_free(&mesh);
+  free(xyz);
+  free(vol);
+  free(vel);
+  free(mass);
+}
+
 static void test_surface_keys(void **state) {
   (void)state;
   expect_error(SCENE_WITH(", 'output': {'surface': {'voxle': 1}}"), MPM_ERR_INVALID,
@@ -239,6 +316,10 @@ static void test_surface_keys(void **state) {
                "output.surface", NULL);
   expect_error(SCENE_WITH(", 'output': {'surface': true, 'vdb': 1}"), MPM_ERR_INVALID, "output.vdb",
                NULL);
+  expect_error(SCENE_WITH(", 'output': {'vdb_velocity': true}"), MPM_ERR_INVALID,
+               "output.vdb_velocity", "output.surface", NULL);
+  expect_error(SCENE_WITH(", 'output': {'surface': true, 'vdb_velocity': 'yes'}"), MPM_ERR_INVALID,
+               "output.vdb_velocity", NULL);
   /* and the valid forms */
   mpm_scene s;
   parse_ok(SCENE_WITH(", 'output': {'surface': {'materials': ['jello'], 'voxel': 0.25, "
@@ -253,9 +334,13 @@ static void test_surface_keys(void **state) {
   assert_int_equal(s.output.surface.filter, MPM_SURFACE_GAUSSIAN);
   mpm_scene_free(&s);
   parse_ok(SCENE_WITH(", 'output': {'surface': true}"), &s);
-  assert_true(s.output.surface.enabled && !s.output.vdb);
+  assert_true(s.output.surface.enabled && !s.output.vdb && !s.output.vdb_velocity);
   assert_int_equal(s.output.surface.smoothing, 1);
   assert_int_equal(s.output.surface.filter, MPM_SURFACE_MEAN_CURVATURE);
+  mpm_scene_free(&s);
+  /* the velocity grid asks for the .vdb it goes into */
+  parse_ok(SCENE_WITH(", 'output': {'surface': true, 'vdb_velocity': true}"), &s);
+  assert_true(s.output.vdb && s.output.vdb_velocity && !s.output.vdb_density);
   mpm_scene_free(&s);
 }
 
@@ -276,10 +361,11 @@ static void test_run_writes_surfaces(void **state) {
       " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3, "
       "\"density\": 1000}],"
       " \"bodies\": [{\"name\": \"a\", \"shape\": {\"type\": \"box\", \"center\": [0.3,0.5,0.5], "
-      "\"half_extent\": [0.1,0.1,0.1]}, \"material\": \"m\"},"
+      "\"half_extent\": [0.1,0.1,0.1]}, \"material\": \"m\", \"velocity\": [0.5, 0, 0]},"
       " {\"name\": \"b\", \"shape\": {\"type\": \"sphere\", \"center\": [0.7,0.5,0.5], "
       "\"radius\": 0.12}, \"material\": \"m\"}],"
-      " \"output\": {\"surface\": {\"bodies\": \"all\", \"per_body\": true}, \"vdb\": true}}",
+      " \"output\": {\"surface\": {\"bodies\": \"all\", \"per_body\": true}, \"vdb_velocity\": "
+      "true}}",
       "surface run");
   const char *dir = test_temp_dir("surface-run");
   assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
@@ -293,6 +379,20 @@ static void test_run_writes_surfaces(void **state) {
   for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k)
     if (!has_file(dir, names[k])) fail_msg("%s/%s was not written", dir, names[k]);
   assert_false(has_file(dir, "surface_0000.obj")); /* per body: no combined file */
+  /* the drifting box's level set file holds its velocity, the resting sphere's zero */
+  for (int b = 0; b < 2; ++b) {
+    char vdb[700], msg[600];
+    snprintf(vdb, sizeof vdb, "%s/levelset_b%d_0000.vdb", dir, b);
+    mpm_vdb_vector_grid *v = NULL;
+    if (mpm_vdb_read_vector(vdb, "vel", &v, msg, sizeof msg) != MPM_VDB_OK) fail_msg("%s", msg);
+    const double centre[3] = {b ? 0.7 : 0.3, 0.5, 0.5};
+    double got[3];
+    mpm_vdb_vector_sample(v, centre, got);
+    assert_close(got[0], b ? 0 : 0.5, 1e-6);
+    assert_close(got[1], 0, 1e-6);
+    assert_close(got[2], 0, 1e-6);
+    mpm_vdb_vector_grid_destroy(v);
+  }
   assert_false(dir_has_temp(dir));
   char path[700];
   snprintf(path, sizeof path, "%s/surface_b0_0000.ply", dir);
@@ -380,9 +480,10 @@ static void test_cli_surfaces(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_sphere_surface),      cmocka_unit_test(test_face_height),
-      cmocka_unit_test(test_vdb_round_trip),      cmocka_unit_test(test_surface_keys),
-      cmocka_unit_test(test_run_writes_surfaces), cmocka_unit_test(test_cli_surfaces),
+      cmocka_unit_test(test_sphere_surface), cmocka_unit_test(test_face_height),
+      cmocka_unit_test(test_vdb_round_trip), cmocka_unit_test(test_vdb_velocity),
+      cmocka_unit_test(test_surface_keys),   cmocka_unit_test(test_run_writes_surfaces),
+      cmocka_unit_test(test_cli_surfaces),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -229,6 +229,7 @@ typedef struct mpm_output_desc {
   mpm_surface_desc surface;     /* surface_NNNN.obj / .ply per frame */
   int vdb;                      /* with a surface: its level set as levelset_NNNN.vdb */
   int vdb_density;              /* and a fog-volume grid "density" beside it */
+  int vdb_velocity;             /* and the particles' velocity as a vector grid "vel" */
 } mpm_output_desc;
 
 /* The view `mpm render` uses (the renderer frames the domain when the scene has none). */

@@ -1,7 +1,8 @@
 /* sim_surface.c - output.surface per frame (issue 14): the particles of the selected bodies or
  * materials become a closed triangle surface (src/surface/surface.h), written as
  * surface_NNNN.obj and surface_NNNN.ply (or surface_bB_NNNN.* per body B with per_body), and
- * with output.vdb its level set as levelset_NNNN.vdb (levelset_bB_NNNN.vdb). A mesh body with
+ * with output.vdb its level set as levelset_NNNN.vdb (levelset_bB_NNNN.vdb; with vdb_velocity the
+ * same particles' velocity beside it as the vector grid "vel"). A mesh body with
  * particle domains keeps its embedded mesh (Zhu sec. 4.1, surface_bodyB_NNNN.*): "all bodies"
  * leaves it out. */
 #include "solver/sim.h"
@@ -33,10 +34,28 @@ static void selection(const mpm_sim *sim, unsigned char *body, unsigned char *ma
   for (int s = 0; s < sim->surface_count; ++s) body[sim->surfaces[s].body] = 0;
 }
 
+/* The buffers of one surface's particles: centres and volumes, and with vdb_velocity their
+   velocities and masses (NULL otherwise). */
+typedef struct surface_buffers {
+  double *xyz, *vol, *vel, *mass;
+} surface_buffers;
+
+/* The velocity grid of the n particles gathered in b, on the level set's voxels (the surface's
+   voxel key, or the particle spacing the surface chose when it is 0). */
+static mpm_status velocity_grid(mpm_sim *sim, const surface_buffers *b, size_t n, double voxel,
+                                int frame, mpm_vdb_vector_grid **out) {
+  char msg[512];
+  if (mpm_vdb_velocity_from_particles(b->xyz, b->vel, b->mass, n, voxel, out, msg, sizeof msg) !=
+      MPM_VDB_OK)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "frame %d: %s", frame, msg);
+  return MPM_OK;
+}
+
 /* One surface of the particles of p with body == only (or any selected body when only < 0). */
 static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsigned char *body,
-                              const unsigned char *material, int only, int frame, double *xyz,
-                              double *vol) {
+                              const unsigned char *material, int only, int frame,
+                              const surface_buffers *buf) {
+  double *xyz = buf->xyz, *vol = buf->vol;
   const mpm_output_desc *o = &sim->scene.output;
   const double dx = sim->scene.dx;
   size_t n = 0;
@@ -46,6 +65,10 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsign
     mpm_real F[9];
     for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
     for (int d = 0; d < 3; ++d) xyz[3 * n + (size_t)d] = p->x[d][i];
+    if (buf->vel) {
+      for (int d = 0; d < 3; ++d) buf->vel[3 * n + (size_t)d] = p->v[d][i];
+      buf->mass[n] = p->mass[i];
+    }
     vol[n++] = (double)p->vol0[i] * (double)mpm_m3_det(F);
   }
   mpm_surface_params par = mpm_surface_params_default();
@@ -58,7 +81,8 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsign
   mpm_vdb_grid *grid = NULL;
   mpm_error err;
   mpm_error_clear(&err);
-  mpm_status st = mpm_surface_build(xyz, vol, n, &par, &mesh, o->vdb ? &grid : NULL, NULL, &err);
+  mpm_surface_figures fig;
+  mpm_status st = mpm_surface_build(xyz, vol, n, &par, &mesh, o->vdb ? &grid : NULL, &fig, &err);
   if (st != MPM_OK) return mpm_error_set(&sim->error, st, "frame %d: %s", frame, err.message);
   char tag[32] = "", path[MPM_PATH_MAX + 64];
   if (only >= 0) snprintf(tag, sizeof tag, "b%d_", only);
@@ -68,10 +92,14 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsign
     snprintf(path, sizeof path, "%s/surface_%s%04d.ply", sim->output_dir, tag, frame);
     st = mpm_surface_write_ply(path, &mesh, &sim->error);
   }
+  mpm_vdb_vector_grid *velocity = NULL;
+  if (st == MPM_OK && grid && buf->vel)
+    st = velocity_grid(sim, buf, n, fig.voxel, frame, &velocity);
   if (st == MPM_OK && grid) {
     snprintf(path, sizeof path, "%s/levelset_%s%04d.vdb", sim->output_dir, tag, frame);
-    st = mpm_surface_write_vdb(path, grid, o->vdb_density, &sim->error);
+    st = mpm_surface_write_vdb(path, grid, o->vdb_density, velocity, &sim->error);
   }
+  mpm_vdb_vector_grid_destroy(velocity);
   sim->surface_triangles += mesh.triangle_count;
   mpm_surface_mesh_free(&mesh);
   mpm_vdb_grid_destroy(grid);
@@ -84,25 +112,30 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int fram
   const int nb = sim->scene.body_count;
   unsigned char *body = malloc((size_t)nb + 1);
   unsigned char *material = malloc((size_t)sim->scene.material_count + 1);
-  double *xyz = malloc((3 * p->count + 3) * sizeof *xyz);
-  double *vol = malloc((p->count + 1) * sizeof *vol);
+  const int with_velocity = sim->scene.output.vdb_velocity;
+  surface_buffers buf = {malloc((3 * p->count + 3) * sizeof(double)),
+                         malloc((p->count + 1) * sizeof(double)),
+                         with_velocity ? malloc((3 * p->count + 3) * sizeof(double)) : NULL,
+                         with_velocity ? malloc((p->count + 1) * sizeof(double)) : NULL};
   mpm_status st = MPM_OK;
-  if (!body || !material || !xyz || !vol) {
+  if (!body || !material || !buf.xyz || !buf.vol || (with_velocity && (!buf.vel || !buf.mass))) {
     st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the surfaces of frame %d",
                        frame);
   } else {
     selection(sim, body, material);
     if (sim->scene.output.surface.per_body) {
       for (int b = 0; b < nb && st == MPM_OK; ++b)
-        if (body[b]) st = one_surface(sim, p, body, material, b, frame, xyz, vol);
+        if (body[b]) st = one_surface(sim, p, body, material, b, frame, &buf);
     } else {
-      st = one_surface(sim, p, body, material, -1, frame, xyz, vol);
+      st = one_surface(sim, p, body, material, -1, frame, &buf);
     }
   }
   free(body);
   free(material);
-  free(xyz);
-  free(vol);
+  free(buf.xyz);
+  free(buf.vol);
+  free(buf.vel);
+  free(buf.mass);
   sim->surface_seconds = mpm_wall_seconds() - t0;
   sim->surface_seconds_total += sim->surface_seconds;
   sim->surface_frames++;

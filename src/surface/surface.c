@@ -176,7 +176,7 @@ mpm_status mpm_surface_write_ply(const char *path, const mpm_surface_mesh *m, mp
 }
 
 mpm_status mpm_surface_write_vdb(const char *path, const mpm_vdb_grid *grid, int density,
-                                 mpm_error *err) {
+                                 const mpm_vdb_vector_grid *velocity, mpm_error *err) {
   /* OpenVDB writes the file itself: to a temporary beside it, renamed on success */
   char temp[1100];
   const char *slash = strrchr(path, '/');
@@ -184,7 +184,7 @@ mpm_status mpm_surface_write_vdb(const char *path, const mpm_vdb_grid *grid, int
   snprintf(temp, sizeof temp, "%.*s.%s.tmp.%ld", dir_len, path, slash ? slash + 1 : path,
            (long)getpid());
   char msg[600];
-  if (mpm_vdb_write(grid, temp, density, msg, sizeof msg) != MPM_VDB_OK) {
+  if (mpm_vdb_write(grid, temp, density, velocity, msg, sizeof msg) != MPM_VDB_OK) {
     remove(temp);
     return mpm_error_set(err, MPM_ERR_IO, "%s", msg);
   }

@@ -65,10 +65,10 @@ double mpm_surface_face_height(double r, double s);
 
 /// Writers, each atomic. OBJ: v and f records, 1-based. PLY: binary little endian, float x y z
 /// and a uchar-counted int list vertex_indices. VDB: the level set "surface" (and with density
-/// a fog volume "density").
+/// a fog volume "density", with velocity that vector grid "vel").
 mpm_status mpm_surface_write_obj(const char *path, const mpm_surface_mesh *m, mpm_error *err);
 mpm_status mpm_surface_write_ply(const char *path, const mpm_surface_mesh *m, mpm_error *err);
 mpm_status mpm_surface_write_vdb(const char *path, const mpm_vdb_grid *grid, int density,
-                                 mpm_error *err);
+                                 const mpm_vdb_vector_grid *velocity, mpm_error *err);
 
 #endif

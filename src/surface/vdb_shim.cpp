@@ -16,6 +16,7 @@
 #include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/global_control.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -25,6 +26,10 @@
 
 struct mpm_vdb_grid {
   openvdb::FloatGrid::Ptr grid;
+};
+
+struct mpm_vdb_vector_grid {
+  openvdb::Vec3SGrid::Ptr grid;
 };
 
 namespace {
@@ -175,7 +180,65 @@ uint64_t mpm_vdb_active_voxels(const mpm_vdb_grid *g) {
   return g->grid->activeVoxelCount();
 }
 
-int mpm_vdb_write(const mpm_vdb_grid *g, const char *path, int density, char *msg, size_t cap) {
+int mpm_vdb_velocity_from_particles(const double *xyz, const double *v, const double *mass,
+                                    size_t n, double voxel, mpm_vdb_vector_grid **out, char *msg,
+                                    size_t cap) {
+  *out = nullptr;
+  if (!(voxel > 0)) {
+    say(msg, cap, "velocity grid: the voxel size must be > 0", nullptr);
+    return MPM_VDB_FAIL;
+  }
+  try {
+    openvdb::initialize();
+    /* P2G with the trilinear (tent) kernel on the voxel centres: momentum and mass per voxel,
+       then the velocity is their ratio (a rigid motion's velocity comes back exactly) */
+    openvdb::Vec3DGrid::Ptr momentum = openvdb::Vec3DGrid::create(openvdb::Vec3d(0));
+    openvdb::DoubleGrid::Ptr weight = openvdb::DoubleGrid::create(0.0);
+    openvdb::Vec3DGrid::Accessor pa = momentum->getAccessor();
+    openvdb::DoubleGrid::Accessor wa = weight->getAccessor();
+    const double inv = 1 / voxel;
+    for (size_t p = 0; p < n; ++p) {
+      const double *x = xyz + 3 * p;
+      int base[3];
+      double f[3];
+      for (int d = 0; d < 3; ++d) {
+        const double s = x[d] * inv, b = std::floor(s);
+        base[d] = (int)b;
+        f[d] = s - b;
+      }
+      const openvdb::Vec3d mv(mass[p] * v[3 * p], mass[p] * v[3 * p + 1], mass[p] * v[3 * p + 2]);
+      for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+          for (int c = 0; c < 2; ++c) {
+            const double w = (a ? f[0] : 1 - f[0]) * (b ? f[1] : 1 - f[1]) * (c ? f[2] : 1 - f[2]);
+            if (w <= 0) continue;
+            const openvdb::Coord ijk(base[0] + a, base[1] + b, base[2] + c);
+            pa.setValue(ijk, pa.getValue(ijk) + w * mv);
+            wa.setValue(ijk, wa.getValue(ijk) + w * mass[p]);
+          }
+    }
+    openvdb::Vec3SGrid::Ptr grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    grid->setName("vel");
+    grid->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+    openvdb::Vec3SGrid::Accessor va = grid->getAccessor();
+    for (openvdb::DoubleGrid::ValueOnCIter it = weight->cbeginValueOn(); it; ++it) {
+      if (!(*it > 0)) continue;
+      const openvdb::Vec3d u = pa.getValue(it.getCoord()) / *it;
+      va.setValue(it.getCoord(), openvdb::Vec3s((float)u[0], (float)u[1], (float)u[2]));
+    }
+    *out = new mpm_vdb_vector_grid{grid};
+    return MPM_VDB_OK;
+  } catch (const std::exception &e) {
+    say(msg, cap, "OpenVDB failed making the velocity grid", e.what());
+  } catch (...) {
+    say(msg, cap, "OpenVDB failed making the velocity grid", "unknown exception");
+  }
+  return MPM_VDB_FAIL;
+}
+
+int mpm_vdb_write(const mpm_vdb_grid *g, const char *path, int density,
+                  const mpm_vdb_vector_grid *velocity, char *msg, size_t cap) {
   try {
     openvdb::initialize();
     openvdb::GridPtrVec grids;
@@ -186,6 +249,7 @@ int mpm_vdb_write(const mpm_vdb_grid *g, const char *path, int density, char *ms
       fog->setName("density");
       grids.push_back(fog);
     }
+    if (velocity) grids.push_back(velocity->grid);
     openvdb::io::File file(path);
     file.write(grids);
     file.close();
@@ -200,8 +264,15 @@ int mpm_vdb_write(const mpm_vdb_grid *g, const char *path, int density, char *ms
   return MPM_VDB_FAIL;
 }
 
-int mpm_vdb_read(const char *path, const char *name, mpm_vdb_grid **out, char *msg, size_t cap) {
-  *out = nullptr;
+} // extern "C"
+
+namespace {
+
+/* The grid `name` of the file at `path` as a GridT; NULL with a message naming the file, its
+   grids, or the grid's type when it is missing or of another type. */
+template <typename GridT>
+typename GridT::Ptr read_grid(const char *path, const char *name, const char *kind, char *msg,
+                              size_t cap) {
   const std::string what = std::string("cannot read '") + path + "'";
   try {
     openvdb::initialize();
@@ -215,25 +286,59 @@ int mpm_vdb_read(const char *path, const char *name, mpm_vdb_grid **out, char *m
       const std::string detail = "it has no grid '" + std::string(name) +
                                  "' (it has: " + (names.empty() ? "none" : names) + ")";
       say(msg, cap, what.c_str(), detail.c_str());
-      return MPM_VDB_FAIL;
+      return nullptr;
     }
     openvdb::GridBase::Ptr base = file.readGrid(name);
     file.close();
-    openvdb::FloatGrid::Ptr grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    typename GridT::Ptr grid = openvdb::gridPtrCast<GridT>(base);
     if (!grid) {
       const std::string detail =
-          "grid '" + std::string(name) + "' is of type " + base->type() + ", not a float grid";
+          "grid '" + std::string(name) + "' is of type " + base->type() + ", not a " + kind;
       say(msg, cap, what.c_str(), detail.c_str());
-      return MPM_VDB_FAIL;
     }
-    *out = new mpm_vdb_grid{grid};
-    return MPM_VDB_OK;
+    return grid;
   } catch (const std::exception &e) {
     say(msg, cap, what.c_str(), e.what());
   } catch (...) {
     say(msg, cap, what.c_str(), "unknown exception");
   }
-  return MPM_VDB_FAIL;
+  return nullptr;
+}
+
+} // namespace
+
+extern "C" {
+
+int mpm_vdb_read(const char *path, const char *name, mpm_vdb_grid **out, char *msg, size_t cap) {
+  openvdb::FloatGrid::Ptr grid = read_grid<openvdb::FloatGrid>(path, name, "float grid", msg, cap);
+  *out = grid ? new mpm_vdb_grid{grid} : nullptr;
+  return grid ? MPM_VDB_OK : MPM_VDB_FAIL;
+}
+
+int mpm_vdb_read_vector(const char *path, const char *name, mpm_vdb_vector_grid **out, char *msg,
+                        size_t cap) {
+  openvdb::Vec3SGrid::Ptr grid =
+      read_grid<openvdb::Vec3SGrid>(path, name, "vector (Vec3f) grid", msg, cap);
+  *out = grid ? new mpm_vdb_vector_grid{grid} : nullptr;
+  return grid ? MPM_VDB_OK : MPM_VDB_FAIL;
+}
+
+void mpm_vdb_vector_sample(const mpm_vdb_vector_grid *g, const double x[3], double v[3]) {
+  openvdb::tools::GridSampler<openvdb::Vec3SGrid, openvdb::tools::BoxSampler> s(*g->grid);
+  const openvdb::Vec3s u = s.wsSample(openvdb::Vec3R(x[0], x[1], x[2]));
+  for (int d = 0; d < 3; ++d) v[d] = u[d];
+}
+
+uint64_t mpm_vdb_vector_active_voxels(const mpm_vdb_vector_grid *g) {
+  return g->grid->activeVoxelCount();
+}
+
+void mpm_vdb_vector_name(const mpm_vdb_vector_grid *g, char *name, size_t cap) {
+  if (name && cap) std::snprintf(name, cap, "%s", g->grid->getName().c_str());
+}
+
+void mpm_vdb_vector_grid_destroy(mpm_vdb_vector_grid *g) {
+  delete g;
 }
 
 void mpm_vdb_grid_info(const mpm_vdb_grid *g, char *name, size_t cap, mpm_vdb_class *cls,

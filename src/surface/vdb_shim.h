@@ -66,10 +66,25 @@ int mpm_vdb_mesh(const mpm_vdb_grid *grid, int threads, float **points, size_t *
 /// Number of active voxels (the narrow band), for figures.
 uint64_t mpm_vdb_active_voxels(const mpm_vdb_grid *grid);
 
+/* A vector grid (openvdb::Vec3SGrid), owned by the caller. */
+typedef struct mpm_vdb_vector_grid mpm_vdb_vector_grid;
+
+/// The particles' velocity as a vector grid "vel" (the name Houdini's and Blender's volume
+/// tools look for) on voxels of `voxel` m, indexed like the level set's (voxel ijk at world
+/// ijk * voxel): every voxel within one voxel of a particle holds the mass-weighted trilinear
+/// average sum_p w_ip m_p v_p / sum_p w_ip m_p (a linear-kernel P2G: a rigid translation is
+/// reproduced exactly). Particle p is centred at xyz[3p..3p+2] with velocity v[3p..3p+2] (m/s)
+/// and mass mass[p]. Vector type contravariant-relative (a displacement per time). Serial.
+int mpm_vdb_velocity_from_particles(const double *xyz, const double *v, const double *mass,
+                                    size_t n, double voxel, mpm_vdb_vector_grid **out, char *msg,
+                                    size_t cap);
+
 /// Write the level set to a .vdb file at `path` (created or replaced; the caller renames it
 /// into place for atomicity). With `density` set, a second grid "density" (class fog volume:
-/// 0 outside, rising to 1 one band half-width inside) is written beside it.
-int mpm_vdb_write(const mpm_vdb_grid *grid, const char *path, int density, char *msg, size_t cap);
+/// 0 outside, rising to 1 one band half-width inside) is written beside it; with `velocity`
+/// non-NULL, that vector grid too.
+int mpm_vdb_write(const mpm_vdb_grid *grid, const char *path, int density,
+                  const mpm_vdb_vector_grid *velocity, char *msg, size_t cap);
 
 /// Read the grid called `name` of the .vdb file at `path` (a float grid). *out is NULL on
 /// failure, which names the file and the grids it holds.
@@ -83,6 +98,19 @@ void mpm_vdb_grid_info(const mpm_vdb_grid *grid, char *name, size_t cap, mpm_vdb
 double mpm_vdb_sample(const mpm_vdb_grid *grid, const double x[3]);
 
 void mpm_vdb_grid_destroy(mpm_vdb_grid *grid);
+
+/// Read the vector grid called `name` of the .vdb file at `path` (a Vec3f grid); *out is NULL
+/// on failure, which names the file and what it holds.
+int mpm_vdb_read_vector(const char *path, const char *name, mpm_vdb_vector_grid **out, char *msg,
+                        size_t cap);
+
+/// The vector grid's value at the world point x (trilinear) into v, its active voxel count, and
+/// its name (into name, cap bytes).
+void mpm_vdb_vector_sample(const mpm_vdb_vector_grid *grid, const double x[3], double v[3]);
+uint64_t mpm_vdb_vector_active_voxels(const mpm_vdb_vector_grid *grid);
+void mpm_vdb_vector_name(const mpm_vdb_vector_grid *grid, char *name, size_t cap);
+
+void mpm_vdb_vector_grid_destroy(mpm_vdb_vector_grid *grid);
 
 #ifdef __cplusplus
 }

@@ -43,8 +43,17 @@ uint64_t mpm_vdb_active_voxels(const mpm_vdb_grid *grid) {
   return 0;
 }
 
-int mpm_vdb_write(const mpm_vdb_grid *grid, const char *path, int density, char *msg, size_t cap) {
-  (void)grid, (void)path, (void)density;
+int mpm_vdb_velocity_from_particles(const double *xyz, const double *v, const double *mass,
+                                    size_t n, double voxel, mpm_vdb_vector_grid **out, char *msg,
+                                    size_t cap) {
+  (void)xyz, (void)v, (void)mass, (void)n, (void)voxel;
+  *out = NULL;
+  return unavailable(msg, cap);
+}
+
+int mpm_vdb_write(const mpm_vdb_grid *grid, const char *path, int density,
+                  const mpm_vdb_vector_grid *velocity, char *msg, size_t cap) {
+  (void)grid, (void)path, (void)density, (void)velocity;
   return unavailable(msg, cap);
 }
 
@@ -68,6 +77,32 @@ double mpm_vdb_sample(const mpm_vdb_grid *grid, const double x[3]) {
 }
 
 void mpm_vdb_grid_destroy(mpm_vdb_grid *grid) {
+  (void)grid;
+}
+
+int mpm_vdb_read_vector(const char *path, const char *name, mpm_vdb_vector_grid **out, char *msg,
+                        size_t cap) {
+  (void)path, (void)name;
+  *out = NULL;
+  return unavailable(msg, cap);
+}
+
+void mpm_vdb_vector_sample(const mpm_vdb_vector_grid *grid, const double x[3], double v[3]) {
+  (void)grid, (void)x;
+  v[0] = v[1] = v[2] = 0;
+}
+
+uint64_t mpm_vdb_vector_active_voxels(const mpm_vdb_vector_grid *grid) {
+  (void)grid;
+  return 0;
+}
+
+void mpm_vdb_vector_name(const mpm_vdb_vector_grid *grid, char *name, size_t cap) {
+  (void)grid;
+  if (name && cap) name[0] = 0;
+}
+
+void mpm_vdb_vector_grid_destroy(mpm_vdb_vector_grid *grid) {
   (void)grid;
 }
 #else
