@@ -30,9 +30,25 @@ void assert_close_msg(double a, double b, double tol, const char *what) {
 #define TEMP_DIRS_MAX 64
 static char temp_dirs[TEMP_DIRS_MAX][512];
 static int temp_dir_count;
+static int cleaned;     /* test_cleanup ran */
+static long owner = -1; /* the process that made the folders (not a forked child) */
+
+/* A test program that makes folders must hand its result to test_cleanup (main returns
+ * test_cleanup(cmocka_run_group_tests(...))), or a passing run leaves them in /tmp: that
+ * program fails here, naming the folders. */
+static void check_cleaned(void) {
+  if (cleaned || (long)getpid() != owner || !temp_dir_count) return;
+  fprintf(stderr, "test program made %s and others but never called test_cleanup: they are left\n",
+          temp_dirs[0]);
+  _exit(1);
+}
 
 const char *test_temp_dir(const char *name) {
   static char buf[512];
+  if (owner < 0) {
+    owner = (long)getpid();
+    atexit(check_cleaned);
+  }
   snprintf(buf, sizeof buf, "/tmp/mpm-test-%d-%s", (int)getpid(), name);
   char cmd[1100];
   snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s'", buf, buf);
@@ -45,6 +61,7 @@ const char *test_temp_dir(const char *name) {
 }
 
 int test_cleanup(int failures) {
+  cleaned = 1;
   for (int k = 0; k < temp_dir_count; ++k) {
     if (failures) {
       fprintf(stderr, "test files kept in %s\n", temp_dirs[k]);

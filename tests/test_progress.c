@@ -52,5 +52,5 @@ int main(void) {
       cmocka_unit_test(test_durations),
       cmocka_unit_test(test_lines_within_a_frame),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }
