@@ -71,6 +71,15 @@ typedef struct mpm_adaptive {
     uint32_t node, ghost;
   } * cell_ghost;
   size_t cell_ghost_count, cell_ghost_capacity;
+  /* the same entries by ghost, for the ghosts' sums in parallel: ghost g's are
+   * ghost_entry[ghost_start[g] .. ghost_start[g + 1]) in cell order, each with its cell; a
+   * cell's boundary particles are boundary[cell_particle[c] .. cell_particle[c + 1]) */
+  uint32_t *ghost_start, *cell_particle;
+  size_t ghost_start_capacity, cell_particle_capacity;
+  struct mpm_ghost_entry {
+    uint32_t cell, entry;
+  } * ghost_entry;
+  size_t ghost_entry_capacity;
   mpm_real *moment, *dB, *work;
   size_t moment_capacity, dB_capacity, work_capacity;
   long long rebuilds;     /* trees made by domain.refine_every since creation */

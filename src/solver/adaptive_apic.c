@@ -14,8 +14,9 @@
  *   G2P  the lanes give sum_g w_gp v_g (x_g - x_p)^T, and B_p needs sum_g w_gp M_g besides, the
  *        ghosts' velocity moments (mpm_adaptive_grid_gather_moments).
  * Boundary particles are found per occupied cell of a transfer grid (its particles share the
- * stencil), with the cell's list of (stencil node, ghost). The accumulation of A_g runs serially
- * in a fixed order (stencils overlap), so results do not depend on the thread count. */
+ * stencil), with the cell's list of (stencil node, ghost). Each A_g is summed by one thread over
+ * its contributions in boundary-particle order (the entries transposed by ghost), so results do
+ * not depend on the thread count. */
 #include "solver/adaptive.h"
 
 #include "core/alloc.h"
@@ -40,6 +41,33 @@ static void stencil_slots(const mpm_grid *g, size_t b, const int32_t base[3], in
         slot[n] =
             (uint32_t)(g->dof_begin + (size_t)sg->neighbor[b][o] * MPM_BLOCK_NODES + (size_t)local);
       }
+}
+
+/* The cells' entries by ghost (a counting sort, stable: cell order within a ghost) and each
+ * cell's range of boundary particles (pushed cell by cell, so contiguous and in cell order). */
+static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
+  const size_t nc = a->cell_count, ne = a->cell_ghost_count, nb = a->boundary_count;
+  if (mpm_grow((void **)&a->ghost_start, &a->ghost_start_capacity, ng + 2,
+               sizeof *a->ghost_start) ||
+      mpm_grow((void **)&a->cell_particle, &a->cell_particle_capacity, nc + 2,
+               sizeof *a->cell_particle) ||
+      mpm_grow((void **)&a->ghost_entry, &a->ghost_entry_capacity, ne + 1, sizeof *a->ghost_entry))
+    return -1;
+  uint32_t *start = a->ghost_start;
+  memset(start, 0, (ng + 1) * sizeof *start);
+  for (size_t e = 0; e < ne; ++e) ++start[a->cell_ghost[e].ghost + 1];
+  for (size_t g = 0; g < ng; ++g) start[g + 1] += start[g];
+  for (size_t c = 0; c < nc; ++c) /* start[g] runs on to g's end */
+    for (uint32_t e = a->cell[c]; e < a->cell[c + 1]; ++e) {
+      const uint32_t at = start[a->cell_ghost[e].ghost]++;
+      a->ghost_entry[at].cell = (uint32_t)c;
+      a->ghost_entry[at].entry = e;
+    }
+  for (size_t g = ng; g > 0; --g) start[g] = start[g - 1];
+  start[0] = 0;
+  for (size_t k = nb; k-- > 0;) a->cell_particle[a->boundary[k].cell] = (uint32_t)k;
+  a->cell_particle[nc] = (uint32_t)nb;
+  return 0;
 }
 
 mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
@@ -115,6 +143,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
         a->cell_count++;
       }
   }
+  if (transpose_by_ghost(a, ag->ghost_count)) goto nomem;
   /* per boundary particle its B (kept over the P2G) and its B correction (G2P), and the P2G's
    * work (m C and the 1D weights) */
   if (mpm_grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB) ||
@@ -237,20 +266,26 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
       for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs.d[v]);
     for (int c = 0; c < 9; ++c) out[c] = (mpm_real)(m * C[c]);
   }
-  /* the ghosts' affine moments A_g = sum w m C, serially in a fixed order (stencils overlap) */
-  for (long k = 0; k < nb; ++k) {
-    const mpm_real *mC = Cw + 21 * (size_t)k, *w = mC + 9;
-    const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
-    for (uint32_t e = c0; e < c1; ++e) {
-      const mpm_real we = packed_weight(w, a->cell_ghost[e].node);
-      mpm_real *A = a->moment + 9 * (size_t)a->cell_ghost[e].ghost; /* interleaved here */
-      for (int c = 0; c < 9; ++c) A[c] += we * mC[c];
-    }
-  }
-  /* one plane per component for the scatter */
+  /* the ghosts' affine moments A_g = sum_p w_gp m_p C_p (stencils overlap): each ghost summed
+   * by one thread, over its boundary particles in their order (a ghost is once in a cell's
+   * entries), into one plane per component for the scatter */
+  if (!nb) return; /* the planes are zero (mpm_adaptive_apic_prepare) */
   mpm_real *planes = a->moment + 9 * ng;
-  for (size_t g = 0; g < ng; ++g)
-    for (int c = 0; c < 9; ++c) planes[(size_t)c * ng + g] = a->moment[9 * g + (size_t)c];
+  const uint32_t *start = a->ghost_start, *first = a->cell_particle;
+  const struct mpm_ghost_entry *ge = a->ghost_entry;
+#pragma omp parallel for schedule(static)
+  for (long g = 0; g < (long)ng; ++g) {
+    mpm_real A[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    for (uint32_t j = start[g]; j < start[g + 1]; ++j) {
+      const uint32_t cell = ge[j].cell, node = a->cell_ghost[ge[j].entry].node;
+      for (uint32_t k = first[cell]; k < first[cell + 1]; ++k) {
+        const mpm_real *mC = Cw + 21 * (size_t)k, *w = mC + 9;
+        const mpm_real we = packed_weight(w, node);
+        for (int c = 0; c < 9; ++c) A[c] += we * mC[c];
+      }
+    }
+    for (int c = 0; c < 9; ++c) planes[(size_t)c * ng + (size_t)g] = A[c];
+  }
 }
 
 void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {

@@ -142,6 +142,9 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->boundary);
   mpm_free(a->cell);
   mpm_free(a->cell_ghost);
+  mpm_free(a->ghost_start);
+  mpm_free(a->cell_particle);
+  mpm_free(a->ghost_entry);
   mpm_free(a->moment);
   mpm_free(a->dB);
   mpm_free(a->work);
