@@ -105,6 +105,11 @@ typedef struct mpm_stats_row {
 /* Rewrites the whole CSV (header + rows) atomically; rows are kept by the caller. */
 mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row *rows,
                                mpm_error *err);
+/* The same with the force each of `colliders` colliders felt from the material, three columns
+ * per collider after all the others (collider<c>_fx, _fy, _fz, N): row r's are
+ * forces[3 (r colliders + c) + e]. forces may be NULL when colliders is 0. */
+mpm_status mpm_write_stats_csv_forces(const char *path, int count, const mpm_stats_row *rows,
+                                      int colliders, const double *forces, mpm_error *err);
 
 /* ---- reading frames back (vtu_read.c) ------------------------------------------------- */
 

@@ -16,11 +16,13 @@ mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
   free(sim->frame_times);
   free(sim->frame_files);
   free(sim->stats);
+  free(sim->stats_forces);
   const size_t n = (size_t)(records > sim->frame_count + 1 ? records : sim->frame_count + 1);
   sim->frame_times = calloc(n, sizeof *sim->frame_times);
   sim->frame_files = calloc(n, sizeof *sim->frame_files);
   sim->stats = calloc(n, sizeof *sim->stats);
-  if (!sim->frame_times || !sim->frame_files || !sim->stats)
+  sim->stats_forces = calloc(n * 3 * (size_t)sim->collider_count + 1, sizeof *sim->stats_forces);
+  if (!sim->frame_times || !sim->frame_files || !sim->stats || !sim->stats_forces)
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for output bookkeeping");
   return MPM_OK;
 }
@@ -271,8 +273,13 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
         sim->domains.active_count
             ? 100.0 * (double)en->particles[MPM_DOMAIN_ENRICHED] / (double)sim->domains.active_count
             : 0;
+    /* the colliders' mean force over the frame: the momentum they took over its time */
+    const int nc = sim->collider_count;
+    double *force = sim->stats_forces + 3 * (size_t)frame * (size_t)nc;
+    for (int k = 0; k < 3 * nc; ++k) force[k] = sp->sum > 0 ? sim->collider_frame[k] / sp->sum : 0;
     snprintf(path, sizeof path, "%s/stats.csv", sim->output_dir);
-    st = mpm_write_stats_csv(path, frame + 1, sim->stats, &sim->error);
+    st =
+        mpm_write_stats_csv_forces(path, frame + 1, sim->stats, nc, sim->stats_forces, &sim->error);
     if (st != MPM_OK) goto done;
   }
   sim->written_frames++;
