@@ -140,6 +140,35 @@ static void test_threads_bitwise(void **state) {
   assert_true(got[0][3 * 2 * 3 + 4] < 0); /* frame 3: the floor is pressed */
 }
 
+/* A run checkpointed a few steps into frame 3 and resumed ends with the forces of an
+ * uninterrupted one, bit for bit: the frame in progress's sums and the rows are in the
+ * checkpoint. */
+static void test_resume_bitwise(void **state) {
+  (void)state;
+  struct mpm_sim *a = block_on_floor(0.5, "", "");
+  run_all(a, "resume-full");
+  struct mpm_sim *b = block_on_floor(0.5, "", "");
+  char part[700];
+  snprintf(part, sizeof part, "%s", test_temp_dir("resume-part"));
+  assert_int_equal(mpm_sim_enable_output(b, part), MPM_OK);
+  for (int f = 0; f < 3; ++f) assert_int_equal(mpm_sim_advance_frame(b), MPM_OK);
+  for (int k = 0; k < 5; ++k)
+    assert_int_equal(mpm_sim_step(b, b->frame_dt - fmod(b->time, b->frame_dt)), MPM_OK);
+  char path[1100];
+  assert_int_equal(mpm_sim_write_checkpoint(b, path, sizeof path), MPM_OK);
+  mpm_sim_destroy(b);
+  struct mpm_sim *c = block_on_floor(0.5, "", "");
+  char used[1100];
+  assert_int_equal(mpm_sim_resume(c, part, used, sizeof used), MPM_OK);
+  while (mpm_sim_frame(c) < mpm_sim_frame_count(c))
+    assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
+  const size_t n = (size_t)(mpm_sim_frame_count(a) + 1) * 3 * 2;
+  assert_memory_equal(a->stats_forces, c->stats_forces, n * sizeof(double));
+  assert_true(a->stats_forces[3 * 2 * 4 + 4] < 0); /* frame 4 presses the floor */
+  mpm_sim_destroy(a);
+  mpm_sim_destroy(c);
+}
+
 /* The header: the old columns, then the colliders' (none without colliders). */
 static void read_header(const char *dir, char *line, size_t cap) {
   char path[700];
@@ -180,7 +209,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resting_explicit), cmocka_unit_test(test_resting_implicit),
       cmocka_unit_test(test_resting_domains),  cmocka_unit_test(test_free_flight),
-      cmocka_unit_test(test_threads_bitwise),  cmocka_unit_test(test_header),
+      cmocka_unit_test(test_threads_bitwise),  cmocka_unit_test(test_resume_bitwise),
+      cmocka_unit_test(test_header),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }
