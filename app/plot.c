@@ -2,9 +2,10 @@
  * (io/stats_csv.c) and draw them with gnuplot to PNG files in OUTDIR/plots/.
  *
  * The CSV is read and checked completely before anything is written: the header must be the
- * one mpm_write_stats_csv writes (25 columns; the 21 of files from before the step range and
- * the gravitational energy, the 20 of files from before dynamic enrichment and the 15 of files
- * from before the implicit integrator are read too), every row must have its
+ * one mpm_write_stats_csv writes (25 columns, then three force columns per collider, which are
+ * checked but not plotted; the 21 of files from before the step range and the gravitational
+ * energy, the 20 of files from before dynamic enrichment and the 15 of files from before the
+ * implicit integrator are read too), every row must have its
  * fields and every field must be a finite number (a bad file is an input error, exit 2, with the
  * file and line named). Then:
  *   1. find gnuplot on PATH (not found: exit 1, nothing written);
@@ -140,19 +141,40 @@ static int split_fields(char *line, char **fields, int max) {
   return n;
 }
 
+/* Most collider force columns read (3 per collider); they are checked, not plotted. */
+#define COLLIDER_COLUMNS_MAX 3000
+
 /* The header's columns: COL_COUNT, or COL_ENRICHED_COUNT, COL_SOLVER_COUNT or COL_LEGACY_COUNT
- * for a file of an earlier version (the columns it lacks read as 0). */
-static mpm_status check_header(const char *path, char *line, int *columns, mpm_error *err) {
-  char *fields[COL_COUNT];
-  const int n = split_fields(line, fields, COL_COUNT);
-  *columns = n;
+ * for a file of an earlier version (the columns it lacks read as 0); *extra: the collider
+ * force columns after total_energy (collider<c>_fx, _fy, _fz for c = 0, 1, ...), 0 without
+ * colliders or in an earlier file. */
+static mpm_status check_header(const char *path, char *line, int *columns, int *extra,
+                               mpm_error *err) {
+  char *fields[COL_COUNT + COLLIDER_COLUMNS_MAX];
+  const int n = split_fields(line, fields, COL_COUNT + COLLIDER_COLUMNS_MAX);
+  *columns = n < COL_COUNT ? n : COL_COUNT;
+  *extra = n > COL_COUNT ? n - COL_COUNT : 0;
   for (int c = 0; c < COL_COUNT && c < n; ++c)
     if (strcmp(fields[c], column_names[c]) != 0)
       return mpm_error_set(err, MPM_ERR_PARSE,
                            "%s: line 1: not an mpm stats header: column %d is '%.60s', expected "
                            "'%s'",
                            path, c + 1, fields[c], column_names[c]);
-  if (n != COL_COUNT && n != COL_ENRICHED_COUNT && n != COL_SOLVER_COUNT && n != COL_LEGACY_COUNT)
+  if (*extra > COLLIDER_COLUMNS_MAX || *extra % 3)
+    return mpm_error_set(err, MPM_ERR_PARSE,
+                         "%s: line 1: not an mpm stats header: %d columns after total_energy, "
+                         "expected three per collider (at most %d)",
+                         path, *extra, COLLIDER_COLUMNS_MAX);
+  for (int k = 0; k < *extra; ++k) {
+    char want[48];
+    snprintf(want, sizeof want, "collider%d_f%c", k / 3, "xyz"[k % 3]);
+    if (strcmp(fields[COL_COUNT + k], want) != 0)
+      return mpm_error_set(err, MPM_ERR_PARSE,
+                           "%s: line 1: not an mpm stats header: column %d is '%.60s', expected "
+                           "'%s'",
+                           path, COL_COUNT + k + 1, fields[COL_COUNT + k], want);
+  }
+  if (n < COL_COUNT && n != COL_ENRICHED_COUNT && n != COL_SOLVER_COUNT && n != COL_LEGACY_COUNT)
     return mpm_error_set(err, MPM_ERR_PARSE,
                          "%s: line 1: not an mpm stats header: %d columns, expected %d (frame, "
                          "time, ..., total_energy), %d (frame, time, ..., enriched_percent), %d "
@@ -163,15 +185,15 @@ static mpm_status check_header(const char *path, char *line, int *columns, mpm_e
   return MPM_OK;
 }
 
-static mpm_status parse_row(const char *path, long line_no, char *line, int columns, double *row,
-                            mpm_error *err) {
-  char *fields[COL_COUNT];
-  const int n = split_fields(line, fields, COL_COUNT);
+static mpm_status parse_row(const char *path, long line_no, char *line, int columns, int extra,
+                            double *row, mpm_error *err) {
+  char *fields[COL_COUNT + COLLIDER_COLUMNS_MAX];
+  const int n = split_fields(line, fields, COL_COUNT + COLLIDER_COLUMNS_MAX);
   for (int c = columns; c < COL_COUNT; ++c) row[c] = 0;
-  if (n != columns)
+  if (n != columns + extra)
     return mpm_error_set(err, MPM_ERR_PARSE, "%s: line %ld: %d fields, expected %d", path, line_no,
-                         n, columns);
-  for (int c = 0; c < columns; ++c) {
+                         n, columns + extra);
+  for (int c = 0; c < columns + extra; ++c) {
     const char *s = fields[c];
     char *end;
     errno = 0;
@@ -179,9 +201,9 @@ static mpm_status parse_row(const char *path, long line_no, char *line, int colu
     const int parsed = end != s && is_blank(end);
     if (!parsed || !isfinite(v))
       return mpm_error_set(err, MPM_ERR_PARSE, "%s: line %ld: field %d (%s) is %s: '%.60s'", path,
-                           line_no, c + 1, column_names[c],
+                           line_no, c + 1, c < COL_COUNT ? column_names[c] : "a collider force",
                            parsed ? "not a finite number" : "not a number", s);
-    row[c] = v;
+    if (c < COL_COUNT) row[c] = v;
   }
   return MPM_OK;
 }
@@ -199,14 +221,14 @@ static mpm_status read_stats(const char *path, stats_table *t, mpm_error *err) {
   char *line = NULL;
   size_t cap = 0;
   long line_no = 0;
-  int columns = COL_COUNT;
+  int columns = COL_COUNT, extra = 0;
   mpm_status st = MPM_OK;
   errno = 0;
   while (getline(&line, &cap, f) >= 0) {
     ++line_no;
     chomp(line);
     if (line_no == 1) {
-      st = check_header(path, line, &columns, err);
+      st = check_header(path, line, &columns, &extra, err);
       if (st != MPM_OK) break;
       continue;
     }
@@ -221,7 +243,7 @@ static mpm_status read_stats(const char *path, stats_table *t, mpm_error *err) {
       t->rows = grown;
       t->capacity = want;
     }
-    st = parse_row(path, line_no, line, columns, t->rows[t->count], err);
+    st = parse_row(path, line_no, line, columns, extra, t->rows[t->count], err);
     if (st != MPM_OK) break;
     ++t->count;
   }

@@ -283,7 +283,7 @@ static void test_vtu_roundtrip(void **state) {
   const char *dir = test_temp_dir("io-vtu");
   char path[600];
   join(path, sizeof path, dir, "frame_0003.vtu");
-  mpm_frame_fields ff = {&p, J, stress, 0.041666666666666664, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, J, stress, 0.041666666666666664, NULL, 0, NULL, 0, NULL, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_vtu(path, &ff, &err), MPM_OK);
   check_vtu(path, &p, J, stress, ff.time);
@@ -300,7 +300,7 @@ static void test_vtu_empty(void **state) {
   const char *dir = test_temp_dir("io-vtu-empty");
   char path[600];
   join(path, sizeof path, dir, "empty.vtu");
-  mpm_frame_fields ff = {&p, NULL, NULL, 2.5, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, NULL, NULL, 2.5, NULL, 0, NULL, 0, NULL, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_vtu(path, &ff, &err), MPM_OK);
   check_vtu(path, &p, NULL, NULL, 2.5);
@@ -317,7 +317,7 @@ static void test_vtu_default_fields(void **state) {
   const char *dir = test_temp_dir("io-vtu-default");
   char path[600];
   join(path, sizeof path, dir, "f.vtu");
-  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL, 0, NULL, 0, NULL, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_vtu(path, &ff, &err), MPM_OK);
   check_vtu(path, &p, NULL, NULL, 0.0);
@@ -338,7 +338,7 @@ static void test_vtu_small_buffer(void **state) {
   const char *dir = test_temp_dir("io-vtu-mem");
   char path[600];
   join(path, sizeof path, dir, "big.vtu");
-  mpm_frame_fields ff = {&p, NULL, NULL, 1.0, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, NULL, NULL, 1.0, NULL, 0, NULL, 0, NULL, NULL};
   mpm_error err = {0};
   const size_t live = mpm_alloc_live_bytes();
   mpm_alloc_reset_peak();
@@ -408,7 +408,7 @@ static void test_ply(void **state) {
   const char *dir = test_temp_dir("io-ply");
   char path[600];
   join(path, sizeof path, dir, "frame_0000.ply");
-  mpm_frame_fields ff = {&p, NULL, NULL, 0.25, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, NULL, NULL, 0.25, NULL, 0, NULL, 0, NULL, NULL};
   mpm_error err = {0};
   assert_int_equal(mpm_write_ply_points(path, &ff, &err), MPM_OK);
 

@@ -118,7 +118,7 @@ static void test_missing_directory(void **state) {
 
   mpm_particles p;
   make_particles(&p, 5, NULL, NULL);
-  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL, 0, NULL, 0, NULL, NULL};
   mpm_error_clear(&err);
   assert_io_error_names(mpm_write_vtu(path, &ff, &err), &err, path);
   mpm_error_clear(&err);
@@ -143,7 +143,7 @@ static void test_write_failure_keeps_old(void **state) {
   spit(path, "old frame\n");
   mpm_particles p;
   make_particles(&p, 5000, NULL, NULL); /* about 300 KB of VTU */
-  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL, 0, NULL};
+  mpm_frame_fields ff = {&p, NULL, NULL, 0.0, NULL, 0, NULL, 0, NULL, NULL};
 
   struct rlimit old_limit, limit;
   assert_int_equal(getrlimit(RLIMIT_FSIZE, &old_limit), 0);

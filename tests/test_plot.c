@@ -1,9 +1,9 @@
 /* test_plot.c - `mpm plot OUTDIR` as users run it: the seven PNGs from a synthetic stats.csv (of
- * every column layout mpm run has written) and from a real short run, exit code 2 with the file and
- * line named for a missing directory or a corrupt stats.csv (and no plots directory made), exit
- * code 1 when gnuplot is not on PATH or fails (its messages shown, earlier plots kept, no
- * temporaries left), usage errors. The parts that need gnuplot are skipped, with a message, where
- * it is not installed. */
+ * every column layout mpm run has written, collider force columns included) and from a real short
+ * run, exit code 2 with the file and line named for a missing directory or a corrupt stats.csv (and
+ * no plots directory made), exit code 1 when gnuplot is not on PATH or fails (its messages shown,
+ * earlier plots kept, no temporaries left), usage errors. The parts that need gnuplot are skipped,
+ * with a message, where it is not installed. */
 #include "support.h"
 #include "cli_support.h"
 
@@ -63,6 +63,9 @@ static void write_stats_layout(const char *dir, int frames, int columns) {
   const int parts = columns >= 25 ? 3 : columns >= 21 ? 2 : columns >= 20 ? 1 : 0;
   fprintf(f, "%.*s", (int)strlen(stats_header) - 1, stats_header);
   for (int k = 0; k < parts; ++k) fputs(extra[k], f);
+  const int colliders = columns > 25 ? (columns - 25) / 3 : 0; /* their forces, at the end */
+  for (int c = 0; c < colliders; ++c)
+    fprintf(f, ",collider%d_fx,collider%d_fy,collider%d_fz", c, c, c);
   fputc('\n', f);
   long steps = 0;
   for (int i = 0; i < frames; ++i) {
@@ -75,6 +78,7 @@ static void write_stats_layout(const char *dir, int frames, int columns) {
     if (parts > 2)
       fprintf(f, ",%.9g,%.9g,%.9g,%.9g", i ? 0.6e-3 / (1 + i) : 0.0, i ? 1.1e-3 / (1 + i) : 0.0, g,
               ke + 0.01 * i + g);
+    for (int c = 0; c < colliders; ++c) fprintf(f, ",0.5,%g,0", i ? -19.62 : 0.0);
     fputc('\n', f);
   }
   fclose(f);
@@ -135,11 +139,12 @@ static void test_synthetic_stats(void **state) {
   assert_int_equal((int)strlen(output), 0); /* gnuplot's warnings about one point stay quiet */
 }
 
-/* Files of every layout plot (the columns an older file lacks are left out of the plots). */
+/* Files of every layout plot (the columns an older file lacks are left out of the plots), and
+ * today's with the force columns of one and of two colliders. */
 static void test_every_layout(void **state) {
   (void)state;
-  static const int layouts[] = {15, 20, 21, 25};
-  for (int k = 0; k < 4; ++k) {
+  static const int layouts[] = {15, 20, 21, 25, 28, 31};
+  for (int k = 0; k < 6; ++k) {
     char name[64], args[1400], plots[700];
     snprintf(name, sizeof name, "plot-layout-%d", layouts[k]);
     const char *dir = test_temp_dir(name);
@@ -165,6 +170,22 @@ static void test_every_layout(void **state) {
   snprintf(args, sizeof args, "plot '%s'", dir);
   assert_int_equal(mpm(args), 2);
   expect_output("22 columns");
+  /* after total_energy only whole colliders, named in order */
+  static const char *const bad[] = {",collider0_fx,collider0_fy",
+                                    ",collider0_fx,collider0_fy,collider1_fz"};
+  static const char *const said[] = {"2 columns after total_energy", "column 28 is 'collider1_fz'"};
+  for (int k = 0; k < 2; ++k) {
+    write_stats_layout(dir, 3, 25);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "%.*s,cg_iterations_mean,cg_iterations_max,cg_residual_max,newton_iterations_mean,"
+            "cg_unconverged,enriched_percent,dt_min,dt_max,gravitational_energy,total_energy%s\n",
+            (int)strlen(stats_header) - 1, stats_header, bad[k]);
+    fclose(f);
+    assert_int_equal(mpm(args), 2);
+    expect_output(said[k]);
+  }
 }
 
 static void test_missing_directory(void **state) {

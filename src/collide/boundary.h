@@ -19,10 +19,9 @@ typedef struct mpm_boundary {
   const mpm_collider_pose *poses; /* at the end of the step */
 } mpm_boundary;
 
-/* Apply the colliders, then the walls, to velocity v at position x; depth as above. */
-MPM_ALWAYS_INLINE void mpm_boundary_apply(const mpm_boundary *b, const mpm_real x[3],
-                                          mpm_real depth, mpm_real v[3]) {
-  for (int c = 0; c < b->collider_count; ++c) mpm_collider_apply(&b->poses[c], x, v);
+/* The walls alone (after the colliders, in mpm_boundary_apply). */
+MPM_ALWAYS_INLINE void mpm_boundary_apply_walls(const mpm_boundary *b, const mpm_real x[3],
+                                                mpm_real depth, mpm_real v[3]) {
   static const mpm_real zero[3] = {0, 0, 0};
   for (int d = 0; d < 3; ++d) {
     const mpm_real lo_plane = b->wall_lo[d] - depth, hi_plane = b->wall_hi[d] + depth;
@@ -33,6 +32,28 @@ MPM_ALWAYS_INLINE void mpm_boundary_apply(const mpm_boundary *b, const mpm_real 
       mpm_boundary_project(b->wall_rule, b->wall_friction, n, zero, v);
     }
   }
+}
+
+/* Apply the colliders, then the walls, to velocity v at position x; depth as above. */
+MPM_ALWAYS_INLINE void mpm_boundary_apply(const mpm_boundary *b, const mpm_real x[3],
+                                          mpm_real depth, mpm_real v[3]) {
+  for (int c = 0; c < b->collider_count; ++c) mpm_collider_apply(&b->poses[c], x, v);
+  mpm_boundary_apply_walls(b, x, depth, v);
+}
+
+/* mpm_boundary_apply at a DOF of the given mass, adding to taken[3 c + e] the momentum
+ * component e that collider (pose) c's projection took from it, mass (v_before - v_after),
+ * kg m/s: what the material gave the collider, whose force on it is that over dt. The same
+ * velocities as mpm_boundary_apply, bitwise. */
+MPM_ALWAYS_INLINE void mpm_boundary_apply_taken(const mpm_boundary *b, const mpm_real x[3],
+                                                mpm_real depth, mpm_real mass, mpm_real v[3],
+                                                double *taken) {
+  for (int c = 0; c < b->collider_count; ++c) {
+    const mpm_real before[3] = {v[0], v[1], v[2]};
+    if (mpm_collider_apply(&b->poses[c], x, v))
+      for (int e = 0; e < 3; ++e) taken[3 * c + e] += (double)mass * (double)(before[e] - v[e]);
+  }
+  mpm_boundary_apply_walls(b, x, depth, v);
 }
 
 /* The constraints the implicit solve enforces inside CG at a DOF at x (the same colliders and

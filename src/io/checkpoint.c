@@ -199,6 +199,12 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
     if (!rc && r)
       rc = put_dataset(f, "frame_files", H5T_NATIVE_UINT8, r, MPM_FRAME_NAME_MAX, frows);
     if (!rc && r) rc = put_dataset(f, "stats", H5T_NATIVE_DOUBLE, r, MPM_CKPT_STATS_COLUMNS, srows);
+    /* only with colliders: a file without them is what it was before the columns */
+    const void *forces = c->collider_forces;
+    if (!rc && c->colliders > 0)
+      rc = put_attr(f, "colliders", H5T_NATIVE_INT, &c->colliders) ||
+           put_dataset(f, "collider_forces", H5T_NATIVE_DOUBLE, 0,
+                       (r + 1) * 3 * (hsize_t)c->colliders, &forces);
   }
   free(stats);
   free(srows);

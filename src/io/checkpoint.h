@@ -7,7 +7,8 @@
  * retry guard, the fingerprint of the scene, the particle domains (their particles, corner
  * indices, weights, active flags, and the corners' reference and current positions and
  * velocities), and the per-frame records the outputs are
- * rebuilt from (frame times and names for the PVD, stats rows for stats.csv). Colliders move
+ * rebuilt from (frame times and names for the PVD, stats rows and the colliders' forces for
+ * stats.csv). Colliders move
  * as pure functions of time and the sampling's random jitter is spent at creation, so time
  * is their whole state. Every dataset carries a Fletcher-32 checksum: a damaged file is
  * refused instead of resumed. */
@@ -51,6 +52,11 @@ typedef struct mpm_checkpoint {
   double *frame_times;
   char (*frame_files)[MPM_FRAME_NAME_MAX];
   mpm_stats_row *stats;
+  /* the colliders' force columns of stats.csv (0 and NULL for a scene without colliders, and
+   * in checkpoints from before them): 3 per collider in each of records + 1 rows, the first the
+   * momentum they took in the frame in progress (kg m/s), then the records' mean forces (N) */
+  int colliders;
+  double *collider_forces;
 } mpm_checkpoint;
 
 /* Write *c to `path` atomically (a temporary in the same directory, renamed when complete).

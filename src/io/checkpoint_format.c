@@ -135,6 +135,9 @@ uint64_t mpm_ckpt_content_checksum(const mpm_checkpoint *c) {
     mpm_ckpt_stats_to_row(&c->stats[i], row);
     h = mpm_hash64_words(row, sizeof row, h);
   }
+  if (c->colliders > 0) /* files without colliders keep the checksum they had */
+    h = mpm_hash64_words(c->collider_forces,
+                         (r + 1) * 3 * (size_t)c->colliders * sizeof *c->collider_forces, h);
   return h;
 }
 
@@ -185,5 +188,6 @@ void mpm_checkpoint_free(mpm_checkpoint *c) {
   free(c->frame_times);
   free(c->frame_files);
   free(c->stats);
+  free(c->collider_forces);
   memset(c, 0, sizeof *c);
 }

@@ -386,6 +386,27 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       goto done;
     }
   }
+  if (H5Aexists(r->file, "colliders") > 0) { /* the colliders' force columns */
+    if (get_attr(r, "colliders", H5T_INTEGER, H5T_NATIVE_INT, &c->colliders)) goto done;
+    const size_t nf = ((size_t)c->records + 1) * 3 * (size_t)(c->colliders > 0 ? c->colliders : 0);
+    if (c->colliders <= 0 || c->colliders > 1000000 || nf * sizeof(double) > r->file_bytes) {
+      c->colliders = 0;
+      bad(r, "%s", "the 'colliders' attribute is out of range");
+      goto done;
+    }
+    void *forces = c->collider_forces = malloc(nf * sizeof *c->collider_forces);
+    if (!forces) {
+      mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the collider forces", r->path);
+      goto done;
+    }
+    if (get_dataset(r, "collider_forces", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, 0, (hsize_t)nf, &forces))
+      goto done;
+    for (size_t k = 0; k < nf; ++k)
+      if (!isfinite(c->collider_forces[k])) {
+        bad(r, "%s", "a collider force is not finite");
+        goto done;
+      }
+  }
   if (content != mpm_ckpt_content_checksum(c)) {
     bad(r, "%s", "the data do not match their checksum (damaged)");
     goto done;

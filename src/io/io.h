@@ -38,11 +38,17 @@ typedef struct mpm_frame_fields {
                                 transitional, 2 enriched, -1 a material point; NULL: all -1 */
   int heat;                  /* the run has heat: write temperature and melt */
   const mpm_real *melt;      /* melt fraction per particle (material.h), NULL: 0 */
+  unsigned fields;        /* the point arrays written, bit (1u << f) per mpm_output_field (scene.h);
+                             0: mpm_output_fields_default(heat) */
+  const mpm_real *cauchy; /* Cauchy stress per particle, 9 row-major values each, Pa; NULL
+                             with cauchy_stress selected: zero */
+  const mpm_real *pressure; /* -tr(sigma) / 3 per particle, Pa; NULL: zero */
 } mpm_frame_fields;
 
 /* VTK UnstructuredGrid, one vertex cell per particle, binary appended raw data with
- * Float32/Float64 per the real type: points; point data id, velocity, mass, volume (current,
- * V0 J), J, stress, plastic (the model's plastic state), material, body, enrichment. */
+ * Float32/Float64 per the real type: points; the point data f->fields selects (by default id,
+ * velocity, mass, volume (current, V0 J), J, stress, plastic (the model's plastic state),
+ * material, body, level, enrichment, and temperature and melt with heat). */
 mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err);
 
 /* ParaView collection listing the frame files written so far (file names relative to the
@@ -99,6 +105,11 @@ typedef struct mpm_stats_row {
 /* Rewrites the whole CSV (header + rows) atomically; rows are kept by the caller. */
 mpm_status mpm_write_stats_csv(const char *path, int count, const mpm_stats_row *rows,
                                mpm_error *err);
+/* The same with the force each of `colliders` colliders felt from the material, three columns
+ * per collider after all the others (collider<c>_fx, _fy, _fz, N): row r's are
+ * forces[3 (r colliders + c) + e]. forces may be NULL when colliders is 0. */
+mpm_status mpm_write_stats_csv_forces(const char *path, int count, const mpm_stats_row *rows,
+                                      int colliders, const double *forces, mpm_error *err);
 
 /* ---- reading frames back (vtu_read.c) ------------------------------------------------- */
 

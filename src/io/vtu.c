@@ -9,14 +9,18 @@
  * every array is produced by a fill function into one fixed 32 KiB buffer and streamed a chunk
  * at a time: a million particles need no more memory than that.
  *
- * Arrays: FieldData TIME (Float64); Points; PointData id, velocity, mass, volume (= V0 J, the
- * current volume), J, stress (von Mises, Pa), plastic (the model's plastic state: snow J_p,
- * Drucker-Prager's volume correction), material, body, level, enrichment, and with heat
- * temperature and melt (the melt fraction, 0 solid to 1 melted); Cells connectivity, offsets,
- * types. Reals are Float32 or Float64 as the build's mpm_real. When fields->J is NULL, J is
- * det F of each particle; when fields->stress is NULL, stress is written as zero. */
+ * Arrays: FieldData TIME (Float64); Points; PointData, those of fields->fields (the scene's
+ * output.fields; by default id, velocity, mass, volume (= V0 J, the current volume), J, stress
+ * (von Mises, Pa), plastic (the model's plastic state: snow J_p, Drucker-Prager's volume
+ * correction), material, body, level, enrichment, and with heat temperature and melt (the
+ * melt fraction, 0 solid to 1 melted); on request cauchy_stress (9 components, a VTK tensor,
+ * Pa), pressure (Pa) and F (9 components)); Cells connectivity, offsets, types. Tensors are
+ * row-major, as ParaView names the components (XX, XY, XZ, YX, ...). Reals are Float32 or
+ * Float64 as the build's mpm_real. When fields->J is NULL, J is det F of each particle; when
+ * fields->stress (cauchy, pressure) is NULL, that array is written as zero. */
 #include "io/io.h"
 #include "core/alloc.h"
+#include "scene/scene.h"
 
 #include <errno.h>
 #include <stdint.h>
@@ -39,7 +43,7 @@ typedef struct vtu_array {
   size_t comp_bytes; /* bytes of one component */
   int comps;
   int per_particle; /* 1: count tuples, 0: a single tuple (TIME) */
-  int heat;         /* written only when the run has heat */
+  int field;        /* the mpm_output_field that selects it; -1: always written */
   vtu_fill_fn fill;
 } vtu_array;
 
@@ -132,6 +136,29 @@ static void fill_melt(const mpm_frame_fields *f, size_t first, size_t n, void *o
     memset(out, 0, n * sizeof(mpm_real));
 }
 
+static void fill_cauchy(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  if (f->cauchy)
+    memcpy(out, f->cauchy + 9 * first, 9 * n * sizeof(mpm_real));
+  else
+    memset(out, 0, 9 * n * sizeof(mpm_real));
+}
+
+static void fill_pressure(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  if (f->pressure)
+    memcpy(out, f->pressure + first, n * sizeof(mpm_real));
+  else
+    memset(out, 0, n * sizeof(mpm_real));
+}
+
+/* F is stored as nine arrays, one per row-major component; VTK wants the nine of a particle
+ * together. */
+static void fill_F(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
+  mpm_real *o = out;
+  mpm_real *const *F = f->particles->F;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 9; ++c) o[9 * i + c] = F[c][first + i];
+}
+
 static void fill_connectivity(const mpm_frame_fields *f, size_t first, size_t n, void *out) {
   (void)f;
   int64_t *o = out;
@@ -151,27 +178,35 @@ static void fill_types(const mpm_frame_fields *f, size_t first, size_t n, void *
 }
 
 /* In order of appearance in the appended block; the header groups them by section. */
-#define VTU_ARRAYS 18
+#define VTU_ARRAYS 21
 static const vtu_array vtu_arrays[VTU_ARRAYS] = {
-    {"field", "TIME", "Float64", sizeof(double), 1, 0, 0, fill_time},
-    {"points", "Points", NULL, sizeof(mpm_real), 3, 1, 0, fill_points},
-    {"point", "id", "UInt32", sizeof(uint32_t), 1, 1, 0, fill_id},
-    {"point", "velocity", NULL, sizeof(mpm_real), 3, 1, 0, fill_velocity},
-    {"point", "mass", NULL, sizeof(mpm_real), 1, 1, 0, fill_mass},
-    {"point", "volume", NULL, sizeof(mpm_real), 1, 1, 0, fill_volume},
-    {"point", "J", NULL, sizeof(mpm_real), 1, 1, 0, fill_J},
-    {"point", "stress", NULL, sizeof(mpm_real), 1, 1, 0, fill_stress},
-    {"point", "plastic", NULL, sizeof(mpm_real), 1, 1, 0, fill_plastic},
-    {"point", "material", "Int32", sizeof(int32_t), 1, 1, 0, fill_material},
-    {"point", "body", "Int32", sizeof(int32_t), 1, 1, 0, fill_body},
-    {"point", "level", "Int32", sizeof(int32_t), 1, 1, 0, fill_level},
-    {"point", "enrichment", "Int32", sizeof(int32_t), 1, 1, 0, fill_enrichment},
-    {"point", "temperature", NULL, sizeof(mpm_real), 1, 1, 1, fill_temperature},
-    {"point", "melt", NULL, sizeof(mpm_real), 1, 1, 1, fill_melt},
-    {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, 0, fill_connectivity},
-    {"cells", "offsets", "Int64", sizeof(int64_t), 1, 1, 0, fill_offsets},
-    {"cells", "types", "UInt8", sizeof(uint8_t), 1, 1, 0, fill_types},
+    {"field", "TIME", "Float64", sizeof(double), 1, 0, -1, fill_time},
+    {"points", "Points", NULL, sizeof(mpm_real), 3, 1, -1, fill_points},
+    {"point", "id", "UInt32", sizeof(uint32_t), 1, 1, MPM_FIELD_ID, fill_id},
+    {"point", "velocity", NULL, sizeof(mpm_real), 3, 1, MPM_FIELD_VELOCITY, fill_velocity},
+    {"point", "mass", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_MASS, fill_mass},
+    {"point", "volume", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_VOLUME, fill_volume},
+    {"point", "J", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_J, fill_J},
+    {"point", "stress", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_STRESS, fill_stress},
+    {"point", "plastic", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_PLASTIC, fill_plastic},
+    {"point", "material", "Int32", sizeof(int32_t), 1, 1, MPM_FIELD_MATERIAL, fill_material},
+    {"point", "body", "Int32", sizeof(int32_t), 1, 1, MPM_FIELD_BODY, fill_body},
+    {"point", "level", "Int32", sizeof(int32_t), 1, 1, MPM_FIELD_LEVEL, fill_level},
+    {"point", "enrichment", "Int32", sizeof(int32_t), 1, 1, MPM_FIELD_ENRICHMENT, fill_enrichment},
+    {"point", "temperature", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_TEMPERATURE, fill_temperature},
+    {"point", "melt", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_MELT, fill_melt},
+    {"point", "cauchy_stress", NULL, sizeof(mpm_real), 9, 1, MPM_FIELD_CAUCHY_STRESS, fill_cauchy},
+    {"point", "pressure", NULL, sizeof(mpm_real), 1, 1, MPM_FIELD_PRESSURE, fill_pressure},
+    {"point", "F", NULL, sizeof(mpm_real), 9, 1, MPM_FIELD_F, fill_F},
+    {"cells", "connectivity", "Int64", sizeof(int64_t), 1, 1, -1, fill_connectivity},
+    {"cells", "offsets", "Int64", sizeof(int64_t), 1, 1, -1, fill_offsets},
+    {"cells", "types", "UInt8", sizeof(uint8_t), 1, 1, -1, fill_types},
 };
+
+/* Whether array a is written under the selection `fields` (bits of mpm_output_field). */
+static int written(const vtu_array *a, unsigned fields) {
+  return a->field < 0 || (fields >> a->field & 1u);
+}
 
 /* Output stream that remembers the first failure, so that a full disk stops the writer at
  * once and the message carries the real errno rather than one from a later call. */
@@ -196,11 +231,11 @@ static uint64_t array_bytes(const vtu_array *a, size_t count) {
 
 /* Header lines of every array of one section. */
 static void header_section(vtu_out *o, const char *section, const uint64_t *offsets,
-                           const char *indent, int heat) {
+                           const char *indent, unsigned fields) {
   char line[320];
   for (int k = 0; k < VTU_ARRAYS; ++k) {
     const vtu_array *a = &vtu_arrays[k];
-    if (strcmp(a->section, section) != 0 || (a->heat && !heat)) continue;
+    if (strcmp(a->section, section) != 0 || !written(a, fields)) continue;
     const char *type = a->type ? a->type : VTU_REAL_TYPE;
     char comps[48] = "";
     if (a->comps > 1) snprintf(comps, sizeof comps, " NumberOfComponents=\"%d\"", a->comps);
@@ -212,24 +247,29 @@ static void header_section(vtu_out *o, const char *section, const uint64_t *offs
   }
 }
 
-static void write_header(vtu_out *o, size_t count, const uint64_t *offsets, int heat) {
+static void write_header(vtu_out *o, size_t count, const uint64_t *offsets, unsigned fields) {
   char line[256];
   out_text(o, "<?xml version=\"1.0\"?>\n"
               "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
               "header_type=\"UInt64\">\n"
               "  <UnstructuredGrid>\n"
               "    <FieldData>\n");
-  header_section(o, "field", offsets, "      ", heat);
+  header_section(o, "field", offsets, "      ", fields);
   out_text(o, "    </FieldData>\n");
   snprintf(line, sizeof line, "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n", count,
            count);
   out_text(o, line);
-  out_text(o, "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n");
-  header_section(o, "point", offsets, "        ", heat);
+  /* the active attributes ParaView colours and glyphs by, where they are written */
+  snprintf(line, sizeof line, "      <PointData%s%s%s>\n",
+           fields >> MPM_FIELD_STRESS & 1u ? " Scalars=\"stress\"" : "",
+           fields >> MPM_FIELD_VELOCITY & 1u ? " Vectors=\"velocity\"" : "",
+           fields >> MPM_FIELD_CAUCHY_STRESS & 1u ? " Tensors=\"cauchy_stress\"" : "");
+  out_text(o, line);
+  header_section(o, "point", offsets, "        ", fields);
   out_text(o, "      </PointData>\n      <Points>\n");
-  header_section(o, "points", offsets, "        ", heat);
+  header_section(o, "points", offsets, "        ", fields);
   out_text(o, "      </Points>\n      <Cells>\n");
-  header_section(o, "cells", offsets, "        ", heat);
+  header_section(o, "cells", offsets, "        ", fields);
   out_text(o, "      </Cells>\n"
               "    </Piece>\n"
               "  </UnstructuredGrid>\n"
@@ -254,10 +294,12 @@ static void write_array(vtu_out *o, const vtu_array *a, const mpm_frame_fields *
 
 mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err) {
   const size_t count = f->particles->count;
+  const unsigned fields = f->fields ? f->fields : mpm_output_fields_default(f->heat);
   uint64_t offsets[VTU_ARRAYS], at = 0;
   for (int k = 0; k < VTU_ARRAYS; ++k) {
     offsets[k] = at;
-    if (!vtu_arrays[k].heat || f->heat) at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], count);
+    if (written(&vtu_arrays[k], fields))
+      at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], count);
   }
 
   /* heap, not stack: the fill functions store reals and integers into it */
@@ -270,9 +312,9 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
     return st;
   }
   vtu_out o = {af.fp, 0};
-  write_header(&o, count, offsets, f->heat);
+  write_header(&o, count, offsets, fields);
   for (int k = 0; k < VTU_ARRAYS && !o.err; ++k)
-    if (!vtu_arrays[k].heat || f->heat) write_array(&o, &vtu_arrays[k], f, count, buf);
+    if (written(&vtu_arrays[k], fields)) write_array(&o, &vtu_arrays[k], f, count, buf);
   out_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
   mpm_free(buf);
   if (o.err) {

@@ -220,6 +220,35 @@ typedef struct mpm_surface_desc {
   int per_body;              /* 1: surface_bB_NNNN.obj per body instead of one surface_NNNN */
 } mpm_surface_desc;
 
+/* The point arrays of frame_NNNN.vtu that output.fields selects, in the order the file lists
+ * them (src/io/vtu.c; docs/scene-format.md "output.fields" says what each holds). */
+typedef enum mpm_output_field {
+  MPM_FIELD_ID = 0,
+  MPM_FIELD_VELOCITY,
+  MPM_FIELD_MASS,
+  MPM_FIELD_VOLUME,
+  MPM_FIELD_J,
+  MPM_FIELD_STRESS, /* von Mises equivalent of the Cauchy stress */
+  MPM_FIELD_PLASTIC,
+  MPM_FIELD_MATERIAL,
+  MPM_FIELD_BODY,
+  MPM_FIELD_LEVEL,
+  MPM_FIELD_ENRICHMENT,
+  MPM_FIELD_TEMPERATURE,
+  MPM_FIELD_MELT,
+  MPM_FIELD_CAUCHY_STRESS, /* the full tensor sigma = P F^T / J */
+  MPM_FIELD_PRESSURE,      /* -tr(sigma) / 3 */
+  MPM_FIELD_F,             /* the deformation gradient */
+  MPM_FIELD_COUNT
+} mpm_output_field;
+
+/* The names of output.fields, in the order of mpm_output_field; NULL-terminated. */
+extern const char *const mpm_output_field_names[MPM_FIELD_COUNT + 1];
+
+/* The arrays written when output.fields is not given: those of the files before the key
+ * existed (id .. enrichment), with temperature and melt when the run has heat. */
+unsigned mpm_output_fields_default(int heat);
+
 typedef struct mpm_output_desc {
   char directory[MPM_PATH_MAX]; /* default "out"; `mpm run -o` overrides */
   int vtu;                      /* per-frame VTU + PVD index */
@@ -230,6 +259,9 @@ typedef struct mpm_output_desc {
   int vdb;                      /* with a surface: its level set as levelset_NNNN.vdb */
   int vdb_density;              /* and a fog-volume grid "density" beside it */
   int vdb_velocity;             /* and the particles' velocity as a vector grid "vel" */
+  /* output.fields: bit (1u << f) per mpm_output_field the VTU frames hold; 0 (the key absent):
+   * mpm_output_fields_default */
+  unsigned fields;
 } mpm_output_desc;
 
 /* The view `mpm render` uses (the renderer frames the domain when the scene has none). */

@@ -50,7 +50,7 @@ static const char *const IMPLICIT_KEYS[] = {
     "dt", "newton_iterations", "cg_tolerance", "cg_max_iterations", "on_cg_failure", NULL};
 static const char *const OUTPUT_KEYS[] = {"directory",        "vtu",     "ply", "stats",
                                           "checkpoint_every", "surface", "vdb", "vdb_density",
-                                          "vdb_velocity",     NULL};
+                                          "vdb_velocity",     "fields",  NULL};
 static const char *const CAMERA_KEYS[] = {"eye", "target", "fov", NULL};
 
 /* Enum spellings, in the order of the enum values of scene.h. */
@@ -309,7 +309,7 @@ static int parse_output(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (mpm_json_expect_object(
           c, o,
           "an object with keys directory, vtu, ply, stats, checkpoint_every, surface, vdb, "
-          "vdb_density, vdb_velocity") < 0 ||
+          "vdb_density, vdb_velocity, fields") < 0 ||
       mpm_json_check_keys(c, o, OUTPUT_KEYS, NULL) < 0 ||
       mpm_json_string(c, o, "directory", 0, s->output.directory, sizeof s->output.directory) < 0 ||
       mpm_json_bool(c, o, "vtu", 0, &s->output.vtu) < 0 ||
@@ -320,7 +320,8 @@ static int parse_output(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
                        &every) < 0 ||
       mpm_sj_parse_surface(c, o, s) < 0 || mpm_json_bool(c, o, "vdb", 0, &s->output.vdb) < 0 ||
       mpm_json_bool(c, o, "vdb_density", 0, &s->output.vdb_density) < 0 ||
-      mpm_json_bool(c, o, "vdb_velocity", 0, &s->output.vdb_velocity) < 0)
+      mpm_json_bool(c, o, "vdb_velocity", 0, &s->output.vdb_velocity) < 0 ||
+      mpm_sj_parse_fields(c, o, s) < 0)
     return -1;
   if ((s->output.vdb || s->output.vdb_density || s->output.vdb_velocity) &&
       !s->output.surface.enabled)
@@ -385,7 +386,8 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_sj_parse_materials(c, root, s) < 0 || mpm_sj_parse_bodies(c, root, s) < 0 ||
       mpm_sj_parse_colliders(c, root, s) < 0 || mpm_sj_parse_forces(c, root, s) < 0 ||
       parse_output(c, root, s) < 0 || parse_camera(c, root, s) < 0 ||
-      mpm_sj_parse_refinement(c, root, s) < 0 || mpm_sj_parse_heat(c, root, s) < 0)
+      mpm_sj_parse_refinement(c, root, s) < 0 || mpm_sj_parse_heat(c, root, s) < 0 ||
+      mpm_sj_check_fields_heat(c, root, s) < 0)
     return -1;
   return 0;
 }

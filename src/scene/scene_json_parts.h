@@ -42,6 +42,13 @@ int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s);
  * bodies and materials (it names them). */
 int mpm_sj_parse_surface(mpm_json_ctx *c, const cJSON *output, mpm_scene *s);
 
+/* ---- output.fields (scene_json_fields.c) ------------------------------------------------ */
+
+/* output.fields of the output object `output`: the point arrays of the VTU frames. */
+int mpm_sj_parse_fields(mpm_json_ctx *c, const cJSON *output, mpm_scene *s);
+/* Fields that need heat (temperature, melt) in a scene without it; runs after the heat. */
+int mpm_sj_check_fields_heat(mpm_json_ctx *c, const cJSON *root, const mpm_scene *s);
+
 /* ---- materials (scene_json_material.c) ------------------------------------------------- */
 
 /* root.materials; leaves room in s->materials for one inline material per body. Runs

@@ -11,6 +11,7 @@
 
 #include "collide/body_force.h"
 #include "collide/boundary.h"
+#include "core/arena.h"
 #include "solver/dofs.h"
 
 /* What P2G left in the DOF set. */
@@ -27,11 +28,18 @@ typedef struct mpm_explicit_update {
   int region_count;    /* body-force regions acting on top of gravity (collide/body_force.h) */
   const mpm_force_region *regions;
   mpm_boundary boundary;
+  /* The momentum the colliders take (their reaction forces in stats.csv): NULL, or
+   * 3 * boundary.collider_count doubles, kg m/s, that the update adds to (pose c's component
+   * e at 3 c + e; mpm_boundary_apply_taken). Summed per grid box and per chunk of corners,
+   * then over them in order, so the sums do not depend on the thread count. */
+  double *taken;
+  mpm_arena *arena; /* with taken: the per-box sums' scratch */
 } mpm_explicit_update;
 
 /* The update of every DOF of d (parallel over the boxes of each grid segment and over chunks
  * of corners; independent per DOF, so deterministic). Reads mass, v0 and (for
- * MPM_P2G_MOMENTUM_FORCE) f; writes v0 = v^n and v = v^{n+1}. */
-void mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mpm_dofs *d);
+ * MPM_P2G_MOMENTUM_FORCE) f; writes v0 = v^n and v = v^{n+1}. Returns 0, or -1 when the arena
+ * has no room for the sums of u->taken (nothing is updated then). */
+int mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mpm_dofs *d);
 
 #endif

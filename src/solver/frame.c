@@ -46,6 +46,7 @@ static mpm_status counted_step(mpm_sim *sim, double max_dt, int shortened) {
   if (f->steps == 0 || dt > f->max) f->max = dt;
   f->steps++;
   f->sum += dt;
+  for (int k = 0; k < 3 * sim->collider_count; ++k) sim->collider_frame[k] += sim->collider_step[k];
   if (!shortened) {
     f->full_steps++;
     f->full_sum += dt;
@@ -100,6 +101,7 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   sim->last_frame_solver = sim->solver_figures;
   memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
   memset(&sim->step_figures, 0, sizeof sim->step_figures);
+  memset(sim->collider_frame, 0, 3 * (size_t)sim->collider_count * sizeof *sim->collider_frame);
   if (!sim->output_enabled) return st;
   const int every = sim->scene.output.checkpoint_every;
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&

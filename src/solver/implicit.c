@@ -383,3 +383,58 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   boundary_after(s, vstar);
   return 0;
 }
+
+/* The momentum the colliders took in the solved step (stats.csv): the part of a DOF's momentum
+ * change that neither gravity nor the elastic forces at the end of the step explain, the
+ * obstacle's impulse on it (backward Euler, m (v - v^n) = dt m g + dt f(u) + J):
+ *   J_i = m_i (v_i - v*_i) + dt f_i^n - dt f_i(dt v),  v* = v^n + dt (g + f^n / m),
+ * zero at free DOFs (there it is the Newton residual, to the solver's tolerance). The DOFs
+ * inside collider (pose) c where the step began (or, for corners, where it takes them) count
+ * for c, the first one when several hold a DOF; the collider took -J_i. One more evaluation of
+ * the forces, only when the caller measures. Sums per chunk of DOFs, then in chunk order, so
+ * they do not depend on the thread count. */
+#define TAKEN_CHUNK 1024
+int mpm_implicit_collider_taken(mpm_implicit *s, double *taken) {
+  mpm_dofs *d = s->dofs;
+  const mpm_boundary *bd = s->boundary;
+  const int nc = bd->collider_count;
+  mpm_real **vstar = mpm_dofs_vector(d, "imp.vstar"), **u = mpm_dofs_vector(d, "imp.u");
+  mpm_real **f = mpm_dofs_vector(d, "imp.b");
+  const long n = (long)d->count, chunks = (n + TAKEN_CHUNK - 1) / TAKEN_CHUNK;
+  double *slots = mpm_arena_alloc(s->arena, ((size_t)chunks * 3 * (size_t)nc + 1) * sizeof *slots);
+  if (!vstar || !u || !f || !slots) return -1;
+  displacement(s, d->v, u);
+  mpm_implicit_displace(s, u);
+  mpm_implicit_forces(s, f);
+#pragma omp parallel for schedule(static)
+  for (long h = 0; h < chunks; ++h) {
+    double *t = slots + (size_t)h * 3 * (size_t)nc;
+    for (int k = 0; k < 3 * nc; ++k) t[k] = 0;
+    const long end = (h + 1) * TAKEN_CHUNK < n ? (h + 1) * TAKEN_CHUNK : n;
+    for (long i = h * TAKEN_CHUNK; i < end; ++i) {
+      const mpm_real m = d->mass[i];
+      if (!(m > 0)) continue;
+      const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
+      const mpm_real vs[3] = {vstar[0][i], vstar[1][i], vstar[2][i]};
+      const mpm_real y[3] = {x[0] + s->dt * vs[0], x[1] + s->dt * vs[1], x[2] + s->dt * vs[2]};
+      int c = 0;
+      for (mpm_real nrm[3]; c < nc; ++c)
+        if (mpm_collider_phi(&bd->poses[c], x, nrm) <= 0 ||
+            ((size_t)i >= s->corner_begin && mpm_collider_phi(&bd->poses[c], y, nrm) <= 0))
+          break;
+      if (c == nc) continue;
+      /* f^n: v* - v^n = dt (g + f^n / m) */
+      for (int e = 0; e < 3; ++e) {
+        const double fn_dt =
+            (double)m * ((double)vs[e] - (double)d->v0[e][i]) -
+            (double)m * (double)s->dt * (double)(s->accel[e] ? s->accel[e][i] : s->gravity[e]);
+        const double J = (double)m * ((double)d->v[e][i] - (double)vs[e]) + fn_dt -
+                         (double)s->dt * (double)f[e][i];
+        t[3 * c + e] -= J;
+      }
+    }
+  }
+  for (long h = 0; h < chunks; ++h)
+    for (int k = 0; k < 3 * nc; ++k) taken[k] += slots[(size_t)h * 3 * (size_t)nc + (size_t)k];
+  return 0;
+}

@@ -115,5 +115,10 @@ void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
 int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);
 /* v = P v at the constrained DOFs. */
 void mpm_implicit_project(mpm_implicit *s, mpm_real *const v[3]);
+/* After mpm_implicit_solve: add to taken[3 c + e] (pose c of s->boundary, component e) the
+ * momentum collider c took from the DOFs in the step, kg m/s (implicit.c says how). Evaluates
+ * the forces at the end of the step once more (the scratch of the solve is overwritten). 0, or
+ * -1 when out of memory. */
+int mpm_implicit_collider_taken(mpm_implicit *s, double *taken);
 
 #endif

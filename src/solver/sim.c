@@ -112,7 +112,9 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   sim->collider_count = sc->collider_count;
   sim->colliders = calloc((size_t)(sc->collider_count + 1), sizeof *sim->colliders);
   sim->poses = calloc((size_t)(sc->collider_count + 1), sizeof *sim->poses);
-  if (!sim->colliders || !sim->poses) {
+  sim->collider_step = calloc(6 * (size_t)sc->collider_count + 1, sizeof(double));
+  sim->collider_frame = sim->collider_step + 3 * sc->collider_count;
+  if (!sim->colliders || !sim->poses || !sim->collider_step) {
     st = oom(err, "colliders");
     goto fail;
   }
@@ -344,6 +346,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);
   free(sim->colliders);
   free(sim->poses);
+  free(sim->collider_step);
   if (sim->force_colliders)
     for (int f = 0; f < sim->force_count; ++f) mpm_collider_free(&sim->force_colliders[f]);
   free(sim->force_colliders);
@@ -359,6 +362,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim->frame_times);
   free(sim->frame_files);
   free(sim->stats);
+  free(sim->stats_forces);
   mpm_scene_free(&sim->scene);
   free(sim);
 }

@@ -55,6 +55,10 @@ struct mpm_sim {
   mpm_collider *colliders;
   mpm_collider_pose *poses;
   int collider_count;
+  /* the momentum each collider took from the DOFs (stats.csv's collider force columns), 3 per
+   * collider, kg m/s: in the step under way (step.c), and summed over this frame's steps
+   * (frame.c); measured only while stats.csv is written */
+  double *collider_step, *collider_frame;
   mpm_collider *force_colliders;   /* body-force regions: their level sets and motion */
   mpm_force_region *force_regions; /* those acting this step (step.c) */
   int force_count;
@@ -101,6 +105,8 @@ struct mpm_sim {
   double *frame_times;
   char (*frame_files)[64];
   mpm_stats_row *stats;
+  double *stats_forces; /* per stats row, 3 per collider: the mean force on each collider over
+                           the frame, N (stats.csv's last columns) */
   double frame_wall_start;
   /* output.surface (sim_surface.c): the last frame's reconstruction, for the progress line */
   double surface_seconds;       /* wall time of the frame's surfaces, files included */

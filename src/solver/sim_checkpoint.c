@@ -105,6 +105,18 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   c.frame_times = sim->frame_times;
   c.frame_files = sim->frame_files;
   c.stats = sim->stats;
+  /* the colliders' columns: the frame in progress's sums, then the rows' forces */
+  const size_t nf = 3 * (size_t)sim->collider_count;
+  double *forces = NULL;
+  if (nf) {
+    forces = malloc(((size_t)c.records + 1) * nf * sizeof *forces);
+    if (!forces)
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing a checkpoint");
+    memcpy(forces, sim->collider_frame, nf * sizeof *forces);
+    memcpy(forces + nf, sim->stats_forces, (size_t)c.records * nf * sizeof *forces);
+    c.colliders = sim->collider_count;
+    c.collider_forces = forces;
+  }
   char file[MPM_PATH_MAX + 32];
   snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->output_dir, NAME_DIGITS,
            (long long)sim->steps);
@@ -112,8 +124,10 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   int32_t(*cells)[4] = NULL;
   if (sim->adaptive && sim->scene.refine_every > 0) {
     size_t count = 0;
-    if (!(cells = mpm_adaptive_tree_cells(sim, &count)))
+    if (!(cells = mpm_adaptive_tree_cells(sim, &count))) {
+      free(forces);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
+    }
     c.tree_count = count;
     for (int k = 0; k < 4; ++k) {
       c.tree[k] = malloc((count + 1) * sizeof(int32_t));
@@ -122,11 +136,13 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     free(cells);
     if (!c.tree[0] || !c.tree[1] || !c.tree[2] || !c.tree[3]) {
       for (int k = 0; k < 4; ++k) free(c.tree[k]);
+      free(forces);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
     }
   }
   mpm_status st = mpm_checkpoint_write(file, &c, &sim->error);
   for (int k = 0; k < 4; ++k) free(c.tree[k]);
+  free(forces);
   if (st != MPM_OK) return st;
   snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
   if (path && cap) snprintf(path, cap, "%s", file);
@@ -238,6 +254,13 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
     sim->frame_times[i] = c->frame_times[i];
     memcpy(sim->frame_files[i], c->frame_files[i], sizeof sim->frame_files[i]);
     sim->stats[i] = c->stats[i];
+  }
+  /* the colliders' columns (a checkpoint from before them has none: zeros) */
+  const size_t nf = 3 * (size_t)sim->collider_count;
+  memset(sim->collider_frame, 0, nf * sizeof *sim->collider_frame);
+  if (c->colliders == sim->collider_count && nf) {
+    memcpy(sim->collider_frame, c->collider_forces, nf * sizeof *sim->collider_frame);
+    memcpy(sim->stats_forces, c->collider_forces + nf, (size_t)c->records * nf * sizeof(double));
   }
   sim->output_enabled = 1;
   sim->frame_wall_start = mpm_wall_seconds();

@@ -16,11 +16,13 @@ mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
   free(sim->frame_times);
   free(sim->frame_files);
   free(sim->stats);
+  free(sim->stats_forces);
   const size_t n = (size_t)(records > sim->frame_count + 1 ? records : sim->frame_count + 1);
   sim->frame_times = calloc(n, sizeof *sim->frame_times);
   sim->frame_files = calloc(n, sizeof *sim->frame_files);
   sim->stats = calloc(n, sizeof *sim->stats);
-  if (!sim->frame_times || !sim->frame_files || !sim->stats)
+  sim->stats_forces = calloc(n * 3 * (size_t)sim->collider_count + 1, sizeof *sim->stats_forces);
+  if (!sim->frame_times || !sim->frame_files || !sim->stats || !sim->stats_forces)
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for output bookkeeping");
   return MPM_OK;
 }
@@ -126,15 +128,21 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "more frames than the scene has");
   char path[MPM_PATH_MAX + 64];
   mpm_status st = MPM_OK;
-  mpm_real *J = NULL, *stress = NULL, *melt = NULL;
+  mpm_real *J = NULL, *stress = NULL, *melt = NULL, *cauchy = NULL, *pressure = NULL;
   int32_t *category = NULL;
   const int heat = sim->scene.heat.enabled;
+  const unsigned fields = o->fields ? o->fields : mpm_output_fields_default(heat);
+  const int want_cauchy = o->vtu && (fields >> MPM_FIELD_CAUCHY_STRESS & 1u);
+  const int want_pressure = o->vtu && (fields >> MPM_FIELD_PRESSURE & 1u);
   if (o->vtu || o->ply) {
     J = mpm_alloc((p->count + 1) * sizeof(mpm_real));
     stress = mpm_alloc((p->count + 1) * sizeof(mpm_real));
     category = mpm_alloc((p->count + 1) * sizeof(int32_t));
     melt = heat ? mpm_alloc((p->count + 1) * sizeof(mpm_real)) : NULL;
-    if (!J || !stress || !category || (heat && !melt)) {
+    cauchy = want_cauchy ? mpm_alloc((9 * p->count + 1) * sizeof(mpm_real)) : NULL;
+    pressure = want_pressure ? mpm_alloc((p->count + 1) * sizeof(mpm_real)) : NULL;
+    if (!J || !stress || !category || (heat && !melt) || (want_cauchy && !cauchy) ||
+        (want_pressure && !pressure)) {
       st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
       goto done;
     }
@@ -143,12 +151,20 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     for (long i = 0; i < n; ++i) {
       mpm_real F[9], P[9], tau[9];
       for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
+      /* the moduli the step's stress uses: hardened by the plastic state (snow) and softened
+       * by melting (transfer/stress_window.h) */
       const mpm_material mat = mpm_material_at_temperature(&sim->materials[p->material[i]],
                                                            p->plastic[i], p->temperature[i]);
       mat.model->pk1(&mat, F, P);
-      mpm_m3_mul_bt(P, F, tau);
+      mpm_m3_mul_bt(P, F, tau); /* Kirchhoff tau = P F^T = J sigma */
       J[i] = mpm_m3_det(F);
       stress[i] = mpm_von_mises(tau, J[i]);
+      if (cauchy || pressure) {
+        const mpm_real inv_J = 1 / J[i]; /* Cauchy from first Piola: sigma = P F^T / J */
+        if (cauchy)
+          for (int c = 0; c < 9; ++c) cauchy[9 * i + c] = tau[c] * inv_J;
+        if (pressure) pressure[i] = -(tau[0] + tau[4] + tau[8]) * inv_J / 3;
+      }
       if (melt)
         melt[i] = mpm_material_melt_fraction(&sim->materials[p->material[i]], p->temperature[i]);
     }
@@ -159,7 +175,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     for (size_t q = 0; q < sim->domains.particles.count; ++q)
       if (sim->domains.active[q]) category[j++] = sim->domains.enrich.category[q];
   }
-  mpm_frame_fields ff = {p, J, stress, sim->time, category, heat, melt};
+  mpm_frame_fields ff = {p, J, stress, sim->time, category, heat, melt, fields, cauchy, pressure};
   if (o->vtu) {
     snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "frame_%04d.vtu", frame);
     snprintf(path, sizeof path, "%s/%s", sim->output_dir, sim->frame_files[frame]);
@@ -257,8 +273,13 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
         sim->domains.active_count
             ? 100.0 * (double)en->particles[MPM_DOMAIN_ENRICHED] / (double)sim->domains.active_count
             : 0;
+    /* the colliders' mean force over the frame: the momentum they took over its time */
+    const int nc = sim->collider_count;
+    double *force = sim->stats_forces + 3 * (size_t)frame * (size_t)nc;
+    for (int k = 0; k < 3 * nc; ++k) force[k] = sp->sum > 0 ? sim->collider_frame[k] / sp->sum : 0;
     snprintf(path, sizeof path, "%s/stats.csv", sim->output_dir);
-    st = mpm_write_stats_csv(path, frame + 1, sim->stats, &sim->error);
+    st =
+        mpm_write_stats_csv_forces(path, frame + 1, sim->stats, nc, sim->stats_forces, &sim->error);
     if (st != MPM_OK) goto done;
   }
   sim->written_frames++;
@@ -268,5 +289,7 @@ done:
   mpm_free(stress);
   mpm_free(category);
   mpm_free(melt);
+  mpm_free(cauchy);
+  mpm_free(pressure);
   return st;
 }

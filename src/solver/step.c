@@ -188,8 +188,37 @@ static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   return MPM_OK;
 }
 
+/* Whether the step measures what the colliders take (only for stats.csv: a step without
+ * colliders, or whose figures nobody writes, does no more work than before). */
+static int measures_colliders(const mpm_sim *sim, const step_ctx *c) {
+  return c->update.boundary.collider_count > 0 && sim->output_enabled && sim->scene.output.stats;
+}
+
+/* Pose c's taken momentum to its collider's sum of the step (the poses are the active
+ * colliders only). */
+static void collect_taken(mpm_sim *sim, const step_ctx *c, const double *taken) {
+  const mpm_boundary *b = &c->update.boundary;
+  for (int k = 0; k < b->collider_count; ++k) {
+    const size_t at = (size_t)(b->poses[k].collider - sim->colliders);
+    for (int e = 0; e < 3; ++e) sim->collider_step[3 * at + e] += taken[3 * k + e];
+  }
+}
+
 static mpm_status stage_update(mpm_sim *sim, step_ctx *c) {
-  mpm_dofs_explicit_update(&c->update, c->p2g_output, &sim->dofs);
+  if (!measures_colliders(sim, c)) {
+    mpm_dofs_explicit_update(&c->update, c->p2g_output, &sim->dofs);
+    return MPM_OK;
+  }
+  double *taken =
+      mpm_arena_alloc(&sim->step_arena, 3 * (size_t)sim->collider_count * sizeof *taken);
+  if (taken) memset(taken, 0, 3 * (size_t)sim->collider_count * sizeof *taken);
+  c->update.taken = taken;
+  c->update.arena = &sim->step_arena;
+  if (!taken || mpm_dofs_explicit_update(&c->update, c->p2g_output, &sim->dofs))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory for the colliders' reaction sums",
+                         (long long)sim->steps);
+  collect_taken(sim, c, taken);
   return MPM_OK;
 }
 
@@ -220,6 +249,16 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the implicit solve over %zu DOFs",
                          (long long)sim->steps, sim->dofs.count);
+  if (measures_colliders(sim, c)) {
+    const size_t n = 3 * (size_t)sim->collider_count;
+    double *taken = mpm_arena_alloc(&sim->step_arena, n * sizeof *taken);
+    if (taken) memset(taken, 0, n * sizeof *taken);
+    if (!taken || mpm_implicit_collider_taken(&s, taken))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory for the colliders' reaction sums",
+                           (long long)sim->steps);
+    collect_taken(sim, c, taken);
+  }
   mpm_solver_figures *f = &sim->solver_figures;
   sim->implicit_steps++;
   sim->cg_iterations += c->solve.cg_iterations;
@@ -439,6 +478,8 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
                          (long long)sim->steps);
   step_ctx c;
   step_setup(sim, dt, &c);
+  /* a retried step starts over: only the accepted attempt's reactions count (frame.c) */
+  memset(sim->collider_step, 0, 3 * (size_t)sim->collider_count * sizeof *sim->collider_step);
   double t = t0;
   const int implicit = sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT;
   const stage *stages = implicit ? implicit_stages : explicit_stages;

@@ -14,7 +14,10 @@ frame, that what ParaView would load is what the engine computed:
               PointData id (UInt32), velocity (3 comps), mass, volume, J, stress, plastic
               (the build's real, Float32 or Float64 as read from the Points) and material,
               body, level (the particle type: 0 .. domain.levels - 1), enrichment (Int32; -1
-              for material points, 0-2 for domain particles). Values: TIME equals the PVD timestep and stats.csv time as written
+              for material points, 0-2 for domain particles), or, for a scene with
+              output.fields (which must keep those), the ones it lists: cauchy_stress and F
+              (9 comps), pressure (the real), checked for sigma symmetric, pressure = -tr
+              sigma / 3, stress = the von Mises of sigma and J = det F. Values: TIME equals the PVD timestep and stats.csv time as written
               (%.9g or exact); all reals finite; mass, volume, J > 0; stress >= 0; ids unique
               and the same set in every frame; body indices 0..bodies-1, one material per body
               and, for bodies naming a material of the scene's list, that material's index.
@@ -26,7 +29,8 @@ frame, that what ParaView would load is what the engine computed:
               (1e-6 relative). Read again with VTK's own vtkPLYReader: the same point count and
               positions (rounded to float, which that reader makes them), nothing printed.
   stats.csv   sum(mass) within 1e-6 relative; 0.5 sum(m |v|^2) from the VTU arrays within
-              1e-4 relative; sum(m v) within 1e-6 of sum(m |v|).
+              1e-4 relative; sum(m v) within 1e-6 of sum(m |v|). With colliders: the row ends
+              with collider<c>_fx, _fy, _fz per collider of the scene, finite, 0 in frame 0.
   grid_cells.vtu (scenes with domain.levels), and grid_cells_NNNN.vtu per frame (with
               domain.refine_every, also a "grid_cells" part of run.pvd)
               every cell a VTK_VOXEL of edge dx / 2^level with CellData level in
@@ -91,6 +95,13 @@ POINT_ARRAYS = {"id": (1, "UInt32"), "velocity": (3, REAL), "mass": (1, REAL),
                 "volume": (1, REAL), "J": (1, REAL), "stress": (1, REAL),
                 "plastic": (1, REAL), "material": (1, "Int32"), "body": (1, "Int32"),
                 "level": (1, "Int32"), "enrichment": (1, "Int32")}
+# what output.fields can add
+OPTIONAL_ARRAYS = {"cauchy_stress": (9, REAL), "pressure": (1, REAL), "F": (9, REAL)}
+# cauchy_stress against itself, relative to the frame's largest component: a float build's
+# stress is P F^T with R of the SVD good to ~1e-7, which leaves 2 mu 1e-7 |F| of asymmetry
+# (mu >> |sigma| for a body near rest), so 1e-3 in float; 1e-7 in double
+TENSOR_RTOL = {"Float32": 1e-3, "Float64": 1e-7}
+DET_RTOL = {"Float32": 1e-5, "Float64": 1e-12}
 PLY_PROPERTIES = ["x", "y", "z", "vx", "vy", "vz", "pscale", "id", "material", "body"]
 PLY_INTS = {"id": "uint", "material": "int", "body": "int"}
 PLY_STRUCT = {"char": "b", "uchar": "B", "short": "h", "ushort": "H", "int": "i",
@@ -325,6 +336,57 @@ def check_arrays(where, data, expected, real, n, kind):
     return got
 
 
+def check_tensors(where, pd, reals, ids, n, real):
+    """cauchy_stress symmetric, pressure = -tr / 3, stress its von Mises; J = det F."""
+    rtol = TENSOR_RTOL[real]
+    if "cauchy_stress" in pd:
+        sig = values(pd["cauchy_stress"])
+        if not all(math.isfinite(y) for y in sig):
+            where.fail("cauchy_stress", "a value is not finite")
+        scale = rtol * max([abs(y) for y in sig] + [1e-30])
+        for i in range(n):
+            s = sig[9 * i:9 * i + 9]
+            for a, b in ((1, 3), (2, 6), (5, 7)):
+                if abs(s[a] - s[b]) > scale:
+                    where.fail("cauchy_stress", "particle %d (id %d) is not symmetric: %r"
+                               % (i, ids[i], s))
+            mean = (s[0] + s[4] + s[8]) / 3
+            dev = [s[k] - (mean if k in (0, 4, 8) else 0) for k in range(9)]
+            vm = math.sqrt(1.5 * math.fsum(d * d for d in dev))
+            if abs(vm - reals["stress"][i]) > scale:
+                where.fail("stress", "particle %d (id %d): %r, the von Mises of cauchy_stress "
+                           "is %r" % (i, ids[i], reals["stress"][i], vm))
+            if "pressure" in pd and abs(pd["pressure"].GetValue(i) + mean) > scale:
+                where.fail("pressure", "particle %d (id %d): %r, -tr(cauchy_stress)/3 is %r"
+                           % (i, ids[i], pd["pressure"].GetValue(i), -mean))
+    if "F" in pd:
+        F = values(pd["F"])
+        for i in range(n):
+            a = F[9 * i:9 * i + 9]
+            det = (a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6])
+                   + a[2] * (a[3] * a[7] - a[4] * a[6]))
+            if not rel_close(det, reals["J"][i], DET_RTOL[real]):
+                where.fail("F", "particle %d (id %d): det F = %r, J is %r"
+                           % (i, ids[i], det, reals["J"][i]))
+
+
+def check_collider_columns(where, stats, colliders):
+    """collider<c>_fx, _fy, _fz for every collider of the scene, finite, 0 in frame 0."""
+    for c in range(colliders):
+        for e in "xyz":
+            name = "collider%d_f%s" % (c, e)
+            for frame, row in sorted(stats.items()):
+                if name not in row:
+                    where.fail(None, "no column %s for collider %d" % (name, c))
+                v = float(row[name])
+                if not math.isfinite(v) or (frame == 0 and v != 0):
+                    where.fail(None, "%s of frame %d is %r" % (name, frame, v))
+    extra = [k for k in next(iter(stats.values())) if k.startswith("collider")]
+    if len(extra) != 3 * colliders:
+        where.fail(None, "%d collider columns, the scene has %d colliders"
+                   % (len(extra), colliders))
+
+
 def first_difference(a, b):
     for i, (x, y) in enumerate(zip(a, b)):
         if x != y:
@@ -368,7 +430,14 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
 
     # arrays: names, components, types
     fd = check_arrays(where, grid.GetFieldData(), FIELD_ARRAYS, real, 1, "FieldData")
-    pd = check_arrays(where, grid.GetPointData(), POINT_ARRAYS, real, n, "PointData")
+    expected = dict(POINT_ARRAYS)
+    fields = scene_info[4] if scene_info is not None else None
+    if fields is not None:
+        if not set(POINT_ARRAYS) <= set(fields):
+            where.fail(None, "check_output.py checks scenes whose output.fields keeps %s"
+                       % sorted(POINT_ARRAYS))
+        expected.update({k: v for k, v in OPTIONAL_ARRAYS.items() if k in fields})
+    pd = check_arrays(where, grid.GetPointData(), expected, real, n, "PointData")
     active = grid.GetPointData().GetScalars(), grid.GetPointData().GetVectors()
     if active[0] is None or active[0].GetName() != "stress":
         where.fail("stress", "not the active scalars (PointData Scalars=\"stress\")")
@@ -399,6 +468,8 @@ def check_frame(where, grid, ply, pvd_step, stats, scene_info, real_seen):
         if bad is not None:
             where.fail(name, "particle %d (id %d) has %r, expected %s"
                        % (bad, ids[bad], reals[name][bad], rule))
+
+    check_tensors(where, pd, reals, ids, n, real)
 
     # PLY (independent writer): the same floats, bit for bit, and the same ids
     for name, col, comps, k in (("Points", "x", 3, 0), ("Points", "y", 3, 1),
@@ -493,7 +564,8 @@ def scene_bodies(path):
         bodies = s["bodies"]
         named = {mt["name"]: k for k, mt in enumerate(s.get("materials", []))
                  if isinstance(mt, dict) and "name" in mt}
-        return (bodies, named, s["domain"].get("levels", 0), s["domain"]) \
+        return (bodies, named, s["domain"].get("levels", 0), s["domain"],
+                s.get("output", {}).get("fields"), len(s.get("colliders", []))) \
             if isinstance(bodies, list) else None
     except (OSError, ValueError, KeyError, TypeError):
         return None
@@ -671,6 +743,8 @@ def check_scene(mpm, scene, outdir, frames, messages):
         Where(name, "stats.csv").fail(None, "frames %s, expected 0..%d"
                                       % (sorted(stats), len(entries) - 1))
     info = scene_bodies(scene)
+    if info is not None:
+        check_collider_columns(Where(name, "stats.csv"), stats, info[5])
     real, ids0, n, domain_cells = None, None, 0, 0
     for k, (step, vtu) in enumerate(entries):
         m = re.fullmatch(r"frame_(\d+)\.vtu", os.path.basename(vtu))
