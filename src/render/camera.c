@@ -52,3 +52,69 @@ mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int widt
   mpm_camera_setup(&cam, width, height);
   return cam;
 }
+
+/* The eye is c - D forward + a right + b up for the box's centre c and the fixed view
+ * direction. A corner p (camera coordinates x, y, z relative to c) lands in the pixel columns
+ * [u0, u1] (relative to the image's centre) when k0 (z + D) <= x - a <= k1 (z + D) with
+ * k = u / focal: every corner bounds a from both sides by lines in D, so the nearest D that
+ * admits an a is (A1 - A0) / (k1 - k0) with A1 = max(x - k1 z), A0 = min(x - k0 z), and the
+ * a in the middle of what is left centres the box. Rows alike. Exact for a pinhole camera. */
+static void fit_axis(const double *x, const double *z, double k0, double k1, double *D, double *a0,
+                     double *a1) {
+  double A1 = -INFINITY, A0 = INFINITY;
+  for (int k = 0; k < 8; ++k) {
+    A1 = fmax(A1, x[k] - k1 * z[k]);
+    A0 = fmin(A0, x[k] - k0 * z[k]);
+  }
+  *D = (A1 - A0) / (k1 - k0);
+  *a0 = A0, *a1 = A1;
+}
+
+mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width, int height,
+                              const int rect[4]) {
+  mpm_camera cam;
+  double c[3], r = 0;
+  for (int d = 0; d < 3; ++d) {
+    c[d] = 0.5 * (lo[d] + hi[d]);
+    r += 0.25 * (hi[d] - lo[d]) * (hi[d] - lo[d]);
+  }
+  r = fmax(sqrt(r), 1e-6);
+  cam.fov_deg = 35;
+  double dir[3] = {0.55, 0.5, 1.0}; /* front right, above: as mpm_camera_frame_box */
+  normalize(dir);
+  for (int d = 0; d < 3; ++d) {
+    cam.target[d] = c[d];
+    cam.eye[d] = c[d] + dir[d];
+  }
+  mpm_camera_setup(&cam, width, height); /* the basis, for the fit below */
+  double x[8], y[8], z[8];
+  for (int k = 0; k < 8; ++k) {
+    double p[3] = {k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]};
+    x[k] = y[k] = z[k] = 0;
+    for (int d = 0; d < 3; ++d) {
+      x[k] += (p[d] - c[d]) * cam.right[d];
+      y[k] += (p[d] - c[d]) * cam.up[d];
+      z[k] += (p[d] - c[d]) * cam.forward[d];
+    }
+  }
+  /* pixel bounds as offsets from the centre, up positive for the rows */
+  const double f = cam.focal;
+  const double u0 = (rect[0] - 0.5 * width) / f, u1 = (rect[2] - 0.5 * width) / f;
+  const double v0 = (0.5 * height - rect[3]) / f, v1 = (0.5 * height - rect[1]) / f;
+  double Dh, Dv, a0, a1, b0, b1;
+  fit_axis(x, z, u0, u1, &Dh, &a0, &a1);
+  fit_axis(y, z, v0, v1, &Dv, &b0, &b1);
+  double D = fmax(fmax(Dh, Dv), 0);
+  double zmin = INFINITY;
+  for (int k = 0; k < 8; ++k) zmin = fmin(zmin, z[k]);
+  D = fmax(D, 0.05 * r - zmin); /* never inside the box */
+  /* the middle of each admissible interval at this D */
+  const double a = 0.5 * ((a1 - u1 * D) + (a0 - u0 * D));
+  const double b = 0.5 * ((b1 - v1 * D) + (b0 - v0 * D));
+  for (int d = 0; d < 3; ++d) {
+    cam.target[d] = c[d] + a * cam.right[d] + b * cam.up[d];
+    cam.eye[d] = cam.target[d] - D * cam.forward[d];
+  }
+  mpm_camera_setup(&cam, width, height);
+  return cam;
+}

@@ -47,6 +47,11 @@ void mpm_camera_setup(mpm_camera *cam, int width, int height);
 /* A camera that frames the box [lo, hi] from the front-right and above. */
 mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int width, int height);
 
+/* A camera from the same direction that is as near the box [lo, hi] as lets all of its
+ * corners project into the pixel rectangle rect = {x0, y0, x1, y1}, centred in it. */
+mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width, int height,
+                              const int rect[4]);
+
 /* Colour maps: t in [0, 1] (clamped) to linear RGB. */
 typedef enum mpm_colormap {
   MPM_CMAP_VIRIDIS = 0, /* perceptually uniform, for magnitudes */
@@ -81,5 +86,12 @@ void mpm_render_lines(mpm_image *img, const mpm_camera *cam, size_t n, const flo
 mpm_status mpm_render_triangles(mpm_image *img, const mpm_camera *cam, size_t vertex_count,
                                 const float *xyz, size_t triangle_count, const uint32_t *tri,
                                 const float rgb[3], mpm_error *err);
+
+/* Pass 1b, the ground's shadow: the n particles at xyz (radius[i], or radius_all when radius is
+ * NULL) darken the ground plane at height floor_y below them, sharply where they touch it and
+ * more softly the higher they are (shadow.c). Only pixels that show the ground are changed. */
+mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, double floor_y, size_t n,
+                                    const float *xyz, const float *radius, float radius_all,
+                                    mpm_error *err);
 
 #endif
