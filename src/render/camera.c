@@ -57,17 +57,39 @@ mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int widt
  * direction. A corner p (camera coordinates x, y, z relative to c) lands in the pixel columns
  * [u0, u1] (relative to the image's centre) when k0 (z + D) <= x - a <= k1 (z + D) with
  * k = u / focal: every corner bounds a from both sides by lines in D, so the nearest D that
- * admits an a is (A1 - A0) / (k1 - k0) with A1 = max(x - k1 z), A0 = min(x - k0 z), and the
- * a in the middle of what is left centres the box. Rows alike. Exact for a pinhole camera. */
-static void fit_axis(const double *x, const double *z, double k0, double k1, double *D, double *a0,
-                     double *a1) {
+ * admits an a is (A1 - A0) / (k1 - k0) with A1 = max(x - k1 z), A0 = min(x - k0 z). Rows
+ * alike. Exact for a pinhole camera. */
+static double fit_distance(const double *x, const double *z, double k0, double k1) {
   double A1 = -INFINITY, A0 = INFINITY;
   for (int k = 0; k < 8; ++k) {
     A1 = fmax(A1, x[k] - k1 * z[k]);
     A0 = fmin(A0, x[k] - k0 * z[k]);
   }
-  *D = (A1 - A0) / (k1 - k0);
-  *a0 = A0, *a1 = A1;
+  return (A1 - A0) / (k1 - k0);
+}
+
+/* The shift a at distance D that centres the corners' projections (x - a) / (z + D) between
+ * k0 and k1: their extremes' sum falls as a grows, so bisection finds it. */
+static double centre_shift(const double *x, const double *z, double k0, double k1, double D) {
+  double lo = -INFINITY, hi = INFINITY;
+  for (int k = 0; k < 8; ++k) { /* a within the corners' own span keeps every one inside */
+    lo = fmax(lo, x[k] - k1 * (z[k] + D));
+    hi = fmin(hi, x[k] - k0 * (z[k] + D));
+  }
+  if (!(lo <= hi)) return 0.5 * (lo + hi);
+  for (int it = 0; it < 100; ++it) {
+    const double a = 0.5 * (lo + hi);
+    double mn = INFINITY, mx = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+      const double q = (x[k] - a) / (z[k] + D);
+      mn = fmin(mn, q), mx = fmax(mx, q);
+    }
+    if (mn + mx > k0 + k1)
+      lo = a;
+    else
+      hi = a;
+  }
+  return 0.5 * (lo + hi);
 }
 
 mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width, int height,
@@ -101,16 +123,11 @@ mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width,
   const double f = cam.focal;
   const double u0 = (rect[0] - 0.5 * width) / f, u1 = (rect[2] - 0.5 * width) / f;
   const double v0 = (0.5 * height - rect[3]) / f, v1 = (0.5 * height - rect[1]) / f;
-  double Dh, Dv, a0, a1, b0, b1;
-  fit_axis(x, z, u0, u1, &Dh, &a0, &a1);
-  fit_axis(y, z, v0, v1, &Dv, &b0, &b1);
-  double D = fmax(fmax(Dh, Dv), 0);
+  double D = fmax(fmax(fit_distance(x, z, u0, u1), fit_distance(y, z, v0, v1)), 0);
   double zmin = INFINITY;
   for (int k = 0; k < 8; ++k) zmin = fmin(zmin, z[k]);
   D = fmax(D, 0.05 * r - zmin); /* never inside the box */
-  /* the middle of each admissible interval at this D */
-  const double a = 0.5 * ((a1 - u1 * D) + (a0 - u0 * D));
-  const double b = 0.5 * ((b1 - v1 * D) + (b0 - v0 * D));
+  const double a = centre_shift(x, z, u0, u1, D), b = centre_shift(y, z, v0, v1, D);
   for (int d = 0; d < 3; ++d) {
     cam.target[d] = c[d] + a * cam.right[d] + b * cam.up[d];
     cam.eye[d] = cam.target[d] - D * cam.forward[d];
