@@ -11,7 +11,7 @@
 #include <string.h>
 
 /* Frames of at most this many particles in all are all read; beyond it a sample. */
-#define SURVEY_POINTS 20000000L
+#define SURVEY_POINTS 12000000L
 #define SURVEY_SAMPLES 12
 /* Speeds within a frame that differ by less than this (m/s, or relative to the fastest) are
  * one colour on the map. */

@@ -142,6 +142,10 @@ void mpm_render_legend(mpm_image *img, const mpm_legend *lg) {
     return;
   }
   const mpm_overlay_box bar = mpm_legend_bar(lg, img->width, img->height);
+  /* a thin dark frame sets the bar off the panel, whose grey its middle colours may match */
+  const mpm_overlay_box frame = {bar.x0 - L.s, bar.y0 - L.s, bar.x1 + L.s, bar.y1 + L.s};
+  const float edge[3] = {0.1f, 0.1f, 0.11f};
+  fill(img, frame, edge);
   const int rows = bar.y1 - bar.y0;
   for (int y = bar.y0; y < bar.y1; ++y) { /* hi at the top */
     const double t = rows > 1 ? (double)(bar.y1 - 1 - y) / (rows - 1) : 0;

@@ -4,11 +4,13 @@
  *   1. the background: a vertical sky gradient, a checkered ground plane at the domain floor,
  *      and the scene's colliders found by sphere tracing their level sets (collide/collider.h);
  *      containers (inside-out colliders) show their far wall, so what they hold stays visible;
+ *   1b. the ground's shadow under the particles (shadow.c), on the pixels that show the ground;
  *   2. the particles as shaded sphere impostors (a disc per particle whose depth and normal
  *      are those of the sphere), depth-tested against each other and the background;
  *   3. tone mapping to 8-bit sRGB and a PNG written atomically with libpng (render_png.c).
  * Between 2 and 3 the particle surfaces may be drawn as shaded triangles (mpm_render_triangles)
- * and an overlay of line segments (mpm_render_lines: the multi-level grid's cells).
+ * and an overlay of line segments (mpm_render_lines: the multi-level grid's cells); before 3
+ * the colour bar and labels of overlay.h.
  * Particles are spread over threads, each with its own colour and depth buffer, merged by
  * depth at the end, so the image does not depend on the thread count. */
 #ifndef MPM_RENDER_RENDER_H
