@@ -61,7 +61,8 @@ int mpm_render_field_values(const mpm_vtu_frame *fr, int field, float *out, char
 int mpm_render_survey(const render_opts *o, const int *frames, int nf, render_survey *sv, char *why,
                       size_t cap);
 
-/* The particles' spheres' box of one frame (radius 0.75 cbrt(volume), as drawn). */
+/* The particles' box of one frame, grown by the largest sphere's radius (0.75 cbrt(volume), as
+ * drawn). */
 void mpm_render_frame_box(const mpm_vtu_frame *fr, double lo[3], double hi[3]);
 
 /* The edges of the multi-level grid's cells of frame `frame` (render_grid.c): segments for

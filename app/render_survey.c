@@ -47,16 +47,20 @@ int mpm_render_field_values(const mpm_vtu_frame *fr, int field, float *out, char
 void mpm_render_frame_box(const mpm_vtu_frame *fr, double lo[3], double hi[3]) {
   const mpm_vtu_array *pts = mpm_vtu_frame_array(fr, "Points");
   const mpm_vtu_array *vol = mpm_vtu_frame_array(fr, "volume");
-  for (int d = 0; d < 3; ++d) lo[d] = INFINITY, hi[d] = -INFINITY;
+  float l[3] = {INFINITY, INFINITY, INFINITY}, h[3] = {-INFINITY, -INFINITY, -INFINITY};
+  float vmax = 0;
   for (long i = 0; pts && i < fr->point_count; ++i) {
-    const double r = vol ? 0.75 * cbrt(fmax(vol->data[i], 0)) : 0.005;
+    const float *p = pts->data + 3 * i;
+    if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) continue;
     for (int d = 0; d < 3; ++d) {
-      const double x = pts->data[3 * i + d];
-      if (!isfinite(x)) continue;
-      lo[d] = fmin(lo[d], x - r);
-      hi[d] = fmax(hi[d], x + r);
+      l[d] = p[d] < l[d] ? p[d] : l[d];
+      h[d] = p[d] > h[d] ? p[d] : h[d];
     }
+    if (vol && vol->data[i] > vmax) vmax = vol->data[i];
   }
+  /* the largest sphere's radius all round: one cube root, not one per particle */
+  const double r = vol ? 0.75 * cbrt((double)vmax) : 0.005;
+  for (int d = 0; d < 3; ++d) lo[d] = l[d] - r, hi[d] = h[d] + r;
 }
 
 /* The 2nd and 98th percentiles of v[0..n) (sorted in place). */

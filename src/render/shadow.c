@@ -66,17 +66,25 @@ static float sample(const shadow_map *m, const float *a, double x, double z) {
 static int build(shadow_map *m, double floor_y, size_t n, const float *xyz, const float *radius,
                  float radius_all) {
   memset(m, 0, sizeof *m);
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  /* plain float compares: this pass and the next are most of the shadow's time */
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  const float ground = (float)floor_y - 1e-3f;
   double rsum = 0;
-  size_t above = 0;
+  size_t above = 0, sampled = 0;
   for (size_t i = 0; i < n; ++i) {
     const float *p = xyz + 3 * i;
-    if (!(p[1] >= floor_y - 1e-3) || !isfinite(p[0]) || !isfinite(p[2])) continue;
-    for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], p[d]), hi[d] = fmax(hi[d], p[d]);
-    rsum += radius ? radius[i] : radius_all;
-    ++above;
+    if (!(p[1] >= ground) || !isfinite(p[0]) || !isfinite(p[2])) continue;
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = p[d] < lo[d] ? p[d] : lo[d];
+      hi[d] = p[d] > hi[d] ? p[d] : hi[d];
+    }
+    if ((above++ & 15) == 0) { /* the mean radius from every 16th particle */
+      rsum += radius ? radius[i] : radius_all;
+      ++sampled;
+    }
   }
   if (!above) return 0;
+  rsum *= (double)above / (double)sampled;
   const double r = fmax(rsum / (double)above, 1e-9);
   const double extent = fmax(fmax(hi[0] - lo[0], hi[2] - lo[2]), fmax(hi[1] - lo[1], 4 * r));
   /* cells no smaller than the particles' spacing (4/3 of a radius), so splats leave no holes */
@@ -91,17 +99,27 @@ static int build(shadow_map *m, double floor_y, size_t n, const float *xyz, cons
   m->contact = calloc(cells, sizeof(float));
   m->tmp = malloc((size_t)(m->nx > m->nz ? m->nx : m->nz) * sizeof(float));
   if (!m->soft || !m->contact || !m->tmp) return -1;
-  const double fade = extent; /* the soft shadow of a body this high is 1/e as dark */
+  /* the lowest gap under each cell first (both weights fall with the gap), then one pair of
+     exponentials per cell rather than per particle */
+  float *gap = m->contact;
+  for (size_t c = 0; c < cells; ++c) gap[c] = INFINITY;
   for (size_t i = 0; i < n; ++i) {
     const float *p = xyz + 3 * i;
-    if (!(p[1] >= floor_y - 1e-3) || !isfinite(p[0]) || !isfinite(p[2])) continue;
+    if (!(p[1] >= ground) || !isfinite(p[0]) || !isfinite(p[2])) continue;
     const int ix = (int)((p[0] - m->x0) / m->cell), iz = (int)((p[2] - m->z0) / m->cell);
     const size_t c = (size_t)iz * (size_t)m->nx + (size_t)ix;
-    const double ri = radius ? radius[i] : radius_all;
-    const double gap = fmax(p[1] - ri - floor_y, 0);
-    const float ws = (float)exp(-gap / fade), wc = (float)exp(-gap / (CONTACT_HEIGHT * r));
-    if (ws > m->soft[c]) m->soft[c] = ws;
-    if (wc > m->contact[c]) m->contact[c] = wc;
+    const float g = p[1] - (radius ? radius[i] : radius_all) - (float)floor_y;
+    if (g < gap[c]) gap[c] = g;
+  }
+  const double fade = extent; /* the soft shadow of a body this high is 1/e as dark */
+  for (size_t c = 0; c < cells; ++c) {
+    if (!isfinite(gap[c])) {
+      m->soft[c] = m->contact[c] = 0;
+      continue;
+    }
+    const double g = fmax(gap[c], 0);
+    m->soft[c] = (float)exp(-g / fade);
+    m->contact[c] = (float)exp(-g / (CONTACT_HEIGHT * r));
   }
   blur(m, m->soft, r_soft);
   blur(m, m->contact, r_contact);
@@ -120,9 +138,33 @@ mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, doubl
   }
   if (built == 0) return MPM_OK;
   const int w = img->width, h = img->height;
+  /* only the pixels the map's rectangle on the ground projects to */
+  int px0 = 0, px1 = w - 1, py0 = 0, py1 = h - 1;
+  double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+  int behind = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double p[3] = {m.x0 + (k & 1 ? m.nx : 0) * m.cell, floor_y,
+                         m.z0 + (k & 2 ? m.nz : 0) * m.cell};
+    double q[3] = {0, 0, 0};
+    for (int d = 0; d < 3; ++d) {
+      q[0] += (p[d] - cam->eye[d]) * cam->right[d];
+      q[1] += (p[d] - cam->eye[d]) * cam->up[d];
+      q[2] += (p[d] - cam->eye[d]) * cam->forward[d];
+    }
+    if (q[2] <= 1e-9) {
+      behind = 1;
+      break;
+    }
+    const double u = 0.5 * w + cam->focal * q[0] / q[2], v = 0.5 * h - cam->focal * q[1] / q[2];
+    u0 = fmin(u0, u), u1 = fmax(u1, u), v0 = fmin(v0, v), v1 = fmax(v1, v);
+  }
+  if (!behind) { /* a plane's rectangle projects into the hull of its corners */
+    px0 = (int)fmax(floor(u0) - 1, 0), px1 = (int)fmin(ceil(u1) + 1, w - 1);
+    py0 = (int)fmax(floor(v0) - 1, 0), py1 = (int)fmin(ceil(v1) + 1, h - 1);
+  }
 #pragma omp parallel for schedule(static)
-  for (int py = 0; py < h; ++py)
-    for (int px = 0; px < w; ++px) {
+  for (int py = py0; py <= py1; ++py)
+    for (int px = px0; px <= px1; ++px) {
       const size_t i = (size_t)py * (size_t)w + (size_t)px;
       if (!isfinite(img->depth[i])) continue;
       /* the pixel's ray, as the background pass casts it */
