@@ -3,7 +3,7 @@
  * more of it than with --frame domain), the ground is darker beside a body on the floor than
  * with --no-shadow, the colour bar's gradient is in its strip and the time label says the
  * frame's time (and --no-legend, --no-time leave them out), and a run at rest is coloured by
- * material (a moving one by speed). */
+ * material (by body when the bodies share one material; a moving one by speed). */
 #include "support.h"
 #include "cli_support.h"
 #include "render/overlay.h"
@@ -209,6 +209,22 @@ static void test_material_by_default(void **state) {
   snprintf(args, sizeof args, "render '%s' --size 160x90", out);
   if (mpm(args) != 0) fail_msg("mpm render failed:\n%s", output);
   expect_output("velocity 0..");
+  /* at rest with one material for both bodies: by body */
+  snprintf(scene, sizeof scene, "%s/one_material.json", dir);
+  json = malloc(strlen(rest_scene) + 1);
+  assert_non_null(json);
+  strcpy(json, rest_scene);
+  at = strstr(json, "\"material\": \"rubber\"");
+  assert_non_null(at);
+  memcpy(at + strlen("\"material\": \""), "jelly\" ", strlen("jelly\" "));
+  write_file(scene, json);
+  free(json);
+  snprintf(out, sizeof out, "%s/one", dir);
+  snprintf(args, sizeof args, "run '%s' -o '%s' --frames 1 --quiet", scene, out);
+  if (mpm(args) != 0) fail_msg("mpm run failed:\n%s", output);
+  snprintf(args, sizeof args, "render '%s' --size 160x90", out);
+  if (mpm(args) != 0) fail_msg("mpm render failed:\n%s", output);
+  expect_output("body 0..1");
 }
 
 static void test_option_errors(void **state) {
