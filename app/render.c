@@ -2,19 +2,19 @@
  * the software renderer (src/render), and optionally assemble a movie with ffmpeg.
  *
  * Frames are read back from OUTDIR/frame_NNNN.vtu; the domain and the colliders come from
- * OUTDIR/scene.json, which `mpm run` writes (or --scene). The colour range of a field is fixed
- * for the whole sequence (from a sample of up to 12 frames, 2nd to 98th percentile) so that
- * colours mean the same in every picture. The camera is the scene's (key `camera`) or frames
- * the domain. */
+ * OUTDIR/scene.json, which `mpm run` writes (or --scene). Before drawing, a sample of the
+ * frames (render_survey.c) fixes what must not change from picture to picture: the colour
+ * range of the field, the field itself when none is asked for (speed, or material where the
+ * velocity is uniform), and the camera, which is the scene's (key `camera`) or frames the box
+ * the material moves in over the whole sequence, clear of the legend and the time label. Each
+ * picture: background (cached while the colliders stand still), the ground's shadow, the
+ * particle surfaces and particles, the grid, then the colour bar and the time. */
 #include "cli.h"
 #include "core/parallel.h"
-#include "io/io.h"
-#include "render/render.h"
-#include "scene/mesh.h"
-#include "scene/scene.h"
+#include "render/overlay.h"
+#include "render_cmd.h"
 
 #include <dirent.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,26 +22,13 @@
 #include <sys/stat.h>
 #include <time.h>
 
-enum {
-  FIELD_VELOCITY,
-  FIELD_J,
-  FIELD_STRESS,
-  FIELD_PLASTIC,
-  FIELD_MATERIAL,
-  FIELD_BODY,
-  FIELD_TEMPERATURE, /* runs with heat (scene `heat`) */
-  FIELD_MELT,
-  FIELDS
-};
-static const char *const FIELD_NAMES[FIELDS] = {"velocity", "J",    "stress",      "plastic",
-                                                "material", "body", "temperature", "melt"};
+/* The colour bar's title per field: the quantity and its units (temperature: the scene's). */
+static const char *const FIELD_TITLES[FIELDS] = {
+    "speed (m/s)", "J (volume ratio)", "von Mises stress (Pa)", "plastic state", "material",
+    "body",        "temperature",      "melt fraction"};
+#define KEY_MAX 10 /* categories in the key: the category map's colours repeat after 10 */
 
-typedef struct render_opts {
-  const char *dir, *scene, *out;
-  int field, colormap, width, height, every, movie, quiet, grid;
-  int particles; /* --particles: draw the particles of bodies that have surfaces too */
-  double lo, hi; /* colour range; lo > hi: automatic */
-} render_opts;
+static const char *const FRAMING_NAMES[] = {"material", "follow", "domain"};
 
 static double now(void) {
   struct timespec ts;
@@ -51,10 +38,6 @@ static double now(void) {
 
 static int cmp_int(const void *a, const void *b) {
   return *(const int *)a - *(const int *)b;
-}
-static int cmp_float(const void *a, const void *b) {
-  const float x = *(const float *)a, y = *(const float *)b;
-  return x < y ? -1 : x > y;
 }
 
 /* Frame numbers of dir/frame_NNNN.vtu, sorted; NULL and *n = 0 when there are none. */
@@ -79,49 +62,35 @@ static int *list_frames(const char *dir, int *n) {
   if (f) qsort(f, (size_t)*n, sizeof *f, cmp_int);
   return f;
 }
-
-/* The field's value of every particle, for the colour map. */
-static int field_values(const mpm_vtu_frame *fr, int field, float *out, char *why, size_t cap) {
-  const char *name = field == FIELD_VELOCITY ? "velocity" : FIELD_NAMES[field];
-  const mpm_vtu_array *a = mpm_vtu_frame_array(fr, name);
-  if (!a) {
-    snprintf(why, cap, "the frames have no '%s' array", name);
-    return -1;
-  }
-  for (long i = 0; i < fr->point_count; ++i) {
-    if (field == FIELD_VELOCITY) {
-      const float *v = a->data + 3 * i;
-      out[i] = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    } else {
-      out[i] = a->data[i];
-    }
-  }
-  return 0;
-}
-
 static int usage(void) {
   fprintf(stderr, "usage: mpm render OUTDIR [--field velocity|J|stress|plastic|material|body|\n"
                   "                                     temperature|melt]\n"
                   "                  [--size WxH] [--colormap viridis|coolwarm|category]\n"
                   "                  [--range LO:HI] [--every N] [--scene SCENE.json] [--out DIR]\n"
-                  "                  [--movie] [--grid] [--particles] [--quiet]\n");
+                  "                  [--frame material|follow|domain] [--margin F] [--no-shadow]\n"
+                  "                  [--no-legend] [--no-time]\n"
+                  "                  [--movie] [--grid] [--particles] [--quiet]\n"
+                  "(mpm render --help says what each does)\n");
   return MPM_EXIT_USAGE;
 }
 
 static int parse_args(int argc, char **argv, render_opts *o) {
   memset(o, 0, sizeof *o);
-  o->field = FIELD_VELOCITY;
+  o->field = -1;
   o->colormap = -1;
   o->width = 1280;
   o->height = 720;
   o->every = 1;
   o->lo = 1, o->hi = 0;
+  o->framing = FRAMING_MATERIAL;
+  o->margin = 0.06;
+  o->shadow = o->legend = o->time_label = 1;
   for (int i = 0; i < argc; ++i) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     if (!strcmp(a, "--field") && v) {
       o->field = -1;
       for (int k = 0; k < FIELDS; ++k)
-        if (!strcmp(v, FIELD_NAMES[k])) o->field = k;
+        if (!strcmp(v, MPM_RENDER_FIELD_NAMES[k])) o->field = k;
       if (o->field < 0) {
         fprintf(stderr,
                 "mpm render: --field expects one of velocity, J, stress, plastic, "
@@ -151,6 +120,24 @@ static int parse_args(int argc, char **argv, render_opts *o) {
         return -1;
       }
       ++i;
+    } else if (!strcmp(a, "--frame") && v) {
+      o->framing = -1;
+      for (int k = 0; k < 3; ++k)
+        if (!strcmp(v, FRAMING_NAMES[k])) o->framing = k;
+      if (o->framing < 0) {
+        fprintf(stderr, "mpm render: --frame expects material, follow or domain, got '%s'\n", v);
+        return -1;
+      }
+      ++i;
+    } else if (!strcmp(a, "--margin") && v) {
+      char *end;
+      o->margin = strtod(v, &end);
+      if (*end || end == v || !(o->margin >= 0 && o->margin <= 0.4)) {
+        fprintf(stderr,
+                "mpm render: --margin expects a fraction of the height, 0 to 0.4, got '%s'\n", v);
+        return -1;
+      }
+      ++i;
     } else if (!strcmp(a, "--every")) {
       if (mpm_cli_parse_int("--every", v, 1, 1000000, &o->every)) return -1;
       ++i;
@@ -162,6 +149,12 @@ static int parse_args(int argc, char **argv, render_opts *o) {
       o->grid = 1;
     } else if (!strcmp(a, "--particles")) {
       o->particles = 1;
+    } else if (!strcmp(a, "--no-shadow")) {
+      o->shadow = 0;
+    } else if (!strcmp(a, "--no-legend")) {
+      o->legend = 0;
+    } else if (!strcmp(a, "--no-time")) {
+      o->time_label = 0;
     } else if (!strcmp(a, "--movie")) {
       o->movie = 1;
     } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
@@ -176,211 +169,33 @@ static int parse_args(int argc, char **argv, render_opts *o) {
       return -1;
     }
   }
-  if (!o->dir) return -1;
+  return o->dir ? 0 : -1;
+}
+
+/* The field when none was asked for: speed, unless the particles all move alike in every
+ * sampled frame (a run at rest, a body in free flight), where speed would paint everything one
+ * colour; then material, or body when the bodies share one material. */
+static void choose_field(render_opts *o, const render_survey *sv) {
+  if (o->field < 0)
+    o->field = !sv->uniform_speed                          ? FIELD_VELOCITY
+               : sv->max_material > 0 || sv->max_body == 0 ? FIELD_MATERIAL
+                                                           : FIELD_BODY;
   if (o->colormap < 0)
     o->colormap = o->field == FIELD_MATERIAL || o->field == FIELD_BODY ? MPM_CMAP_CATEGORY
                   : o->field == FIELD_J                                ? MPM_CMAP_COOLWARM
                                                                        : MPM_CMAP_VIRIDIS;
-  return 0;
 }
 
-static int cmp_u64(const void *a, const void *b) {
-  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return x < y ? -1 : x > y;
-}
-
-/* The edges of the multi-level grid's fine leaves (OUTDIR/grid_cells_NNNN.vtu of a frame when
- * the run rebuilt its grid, else OUTDIR/grid_cells.vtu: 8 corners per voxel)
- * on the surfaces of the levels' regions, each once, coloured by level (the edge length):
- * segments for mpm_render_lines. 0 with
- * *n = 0 when the run has no such file; -1 with `why` on a bad file. */
-static int grid_edges(const char *dir, int frame, float **ab, float **rgb, size_t *n, char *why,
-                      size_t cap) {
-  *n = 0;
-  char path[4200];
-  snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", dir, frame);
-  FILE *probe = fopen(path, "rb");
-  if (!probe) {
-    snprintf(path, sizeof path, "%s/grid_cells.vtu", dir);
-    probe = fopen(path, "rb");
-  }
-  if (!probe) return 0;
-  fclose(probe);
-  mpm_vtu_frame fr;
-  mpm_error err;
-  mpm_error_clear(&err);
-  if (mpm_read_vtu(path, &fr, &err) != MPM_OK) {
-    snprintf(why, cap, "%s", err.message);
-    return -1;
-  }
-  const mpm_vtu_array *pts = mpm_vtu_frame_array(&fr, "Points");
-  const size_t cells = pts ? (size_t)fr.point_count / 8 : 0;
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, h = INFINITY;
-  for (size_t c = 0; c < cells; ++c) {
-    const float *p = pts->data + 24 * c;
-    h = fmin(h, (double)(p[3] - p[0])); /* corner 1 is corner 0 + x */
-    for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], (double)p[d]);
-  }
-  /* an edge: its start on the finest lattice (18 bits per axis), axis and length exponent */
-  uint64_t *key = malloc((12 * cells + 1) * sizeof *key);
-  if (!key) {
-    mpm_vtu_frame_free(&fr);
-    snprintf(why, cap, "out of memory for the grid's edges");
-    return -1;
-  }
-  size_t m = 0;
-  static const int from[12] = {0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3};
-  static const int axis[12] = {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2};
-  for (size_t c = 0; c < cells; ++c) {
-    const float *p = pts->data + 24 * c;
-    const double size = (double)(p[3] - p[0]);
-    const int e = (int)lround(log2(size / h));
-    for (int k = 0; k < 12; ++k) {
-      uint64_t q = 0;
-      for (int d = 0; d < 3; ++d)
-        q = q << 18 | ((uint64_t)lround(((double)p[3 * from[k] + d] - lo[d]) / h) & 0x3ffff);
-      key[m++] = (q << 2 | (uint64_t)axis[k]) << 4 | (uint64_t)(e & 15);
-    }
-  }
-  qsort(key, m, sizeof *key, cmp_u64);
-  /* each edge once, and only those on the surface of a level's region: an edge inside one is
-   * shared by 4 cells of its size */
-  size_t u = 0;
-  for (size_t k = 0; k < m;) {
-    size_t j = k;
-    while (j < m && key[j] == key[k]) ++j;
-    if (j - k < 4) key[u++] = key[k];
-    k = j;
-  }
-  *ab = malloc((6 * u + 1) * sizeof **ab);
-  *rgb = malloc((3 * u + 1) * sizeof **rgb);
-  if (!*ab || !*rgb) {
-    free(key);
-    mpm_vtu_frame_free(&fr);
-    snprintf(why, cap, "out of memory for the grid's edges");
-    return -1;
-  }
-  for (size_t k = 0; k < u; ++k) {
-    const int e = (int)(key[k] & 15), ax = (int)(key[k] >> 4 & 3);
-    const uint64_t q = key[k] >> 6;
-    const double len = h * (double)(1 << e);
-    for (int d = 0; d < 3; ++d) {
-      const double x = lo[d] + h * (double)((q >> (18 * (2 - d))) & 0x3ffff);
-      (*ab)[6 * k + d] = (float)x;
-      (*ab)[6 * k + 3 + d] = (float)(x + (d == ax ? len : 0));
-    }
-    /* the finest level light, coarser ones darker */
-    mpm_colormap_eval(MPM_CMAP_VIRIDIS, 1 - 0.3 * e, *rgb + 3 * k);
-  }
-  *n = u;
-  free(key);
-  mpm_vtu_frame_free(&fr);
-  return 0;
-}
-
-/* The particle surfaces of frame k (output.surface): surface_NNNN.ply, or surface_bB_NNNN.ply
- * per body B < bodies. Each one found is drawn; *drawn counts them. -1 with `why` on a bad
- * file or no memory. */
-static int draw_surfaces(const char *dir, int k, int bodies, mpm_image *img, const mpm_camera *cam,
-                         int *drawn, char *why, size_t cap) {
-  *drawn = 0;
-  for (int b = -1; b < bodies; ++b) {
-    char path[4300];
-    if (b < 0)
-      snprintf(path, sizeof path, "%s/surface_%04d.ply", dir, k);
-    else
-      snprintf(path, sizeof path, "%s/surface_b%d_%04d.ply", dir, b, k);
-    struct stat sb;
-    if (stat(path, &sb) != 0) continue;
-    mpm_mesh m;
-    mpm_error err;
-    mpm_error_clear(&err);
-    if (mpm_mesh_load(path, &m, &err) != MPM_OK) {
-      if (strstr(err.message, "no faces")) continue; /* an empty surface */
-      snprintf(why, cap, "%s", err.message);
-      return -1;
-    }
-    float *xyz = malloc((3 * (size_t)m.vertex_count + 1) * sizeof *xyz);
-    uint32_t *tri = malloc((3 * (size_t)m.triangle_count + 1) * sizeof *tri);
-    int st = 0;
-    if (!xyz || !tri) {
-      snprintf(why, cap, "out of memory for the surface of frame %d", k);
-      st = -1;
-    } else {
-      for (size_t i = 0; i < 3 * (size_t)m.vertex_count; ++i) xyz[i] = (float)m.vertices[i];
-      for (size_t i = 0; i < 3 * (size_t)m.triangle_count; ++i) tri[i] = (uint32_t)m.triangles[i];
-      float rgb[3] = {0.80f, 0.70f, 0.52f}; /* one surface: sand; one per body: its colour */
-      if (b >= 0) mpm_colormap_eval(MPM_CMAP_CATEGORY, b, rgb);
-      if (mpm_render_triangles(img, cam, (size_t)m.vertex_count, xyz, (size_t)m.triangle_count, tri,
-                               rgb, &err) != MPM_OK) {
-        snprintf(why, cap, "%s", err.message);
-        st = -1;
-      }
-      ++*drawn;
-    }
-    free(xyz);
-    free(tri);
-    mpm_mesh_free(&m);
-    if (st) return st;
-  }
-  return 0;
-}
-
-/* Whether a particle of body b and material m is drawn by a surface (output.surface of the
- * scene), so that its splat is left out. */
-static int on_surface(const mpm_scene *s, int b, int m) {
-  const mpm_surface_desc *d = &s->output.surface;
-  if (!d->enabled || b < 0 || b >= s->body_count) return 0;
-  if (d->material_count) {
-    for (int k = 0; k < d->material_count; ++k)
-      if (d->materials[k] == m) return 1;
-    return 0;
-  }
-  if (d->body_count) {
-    for (int k = 0; k < d->body_count; ++k)
-      if (d->bodies[k] == b) return 1;
-    return 0;
-  }
-  /* all bodies but those that keep their embedded mesh (a mesh body with domains) */
-  return !(s->bodies[b].domains && s->bodies[b].shape.kind == MPM_SHAPE_MESH);
-}
-
-/* Automatic colour range from a sample of frames (percentiles 2 and 98; J centred on 1). */
-static int auto_range(render_opts *o, const int *frames, int nf, char *why, size_t cap) {
-  if (o->lo < o->hi) return 0;
+/* The colour range from the survey unless --range gave one: speed and stress from 0, the melt
+ * fraction 0 to 1, J centred on 1; labels map directly. */
+static void choose_range(render_opts *o, const render_survey *sv) {
+  if (o->lo < o->hi) return;
   if (o->field == FIELD_MATERIAL || o->field == FIELD_BODY) {
-    o->lo = 0, o->hi = 1; /* labels map directly */
-    return 0;
+    o->lo = 0, o->hi = 1;
+    return;
   }
-  double lo = INFINITY, hi = -INFINITY;
-  const int samples = nf < 12 ? nf : 12;
-  for (int s = 0; s < samples; ++s) {
-    const int k = frames[(long)s * (nf - 1) / (samples > 1 ? samples - 1 : 1)];
-    char path[4200];
-    snprintf(path, sizeof path, "%s/frame_%04d.vtu", o->dir, k);
-    mpm_vtu_frame fr;
-    mpm_error err;
-    mpm_error_clear(&err);
-    if (mpm_read_vtu(path, &fr, &err) != MPM_OK) {
-      snprintf(why, cap, "%s", err.message);
-      return -1;
-    }
-    float *v = malloc(((size_t)fr.point_count + 1) * sizeof *v);
-    if (!v || field_values(&fr, o->field, v, why, cap)) {
-      free(v);
-      mpm_vtu_frame_free(&fr);
-      if (!v) snprintf(why, cap, "out of memory");
-      return -1;
-    }
-    qsort(v, (size_t)fr.point_count, sizeof *v, cmp_float);
-    if (fr.point_count > 0) {
-      lo = fmin(lo, v[(size_t)(0.02 * (double)(fr.point_count - 1))]);
-      hi = fmax(hi, v[(size_t)(0.98 * (double)(fr.point_count - 1))]);
-    }
-    free(v);
-    mpm_vtu_frame_free(&fr);
-  }
-  if (!isfinite(lo)) lo = 0, hi = 1;
+  double lo = sv->field_lo, hi = sv->field_hi;
+  if (!isfinite(lo) || !isfinite(hi)) lo = 0, hi = 1;
   if (o->field == FIELD_VELOCITY || o->field == FIELD_STRESS) lo = 0;
   if (o->field == FIELD_MELT) lo = 0, hi = 1;
   if (o->field == FIELD_J) {
@@ -389,7 +204,41 @@ static int auto_range(render_opts *o, const int *frames, int nf, char *why, size
   }
   if (!(hi > lo)) hi = lo + 1;
   o->lo = lo, o->hi = hi;
-  return 0;
+}
+
+/* The ground's height: the domain's floor, or an upward half-space collider above it. */
+static double floor_height(const mpm_scene *scene, double lowest) {
+  double y = scene ? scene->domain_min[1] : lowest;
+  for (int k = 0; scene && k < scene->collider_count; ++k) {
+    const mpm_shape_desc *s = &scene->colliders[k].shape;
+    if (s->kind == MPM_SHAPE_HALFSPACE && !scene->colliders[k].inside_out && s->axis[1] > 0.99)
+      y = fmax(y, s->center[1]);
+  }
+  return y;
+}
+
+/* The camera on the box [lo, hi] of the material: down to the ground when the material is
+ * not far above it (so its shadow shows), fitted into the picture less the margin, the
+ * legend's corner and the time label's strip. */
+static mpm_camera fit_material(const render_opts *o, const double box_lo[3], const double box_hi[3],
+                               double floor_y, const mpm_legend *legend, const char *label) {
+  double lo[3], hi[3], size = 0;
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = box_lo[d], hi[d] = box_hi[d];
+    if (!(hi[d] > lo[d])) { /* no particles, or a flat sheet */
+      const double c = isfinite(lo[d] + hi[d]) ? 0.5 * (lo[d] + hi[d]) : 0.5;
+      lo[d] = c - 1e-3, hi[d] = c + 1e-3;
+    }
+    size = fmax(size, hi[d] - lo[d]);
+  }
+  if (lo[1] > floor_y && lo[1] - floor_y <= size) lo[1] = floor_y;
+  const int w = o->width, h = o->height, m = (int)lround(o->margin * h);
+  int rect[4] = {m, m, w - m, h - m};
+  if (o->legend) rect[2] -= w - mpm_legend_box(legend, w, h).x0;
+  if (o->time_label) rect[1] += mpm_label_box(label, w, h).y1;
+  if (rect[2] - rect[0] < w / 4) rect[0] = w / 2 - w / 8, rect[2] = w / 2 + w / 8;
+  if (rect[3] - rect[1] < h / 4) rect[1] = h / 2 - h / 8, rect[3] = h / 2 + h / 8;
+  return mpm_camera_fit_box(lo, hi, w, h, rect);
 }
 
 static int make_movie(const render_opts *o, const char *out, double fps) {
@@ -411,6 +260,12 @@ static int make_movie(const render_opts *o, const char *out, double fps) {
   }
   if (!o->quiet) printf("%s/movie.mp4\n", out);
   return MPM_EXIT_OK;
+}
+/* The time label's text: the frame's time with as many decimals as the frame rate needs. */
+static void time_text(char *buf, size_t cap, double t, int frame, double fps) {
+  int decimals = fps > 0 ? (int)ceil(log10(fps)) : 3;
+  decimals = decimals < 3 ? 3 : (decimals > 6 ? 6 : decimals);
+  snprintf(buf, cap, "t = %.*f s, frame %d", decimals, t, frame);
 }
 
 int mpm_cmd_render(int argc, char **argv) {
@@ -465,12 +320,37 @@ int mpm_cmd_render(int argc, char **argv) {
   float *xyz = NULL, *rad = NULL, *rgb = NULL, *val = NULL;
   float *edges = NULL, *edge_rgb = NULL; /* --grid: the multi-level grid's cell edges */
   size_t edge_count = 0;
-  double lo[3], hi[3], floor_y;
-  if (auto_range(&o, frames, nf, why, sizeof why)) {
+  render_survey sv;
+  if (mpm_render_survey(&o, frames, nf, &sv, why, sizeof why)) {
     fprintf(stderr, "mpm render: %s\n", why);
     code = MPM_EXIT_USAGE;
     goto done;
   }
+  choose_field(&o, &sv);
+  choose_range(&o, &sv);
+  /* the legend: a colour bar, or a key of the labels with the scene's names */
+  const char *names[KEY_MAX] = {NULL};
+  mpm_legend legend = {(mpm_colormap)o.colormap, FIELD_TITLES[o.field], o.lo, o.hi, 0, names};
+  if (o.colormap == MPM_CMAP_CATEGORY) {
+    const int top = o.field == FIELD_BODY ? sv.max_body : sv.max_material;
+    legend.count = top + 1 < KEY_MAX ? top + 1 : KEY_MAX;
+    for (int k = 0; have_scene && k < legend.count; ++k) {
+      if (o.field == FIELD_MATERIAL && k < scene.material_count) names[k] = scene.materials[k].name;
+      if (o.field == FIELD_BODY && k < scene.body_count && scene.bodies[k].name[0])
+        names[k] = scene.bodies[k].name;
+    }
+    if (o.field != FIELD_MATERIAL && o.field != FIELD_BODY) legend.count = 0; /* no names */
+  }
+  const double fps = have_scene ? scene.fps : 0;
+  /* the domain (the ground's checkers, the scale of the background) and the ground */
+  double dom_lo[3], dom_hi[3];
+  for (int d = 0; d < 3; ++d) {
+    dom_lo[d] = have_scene ? scene.domain_min[d] : sv.lo[d];
+    dom_hi[d] = have_scene ? scene.domain_max[d] : sv.hi[d];
+    if (!(dom_hi[d] > dom_lo[d])) dom_lo[d] -= 0.5, dom_hi[d] += 0.5;
+  }
+  const double floor_y = floor_height(have_scene ? &scene : NULL, dom_lo[1]);
+  const int own_camera = have_scene && scene.camera.set;
   if (mpm_make_dirs(out, &err) != MPM_OK || mpm_image_init(&img, o.width, o.height, &err) ||
       mpm_image_init(&bg, o.width, o.height, &err)) {
     fprintf(stderr, "mpm render: %s\n", err.message);
@@ -478,7 +358,7 @@ int mpm_cmd_render(int argc, char **argv) {
     goto done;
   }
   if (o.grid) {
-    if (grid_edges(o.dir, frames[0], &edges, &edge_rgb, &edge_count, why, sizeof why)) {
+    if (mpm_render_grid_edges(o.dir, frames[0], &edges, &edge_rgb, &edge_count, why, sizeof why)) {
       fprintf(stderr, "mpm render: %s\n", why);
       code = MPM_EXIT_USAGE;
       goto done;
@@ -496,6 +376,7 @@ int mpm_cmd_render(int argc, char **argv) {
   int rendered = 0;
   double total = 0;
   mpm_camera cam;
+  char label[160];
   for (int fi = 0; fi < nf; fi += o.every) {
     const double t0 = now();
     char path[4300];
@@ -503,7 +384,8 @@ int mpm_cmd_render(int argc, char **argv) {
     if (o.grid && fi > 0) { /* a grid rebuilt during the run has a file per frame */
       free(edges), free(edge_rgb);
       edges = edge_rgb = NULL;
-      if (grid_edges(o.dir, frames[fi], &edges, &edge_rgb, &edge_count, why, sizeof why)) {
+      if (mpm_render_grid_edges(o.dir, frames[fi], &edges, &edge_rgb, &edge_count, why,
+                                sizeof why)) {
         fprintf(stderr, "mpm render: %s\n", why);
         code = MPM_EXIT_USAGE;
         goto done;
@@ -518,33 +400,31 @@ int mpm_cmd_render(int argc, char **argv) {
     const size_t n = (size_t)fr.point_count;
     const mpm_vtu_array *pts = mpm_vtu_frame_array(&fr, "Points");
     const mpm_vtu_array *vol = mpm_vtu_frame_array(&fr, "volume");
-    if (rendered == 0) { /* the frame of the camera: the domain, or the particles' box */
-      for (int d = 0; d < 3; ++d) {
-        lo[d] = INFINITY, hi[d] = -INFINITY;
-        for (size_t i = 0; i < n; ++i) {
-          lo[d] = fmin(lo[d], pts->data[3 * i + d]);
-          hi[d] = fmax(hi[d], pts->data[3 * i + d]);
-        }
-        if (have_scene) { /* the domain, but only up to a little above the material */
-          const double top = hi[1];
-          lo[d] = scene.domain_min[d], hi[d] = scene.domain_max[d];
-          if (d == 1) hi[1] = fmin(hi[1], top + 0.3 * (hi[0] - lo[0]));
-        }
-        if (!(hi[d] > lo[d])) lo[d] -= 0.5, hi[d] += 0.5;
-      }
-      floor_y = lo[1];
-      for (int k = 0; have_scene && k < scene.collider_count; ++k) {
-        const mpm_shape_desc *s = &scene.colliders[k].shape;
-        if (s->kind == MPM_SHAPE_HALFSPACE && !scene.colliders[k].inside_out && s->axis[1] > 0.99)
-          floor_y = fmax(floor_y, s->center[1]);
-      }
-      cam = mpm_camera_frame_box(lo, hi, o.width, o.height);
-      if (have_scene && scene.camera.set) { /* the scene's own view */
+    time_text(label, sizeof label, fr.time, frames[fi], fps);
+    if (own_camera) {
+      if (rendered == 0) {
         memcpy(cam.eye, scene.camera.eye, sizeof cam.eye);
         memcpy(cam.target, scene.camera.target, sizeof cam.target);
         cam.fov_deg = scene.camera.fov;
         mpm_camera_setup(&cam, o.width, o.height);
       }
+    } else if (o.framing == FRAMING_DOMAIN) {
+      if (rendered == 0) { /* the domain, but only up to a little above the material */
+        double lo[3], hi[3];
+        for (int d = 0; d < 3; ++d) lo[d] = dom_lo[d], hi[d] = dom_hi[d];
+        if (have_scene) hi[1] = fmin(hi[1], sv.hi[1] + 0.3 * (hi[0] - lo[0]));
+        if (!(hi[1] > lo[1])) hi[1] = lo[1] + 1;
+        cam = mpm_camera_frame_box(lo, hi, o.width, o.height);
+      }
+    } else if (o.framing == FRAMING_FOLLOW || rendered == 0) {
+      double lo[3], hi[3];
+      if (o.framing == FRAMING_FOLLOW) {
+        mpm_render_frame_box(&fr, lo, hi);
+        bg_key = NAN; /* the view moves */
+      } else {
+        memcpy(lo, sv.lo, sizeof lo), memcpy(hi, sv.hi, sizeof hi);
+      }
+      cam = fit_material(&o, lo, hi, floor_y, &legend, label);
     }
     free(xyz), free(rad), free(rgb), free(val);
     xyz = malloc((3 * n + 1) * sizeof *xyz);
@@ -556,7 +436,7 @@ int mpm_cmd_render(int argc, char **argv) {
       code = MPM_EXIT_FAILURE;
       goto done;
     }
-    if (field_values(&fr, o.field, val, why, sizeof why)) {
+    if (mpm_render_field_values(&fr, o.field, val, why, sizeof why)) {
       fprintf(stderr, "mpm render: %s: %s\n", path, why);
       code = MPM_EXIT_USAGE;
       goto done;
@@ -569,7 +449,7 @@ int mpm_cmd_render(int argc, char **argv) {
       const double t = o.colormap == MPM_CMAP_CATEGORY ? val[i] : (val[i] - o.lo) / (o.hi - o.lo);
       mpm_colormap_eval((mpm_colormap)o.colormap, t, rgb + 3 * i);
     }
-    /* background: recomputed only when a collider moved */
+    /* background: recomputed only when a collider (or the view) moved */
     double key = 0;
     int na = 0; /* the colliders acting at this frame's time (a grip's `active` window) */
     for (int k = 0; k < nc; ++k) {
@@ -582,16 +462,22 @@ int mpm_cmd_render(int argc, char **argv) {
       ++na;
     }
     if (!(key == bg_key)) {
-      mpm_render_background(&bg, &cam, floor_y, lo, hi, poses, na);
-      bg_key = key;
+      mpm_render_background(&bg, &cam, floor_y, dom_lo, dom_hi, poses, na);
+      bg_key = o.framing == FRAMING_FOLLOW && !own_camera ? NAN : key;
     }
     const size_t pix = (size_t)o.width * (size_t)o.height;
     memcpy(img.rgb, bg.rgb, 3 * pix * sizeof(float));
     memcpy(img.depth, bg.depth, pix * sizeof(float));
+    /* the shadow of every particle, those a surface stands for too */
+    if (o.shadow && mpm_render_ground_shadow(&img, &cam, floor_y, n, xyz, rad, 0, &err) != MPM_OK) {
+      fprintf(stderr, "mpm render: %s\n", err.message);
+      code = MPM_EXIT_FAILURE;
+      goto done;
+    }
     /* the particle surfaces first; the particles they stand for are then left out */
     int surfaces = 0;
-    if (draw_surfaces(o.dir, frames[fi], have_scene ? scene.body_count : 64, &img, &cam, &surfaces,
-                      why, sizeof why)) {
+    if (mpm_render_draw_surfaces(o.dir, frames[fi], have_scene ? scene.body_count : 64, &img, &cam,
+                                 &surfaces, why, sizeof why)) {
       fprintf(stderr, "mpm render: %s\n", why);
       code = MPM_EXIT_USAGE;
       goto done;
@@ -602,7 +488,8 @@ int mpm_cmd_render(int argc, char **argv) {
       const mpm_vtu_array *mat = mpm_vtu_frame_array(&fr, "material");
       drawn = 0;
       for (size_t i = 0; i < n; ++i) {
-        if (body && mat && on_surface(&scene, (int)body->data[i], (int)mat->data[i])) continue;
+        if (body && mat && mpm_render_on_surface(&scene, (int)body->data[i], (int)mat->data[i]))
+          continue;
         memmove(xyz + 3 * drawn, xyz + 3 * i, 3 * sizeof *xyz);
         memmove(rgb + 3 * drawn, rgb + 3 * i, 3 * sizeof *rgb);
         rad[drawn++] = rad[i];
@@ -614,6 +501,9 @@ int mpm_cmd_render(int argc, char **argv) {
       goto done;
     }
     if (edge_count) mpm_render_lines(&img, &cam, edge_count, edges, edge_rgb, 0.3f);
+    if (o.legend && (o.colormap != MPM_CMAP_CATEGORY || legend.count > 0))
+      mpm_render_legend(&img, &legend);
+    if (o.time_label) mpm_render_label(&img, label);
     char png[4400];
     snprintf(png, sizeof png, "%s/frame_%04d.png", out, frames[fi]);
     if (mpm_image_write_png(&img, png, &err) != MPM_OK) {
@@ -633,12 +523,12 @@ int mpm_cmd_render(int argc, char **argv) {
     }
   }
   if (!o.quiet)
-    printf("mpm render: %d frames, %.2f s per frame (%dx%d, %s %g..%g, %d threads)\n", rendered,
-           total / rendered, o.width, o.height, FIELD_NAMES[o.field], o.lo, o.hi,
-           mpm_thread_count());
+    printf("mpm render: %d frames, %.2f s per frame (%dx%d, %s %g..%g, %s, %d threads)\n", rendered,
+           total / rendered, o.width, o.height, MPM_RENDER_FIELD_NAMES[o.field], o.lo, o.hi,
+           own_camera ? "the scene's camera" : FRAMING_NAMES[o.framing], mpm_thread_count());
   if (o.movie) {
-    const double fps = (have_scene && scene.fps > 0 ? scene.fps : 24) / o.every;
-    code = make_movie(&o, out, fps);
+    const double movie_fps = (have_scene && scene.fps > 0 ? scene.fps : 24) / o.every;
+    code = make_movie(&o, out, movie_fps);
   }
 done:
   mpm_vtu_frame_free(&fr);

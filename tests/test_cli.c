@@ -278,14 +278,15 @@ static void test_output_folder_holds_one_run(void **state) {
 static void test_subcommand_help(void **state) {
   (void)state;
   static const struct {
-    const char *cmd, *options[10];
+    const char *cmd, *options[16];
   } subs[] = {
       {"run",
        {"-o DIR", "--overwrite", "--resume", "--threads", "--frames", "--render", "--quiet", NULL}},
       {"check", {"SCENE.json", NULL}},
       {"render",
        {"--field", "--size", "--colormap", "--range", "--every", "--scene", "--out", "--movie",
-        "--quiet", NULL}},
+        "--quiet", "--frame", "--margin", "--no-shadow", "--no-legend", "--no-time", "--grid",
+        NULL}},
       {"plot", {"--out", "--quiet", NULL}},
       {"error", {"REST_FRAME", "--body", NULL}},
       {"bench", {"transfer", "step", "stress", "checkpoint", "domains", "implicit", NULL}},

@@ -7,41 +7,13 @@
 #include "support.h"
 #include "cli_support.h"
 #include "render/render.h"
+#include "render_support.h"
 
-#include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-
-typedef struct rgb_image {
-  int w, h;
-  unsigned char *px; /* w * h * 3 */
-} rgb_image;
-
-static rgb_image read_png(const char *path) {
-  rgb_image im = {0, 0, NULL};
-  png_image pi;
-  memset(&pi, 0, sizeof pi);
-  pi.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&pi, path)) fail_msg("%s: not a PNG: %s", path, pi.message);
-  pi.format = PNG_FORMAT_RGB;
-  im.w = (int)pi.width;
-  im.h = (int)pi.height;
-  im.px = malloc(PNG_IMAGE_SIZE(pi));
-  assert_non_null(im.px);
-  if (!png_image_finish_read(&pi, NULL, im.px, 0, NULL)) fail_msg("%s: %s", path, pi.message);
-  return im;
-}
-
-/* Is the pixel grey (sky or ground), i.e. no colour-mapped particle? */
-static int greyish(const rgb_image *im, int x, int y) {
-  const unsigned char *p = im->px + 3 * ((size_t)y * (size_t)im->w + (size_t)x);
-  const int mx = p[0] > p[1] ? (p[0] > p[2] ? p[0] : p[2]) : (p[1] > p[2] ? p[1] : p[2]);
-  const int mn = p[0] < p[1] ? (p[0] < p[2] ? p[0] : p[2]) : (p[1] < p[2] ? p[1] : p[2]);
-  return mx - mn < 40;
-}
 
 static const char *scene_json =
     "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.05},"

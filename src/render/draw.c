@@ -153,14 +153,18 @@ static void splat(int w, int h, float *rgb, float *depth, const mpm_camera *cam,
   if (x1 < 0 || y1 < 0 || x0 >= w || y0 >= h) return;
   /* light from the upper left, towards the viewer (camera space: x right, y up, z to eye) */
   const double L[3] = {-0.42, 0.62, 0.66};
+  const float nearest = (float)(z - r); /* no pixel of the sphere is nearer */
   for (int py = y0 < 0 ? 0 : y0; py <= y1 && py < h; ++py)
     for (int px = x0 < 0 ? 0 : x0; px <= x1 && px < w; ++px) {
+      const size_t i = (size_t)py * (size_t)w + (size_t)px;
+      /* hidden whole: skip the square root (the depth below is never nearer, so the picture
+         is the same) */
+      if (nearest >= depth[i]) continue;
       const double dx = (px + 0.5 - cx) / rp, dy = (py + 0.5 - cy) / rp;
       const double d2 = dx * dx + dy * dy;
       if (d2 > 1) continue;
       const double nz = sqrt(1 - d2);
       const float dep = (float)(z - r * nz);
-      const size_t i = (size_t)py * (size_t)w + (size_t)px;
       if (dep >= depth[i]) continue;
       depth[i] = dep;
       const double ndl = dx * L[0] - dy * L[1] + nz * L[2];

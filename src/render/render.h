@@ -4,11 +4,13 @@
  *   1. the background: a vertical sky gradient, a checkered ground plane at the domain floor,
  *      and the scene's colliders found by sphere tracing their level sets (collide/collider.h);
  *      containers (inside-out colliders) show their far wall, so what they hold stays visible;
+ *   1b. the ground's shadow under the particles (shadow.c), on the pixels that show the ground;
  *   2. the particles as shaded sphere impostors (a disc per particle whose depth and normal
  *      are those of the sphere), depth-tested against each other and the background;
  *   3. tone mapping to 8-bit sRGB and a PNG written atomically with libpng (render_png.c).
  * Between 2 and 3 the particle surfaces may be drawn as shaded triangles (mpm_render_triangles)
- * and an overlay of line segments (mpm_render_lines: the multi-level grid's cells).
+ * and an overlay of line segments (mpm_render_lines: the multi-level grid's cells); before 3
+ * the colour bar and labels of overlay.h.
  * Particles are spread over threads, each with its own colour and depth buffer, merged by
  * depth at the end, so the image does not depend on the thread count. */
 #ifndef MPM_RENDER_RENDER_H
@@ -47,6 +49,11 @@ void mpm_camera_setup(mpm_camera *cam, int width, int height);
 /* A camera that frames the box [lo, hi] from the front-right and above. */
 mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int width, int height);
 
+/* A camera from the same direction that is as near the box [lo, hi] as lets all of its
+ * corners project into the pixel rectangle rect = {x0, y0, x1, y1}, centred in it. */
+mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width, int height,
+                              const int rect[4]);
+
 /* Colour maps: t in [0, 1] (clamped) to linear RGB. */
 typedef enum mpm_colormap {
   MPM_CMAP_VIRIDIS = 0, /* perceptually uniform, for magnitudes */
@@ -81,5 +88,12 @@ void mpm_render_lines(mpm_image *img, const mpm_camera *cam, size_t n, const flo
 mpm_status mpm_render_triangles(mpm_image *img, const mpm_camera *cam, size_t vertex_count,
                                 const float *xyz, size_t triangle_count, const uint32_t *tri,
                                 const float rgb[3], mpm_error *err);
+
+/* Pass 1b, the ground's shadow: the n particles at xyz (radius[i], or radius_all when radius is
+ * NULL) darken the ground plane at height floor_y below them, sharply where they touch it and
+ * more softly the higher they are (shadow.c). Only pixels that show the ground are changed. */
+mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, double floor_y, size_t n,
+                                    const float *xyz, const float *radius, float radius_all,
+                                    mpm_error *err);
 
 #endif
