@@ -501,7 +501,8 @@ int mpm_cmd_render(int argc, char **argv) {
       goto done;
     }
     if (edge_count) mpm_render_lines(&img, &cam, edge_count, edges, edge_rgb, 0.3f);
-    if (o.legend && (o.colormap != MPM_CMAP_CATEGORY || legend.count > 0))
+    /* no colour bar when every particle is drawn as a surface, which is not coloured by it */
+    if (o.legend && (o.colormap != MPM_CMAP_CATEGORY || legend.count > 0) && (drawn || !n))
       mpm_render_legend(&img, &legend);
     if (o.time_label) mpm_render_label(&img, label);
     char png[4400];
