@@ -42,6 +42,15 @@ static int setup(void **state) {
   return 0;
 }
 
+/* Run a scene for one frame into out and render it small: what mpm printed is in output. */
+static void run_and_render(const char *scene, const char *out) {
+  char args[1600];
+  snprintf(args, sizeof args, "run '%s' -o '%s' --frames 1 --quiet", scene, out);
+  if (mpm(args) != 0) fail_msg("mpm run failed:\n%s", output);
+  snprintf(args, sizeof args, "render '%s' --size 160x90", out);
+  if (mpm(args) != 0) fail_msg("mpm render failed:\n%s", output);
+}
+
 /* Render the run with extra options into run_dir/NAME and read frame 0 back. */
 static rgb_image render(const char *name, const char *options) {
   char args[2000], png[900];
@@ -204,10 +213,7 @@ static void test_material_by_default(void **state) {
   write_file(scene, json);
   free(json);
   snprintf(out, sizeof out, "%s/out", dir);
-  snprintf(args, sizeof args, "run '%s' -o '%s' --frames 1 --quiet", scene, out);
-  if (mpm(args) != 0) fail_msg("mpm run failed:\n%s", output);
-  snprintf(args, sizeof args, "render '%s' --size 160x90", out);
-  if (mpm(args) != 0) fail_msg("mpm render failed:\n%s", output);
+  run_and_render(scene, out);
   expect_output("velocity 0..");
   /* at rest with one material for both bodies: by body */
   snprintf(scene, sizeof scene, "%s/one_material.json", dir);
@@ -220,10 +226,7 @@ static void test_material_by_default(void **state) {
   write_file(scene, json);
   free(json);
   snprintf(out, sizeof out, "%s/one", dir);
-  snprintf(args, sizeof args, "run '%s' -o '%s' --frames 1 --quiet", scene, out);
-  if (mpm(args) != 0) fail_msg("mpm run failed:\n%s", output);
-  snprintf(args, sizeof args, "render '%s' --size 160x90", out);
-  if (mpm(args) != 0) fail_msg("mpm render failed:\n%s", output);
+  run_and_render(scene, out);
   expect_output("body 0..1");
 }
 
