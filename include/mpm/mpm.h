@@ -74,12 +74,12 @@ MPM_API mpm_status mpm_sim_step(mpm_sim *sim, double max_dt);
 /// The message of the last failure of this simulation ("" when none). Owned by sim.
 MPM_API const char *mpm_sim_last_error(const mpm_sim *sim);
 
-/// The OpenMP threads this simulation's calls run on (advance, step, enable_output), at least 1;
-/// 0 (the default) leaves the caller's OpenMP setting (OMP_NUM_THREADS, omp_set_num_threads).
-/// The count is set for the duration of each call and the caller's restored after it, so that a
-/// host's own parallel regions keep theirs. Results do not depend on the count. Returns
-/// MPM_ERR_INVALID for a negative count; in a build without OpenMP the count is accepted and
-/// every call runs on one thread.
+/// The OpenMP threads this simulation's calls run on (advance, step, enable_output, particles),
+/// at least 1; 0 (the default) leaves the caller's OpenMP setting (OMP_NUM_THREADS,
+/// omp_set_num_threads). The count is set for the duration of each call and the caller's restored
+/// after it, so that a host's own parallel regions keep theirs. Results do not depend on the count.
+/// Returns MPM_ERR_INVALID for a negative count; in a build without OpenMP the count is accepted
+/// and every call runs on one thread.
 MPM_API mpm_status mpm_sim_set_threads(mpm_sim *sim, int threads);
 
 /// Simulated time in seconds, steps taken, and frames completed.
