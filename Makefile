@@ -5,6 +5,11 @@ BUILD_DOUBLE ?= build-double
 BUILD_SANITIZE ?= build-sanitize
 BUILD_FUZZ ?= build-fuzz
 BUILD_TSAN ?= build-tsan
+# make install: its own build tree, for a portable CPU (-march=$(MPM_INSTALL_ARCH)) rather than
+# the build machine's (the other builds use -march=native); MPM_INSTALL_ARCH=native for that
+BUILD_INSTALL ?= build-install
+PREFIX ?= /usr/local
+MPM_INSTALL_ARCH ?= x86-64-v2
 FUZZ_SECONDS ?= 60
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
@@ -22,7 +27,7 @@ TSAN_TESTS = test_sim|test_resample_sim|test_domain_sim|test_domain|test_domain_
 
 .PHONY: all deps vdb-shim build build-double build-sanitize demo test test-float test-double \
 	test-sanitize bench clean format valgrind deps-fuzz build-fuzz fuzz test-fuzz deps-tsan \
-	build-tsan test-tsan
+	build-tsan test-tsan install build-install
 
 all: build
 
@@ -83,6 +88,16 @@ build-tsan: deps-tsan
 	cmake -S . -B $(BUILD_TSAN) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPM_TSAN=ON -DMPM_OPENVDB=OFF \
 	  $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD_TSAN) -j $(JOBS) --target $(subst |, ,$(TSAN_TESTS))
+
+# The libraries (libmpm.so, libmpm.a), mpm/mpm.h, mpm.pc, the CMake package and the program
+# under $(PREFIX) (README "Using mpm as a library"); run as a user who may write there.
+build-install: deps
+	cmake -S . -B $(BUILD_INSTALL) -DCMAKE_BUILD_TYPE=Release -DMPM_ARCH=$(MPM_INSTALL_ARCH) \
+	  -DCMAKE_INSTALL_PREFIX=$(PREFIX) -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD_INSTALL) -j $(JOBS)
+
+install: build-install
+	cmake --install $(BUILD_INSTALL) --prefix $(PREFIX)
 
 demo: build
 	./$(BUILD)/mpm run $(DEMO_SCENE) -o out --overwrite
@@ -147,4 +162,4 @@ format:
 	clang-format -i $$(git ls-files '*.c' '*.h')
 
 clean:
-	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) $(BUILD_FUZZ) $(BUILD_TSAN) out
+	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) $(BUILD_FUZZ) $(BUILD_TSAN) $(BUILD_INSTALL) out

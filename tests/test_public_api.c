@@ -1,11 +1,15 @@
 /* test_public_api.c - the embedding API of include/mpm/mpm.h as a program linking the library
- * would use it (issue 17, defect 3): the particle view of a scene with particle domains holds
+ * would use it (issue 17). Defect 3: the particle view of a scene with particle domains holds
  * every particle (it held none of the domain particles), and a checkpoint can be written from
- * the public API once output is enabled there (mpm_sim_enable_output was internal). */
+ * the public API once output is enabled there (mpm_sim_enable_output was internal). Then the
+ * rest of the embedding API: a scene from a JSON string, the thread count, the view's J,
+ * Cauchy stress, plastic state and temperature, and the colliders' poses. */
 #include "support.h"
 #include "mpm/mpm.h"
 
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
@@ -60,10 +64,165 @@ static void test_checkpoint_from_the_api(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* one entry of a view array, whatever the real type */
+static double at(const mpm_particle_view *v, const void *a, size_t i) {
+  return v->real_size == 4 ? ((const float *)a)[i] : ((const double *)a)[i];
+}
+
+/* A small elastic block at rest in zero gravity, with domains, and one moving box collider. */
+static const char *const block_json =
+    "{\"name\": \"block\", \"domain\": {\"min\": [0, 0, 0], \"max\": [0.5, 0.5, 0.5], \"dx\": "
+    "0.05},"
+    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
+    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
+    "  \"density\": 1000}],"
+    " \"bodies\": [{\"name\": \"b\", \"shape\": {\"type\": \"box\", \"center\": [0.25, 0.25, 0.25],"
+    "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"domains\": true}],"
+    " \"colliders\": [{\"name\": \"pusher\", \"shape\": {\"type\": \"sphere\", \"center\": [0.05, "
+    "0.05, 0.05],"
+    "  \"radius\": 0.02}, \"rule\": \"slip\", \"motion\": {\"velocity\": [0.5, 0, 0]},"
+    "  \"active\": [0.05, 1]}]}";
+
+static void test_create_from_json(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  mpm_particle_view v = mpm_sim_particles(sim);
+  assert_true(v.count > 0); /* every particle has a domain: the view has them all */
+  assert_int_equal(mpm_sim_frame_count(sim), 2);
+  mpm_sim_destroy(sim);
+  /* a broken text: the status and a message that names the scene and the base folder */
+  assert_int_equal(mpm_sim_create_from_json("{\"domain\": ", "/some/dir", &sim, err, sizeof err),
+                   MPM_ERR_PARSE);
+  assert_null(sim);
+  print_message("broken JSON: %s\n", err);
+  assert_non_null(strstr(err, "/some/dir/<json>"));
+  /* a well-formed text with a bad value: the key path */
+  assert_int_not_equal(
+      mpm_sim_create_from_json("{\"domain\": {\"dx\": -1}}", NULL, &sim, err, sizeof err), MPM_OK);
+  assert_null(sim);
+  assert_non_null(strstr(err, "<json>"));
+  assert_int_equal(mpm_sim_create_from_json(NULL, NULL, &sim, err, sizeof err), MPM_ERR_INVALID);
+}
+
+/* The positions after one frame, as doubles (the caller frees). */
+static double *run_frame(int threads, size_t *count) {
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_file("examples/jello_cubes.json", &sim, err, sizeof err),
+                   MPM_OK);
+  assert_int_equal(mpm_sim_set_threads(sim, threads), MPM_OK);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  mpm_particle_view v = mpm_sim_particles(sim);
+  double *x = malloc(3 * v.count * sizeof *x);
+  assert_non_null(x);
+  for (size_t i = 0; i < v.count; ++i)
+    for (int d = 0; d < 3; ++d) x[3 * i + (size_t)d] = at(&v, v.x[d], i);
+  *count = v.count;
+  mpm_sim_destroy(sim);
+  return x;
+}
+
+static void test_set_threads(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_set_threads(sim, -1), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "thread"));
+  mpm_sim_destroy(sim);
+  /* the same state on one thread and on two, bit for bit */
+  size_t n1, n2;
+  double *a = run_frame(1, &n1), *b = run_frame(2, &n2);
+  assert_int_equal(n1, n2);
+  assert_memory_equal(a, b, 3 * n1 * sizeof *a);
+  free(a);
+  free(b);
+}
+
+/* At rest the view's J is 1 and the stress 0; squeezed, J = det F and the stress is symmetric
+ * and compressive. */
+static void test_view_fields(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_file("examples/ball_bunny.json", &sim, err, sizeof err),
+                   MPM_OK);
+  mpm_particle_view v = mpm_sim_particles(sim);
+  assert_non_null(v.J);
+  assert_null(v.temperature); /* no heat in this scene */
+  for (size_t i = 0; i < v.count; ++i) {
+    assert_close(at(&v, v.J, i), 1, 1e-6);
+    for (int c = 0; c < 9; ++c) assert_close(at(&v, v.stress[c], i), 0, 1e-3);
+    assert_close(at(&v, v.plastic, i), 1, 0); /* neo-Hookean: the unused state, 1 */
+  }
+  /* the ball hits the bunny during the first frames */
+  for (int f = 0; f < 4; ++f) assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  v = mpm_sim_particles(sim);
+  double worst_det = 0, worst_sym = 0, smax = 0;
+  for (size_t i = 0; i < v.count; ++i) {
+    double F[9], s[9];
+    for (int c = 0; c < 9; ++c) F[c] = at(&v, v.F[c], i), s[c] = at(&v, v.stress[c], i);
+    const double det = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
+                       F[2] * (F[3] * F[7] - F[4] * F[6]);
+    worst_det = fmax(worst_det, fabs(det - at(&v, v.J, i)));
+    for (int c = 0; c < 9; ++c) smax = fmax(smax, fabs(s[c]));
+    worst_sym = fmax(worst_sym, fabs(s[1] - s[3]) + fabs(s[2] - s[6]) + fabs(s[5] - s[7]));
+  }
+  print_message("after 4 frames: largest stress %.4g Pa, |J - det F| <= %.3g, asymmetry %.3g\n",
+                smax, worst_det, worst_sym);
+  assert_true(smax > 10);                    /* the impact stresses the bodies */
+  assert_true(worst_det < TOL(1e-5, 1e-12)); /* J is det F */
+  assert_true(worst_sym < TOL(1e-4, 1e-9) * smax);
+  mpm_sim_destroy(sim);
+}
+
+static void test_view_temperature(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(
+      mpm_sim_create_from_file("examples/zhu/melting_bunny.json", &sim, err, sizeof err), MPM_OK);
+  const mpm_particle_view v = mpm_sim_particles(sim);
+  assert_non_null(v.temperature);
+  assert_true(v.count > 0);
+  for (size_t i = 0; i < v.count; ++i) assert_true(isfinite(at(&v, v.temperature, i)));
+  mpm_sim_destroy(sim);
+}
+
+static void test_collider_pose(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_collider_count(sim), 1);
+  mpm_collider_state c;
+  assert_int_equal(mpm_sim_collider_pose(sim, 0, &c), MPM_OK);
+  assert_string_equal(c.name, "pusher");
+  assert_false(c.active); /* its window opens at 0.05 s */
+  assert_close(c.center[0], 0.05, 1e-7);
+  assert_close(c.rotation[0], 1, 1e-7);
+  assert_close(c.rotation[4], 1, 1e-7);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK); /* to t = 0.05 */
+  assert_int_equal(mpm_sim_collider_pose(sim, 0, &c), MPM_OK);
+  assert_true(c.active);
+  assert_close(c.center[0], 0.05 + 0.5 * mpm_sim_time(sim), 1e-6);
+  assert_close(c.velocity[0], 0.5, 1e-7);
+  assert_int_equal(mpm_sim_collider_pose(sim, 1, &c), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "collider 1"));
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_view_holds_domain_particles),
       cmocka_unit_test(test_checkpoint_from_the_api),
+      cmocka_unit_test(test_create_from_json),
+      cmocka_unit_test(test_set_threads),
+      cmocka_unit_test(test_view_fields),
+      cmocka_unit_test(test_view_temperature),
+      cmocka_unit_test(test_collider_pose),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

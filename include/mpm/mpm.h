@@ -7,12 +7,23 @@
  * the caller's buffer. No function of the library exits the process.
  *
  * Thread safety: one mpm_sim may be used by one caller thread at a time; the engine itself
- * runs its transfers on OpenMP threads. */
+ * runs its transfers on OpenMP threads.
+ *
+ * Linking: libmpm.so exports the functions of this header only (MPM_API); libmpm.a holds the
+ * same objects. See README "Using mpm as a library" (pkg-config mpm, find_package(mpm)). */
 #ifndef MPM_MPM_H
 #define MPM_MPM_H
 
 #include <stddef.h>
 #include <stdint.h>
+
+/* The functions of the public API: exported from the shared library, which is compiled with
+ * -fvisibility=hidden (everything else stays inside it). */
+#if defined(__GNUC__) || defined(__clang__)
+#define MPM_API __attribute__((visibility("default")))
+#else
+#define MPM_API
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -29,68 +40,87 @@ typedef enum mpm_status {
 } mpm_status;
 
 /// Human-readable name of a status ("ok", "parse error", ...). Static storage.
-const char *mpm_status_string(mpm_status s);
+MPM_API const char *mpm_status_string(mpm_status s);
 
 /// Version string of the library, "MAJOR.MINOR.PATCH". Static storage.
-const char *mpm_version(void);
+MPM_API const char *mpm_version(void);
 
 /// Name of the real type this library was built with: "float" or "double".
-const char *mpm_real_type(void);
+MPM_API const char *mpm_real_type(void);
 
 typedef struct mpm_sim mpm_sim;
 
 /// Load and validate a JSON scene and build the simulation (particles sampled, colliders set).
 /// On failure *out is NULL and err (of errlen bytes, may be NULL) holds the message.
-mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char *err,
-                                    size_t errlen);
+MPM_API mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char *err,
+                                            size_t errlen);
+
+/// The same from the scene's JSON text (a NUL-terminated string, the keys of a scene file).
+/// Relative mesh files resolve against `base_dir` (NULL: the current directory), and messages
+/// name the scene "<json>" (inside base_dir when given). The text is not kept. On failure *out
+/// is NULL and err (of errlen bytes, may be NULL) holds the message.
+MPM_API mpm_status mpm_sim_create_from_json(const char *json_text, const char *base_dir,
+                                            mpm_sim **out, char *err, size_t errlen);
 
 /// Destroy a simulation; NULL is fine.
-void mpm_sim_destroy(mpm_sim *sim);
+MPM_API void mpm_sim_destroy(mpm_sim *sim);
 
 /// Advance the simulation to the end of the next frame (several substeps).
-mpm_status mpm_sim_advance_frame(mpm_sim *sim);
+MPM_API mpm_status mpm_sim_advance_frame(mpm_sim *sim);
 
 /// Advance by exactly one time step of at most max_dt seconds (the CFL bound applies too).
-mpm_status mpm_sim_step(mpm_sim *sim, double max_dt);
+MPM_API mpm_status mpm_sim_step(mpm_sim *sim, double max_dt);
 
 /// The message of the last failure of this simulation ("" when none). Owned by sim.
-const char *mpm_sim_last_error(const mpm_sim *sim);
+MPM_API const char *mpm_sim_last_error(const mpm_sim *sim);
+
+/// The OpenMP threads this simulation's calls run on (advance, step, enable_output, particles),
+/// at least 1; 0 (the default) leaves the caller's OpenMP setting (OMP_NUM_THREADS,
+/// omp_set_num_threads). The count is set for the duration of each call and the caller's restored
+/// after it, so that a host's own parallel regions keep theirs. Results do not depend on the count.
+/// Returns MPM_ERR_INVALID for a negative count; in a build without OpenMP the count is accepted
+/// and every call runs on one thread.
+MPM_API mpm_status mpm_sim_set_threads(mpm_sim *sim, int threads);
 
 /// Simulated time in seconds, steps taken, and frames completed.
-double mpm_sim_time(const mpm_sim *sim);
-int64_t mpm_sim_steps(const mpm_sim *sim);
-int mpm_sim_frame(const mpm_sim *sim);
-int mpm_sim_frame_count(const mpm_sim *sim);
+MPM_API double mpm_sim_time(const mpm_sim *sim);
+MPM_API int64_t mpm_sim_steps(const mpm_sim *sim);
+MPM_API int mpm_sim_frame(const mpm_sim *sim);
+MPM_API int mpm_sim_frame_count(const mpm_sim *sim);
 
-/// Turn per-frame output on into `dir` (created if missing; the scene's `output` keys choose the
-/// files) and write frame 0. Checkpoints need it: mpm_sim_write_checkpoint writes into `dir`.
-mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
+/// Turn per-frame output on into `dir` (created if missing; NULL: the scene's output.directory;
+/// the scene's `output` keys choose the files) and write frame 0. Checkpoints need it:
+/// mpm_sim_write_checkpoint writes into `dir`.
+MPM_API mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
 
 /// Checkpoints (HDF5, see docs/scene-format.md "Checkpoints"). Write the complete state into
 /// the output directory as checkpoint_<steps>.h5, atomically, keeping the two newest; the
 /// path written is copied to `path` (of `cap` bytes, may be NULL). Needs output enabled.
-mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap);
+MPM_API mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap);
 /// Replace the state of a freshly created simulation with the newest valid checkpoint in
 /// `dir` (older ones are tried when the newest is damaged) and continue writing frames there.
 /// The scene must be the one the checkpoint was written from. The checkpoint used is copied
 /// to `path` (may be NULL). The run then continues bit-identically to an uninterrupted one.
-mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap);
+MPM_API mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap);
 /// Stop between two steps when *flag becomes nonzero (set it from a signal handler):
 /// mpm_sim_advance_frame then returns MPM_ERR_INTERRUPTED with the state consistent, ready
 /// for mpm_sim_write_checkpoint. NULL removes the flag.
-void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag);
+MPM_API void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag);
 
 /// Particle domains (Zhu et al. 2017): switch off the domains of every domain particle inside
 /// the box [lo, hi] (m), now; they continue as standard material points (for topology change
 /// such as melting or cutting). The number switched off goes to *count (may be NULL).
-mpm_status mpm_sim_release_domains(mpm_sim *sim, const double lo[3], const double hi[3],
-                                   size_t *count);
+MPM_API mpm_status mpm_sim_release_domains(mpm_sim *sim, const double lo[3], const double hi[3],
+                                           size_t *count);
 
 /// Read-only view of every particle, valid until the next call that advances sim or asks for
 /// the view again: the standard material points, then the particles with domains (Zhu et al.)
-/// whose domains are on. Without domains the arrays are the simulation's own; with them, a
-/// copy the simulation owns. Components are separate arrays (structure of arrays) of `count`
-/// entries each, in the engine's real type (float or double, see real_size).
+/// whose domains are on. Without domains the state arrays are the simulation's own; with them,
+/// a copy the simulation owns. Components are separate arrays (structure of arrays) of `count`
+/// entries each, in the engine's real type (float or double, see real_size). J and stress are
+/// computed by each call (one stress evaluation per particle, in parallel): ask once per frame,
+/// not once per particle. Members are only ever added at the end, so a program compiled against
+/// an older header keeps working. An empty view (count 0) when out of memory.
 typedef struct mpm_particle_view {
   size_t count;
   size_t real_size;    /* sizeof the real type: 4 or 8 */
@@ -102,9 +132,33 @@ typedef struct mpm_particle_view {
   const int32_t *material;
   const int32_t *body;
   const uint32_t *id; /* stable particle id */
+  /* temperature in the scene's unit (K or degrees C, scene `heat`); NULL when heat is off */
+  const void *temperature;
+  /* the plastic state of the particle's material model: snow's J_p (plastic volume change,
+   * 1 at rest), Drucker-Prager's accumulated log volume correction (0 at rest); 1 and unused
+   * for the other models */
+  const void *plastic;
+  const void *J;         /* det F, the volume ratio (elastic part for the plastic models) */
+  const void *stress[9]; /* Cauchy stress sigma = P F^T / J, row-major, Pa */
 } mpm_particle_view;
 
-mpm_particle_view mpm_sim_particles(const mpm_sim *sim);
+MPM_API mpm_particle_view mpm_sim_particles(const mpm_sim *sim);
+
+/// A collider of the scene (its `colliders` list, in order) at the simulation's current time.
+typedef struct mpm_collider_state {
+  const char *name;           /* the scene's name for it; owned by sim */
+  double center[3];           /* the shape's centre now, m */
+  double rotation[9];         /* its rotation now (local -> world), row-major */
+  double velocity[3];         /* of the centre, m/s */
+  double angular_velocity[3]; /* rad/s */
+  int active;                 /* it acts now (inside its `active` time window) */
+} mpm_collider_state;
+
+/// The number of colliders of the scene.
+MPM_API int mpm_sim_collider_count(const mpm_sim *sim);
+/// The pose of collider `index` (0 <= index < mpm_sim_collider_count) at mpm_sim_time, into
+/// *out; MPM_ERR_INVALID for an index out of range.
+MPM_API mpm_status mpm_sim_collider_pose(const mpm_sim *sim, int index, mpm_collider_state *out);
 
 #ifdef __cplusplus
 }

@@ -55,10 +55,13 @@ static mpm_status counted_step(mpm_sim *sim, double max_dt, int shortened) {
 }
 
 mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
-  return counted_step(sim, max_dt, 0);
+  const int saved = mpm_sim_threads_enter(sim);
+  const mpm_status st = counted_step(sim, max_dt, 0);
+  mpm_sim_threads_leave(sim, saved);
+  return st;
 }
 
-mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
+static mpm_status advance_frame(mpm_sim *sim) {
   if (sim->frame >= sim->frame_count)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "the simulation already reached its end time");
@@ -107,5 +110,12 @@ mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
       sim->time < sim->scene.end_time * (1 - 1e-12))
     st = mpm_sim_write_checkpoint(sim, NULL, 0);
+  return st;
+}
+
+mpm_status mpm_sim_advance_frame(mpm_sim *sim) {
+  const int saved = mpm_sim_threads_enter(sim);
+  const mpm_status st = advance_frame(sim);
+  mpm_sim_threads_leave(sim, saved);
   return st;
 }

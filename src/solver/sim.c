@@ -5,6 +5,7 @@
 #include "solver/adaptive.h"
 #include "domain/enrich.h"
 #include "core/alloc.h"
+#include "core/parallel.h"
 #include "scene/sample.h"
 
 #include <math.h>
@@ -331,12 +332,35 @@ mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char 
   return st;
 }
 
+mpm_status mpm_sim_create_from_json(const char *json_text, const char *base_dir, mpm_sim **out,
+                                    char *errbuf, size_t errlen) {
+  /* the scene's path names it in messages and resolves its mesh files (against its folder) */
+  char path[MPM_PATH_MAX + 16];
+  if (base_dir && base_dir[0])
+    snprintf(path, sizeof path, "%.*s/<json>", MPM_PATH_MAX, base_dir);
+  else
+    snprintf(path, sizeof path, "<json>");
+  mpm_error err;
+  mpm_error_clear(&err);
+  mpm_scene scene;
+  *out = NULL;
+  mpm_status st = json_text ? mpm_scene_parse(json_text, path, &scene, &err)
+                            : mpm_error_set(&err, MPM_ERR_INVALID, "no scene text given (NULL)");
+  if (st == MPM_OK) {
+    st = mpm_sim_create_from_scene(&scene, out, &err);
+    mpm_scene_free(&scene);
+  }
+  if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
+  return st;
+}
+
 void mpm_sim_destroy(mpm_sim *sim) {
   if (!sim) return;
   mpm_particles_free(&sim->particles);
   mpm_particles_free(&sim->backup);
   mpm_particles_free(&sim->domain_backup);
   mpm_particles_free(&sim->view);
+  mpm_free(sim->view_derived);
   for (int k = 0; k < 18; ++k) mpm_free(sim->corner_backup[k]);
   mpm_domain_set_free(&sim->domains);
   for (int i = 0; i < sim->surface_count; ++i) mpm_embedded_surface_free(&sim->surfaces[i]);
@@ -383,26 +407,22 @@ int mpm_sim_frame_count(const mpm_sim *sim) {
   return sim->frame_count;
 }
 
-mpm_particle_view mpm_sim_particles(const mpm_sim *sim) {
-  const mpm_particles *p = &sim->particles;
-  mpm_particle_view v;
-  memset(&v, 0, sizeof v);
-  if (sim->domains.active_count > 0) {
-    /* the view's copy is a cache, not state: hence the cast */
-    if (mpm_sim_all_particles(sim, (mpm_particles *)&sim->view)) return v; /* no memory: empty */
-    p = &sim->view;
-  }
-  v.count = p->count;
-  v.real_size = sizeof(mpm_real);
-  for (int d = 0; d < 3; ++d) {
-    v.x[d] = p->x[d];
-    v.v[d] = p->v[d];
-  }
-  for (int c = 0; c < 9; ++c) v.F[c] = p->F[c];
-  v.mass = p->mass;
-  v.volume0 = p->vol0;
-  v.material = p->material;
-  v.body = p->body;
-  v.id = p->id;
-  return v;
+mpm_status mpm_sim_set_threads(mpm_sim *sim, int threads) {
+  if (threads < 0)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "mpm_sim_set_threads: expected a thread count >= 0 (0: the caller's "
+                         "OpenMP setting), got %d",
+                         threads);
+  sim->thread_request = threads;
+  return MPM_OK;
+}
+
+int mpm_sim_threads_enter(const mpm_sim *sim) {
+  const int saved = mpm_thread_count();
+  if (sim->thread_request > 0 && sim->thread_request != saved) mpm_set_threads(sim->thread_request);
+  return saved;
+}
+
+void mpm_sim_threads_leave(const mpm_sim *sim, int saved) {
+  if (sim->thread_request > 0 && mpm_thread_count() != saved) mpm_set_threads(saved);
 }

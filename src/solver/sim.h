@@ -82,6 +82,7 @@ struct mpm_sim {
   size_t scratch_capacity;
   int reorder_interval;     /* physically reorder particles every this many steps */
   mpm_thread_tuner threads; /* the step's thread count, measured (solver/thread_tuner.h) */
+  int thread_request;       /* mpm_sim_set_threads' count for the public calls; 0: the caller's */
   /* time */
   double time, frame_dt, last_dt;
   int64_t steps;
@@ -124,7 +125,9 @@ struct mpm_sim {
   /* called after every step inside mpm_sim_advance_frame (the CLI's progress within a frame) */
   void (*on_step)(void *ctx, const mpm_sim *sim);
   void *on_step_ctx;
-  mpm_particles view; /* mpm_sim_particles' copy of every particle when there are domains */
+  mpm_particles view;     /* mpm_sim_particles' copy of every particle when there are domains */
+  mpm_real *view_derived; /* the view's J and Cauchy stress: 10 arrays of view_capacity */
+  size_t view_capacity;
   char last_checkpoint[MPM_PATH_MAX + 32];
   mpm_error error;
 };
@@ -134,6 +137,11 @@ struct mpm_sim {
 mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error *err);
 
 /* mpm_sim_enable_output (per-frame writing into `dir`, frame 0 written) is public: mpm/mpm.h. */
+
+/* Around a public call that runs parallel work (mpm_sim_set_threads): enter sets the
+ * simulation's thread count, when one was set, and returns the caller's, which leave restores. */
+int mpm_sim_threads_enter(const mpm_sim *sim);
+void mpm_sim_threads_leave(const mpm_sim *sim, int saved);
 
 /* The standard and the active domain particles in one set (`all`: zeroed, or a set this made
  * before, whose arrays it reuses): for the frame files and the public particle view. 0, or -1

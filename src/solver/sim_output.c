@@ -34,7 +34,10 @@ mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   if (st != MPM_OK) return st;
   sim->output_enabled = 1;
   sim->frame_wall_start = mpm_wall_seconds();
-  return mpm_sim_write_frame(sim);
+  const int saved = mpm_sim_threads_enter(sim); /* the frame's stress loop is parallel */
+  st = mpm_sim_write_frame(sim);
+  mpm_sim_threads_leave(sim, saved);
+  return st;
 }
 
 int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {

@@ -1,0 +1,106 @@
+/* sim_view.c - what a program embedding the library reads back (include/mpm/mpm.h): the
+ * particle view, with the per-particle J and Cauchy stress it derives, and the colliders' poses.
+ *
+ * The view points at the simulation's own arrays when there are no particle domains. With
+ * domains, the standard and the active domain particles are copied into one set first (the
+ * order of the frame files), so that a caller sees one list of every particle. */
+#include "solver/sim.h"
+#include "core/alloc.h"
+#include "core/mat3.h"
+
+#include <string.h>
+
+/* The view's J and stress arrays for n particles: 10 arrays of capacity each in one block. */
+static mpm_real *derived_buffer(mpm_sim *sim, size_t n) {
+  if (n > sim->view_capacity || !sim->view_derived) {
+    const size_t cap = n + n / 4 + 1; /* a split or a release adds particles: room to grow */
+    mpm_real *b = mpm_alloc(10 * cap * sizeof(mpm_real));
+    if (!b) return NULL;
+    mpm_free(sim->view_derived);
+    sim->view_derived = b;
+    sim->view_capacity = cap;
+  }
+  return sim->view_derived;
+}
+
+/* J = det F and sigma = P F^T / J per particle, with each particle's material as its plastic
+ * state and temperature make it (as the frame files compute their von Mises stress). */
+static void derive_stress(const mpm_sim *sim, const mpm_particles *p, mpm_real *J,
+                          mpm_real *const sigma[9]) {
+  const long n = (long)p->count;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    mpm_real F[9], P[9], tau[9];
+    for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
+    const mpm_material mat = mpm_material_at_temperature(&sim->materials[p->material[i]],
+                                                         p->plastic[i], p->temperature[i]);
+    mat.model->pk1(&mat, F, P);
+    mpm_m3_mul_bt(P, F, tau);
+    J[i] = mpm_m3_det(F);
+    const mpm_real inv = J[i] != 0 ? 1 / J[i] : 0; /* a degenerate F: no stress to speak of */
+    for (int c = 0; c < 9; ++c) sigma[c][i] = tau[c] * inv;
+  }
+}
+
+mpm_particle_view mpm_sim_particles(const mpm_sim *sim_in) {
+  /* the view's buffers are a cache, not state: the handle is const to the caller */
+  mpm_sim *sim = (mpm_sim *)sim_in;
+  const mpm_particles *p = &sim->particles;
+  mpm_particle_view v;
+  memset(&v, 0, sizeof v);
+  if (sim->domains.active_count > 0) {
+    if (mpm_sim_all_particles(sim, &sim->view)) return v;
+    p = &sim->view;
+  }
+  mpm_real *derived = derived_buffer(sim, p->count);
+  if (!derived) return v;
+  mpm_real *sigma[9];
+  for (int c = 0; c < 9; ++c) sigma[c] = derived + (size_t)(c + 1) * sim->view_capacity;
+  const int saved = mpm_sim_threads_enter(sim);
+  derive_stress(sim, p, derived, sigma);
+  mpm_sim_threads_leave(sim, saved);
+
+  v.count = p->count;
+  v.real_size = sizeof(mpm_real);
+  for (int d = 0; d < 3; ++d) {
+    v.x[d] = p->x[d];
+    v.v[d] = p->v[d];
+  }
+  for (int c = 0; c < 9; ++c) v.F[c] = p->F[c];
+  v.mass = p->mass;
+  v.volume0 = p->vol0;
+  v.material = p->material;
+  v.body = p->body;
+  v.id = p->id;
+  v.temperature = sim->scene.heat.enabled ? p->temperature : NULL;
+  v.plastic = p->plastic;
+  v.J = derived;
+  for (int c = 0; c < 9; ++c) v.stress[c] = sigma[c];
+  return v;
+}
+
+int mpm_sim_collider_count(const mpm_sim *sim) {
+  return sim->collider_count;
+}
+
+mpm_status mpm_sim_collider_pose(const mpm_sim *sim, int index, mpm_collider_state *out) {
+  if (index < 0 || index >= sim->collider_count) {
+    /* the message goes to the handle's error, which a const handle may still set: it is the
+     * caller's report, not the simulation's state */
+    return mpm_error_set(&((mpm_sim *)sim)->error, MPM_ERR_INVALID,
+                         "mpm_sim_collider_pose: collider %d does not exist (the scene has %d)",
+                         index, sim->collider_count);
+  }
+  const mpm_collider *c = &sim->colliders[index];
+  const mpm_collider_pose pose = mpm_collider_pose_at(c, sim->time);
+  memset(out, 0, sizeof *out);
+  out->name = c->desc.name;
+  for (int d = 0; d < 3; ++d) {
+    out->center[d] = pose.center[d];
+    out->velocity[d] = pose.velocity[d];
+    out->angular_velocity[d] = pose.omega[d];
+  }
+  for (int k = 0; k < 9; ++k) out->rotation[k] = pose.R[k];
+  out->active = sim->time >= c->desc.active[0] && sim->time < c->desc.active[1];
+  return MPM_OK;
+}
