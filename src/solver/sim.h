@@ -148,6 +148,11 @@ void mpm_sim_threads_leave(const mpm_sim *sim, int saved);
  * when out of memory. */
 int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
 
+/* Particle i of p (sim's particles or a copy of them): its Kirchhoff stress tau = P F^T = J sigma
+ * with the moduli the step uses (the material hardened by its plastic state, softened by
+ * melting), for the frame files and the view; returns J = det F. */
+mpm_real mpm_sim_kirchhoff(const mpm_sim *sim, const mpm_particles *p, size_t i, mpm_real tau[9]);
+
 /* Memory (memory_estimate.c): the bytes a scene will need (its expected particle count in
  * *particles when not NULL), the memory this process may use (MPM_MEMORY_LIMIT, else the
  * machine's available memory), and the check mpm_sim_create_from_scene makes before it

@@ -152,15 +152,8 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
     const long n = (long)p->count;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
-      mpm_real F[9], P[9], tau[9];
-      for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
-      /* the moduli the step's stress uses: hardened by the plastic state (snow) and softened
-       * by melting (transfer/stress_window.h) */
-      const mpm_material mat = mpm_material_at_temperature(&sim->materials[p->material[i]],
-                                                           p->plastic[i], p->temperature[i]);
-      mat.model->pk1(&mat, F, P);
-      mpm_m3_mul_bt(P, F, tau); /* Kirchhoff tau = P F^T = J sigma */
-      J[i] = mpm_m3_det(F);
+      mpm_real tau[9];
+      J[i] = mpm_sim_kirchhoff(sim, p, (size_t)i, tau);
       stress[i] = mpm_von_mises(tau, J[i]);
       if (cauchy || pressure) {
         const mpm_real inv_J = 1 / J[i]; /* Cauchy from first Piola: sigma = P F^T / J */

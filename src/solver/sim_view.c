@@ -23,20 +23,26 @@ static mpm_real *derived_buffer(mpm_sim *sim, size_t n) {
   return sim->view_derived;
 }
 
-/* J = det F and sigma = P F^T / J per particle, with each particle's material as its plastic
- * state and temperature make it (as the frame files compute their von Mises stress). */
+mpm_real mpm_sim_kirchhoff(const mpm_sim *sim, const mpm_particles *p, size_t i, mpm_real tau[9]) {
+  mpm_real F[9], P[9];
+  for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
+  /* the moduli the step's stress uses: hardened by the plastic state (snow) and softened by
+   * melting (transfer/stress_window.h) */
+  const mpm_material mat = mpm_material_at_temperature(&sim->materials[p->material[i]],
+                                                       p->plastic[i], p->temperature[i]);
+  mat.model->pk1(&mat, F, P);
+  mpm_m3_mul_bt(P, F, tau); /* Kirchhoff tau = P F^T = J sigma */
+  return mpm_m3_det(F);
+}
+
+/* J = det F and sigma = P F^T / J per particle (as the frame files compute theirs). */
 static void derive_stress(const mpm_sim *sim, const mpm_particles *p, mpm_real *J,
                           mpm_real *const sigma[9]) {
   const long n = (long)p->count;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
-    mpm_real F[9], P[9], tau[9];
-    for (int c = 0; c < 9; ++c) F[c] = p->F[c][i];
-    const mpm_material mat = mpm_material_at_temperature(&sim->materials[p->material[i]],
-                                                         p->plastic[i], p->temperature[i]);
-    mat.model->pk1(&mat, F, P);
-    mpm_m3_mul_bt(P, F, tau);
-    J[i] = mpm_m3_det(F);
+    mpm_real tau[9];
+    J[i] = mpm_sim_kirchhoff(sim, p, (size_t)i, tau);
     const mpm_real inv = J[i] != 0 ? 1 / J[i] : 0; /* a degenerate F: no stress to speak of */
     for (int c = 0; c < 9; ++c) sigma[c][i] = tau[c] * inv;
   }
