@@ -1,13 +1,16 @@
 /* run.c - `mpm run` and `mpm check`: load and validate a scene, simulate it frame by frame
- * with a progress display, write the outputs. */
+ * with a progress display, write the outputs. Written on the public API (mpm/mpm.h) alone,
+ * as a program embedding the library would be: the build compiles it without the engine's
+ * internal headers on the include path (CMakeLists.txt, mpm_cli_public). */
 #define _POSIX_C_SOURCE 200809L
 
 #include "cli.h"
 #include "progress.h"
-#include "scene_copy.h"
-#include "core/parallel.h"
-#include "solver/adaptive.h"
-#include "solver/sim.h"
+#include "mpm/mpm.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <signal.h>
 #include <dirent.h>
@@ -36,31 +39,32 @@ static void catch_stop_signals(void) {
   sigaction(SIGTERM, &sa, NULL);
 }
 
-static mpm_status load(const char *path, mpm_sim **sim, mpm_error *err) {
-  mpm_scene scene;
-  mpm_status st = mpm_scene_load(path, &scene, err);
-  if (st != MPM_OK) return st;
-  st = mpm_sim_create_from_scene(&scene, sim, err);
-  mpm_scene_free(&scene);
-  return st;
-}
+/* The longest path the program builds (an output folder and a file name in it). */
+enum { PATH_CAP = 4096 + 64 };
 
-/* Warnings about where the bodies start (overlaps, inside colliders), one line each. */
-static void warn_placement(const mpm_sim *sim, const char *scene) {
-  char text[4096];
-  if (!mpm_sim_placement_report(sim, text, sizeof text)) return;
+/* The scene's warnings (a kernel that goes unstable, overlapping bodies, bodies inside
+ * colliders), one line each. */
+static void print_warnings(const mpm_sim *sim, const char *scene) {
+  char text[8192];
+  if (!mpm_sim_warnings(sim, text, sizeof text)) return;
   for (char *line = text, *end; *line; line = end + 1) {
     end = strchr(line, '\n');
-    if (!end) break;
-    *end = 0;
+    if (end) *end = 0;
     fprintf(stderr, "mpm: warning: %s: %s\n", scene, line);
+    if (!end) break;
   }
 }
 
-/* Progress within a frame (sim->on_step). */
+/* Progress within a frame (the step callback). */
 static void progress_on_step(void *ctx, const mpm_sim *sim) {
-  mpm_progress_step(ctx, sim->frame, sim->time, sim->steps,
-                    sim->particles.count + sim->domains.active_count);
+  mpm_progress_step(ctx, mpm_sim_frame(sim), mpm_sim_time(sim), mpm_sim_steps(sim),
+                    mpm_sim_particle_count(sim));
+}
+
+static mpm_sim_info info_of(const mpm_sim *sim) {
+  mpm_sim_info info;
+  mpm_sim_get_info(sim, &info, sizeof info);
+  return info;
 }
 
 int mpm_cmd_check(int argc, char **argv) {
@@ -68,40 +72,30 @@ int mpm_cmd_check(int argc, char **argv) {
     fprintf(stderr, "usage: mpm check SCENE.json\n");
     return MPM_EXIT_USAGE;
   }
-  mpm_error err;
-  mpm_error_clear(&err);
-  mpm_scene scene;
-  if (mpm_scene_load(argv[0], &scene, &err) != MPM_OK) {
-    fprintf(stderr, "mpm: %s\n", err.message);
-    return MPM_EXIT_USAGE;
-  }
-  /* sampling the bodies checks meshes and body placement too; nothing is written */
+  /* the scene is read, checked and its bodies sampled (which checks meshes and placement);
+     nothing is written */
+  char err[4096];
   mpm_sim *sim = NULL;
-  mpm_status st = mpm_sim_create_from_scene(&scene, &sim, &err);
-  mpm_scene_free(&scene);
+  mpm_status st = mpm_sim_create_from_file(argv[0], &sim, err, sizeof err);
   if (st != MPM_OK) {
-    fprintf(stderr, "mpm: %s\n", err.message);
+    fprintf(stderr, "mpm: %s\n", err);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
-  const char *advice = mpm_scene_advice(&sim->scene);
-  if (advice) fprintf(stderr, "mpm: warning: %s: %s\n", argv[0], advice);
-  warn_placement(sim, argv[0]);
+  print_warnings(sim, argv[0]);
+  const mpm_sim_info in = info_of(sim);
   printf("%s: ok (%zu particles, %zu of them with domains, %d materials, %d colliders, dx = %g "
          "m, %d frames, about %.0f MiB)\n",
-         argv[0], sim->particles.count + sim->domains.active_count, sim->domains.active_count,
-         sim->material_count, sim->collider_count, sim->scene.dx, sim->frame_count,
-         mpm_scene_memory_for(&sim->scene,
-                              (double)(sim->particles.count + sim->domains.particles.count)) /
-             (1024.0 * 1024.0));
+         argv[0], in.particles, in.domain_particles, in.materials, in.colliders, in.dx,
+         in.frame_count, in.memory_bytes / (1024.0 * 1024.0));
   /* the first step, as the frame loop will plan it: a frame needing very many steps is
      usually a unit slip (E in Pa, dx in m) or a far too fine grid for the material's stiffness */
-  st = mpm_sim_mark_enrichment(sim);
+  double dt = 0;
+  st = mpm_sim_next_dt(sim, &dt);
   if (st == MPM_OK) {
-    const double dt = mpm_sim_cfl_dt(sim);
-    const double per_frame = dt > 0 ? ceil(sim->frame_dt / dt - 1e-9) : 0;
+    const double per_frame = dt > 0 ? ceil(in.frame_dt / dt - 1e-9) : 0;
     printf("%s: first step dt = %.3g s, about %.0f steps per frame (%g frames per second)%s\n",
-           argv[0], dt, per_frame, sim->scene.fps,
-           sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT && sim->scene.solver.dt > 0
+           argv[0], dt, per_frame, in.fps,
+           in.fixed_dt
                ? ""
                : "; the step follows the material's wave speed and shrinks as it speeds up");
     if (per_frame > 1e4)
@@ -118,26 +112,26 @@ int mpm_cmd_check(int argc, char **argv) {
 /* 1 when the newest checkpoint written is of the current step already. */
 static int checkpoint_is_current(const mpm_sim *sim) {
   char name[64];
-  snprintf(name, sizeof name, "checkpoint_%012lld.h5", (long long)sim->steps);
-  const char *slash = strrchr(sim->last_checkpoint, '/');
-  return !strcmp(slash ? slash + 1 : sim->last_checkpoint, name);
+  snprintf(name, sizeof name, "checkpoint_%012lld.h5", (long long)mpm_sim_steps(sim));
+  const char *last = info_of(sim).last_checkpoint, *slash = strrchr(last, '/');
+  return !strcmp(slash ? slash + 1 : last, name);
 }
 
 /* After a stop signal: checkpoint the state between the two steps where the run stopped and say
  * how to continue. Exit status 128 + the signal, as shells report a signal's end. */
 static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
-  char path[MPM_PATH_MAX + 32];
+  char path[PATH_CAP];
   const char *name = sig == SIGTERM ? "SIGTERM" : "SIGINT";
   if (mpm_sim_write_checkpoint(sim, path, sizeof path) != MPM_OK) {
     fprintf(stderr, "mpm: stopped by %s at step %lld, but the checkpoint failed: %s\n", name,
-            (long long)sim->steps, mpm_sim_last_error(sim));
+            (long long)mpm_sim_steps(sim), mpm_sim_last_error(sim));
     return MPM_EXIT_FAILURE;
   }
   fprintf(stderr,
           "mpm: stopped by %s at step %lld (t = %.6g s, %d of %d frames done); checkpoint %s\n"
           "mpm: continue with: mpm run %s --resume %s\n",
-          name, (long long)sim->steps, sim->time, sim->frame, sim->frame_count, path, scene_path,
-          sim->output_dir);
+          name, (long long)mpm_sim_steps(sim), mpm_sim_time(sim), mpm_sim_frame(sim),
+          mpm_sim_frame_count(sim), path, scene_path, info_of(sim).output_dir);
   return 128 + sig;
 }
 
@@ -236,21 +230,23 @@ int mpm_cmd_run(int argc, char **argv) {
             resume_dir, out_dir);
     return MPM_EXIT_USAGE;
   }
-  if (threads > 0) mpm_set_threads(threads);
+  /* the program's OpenMP threads, for everything it runs (the simulation, --render) */
+#ifdef _OPENMP
+  if (threads > 0) omp_set_num_threads(threads);
+#endif
 
-  mpm_error err;
-  mpm_error_clear(&err);
+  char err[4096];
   mpm_sim *sim = NULL;
-  mpm_status st = load(scene_path, &sim, &err);
+  mpm_status st = mpm_sim_create_from_file(scene_path, &sim, err, sizeof err);
   if (st != MPM_OK) {
-    fprintf(stderr, "mpm: %s\n", err.message);
+    fprintf(stderr, "mpm: %s\n", err);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
-  const char *advice = mpm_scene_advice(&sim->scene);
-  if (advice) fprintf(stderr, "mpm: warning: %s: %s\n", scene_path, advice);
-  if (!resume_dir) warn_placement(sim, scene_path);
-  if (max_frames > 0 && max_frames < sim->frame_count) sim->frame_count = max_frames;
-  char checkpoint[MPM_PATH_MAX + 32] = "";
+  if (threads > 0) mpm_sim_set_threads(sim, threads);
+  if (!resume_dir) print_warnings(sim, scene_path);
+  if (max_frames > 0 && max_frames < mpm_sim_frame_count(sim))
+    mpm_sim_set_frame_limit(sim, max_frames);
+  char checkpoint[PATH_CAP] = "";
   if (resume_dir) {
     st = mpm_sim_resume(sim, resume_dir, checkpoint, sizeof checkpoint);
     if (st != MPM_OK) {
@@ -260,26 +256,28 @@ int mpm_cmd_run(int argc, char **argv) {
     }
     /* a finished run: its last frame is written; resuming would redo the frames after the
      * last checkpoint */
-    char last[MPM_PATH_MAX + 32];
-    snprintf(last, sizeof last, "%s/frame_%04d.vtu", sim->output_dir, sim->frame_count);
-    if (sim->frame < sim->frame_count && access(last, F_OK) == 0) {
+    char last[PATH_CAP];
+    snprintf(last, sizeof last, "%s/frame_%04d.vtu", info_of(sim).output_dir,
+             mpm_sim_frame_count(sim));
+    if (mpm_sim_frame(sim) < mpm_sim_frame_count(sim) && access(last, F_OK) == 0) {
       fprintf(stderr,
               "mpm: the run in %s is complete: its %d frames are written (the last, %s); "
               "nothing to resume (run again with -o DIR to simulate it anew)\n",
-              resume_dir, sim->frame_count, last);
+              resume_dir, mpm_sim_frame_count(sim), last);
       mpm_sim_destroy(sim);
       return MPM_EXIT_OK;
     }
+    print_warnings(sim, scene_path); /* the scene's; where the bodies started is past */
   } else {
-    const int claim = claim_output_dir(out_dir ? out_dir : sim->output_dir, overwrite);
+    const int claim = claim_output_dir(out_dir ? out_dir : info_of(sim).output_dir, overwrite);
     if (claim) {
       mpm_sim_destroy(sim);
       return claim;
     }
+    /* frame 0 and the copy of the scene (scene.json, for `mpm render`) */
     st = mpm_sim_enable_output(sim, out_dir);
-    if (st == MPM_OK) st = mpm_write_scene_copy(scene_path, &sim->scene, sim->output_dir, &err);
     if (st != MPM_OK) {
-      fprintf(stderr, "mpm: %s\n", err.message[0] ? err.message : mpm_sim_last_error(sim));
+      fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
       mpm_sim_destroy(sim);
       return MPM_EXIT_FAILURE;
     }
@@ -287,26 +285,27 @@ int mpm_cmd_run(int argc, char **argv) {
   stop_signal = 0;
   catch_stop_signals();
   mpm_sim_set_interrupt(sim, &stop_signal);
+  const mpm_sim_info start = info_of(sim);
   mpm_progress pr;
   mpm_progress_begin(&pr,
                      quiet ? MPM_PROGRESS_QUIET
                            : (isatty(STDERR_FILENO) ? MPM_PROGRESS_BAR : MPM_PROGRESS_LINES),
-                     sim->frame_count, sim->particles.count);
-  pr.first_frame = sim->frame;
-  pr.first_steps = sim->steps;
-  pr.t0 = sim->time;
-  pr.t_end = sim->frame_count * sim->frame_dt < sim->scene.end_time
-                 ? sim->frame_count * sim->frame_dt
-                 : sim->scene.end_time;
-  sim->on_step = progress_on_step;
-  sim->on_step_ctx = &pr;
+                     start.frame_count, start.particles);
+  pr.first_frame = mpm_sim_frame(sim);
+  pr.first_steps = mpm_sim_steps(sim);
+  pr.t0 = mpm_sim_time(sim);
+  pr.t_end = start.frame_count * start.frame_dt < start.end_time
+                 ? start.frame_count * start.frame_dt
+                 : start.end_time;
+  mpm_sim_set_step_callback(sim, progress_on_step, &pr);
   if (!quiet && resume_dir)
     fprintf(stderr, "mpm: resuming %s from %s: frame %d of %d, t = %.6g s, step %lld\n", scene_path,
-            checkpoint, sim->frame, sim->frame_count, sim->time, (long long)sim->steps);
+            checkpoint, mpm_sim_frame(sim), start.frame_count, mpm_sim_time(sim),
+            (long long)mpm_sim_steps(sim));
   if (!quiet)
     fprintf(stderr, "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d threads, %s)\n",
-            scene_path, sim->particles.count + sim->domains.active_count, sim->scene.dx,
-            sim->frame_count, sim->output_dir, mpm_thread_count(), mpm_real_type());
+            scene_path, start.particles, start.dx, start.frame_count, start.output_dir,
+            start.threads, mpm_real_type());
   int code = MPM_EXIT_OK;
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
     st = mpm_sim_advance_frame(sim);
@@ -315,32 +314,33 @@ int mpm_cmd_run(int argc, char **argv) {
       code = interrupted(sim, scene_path, stop_signal);
       break;
     }
+    const mpm_sim_info in = info_of(sim);
     if (st != MPM_OK) {
       mpm_progress_end(&pr);
       fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
-      if (sim->frame > 0 || sim->written_frames > 0)
+      if (mpm_sim_frame(sim) > 0 || in.written_frames > 0)
         fprintf(stderr, "mpm: the frames up to frame_%04d are complete%s%s\n",
-                sim->written_frames - 1, sim->last_checkpoint[0] ? "; the last checkpoint is " : "",
-                sim->last_checkpoint);
+                in.written_frames - 1, in.last_checkpoint[0] ? "; the last checkpoint is " : "",
+                in.last_checkpoint);
       code = MPM_EXIT_FAILURE;
       break;
     }
     char solver[240] = "";
-    const mpm_solver_figures *sf = &sim->last_frame_solver;
-    if (sf->steps > 0) /* implicit: CG and Newton iterations per step over the frame */
+    if (in.solver_steps > 0) /* implicit: CG and Newton iterations per step over the frame */
       snprintf(solver, sizeof solver, "CG %.1f/step (max %d, residual %.2g) Newton %.2f/step%s",
-               (double)sf->cg_iterations / (double)sf->steps, sf->cg_max, sf->residual_max,
-               (double)sf->newton_iterations / (double)sf->steps,
-               sf->cg_unconverged ? " unconverged" : "");
-    if (sim->scene.output.surface.enabled) { /* the frame's surfaces (output.surface) */
+               (double)in.cg_iterations / (double)in.solver_steps, in.cg_max, in.cg_residual_max,
+               (double)in.newton_iterations / (double)in.solver_steps,
+               in.cg_unconverged ? " unconverged" : "");
+    if (in.surfaces) { /* the frame's surfaces (output.surface) */
       const size_t len = strlen(solver);
       snprintf(solver + len, sizeof solver - len, "%ssurface %.2f s (%zu triangles)",
-               len ? ", " : "", sim->surface_seconds, sim->surface_triangles);
+               len ? ", " : "", in.surface_seconds, in.surface_triangles);
     }
-    mpm_progress_update(&pr, sim->frame, sim->time, sim->steps, sim->particles.count, solver);
+    mpm_progress_update(&pr, mpm_sim_frame(sim), mpm_sim_time(sim), mpm_sim_steps(sim),
+                        in.particles, solver);
   }
   /* stopped short of the scene's end by --frames: leave a checkpoint to continue from */
-  if (code == MPM_EXIT_OK && sim->time < sim->scene.end_time * (1 - 1e-12) &&
+  if (code == MPM_EXIT_OK && mpm_sim_time(sim) < start.end_time * (1 - 1e-12) &&
       !checkpoint_is_current(sim)) {
     if (mpm_sim_write_checkpoint(sim, checkpoint, sizeof checkpoint) != MPM_OK) {
       fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
@@ -349,33 +349,34 @@ int mpm_cmd_run(int argc, char **argv) {
   }
   if (code == MPM_EXIT_OK) {
     mpm_progress_end(&pr);
+    const mpm_sim_info in = info_of(sim);
     if (!quiet)
       fprintf(stderr,
               "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/run.pvd in ParaView\n",
-              sim->frame, (long long)sim->steps, pr.elapsed, sim->output_dir);
-    if (!quiet && sim->adaptive && sim->scene.refine_every > 0)
-      fprintf(stderr, "mpm: refinement: %lld trees from the rules, %.2f s\n",
-              sim->adaptive->rebuilds, sim->adaptive->rebuild_seconds);
-    if (!quiet && sim->scene.resample.enabled) {
-      const double *dL = sim->resample_figures.angular_momentum_change;
+              mpm_sim_frame(sim), (long long)mpm_sim_steps(sim), pr.elapsed, in.output_dir);
+    if (!quiet && in.refining)
+      fprintf(stderr, "mpm: refinement: %lld trees from the rules, %.2f s\n", in.refinements,
+              in.refinement_seconds);
+    if (!quiet && in.resampling) {
+      const double *dL = in.angular_momentum_change;
       fprintf(stderr,
               "mpm: resampling: %lld splits, %lld merges; angular momentum changed by (%.3g, "
               "%.3g, %.3g) kg m^2/s\n",
-              sim->resample_figures.splits, sim->resample_figures.merges, dL[0], dL[1], dL[2]);
+              in.splits, in.merges, dL[0], dL[1], dL[2]);
     }
-    if (!quiet && sim->scene.heat.enabled)
+    if (!quiet && in.heat)
       fprintf(stderr,
               "mpm: heat: %zu domain particles melted off their domains (since this run started "
               "or resumed); the last step took %d conduction substeps\n",
-              sim->melted_domains, sim->heat.figures.substeps);
-    if (!quiet && sim->surface_frames > 0) /* output.surface's share of the wall time */
+              in.melted_domains, in.conduction_substeps);
+    if (!quiet && in.surface_frames > 0) /* output.surface's share of the wall time */
       fprintf(stderr, "mpm: surfaces: %.1f s of it, %.2f s per frame (%d frames)\n",
-              sim->surface_seconds_total, sim->surface_seconds_total / sim->surface_frames,
-              sim->surface_frames);
+              in.surface_seconds_total, in.surface_seconds_total / in.surface_frames,
+              in.surface_frames);
   }
   if (code == MPM_EXIT_OK && render) { /* pictures of every frame: `mpm render DIR` */
-    char dir[MPM_PATH_MAX];
-    snprintf(dir, sizeof dir, "%s", sim->output_dir);
+    char dir[PATH_CAP];
+    snprintf(dir, sizeof dir, "%s", info_of(sim).output_dir);
     mpm_sim_destroy(sim);
     char quiet_flag[] = "--quiet";
     char *rargv[] = {dir, quiet ? quiet_flag : NULL, NULL};

@@ -160,6 +160,85 @@ MPM_API int mpm_sim_collider_count(const mpm_sim *sim);
 /// *out; MPM_ERR_INVALID for an index out of range.
 MPM_API mpm_status mpm_sim_collider_pose(const mpm_sim *sim, int index, mpm_collider_state *out);
 
+/// The particles simulated now: the standard material points and the particles whose domains
+/// are on (the count of mpm_sim_particles' view, without building it).
+MPM_API size_t mpm_sim_particle_count(const mpm_sim *sim);
+
+/// Run at most `frames` frames (1 .. the scene's end time times fps): mpm_sim_frame_count then
+/// returns it, and a loop `while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))` stops there
+/// (`mpm run --frames N`). Once output is enabled the count may only be lowered (the output's
+/// per-frame records are sized for it). MPM_ERR_INVALID otherwise, with the message.
+MPM_API mpm_status mpm_sim_set_frame_limit(mpm_sim *sim, int frames);
+
+/// Called after every step that mpm_sim_advance_frame takes, with `ctx` and the simulation
+/// (whose getters it may call; it must not advance it): progress within a long frame. NULL
+/// removes it.
+typedef void (*mpm_step_callback)(void *ctx, const mpm_sim *sim);
+MPM_API void mpm_sim_set_step_callback(mpm_sim *sim, mpm_step_callback callback, void *ctx);
+
+/// What is likely a mistake in the scene though not an error, one line each (no trailing
+/// newline) into `buf` (of `cap` bytes, may be NULL with cap 0): a kernel known to go unstable
+/// on the scene's bodies and, before the first step, bodies that overlap each other (they
+/// would be doubly dense) or start inside a collider. Returns the number of warnings.
+MPM_API int mpm_sim_warnings(const mpm_sim *sim, char *buf, size_t cap);
+
+/// The time step the next mpm_sim_step would take before clipping to a frame's end: the CFL
+/// bound on the current state (the enrichment's too, Zhu et al. 2017 sec. 5) or the implicit
+/// solver's fixed solver.dt, into *dt, without advancing. A frame then needs about
+/// 1 / (fps * dt) steps (`mpm check` prints it). It computes the step's enrichment marks,
+/// which the next step would compute the same way.
+MPM_API mpm_status mpm_sim_next_dt(mpm_sim *sim, double *dt);
+
+/// What a program reports about a simulation: its size, its output and the figures of the
+/// last frame. Fill it with mpm_sim_get_info(sim, &info, sizeof info): members are only ever
+/// added at the end, and the library writes no more than `size` bytes, so a program built
+/// against an older header keeps working. The strings are owned by sim and valid until the
+/// next call that changes it.
+typedef struct mpm_sim_info {
+  size_t particles;        /* simulated now (mpm_sim_particle_count) */
+  size_t domain_particles; /* of them, those whose domains are on (Zhu et al. 2017) */
+  int bodies, materials, colliders;
+  double dx;             /* the grid's cell size (the coarsest level's on a multi-level grid), m */
+  double finest_dx;      /* the finest level's, m (dx on a uniform grid) */
+  double fps, frame_dt;  /* frames per second and 1 / fps, s */
+  double end_time;       /* the scene's, s */
+  int frame_count;       /* frames to run: the scene's or mpm_sim_set_frame_limit's */
+  int implicit;          /* solver.integrator is "implicit" */
+  int fixed_dt;          /* the step is the scene's solver.dt (implicit), not a CFL bound */
+  int threads;           /* the OpenMP threads its calls run on (mpm_sim_set_threads) */
+  double memory_bytes;   /* the memory the scene needs for its particles (the estimate that
+                            creation checks against MPM_MEMORY_LIMIT or the machine's) */
+  int output_enabled;    /* mpm_sim_enable_output was called (or mpm_sim_resume) */
+  const char *output_dir;      /* where frames go (the scene's output.directory until then) */
+  int written_frames;          /* frame files written, frame 0 included */
+  const char *last_checkpoint; /* the path of the newest checkpoint written, "" when none */
+  /* the implicit solver over the last frame completed (0 steps when explicit) */
+  long long solver_steps, cg_iterations, newton_iterations, cg_unconverged;
+  int cg_max;                /* most CG iterations of one step */
+  double cg_residual_max;    /* largest final relative CG residual of one step */
+  /* output.surface: the last frame's particle surfaces, and all frames of this process */
+  int surfaces;              /* output.surface is on */
+  double surface_seconds;    /* the last frame's wall time for them, s */
+  size_t surface_triangles;  /* its triangles */
+  double surface_seconds_total;
+  int surface_frames;
+  /* Gao et al. 2017: the multi-level grid's rebuilds (domain.refine_every) and the particle
+     split and merge (resample), since creation */
+  int refining;
+  long long refinements;
+  double refinement_seconds;
+  int resampling;
+  long long splits, merges;
+  double angular_momentum_change[3]; /* what the resampling changed, kg m^2/s */
+  /* heat (scene `heat`): domain particles melted off their domains since creation, and the
+     last step's conduction substeps */
+  int heat;
+  size_t melted_domains;
+  int conduction_substeps;
+} mpm_sim_info;
+
+MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size);
+
 #ifdef __cplusplus
 }
 #endif

@@ -325,8 +325,13 @@ mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char 
   mpm_scene scene;
   mpm_status st = mpm_scene_load(scene_path, &scene, &err);
   if (st == MPM_OK) {
+    char *copy = mpm_scene_copy_of_file(scene_path, &scene);
     st = mpm_sim_create_from_scene(&scene, out, &err);
     mpm_scene_free(&scene);
+    if (st == MPM_OK)
+      (*out)->scene_copy = copy;
+    else
+      free(copy);
   }
   if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
   return st;
@@ -347,8 +352,13 @@ mpm_status mpm_sim_create_from_json(const char *json_text, const char *base_dir,
   mpm_status st = json_text ? mpm_scene_parse(json_text, path, &scene, &err)
                             : mpm_error_set(&err, MPM_ERR_INVALID, "no scene text given (NULL)");
   if (st == MPM_OK) {
+    char *copy = mpm_scene_copy_text(json_text, &scene);
     st = mpm_sim_create_from_scene(&scene, out, &err);
     mpm_scene_free(&scene);
+    if (st == MPM_OK)
+      (*out)->scene_copy = copy;
+    else
+      free(copy);
   }
   if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
   return st;
@@ -388,6 +398,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim->stats);
   free(sim->stats_forces);
   mpm_scene_free(&sim->scene);
+  free(sim->scene_copy);
   free(sim);
 }
 

@@ -129,6 +129,9 @@ struct mpm_sim {
   mpm_real *view_derived; /* the view's J and Cauchy stress: 10 arrays of view_capacity */
   size_t view_capacity;
   char last_checkpoint[MPM_PATH_MAX + 32];
+  /* the scene's JSON, mesh paths made absolute, for the output folder's scene.json (made when
+   * created from a file or JSON text; NULL when created from a scene struct) */
+  char *scene_copy;
   mpm_error error;
 };
 
@@ -235,6 +238,13 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim);
  * with output.vdb levelset_NNNN.vdb, from the particles p (all of them, domains included), in
  * order of p's bodies (sim_surface.c). */
 mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int frame);
+
+/* The output folder's copy of the scene (sim_scene_copy.c): the JSON text (or the scene file's)
+ * with the mesh bodies' files made absolute, NULL when it cannot be read or is out of memory;
+ * and writing sim->scene_copy as output_dir/scene.json (nothing without one). */
+char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene);
+char *mpm_scene_copy_of_file(const char *scene_path, const mpm_scene *scene);
+mpm_status mpm_sim_write_scene_copy(mpm_sim *sim);
 
 /* Seconds since an arbitrary start, monotonic. */
 double mpm_wall_seconds(void);

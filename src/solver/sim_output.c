@@ -32,6 +32,8 @@ mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   mpm_status st = mpm_make_dirs(sim->output_dir, &sim->error);
   if (st == MPM_OK) st = mpm_sim_alloc_output(sim, 0);
   if (st != MPM_OK) return st;
+  st = mpm_sim_write_scene_copy(sim);
+  if (st != MPM_OK) return st;
   sim->output_enabled = 1;
   sim->frame_wall_start = mpm_wall_seconds();
   const int saved = mpm_sim_threads_enter(sim); /* the frame's stress loop is parallel */

@@ -1,0 +1,74 @@
+/* sim_scene_copy.c - the scene a run was made from, kept in its output folder as scene.json, so
+ * that tools reading the folder later (`mpm render`, `mpm plot`) know the domain and the
+ * colliders. The copy is made when the simulation is created from a scene file or JSON text,
+ * with mesh files referred to by absolute path (the copy lives elsewhere, and the caller may
+ * change its working directory), and written by mpm_sim_enable_output. */
+#define _DEFAULT_SOURCE /* realpath */
+#include "solver/sim.h"
+
+#include <cjson/cJSON.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static char *read_text(const char *path) {
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return NULL;
+  char *text = NULL;
+  if (fseek(fp, 0, SEEK_END) == 0) {
+    const long n = ftell(fp);
+    if (n >= 0 && fseek(fp, 0, SEEK_SET) == 0 && (text = malloc((size_t)n + 1))) {
+      if (fread(text, 1, (size_t)n, fp) != (size_t)n) {
+        free(text);
+        text = NULL;
+      } else {
+        text[n] = 0;
+      }
+    }
+  }
+  fclose(fp);
+  return text;
+}
+
+char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
+  cJSON *root = json_text ? cJSON_Parse(json_text) : NULL;
+  if (!root) return NULL;
+  const cJSON *bodies = cJSON_GetObjectItemCaseSensitive(root, "bodies");
+  int i = 0;
+  for (const cJSON *b = bodies ? bodies->child : NULL; b && i < scene->body_count;
+       b = b->next, ++i) {
+    cJSON *shape = cJSON_GetObjectItemCaseSensitive(b, "shape");
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(shape, "type");
+    if (!cJSON_IsString(type) || strcmp(type->valuestring, "mesh")) continue;
+    char abs_path[PATH_MAX];
+    if (!realpath(scene->bodies[i].shape.mesh_path, abs_path)) continue;
+    cJSON_ReplaceItemInObjectCaseSensitive(shape, "file", cJSON_CreateString(abs_path));
+  }
+  char *printed = cJSON_Print(root);
+  cJSON_Delete(root);
+  char *out = printed ? strdup(printed) : NULL; /* the simulation frees it with free() */
+  cJSON_free(printed);
+  return out;
+}
+
+char *mpm_scene_copy_of_file(const char *scene_path, const mpm_scene *scene) {
+  char *text = read_text(scene_path);
+  char *copy = mpm_scene_copy_text(text, scene);
+  free(text);
+  return copy;
+}
+
+mpm_status mpm_sim_write_scene_copy(mpm_sim *sim) {
+  if (!sim->scene_copy) return MPM_OK; /* made from a scene struct: no JSON to keep */
+  char path[MPM_PATH_MAX + 16];
+  snprintf(path, sizeof path, "%s/scene.json", sim->output_dir);
+  mpm_atomic_file f;
+  mpm_status st = mpm_atomic_open(&f, path, &sim->error);
+  if (st != MPM_OK) return st;
+  if (fputs(sim->scene_copy, f.fp) < 0 || fputc('\n', f.fp) < 0) {
+    mpm_atomic_abort(&f);
+    return mpm_error_set(&sim->error, MPM_ERR_IO, "%s: write failed", path);
+  }
+  return mpm_atomic_commit(&f, &sim->error);
+}

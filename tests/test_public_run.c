@@ -1,0 +1,219 @@
+/* test_public_run.c - the public calls a program needs around a run (include/mpm/mpm.h, issue
+ * 17: `mpm run` and `mpm check` are written on them alone): mpm_sim_get_info against the
+ * particle view and the other getters, the frame limit, the step callback, the scene's
+ * warnings, the next step's dt against the step then taken, and the copy of the scene that
+ * mpm_sim_enable_output keeps for `mpm render`. */
+#include "support.h"
+#include "mpm/mpm.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* Two boxes of elastic material points; `overlap` moves the second into the first. */
+static mpm_sim *two_boxes(double second_x, const char *kernel) {
+  char json[2048];
+  snprintf(json, sizeof json,
+           "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.05},"
+           " \"time\": {\"end\": 0.1, \"fps\": 40},"
+           " \"solver\": {\"kernel\": \"%s\"},"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3,"
+           "   \"density\": 1000}],"
+           " \"bodies\": ["
+           "  {\"name\": \"a\", \"shape\": {\"type\": \"box\", \"center\": [0.3, 0.5, 0.5],"
+           "   \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\"},"
+           "  {\"name\": \"b\", \"shape\": {\"type\": \"box\", \"center\": [%g, 0.5, 0.5],"
+           "   \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"domains\": true}]}",
+           kernel, second_x);
+  mpm_sim *sim = NULL;
+  char err[1024];
+  if (mpm_sim_create_from_json(json, NULL, &sim, err, sizeof err) != MPM_OK)
+    fail_msg("create: %s", err);
+  return sim;
+}
+
+static void test_info(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic");
+  mpm_sim_info in;
+  assert_int_equal(mpm_sim_get_info(sim, &in, sizeof in), MPM_OK);
+  const mpm_particle_view v = mpm_sim_particles(sim);
+  assert_int_equal(in.particles, v.count);
+  assert_int_equal(in.particles, mpm_sim_particle_count(sim));
+  /* the second box has domains: half the particles (both boxes sampled alike) */
+  assert_true(in.domain_particles > 0 && in.domain_particles < in.particles);
+  assert_int_equal(in.domain_particles * 2, in.particles);
+  assert_int_equal(in.bodies, 2);
+  assert_int_equal(in.materials, 1);
+  assert_int_equal(in.colliders, 0);
+  assert_true(in.dx == 0.05 && in.finest_dx == 0.05);
+  assert_true(in.fps == 40 && fabs(in.frame_dt - 0.025) < 1e-15 && in.end_time == 0.1);
+  assert_int_equal(in.frame_count, 4);
+  assert_int_equal(in.frame_count, mpm_sim_frame_count(sim));
+  assert_false(in.implicit);
+  assert_false(in.output_enabled);
+  assert_true(in.memory_bytes > 0);
+  assert_true(in.threads >= 1);
+  assert_string_equal(in.last_checkpoint, "");
+  assert_int_equal(mpm_sim_set_threads(sim, 3), MPM_OK);
+  mpm_sim_get_info(sim, &in, sizeof in);
+  assert_int_equal(in.threads, 3);
+  /* a program built against an older, shorter struct: nothing past its size is written */
+  unsigned char bytes[sizeof(mpm_sim_info) + 16];
+  memset(bytes, 0xAB, sizeof bytes);
+  const size_t older = offsetof(mpm_sim_info, fps);
+  assert_int_equal(mpm_sim_get_info(sim, (mpm_sim_info *)(void *)bytes, older), MPM_OK);
+  for (size_t k = older; k < sizeof bytes; ++k) assert_int_equal(bytes[k], 0xAB);
+  assert_int_equal(((mpm_sim_info *)(void *)bytes)->particles, in.particles);
+  assert_int_equal(mpm_sim_get_info(sim, NULL, sizeof in), MPM_ERR_INVALID);
+  mpm_sim_destroy(sim);
+}
+
+static void test_frame_limit(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic");
+  assert_int_equal(mpm_sim_set_frame_limit(sim, 0), MPM_ERR_INVALID);
+  assert_int_equal(mpm_sim_set_frame_limit(sim, 5), MPM_ERR_INVALID); /* the scene has 4 */
+  assert_non_null(strstr(mpm_sim_last_error(sim), "1 to 4 frames"));
+  assert_int_equal(mpm_sim_set_frame_limit(sim, 2), MPM_OK);
+  assert_int_equal(mpm_sim_frame_count(sim), 2);
+  assert_int_equal(mpm_sim_set_frame_limit(sim, 4), MPM_OK); /* back up before output */
+  assert_int_equal(mpm_sim_set_frame_limit(sim, 2), MPM_OK);
+  assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("public_run_limit")), MPM_OK);
+  /* the output's records are for 2 frames now: only lower */
+  assert_int_equal(mpm_sim_set_frame_limit(sim, 3), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "only be lowered"));
+  int frames = 0;
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
+    assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+    ++frames;
+  }
+  assert_int_equal(frames, 2);
+  assert_true(fabs(mpm_sim_time(sim) - 0.05) < 1e-9);
+  mpm_sim_info in;
+  mpm_sim_get_info(sim, &in, sizeof in);
+  assert_true(in.output_enabled);
+  assert_int_equal(in.written_frames, 3); /* frame 0, 1 and 2 */
+  mpm_sim_destroy(sim);
+}
+
+typedef struct step_log {
+  int calls;
+  int64_t last_steps;
+  int monotonic;
+} step_log;
+
+static void on_step(void *ctx, const mpm_sim *sim) {
+  step_log *log = ctx;
+  const int64_t s = mpm_sim_steps(sim);
+  if (s != log->last_steps + 1) log->monotonic = 0;
+  log->last_steps = s;
+  ++log->calls;
+}
+
+static void test_step_callback(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic");
+  step_log log = {0, 0, 1};
+  mpm_sim_set_step_callback(sim, on_step, &log);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  print_message("one frame: %d steps, %d callbacks\n", (int)mpm_sim_steps(sim), log.calls);
+  assert_true(log.calls > 1);
+  assert_int_equal(log.calls, mpm_sim_steps(sim)); /* once after every step, in order */
+  assert_true(log.monotonic);
+  mpm_sim_set_step_callback(sim, NULL, &log); /* removed */
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  assert_true(mpm_sim_steps(sim) > log.calls);
+  assert_int_equal(log.calls, log.last_steps);
+  mpm_sim_destroy(sim);
+}
+
+static void test_warnings(void **state) {
+  (void)state;
+  char text[8192];
+  mpm_sim *sim = two_boxes(0.7, "quadratic"); /* apart, a stable kernel: nothing */
+  assert_int_equal(mpm_sim_warnings(sim, text, sizeof text), 0);
+  assert_string_equal(text, "");
+  mpm_sim_destroy(sim);
+  /* overlapping boxes and the linear kernel: two warnings, one line each */
+  sim = two_boxes(0.35, "linear");
+  const int n = mpm_sim_warnings(sim, text, sizeof text);
+  print_message("%d warnings:\n%s\n", n, text);
+  assert_int_equal(n, 2);
+  assert_non_null(strstr(text, "cell-crossing"));
+  assert_non_null(strstr(text, "overlap"));
+  assert_non_null(strchr(text, '\n'));
+  assert_int_not_equal(text[strlen(text) - 1], '\n');
+  assert_int_equal(mpm_sim_warnings(sim, NULL, 0), 2); /* the count alone */
+  /* once the run is under way the starting positions are past: the kernel's warning stays */
+  assert_int_equal(mpm_sim_step(sim, 1e-4), MPM_OK);
+  assert_int_equal(mpm_sim_warnings(sim, text, sizeof text), 1);
+  assert_null(strstr(text, "overlap"));
+  mpm_sim_destroy(sim);
+}
+
+/* The dt reported for the next step is the step then taken (with no smaller bound given). */
+static void test_next_dt(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic");
+  double dt = 0;
+  assert_int_equal(mpm_sim_next_dt(sim, &dt), MPM_OK);
+  print_message("next dt %.6g s\n", dt);
+  assert_true(dt > 0 && dt < 0.025);
+  assert_int_equal(mpm_sim_step(sim, 1.0), MPM_OK);
+  assert_true(fabs(mpm_sim_time(sim) - dt) <= 1e-12 * dt);
+  /* after a frame's worth of motion it is the next step's again */
+  for (int k = 0; k < 20; ++k) assert_int_equal(mpm_sim_step(sim, 1.0), MPM_OK);
+  const double t = mpm_sim_time(sim);
+  assert_int_equal(mpm_sim_next_dt(sim, &dt), MPM_OK);
+  assert_int_equal(mpm_sim_step(sim, 1.0), MPM_OK);
+  assert_true(fabs(mpm_sim_time(sim) - t - dt) <= 1e-9 * dt);
+  mpm_sim_destroy(sim);
+}
+
+static char *read_all(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  static char text[1 << 16];
+  const size_t n = fread(text, 1, sizeof text - 1, f);
+  fclose(f);
+  text[n] = 0;
+  return text;
+}
+
+/* mpm_sim_enable_output keeps the scene as scene.json (mesh files by absolute path), and that
+ * copy makes the same simulation. */
+static void test_scene_copy(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_file("examples/ball_bunny.json", &sim, err, sizeof err),
+                   MPM_OK);
+  const char *dir = test_temp_dir("public_run_copy");
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  char path[1200];
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  const char *text = read_all(path);
+  assert_non_null(text);
+  /* the bunny mesh by its absolute path */
+  assert_non_null(strstr(text, "\"/"));
+  assert_non_null(strstr(text, "meshes/bunny"));
+  mpm_sim *copy = NULL;
+  assert_int_equal(mpm_sim_create_from_file(path, &copy, err, sizeof err), MPM_OK);
+  const mpm_particle_view a = mpm_sim_particles(sim), b = mpm_sim_particles(copy);
+  assert_int_equal(a.count, b.count);
+  assert_memory_equal(a.x[0], b.x[0], a.count * a.real_size);
+  mpm_sim_destroy(copy);
+  mpm_sim_destroy(sim);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_info),          cmocka_unit_test(test_frame_limit),
+      cmocka_unit_test(test_step_callback), cmocka_unit_test(test_warnings),
+      cmocka_unit_test(test_next_dt),       cmocka_unit_test(test_scene_copy),
+  };
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
+}
