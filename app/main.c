@@ -73,8 +73,9 @@ static const usage_section SECTIONS[] = {
      "      (output.surface) are drawn as shaded triangles in place of their particles\n"
      "      (--particles: the particles too); --quiet prints nothing but errors\n"},
     {"plot", "  mpm plot OUTDIR [--out DIR] [--quiet]\n"
-             "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame)\n"
-             "      to OUTDIR/plots/*.png (or --out DIR) with gnuplot\n"},
+             "      plot OUTDIR/stats.csv (energies, momenta, dt, steps and wall time per frame,\n"
+             "      enriched particles, the colliders' reaction forces) to OUTDIR/plots/*.png\n"
+             "      (or --out DIR) with gnuplot\n"},
     {"error", "  mpm error REST.vtu FINAL.vtu [--body N]\n"
               "  mpm error OUTDIR REST_FRAME FINAL_FRAME [--body N]\n"
               "      the rest-state error (Zhu et al. 2017): particles matched by id, rigid\n"

@@ -2,12 +2,11 @@
  * (io/stats_csv.c) and draw them with gnuplot to PNG files in OUTDIR/plots/.
  *
  * The CSV is read and checked completely before anything is written: the header must be the
- * one mpm_write_stats_csv writes (25 columns, then three force columns per collider, which are
- * checked but not plotted; the 21 of files from before the step range and the gravitational
- * energy, the 20 of files from before dynamic enrichment and the 15 of files from before the
- * implicit integrator are read too), every row must have its
- * fields and every field must be a finite number (a bad file is an input error, exit 2, with the
- * file and line named). Then:
+ * one mpm_write_stats_csv writes (25 columns, then three force columns per collider, plotted
+ * in collider_forces.png when there are any; the 21 of files from before the step range and the
+ * gravitational energy, the 20 of files from before dynamic enrichment and the 15 of files from
+ * before the implicit integrator are read too), every row must have its fields and every field must
+ * be a finite number (a bad file is an input error, exit 2, with the file and line named). Then:
  *   1. find gnuplot on PATH (not found: exit 1, nothing written);
  *   2. create the plots directory and write two temporaries into it: a whitespace-separated
  *      data file with the derived columns (steps per frame, the difference of the cumulative
@@ -105,12 +104,15 @@ static const char *const column_names[COL_COUNT] = {"frame",
 
 typedef struct stats_table {
   double (*rows)[COL_COUNT];
+  double *forces; /* `extra` per row: the colliders' mean force over the frame (x, y, z), N */
   size_t count, capacity;
   int columns; /* the file's: fewer than COL_COUNT for a file of an earlier version */
+  int extra;   /* the collider force columns, 3 per collider */
 } stats_table;
 
 static void stats_table_free(stats_table *t) {
   free(t->rows);
+  free(t->forces);
   memset(t, 0, sizeof *t);
 }
 
@@ -141,7 +143,7 @@ static int split_fields(char *line, char **fields, int max) {
   return n;
 }
 
-/* Most collider force columns read (3 per collider); they are checked, not plotted. */
+/* Most collider force columns read (3 per collider). */
 #define COLLIDER_COLUMNS_MAX 3000
 
 /* The header's columns: COL_COUNT, or COL_ENRICHED_COUNT, COL_SOLVER_COUNT or COL_LEGACY_COUNT
@@ -186,7 +188,7 @@ static mpm_status check_header(const char *path, char *line, int *columns, int *
 }
 
 static mpm_status parse_row(const char *path, long line_no, char *line, int columns, int extra,
-                            double *row, mpm_error *err) {
+                            double *row, double *forces, mpm_error *err) {
   char *fields[COL_COUNT + COLLIDER_COLUMNS_MAX];
   const int n = split_fields(line, fields, COL_COUNT + COLLIDER_COLUMNS_MAX);
   for (int c = columns; c < COL_COUNT; ++c) row[c] = 0;
@@ -203,7 +205,10 @@ static mpm_status parse_row(const char *path, long line_no, char *line, int colu
       return mpm_error_set(err, MPM_ERR_PARSE, "%s: line %ld: field %d (%s) is %s: '%.60s'", path,
                            line_no, c + 1, c < COL_COUNT ? column_names[c] : "a collider force",
                            parsed ? "not a finite number" : "not a number", s);
-    if (c < COL_COUNT) row[c] = v;
+    if (c < columns)
+      row[c] = v;
+    else
+      forces[c - columns] = v;
   }
   return MPM_OK;
 }
@@ -236,18 +241,23 @@ static mpm_status read_stats(const char *path, stats_table *t, mpm_error *err) {
     if (t->count == t->capacity) {
       const size_t want = t->capacity ? 2 * t->capacity : 256;
       void *grown = realloc(t->rows, want * sizeof *t->rows);
-      if (!grown) {
+      if (grown) t->rows = grown;
+      void *grown_forces =
+          grown ? realloc(t->forces, want * (size_t)(extra + 1) * sizeof *t->forces) : NULL;
+      if (!grown_forces) {
         st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory at line %ld", path, line_no);
         break;
       }
-      t->rows = grown;
+      t->forces = grown_forces;
       t->capacity = want;
     }
-    st = parse_row(path, line_no, line, columns, extra, t->rows[t->count], err);
+    st = parse_row(path, line_no, line, columns, extra, t->rows[t->count],
+                   t->forces + t->count * (size_t)extra, err);
     if (st != MPM_OK) break;
     ++t->count;
   }
   t->columns = columns;
+  t->extra = extra;
   const int read_error = ferror(f);
   const int read_errno = errno;
   free(line);
@@ -331,7 +341,8 @@ enum {
   DAT_ENRICHED,
   DAT_DT_MIN,
   DAT_DT_MAX,
-  DAT_GRAVITATIONAL
+  DAT_GRAVITATIONAL,
+  DAT_COLLIDERS /* then per collider its force's x, y, z and magnitude */
 };
 
 /* One PNG: its curves are `using X:Y title T` items over the data file. */
@@ -347,6 +358,8 @@ typedef struct plot_spec {
 } plot_spec;
 
 enum { PLOT_COUNT = 7 };
+/* with colliders, one more: collider_forces.png (written by write_collider_plot) */
+enum { PLOT_MAX = PLOT_COUNT + 1 };
 
 static const plot_spec plots[PLOT_COUNT] = {
     {"energy.png",
@@ -422,10 +435,51 @@ static void write_data(FILE *f, const stats_table *t, int dt_log) {
     put_dt(f, r[COL_DT_MIN], current && i > 0, dt_log);
     put_dt(f, r[COL_DT_MAX], current && i > 0, dt_log);
     if (current)
-      fprintf(f, " %.17g\n", r[COL_GRAVITATIONAL]);
+      fprintf(f, " %.17g", r[COL_GRAVITATIONAL]);
     else
-      fputs(" ?\n", f);
+      fputs(" ?", f);
+    /* a frame's mean force over its steps: none for frame 0, the initial state */
+    const double *F = t->forces + i * (size_t)t->extra;
+    for (int c = 0; c < t->extra / 3; ++c) {
+      if (i == 0) {
+        fputs(" ? ? ? ?", f);
+        continue;
+      }
+      const double *Fc = F + 3 * c;
+      fprintf(f, " %.17g %.17g %.17g %.17g", Fc[0], Fc[1], Fc[2],
+              sqrt(Fc[0] * Fc[0] + Fc[1] * Fc[1] + Fc[2] * Fc[2]));
+    }
+    fputc('\n', f);
   }
+}
+
+/* The colliders' reaction forces over time (stats.csv's collider<c>_f columns, the momentum a
+ * collider took from the material per second of the frame): with one collider its components
+ * and magnitude, with more the magnitude of each. */
+static void write_collider_plot(FILE *f, const char *png_name, const char *run_name,
+                                const stats_table *t) {
+  const int colliders = t->extra / 3;
+  fputs("\nset output ", f);
+  put_gp_string(f, png_name);
+  fputs("\nset title ", f);
+  char title[600];
+  snprintf(title, sizeof title, "force on the colliders: %s", run_name);
+  put_gp_string(f, title);
+  fputs(" noenhanced\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
+        "set key below horizontal spacing 1.3 width 2\nset ytics autofreq\nunset logscale y\n"
+        "set xtics autofreq\nset offsets 0, 0, graph 0.05, graph 0.05\nplot ",
+        f);
+  if (colliders == 1) {
+    static const char *const names[4] = {"F_x", "F_y", "F_z", "|F|"};
+    for (int k = 0; k < 4; ++k)
+      fprintf(f, "%sdata using %d:%d lw 2 title 'collider 0 %s'", k ? ", \\\n     " : "", DAT_TIME,
+              DAT_COLLIDERS + k, names[k]);
+  } else {
+    for (int c = 0; c < colliders; ++c)
+      fprintf(f, "%sdata using %d:%d lw 2 title 'collider %d |F|'", c ? ", \\\n     " : "",
+              DAT_TIME, DAT_COLLIDERS + 4 * c + 3, c);
+  }
+  fputc('\n', f);
 }
 
 /* What the script needs to know about the data beyond the file. */
@@ -523,6 +577,7 @@ static void write_script(FILE *f, const char *data_name, const char *const *png_
     }
     fputc('\n', f);
   }
+  if (t->extra) write_collider_plot(f, png_names[PLOT_COUNT], run_name, t);
   fputs("\nunset output\n", f);
 }
 
@@ -606,16 +661,17 @@ static void usage(FILE *out) {
   fprintf(out, "usage: mpm plot OUTDIR [--out DIR] [--quiet]\n"
                "  plot OUTDIR/stats.csv (written by 'mpm run') to DIR (default OUTDIR/plots):\n"
                "  energy.png, momentum.png, angular_momentum.png, dt.png, steps_per_frame.png,\n"
-               "  wall_per_frame.png; needs gnuplot\n");
+               "  wall_per_frame.png, enriched.png, and collider_forces.png for a run with\n"
+               "  colliders; needs gnuplot\n");
 }
 
 /* The files of one plotting pass; `open` ones are removed by plot_files_abort. */
 typedef struct plot_files {
-  mpm_atomic_file png[PLOT_COUNT], data, script;
+  mpm_atomic_file png[PLOT_MAX], data, script;
 } plot_files;
 
 static void plot_files_abort(plot_files *pf) {
-  for (int p = 0; p < PLOT_COUNT; ++p) mpm_atomic_abort(&pf->png[p]);
+  for (int p = 0; p < PLOT_MAX; ++p) mpm_atomic_abort(&pf->png[p]);
   mpm_atomic_abort(&pf->data);
   mpm_atomic_abort(&pf->script);
 }
@@ -632,12 +688,14 @@ static int plot_stats(const stats_table *t, const char *run_name, const char *gn
   plot_files pf;
   memset(&pf, 0, sizeof pf);
   char path[1100];
-  const char *png_names[PLOT_COUNT];
+  const char *png_names[PLOT_MAX];
+  const int count = PLOT_COUNT + (t->extra > 0);
   /* The temporaries the atomic files reserve: the PNGs are renamed into place after gnuplot
    * has written them; the data file and the script are never committed, only removed. */
   mpm_status st = MPM_OK;
-  for (int p = 0; p < PLOT_COUNT && st == MPM_OK; ++p) {
-    snprintf(path, sizeof path, "%s/%s", dir, plots[p].file);
+  for (int p = 0; p < count && st == MPM_OK; ++p) {
+    snprintf(path, sizeof path, "%s/%s", dir,
+             p < PLOT_COUNT ? plots[p].file : "collider_forces.png");
     st = mpm_atomic_open(&pf.png[p], path, &err);
     png_names[p] = base_name(pf.png[p].temp_path);
   }
@@ -674,7 +732,7 @@ static int plot_stats(const stats_table *t, const char *run_name, const char *gn
   }
   mpm_atomic_abort(&pf.data);
   mpm_atomic_abort(&pf.script);
-  for (int p = 0; p < PLOT_COUNT; ++p) {
+  for (int p = 0; p < count; ++p) {
     struct stat sb;
     if (stat(pf.png[p].temp_path, &sb) != 0 || sb.st_size == 0) {
       fprintf(stderr, "mpm plot: gnuplot wrote no image for %s\n", pf.png[p].final_path);
@@ -682,7 +740,7 @@ static int plot_stats(const stats_table *t, const char *run_name, const char *gn
       return MPM_EXIT_FAILURE;
     }
   }
-  for (int p = 0; p < PLOT_COUNT; ++p) {
+  for (int p = 0; p < count; ++p) {
     if (mpm_atomic_commit(&pf.png[p], &err) != MPM_OK) {
       fprintf(stderr, "mpm plot: %s\n", err.message);
       plot_files_abort(&pf);

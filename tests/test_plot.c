@@ -84,9 +84,9 @@ static void write_stats_layout(const char *dir, int frames, int columns) {
   fclose(f);
 }
 
-/* All seven PNGs in dir, non-empty, with the PNG signature; nothing else there (no temporaries
- * left behind). */
-static void expect_pngs(const char *dir) {
+/* All seven PNGs in dir, and collider_forces.png when the run had colliders, non-empty, with the
+ * PNG signature; nothing else there (no temporaries left behind). */
+static void expect_pngs_of(const char *dir, int colliders) {
   static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   char path[800];
   for (int i = 0; i < PNG_COUNT; ++i) {
@@ -111,7 +111,20 @@ static void expect_pngs(const char *dir) {
       fail_msg("left in %s: %s", dir, e->d_name);
   }
   closedir(d);
-  assert_int_equal(entries, PNG_COUNT);
+  snprintf(path, sizeof path, "%s/collider_forces.png", dir);
+  FILE *f = fopen(path, "rb");
+  if (colliders && !f) fail_msg("missing %s; mpm said:\n%s", path, output);
+  if (!colliders && f) fail_msg("%s written for a run without colliders", path);
+  if (f) {
+    fseek(f, 0, SEEK_END);
+    if (ftell(f) < 1000) fail_msg("%s has only %ld bytes", path, ftell(f));
+    fclose(f);
+  }
+  assert_int_equal(entries, PNG_COUNT + (colliders > 0));
+}
+
+static void expect_pngs(const char *dir) {
+  expect_pngs_of(dir, 0);
 }
 
 static void test_synthetic_stats(void **state) {
@@ -153,7 +166,7 @@ static void test_every_layout(void **state) {
     snprintf(args, sizeof args, "plot '%s' --quiet", dir);
     if (mpm(args) != 0) fail_msg("mpm plot of a %d-column file failed:\n%s", layouts[k], output);
     snprintf(plots, sizeof plots, "%s/plots", dir);
-    expect_pngs(plots);
+    expect_pngs_of(plots, layouts[k] > 25 ? (layouts[k] - 25) / 3 : 0);
   }
   /* a header of 22 columns is no layout mpm wrote */
   const char *dir = test_temp_dir("plot-layout-22");
@@ -261,7 +274,7 @@ static void test_real_run(void **state) {
   snprintf(args, sizeof args, "plot '%s'", dir);
   if (mpm(args) != 0) fail_msg("mpm plot failed:\n%s", output);
   snprintf(plots, sizeof plots, "%s/plots", dir);
-  expect_pngs(plots);
+  expect_pngs_of(plots, 1); /* jello_cubes has a floor: its force is plotted too */
 }
 
 static void test_gnuplot_missing_or_failing(void **state) {
