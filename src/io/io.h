@@ -69,10 +69,22 @@ mpm_status mpm_write_ply_points(const char *path, const mpm_frame_fields *f, mpm
 mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double time,
                                mpm_error *err);
 
-/* The particle domains of a frame as hexahedral cells over their corners (vtu_domains.c). */
+/* The per-particle arrays of frame_NNNN.vtu that `fields` selects (bits of mpm_output_field),
+ * of f's particles, for the CellData of another file (vtu.c): their appended bytes (byte counts
+ * included); their header lines, offsets from `base`, each line led by `indent`; and their
+ * appended data. The two writers return 0 or the errno of the first failed write. */
+uint64_t mpm_vtu_particle_arrays_bytes(const mpm_frame_fields *f, unsigned fields);
+int mpm_vtu_particle_arrays_header(FILE *fp, const mpm_frame_fields *f, unsigned fields,
+                                   uint64_t base, const char *indent);
+int mpm_vtu_particle_arrays_data(FILE *fp, const mpm_frame_fields *f, unsigned fields);
+
+/* The particle domains of a frame as hexahedral cells over their corners (vtu_domains.c).
+ * `cells` (may be NULL): the active domain particles in the set's order, whose arrays that
+ * cells->fields selects beyond the file's own (id, J, material, body, enrichment) are added to
+ * the CellData (output.fields). */
 struct mpm_domain_set;
 mpm_status mpm_write_domain_vtu(const char *path, const struct mpm_domain_set *s, double time,
-                                mpm_error *err);
+                                const mpm_frame_fields *cells, mpm_error *err);
 
 /* ---- stats CSV ---- */
 typedef struct mpm_stats_row {

@@ -323,3 +323,43 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
   }
   return mpm_atomic_commit(&af, err);
 }
+
+/* ---- the per-particle arrays for another file's CellData (vtu_domains.c) ---- */
+
+/* Whether array a is one of the per-particle ones `fields` selects. */
+static int particle_array(const vtu_array *a, unsigned fields) {
+  return !strcmp(a->section, "point") && a->field >= 0 && (fields >> a->field & 1u);
+}
+
+uint64_t mpm_vtu_particle_arrays_bytes(const mpm_frame_fields *f, unsigned fields) {
+  uint64_t at = 0;
+  for (int k = 0; k < VTU_ARRAYS; ++k)
+    if (particle_array(&vtu_arrays[k], fields))
+      at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], f->particles->count);
+  return at;
+}
+
+int mpm_vtu_particle_arrays_header(FILE *fp, const mpm_frame_fields *f, unsigned fields,
+                                   uint64_t base, const char *indent) {
+  uint64_t offsets[VTU_ARRAYS] = {0}, at = base;
+  for (int k = 0; k < VTU_ARRAYS; ++k)
+    if (particle_array(&vtu_arrays[k], fields)) {
+      offsets[k] = at;
+      at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], f->particles->count);
+    }
+  vtu_out o = {fp, 0};
+  /* header_section writes the always-written ones too; there are none among "point" */
+  header_section(&o, "point", offsets, indent, fields);
+  return o.err;
+}
+
+int mpm_vtu_particle_arrays_data(FILE *fp, const mpm_frame_fields *f, unsigned fields) {
+  void *buf = mpm_alloc(VTU_CHUNK_BYTES);
+  if (!buf) return ENOMEM;
+  vtu_out o = {fp, 0};
+  for (int k = 0; k < VTU_ARRAYS && !o.err; ++k)
+    if (particle_array(&vtu_arrays[k], fields))
+      write_array(&o, &vtu_arrays[k], f, f->particles->count, buf);
+  mpm_free(buf);
+  return o.err;
+}

@@ -4,10 +4,13 @@
  *
  * Same layout as vtu.c (XML header, UInt64 byte counts, one raw appended block): FieldData
  * TIME; Points (corner positions); PointData velocity (corner velocities); CellData id, J
- * (det F), material, body; Cells connectivity (VTK's hexahedron order, domain/hex.h),
- * offsets, types. */
+ * (det F), material, body, enrichment, then the per-particle arrays output.fields lists beyond
+ * those (the domain particle's velocity, stress tensor, pressure, F, ...: vtu.c writes them);
+ * Cells connectivity (VTK's hexahedron order, domain/hex.h), offsets, types. Without
+ * output.fields the file is what it was before the key existed. */
 #include "io/io.h"
 #include "domain/domain.h"
+#include "scene/scene.h"
 
 #include <errno.h>
 #include <stdint.h>
@@ -31,8 +34,13 @@ static void put_count(out *o, uint64_t bytes) {
   put(o, &bytes, sizeof bytes);
 }
 
+/* The fields the domain file writes of its own, whatever output.fields says. */
+#define OWN_FIELDS                                                                                 \
+  (1u << MPM_FIELD_ID | 1u << MPM_FIELD_J | 1u << MPM_FIELD_MATERIAL | 1u << MPM_FIELD_BODY |      \
+   1u << MPM_FIELD_ENRICHMENT)
+
 mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, double time,
-                                mpm_error *err) {
+                                const mpm_frame_fields *cells, mpm_error *err) {
   const size_t nc = s->corner_count;
   size_t ncell = 0;
   for (size_t i = 0; i < s->particles.count; ++i) ncell += s->active[i] != 0;
@@ -46,6 +54,11 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
     off[k] = at;
     at += 8 + sizes[k];
   }
+  /* output.fields' arrays, after the file's own */
+  const unsigned extra = cells && cells->fields ? cells->fields & ~OWN_FIELDS : 0;
+  if (extra && cells->particles->count != ncell)
+    return mpm_error_set(err, MPM_ERR_INVALID, "%s: %zu cell values for %zu domains", path,
+                         cells->particles->count, ncell);
   mpm_atomic_file f;
   mpm_status st = mpm_atomic_open(&f, path, err);
   if (st != MPM_OK) return st;
@@ -93,7 +106,11 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
       (unsigned long long)off[2], (unsigned long long)off[3], REAL_TYPE, (unsigned long long)off[4],
       (unsigned long long)off[5], (unsigned long long)off[6], (unsigned long long)off[10],
       (unsigned long long)off[7], (unsigned long long)off[8], (unsigned long long)off[9]);
-  put(&o, head, strlen(head));
+  /* the header in two parts, the selected arrays' lines between them: the CellData's end */
+  char *cell_end = strstr(head, "      </CellData>");
+  put(&o, head, (size_t)(cell_end - head));
+  if (extra && !o.err) o.err = mpm_vtu_particle_arrays_header(f.fp, cells, extra, at, "        ");
+  put(&o, cell_end, strlen(cell_end));
   put_count(&o, sizes[0]);
   put(&o, &time, sizeof time);
   /* corner positions and velocities, interleaved */
@@ -147,6 +164,7 @@ mpm_status mpm_write_domain_vtu(const char *path, const mpm_domain_set *s, doubl
       const int32_t cat = s->enrich.category ? s->enrich.category[i] : 0;
       put(&o, &cat, sizeof cat);
     }
+  if (extra && !o.err) o.err = mpm_vtu_particle_arrays_data(f.fp, cells, extra);
   put(&o, "\n  </AppendedData>\n</VTKFile>\n", strlen("\n  </AppendedData>\n</VTKFile>\n"));
   if (o.err) {
     mpm_atomic_abort(&f);

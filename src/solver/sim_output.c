@@ -198,7 +198,38 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   }
   if (o->vtu && has_domains) {
     snprintf(path, sizeof path, "%s/domains_%04d.vtu", sim->output_dir, frame);
-    st = mpm_write_domain_vtu(path, &sim->domains, sim->time, &sim->error);
+    /* the domain particles' part of the frame's arrays (after the material points, in the
+       set's order of its active domains, as the domain file's cells are) for output.fields */
+    const size_t first = sim->particles.count;
+    mpm_particles dp = *p;
+    dp.count = p->count - first;
+    for (int d = 0; d < 3; ++d) {
+      dp.x[d] += first;
+      dp.v[d] += first;
+    }
+    for (int c = 0; c < 9; ++c) {
+      dp.F[c] += first;
+      dp.B[c] += first;
+    }
+    dp.plastic += first;
+    dp.mass += first;
+    dp.vol0 += first;
+    dp.temperature += first;
+    dp.material += first;
+    dp.body += first;
+    dp.level += first;
+    dp.id += first;
+    const mpm_frame_fields cells = {&dp,
+                                    J ? J + first : NULL,
+                                    stress ? stress + first : NULL,
+                                    sim->time,
+                                    category ? category + first : NULL,
+                                    heat,
+                                    melt ? melt + first : NULL,
+                                    o->fields, /* 0 without output.fields: the file's own only */
+                                    cauchy ? cauchy + 9 * first : NULL,
+                                    pressure ? pressure + first : NULL};
+    st = mpm_write_domain_vtu(path, &sim->domains, sim->time, &cells, &sim->error);
     if (st != MPM_OK) goto done;
   }
   for (int k = 0; k < sim->surface_count; ++k) { /* embedded surfaces (Zhu sec. 4.1) */

@@ -39,7 +39,11 @@ frame, that what ParaView would load is what the engine computed:
               domain).
   domains_NNNN.vtu (scenes with particle domains)
               every cell a VTK_HEXAHEDRON, one per domain particle, ids among the frame's;
-              frame 0's hexahedra all of one positive volume by VTK's HexVolume (corner order).
+              frame 0's hexahedra all of one positive volume by VTK's HexVolume (corner order);
+              with output.fields, the optional arrays the frame file has (cauchy_stress,
+              pressure, F) are CellData of the domains too, and every array beyond the
+              domain file's own (id, J, material, body, enrichment) holds, per cell, exactly
+              its particle's values in the frame file (matched by id).
   run.pvd     parsed with xml.etree: per timestep of frames.pvd, part 0 "particles" is that
               frame's VTU, part 1 "domains" its domains_NNNN.vtu exactly when the run wrote
               one, then one "surface_body<i>" part per surface_body<i>_NNNN.obj the run wrote,
@@ -609,11 +613,49 @@ def check_cells(where, path, domain, messages):
     return cells
 
 
-def check_domains(where, path, frame_ids, first, messages):
+DOMAIN_OWN_ARRAYS = {"id", "J", "material", "body", "enrichment"}
+
+
+def check_domain_fields(where, grid, frame):
+    """output.fields' arrays in domains_NNNN.vtu: every optional array the frame has (they are
+    there only when output.fields lists them) is CellData of the domains too, and each cell's
+    values are its particle's in the frame file, found by id."""
+    pd, cd = frame.GetPointData(), grid.GetCellData()
+    index = {v: i for i, v in enumerate(values(pd.GetArray("id")))} if pd.GetArray("id") else None
+    names = [cd.GetArrayName(k) for k in range(cd.GetNumberOfArrays())]
+    for name in OPTIONAL_ARRAYS:
+        if pd.GetArray(name) is not None and name not in names:
+            where.fail(name, "the frame file has it (output.fields) but the domains file does not")
+    if index is None:
+        return
+    ids = values(cd.GetArray("id"))
+    for name in names:
+        if name in DOMAIN_OWN_ARRAYS:
+            continue
+        mine, theirs = cd.GetArray(name), pd.GetArray(name)
+        if theirs is None:
+            where.fail(name, "CellData the frame file does not have")
+        comps = mine.GetNumberOfComponents()
+        if comps != theirs.GetNumberOfComponents():
+            where.fail(name, "%d components, the frame file's %d"
+                       % (comps, theirs.GetNumberOfComponents()))
+        for c, pid in enumerate(ids):
+            i = index[pid]
+            a = [mine.GetComponent(c, k) for k in range(comps)]
+            b = [theirs.GetComponent(i, k) for k in range(comps)]
+            if a != b:
+                where.fail(name, "domain %d (id %d): %r, its particle's in the frame file %r"
+                           % (c, pid, a, b))
+
+
+def check_domains(where, path, frame_ids, first, messages, frame=None):
     """domains_NNNN.vtu: VTK_HEXAHEDRON cells over the corner points, one per domain particle,
     ids among the frame's; in frame 0 every hexahedron has the same positive volume (VTK's own
-    HexVolume: a wrong corner order gives a negative or twisted one)."""
+    HexVolume: a wrong corner order gives a negative or twisted one); output.fields' arrays as
+    in the frame file (check_domain_fields)."""
     grid = read_vtu(where, path, messages)
+    if frame is not None:
+        check_domain_fields(where, grid, frame)
     cells = grid.GetNumberOfCells()
     if cells == 0:
         where.fail(None, "no domain cells")
@@ -759,7 +801,8 @@ def check_scene(mpm, scene, outdir, frames, messages):
         real, ids = check_frame(where, grid, ply, step, stats[k], info, real)
         dom = os.path.join(outdir, "domains_%04d.vtu" % k)
         if os.path.exists(dom):
-            domain_cells = check_domains(Where(name, dom, k), dom, set(ids), k == 0, messages)
+            domain_cells = check_domains(Where(name, dom, k), dom, set(ids), k == 0, messages,
+                                         grid)
         cells_k = os.path.join(outdir, "grid_cells_%04d.vtu" % k)
         if os.path.exists(cells_k):  # a grid rebuilt during the run: its tree per frame
             check_cells(Where(name, cells_k, k), cells_k, info[3], messages)
