@@ -191,8 +191,10 @@ static int bench_step(int argc, char **argv) {
     const double n = (double)sim->particles.count;
     for (int w = 0; w < 3; ++w) mpm_sim_step(sim, 1e-3);
     double total[100], sort[100], p2g[100], grid[100], g2p[100], guarded[100];
+    double busy[100], stolen[100], run_ns[100]; /* per run, in order (the medians sort theirs) */
     for (int r = 0; r < repeats; ++r) {
       mpm_stage_times before = sim->times;
+      const bench_cpu_sample c0 = bench_cpu_now();
       const double w0 = mpm_wall_seconds();
       for (int k = 0; k < steps; ++k)
         if (mpm_sim_step(sim, 1e-3) != MPM_OK) {
@@ -201,7 +203,12 @@ static int bench_step(int argc, char **argv) {
           return MPM_EXIT_FAILURE;
         }
       const double f = 1e9 / (n * steps);
-      guarded[r] = (mpm_wall_seconds() - w0) * f; /* mpm_sim_step: the guard and bookkeeping too */
+      const double wall = mpm_wall_seconds() - w0;
+      const bench_cpu_sample c1 = bench_cpu_now();
+      guarded[r] = wall * f; /* mpm_sim_step: the guard and bookkeeping too */
+      busy[r] = 100 * (c1.process - c0.process) / (wall * threads[t]);
+      stolen[r] = 1e3 * (c1.stolen - c0.stolen);
+      run_ns[r] = guarded[r];
       total[r] = (sim->times.total - before.total) * f;
       sort[r] = (sim->times.sort - before.sort) * f;
       p2g[r] = (sim->times.p2g - before.p2g) * f;
@@ -214,9 +221,28 @@ static int bench_step(int argc, char **argv) {
     printf("  ns per particle-step: total %.1f = sort %.1f + P2G %.1f + grid %.1f + G2P %.1f\n",
            bench_median(total, repeats), bench_median(sort, repeats), bench_median(p2g, repeats),
            bench_median(grid, repeats), bench_median(g2p, repeats));
+    /* the spread over the runs, before the medians sort the arrays */
+    double g_lo = guarded[0], g_hi = guarded[0];
+    for (int r = 1; r < repeats; ++r) {
+      if (guarded[r] < g_lo) g_lo = guarded[r];
+      if (guarded[r] > g_hi) g_hi = guarded[r];
+    }
     printf("  guarded step (mpm_sim_step, as mpm run takes it, without the frames' outputs): "
-           "%.1f ns per particle-step\n",
-           bench_median(guarded, repeats));
+           "%.1f ns per particle-step (runs %.1f-%.1f)\n",
+           bench_median(guarded, repeats), g_lo, g_hi);
+    /* why runs differ: the threads' CPU time per wall second (below 100% they were off their
+       cores: preempted by other work, or waiting at barriers for one that was) and the time the
+       hypervisor stole from this machine's CPUs meanwhile */
+    printf("  runs (ns per particle-step, CPU busy %% of %d threads, ms stolen by the "
+           "hypervisor):",
+           threads[t]);
+    for (int r = 0; r < repeats; ++r)
+      printf("%s %.1f (%.0f%%, %.0f ms)", r ? "," : "", run_ns[r], busy[r], stolen[r]);
+    printf("\n");
+    double huge = 0, anon = 0;
+    if (bench_huge_page_share(&huge, &anon) == 0)
+      printf("  transparent huge pages: %.0f of %.0f MiB of anonymous memory (%.0f%%)\n", huge,
+             anon, anon > 0 ? 100 * huge / anon : 0);
     printf("  memory: %.1f bytes per particle (library peak %.1f MiB; %zu grid blocks)\n",
            (double)(mpm_alloc_peak_bytes() - live0) / n, mpm_alloc_peak_bytes() / 1048576.0,
            sim->grid.ops->box_count(&sim->grid));

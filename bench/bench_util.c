@@ -1,4 +1,5 @@
 /* bench_util.c - helpers shared by the benchmarks. */
+#define _POSIX_C_SOURCE 200809L /* sysconf, getrusage */
 #include "bench_util.h"
 
 #include "core/parallel.h"
@@ -11,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 void bench_print_machine(void) {
   char model[256] = "unknown";
@@ -36,6 +38,47 @@ double bench_peak_rss_mib(void) {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
   return ru.ru_maxrss / 1024.0;
+}
+
+bench_cpu_sample bench_cpu_now(void) {
+  bench_cpu_sample c = {0, 0};
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) == 0)
+    c.process = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+                (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
+  /* the machine's line of /proc/stat: user nice system idle iowait irq softirq steal, in
+   * clock ticks */
+  FILE *f = fopen("/proc/stat", "r");
+  if (f) {
+    unsigned long long v[8] = {0};
+    if (fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3],
+               &v[4], &v[5], &v[6], &v[7]) == 8) {
+      const long hz = sysconf(_SC_CLK_TCK);
+      c.stolen = (double)v[7] / (double)(hz > 0 ? hz : 100);
+    }
+    fclose(f);
+  }
+  return c;
+}
+
+int bench_huge_page_share(double *huge_mib, double *anon_mib) {
+  FILE *f = fopen("/proc/self/smaps_rollup", "r");
+  if (!f) return -1;
+  char line[256];
+  int found = 0;
+  *huge_mib = *anon_mib = 0;
+  while (fgets(line, sizeof line, f)) {
+    unsigned long kb;
+    if (sscanf(line, "Anonymous: %lu kB", &kb) == 1) {
+      *anon_mib = kb / 1024.0;
+      found |= 1;
+    } else if (sscanf(line, "AnonHugePages: %lu kB", &kb) == 1) {
+      *huge_mib = kb / 1024.0;
+      found |= 2;
+    }
+  }
+  fclose(f);
+  return found == 3 ? 0 : -1;
 }
 
 int bench_parse_threads(const char *s, int *list, int max) {

@@ -10,6 +10,20 @@ void bench_print_machine(void);
 /* Peak resident set of the process, MiB. */
 double bench_peak_rss_mib(void);
 
+/* CPU time: this process's (user + system, all threads) and the time the hypervisor took from
+ * the machine's CPUs (steal, Linux /proc/stat; 0 where unknown), s. Differences over a run tell
+ * why its wall time varies: threads off their cores (less process time per wall second, or
+ * steal) or slower at the same work (more process time). */
+typedef struct bench_cpu_sample {
+  double process, stolen;
+} bench_cpu_sample;
+bench_cpu_sample bench_cpu_now(void);
+
+/* The process's anonymous memory and the part of it on transparent huge pages, MiB (Linux
+ * /proc/self/smaps_rollup): the particle arrays and grid pools ask for them (core/alloc.c), and
+ * whether the kernel grants them changes a step's speed. 0, or -1 where the file is missing. */
+int bench_huge_page_share(double *huge_mib, double *anon_mib);
+
 /* Parse a thread list like "1,2" into list (at most max entries); the count, or -1 if invalid. */
 int bench_parse_threads(const char *s, int *list, int max);
 
