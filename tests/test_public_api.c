@@ -13,6 +13,11 @@
 #include <string.h>
 #include <sys/stat.h>
 
+/* one entry of a view array, whatever the real type */
+static double at(const mpm_particle_view *v, const void *a, size_t i) {
+  return v->real_size == 4 ? ((const float *)a)[i] : ((const double *)a)[i];
+}
+
 static void test_view_holds_domain_particles(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
@@ -30,14 +35,14 @@ static void test_view_holds_domain_particles(void **state) {
     assert_true(v.id[i] < sizeof seen);
     assert_false(seen[v.id[i]]);
     seen[v.id[i]] = 1;
-    const double x = v.real_size == 4 ? ((const float *)v.x[0])[i] : ((const double *)v.x[0])[i];
+    const double x = at(&v, v.x[0], i);
     assert_true(x > 0 && x < 1);
   }
   /* it follows the simulation */
-  const double x0 = v.real_size == 4 ? ((const float *)v.x[0])[0] : ((const double *)v.x[0])[0];
+  const double x0 = at(&v, v.x[0], 0);
   assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
   v = mpm_sim_particles(sim);
-  const double x1 = v.real_size == 4 ? ((const float *)v.x[0])[0] : ((const double *)v.x[0])[0];
+  const double x1 = at(&v, v.x[0], 0);
   assert_true(x1 != x0);
   mpm_sim_destroy(sim);
 }
@@ -62,11 +67,6 @@ static void test_checkpoint_from_the_api(void **state) {
   print_message("checkpoint written from the public API: %s (%lld bytes)\n", path,
                 (long long)st.st_size);
   mpm_sim_destroy(sim);
-}
-
-/* one entry of a view array, whatever the real type */
-static double at(const mpm_particle_view *v, const void *a, size_t i) {
-  return v->real_size == 4 ? ((const float *)a)[i] : ((const double *)a)[i];
 }
 
 /* A small elastic block at rest in zero gravity, with domains, and one moving box collider. */
