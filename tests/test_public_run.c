@@ -209,11 +209,50 @@ static void test_scene_copy(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The rest-state error between two frame files (Zhu et al. 2017; `mpm error`): a frame against
+ * itself is 0 with every particle matched; a rigidly moved copy (the frame one step later of a
+ * body in free flight moves almost rigidly) is small; files that are not frames are refused with
+ * their name. */
+static void test_rest_error_frames(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic");
+  const char *dir = test_temp_dir("public_run_rest");
+  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  char rest[1200], final[1200], err[1024];
+  snprintf(rest, sizeof rest, "%s/frame_0000.vtu", dir);
+  snprintf(final, sizeof final, "%s/frame_0001.vtu", dir);
+  mpm_rest_error_result e;
+  assert_int_equal(mpm_rest_error_frames(rest, rest, -1, &e, err, sizeof err), MPM_OK);
+  assert_int_equal(e.matched, mpm_sim_particle_count(sim));
+  assert_int_equal(e.rest_particles, e.matched);
+  assert_true(e.mean == 0 && e.max == 0 && e.rotation_degrees < 1e-3);
+  /* body 1 alone (the box with domains): half the particles; after a frame of falling the
+     box has moved down but kept its shape: the error is tiny beside the fall */
+  assert_int_equal(mpm_rest_error_frames(rest, final, 1, &e, err, sizeof err), MPM_OK);
+  print_message("body 1 after a frame: mean %.3g, max %.3g, translation y %.4g m\n", e.mean, e.max,
+                e.translation[1]);
+  assert_int_equal(e.matched * 2, mpm_sim_particle_count(sim));
+  assert_true(e.translation[1] < -1e-4);        /* it fell */
+  assert_true(e.max < 1e-4 && e.mean <= e.max); /* free fall does not deform it */
+  assert_int_equal(mpm_rest_error_frames("/nonexistent/frame.vtu", final, -1, &e, err, sizeof err),
+                   MPM_ERR_IO);
+  assert_non_null(strstr(err, "/nonexistent/frame.vtu"));
+  snprintf(rest, sizeof rest, "%s/stats.csv", dir);
+  assert_int_not_equal(mpm_rest_error_frames(rest, final, -1, &e, err, sizeof err), MPM_OK);
+  assert_non_null(strstr(err, "stats.csv"));
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_info),          cmocka_unit_test(test_frame_limit),
-      cmocka_unit_test(test_step_callback), cmocka_unit_test(test_warnings),
-      cmocka_unit_test(test_next_dt),       cmocka_unit_test(test_scene_copy),
+      cmocka_unit_test(test_info),
+      cmocka_unit_test(test_frame_limit),
+      cmocka_unit_test(test_step_callback),
+      cmocka_unit_test(test_warnings),
+      cmocka_unit_test(test_next_dt),
+      cmocka_unit_test(test_scene_copy),
+      cmocka_unit_test(test_rest_error_frames),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

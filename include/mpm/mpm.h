@@ -239,6 +239,25 @@ typedef struct mpm_sim_info {
 
 MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size);
 
+/// The rest-state error of Zhu et al. 2017 (sec. 7, their Table 1) between two frame files of
+/// a run (frame_NNNN.vtu, with the id array; `mpm error`): particles matched by id, the rigid
+/// motion removed by shape matching (mass-weighted where the frames have masses), distances
+/// over the rest shape's bounding-box diagonal. body >= 0 keeps that body's particles only.
+typedef struct mpm_rest_error_result {
+  double mean, max;        /* mean and largest distance after the rigid motion, / diagonal */
+  double diagonal;         /* the rest shape's bounding-box diagonal, m */
+  size_t matched;          /* particles in both frames */
+  size_t rest_particles;   /* particles of the rest frame (of the body) */
+  double rotation[9];      /* the rotation removed, row-major */
+  double rotation_degrees; /* its angle */
+  double translation[3];   /* and the translation, m */
+} mpm_rest_error_result;
+
+/// MPM_ERR_IO or MPM_ERR_PARSE for a file that cannot be read or is not a frame of mpm,
+/// MPM_ERR_INVALID when no particle is in both, with the file named in err (may be NULL).
+MPM_API mpm_status mpm_rest_error_frames(const char *rest_vtu, const char *final_vtu, int body,
+                                         mpm_rest_error_result *out, char *err, size_t errlen);
+
 #ifdef __cplusplus
 }
 #endif
