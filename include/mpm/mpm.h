@@ -242,4 +242,6 @@ MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size
 #ifdef __cplusplus
 }
 #endif
+/* a scene built in code (description structs), on the declarations above */
+#include "scene_def.h"
 #endif
