@@ -24,8 +24,9 @@
  *
  * Every quantity is a double in SI units whatever real type the library was built with. The
  * strings and arrays stay the caller's: they are read during the call only. A `const char *`
- * that is NULL leaves the key out (the format's default applies). Members are only ever added
- * at the end of a struct, and a program that starts from _default() keeps working.
+ * that is NULL leaves the key out (the format's default applies). A number that is not finite
+ * is written as null, which the check reports as "got null" at the field. Members are only ever
+ * added at the end of a struct, and a program that starts from _default() keeps working.
  *
  * Included by mpm.h; include <mpm/mpm.h>. */
 #ifndef MPM_SCENE_DEF_H
@@ -96,8 +97,9 @@ typedef struct mpm_shape_def {
                               0 = infinite; default 0 */
   const char *file;        /* shape.file (mesh): OBJ or PLY, relative to base_dir; default NULL */
   double scale;            /* shape.scale (mesh), factor; default 1 */
-  double point[3];         /* shape.point, m (halfspace); required: default 0 */
-  double normal[3];        /* shape.normal, outward (halfspace), any length; default +y */
+  double point[3];         /* shape.point, m (halfspace); required key: default 0 */
+  double normal[3];        /* shape.normal, outward (halfspace), any length; required key: the
+                              def starts from +y {0, 1, 0} */
 } mpm_shape_def;
 
 /// A material (materials[i]). The keys of one model only (friction_angle...) are written for
