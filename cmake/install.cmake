@@ -2,7 +2,7 @@
 #   lib/libmpm.so*          the shared library (MPM_SHARED), public API only
 #   lib/libmpm.a            the static library, and lib/libmpmvdb.a (the OpenVDB shim) beside it
 #                           when built with OpenVDB: link both, libmpm.a first
-#   include/mpm/mpm.h       the public header
+#   include/mpm/mpm.h       the public header, and scene_def.h which it includes
 #   bin/mpm                 the program (MPM_BUILD_PROGRAM)
 #   lib/pkgconfig/mpm.pc    pkg-config: `pkg-config --cflags --libs mpm` (shared), --static lists
 #                           what libmpm.a needs
@@ -27,7 +27,7 @@ if(MPM_OPENVDB)
   # the shim built here or imported from another build tree (MPM_VDB_SHIM_LIBRARY) alike
   install(FILES $<TARGET_FILE:mpmvdb> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libmpmvdb.a)
 endif()
-install(FILES ${PROJECT_SOURCE_DIR}/include/mpm/mpm.h
+install(FILES ${PROJECT_SOURCE_DIR}/include/mpm/mpm.h ${PROJECT_SOURCE_DIR}/include/mpm/scene_def.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/mpm)
 if(MPM_BUILD_PROGRAM)
   install(TARGETS mpm RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

@@ -261,4 +261,6 @@ MPM_API mpm_status mpm_rest_error_frames(const char *rest_vtu, const char *final
 #ifdef __cplusplus
 }
 #endif
+/* a scene built in code (description structs), on the declarations above */
+#include "scene_def.h"
 #endif

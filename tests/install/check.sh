@@ -7,7 +7,8 @@
 # that knows nothing of this source tree:
 #   1. the prefix holds the shared and the static library, the header, mpm.pc and the CMake
 #      package, and libmpm.so's dynamic symbols are the public API only;
-#   2. examples/embed.c builds through pkg-config, shared and static (--static), and runs;
+#   2. examples/embed.c builds through pkg-config, shared and static (--static), and runs, and
+#      so does examples/embed_def.c (the scene built in code), shared;
 #   3. a CMake project (consumer/) finds the package with find_package(mpm), builds embed.c
 #      against mpm::mpm and against mpm::mpm_static, and runs both;
 #   4. a CMake project that takes the source tree with add_subdirectory configures with the
@@ -34,6 +35,7 @@ pc=$(find "$prefix" -name mpm.pc | head -n 1)
 [ -n "$pc" ] || fail "no mpm.pc under $prefix"
 libdir=$(dirname "$(dirname "$pc")")
 for f in "$libdir/libmpm.so" "$libdir/libmpm.a" "$prefix/include/mpm/mpm.h" \
+  "$prefix/include/mpm/scene_def.h" \
   "$libdir/cmake/mpm/mpmConfig.cmake" "$libdir/cmake/mpm/mpmConfigVersion.cmake"; do
   [ -e "$f" ] || fail "$f was not installed"
 done
@@ -41,11 +43,13 @@ done
 # sections, .gomp_critical_user_*, are the runtime's, not ours)
 nm -D --defined-only "$libdir/libmpm.so" | awk '{print $3}' | grep -v '^\.gomp_critical_user_' |
   sort >"$tmp/exported"
-grep -o 'mpm_[a-z_0-9]*(' "$prefix/include/mpm/mpm.h" | tr -d '(' | sort -u >"$tmp/declared"
+# (mpm.h includes scene_def.h: the declarations of both are the public API)
+cat "$prefix/include/mpm/mpm.h" "$prefix/include/mpm/scene_def.h" | grep -o 'mpm_[a-z_0-9]*(' |
+  tr -d '(' | sort -u >"$tmp/declared"
 extra=$(comm -23 "$tmp/exported" "$tmp/declared")
-[ -z "$extra" ] || fail "libmpm.so exports symbols mpm.h does not declare: $extra"
+[ -z "$extra" ] || fail "libmpm.so exports symbols mpm.h and scene_def.h do not declare: $extra"
 count=$(grep -c . "$tmp/exported")
-echo "libmpm.so exports $count functions, all of them declared in mpm.h"
+echo "libmpm.so exports $count functions, all of them declared in mpm.h and scene_def.h"
 
 echo "== pkg-config"
 export PKG_CONFIG_PATH="$libdir/pkgconfig"
@@ -57,6 +61,11 @@ echo "pkg-config --cflags --libs mpm: $flags"
 # it runs on the installed libmpm.so, not on the build tree's
 ldd "$tmp/embed_pc" | grep -q "$libdir/libmpm.so" || fail "embed_pc does not load $libdir/libmpm.so"
 (cd "$tmp" && ./embed_pc) || fail "embed_pc (pkg-config, shared) failed"
+# the scene built in code, from the installed scene_def.h
+# shellcheck disable=SC2086
+"$cc" -Wall -Wextra -Werror -o "$tmp/embed_def_pc" "$src/examples/embed_def.c" $flags \
+  -Wl,-rpath,"$libdir" || fail "embed_def.c does not build through pkg-config"
+(cd "$tmp" && ./embed_def_pc) || fail "embed_def_pc (pkg-config, shared) failed"
 # static: --static adds what libmpm.a needs; the archive is named, as the linker would take
 # libmpm.so for -lmpm (mpm.pc says so)
 static=$("$pkgconfig" --static --libs mpm | sed "s|-lmpm |$libdir/libmpm.a |")

@@ -1,0 +1,256 @@
+/* scene_def.h - a scene built in code: plain description structs that mirror the JSON scene
+ * format (docs/scene-format.md) key by key, Box2D-style.
+ *
+ * Start every struct from its _default() function, which fills each field with the default the
+ * scene format gives the key it mirrors, change what the scene needs and hand the scene to
+ * mpm_sim_create_from_def:
+ *
+ *   mpm_material_def jelly = mpm_material_def_default();
+ *   jelly.name = "jelly";
+ *   mpm_body_def cube = mpm_body_def_default();
+ *   cube.shape.center[0] = cube.shape.center[1] = cube.shape.center[2] = 0.5;
+ *   cube.shape.half_extent[0] = cube.shape.half_extent[1] = cube.shape.half_extent[2] = 0.1;
+ *   mpm_scene_def def = mpm_scene_def_default();
+ *   def.materials = &jelly, def.material_count = 1;
+ *   def.bodies = &cube, def.body_count = 1;
+ *   mpm_sim_create_from_def(&def, NULL, &sim, err, sizeof err);
+ *
+ * The def is turned into the scene's JSON text and loaded as mpm_sim_create_from_json loads it,
+ * so every check of the scene format applies, and its messages name the field by the same path
+ * as the key: "<def>: bodies[0].shape.radius: expected a number > 0 (m), got 0" is the def's
+ * bodies[0].shape.radius. Fields whose JSON key is required have no default there; the def
+ * either starts them from a value that makes a valid scene (said at the field) or leaves them
+ * 0, which the check refuses, naming the field.
+ *
+ * Every quantity is a double in SI units whatever real type the library was built with. The
+ * strings and arrays stay the caller's: they are read during the call only. A `const char *`
+ * that is NULL leaves the key out (the format's default applies). A number that is not finite
+ * is written as null, which the check reports as "got null" at the field. Members are only ever
+ * added at the end of a struct, and a program that starts from _default() keeps working.
+ *
+ * Included by mpm.h; include <mpm/mpm.h>. */
+#ifndef MPM_SCENE_DEF_H
+#define MPM_SCENE_DEF_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Material models (materials[].model), as the format spells them.
+typedef enum mpm_def_model {
+  MPM_DEF_FIXED_COROTATED = 0, /* "fixed_corotated" (the default) */
+  MPM_DEF_NEO_HOOKEAN = 1,     /* "neo_hookean" */
+  MPM_DEF_HENCKY_STVK = 2,     /* "hencky_stvk" */
+  MPM_DEF_DRUCKER_PRAGER = 3,  /* "drucker_prager": sand */
+  MPM_DEF_VON_MISES = 4,       /* "von_mises": metal-like plasticity */
+  MPM_DEF_SNOW = 5,            /* "snow" */
+} mpm_def_model;
+
+/// Boundary rules of walls and colliders (domain.walls.rule, colliders[].rule).
+typedef enum mpm_def_rule {
+  MPM_DEF_STICKY = 0,   /* "sticky": relative velocity set to zero */
+  MPM_DEF_SLIP = 1,     /* "slip": normal relative velocity removed (the default) */
+  MPM_DEF_SEPARATE = 2, /* "separate": removed only while approaching */
+} mpm_def_rule;
+
+/// Shapes (bodies[].shape.type, colliders[].shape.type).
+typedef enum mpm_def_shape_type {
+  MPM_DEF_BOX = 0,       /* "box": center, half_extent */
+  MPM_DEF_SPHERE = 1,    /* "sphere": center, radius */
+  MPM_DEF_CYLINDER = 2,  /* "cylinder": center, radius, axis, half_height */
+  MPM_DEF_MESH = 3,      /* "mesh": file, center, scale (bodies only) */
+  MPM_DEF_HALFSPACE = 4, /* "halfspace": point, normal (colliders only) */
+} mpm_def_shape_type;
+
+/// solver.kernel
+typedef enum mpm_def_kernel {
+  MPM_DEF_KERNEL_LINEAR = 0,
+  MPM_DEF_KERNEL_QUADRATIC = 1, /* the default */
+  MPM_DEF_KERNEL_CUBIC = 2,
+  MPM_DEF_KERNEL_UGIMP = 3,
+} mpm_def_kernel;
+
+/// solver.transfer
+typedef enum mpm_def_transfer {
+  MPM_DEF_APIC = 0, /* the default */
+  MPM_DEF_FLIP = 1, /* PIC/FLIP blend with solver.flip_alpha */
+} mpm_def_transfer;
+
+/// solver.integrator
+typedef enum mpm_def_integrator {
+  MPM_DEF_EXPLICIT = 0, /* the default */
+  MPM_DEF_IMPLICIT = 1, /* backward Euler (Zhu et al. 2017 sec. 6) */
+} mpm_def_integrator;
+
+/// A shape: the fields of its `type` are written, the others must keep their defaults (a box
+/// given a radius is refused rather than the radius ignored).
+typedef struct mpm_shape_def {
+  mpm_def_shape_type type; /* shape.type; default MPM_DEF_BOX */
+  double center[3];        /* shape.center, m (box, sphere, cylinder, mesh); required: default 0 */
+  double half_extent[3];   /* shape.half_extent, m (box); required, > 0: default 0 (refused) */
+  double radius;           /* shape.radius, m (sphere, cylinder); required, > 0: default 0 */
+  double axis[3];          /* shape.axis (cylinder), any length; default +y {0, 1, 0} */
+  double half_height;      /* shape.half_height, m (cylinder); bodies: required, > 0; colliders:
+                              0 = infinite; default 0 */
+  const char *file;        /* shape.file (mesh): OBJ or PLY, relative to base_dir; default NULL */
+  double scale;            /* shape.scale (mesh), factor; default 1 */
+  double point[3];         /* shape.point, m (halfspace); required key: default 0 */
+  double normal[3];        /* shape.normal, outward (halfspace), any length; required key: the
+                              def starts from +y {0, 1, 0} */
+} mpm_shape_def;
+
+/// A material (materials[i]). The keys of one model only (friction_angle...) are written for
+/// that model; on another model they must keep their defaults (the format refuses a key that
+/// would have no effect, and so does the def).
+typedef struct mpm_material_def {
+  const char *name;    /* materials[].name, 1..63 bytes; default NULL: "material<i>" */
+  mpm_def_model model; /* materials[].model; default MPM_DEF_FIXED_COROTATED */
+  /* E, nu and density are required keys: the def starts from the values of the format's
+     smallest scene, so that a default material is valid */
+  double E;              /* Young's modulus, Pa, > 0; default 1e5 */
+  double nu;             /* Poisson's ratio, (-1, 0.5); default 0.3 */
+  double density;        /* kg/m^3, > 0; default 1000 */
+  double min_stretch;    /* neo_hookean: singular values clamped below it, (0, 1]; default 0.2 */
+  double friction_angle; /* drucker_prager: degrees, [0, 90); default 30 */
+  double cohesion;       /* drucker_prager: Pa, >= 0; default 0 */
+  double yield_stress;   /* von_mises: Pa, > 0, required: default 0 (refused for von_mises) */
+  double theta_c;        /* snow: critical compression, (0, 1); default 0.025 */
+  double theta_s;        /* snow: critical stretch, > 0; default 0.0075 */
+  double hardening;      /* snow: hardening coefficient, >= 0; default 10 */
+} mpm_material_def;
+
+/// A body (bodies[i]): a shape filled with particles of one material.
+typedef struct mpm_body_def {
+  const char *name;    /* bodies[].name, 1..63 bytes; default NULL: "body<i>" */
+  mpm_shape_def shape; /* bodies[].shape: box, sphere, cylinder or mesh */
+  int material;        /* bodies[].material: index into the scene def's materials; default 0 */
+  const char *material_name;  /* or by name (bodies[].material's string), when not NULL; it
+                                 wins over `material`; default NULL */
+  double velocity[3];         /* bodies[].velocity, m/s; default 0 */
+  double angular_velocity[3]; /* bodies[].angular_velocity about the shape's centre, rad/s;
+                                 default 0 */
+  double particles_per_cell;  /* bodies[].particles_per_cell, (0, 1000]; default 8 */
+  double jitter;              /* bodies[].jitter, fraction of the spacing, [0, 1]; default 0 */
+  uint32_t seed;              /* bodies[].seed of the jitter; default 1 */
+  int domains; /* bodies[].domains: particle domains (Zhu et al. 2017), needs jitter 0; 0 or 1;
+                  default 0 */
+} mpm_body_def;
+
+/// A collider's constant motion (colliders[].motion without keyframes).
+typedef struct mpm_motion_def {
+  double velocity[3];   /* motion.velocity, m/s; default 0 */
+  double axis[3];       /* motion.axis of the spin through the centre, any length; default +z */
+  double angular_speed; /* motion.angular_speed about axis, rad/s; default 0 */
+} mpm_motion_def;
+
+/// A collider (colliders[i]): a kinematic obstacle.
+typedef struct mpm_collider_def {
+  const char *name;      /* colliders[].name, 1..63 bytes; default NULL: "collider<i>" */
+  mpm_shape_def shape;   /* colliders[].shape: box, sphere, cylinder or halfspace; default
+                            MPM_DEF_HALFSPACE */
+  int inside_out;        /* colliders[].inside_out: material kept inside (a container); 0 or 1;
+                            default 0 */
+  mpm_def_rule rule;     /* colliders[].rule; default MPM_DEF_SLIP */
+  double friction;       /* colliders[].friction, Coulomb coefficient >= 0; default 0 */
+  mpm_motion_def motion; /* colliders[].motion; default at rest */
+} mpm_collider_def;
+
+/// domain.walls
+typedef struct mpm_walls_def {
+  mpm_def_rule rule; /* walls.rule; default MPM_DEF_SLIP */
+  double friction;   /* walls.friction, >= 0; default 0 */
+  int cells;         /* walls.cells, band depth in cells, 2..16; default 3 */
+} mpm_walls_def;
+
+/// domain (the box and the grid). min, max and dx are required keys: the def starts from the
+/// unit box at 64 cells, so that a default domain is valid.
+typedef struct mpm_domain_def {
+  double min[3];       /* domain.min, m; default 0 */
+  double max[3];       /* domain.max, m, > min + 8 dx; default {1, 1, 1} */
+  double dx;           /* domain.dx, the cell size, m, > 0; default 1/64 */
+  mpm_walls_def walls; /* domain.walls */
+} mpm_domain_def;
+
+/// time
+typedef struct mpm_time_def {
+  double end; /* time.end, s, > 0; required key: default 1 */
+  double fps; /* time.fps, frames per second, > 0; default 24 */
+} mpm_time_def;
+
+/// solver (the keys of the implicit integrator are written only with MPM_DEF_IMPLICIT; with the
+/// explicit one they must keep their defaults)
+typedef struct mpm_solver_def {
+  mpm_def_integrator integrator; /* solver.integrator; default MPM_DEF_EXPLICIT */
+  mpm_def_kernel kernel;         /* solver.kernel; default MPM_DEF_KERNEL_QUADRATIC */
+  mpm_def_transfer transfer;     /* solver.transfer; default MPM_DEF_APIC */
+  double flip_alpha;             /* solver.flip_alpha, FLIP share, [0, 1]; default 0.95 */
+  double cfl;                    /* solver.cfl, (0, 1]; default 0.4 */
+  double max_dt;                 /* solver.max_dt, s, >= 0 (0: no bound); default 0 */
+  double dt;                     /* implicit: solver.dt, a fixed step, s (0: CFL); default 0 */
+  int newton_iterations;         /* implicit: solver.newton_iterations, 1..100; default 2 */
+} mpm_solver_def;
+
+/// output (what mpm_sim_enable_output writes)
+typedef struct mpm_output_def {
+  const char *directory; /* output.directory; default "out" */
+  int vtu;               /* output.vtu: frame_NNNN.vtu and frames.pvd; default 1 */
+  int ply;               /* output.ply: frame_NNNN.ply points; default 0 */
+  int stats;             /* output.stats: stats.csv; default 1 */
+  int checkpoint_every;  /* output.checkpoint_every, frames (0: only on a signal); default 10 */
+} mpm_output_def;
+
+/// A whole scene. The arrays are the caller's (read during the call only); a count of 0 with a
+/// NULL array is an empty list. A scene needs at least one body.
+typedef struct mpm_scene_def {
+  const char *name; /* name, 1..63 bytes; default NULL: the scene is named "<json>" as
+                       mpm_sim_create_from_json names it */
+  mpm_domain_def domain;
+  double gravity[3]; /* gravity, m/s^2; default {0, -9.81, 0} */
+  mpm_time_def time;
+  mpm_solver_def solver;
+  const mpm_material_def *materials; /* materials */
+  int material_count;
+  const mpm_body_def *bodies; /* bodies */
+  int body_count;
+  const mpm_collider_def *colliders; /* colliders */
+  int collider_count;
+  mpm_output_def output;
+} mpm_scene_def;
+
+/// The defaults of each struct (the scene format's defaults for the keys they mirror).
+MPM_API mpm_scene_def mpm_scene_def_default(void);
+MPM_API mpm_material_def mpm_material_def_default(void);
+MPM_API mpm_body_def mpm_body_def_default(void);
+MPM_API mpm_collider_def mpm_collider_def_default(void);
+/// A shape's defaults are those of the body's (MPM_DEF_BOX) and the collider's
+/// (MPM_DEF_HALFSPACE) _default(); this gives them for any type.
+MPM_API mpm_shape_def mpm_shape_def_default(mpm_def_shape_type type);
+
+/// Build the simulation of a def, as mpm_sim_create_from_json builds it from the def's JSON
+/// text (mpm_scene_def_to_json): mesh files resolve against `base_dir` (NULL: the current
+/// directory), and messages name the scene "<def>" (inside base_dir when given) and the field
+/// by its path. The def is not kept. On failure *out is NULL and err (of errlen bytes, may be
+/// NULL) holds the message: MPM_ERR_INVALID for a NULL def, a NULL array with a nonzero count, a
+/// negative count, an enum value out of range, a material index out of range or a name longer
+/// than 63 bytes, and the format's own status for everything the scene check refuses.
+MPM_API mpm_status mpm_sim_create_from_def(const mpm_scene_def *def, const char *base_dir,
+                                           mpm_sim **out, char *err, size_t errlen);
+
+/// The def as the text of a scene file (JSON, indented), to save it or to read it back with
+/// mpm_sim_create_from_file or mpm_sim_create_from_json. Only the def's own checks run here
+/// (those listed at mpm_sim_create_from_def before "and the format's"), not the scene check.
+/// On success *json_out is a NUL-terminated string the caller frees with mpm_free_string; on
+/// failure it is NULL and err holds the message.
+MPM_API mpm_status mpm_scene_def_to_json(const mpm_scene_def *def, char **json_out, char *err,
+                                         size_t errlen);
+
+/// Free a string the library allocated for the caller (mpm_scene_def_to_json's); NULL is fine.
+MPM_API void mpm_free_string(char *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
