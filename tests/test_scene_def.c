@@ -52,6 +52,10 @@ static void assert_same_scene(const mpm_scene *a, const mpm_scene *b) {
   SAME(a, b, output.ply);
   SAME(a, b, output.stats);
   SAME(a, b, output.checkpoint_every);
+  SAME(a, b, output.fields);
+  SAME(a, b, heat.enabled);
+  SAME(a, b, heat.temperature);
+  SAME(a, b, heat.pic);
   assert_int_equal(a->material_count, b->material_count);
   for (int i = 0; i < a->material_count; ++i) {
     const mpm_material_desc *p = &a->materials[i], *q = &b->materials[i];
@@ -67,6 +71,13 @@ static void assert_same_scene(const mpm_scene *a, const mpm_scene *b) {
     SAME(p, q, theta_c);
     SAME(p, q, theta_s);
     SAME(p, q, hardening);
+    SAME(p, q, specific_heat);
+    SAME(p, q, conductivity);
+    SAME(p, q, melting);
+    SAME(p, q, melt_point);
+    SAME(p, q, melt_range);
+    SAME(p, q, melt_shear);
+    SAME(p, q, melt_bulk);
   }
   assert_int_equal(a->body_count, b->body_count);
   for (int i = 0; i < a->body_count; ++i) {
@@ -80,6 +91,8 @@ static void assert_same_scene(const mpm_scene *a, const mpm_scene *b) {
     SAME(p, q, jitter);
     SAME(p, q, seed);
     SAME(p, q, domains);
+    SAME(p, q, has_temperature);
+    SAME(p, q, temperature);
   }
   assert_int_equal(a->collider_count, b->collider_count);
   for (int i = 0; i < a->collider_count; ++i) {
@@ -92,6 +105,8 @@ static void assert_same_scene(const mpm_scene *a, const mpm_scene *b) {
     SAME(p, q, motion.velocity);
     SAME(p, q, motion.axis);
     SAME(p, q, motion.angular_speed);
+    SAME(p, q, heat_source);
+    SAME(p, q, temperature);
     assert_int_equal(p->motion.keyframe_count, q->motion.keyframe_count);
   }
 }
@@ -348,6 +363,94 @@ static void test_implicit_fields(void **state) {
                      NULL);
 }
 
+/* Heat and melting, and output.fields: a hot plate under a melting block with its own starting
+ * temperature, beside a ball at the scene's, writing the stress tensor and the temperature. */
+static const mpm_def_field heat_fields[] = {MPM_DEF_FIELD_ID, MPM_DEF_FIELD_TEMPERATURE,
+                                            MPM_DEF_FIELD_MELT, MPM_DEF_FIELD_CAUCHY_STRESS};
+
+static mpm_scene_def heat_def(mpm_material_def *wax, mpm_body_def bodies[2],
+                              mpm_collider_def *plate) {
+  *wax = mpm_material_def_default();
+  wax->name = "wax";
+  wax->model = MPM_DEF_NEO_HOOKEAN;
+  wax->specific_heat = 2000;
+  wax->conductivity = 5;
+  wax->melting = 1;
+  wax->melt_point = 40;
+  wax->melt_range = 5;
+  wax->melt_shear = 0.1;
+  wax->melt_bulk = 0.5;
+  bodies[0] = mpm_body_def_default();
+  bodies[0].shape.center[0] = 0.3, bodies[0].shape.center[1] = 0.3, bodies[0].shape.center[2] = 0.5;
+  bodies[0].shape.half_extent[0] = bodies[0].shape.half_extent[1] = 0.08;
+  bodies[0].shape.half_extent[2] = 0.08;
+  bodies[0].has_temperature = 1;
+  bodies[0].temperature = 35;
+  bodies[1] = mpm_body_def_default();
+  bodies[1].shape = mpm_shape_def_default(MPM_DEF_SPHERE);
+  bodies[1].shape.center[0] = 0.7, bodies[1].shape.center[1] = 0.3, bodies[1].shape.center[2] = 0.5;
+  bodies[1].shape.radius = 0.07;
+  *plate = mpm_collider_def_default();
+  plate->shape = mpm_shape_def_default(MPM_DEF_BOX);
+  plate->shape.center[0] = 0.5, plate->shape.center[1] = 0.15, plate->shape.center[2] = 0.5;
+  plate->shape.half_extent[0] = 0.4, plate->shape.half_extent[1] = 0.05;
+  plate->shape.half_extent[2] = 0.4;
+  plate->rule = MPM_DEF_STICKY;
+  plate->heat_source = 1;
+  plate->temperature = 90;
+  mpm_scene_def def = mpm_scene_def_default();
+  def.domain.dx = 0.04;
+  def.time.end = 0.05, def.time.fps = 40;
+  def.materials = wax, def.material_count = 1;
+  def.bodies = bodies, def.body_count = 2;
+  def.colliders = plate, def.collider_count = 1;
+  def.heat.enabled = 1;
+  def.heat.temperature = 20;
+  def.heat.pic = 0.25;
+  for (size_t k = 0; k < sizeof heat_fields / sizeof heat_fields[0]; ++k)
+    def.output.fields |= 1u << heat_fields[k];
+  return def;
+}
+
+static void test_heat_and_fields(void **state) {
+  (void)state;
+  mpm_material_def wax;
+  mpm_body_def bodies[2];
+  mpm_collider_def plate;
+  const mpm_scene_def def = heat_def(&wax, bodies, &plate);
+  assert_def_is_json(
+      &def,
+      "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.04},"
+      " \"time\": {\"end\": 0.05, \"fps\": 40},"
+      " \"heat\": {\"temperature\": 20, \"pic\": 0.25},"
+      " \"materials\": [{\"name\": \"wax\", \"model\": \"neo_hookean\", \"E\": 1e5,"
+      "   \"nu\": 0.3, \"density\": 1000, \"specific_heat\": 2000, \"conductivity\": 5,"
+      "   \"melting\": {\"point\": 40, \"range\": 5, \"shear\": 0.1, \"bulk\": 0.5}}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.3, 0.3, 0.5],"
+      "   \"half_extent\": [0.08, 0.08, 0.08]}, \"material\": \"wax\", \"temperature\": 35},"
+      "  {\"shape\": {\"type\": \"sphere\", \"center\": [0.7, 0.3, 0.5], \"radius\": 0.07},"
+      "   \"material\": \"wax\"}],"
+      " \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.15, 0.5],"
+      "   \"half_extent\": [0.4, 0.05, 0.4]}, \"rule\": \"sticky\", \"temperature\": 90}],"
+      " \"output\": {\"fields\": [\"cauchy_stress\", \"id\", \"melt\", \"temperature\"]}}",
+      NULL);
+  /* the temperatures reach the particles: the block's own, the ball the scene's */
+  mpm_sim *sim = NULL;
+  char err[1024];
+  if (mpm_sim_create_from_def(&def, NULL, &sim, err, sizeof err) != MPM_OK) fail_msg("%s", err);
+  const mpm_particle_view v = mpm_sim_particles(sim);
+  assert_non_null(v.temperature);
+  size_t n[2] = {0, 0};
+  for (size_t i = 0; i < v.count; ++i) {
+    const double T =
+        v.real_size == 4 ? ((const float *)v.temperature)[i] : ((const double *)v.temperature)[i];
+    assert_true(v.body[i] == 0 ? T == 35 : T == 20);
+    ++n[v.body[i]];
+  }
+  assert_true(n[0] > 0 && n[1] > 0);
+  mpm_sim_destroy(sim);
+}
+
 /* ---- (c) what the def refuses ---------------------------------------------------------- */
 
 /* Refused by create and by to_json alike, MPM_ERR_INVALID, with `field` in the message. */
@@ -453,6 +556,45 @@ static void test_refused(void **state) {
   d = good, d.solver.newton_iterations = 3;
   assert_refused(&d, "solver.newton_iterations: a field of the implicit integrator only");
 
+  /* heat fields without heat, and values that their switch leaves unused */
+  {
+    mpm_material_def wax;
+    mpm_body_def hb[2];
+    mpm_collider_def plate;
+    const mpm_scene_def hot = heat_def(&wax, hb, &plate);
+    d = hot, d.heat.enabled = 0;
+    assert_refused(&d, "materials[0].specific_heat: a heat field, and the def's heat is off");
+    mpm_material_def cold = wax;
+    cold.specific_heat = mpm_material_def_default().specific_heat;
+    cold.conductivity = mpm_material_def_default().conductivity;
+    d = hot, d.heat.enabled = 0, d.materials = &cold;
+    assert_refused(&d, "materials[0].melting: a heat field");
+    cold.melting = 0;
+    assert_refused(&d, "materials[0].melt_*: melting values with melting 0");
+    cold = mpm_material_def_default(), cold.model = MPM_DEF_NEO_HOOKEAN;
+    assert_refused(&d, "bodies[0].temperature: a heat field");
+    mpm_body_def plain[2] = {hb[0], hb[1]};
+    plain[0].has_temperature = 0;
+    d.bodies = plain;
+    assert_refused(&d, "bodies[0].temperature: given with has_temperature 0");
+    plain[0].temperature = 0;
+    assert_refused(&d, "colliders[0].temperature: a heat field");
+    mpm_collider_def unheated = plate;
+    unheated.heat_source = 0;
+    d.colliders = &unheated;
+    assert_refused(&d, "colliders[0].temperature: given with heat_source 0");
+    unheated.temperature = 0;
+    assert_refused(&d, "heat.temperature: given with heat.enabled 0");
+    d.heat.temperature = 0;
+    d.heat.pic = 0;
+    /* temperature among the fields without heat: the parser's check (to_json writes it) */
+    assert_int_equal(mpm_sim_create_from_def(&d, NULL, &sim, err, sizeof err), MPM_ERR_INVALID);
+    assert_null(sim);
+    assert_non_null(strstr(err, "<def>: output.fields[1]: 'temperature' needs heat"));
+    d.output.fields = 1u << 16;
+    assert_refused(&d, "output.fields: bits above");
+  }
+
   /* the parser's checks, under the def's name and its field paths */
   memcpy(bodies, full_bodies, sizeof bodies);
   d = good, d.bodies = bodies, bodies[1].shape.radius = 0;
@@ -523,7 +665,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_defaults),        cmocka_unit_test(test_every_field),
       cmocka_unit_test(test_implicit_fields), cmocka_unit_test(test_refused),
-      cmocka_unit_test(test_to_json),
+      cmocka_unit_test(test_to_json),         cmocka_unit_test(test_heat_and_fields),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -120,6 +120,14 @@ typedef struct mpm_material_def {
   double theta_c;        /* snow: critical compression, (0, 1); default 0.025 */
   double theta_s;        /* snow: critical stretch, > 0; default 0.0075 */
   double hardening;      /* snow: hardening coefficient, >= 0; default 10 */
+  /* heat (the scene's heat.enabled; without it these must keep their defaults) */
+  double specific_heat; /* materials[].specific_heat, J/(kg K), > 0; default 1000 */
+  double conductivity;  /* materials[].conductivity, W/(m K), >= 0; default 0 (none) */
+  int melting;          /* write materials[].melting (elastic models only); default 0 */
+  double melt_point;    /* melting.point, the scene's temperature unit; default 0 */
+  double melt_range;    /* melting.range, degrees over which the moduli fall, >= 0; default 0 */
+  double melt_shear;    /* melting.shear, the melted shear modulus's share, [0, 1]; default 0.01 */
+  double melt_bulk;     /* melting.bulk, the melted lambda's share, (0, 1]; default 1 */
 } mpm_material_def;
 
 /// A body (bodies[i]): a shape filled with particles of one material.
@@ -137,6 +145,8 @@ typedef struct mpm_body_def {
   uint32_t seed;              /* bodies[].seed of the jitter; default 1 */
   int domains; /* bodies[].domains: particle domains (Zhu et al. 2017), needs jitter 0; 0 or 1;
                   default 0 */
+  int has_temperature; /* write bodies[].temperature (needs heat); default 0: heat.temperature */
+  double temperature;  /* bodies[].temperature, its particles' initial one; default 0 */
 } mpm_body_def;
 
 /// A collider's constant motion (colliders[].motion without keyframes).
@@ -156,6 +166,9 @@ typedef struct mpm_collider_def {
   mpm_def_rule rule;     /* colliders[].rule; default MPM_DEF_SLIP */
   double friction;       /* colliders[].friction, Coulomb coefficient >= 0; default 0 */
   mpm_motion_def motion; /* colliders[].motion; default at rest */
+  int heat_source;       /* write colliders[].temperature (needs heat): the grid nodes inside
+                            its solid are held at `temperature`; default 0 */
+  double temperature;    /* colliders[].temperature; default 0 */
 } mpm_collider_def;
 
 /// domain.walls
@@ -193,6 +206,35 @@ typedef struct mpm_solver_def {
   int newton_iterations;         /* implicit: solver.newton_iterations, 1..100; default 2 */
 } mpm_solver_def;
 
+/// The point arrays of frame_NNNN.vtu (output.fields, docs/scene-format.md): bit (1u << f) of
+/// mpm_output_def.fields for each one written.
+typedef enum mpm_def_field {
+  MPM_DEF_FIELD_ID = 0,
+  MPM_DEF_FIELD_VELOCITY = 1,
+  MPM_DEF_FIELD_MASS = 2,
+  MPM_DEF_FIELD_VOLUME = 3,
+  MPM_DEF_FIELD_J = 4,
+  MPM_DEF_FIELD_STRESS = 5, /* von Mises equivalent stress */
+  MPM_DEF_FIELD_PLASTIC = 6,
+  MPM_DEF_FIELD_MATERIAL = 7,
+  MPM_DEF_FIELD_BODY = 8,
+  MPM_DEF_FIELD_LEVEL = 9,
+  MPM_DEF_FIELD_ENRICHMENT = 10,
+  MPM_DEF_FIELD_TEMPERATURE = 11, /* needs heat */
+  MPM_DEF_FIELD_MELT = 12,        /* needs heat */
+  MPM_DEF_FIELD_CAUCHY_STRESS = 13,
+  MPM_DEF_FIELD_PRESSURE = 14,
+  MPM_DEF_FIELD_F = 15,
+} mpm_def_field;
+
+/// heat (heat transfer and melting; docs/scene-format.md "heat")
+typedef struct mpm_heat_def {
+  int enabled;        /* write the scene's heat object: heat transfer on; default 0 */
+  double temperature; /* heat.temperature, the bodies' initial one where they give none;
+                         default 0 */
+  double pic;         /* heat.pic, the PIC share of the temperature update, [0, 1]; default 0 */
+} mpm_heat_def;
+
 /// output (what mpm_sim_enable_output writes)
 typedef struct mpm_output_def {
   const char *directory; /* output.directory; default "out" */
@@ -200,6 +242,9 @@ typedef struct mpm_output_def {
   int ply;               /* output.ply: frame_NNNN.ply points; default 0 */
   int stats;             /* output.stats: stats.csv; default 1 */
   int checkpoint_every;  /* output.checkpoint_every, frames (0: only on a signal); default 10 */
+  unsigned fields;       /* output.fields: bit (1u << mpm_def_field) per array; default 0, the
+                            format's default set (id .. enrichment, with heat temperature and
+                            melt) */
 } mpm_output_def;
 
 /// A whole scene. The arrays are the caller's (read during the call only); a count of 0 with a
@@ -218,6 +263,7 @@ typedef struct mpm_scene_def {
   const mpm_collider_def *colliders; /* colliders */
   int collider_count;
   mpm_output_def output;
+  mpm_heat_def heat;
 } mpm_scene_def;
 
 /// The defaults of each struct (the scene format's defaults for the keys they mirror).

@@ -52,6 +52,13 @@ mpm_material_def mpm_material_def_default(void) {
   d.theta_c = m.theta_c;
   d.theta_s = m.theta_s;
   d.hardening = m.hardening;
+  d.specific_heat = m.specific_heat;
+  d.conductivity = m.conductivity;
+  d.melting = m.melting;
+  d.melt_point = m.melt_point;
+  d.melt_range = m.melt_range;
+  d.melt_shear = m.melt_shear;
+  d.melt_bulk = m.melt_bulk;
   return d;
 }
 
@@ -65,6 +72,8 @@ mpm_body_def mpm_body_def_default(void) {
   d.jitter = b.jitter;
   d.seed = b.seed;
   d.domains = b.domains;
+  d.has_temperature = b.has_temperature;
+  d.temperature = b.temperature;
   return d;
 }
 
@@ -78,6 +87,8 @@ mpm_collider_def mpm_collider_def_default(void) {
   d.friction = c.friction;
   for (int k = 0; k < 3; ++k) d.motion.axis[k] = c.motion.axis[k];
   d.motion.angular_speed = c.motion.angular_speed;
+  d.heat_source = c.heat_source;
+  d.temperature = c.temperature;
   return d;
 }
 
@@ -112,6 +123,10 @@ mpm_scene_def mpm_scene_def_default(void) {
   d.output.ply = s.output.ply;
   d.output.stats = s.output.stats;
   d.output.checkpoint_every = s.output.checkpoint_every;
+  d.output.fields = s.output.fields;
+  d.heat.enabled = s.heat.enabled;
+  d.heat.temperature = s.heat.temperature;
+  d.heat.pic = s.heat.pic;
   return d;
 }
 
@@ -120,7 +135,8 @@ _Static_assert((int)MPM_DEF_SNOW == (int)MPM_MODEL_SNOW &&
                    (int)MPM_DEF_SEPARATE == (int)MPM_BOUNDARY_SEPARATE &&
                    (int)MPM_DEF_KERNEL_UGIMP == (int)MPM_KERNEL_UGIMP &&
                    (int)MPM_DEF_FLIP == (int)MPM_TRANSFER_FLIP &&
-                   (int)MPM_DEF_IMPLICIT == (int)MPM_INTEGRATOR_IMPLICIT,
+                   (int)MPM_DEF_IMPLICIT == (int)MPM_INTEGRATOR_IMPLICIT &&
+                   (int)MPM_DEF_FIELD_F == (int)MPM_FIELD_F && MPM_FIELD_F + 1 == MPM_FIELD_COUNT,
                "scene_def.h's enums must match scene.h's");
 
 /* ---- checks --------------------------------------------------------------------------- */
@@ -340,7 +356,15 @@ static double field_at(const mpm_material_def *m, size_t offset) {
   return v;
 }
 
-static int write_material(writer *w, int i, const mpm_material_def *m, const char *name,
+/* A heat field given without heat (it would do nothing: the format refuses it too). */
+static int no_heat(writer *w, const char *path, const char *field) {
+  return fail(w->c,
+              "%s.%s: a heat field, and the def's heat is off (it would have no effect); set "
+              "heat.enabled or leave it at its default",
+              path, field);
+}
+
+static int write_material(writer *w, int i, const mpm_material_def *m, const char *name, int heat,
                           cJSON *arr) {
   char p[64];
   snprintf(p, sizeof p, "materials[%d].model", i);
@@ -361,6 +385,19 @@ static int write_material(writer *w, int i, const mpm_material_def *m, const cha
                   i, MODEL_ONLY[k].key, MODEL_NAMES[owner], model,
                   mpm_json_format_number(field_at(&d, MODEL_ONLY[k].offset), dflt, sizeof dflt), i);
     }
+  char where[32];
+  snprintf(where, sizeof where, "materials[%d]", i);
+  if (!heat) {
+    if (m->specific_heat != d.specific_heat) return no_heat(w, where, "specific_heat");
+    if (m->conductivity != d.conductivity) return no_heat(w, where, "conductivity");
+    if (m->melting) return no_heat(w, where, "melting");
+  }
+  if (!m->melting && (m->melt_point != d.melt_point || m->melt_range != d.melt_range ||
+                      m->melt_shear != d.melt_shear || m->melt_bulk != d.melt_bulk))
+    return fail(w->c,
+                "%s.melt_*: melting values with melting 0 (they would have no effect); set "
+                "%s.melting to 1 or leave them at their defaults",
+                where, where);
   cJSON *o = cJSON_CreateObject();
   if (!o || !cJSON_AddItemToArray(arr, o)) {
     cJSON_Delete(o);
@@ -369,6 +406,17 @@ static int write_material(writer *w, int i, const mpm_material_def *m, const cha
   }
   add_string(w, o, "name", name);
   add_string(w, o, "model", model);
+  if (heat) {
+    add_number(w, o, "specific_heat", m->specific_heat);
+    add_number(w, o, "conductivity", m->conductivity);
+  }
+  if (m->melting) {
+    cJSON *melt = add_object(w, o, "melting");
+    add_number(w, melt, "point", m->melt_point);
+    add_number(w, melt, "range", m->melt_range);
+    add_number(w, melt, "shear", m->melt_shear);
+    add_number(w, melt, "bulk", m->melt_bulk);
+  }
   add_number(w, o, "E", m->E);
   add_number(w, o, "nu", m->nu);
   add_number(w, o, "density", m->density);
@@ -415,10 +463,18 @@ static int write_body(writer *w, int i, const mpm_body_def *b, const mpm_scene_d
   add_number(w, o, "jitter", b->jitter);
   add_number(w, o, "seed", (double)b->seed);
   add_bool(w, o, "domains", b->domains);
+  snprintf(p, sizeof p, "bodies[%d]", i);
+  if (b->has_temperature && !def->heat.enabled) return no_heat(w, p, "temperature");
+  if (!b->has_temperature && b->temperature != mpm_body_def_default().temperature)
+    return fail(w->c,
+                "%s.temperature: given with has_temperature 0 (it would have no effect); set "
+                "%s.has_temperature to 1 or leave it at its default",
+                p, p);
+  if (b->has_temperature) add_number(w, o, "temperature", b->temperature);
   return 0;
 }
 
-static int write_collider(writer *w, int i, const mpm_collider_def *cd, cJSON *arr) {
+static int write_collider(writer *w, int i, const mpm_collider_def *cd, int heat, cJSON *arr) {
   char p[64];
   snprintf(p, sizeof p, "colliders[%d].name", i);
   if (check_name(w->c, p, cd->name) < 0) return -1;
@@ -441,6 +497,14 @@ static int write_collider(writer *w, int i, const mpm_collider_def *cd, cJSON *a
   add_vec3(w, m, "velocity", cd->motion.velocity);
   add_vec3(w, m, "axis", cd->motion.axis);
   add_number(w, m, "angular_speed", cd->motion.angular_speed);
+  snprintf(p, sizeof p, "colliders[%d]", i);
+  if (cd->heat_source && !heat) return no_heat(w, p, "temperature");
+  if (!cd->heat_source && cd->temperature != mpm_collider_def_default().temperature)
+    return fail(w->c,
+                "%s.temperature: given with heat_source 0 (it would have no effect); set "
+                "%s.heat_source to 1 or leave it at its default",
+                p, p);
+  if (cd->heat_source) add_number(w, o, "temperature", cd->temperature);
   return 0;
 }
 
@@ -526,14 +590,14 @@ static cJSON *build(def_ctx *c, const mpm_scene_def *def) {
   bad = bad || write_solver(&w, &def->solver, root) < 0;
   cJSON *mats = add_array(&w, root, "materials");
   for (int i = 0; i < def->material_count && !bad; ++i)
-    bad = write_material(&w, i, &def->materials[i], names[i], mats) < 0;
+    bad = write_material(&w, i, &def->materials[i], names[i], def->heat.enabled, mats) < 0;
   cJSON *bodies = add_array(&w, root, "bodies");
   for (int i = 0; i < def->body_count && !bad; ++i)
     bad = write_body(&w, i, &def->bodies[i], def, names, bodies) < 0;
   if (def->collider_count > 0) {
     cJSON *cols = add_array(&w, root, "colliders");
     for (int i = 0; i < def->collider_count && !bad; ++i)
-      bad = write_collider(&w, i, &def->colliders[i], cols) < 0;
+      bad = write_collider(&w, i, &def->colliders[i], def->heat.enabled, cols) < 0;
   }
   cJSON *out = add_object(&w, root, "output");
   add_string(&w, out, "directory", def->output.directory);
@@ -541,6 +605,34 @@ static cJSON *build(def_ctx *c, const mpm_scene_def *def) {
   add_bool(&w, out, "ply", def->output.ply);
   add_bool(&w, out, "stats", def->output.stats);
   add_number(&w, out, "checkpoint_every", def->output.checkpoint_every);
+  if (!bad && def->output.fields >> MPM_FIELD_COUNT)
+    bad = fail(c,
+               "output.fields: bits above (1u << MPM_DEF_FIELD_F) are no mpm_def_field, got "
+               "0x%x",
+               def->output.fields) < 0;
+  if (!bad && def->output.fields) { /* in the enum's order, which is the file's */
+    cJSON *list = add_array(&w, out, "fields");
+    for (int f = 0; f < MPM_FIELD_COUNT; ++f)
+      if (def->output.fields >> f & 1u) {
+        cJSON *name = cJSON_CreateString(mpm_output_field_names[f]);
+        if (!name || !cJSON_AddItemToArray(list, name)) {
+          cJSON_Delete(name);
+          w.nomem = 1;
+        }
+      }
+  }
+  const mpm_heat_def dh = mpm_scene_def_default().heat;
+  if (!bad && !def->heat.enabled &&
+      (def->heat.temperature != dh.temperature || def->heat.pic != dh.pic))
+    bad = fail(c,
+               "heat.%s: given with heat.enabled 0 (it would have no effect); set "
+               "heat.enabled or leave it at its default",
+               def->heat.temperature != dh.temperature ? "temperature" : "pic") < 0;
+  if (!bad && def->heat.enabled) {
+    cJSON *heat = add_object(&w, root, "heat");
+    add_number(&w, heat, "temperature", def->heat.temperature);
+    add_number(&w, heat, "pic", def->heat.pic);
+  }
   free(names);
   if (!bad && w.nomem) {
     c->status = MPM_ERR_NOMEM;
