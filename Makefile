@@ -57,10 +57,11 @@ build: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD) -j $(JOBS)
 
-# The OpenVDB shim (libmpmvdb.a, src/surface/vdb_shim.cpp) is the same for every precision and
-# takes longer to compile than the rest of the library: it is built once, in $(BUILD), and the
-# double and sanitizer builds link that one (CMakeLists.txt: MPM_VDB_SHIM_LIBRARY).
-VDB_SHIM = $(abspath $(BUILD))/libmpmvdb.a
+# The OpenVDB shim (the module libmpmvdb.so, src/surface/vdb_shim.cpp) is the same for every
+# precision and takes longer to compile than the rest of the library: it is built once, in
+# $(BUILD), and the double and sanitizer builds load that one (CMakeLists.txt:
+# MPM_VDB_SHIM_LIBRARY).
+VDB_SHIM = $(abspath $(BUILD))/libmpmvdb.so
 vdb-shim: deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 	cmake --build $(BUILD) -j $(JOBS) --target mpmvdb

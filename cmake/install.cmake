@@ -1,7 +1,8 @@
 # install.cmake - what `cmake --install` (and `make install`) puts under the prefix:
 #   lib/libmpm.so*          the shared library (MPM_SHARED), public API only
-#   lib/libmpm.a            the static library, and lib/libmpmvdb.a (the OpenVDB shim) beside it
-#                           when built with OpenVDB: link both, libmpm.a first
+#   lib/libmpm.a            the static library
+#   lib/libmpmvdb.so        with OpenVDB: the shim both libraries open (dlopen) at the first
+#                           particle surface, from beside themselves
 #   include/mpm/mpm.h       the public header, and scene_def.h which it includes
 #   bin/mpm                 the program (MPM_BUILD_PROGRAM)
 #   lib/pkgconfig/mpm.pc    pkg-config: `pkg-config --cflags --libs mpm` (shared), --static lists
@@ -24,8 +25,9 @@ install(TARGETS ${MPM_INSTALL_TARGETS} EXPORT mpmTargets
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 if(MPM_OPENVDB)
-  # the shim built here or imported from another build tree (MPM_VDB_SHIM_LIBRARY) alike
-  install(FILES $<TARGET_FILE:mpmvdb> DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libmpmvdb.a)
+  # the OpenVDB module, built here or in another build tree (MPM_VDB_SHIM_LIBRARY) alike: both
+  # libraries open it from beside themselves (src/surface/vdb_load.c)
+  install(FILES ${MPM_VDB_MODULE_FILE} DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libmpmvdb.so)
 endif()
 install(FILES ${PROJECT_SOURCE_DIR}/include/mpm/mpm.h ${PROJECT_SOURCE_DIR}/include/mpm/scene_def.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/mpm)
@@ -59,9 +61,7 @@ file(RELATIVE_PATH MPM_PC_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /pref
 set(MPM_PC_REQUIRES_PRIVATE "libcjson libpng hdf5")
 set(MPM_PC_LIBS_PRIVATE "")
 if(MPM_OPENVDB)
-  string(APPEND MPM_PC_REQUIRES_PRIVATE " tbb Imath")
-  get_filename_component(MPM_OPENVDB_LIBDIR ${MPM_OPENVDB_LIBRARY} DIRECTORY)
-  string(APPEND MPM_PC_LIBS_PRIVATE " -lmpmvdb -L${MPM_OPENVDB_LIBDIR} -lopenvdb -lstdc++")
+  string(APPEND MPM_PC_LIBS_PRIVATE " -ldl") # dlopen of libmpmvdb.so
 endif()
 if(MPM_OPENMP)
   string(APPEND MPM_PC_LIBS_PRIVATE " ${OpenMP_C_FLAGS}")

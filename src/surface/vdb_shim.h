@@ -37,8 +37,9 @@ typedef enum mpm_vdb_class {
 /* A float grid (openvdb::FloatGrid), owned by the caller. */
 typedef struct mpm_vdb_grid mpm_vdb_grid;
 
-/// 1 when the library was built with OpenVDB; 0 for the stub (vdb_stub.c), whose every other
-/// call fails with a message saying so.
+/// 1 when the library was built with OpenVDB and its module (libmpmvdb.so) loads; 0 for the
+/// stub (vdb_stub.c) or a module that cannot be found, when every other call fails with a
+/// message saying so.
 int mpm_vdb_available(void);
 
 /// The narrow-band signed distance (negative inside) of the CSG union of the spheres of n
@@ -111,6 +112,34 @@ uint64_t mpm_vdb_vector_active_voxels(const mpm_vdb_vector_grid *grid);
 void mpm_vdb_vector_name(const mpm_vdb_vector_grid *grid, char *name, size_t cap);
 
 void mpm_vdb_vector_grid_destroy(mpm_vdb_vector_grid *grid);
+
+/* The module (libmpmvdb.so, vdb_shim.cpp) exports one function, mpm_vdb_module_table, that
+ * returns these entry points; vdb_load.c opens it with dlopen at the first call above, so that a
+ * run without surfaces does not load OpenVDB and its libraries (42 of the program's 55 ms of
+ * start-up: the relocations of libopenvdb and its dependencies). The version changes whenever
+ * the table does. */
+#define MPM_VDB_TABLE_VERSION 1
+typedef struct mpm_vdb_table {
+  int version;
+  int (*levelset_from_spheres)(const double *, const double *, size_t, double, double, int,
+                               mpm_vdb_grid **, char *, size_t);
+  int (*smooth)(mpm_vdb_grid *, int, mpm_vdb_filter, double, int, char *, size_t);
+  int (*mesh)(const mpm_vdb_grid *, int, float **, size_t *, uint32_t **, size_t *, char *, size_t);
+  uint64_t (*active_voxels)(const mpm_vdb_grid *);
+  int (*velocity_from_particles)(const double *, const double *, const double *, size_t, double,
+                                 mpm_vdb_vector_grid **, char *, size_t);
+  int (*write)(const mpm_vdb_grid *, const char *, int, const mpm_vdb_vector_grid *, char *,
+               size_t);
+  int (*read)(const char *, const char *, mpm_vdb_grid **, char *, size_t);
+  void (*grid_info)(const mpm_vdb_grid *, char *, size_t, mpm_vdb_class *, double *);
+  double (*sample)(const mpm_vdb_grid *, const double[3]);
+  void (*grid_destroy)(mpm_vdb_grid *);
+  int (*read_vector)(const char *, const char *, mpm_vdb_vector_grid **, char *, size_t);
+  void (*vector_sample)(const mpm_vdb_vector_grid *, const double[3], double[3]);
+  uint64_t (*vector_active_voxels)(const mpm_vdb_vector_grid *);
+  void (*vector_name)(const mpm_vdb_vector_grid *, char *, size_t);
+  void (*vector_grid_destroy)(mpm_vdb_vector_grid *);
+} mpm_vdb_table;
 
 #ifdef __cplusplus
 }
