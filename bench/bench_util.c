@@ -51,8 +51,8 @@ bench_cpu_sample bench_cpu_now(void) {
   FILE *f = fopen("/proc/stat", "r");
   if (f) {
     unsigned long long v[8] = {0};
-    if (fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3],
-               &v[4], &v[5], &v[6], &v[7]) == 8) {
+    if (fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4],
+               &v[5], &v[6], &v[7]) == 8) {
       const long hz = sysconf(_SC_CLK_TCK);
       c.stolen = (double)v[7] / (double)(hz > 0 ? hz : 100);
     }

@@ -198,28 +198,28 @@ typedef struct mpm_sim_info {
   size_t particles;        /* simulated now (mpm_sim_particle_count) */
   size_t domain_particles; /* of them, those whose domains are on (Zhu et al. 2017) */
   int bodies, materials, colliders;
-  double dx;             /* the grid's cell size (the coarsest level's on a multi-level grid), m */
-  double finest_dx;      /* the finest level's, m (dx on a uniform grid) */
-  double fps, frame_dt;  /* frames per second and 1 / fps, s */
-  double end_time;       /* the scene's, s */
-  int frame_count;       /* frames to run: the scene's or mpm_sim_set_frame_limit's */
-  int implicit;          /* solver.integrator is "implicit" */
-  int fixed_dt;          /* the step is the scene's solver.dt (implicit), not a CFL bound */
-  int threads;           /* the OpenMP threads its calls run on (mpm_sim_set_threads) */
-  double memory_bytes;   /* the memory the scene needs for its particles (the estimate that
-                            creation checks against MPM_MEMORY_LIMIT or the machine's) */
-  int output_enabled;    /* mpm_sim_enable_output was called (or mpm_sim_resume) */
-  const char *output_dir;      /* where frames go (the scene's output.directory until then) */
-  int written_frames;          /* frame files written, frame 0 included */
+  double dx;              /* the grid's cell size (the coarsest level's on a multi-level grid), m */
+  double finest_dx;       /* the finest level's, m (dx on a uniform grid) */
+  double fps, frame_dt;   /* frames per second and 1 / fps, s */
+  double end_time;        /* the scene's, s */
+  int frame_count;        /* frames to run: the scene's or mpm_sim_set_frame_limit's */
+  int implicit;           /* solver.integrator is "implicit" */
+  int fixed_dt;           /* the step is the scene's solver.dt (implicit), not a CFL bound */
+  int threads;            /* the OpenMP threads its calls run on (mpm_sim_set_threads) */
+  double memory_bytes;    /* the memory the scene needs for its particles (the estimate that
+                             creation checks against MPM_MEMORY_LIMIT or the machine's) */
+  int output_enabled;     /* mpm_sim_enable_output was called (or mpm_sim_resume) */
+  const char *output_dir; /* where frames go (the scene's output.directory until then) */
+  int written_frames;     /* frame files written, frame 0 included */
   const char *last_checkpoint; /* the path of the newest checkpoint written, "" when none */
   /* the implicit solver over the last frame completed (0 steps when explicit) */
   long long solver_steps, cg_iterations, newton_iterations, cg_unconverged;
-  int cg_max;                /* most CG iterations of one step */
-  double cg_residual_max;    /* largest final relative CG residual of one step */
+  int cg_max;             /* most CG iterations of one step */
+  double cg_residual_max; /* largest final relative CG residual of one step */
   /* output.surface: the last frame's particle surfaces, and all frames of this process */
-  int surfaces;              /* output.surface is on */
-  double surface_seconds;    /* the last frame's wall time for them, s */
-  size_t surface_triangles;  /* its triangles */
+  int surfaces;             /* output.surface is on */
+  double surface_seconds;   /* the last frame's wall time for them, s */
+  size_t surface_triangles; /* its triangles */
   double surface_seconds_total;
   int surface_frames;
   /* Gao et al. 2017: the multi-level grid's rebuilds (domain.refine_every) and the particle

@@ -376,22 +376,14 @@ void mpm_vdb_grid_destroy(mpm_vdb_grid *g) {
  * -Bsymbolic-functions, so the functions above bind inside it and never to the loader's
  * wrappers of the same names. */
 const mpm_vdb_table *mpm_vdb_module_table(void) {
-  static const mpm_vdb_table table = {MPM_VDB_TABLE_VERSION,
-                                      mpm_vdb_levelset_from_spheres,
-                                      mpm_vdb_smooth,
-                                      mpm_vdb_mesh,
-                                      mpm_vdb_active_voxels,
-                                      mpm_vdb_velocity_from_particles,
-                                      mpm_vdb_write,
-                                      mpm_vdb_read,
-                                      mpm_vdb_grid_info,
-                                      mpm_vdb_sample,
-                                      mpm_vdb_grid_destroy,
-                                      mpm_vdb_read_vector,
-                                      mpm_vdb_vector_sample,
-                                      mpm_vdb_vector_active_voxels,
-                                      mpm_vdb_vector_name,
-                                      mpm_vdb_vector_grid_destroy};
+  static const mpm_vdb_table table = {MPM_VDB_TABLE_VERSION, mpm_vdb_levelset_from_spheres,
+                                      mpm_vdb_smooth,        mpm_vdb_mesh,
+                                      mpm_vdb_active_voxels, mpm_vdb_velocity_from_particles,
+                                      mpm_vdb_write,         mpm_vdb_read,
+                                      mpm_vdb_grid_info,     mpm_vdb_sample,
+                                      mpm_vdb_grid_destroy,  mpm_vdb_read_vector,
+                                      mpm_vdb_vector_sample, mpm_vdb_vector_active_voxels,
+                                      mpm_vdb_vector_name,   mpm_vdb_vector_grid_destroy};
   return &table;
 }
 
