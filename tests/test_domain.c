@@ -301,13 +301,25 @@ static void test_build_from_body(void **state) {
   mpm_particles_free(&ref);
 }
 
-/* Mass, momentum and (zero) total internal force through particle -> corner -> grid, and
- * momentum back through grid -> corner -> particle, for a randomly deformed, moving block. */
-static void run_conservation(mpm_kernel_kind kind) {
+/* A randomly deformed, moving block of 6 x 5 x 4 domain particles (mass 0.5 to 1.5) on a sparse
+ * grid, activated and laid out for one step of transfers. */
+typedef struct block_fixture {
   mpm_domain_set s;
-  mpm_domain_set_init(&s);
-  mpm_particles p;
-  mpm_particles_init(&p, 64);
+  mpm_particles p, none;
+  mpm_material mat;
+  mpm_transfer_ctx ctx;
+  mpm_grid grid;
+  mpm_arena scratch;
+  mpm_dofs dofs;
+  mpm_grid_values val;
+  mpm_explicit_update u;
+} block_fixture;
+
+static void block_setup(block_fixture *fx, mpm_kernel_kind kind, mpm_transfer_kind transfer) {
+  memset(fx, 0, sizeof *fx);
+  mpm_domain_set *s = &fx->s;
+  mpm_domain_set_init(s);
+  mpm_particles_init(&fx->p, 64);
   const double h = 0.025, dx = 0.05, origin[3] = {0, 0, 0};
   uint64_t rng = 99;
   for (int i = 0; i < 6; ++i)
@@ -316,65 +328,85 @@ static void run_conservation(mpm_kernel_kind kind) {
         const mpm_real x[3] = {(mpm_real)((i + 0.5) * h + 0.3), (mpm_real)((j + 0.5) * h + 0.3),
                                (mpm_real)((k + 0.5) * h + 0.3)};
         const mpm_real v[3] = {0, 0, 0};
-        mpm_particles_push(&p, x, v, (mpm_real)test_rand(&rng, 0.5, 1.5), (mpm_real)(h * h * h), 0,
-                           0);
+        mpm_particles_push(&fx->p, x, v, (mpm_real)test_rand(&rng, 0.5, 1.5), (mpm_real)(h * h * h),
+                           0, 0);
       }
   mpm_error err;
-  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, origin, h, "b", &err), MPM_OK);
-  for (size_t c = 0; c < s.corner_count; ++c)
+  assert_int_equal(mpm_domain_set_add_lattice(s, &fx->p, 0, origin, h, "b", &err), MPM_OK);
+  for (size_t c = 0; c < s->corner_count; ++c)
     for (int d = 0; d < 3; ++d) {
-      s.cv[d][c] = (mpm_real)test_rand(&rng, -1, 1);
-      s.cx[d][c] += (mpm_real)test_rand(&rng, -0.2, 0.2) * (mpm_real)h;
+      s->cv[d][c] = (mpm_real)test_rand(&rng, -1, 1);
+      s->cx[d][c] += (mpm_real)test_rand(&rng, -0.2, 0.2) * (mpm_real)h;
     }
-  mpm_domain_set_sync_particles(&s);
-  for (size_t q = 0; q < s.particles.count; ++q)
-    for (int e = 0; e < 9; ++e) s.particles.F[e][q] += (mpm_real)test_rand(&rng, -0.2, 0.2);
+  for (size_t c = 0; c < s->corner_count; ++c) /* an affine moment, for APIC */
+    for (int e = 0; e < 9; ++e) s->cB[e][c] = (mpm_real)test_rand(&rng, -1e-3, 1e-3);
+  mpm_domain_set_sync_particles(s);
+  for (size_t q = 0; q < s->particles.count; ++q)
+    for (int e = 0; e < 9; ++e) s->particles.F[e][q] += (mpm_real)test_rand(&rng, -0.2, 0.2);
 
   mpm_material_desc md = mpm_material_desc_default();
   md.model = MPM_MODEL_FIXED_COROTATED;
   md.E = 1e5;
-  mpm_material mat;
-  mpm_material_init(&mat, &md);
-  mpm_transfer_ctx ctx;
-  memset(&ctx, 0, sizeof ctx);
-  ctx.kernel = mpm_kernel_make(kind, (mpm_real)dx, (mpm_real)dx);
-  ctx.dt = (mpm_real)1e-3;
-  ctx.flip_alpha = (mpm_real)0.95;
-  ctx.materials = &mat;
-  ctx.material_count = 1;
+  mpm_material_init(&fx->mat, &md);
+  mpm_transfer_ctx *ctx = &fx->ctx;
+  ctx->kernel = mpm_kernel_make(kind, (mpm_real)dx, (mpm_real)dx);
+  ctx->dt = (mpm_real)1e-3;
+  ctx->transfer = transfer;
+  ctx->flip_alpha = (mpm_real)0.95;
+  ctx->materials = &fx->mat;
+  ctx->material_count = 1;
   for (int d = 0; d < 3; ++d) {
-    ctx.clamp_lo[d] = -10;
-    ctx.clamp_hi[d] = 10;
+    ctx->clamp_lo[d] = -10;
+    ctx->clamp_hi[d] = 10;
   }
-  mpm_grid grid;
-  mpm_grid_init_sparse(&grid, 0, ctx.origin, (mpm_real)dx);
-  mpm_particles none;
-  mpm_particles_init(&none, 16);
-  mpm_arena scratch;
-  mpm_arena_init(&scratch);
-  assert_int_equal(grid.ops->activate(&grid, &ctx.kernel, 1, &none, &scratch), 0);
-  assert_int_equal(mpm_domain_activate(&s, &grid, &ctx.kernel), 0);
-  mpm_dofs dofs;
-  mpm_dofs_init(&dofs);
-  mpm_dofs_begin_layout(&dofs);
-  assert_int_equal(mpm_dofs_add_grid(&dofs, &grid), 0);
-  assert_int_equal(mpm_dofs_end_layout(&dofs, MPM_DOF_ALL), 0);
-  mpm_dofs_clear(&dofs, MPM_DOF_ALL);
-  const mpm_grid_values val = mpm_dofs_grid_values(&dofs, &grid);
-  mpm_domain_p2g(&ctx, &s, &grid, &val, &scratch);
+  mpm_grid_init_sparse(&fx->grid, 0, ctx->origin, (mpm_real)dx);
+  mpm_particles_init(&fx->none, 16);
+  mpm_arena_init(&fx->scratch);
+  assert_int_equal(fx->grid.ops->activate(&fx->grid, &ctx->kernel, 1, &fx->none, &fx->scratch), 0);
+  assert_int_equal(mpm_domain_activate(s, &fx->grid, &ctx->kernel), 0);
+  mpm_dofs_init(&fx->dofs);
+  mpm_dofs_begin_layout(&fx->dofs);
+  assert_int_equal(mpm_dofs_add_grid(&fx->dofs, &fx->grid), 0);
+  assert_int_equal(mpm_dofs_end_layout(&fx->dofs, MPM_DOF_ALL), 0);
+  mpm_dofs_clear(&fx->dofs, MPM_DOF_ALL);
+  fx->val = mpm_dofs_grid_values(&fx->dofs, &fx->grid);
+  /* the grid update: no gravity, no walls */
+  fx->u.dt = ctx->dt;
+  for (int d = 0; d < 3; ++d) {
+    fx->u.boundary.wall_lo[d] = -1000000;
+    fx->u.boundary.wall_hi[d] = 1000000;
+  }
+}
+
+static void block_free(block_fixture *fx) {
+  mpm_grid_free(&fx->grid);
+  mpm_dofs_free(&fx->dofs);
+  mpm_arena_free(&fx->scratch);
+  mpm_particles_free(&fx->none);
+  mpm_particles_free(&fx->p);
+  mpm_domain_set_free(&fx->s);
+}
+
+/* Mass, momentum and (zero) total internal force through particle -> corner -> grid, and
+ * momentum back through grid -> corner -> particle, for a randomly deformed, moving block. */
+static void run_conservation(mpm_kernel_kind kind) {
+  block_fixture fx;
+  block_setup(&fx, kind, MPM_TRANSFER_FLIP);
+  mpm_domain_set *s = &fx.s;
+  mpm_domain_p2g(&fx.ctx, s, &fx.grid, &fx.val, &fx.scratch);
 
   double m_p = 0, P_p[3] = {0, 0, 0};
-  for (size_t q = 0; q < s.particles.count; ++q) {
-    m_p += s.particles.mass[q];
-    for (int d = 0; d < 3; ++d) P_p[d] += (double)s.particles.mass[q] * s.particles.v[d][q];
+  for (size_t q = 0; q < s->particles.count; ++q) {
+    m_p += s->particles.mass[q];
+    for (int d = 0; d < 3; ++d) P_p[d] += (double)s->particles.mass[q] * s->particles.v[d][q];
   }
   double m_g = 0, P_g[3] = {0, 0, 0}, f_g[3] = {0, 0, 0}, f_abs = 0;
-  for (size_t n = 0; n < dofs.count; ++n) {
-    m_g += dofs.mass[n];
+  for (size_t n = 0; n < fx.dofs.count; ++n) {
+    m_g += fx.dofs.mass[n];
     for (int d = 0; d < 3; ++d) {
-      P_g[d] += dofs.v0[d][n];
-      f_g[d] += dofs.f[d][n];
-      f_abs += fabs(dofs.f[d][n]);
+      P_g[d] += fx.dofs.v0[d][n];
+      f_g[d] += fx.dofs.f[d][n];
+      f_abs += fabs(fx.dofs.f[d][n]);
     }
   }
   assert_close(m_g, m_p, TOL(1e-5, 1e-13) * m_p);
@@ -384,28 +416,77 @@ static void run_conservation(mpm_kernel_kind kind) {
   }
   assert_true(f_abs > 0);
 
-  /* grid update without gravity or walls, then back */
-  mpm_explicit_update u;
-  memset(&u, 0, sizeof u);
-  u.dt = ctx.dt;
-  for (int d = 0; d < 3; ++d) {
-    u.boundary.wall_lo[d] = -1000000;
-    u.boundary.wall_hi[d] = 1000000;
-  }
-  mpm_dofs_explicit_update(&u, MPM_P2G_MOMENTUM_FORCE, &dofs);
-  mpm_g2p_result r = mpm_domain_g2p(&ctx, &s, &val, &u.boundary);
+  /* grid update, then back */
+  mpm_dofs_explicit_update(&fx.u, MPM_P2G_MOMENTUM_FORCE, &fx.dofs);
+  mpm_g2p_result r = mpm_domain_g2p(&fx.ctx, s, &fx.val, &fx.u.boundary);
   assert_true(r.bad_particle < 0);
   double P_after[3] = {0, 0, 0};
-  for (size_t q = 0; q < s.particles.count; ++q)
-    for (int d = 0; d < 3; ++d) P_after[d] += (double)s.particles.mass[q] * s.particles.v[d][q];
+  for (size_t q = 0; q < s->particles.count; ++q)
+    for (int d = 0; d < 3; ++d) P_after[d] += (double)s->particles.mass[q] * s->particles.v[d][q];
   for (int d = 0; d < 3; ++d) assert_close(P_after[d], P_p[d], TOL(1e-4, 1e-12) * m_p);
+  block_free(&fx);
+}
 
-  mpm_grid_free(&grid);
-  mpm_dofs_free(&dofs);
-  mpm_arena_free(&scratch);
-  mpm_particles_free(&none);
-  mpm_particles_free(&p);
-  mpm_domain_set_free(&s);
+/* |a - b| <= tol max |b| over n values. */
+static void assert_arrays_close(const mpm_real *a, const mpm_real *b, size_t n, double tol,
+                                const char *what) {
+  double scale = 0, worst = 0;
+  for (size_t i = 0; i < n; ++i) scale = fmax(scale, fabs(b[i]));
+  for (size_t i = 0; i < n; ++i) worst = fmax(worst, fabs((double)a[i] - b[i]));
+  if (worst > tol * scale)
+    fail_msg("%s: differ by %g (scale %g, tolerance %g)", what, worst, scale, tol);
+}
+
+/* The corners' transfers through pads (domain/corner_pads.h, the explicit step on the sparse
+ * grid) against the embedding's rows (s->corner_rows, the implicit step's path): the same
+ * grid values after P2G, and the same corner velocities, affine moments and positions and
+ * particle F after G2P, for FLIP and APIC with the linear and quadratic corner kernels. */
+static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer, double tol) {
+  block_fixture a, b;
+  block_setup(&a, kind, transfer);
+  block_setup(&b, kind, transfer);
+  b.s.corner_rows = 1;
+  assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), 0);
+  assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), 0);
+  assert_true(a.s.pads.on);
+  assert_false(b.s.pads.on);
+  assert_true(a.s.corner_grid.rows == 0 && b.s.corner_grid.rows == b.s.corner_count);
+  const size_t nd = a.dofs.count, nc = a.s.corner_count;
+  assert_int_equal(nd, b.dofs.count);
+  assert_arrays_close(a.dofs.mass, b.dofs.mass, nd, tol, "grid mass");
+  for (int d = 0; d < 3; ++d) {
+    assert_arrays_close(a.dofs.v0[d], b.dofs.v0[d], nd, tol, "grid momentum");
+    assert_arrays_close(a.dofs.f[d], b.dofs.f[d], nd, tol, "grid force");
+  }
+  mpm_dofs_explicit_update(&a.u, MPM_P2G_MOMENTUM_FORCE, &a.dofs);
+  mpm_dofs_explicit_update(&b.u, MPM_P2G_MOMENTUM_FORCE, &b.dofs);
+  mpm_domain_g2p(&a.ctx, &a.s, &a.val, &a.u.boundary);
+  mpm_domain_g2p(&b.ctx, &b.s, &b.val, &b.u.boundary);
+  for (int d = 0; d < 3; ++d) {
+    assert_arrays_close(a.s.cvg[d], b.s.cvg[d], nc, tol, "corner grid velocity");
+    assert_arrays_close(a.s.cv[d], b.s.cv[d], nc, tol, "corner velocity");
+    assert_arrays_close(a.s.cx[d], b.s.cx[d], nc, tol, "corner position");
+  }
+  if (transfer == MPM_TRANSFER_APIC) {
+    double B = 0;
+    for (size_t c = 0; c < nc; ++c) B = fmax(B, fabs(a.s.cB[0][c]) + fabs(a.s.cB[4][c]));
+    assert_true(B > 0);
+    for (int e = 0; e < 9; ++e) assert_arrays_close(a.s.cB[e], b.s.cB[e], nc, tol, "corner B");
+  }
+  for (int e = 0; e < 9; ++e)
+    assert_arrays_close(a.s.particles.F[e], b.s.particles.F[e], a.s.particles.count, tol,
+                        "particle F");
+  block_free(&a);
+  block_free(&b);
+}
+
+static void test_pads_match_rows(void **state) {
+  (void)state;
+  const double tol = 0; /* the same terms in the same order: bit for bit */
+  run_pads_match_rows(MPM_KERNEL_LINEAR, MPM_TRANSFER_FLIP, tol);
+  run_pads_match_rows(MPM_KERNEL_LINEAR, MPM_TRANSFER_APIC, tol);
+  run_pads_match_rows(MPM_KERNEL_QUADRATIC, MPM_TRANSFER_FLIP, tol);
+  run_pads_match_rows(MPM_KERNEL_QUADRATIC, MPM_TRANSFER_APIC, tol);
 }
 
 static void test_conservation_linear(void **state) {
@@ -422,7 +503,7 @@ int main(void) {
       cmocka_unit_test(test_weights_cube),           cmocka_unit_test(test_weights_distorted),
       cmocka_unit_test(test_two_step_equals_direct), cmocka_unit_test(test_affine_motion_exact_F),
       cmocka_unit_test(test_build_from_body),        cmocka_unit_test(test_conservation_linear),
-      cmocka_unit_test(test_conservation_quadratic),
+      cmocka_unit_test(test_conservation_quadratic), cmocka_unit_test(test_pads_match_rows),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

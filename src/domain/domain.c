@@ -42,6 +42,7 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_free(s->adj);
   mpm_free(s->corner_use);
   mpm_embedding_free(&s->corner_grid);
+  mpm_corner_pads_free(&s->pads);
   mpm_enrichment_free(&s->enrich);
   memset(s, 0, sizeof *s);
 }

@@ -20,6 +20,7 @@
 
 #include "core/error.h"
 #include "core/particles.h"
+#include "domain/corner_pads.h"
 #include "domain/hex.h"
 #include "grid/embedding.h"
 
@@ -89,6 +90,11 @@ typedef struct mpm_domain_set {
    * APIC factor a_e = D_a^-1 omega_i(x_a) (x_i - x_a), 1/m, and per corner D_a's diagonal, m^2
    * (interp/kernel.h) */
   mpm_real *apic_a[3], *apic_d[3];
+  /* set by the step: 1 when it applies the corners' embedding as a matrix (the implicit
+   * Hessian, domain_hessian.c), so that P2G builds corner_grid's rows; else on the sparse grid
+   * the corner transfers go through pads (domain/corner_pads.h) and corner_grid is empty */
+  int corner_rows;
+  mpm_corner_pads pads;
   mpm_domain_enrichment enrich;
 } mpm_domain_set;
 

@@ -3,6 +3,7 @@
 #include "domain/domain_transfer.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
+#include "domain/corner_pads.h"
 #include "domain/enrich.h"
 
 #include <math.h>
@@ -68,15 +69,11 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
         key[c] = -1;
         continue;
       }
-      if (apic) /* D's diagonal: sum_i w_i (x_i - x_a)^2 per axis (interp/kernel.h) */
-        for (int d = 0; d < 3; ++d) {
-          mpm_real D = 0;
-          for (int i = 0; i < W; ++i) {
-            const mpm_real r = (mpm_real)(st.base[d] + i) * k->dx - xr[d];
-            D += st.w[d][i] * r * r;
-          }
-          s->apic_d[d][c] = D;
-        }
+      if (apic) { /* D's diagonal: sum_i w_i (x_i - x_a)^2 per axis (interp/kernel.h) */
+        mpm_real D[3];
+        mpm_corner_apic_d(k, &st, xr, D);
+        for (int d = 0; d < 3; ++d) s->apic_d[d][c] = D[d];
+      }
       int e = 0;
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
@@ -126,9 +123,14 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     if (!s->active[q]) continue;
     mpm_real F[9], P[9];
     for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
-    const mpm_material mat = mpm_material_at_temperature(&ctx->materials[p->material[q]],
-                                                         p->plastic[q], p->temperature[q]);
-    mat.model->pk1(&mat, F, P);
+    const mpm_material *base = &ctx->materials[p->material[q]];
+    if (mpm_material_varies(base)) { /* the moduli of the particle's state */
+      const mpm_material mat =
+          mpm_material_at_temperature(base, p->plastic[q], p->temperature[q]);
+      mat.model->pk1(&mat, F, P);
+    } else { /* the material's own moduli: no copy of it per particle */
+      base->model->pk1(base, F, P);
+    }
     for (int e = 0; e < 9; ++e) vP[q][e] = p->vol0[q] * P[e];
   }
   /* 1. particle -> corner, gathered per corner (each corner sums its <= 8 particle slots in
@@ -164,13 +166,27 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   }
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
-   *    order: the same sums for any number of threads */
-  if (build_corner_embedding(&ctx->kernel, s, g, apic, scratch)) return -1;
+   *    order: the same sums for any number of threads. On the sparse grid, unless the step
+   *    applies the embedding as a matrix (s->corner_rows), through pads of nodes from the
+   *    corners' positions (domain/corner_pads.h): the same sums without stored rows */
+  s->pads.on = 0;
+  const int pads = g->kind == MPM_GRID_SPARSE && !s->corner_rows;
+  if (pads) {
+    for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
+    s->corner_grid.rows = 0; /* not this step's */
+    s->corner_grid.schedule.built = 0;
+    if (mpm_corner_pads_plan(&s->pads, s, g, &ctx->kernel, scratch)) return -1;
+  } else if (build_corner_embedding(&ctx->kernel, s, g, apic, scratch)) {
+    return -1;
+  }
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};
   if (!apic) {
-    mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
+    if (pads)
+      mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, NULL, values);
+    else
+      mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
     return 0;
   }
   /* APIC at the corner -> grid step: the corner's affine moment m_a B_a (B_a from the last
@@ -183,6 +199,11 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
 #pragma omp parallel for schedule(static)
   for (long c = 0; c < nc; ++c)
     for (int e = 0; e < 9; ++e) mB[e][c] = s->cm[c] * s->cB[e][c];
+  if (pads) {
+    const mpm_real *const cmB[9] = {mB[0], mB[1], mB[2], mB[3], mB[4], mB[5], mB[6], mB[7], mB[8]};
+    mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, cmB, values);
+    return 0;
+  }
   const mpm_real *const a[3] = {s->apic_a[0], s->apic_a[1], s->apic_a[2]};
   const mpm_real *const cm[9] = {mB[0], mB[1], mB[2], mB[3], mB[4], mB[5], mB[6], mB[7], mB[8]};
   mpm_real *const um[3] = {dof->v0[0], dof->v0[1], dof->v0[2]};
@@ -201,17 +222,50 @@ void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
   for (int e = 0; e < 9; ++e) s->particles.F[e][q] += dt * gradv[e];
 }
 
+/* v^g_a, the FLIP increment and (apic) B_a of corner c through the embedding's rows. */
+static void corner_velocity(mpm_domain_set *s, const mpm_grid_values *dof, int apic, size_t c,
+                            mpm_real vnew[3], mpm_real dv[3]) {
+  const mpm_embedding *E = &s->corner_grid;
+  const uint32_t e0 = E->row_start[c], e1 = e0 + E->row_len[c];
+  for (uint32_t e = e0; e < e1; ++e) {
+    const uint32_t n = E->col[e];
+    const mpm_real w = E->w[e];
+    for (int d = 0; d < 3; ++d) {
+      const mpm_real vn = dof->v[d][n];
+      const mpm_real vo = dof->v0[d][n];
+      vnew[d] += w * vn;
+      dv[d] += w * (vn - vo);
+    }
+  }
+  if (apic) { /* B_a = sum_i w_i v_i (x_i - x_a)^T = (sum_i v_i a_i^T) D_a */
+    mpm_real S[9] = {0};
+    for (uint32_t e = e0; e < e1; ++e) {
+      const uint32_t n = E->col[e];
+      const mpm_real a[3] = {s->apic_a[0][e], s->apic_a[1][e], s->apic_a[2][e]};
+      for (int r = 0; r < 3; ++r)
+        for (int t = 0; t < 3; ++t) S[3 * r + t] += dof->v[r][n] * a[t];
+    }
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) s->cB[3 * r + t][c] = S[3 * r + t] * s->apic_d[t][c];
+  }
+}
+
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
                               const mpm_grid_values *dof, const mpm_boundary *boundary) {
   const long nc = (long)s->corner_count;
-  const mpm_embedding *E = &s->corner_grid;
-  const int apic = ctx->transfer == MPM_TRANSFER_APIC && s->apic_a[0];
+  const mpm_corner_pads *P = &s->pads;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC && (P->on || s->apic_a[0]);
   /* APIC: the corner takes the grid's velocity (PIC) and its affine moment; otherwise the
    * scene's PIC/FLIP blend */
   const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
   const mpm_domain_enrichment *en = &s->enrich;
   const int enriched = en->count > 0;
   /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
+  if (P->on) { /* the same sums from the corners' positions (domain/corner_pads.h) */
+    const mpm_real *const v[3] = {dof->v[0], dof->v[1], dof->v[2]};
+    const mpm_real *const v0[3] = {dof->v0[0], dof->v0[1], dof->v0[2]};
+    mpm_corner_pads_gather(P, s, &ctx->kernel, apic, v, v0);
+  }
   mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
 #pragma omp parallel for schedule(static) reduction(max : max_v2)
   for (long c = 0; c < nc; ++c) {
@@ -219,27 +273,13 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     /* the embedding applied to the grid's velocities: v^g_a = sum_i E_ai v_i^{n+1}, and the
      * FLIP increment sum_i E_ai (v_i^{n+1} - v_i^n) */
     mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
-    const uint32_t e0 = E->row_start[c], e1 = e0 + E->row_len[c];
-    for (uint32_t e = e0; e < e1; ++e) {
-      const uint32_t n = E->col[e];
-      const mpm_real w = E->w[e];
+    if (P->on) {
       for (int d = 0; d < 3; ++d) {
-        const mpm_real vn = dof->v[d][n];
-        const mpm_real vo = dof->v0[d][n];
-        vnew[d] += w * vn;
-        dv[d] += w * (vn - vo);
+        vnew[d] = s->cvg[d][c];
+        dv[d] = P->dv[d][c];
       }
-    }
-    if (apic) { /* B_a = sum_i w_i v_i (x_i - x_a)^T = (sum_i v_i a_i^T) D_a */
-      mpm_real S[9] = {0};
-      for (uint32_t e = e0; e < e1; ++e) {
-        const uint32_t n = E->col[e];
-        const mpm_real a[3] = {s->apic_a[0][e], s->apic_a[1][e], s->apic_a[2][e]};
-        for (int r = 0; r < 3; ++r)
-          for (int t = 0; t < 3; ++t) S[3 * r + t] += dof->v[r][n] * a[t];
-      }
-      for (int r = 0; r < 3; ++r)
-        for (int t = 0; t < 3; ++t) s->cB[3 * r + t][c] = S[3 * r + t] * s->apic_d[t][c];
+    } else {
+      corner_velocity(s, dof, apic, (size_t)c, vnew, dv);
     }
     mpm_real v[3];
     for (int d = 0; d < 3; ++d) {

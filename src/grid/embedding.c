@@ -15,18 +15,14 @@ void mpm_embedding_free(mpm_embedding *E) {
   mpm_free(E->row_len);
   mpm_free(E->col);
   mpm_free(E->w);
-  mpm_free(E->group_row);
-  mpm_free(E->group_start);
-  mpm_free(E->key_group);
-  mpm_free(E->own_row);
+  mpm_scatter_schedule_free(&E->schedule);
   memset(E, 0, sizeof *E);
 }
 
 size_t mpm_embedding_bytes(const mpm_embedding *E) {
   return E->row_capacity * 2 * sizeof(uint32_t) +
          E->entry_capacity * (sizeof(uint32_t) + sizeof(mpm_real)) +
-         (E->group_row_capacity + E->group_capacity) * sizeof(uint32_t) +
-         E->key_capacity * sizeof(int32_t) + E->own_row_capacity * sizeof(uint32_t);
+         mpm_scatter_schedule_bytes(&E->schedule);
 }
 
 /* Grow a buffer of `size`-byte items to hold `need`, without keeping its contents. */
@@ -41,7 +37,7 @@ static int reserve(void **a, size_t *cap, size_t need, size_t size) {
 
 int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
                          uint32_t uniform_len) {
-  E->scheduled = 0;
+  E->schedule.built = 0;
   E->rows = 0;
   size_t rcap = E->row_capacity;
   if (rows + 1 > rcap) {
@@ -76,53 +72,7 @@ int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
 
 int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
                            const uint8_t *key_colour) {
-  E->scheduled = 0;
-  const size_t rows = E->rows;
-  size_t cap = E->key_capacity;
-  if (reserve((void **)&E->key_group, &cap, key_count + 1, sizeof(int32_t))) return -1;
-  E->key_capacity = cap;
-  /* the keys in use, numbered as groups in colour order, then key order */
-  int32_t *kg = E->key_group;
-  for (size_t k = 0; k < key_count; ++k) kg[k] = -1;
-  size_t used_rows = 0, own = 0;
-  for (size_t a = 0; a < rows; ++a)
-    if (key[a] >= 0) {
-      kg[key[a]] = 0;
-      ++used_rows;
-    } else if (key[a] == MPM_EMBEDDING_OWN_COLUMNS) {
-      ++own;
-    }
-  cap = E->own_row_capacity;
-  if (reserve((void **)&E->own_row, &cap, own + 1, sizeof(uint32_t))) return -1;
-  E->own_row_capacity = cap;
-  E->own_rows = 0;
-  for (size_t a = 0; a < rows; ++a)
-    if (key[a] == MPM_EMBEDDING_OWN_COLUMNS) E->own_row[E->own_rows++] = (uint32_t)a;
-  size_t groups = 0;
-  for (int colour = 0; colour < MPM_EMBEDDING_COLOURS; ++colour) {
-    E->colour_start[colour] = groups;
-    for (size_t k = 0; k < key_count; ++k)
-      if (kg[k] >= 0 && key_colour[k] == colour) kg[k] = (int32_t)groups++;
-  }
-  E->colour_start[MPM_EMBEDDING_COLOURS] = groups;
-  cap = E->group_capacity;
-  if (reserve((void **)&E->group_start, &cap, groups + 2, sizeof(uint32_t))) return -1;
-  E->group_capacity = cap;
-  cap = E->group_row_capacity;
-  if (reserve((void **)&E->group_row, &cap, used_rows + 1, sizeof(uint32_t))) return -1;
-  E->group_row_capacity = cap;
-  /* counting sort of the rows by group, stable in row order */
-  uint32_t *start = E->group_start;
-  memset(start, 0, (groups + 1) * sizeof *start);
-  for (size_t a = 0; a < rows; ++a)
-    if (key[a] >= 0) start[kg[key[a]] + 1]++;
-  for (size_t q = 0; q < groups; ++q) start[q + 1] += start[q];
-  for (size_t a = 0; a < rows; ++a)
-    if (key[a] >= 0) E->group_row[start[kg[key[a]]]++] = (uint32_t)a;
-  for (size_t q = groups; q > 0; --q) start[q] = start[q - 1]; /* back to the starts */
-  start[0] = 0;
-  E->scheduled = 1;
-  return 0;
+  return mpm_scatter_schedule_build(&E->schedule, E->rows, key, key_count, key_colour);
 }
 
 /* The first moments of a scatter (NULL: none): per entry a[j][e], per carrier cm[3 k + j][row],
@@ -171,20 +121,21 @@ static inline void scatter_row(const mpm_embedding *E, size_t a, int fields,
 
 static void scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,
                     mpm_real *const *u, const scatter_moments *m) {
-  if (!E->scheduled) {
+  const mpm_scatter_schedule *S = &E->schedule;
+  if (!S->built) {
     for (size_t a = 0; a < E->rows; ++a) scatter_row(E, a, fields, c, u, m);
     return;
   }
-  for (int colour = 0; colour < MPM_EMBEDDING_COLOURS; ++colour) {
-    const long g0 = (long)E->colour_start[colour], g1 = (long)E->colour_start[colour + 1];
+  for (int colour = 0; colour < MPM_SCHEDULE_COLOURS; ++colour) {
+    const long g0 = (long)S->colour_start[colour], g1 = (long)S->colour_start[colour + 1];
 #pragma omp parallel for schedule(dynamic, 4)
     for (long q = g0; q < g1; ++q)
-      for (uint32_t j = E->group_start[q]; j < E->group_start[q + 1]; ++j)
-        scatter_row(E, E->group_row[j], fields, c, u, m);
+      for (uint32_t j = S->group_start[q]; j < S->group_start[q + 1]; ++j)
+        scatter_row(E, S->group_row[j], fields, c, u, m);
   }
-  const long own = (long)E->own_rows;
+  const long own = (long)S->own_rows;
 #pragma omp parallel for schedule(static) if (own >= MPM_PARALLEL_MIN)
-  for (long j = 0; j < own; ++j) scatter_row(E, E->own_row[j], fields, c, u, m);
+  for (long j = 0; j < own; ++j) scatter_row(E, S->own_row[j], fields, c, u, m);
 }
 
 void mpm_embedding_scatter(const mpm_embedding *E, int fields, const mpm_real *const *c,

@@ -27,11 +27,12 @@
 #define MPM_GRID_EMBEDDING_H
 
 #include "core/real.h"
+#include "grid/scatter_schedule.h"
 
 #include <stddef.h>
 #include <stdint.h>
 
-#define MPM_EMBEDDING_COLOURS 8
+#define MPM_EMBEDDING_COLOURS MPM_SCHEDULE_COLOURS
 
 typedef struct mpm_embedding {
   size_t rows, row_capacity;
@@ -40,22 +41,12 @@ typedef struct mpm_embedding {
   uint32_t *row_len;
   uint32_t *col; /* DOF indices */
   mpm_real *w;
-  /* the scatter's schedule: groups of rows (group_row[group_start[q] .. group_start[q + 1])),
-   * the groups of colour c are colour_start[c] .. colour_start[c + 1] */
-  int scheduled;
-  uint32_t *group_row, *group_start;
-  int32_t *key_group;
-  size_t group_row_capacity, group_capacity, key_capacity;
-  size_t colour_start[MPM_EMBEDDING_COLOURS + 1];
-  /* rows whose columns no other row has (key MPM_EMBEDDING_OWN_COLUMNS): scattered last, all
-   * in parallel */
-  uint32_t *own_row;
-  size_t own_rows, own_row_capacity;
+  mpm_scatter_schedule schedule; /* the scatter's (grid/scatter_schedule.h); built: scheduled */
 } mpm_embedding;
 
 /* The key of a row whose columns belong to it alone (an enriched corner's identity row, Zhu
  * sec. 5: the corner is its own DOF): it needs no colour. */
-#define MPM_EMBEDDING_OWN_COLUMNS (-2)
+#define MPM_EMBEDDING_OWN_COLUMNS MPM_SCHEDULE_OWN_COLUMNS
 
 void mpm_embedding_init(mpm_embedding *E);
 void mpm_embedding_free(mpm_embedding *E);

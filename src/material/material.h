@@ -102,6 +102,12 @@ mpm_real mpm_material_melt_fraction(const mpm_material *m, mpm_real T);
  * 1 + f (melt_shear - 1) and lambda by 1 + f (melt_bulk - 1), f the melt fraction. */
 mpm_material mpm_material_at_temperature(const mpm_material *m, mpm_real plastic, mpm_real T);
 
+/* Whether a particle's moduli can differ from the material's (snow hardening, melting): where
+ * not, mpm_material_at_temperature returns *m, and a loop over particles may skip the copy. */
+static inline int mpm_material_varies(const mpm_material *m) {
+  return m->melting || m->kind == MPM_MODEL_SNOW;
+}
+
 /* dP = (dP/dF) : dF with a factored derivative: U dP^(U^T dF V) V^T (material/isotropic.h). */
 void mpm_stress_hessian_action(const mpm_stress_hessian *H, const mpm_real dF[9], mpm_real dP[9]);
 

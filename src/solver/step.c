@@ -181,6 +181,9 @@ static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   } else {
     mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
   }
+  /* the implicit step applies the corners' embedding as a matrix (its Hessian): it needs the
+   * rows, which the explicit step does without (domain/corner_pads.h) */
+  sim->domains.corner_rows = sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT;
   if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid, &c->all, &sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the stresses of %zu domain particles",

@@ -1,0 +1,77 @@
+/* corner_pads.h - the corner <-> grid half of the domain transfers (domain_transfer.h) on the
+ * sparse grid, applied from the corners' positions instead of the embedding's stored rows.
+ *
+ * Why: the rows of the corners' embedding (grid/embedding.h) hold, for the linear hat, 8
+ * entries of weight, column and 3 APIC factors: 160 bytes a corner, written by P2G and read by
+ * the scatter and again by G2P, in the order of the scatter's groups (base blocks), which is
+ * not the corners' order. At 200k corners that is ~100 MB of memory traffic a step that does
+ * not stay in cache, and the scatter waited on it: the domain step was 6x the material-point
+ * step (issue 13). The corners of one group share a base block, so their stencils reach only
+ * that block and its 7 forward neighbours: the group's nodes are read into a small pad, every
+ * corner's stencil is evaluated from its position and accumulated there, as the material
+ * points' transfers do (transfer/p2g.c), and the pad is written back.
+ *
+ * The pad starts from the DOF values and the corners are visited in the schedule's order (the
+ * colours in turn, a group's corners in corner order), each adding its weights, then its APIC
+ * moments, with the same expressions as through the rows: every node receives the same terms
+ * in the same order, and the sums are bit for bit those of mpm_embedding_scatter and _gather
+ * (tests/test_domain.c compares them). The rows are still built where they are applied as a
+ * matrix: the implicit step's Hessian (domain_hessian.c), and the dense grid. */
+#ifndef MPM_DOMAIN_CORNER_PADS_H
+#define MPM_DOMAIN_CORNER_PADS_H
+
+#include "core/arena.h"
+#include "grid/grid.h"
+#include "grid/scatter_schedule.h"
+#include "interp/kernel.h"
+
+struct mpm_domain_set;
+
+typedef struct mpm_corner_pads {
+  int on;                        /* this step's corner transfers go through the pads */
+  mpm_scatter_schedule schedule; /* groups of corners by base block (memory kept across steps) */
+  int32_t *block;                /* step scratch: per corner, its base block (its key), or < 0 */
+  int32_t (*pad)[8];             /* step scratch: per group, the 8 blocks of its pad */
+  int32_t (*org)[3];             /* step scratch: per group, its base block's first node */
+  uint32_t grid_dofs;            /* the DOF of the level's node 0 */
+  uint32_t corner_dofs;          /* the DOF of enriched corner 0 */
+  mpm_real origin[3];            /* the level's node (0, 0, 0), m */
+  mpm_real *dv[3];               /* step scratch: G2P's FLIP increment per corner, m/s */
+} mpm_corner_pads;
+
+void mpm_corner_pads_free(mpm_corner_pads *P);
+
+/* Group the used corners of s by the base block of their stencils on sparse level g (enriched
+ * corners are rows of their own: their DOFs), with kernel k; scratch from the step's arena. 0,
+ * or -1 when out of memory or a block is missing (cannot happen after mpm_domain_activate). */
+int mpm_corner_pads_plan(mpm_corner_pads *P, const struct mpm_domain_set *s, const mpm_grid *g,
+                         const mpm_kernel *k, mpm_arena *scratch);
+
+/* values[f][DOF] += omega_i(x_a) carrier[f][a] for the 7 fields (mass, momentum, force), and with
+ * APIC (mB: the corners' m_a B_a, row-major) the affine moment sum_j a_j mB[3k + j][a] added to
+ * values[1 + k] (momentum), as mpm_embedding_scatter_moments does with the rows. */
+void mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_set *s,
+                             const mpm_kernel *k, const mpm_real *const carrier[7],
+                             const mpm_real *const mB[9], mpm_real *const values[7]);
+
+/* The grid's velocities at the corners: s->cvg = sum_i omega_i(x_a) v_i, P->dv = sum_i
+ * omega_i(x_a) (v_i - v0_i), and with apic s->cB = (sum_i v_i a_i^T) D_a, for every used
+ * corner (enriched ones from their DOFs). */
+void mpm_corner_pads_gather(const mpm_corner_pads *P, struct mpm_domain_set *s, const mpm_kernel *k,
+                            int apic, const mpm_real *const v[3], const mpm_real *const v0[3]);
+
+/* D_a's diagonal for APIC, sum_i w_i (x_i - x_a)^2 per axis, of stencil st at xr (the position
+ * from the level's origin, m): the one expression the rows and the pads share. */
+static inline void mpm_corner_apic_d(const mpm_kernel *k, const mpm_stencil *st,
+                                     const mpm_real xr[3], mpm_real D[3]) {
+  for (int d = 0; d < 3; ++d) {
+    mpm_real sum = 0;
+    for (int i = 0; i < k->width; ++i) {
+      const mpm_real r = (mpm_real)(st->base[d] + i) * k->dx - xr[d];
+      sum += st->w[d][i] * r * r;
+    }
+    D[d] = sum;
+  }
+}
+
+#endif
