@@ -471,7 +471,10 @@ static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer
     double B = 0;
     for (size_t c = 0; c < nc; ++c) B = fmax(B, fabs(a.s.cB[0][c]) + fabs(a.s.cB[4][c]));
     assert_true(B > 0);
-    for (int e = 0; e < 9; ++e) assert_arrays_close(a.s.cB[e], b.s.cB[e], nc, tol, "corner B");
+    /* B sums terms of |v| |a| D ~ |v| dx much larger than itself (a rotation's moment is
+     * their difference): 10 times the tolerance */
+    for (int e = 0; e < 9; ++e)
+      assert_arrays_close(a.s.cB[e], b.s.cB[e], nc, 10 * tol, "corner B");
   }
   for (int e = 0; e < 9; ++e)
     assert_arrays_close(a.s.particles.F[e], b.s.particles.F[e], a.s.particles.count, tol,
@@ -482,7 +485,8 @@ static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer
 
 static void test_pads_match_rows(void **state) {
   (void)state;
-  const double tol = 0; /* the same terms in the same order: bit for bit */
+  /* the same terms, summed in another order (lanes, then nodes): equal to rounding */
+  const double tol = TOL(1e-6, 1e-14);
   run_pads_match_rows(MPM_KERNEL_LINEAR, MPM_TRANSFER_FLIP, tol);
   run_pads_match_rows(MPM_KERNEL_LINEAR, MPM_TRANSFER_APIC, tol);
   run_pads_match_rows(MPM_KERNEL_QUADRATIC, MPM_TRANSFER_FLIP, tol);

@@ -243,8 +243,17 @@ static void test_threads_bitwise(void **state) {
 }
 
 /* Particle domains on the dense reference grid: the corner embedding goes through the grid
- * interface alone (grid/grid.h), and the dense grid gives bitwise the sparse grid's state (the
- * corners' scatter schedule gives every node its contributions in the same order). */
+ * interface alone (grid/grid.h), and the dense grid gives the sparse grid's state. The dense
+ * grid applies the embedding's rows; the sparse one, in explicit steps, the pads of
+ * domain/corner_pads.h, which sum the same terms in another order: equal to rounding (the rows
+ * on both grids gave bit for bit the same state, and test_domain compares pads and rows). */
+static void assert_near(const mpm_real *a, const mpm_real *b, size_t n, double tol,
+                        const char *what) {
+  double worst = 0;
+  for (size_t i = 0; i < n; ++i) worst = fmax(worst, fabs((double)a[i] - b[i]));
+  if (worst > tol) fail_msg("%s: dense and sparse differ by %g (tolerance %g)", what, worst, tol);
+}
+
 static void test_dense_equals_sparse(void **state) {
   (void)state;
   mpm_sim *run[2] = {bar_on("sparse", "true", ""), bar_on("dense", "true", "")};
@@ -253,13 +262,13 @@ static void test_dense_equals_sparse(void **state) {
       if (mpm_sim_advance_frame(run[g]) != MPM_OK) fail_msg("%s", mpm_sim_last_error(run[g]));
   assert_int_equal(run[1]->grid.kind, MPM_GRID_DENSE);
   const mpm_domain_set *a = &run[0]->domains, *b = &run[1]->domains;
+  const size_t nc = a->corner_count, np = a->particles.count;
   for (int d = 0; d < 3; ++d) {
-    assert_memory_equal(a->cx[d], b->cx[d], a->corner_count * sizeof(mpm_real));
-    assert_memory_equal(a->cv[d], b->cv[d], a->corner_count * sizeof(mpm_real));
+    assert_near(a->cx[d], b->cx[d], nc, TOL(1e-6, 1e-12), "corner position, m");
+    assert_near(a->cv[d], b->cv[d], nc, TOL(1e-4, 1e-10), "corner velocity, m/s");
   }
   for (int e = 0; e < 9; ++e)
-    assert_memory_equal(a->particles.F[e], b->particles.F[e],
-                        a->particles.count * sizeof(mpm_real));
+    assert_near(a->particles.F[e], b->particles.F[e], np, TOL(1e-5, 1e-11), "F");
   assert_true(run[0]->steps == run[1]->steps && run[0]->steps > 10);
   mpm_sim_destroy(run[0]);
   mpm_sim_destroy(run[1]);

@@ -20,6 +20,11 @@
  * 17: a moving body was 12% slower between the reorders every 16 steps) changes the order of the
  * transfers' sums in every scene whose material moves; those digests were rewritten with it.
  *
+ * The corners' transfers through pads of nodes on the sparse grid (domain/corner_pads.h, issue 13:
+ * the domain step's speed) take their corners as SIMD lanes, which sums the same terms in
+ * another order: the explicit domain scenes on the sparse grid were rewritten with it (the
+ * enriched release, whose every corner is its own DOF, and every other scene are unchanged).
+ *
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:
  *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression

@@ -4,6 +4,7 @@
 #include "core/parallel.h"
 #include "domain/domain.h"
 #include "grid/sparse_grid.h"
+#include "transfer/transfer_lanes.h"
 
 #include <string.h>
 
@@ -24,9 +25,9 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   const mpm_sparse_grid *sg = &g->impl.sparse;
   const size_t nc = s->corner_count, nk = sg->block_count;
   P->block = mpm_arena_alloc(scratch, (nc + 1) * sizeof *P->block);
+  P->cell = mpm_arena_alloc(scratch, nc + 1);
   uint8_t *key_colour = mpm_arena_alloc(scratch, nk + 1);
-  for (int d = 0; d < 3; ++d) P->dv[d] = mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real));
-  if (!P->block || !key_colour || !P->dv[0] || !P->dv[1] || !P->dv[2]) return -1;
+  if (!P->block || !P->cell || !key_colour) return -1;
   const mpm_domain_enrichment *en = &s->enrich;
   const int enriched = en->count > 0;
   int missing = 0;
@@ -43,10 +44,10 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
       }
       const mpm_real xr[3] = {s->cx[0][c] - g->origin[0], s->cx[1][c] - g->origin[1],
                               s->cx[2][c] - g->origin[2]};
-      mpm_stencil st;
-      mpm_kernel_stencil(k, xr, &st);
-      const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
-                             st.base[2] >> MPM_BLOCK_BITS};
+      int base[3];
+      mpm_kernel_base(k, xr, base);
+      const int32_t bb[3] = {base[0] >> MPM_BLOCK_BITS, base[1] >> MPM_BLOCK_BITS,
+                             base[2] >> MPM_BLOCK_BITS};
       if (bb[0] != last[0] || bb[1] != last[1] || bb[2] != last[2]) {
         last_block = mpm_sparse_grid_find(sg, bb);
         memcpy(last, bb, sizeof last);
@@ -56,6 +57,7 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
         continue;
       }
       P->block[c] = last_block;
+      P->cell[c] = (uint8_t)((base[0] & 3) << 4 | (base[1] & 3) << 2 | (base[2] & 3));
     }
   }
   if (missing) return -1;
@@ -70,7 +72,42 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   const size_t groups = S->colour_start[MPM_SCHEDULE_COLOURS];
   P->pad = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->pad);
   P->org = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->org);
-  if (!P->pad || !P->org) return -1;
+  P->cell_start = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->cell_start);
+  P->grid_positions = S->group_start[groups];
+  P->positions = P->grid_positions + S->own_rows;
+  P->row = mpm_arena_alloc(scratch, (P->positions + 1) * sizeof *P->row);
+  P->pos = mpm_arena_alloc(scratch, (nc + 1) * sizeof *P->pos);
+  if (!P->pad || !P->org || !P->cell_start || !P->row || !P->pos) return -1;
+  for (int d = 0; d < 3; ++d) { /* positions by position (room for a last full vector) */
+    P->x[d] = mpm_arena_alloc(scratch, (P->positions + MPM_LANES) * sizeof(mpm_real));
+    P->dv[d] = mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real));
+    if (!P->x[d] || !P->dv[d]) return -1;
+  }
+  memset(P->pos, 0xff, nc * sizeof *P->pos); /* MPM_CORNER_PADS_NONE */
+  /* each group's corners by the cell of their base node (stable): the corners of one cell
+   * share every node they touch and are taken as SIMD lanes */
+#pragma omp parallel for schedule(dynamic, 16)
+  for (long q = 0; q < (long)groups; ++q) {
+    uint32_t *cs = P->cell_start[q];
+    memset(cs, 0, sizeof P->cell_start[q]);
+    const uint32_t r0 = S->group_start[q], r1 = S->group_start[q + 1];
+    for (uint32_t r = r0; r < r1; ++r) cs[P->cell[S->group_row[r]] + 1]++;
+    cs[0] = r0;
+    for (int c = 0; c < MPM_BLOCK_NODES; ++c) cs[c + 1] += cs[c];
+    uint32_t at[MPM_BLOCK_NODES];
+    memcpy(at, cs, sizeof at);
+    for (uint32_t r = r0; r < r1; ++r) {
+      const uint32_t c = S->group_row[r];
+      const uint32_t at_k = at[P->cell[c]]++;
+      P->row[at_k] = c;
+      P->pos[c] = at_k;
+      for (int d = 0; d < 3; ++d) P->x[d][at_k] = s->cx[d][c];
+    }
+  }
+  for (size_t j = 0; j < S->own_rows; ++j) { /* the enriched corners follow, in corner order */
+    P->row[P->grid_positions + j] = S->own_row[j];
+    P->pos[S->own_row[j]] = (uint32_t)(P->grid_positions + j);
+  }
   for (size_t q = 0; q < groups; ++q) {
     const int32_t *bc = sg->coord[mpm_scatter_schedule_group_key(S, P->block, q)];
     for (int o = 0; o < 8; ++o) {
@@ -97,69 +134,89 @@ ALWAYS_INLINE void pad_dofs(const mpm_corner_pads *P, size_t q, const int S, uin
       }
 }
 
-/* Corner c's stencil and the pad index of its base node in group q's pad. */
-ALWAYS_INLINE int corner_stencil(const mpm_corner_pads *P, const mpm_domain_set *s,
-                                 const mpm_kernel *k, size_t q, const int S, uint32_t c,
-                                 mpm_stencil *st, mpm_real xr[3]) {
-  for (int d = 0; d < 3; ++d) xr[d] = s->cx[d][c] - P->origin[d];
-  mpm_kernel_stencil(k, xr, st);
-  return ((st->base[0] - P->org[q][0]) * S + (st->base[1] - P->org[q][1])) * S +
-         (st->base[2] - P->org[q][2]);
+/* The positions k .. k + n - 1 of a batch, as lane indices (lanes >= n repeat lane 0). */
+ALWAYS_INLINE void batch_positions(uint32_t k, int n, uint32_t pos[MPM_LANES]) {
+  for (int l = 0; l < MPM_LANES; ++l) pos[l] = k + (uint32_t)(l < n ? l : 0);
 }
 
-ALWAYS_INLINE void scatter_group(const int W, const mpm_corner_pads *P, const mpm_domain_set *s,
+/* The lanes of a batch of n corners' values laid out by position (lanes >= n: 0). */
+ALWAYS_INLINE mpm_vl corner_lanes(const mpm_real *a, const uint32_t pos[MPM_LANES], int n,
+                                  mpm_vl live) {
+  return mpm_lanes_load(a, pos, n, n == MPM_LANES) * live;
+}
+
+/* The weight and (apic) APIC factors of node (i, j, l) of a lane stencil. */
+ALWAYS_INLINE mpm_vl node_weight(const mpm_lane_stencil *st, int i, int j, int l) {
+  return st->w[0][i] * (st->w[1][j] * st->w[2][l]);
+}
+ALWAYS_INLINE void node_apic(const mpm_lane_stencil *st, int i, int j, int l, mpm_vl A[3]) {
+  A[0] = st->a[0][i] * (st->w[1][j] * st->w[2][l]);
+  A[1] = st->w[0][i] * (st->a[1][j] * st->w[2][l]);
+  A[2] = st->w[0][i] * (st->w[1][j] * st->a[2][l]);
+}
+
+ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_pads *P,
                                  const mpm_kernel *k, size_t q, const mpm_real *const carrier[7],
                                  const mpm_real *const mB[9], mpm_real *const values[7]) {
   const int S = MPM_BLOCK + W - 1;
   uint32_t dof[SIDE_MAX * SIDE_MAX * SIDE_MAX];
-  mpm_real pad[SIDE_MAX * SIDE_MAX * SIDE_MAX * SCATTER_STRIDE];
+  mpm_vl pad[SIDE_MAX * SIDE_MAX * SIDE_MAX]; /* per node: the 7 fields and a spare lane */
   pad_dofs(P, q, S, dof);
-  /* the pad starts from the values: each node then sums in the order of the rows' scatter */
-  for (int n = 0; n < S * S * S; ++n)
-    for (int f = 0; f < SCATTER_FIELDS; ++f) pad[n * SCATTER_STRIDE + f] = values[f][dof[n]];
-  const mpm_scatter_schedule *sch = &P->schedule;
-  for (uint32_t r = sch->group_start[q]; r < sch->group_start[q + 1]; ++r) {
-    const uint32_t c = sch->group_row[r];
-    mpm_stencil st;
-    mpm_real xr[3];
-    const int base = corner_stencil(P, s, k, q, S, c, &st, xr);
-    mpm_real ca[SCATTER_FIELDS];
-    for (int f = 0; f < SCATTER_FIELDS; ++f) ca[f] = carrier[f][c];
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int l = 0; l < W; ++l) {
-          const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
-          if (w == 0) continue; /* the rows hold no such entry */
-          mpm_real *at = pad + (base + (i * S + j) * S + l) * SCATTER_STRIDE;
-          for (int f = 0; f < SCATTER_FIELDS; ++f) at[f] += w * ca[f];
-        }
-    if (!mB) continue;
-    /* APIC: the affine moment, after the row's weights as in mpm_embedding_scatter_moments */
-    mpm_real cm[9];
-    for (int e = 0; e < 9; ++e) cm[e] = mB[e][c];
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int l = 0; l < W; ++l) {
-          if (st.w[0][i] * st.w[1][j] * st.w[2][l] == 0) continue;
-          const mpm_real a0 = st.a[0][i] * st.w[1][j] * st.w[2][l];
-          const mpm_real a1 = st.w[0][i] * st.a[1][j] * st.w[2][l];
-          const mpm_real a2 = st.w[0][i] * st.w[1][j] * st.a[2][l];
-          mpm_real *at = pad + (base + (i * S + j) * S + l) * SCATTER_STRIDE + 1;
-          for (int kk = 0; kk < 3; ++kk)
-            at[kk] += a0 * cm[3 * kk] + a1 * cm[3 * kk + 1] + a2 * cm[3 * kk + 2];
-        }
+  for (int n = 0; n < S * S * S; ++n) {
+    mpm_vl u = {0};
+    for (int f = 0; f < SCATTER_FIELDS; ++f) u[f] = values[f][dof[n]];
+    pad[n] = u;
+  }
+  const mpm_real *const x[3] = {P->x[0], P->x[1], P->x[2]};
+  for (int cell = 0; cell < MPM_BLOCK_NODES; ++cell) {
+    const uint32_t end = P->cell_start[q][cell + 1];
+    for (uint32_t r = P->cell_start[q][cell]; r < end; r += MPM_LANES) {
+      const int n = end - r < MPM_LANES ? (int)(end - r) : MPM_LANES;
+      uint32_t pos[MPM_LANES];
+      batch_positions(r, n, pos);
+      mpm_vl live = {0};
+      for (int l = 0; l < n; ++l) live[l] = 1;
+      mpm_lane_stencil st;
+      int base[3];
+      mpm_lane_stencil_eval(W, k, x, P->origin, pos, n, n == MPM_LANES, apic, base, &st);
+      mpm_vl in[SCATTER_FIELDS], cm[9];
+      for (int f = 0; f < SCATTER_FIELDS; ++f) in[f] = corner_lanes(carrier[f], pos, n, live);
+      if (apic)
+        for (int e = 0; e < 9; ++e) cm[e] = corner_lanes(mB[e], pos, n, live);
+      const int off =
+          ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
+      for (int i = 0; i < W; ++i)
+        for (int j = 0; j < W; ++j)
+          for (int l = 0; l < W; ++l) {
+            const mpm_vl w = node_weight(&st, i, j, l);
+            mpm_vl ch[8];
+            ch[0] = w * in[0];
+            for (int d = 0; d < 3; ++d) {
+              ch[1 + d] = w * in[1 + d];
+              ch[4 + d] = w * in[4 + d];
+            }
+            ch[7] = (mpm_vl){0};
+            if (apic) { /* the affine moment m_a B_a D^-1 (x_i - x_a) w */
+              mpm_vl A[3];
+              node_apic(&st, i, j, l, A);
+              for (int d = 0; d < 3; ++d)
+                ch[1 + d] += A[0] * cm[3 * d] + A[1] * cm[3 * d + 1] + A[2] * cm[3 * d + 2];
+            }
+            pad[off + (i * S + j) * S + l] += mpm_vl_sum8(ch);
+          }
+    }
   }
   for (int n = 0; n < S * S * S; ++n)
-    for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][dof[n]] = pad[n * SCATTER_STRIDE + f];
+    for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][dof[n]] = pad[n][f];
 }
 
 /* The scatter of the groups of one colour with a kernel of width W. */
-ALWAYS_INLINE void scatter_colour(const int W, const mpm_corner_pads *P, const mpm_domain_set *s,
+ALWAYS_INLINE void scatter_colour(const int W, const int apic, const mpm_corner_pads *P,
                                   const mpm_kernel *k, long g0, long g1,
                                   const mpm_real *const carrier[7], const mpm_real *const mB[9],
                                   mpm_real *const values[7]) {
 #pragma omp parallel for schedule(dynamic, 4)
-  for (long q = g0; q < g1; ++q) scatter_group(W, P, s, k, (size_t)q, carrier, mB, values);
+  for (long q = g0; q < g1; ++q) scatter_group(W, apic, P, k, (size_t)q, carrier, mB, values);
 }
 
 void mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, const mpm_kernel *k,
@@ -168,35 +225,38 @@ void mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, 
   const mpm_scatter_schedule *sch = &P->schedule;
   for (int colour = 0; colour < MPM_SCHEDULE_COLOURS; ++colour) {
     const long g0 = (long)sch->colour_start[colour], g1 = (long)sch->colour_start[colour + 1];
-    switch (k->width) { /* the width a constant in each copy: the stencil loops unroll */
-    case 2:
-      scatter_colour(2, P, s, k, g0, g1, carrier, mB, values);
-      break;
-    case 3:
-      scatter_colour(3, P, s, k, g0, g1, carrier, mB, values);
-      break;
-    default:
-      scatter_colour(4, P, s, k, g0, g1, carrier, mB, values);
-      break;
-    }
+    /* the width and APIC constants in each copy: the stencil loops unroll */
+    const int w = k->width, apic = mB != NULL;
+    if (w == 2 && apic)
+      scatter_colour(2, 1, P, k, g0, g1, carrier, mB, values);
+    else if (w == 2)
+      scatter_colour(2, 0, P, k, g0, g1, carrier, mB, values);
+    else if (w == 3 && apic)
+      scatter_colour(3, 1, P, k, g0, g1, carrier, mB, values);
+    else if (w == 3)
+      scatter_colour(3, 0, P, k, g0, g1, carrier, mB, values);
+    else if (apic)
+      scatter_colour(4, 1, P, k, g0, g1, carrier, mB, values);
+    else
+      scatter_colour(4, 0, P, k, g0, g1, carrier, mB, values);
   }
   /* enriched corners: identity rows into their DOFs (weight 1, APIC factors 0) */
   const long own = (long)sch->own_rows;
   const mpm_real one = 1, zero = 0;
 #pragma omp parallel for schedule(static) if (own >= MPM_PARALLEL_MIN)
   for (long j = 0; j < own; ++j) {
-    const uint32_t c = sch->own_row[j];
-    const uint32_t i = P->corner_dofs + s->enrich.slot[c];
-    for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][i] += one * carrier[f][c];
+    const size_t at = P->grid_positions + (size_t)j;
+    const uint32_t i = P->corner_dofs + s->enrich.slot[P->row[at]];
+    for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][i] += one * carrier[f][at];
     if (mB)
       for (int kk = 0; kk < 3; ++kk)
         values[1 + kk][i] +=
-            zero * mB[3 * kk][c] + zero * mB[3 * kk + 1][c] + zero * mB[3 * kk + 2][c];
+            zero * mB[3 * kk][at] + zero * mB[3 * kk + 1][at] + zero * mB[3 * kk + 2][at];
   }
 }
 
-ALWAYS_INLINE void gather_group(const int W, const mpm_corner_pads *P, mpm_domain_set *s,
-                                const mpm_kernel *k, size_t q, const int apic,
+ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pads *P,
+                                mpm_domain_set *s, const mpm_kernel *k, size_t q,
                                 const mpm_real *const v[3], const mpm_real *const v0[3]) {
   const int S = MPM_BLOCK + W - 1;
   uint32_t dof[SIDE_MAX * SIDE_MAX * SIDE_MAX];
@@ -207,71 +267,84 @@ ALWAYS_INLINE void gather_group(const int W, const mpm_corner_pads *P, mpm_domai
       pad[n * GATHER_STRIDE + d] = v[d][dof[n]];
       pad[n * GATHER_STRIDE + 3 + d] = v0[d][dof[n]];
     }
-  const mpm_scatter_schedule *sch = &P->schedule;
-  for (uint32_t r = sch->group_start[q]; r < sch->group_start[q + 1]; ++r) {
-    const uint32_t c = sch->group_row[r];
-    mpm_stencil st;
-    mpm_real xr[3];
-    const int base = corner_stencil(P, s, k, q, S, c, &st, xr);
-    /* v^g_a = sum_i E_ai v_i^{n+1} and the FLIP increment sum_i E_ai (v_i^{n+1} - v_i^n) */
-    mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int l = 0; l < W; ++l) {
-          const mpm_real w = st.w[0][i] * st.w[1][j] * st.w[2][l];
-          if (w == 0) continue;
-          const mpm_real *at = pad + (base + (i * S + j) * S + l) * GATHER_STRIDE;
-          for (int d = 0; d < 3; ++d) {
-            const mpm_real vn = at[d], vo = at[3 + d];
-            vnew[d] += w * vn;
-            dv[d] += w * (vn - vo);
+  const mpm_real *const x[3] = {P->x[0], P->x[1], P->x[2]};
+  const mpm_real dx = k->dx;
+  for (int cell = 0; cell < MPM_BLOCK_NODES; ++cell) {
+    const uint32_t end = P->cell_start[q][cell + 1];
+    for (uint32_t r = P->cell_start[q][cell]; r < end; r += MPM_LANES) {
+      const int n = end - r < MPM_LANES ? (int)(end - r) : MPM_LANES;
+      uint32_t pos[MPM_LANES];
+      batch_positions(r, n, pos);
+      mpm_lane_stencil st;
+      int base[3];
+      mpm_lane_stencil_eval(W, k, x, P->origin, pos, n, n == MPM_LANES, apic, base, &st);
+      const int off =
+          ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
+      /* v^g_a = sum_i omega_i(x_a) v_i^{n+1}, the FLIP increment sum_i omega_i(x_a) (v_i^{n+1}
+       * - v_i^n), and sum_i v_i a_i^T for B_a */
+      const mpm_vl zero = {0};
+      mpm_vl vg[3] = {zero, zero, zero}, dv[3] = {zero, zero, zero}, B[9];
+      for (int e = 0; e < 9; ++e) B[e] = zero;
+      for (int i = 0; i < W; ++i)
+        for (int j = 0; j < W; ++j)
+          for (int l = 0; l < W; ++l) {
+            const mpm_vl w = node_weight(&st, i, j, l);
+            const mpm_real *node = pad + (off + (i * S + j) * S + l) * GATHER_STRIDE;
+            mpm_vl A[3];
+            if (apic) node_apic(&st, i, j, l, A);
+            for (int d = 0; d < 3; ++d) {
+              const mpm_vl u = mpm_vl_splat(node[d]);
+              vg[d] += w * u;
+              dv[d] += w * (u - node[3 + d]);
+              if (apic)
+                for (int t = 0; t < 3; ++t) B[3 * d + t] += u * A[t];
+            }
           }
+      /* the results by corner: the corner loop of G2P reads them in corner order, and these
+       * stores cost less than its loads through P->pos would (measured) */
+      const uint32_t *idx = P->row + r;
+      for (int d = 0; d < 3; ++d) {
+        mpm_lanes_store(s->cvg[d], idx, n, 0, vg[d]);
+        mpm_lanes_store(P->dv[d], idx, n, 0, dv[d]);
+      }
+      if (!apic) continue;
+      /* B_a = (sum_i v_i a_i^T) D_a, D_a's diagonal sum_i w_i (x_i - x_a)^2 per axis */
+      for (int t = 0; t < 3; ++t) {
+        mpm_vl D = zero;
+        for (int i = 0; i < W; ++i) {
+          const mpm_vl rr = ((mpm_real)i - st.f[t]) * dx;
+          D += st.w[t][i] * rr * rr;
         }
-    for (int d = 0; d < 3; ++d) {
-      s->cvg[d][c] = vnew[d];
-      P->dv[d][c] = dv[d];
+        for (int d = 0; d < 3; ++d) mpm_lanes_store(s->cB[3 * d + t], idx, n, 0, B[3 * d + t] * D);
+      }
     }
-    if (!apic) continue;
-    /* B_a = sum_i w_i v_i (x_i - x_a)^T = (sum_i v_i a_i^T) D_a */
-    mpm_real B[9] = {0}, D[3];
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int l = 0; l < W; ++l) {
-          if (st.w[0][i] * st.w[1][j] * st.w[2][l] == 0) continue;
-          const mpm_real a[3] = {st.a[0][i] * st.w[1][j] * st.w[2][l],
-                                 st.w[0][i] * st.a[1][j] * st.w[2][l],
-                                 st.w[0][i] * st.w[1][j] * st.a[2][l]};
-          const mpm_real *at = pad + (base + (i * S + j) * S + l) * GATHER_STRIDE;
-          for (int rr = 0; rr < 3; ++rr)
-            for (int t = 0; t < 3; ++t) B[3 * rr + t] += at[rr] * a[t];
-        }
-    mpm_corner_apic_d(k, &st, xr, D);
-    for (int rr = 0; rr < 3; ++rr)
-      for (int t = 0; t < 3; ++t) s->cB[3 * rr + t][c] = B[3 * rr + t] * D[t];
   }
 }
 
-ALWAYS_INLINE void gather_groups(const int W, const mpm_corner_pads *P, mpm_domain_set *s,
-                                 const mpm_kernel *k, const int apic, const mpm_real *const v[3],
+ALWAYS_INLINE void gather_groups(const int W, const int apic, const mpm_corner_pads *P,
+                                 mpm_domain_set *s, const mpm_kernel *k, const mpm_real *const v[3],
                                  const mpm_real *const v0[3]) {
   const long groups = (long)P->schedule.colour_start[MPM_SCHEDULE_COLOURS];
 #pragma omp parallel for schedule(dynamic, 4)
-  for (long q = 0; q < groups; ++q) gather_group(W, P, s, k, (size_t)q, apic, v, v0);
+  for (long q = 0; q < groups; ++q) gather_group(W, apic, P, s, k, (size_t)q, v, v0);
 }
 
 void mpm_corner_pads_gather(const mpm_corner_pads *P, mpm_domain_set *s, const mpm_kernel *k,
                             int apic, const mpm_real *const v[3], const mpm_real *const v0[3]) {
-  switch (k->width) { /* reads only: every group at once, in parallel */
-  case 2:
-    gather_groups(2, P, s, k, apic, v, v0);
-    break;
-  case 3:
-    gather_groups(3, P, s, k, apic, v, v0);
-    break;
-  default:
-    gather_groups(4, P, s, k, apic, v, v0);
-    break;
-  }
+  /* reads only: every group at once, in parallel */
+  const int w = k->width;
+  if (w == 2 && apic)
+    gather_groups(2, 1, P, s, k, v, v0);
+  else if (w == 2)
+    gather_groups(2, 0, P, s, k, v, v0);
+  else if (w == 3 && apic)
+    gather_groups(3, 1, P, s, k, v, v0);
+  else if (w == 3)
+    gather_groups(3, 0, P, s, k, v, v0);
+  else if (apic)
+    gather_groups(4, 1, P, s, k, v, v0);
+  else
+    gather_groups(4, 0, P, s, k, v, v0);
   const mpm_scatter_schedule *sch = &P->schedule;
   const long own = (long)sch->own_rows;
   const mpm_real one = 1;

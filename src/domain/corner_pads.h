@@ -11,12 +11,14 @@
  * corner's stencil is evaluated from its position and accumulated there, as the material
  * points' transfers do (transfer/p2g.c), and the pad is written back.
  *
- * The pad starts from the DOF values and the corners are visited in the schedule's order (the
- * colours in turn, a group's corners in corner order), each adding its weights, then its APIC
- * moments, with the same expressions as through the rows: every node receives the same terms
- * in the same order, and the sums are bit for bit those of mpm_embedding_scatter and _gather
- * (tests/test_domain.c compares them). The rows are still built where they are applied as a
- * matrix: the implicit step's Hessian (domain_hessian.c), and the dense grid. */
+ * The corners of a group are sorted by the cell of their base node, so that those of one cell
+ * share every node and are taken as SIMD lanes (transfer/transfer_lanes.h's lane stencils),
+ * and their values are laid out in that order (P2G writes them there), so that a batch loads
+ * with vector loads. The colours run in turn and each group adds its pad to the nodes once:
+ * deterministic for any number of threads. The terms are those of the rows, summed in another
+ * order (lanes, then nodes): equal to rounding (tests/test_domain.c compares them, and pads
+ * against rows on the dense grid in test_domain_sim). The rows are still built where they are
+ * applied as a matrix: the implicit step's Hessian (domain_hessian.c), and the dense grid. */
 #ifndef MPM_DOMAIN_CORNER_PADS_H
 #define MPM_DOMAIN_CORNER_PADS_H
 
@@ -27,16 +29,27 @@
 
 struct mpm_domain_set;
 
+#define MPM_CORNER_PADS_NONE UINT32_MAX /* the position of an unused corner */
+
 typedef struct mpm_corner_pads {
   int on;                        /* this step's corner transfers go through the pads */
   mpm_scatter_schedule schedule; /* groups of corners by base block (memory kept across steps) */
   int32_t *block;                /* step scratch: per corner, its base block (its key), or < 0 */
   int32_t (*pad)[8];             /* step scratch: per group, the 8 blocks of its pad */
   int32_t (*org)[3];             /* step scratch: per group, its base block's first node */
-  uint32_t grid_dofs;            /* the DOF of the level's node 0 */
-  uint32_t corner_dofs;          /* the DOF of enriched corner 0 */
-  mpm_real origin[3];            /* the level's node (0, 0, 0), m */
-  mpm_real *dv[3];               /* step scratch: G2P's FLIP increment per corner, m/s */
+  uint8_t *cell;                 /* step scratch: per corner, its base node's cell in its block */
+  /* step scratch: the pads' order of the corners, position k -> corner row[k]: the groups'
+   * corners (each group's by cell), then the enriched ones; P2G's corner values are laid out
+   * in it (so that a batch of corners is contiguous), and their positions x[d][k] */
+  uint32_t *row;
+  uint32_t *pos;                    /* per corner: its position, or MPM_CORNER_PADS_NONE */
+  size_t positions, grid_positions; /* all; of the groups (the enriched follow) */
+  mpm_real *x[3];
+  uint32_t (*cell_start)[MPM_BLOCK_NODES + 1]; /* per group: row[] of each cell (absolute) */
+  uint32_t grid_dofs;                          /* the DOF of the level's node 0 */
+  uint32_t corner_dofs;                        /* the DOF of enriched corner 0 */
+  mpm_real origin[3];                          /* the level's node (0, 0, 0), m */
+  mpm_real *dv[3]; /* step scratch: G2P's FLIP increment per corner, m/s */
 } mpm_corner_pads;
 
 void mpm_corner_pads_free(mpm_corner_pads *P);
@@ -47,9 +60,10 @@ void mpm_corner_pads_free(mpm_corner_pads *P);
 int mpm_corner_pads_plan(mpm_corner_pads *P, const struct mpm_domain_set *s, const mpm_grid *g,
                          const mpm_kernel *k, mpm_arena *scratch);
 
-/* values[f][DOF] += omega_i(x_a) carrier[f][a] for the 7 fields (mass, momentum, force), and with
- * APIC (mB: the corners' m_a B_a, row-major) the affine moment sum_j a_j mB[3k + j][a] added to
- * values[1 + k] (momentum), as mpm_embedding_scatter_moments does with the rows. */
+/* values[f][DOF] += omega_i(x_a) carrier[f][k] for the 7 fields (mass, momentum, force) of
+ * corner a = P->row[k], and with APIC (mB: the corners' m_a B_a, row-major, also by position) the
+ * affine moment sum_j a_j mB[3k + j][a] added to values[1 + k] (momentum), as
+ * mpm_embedding_scatter_moments does with the rows. */
 void mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_set *s,
                              const mpm_kernel *k, const mpm_real *const carrier[7],
                              const mpm_real *const mB[9], mpm_real *const values[7]);

@@ -125,18 +125,38 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     for (int e = 0; e < 9; ++e) F[e] = p->F[e][q];
     const mpm_material *base = &ctx->materials[p->material[q]];
     if (mpm_material_varies(base)) { /* the moduli of the particle's state */
-      const mpm_material mat =
-          mpm_material_at_temperature(base, p->plastic[q], p->temperature[q]);
+      const mpm_material mat = mpm_material_at_temperature(base, p->plastic[q], p->temperature[q]);
       mat.model->pk1(&mat, F, P);
     } else { /* the material's own moduli: no copy of it per particle */
       base->model->pk1(base, F, P);
     }
     for (int e = 0; e < 9; ++e) vP[q][e] = p->vol0[q] * P[e];
   }
+  /* the corner -> grid step's plan first: on the sparse grid, unless the step applies the
+   * embedding as a matrix (s->corner_rows), the corners go to the grid through pads of nodes
+   * (domain/corner_pads.h), and their values are laid out in the pads' order */
+  s->pads.on = 0;
+  const int pads = g->kind == MPM_GRID_SPARSE && !s->corner_rows;
+  if (pads) {
+    for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
+    s->corner_grid.rows = 0; /* not this step's */
+    s->corner_grid.schedule.built = 0;
+    if (mpm_corner_pads_plan(&s->pads, s, g, &ctx->kernel, scratch)) return -1;
+  }
   /* 1. particle -> corner, gathered per corner (each corner sums its <= 8 particle slots in
-   *    slot order: no races, the same sums for any thread count) */
+   *    slot order: no races, the same sums for any thread count), in corner order (the
+   *    particles' values are read in their order); with pads, corner c's values are written
+   *    at its position s->pads.pos[c] */
+  const uint32_t *pos = pads ? s->pads.pos : NULL;
+  mpm_real *mB[9] = {NULL}; /* APIC: m_a B_a, by position as the other values */
+  for (int e = 0; e < 9 && apic; ++e) {
+    mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
+    if (!mB[e]) return -1;
+  }
 #pragma omp parallel for schedule(static)
   for (long c = 0; c < nc; ++c) {
+    const uint32_t k = pos ? pos[c] : (uint32_t)c;
+    if (k == MPM_CORNER_PADS_NONE) continue; /* unused */
     double m = 0, mv[3] = {0, 0, 0}, f[3] = {0, 0, 0};
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
       const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
@@ -158,27 +178,18 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
      * the same, sum_a m_a v_a = sum_p m_p v_p, and nothing is averaged away */
     if (apic)
       for (int d = 0; d < 3; ++d) mv[d] = m * s->cv[d][c];
-    s->cm[c] = (mpm_real)m;
+    s->cm[k] = (mpm_real)m;
     for (int d = 0; d < 3; ++d) {
-      s->cp[d][c] = (mpm_real)mv[d];
-      s->cf[d][c] = (mpm_real)f[d];
+      s->cp[d][k] = (mpm_real)mv[d];
+      s->cf[d][k] = (mpm_real)f[d];
     }
+    if (apic)
+      for (int e = 0; e < 9; ++e) mB[e][k] = s->cm[k] * s->cB[e][c];
   }
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
-   *    order: the same sums for any number of threads. On the sparse grid, unless the step
-   *    applies the embedding as a matrix (s->corner_rows), through pads of nodes from the
-   *    corners' positions (domain/corner_pads.h): the same sums without stored rows */
-  s->pads.on = 0;
-  const int pads = g->kind == MPM_GRID_SPARSE && !s->corner_rows;
-  if (pads) {
-    for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
-    s->corner_grid.rows = 0; /* not this step's */
-    s->corner_grid.schedule.built = 0;
-    if (mpm_corner_pads_plan(&s->pads, s, g, &ctx->kernel, scratch)) return -1;
-  } else if (build_corner_embedding(&ctx->kernel, s, g, apic, scratch)) {
-    return -1;
-  }
+   *    order: the same sums for any number of threads (through the pads: the same terms) */
+  if (!pads && build_corner_embedding(&ctx->kernel, s, g, apic, scratch)) return -1;
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};
@@ -190,15 +201,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     return 0;
   }
   /* APIC at the corner -> grid step: the corner's affine moment m_a B_a (B_a from the last
-   * G2P) spread with the entries' APIC factors */
-  mpm_real *mB[9];
-  for (int e = 0; e < 9; ++e) {
-    mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
-    if (!mB[e]) return -1;
-  }
-#pragma omp parallel for schedule(static)
-  for (long c = 0; c < nc; ++c)
-    for (int e = 0; e < 9; ++e) mB[e][c] = s->cm[c] * s->cB[e][c];
+   * G2P, m_a B_a made in step 1) spread with the entries' APIC factors */
   if (pads) {
     const mpm_real *const cmB[9] = {mB[0], mB[1], mB[2], mB[3], mB[4], mB[5], mB[6], mB[7], mB[8]};
     mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, cmB, values);

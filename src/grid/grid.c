@@ -37,10 +37,10 @@ static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
   for (size_t i = 0; i < n; ++i) {
     if (use && !use[i]) continue;
     const mpm_real xr[3] = {x[0][i] - g->origin[0], x[1][i] - g->origin[1], x[2][i] - g->origin[2]};
-    mpm_stencil st;
-    mpm_kernel_stencil(k, xr, &st);
-    const int32_t bb[3] = {st.base[0] >> MPM_BLOCK_BITS, st.base[1] >> MPM_BLOCK_BITS,
-                           st.base[2] >> MPM_BLOCK_BITS};
+    int base[3];
+    mpm_kernel_base(k, xr, base);
+    const int32_t bb[3] = {base[0] >> MPM_BLOCK_BITS, base[1] >> MPM_BLOCK_BITS,
+                           base[2] >> MPM_BLOCK_BITS};
     if (pad_blocks(sg, sg, bb, &c)) return -1;
   }
   return 0;

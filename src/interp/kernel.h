@@ -185,6 +185,13 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
   return base;
 }
 
+/* The base node of the stencil at position x (relative to the grid origin, m) alone, as
+ * mpm_kernel_stencil gives it: for sorting and activation, which need no weights. */
+static inline __attribute__((always_inline)) void
+mpm_kernel_base(const mpm_kernel *k, const mpm_real x[3], int base[3]) {
+  for (int d = 0; d < 3; ++d) base[d] = (int)mpm_floor(x[d] * k->inv_dx - k->shift);
+}
+
 /* Full stencil of a particle at position x (relative to the grid origin, m). */
 static inline __attribute__((always_inline)) void
 mpm_kernel_stencil(const mpm_kernel *k, const mpm_real x[3], mpm_stencil *s) {
