@@ -25,8 +25,11 @@
  * Every quantity is a double in SI units whatever real type the library was built with. The
  * strings and arrays stay the caller's: they are read during the call only. A `const char *`
  * that is NULL leaves the key out (the format's default applies). A number that is not finite
- * is written as null, which the check reports as "got null" at the field. Members are only ever
- * added at the end of a struct, and a program that starts from _default() keeps working.
+ * is written as null, which the check reports as "got null" at the field. An object that the
+ * format turns on by being there (heat, camera, output.surface, domain.resample) has an `enabled`
+ * field, and its other fields must keep their defaults while it is 0; lists of bodies or
+ * materials hold indices into the def's arrays. Members are only ever added at the end of a
+ * struct, and a program that starts from _default() keeps working.
  *
  * Included by mpm.h; include <mpm/mpm.h>. */
 #ifndef MPM_SCENE_DEF_H
@@ -243,8 +246,8 @@ typedef struct mpm_motion_def {
 /// A collider (colliders[i]): a kinematic obstacle.
 typedef struct mpm_collider_def {
   const char *name;      /* colliders[].name, 1..63 bytes; default NULL: "collider<i>" */
-  mpm_shape_def shape;   /* colliders[].shape: box, sphere, cylinder or halfspace; default
-                            MPM_DEF_HALFSPACE */
+  mpm_shape_def shape;   /* colliders[].shape: box, sphere, cylinder, halfspace or revolve;
+                            default MPM_DEF_HALFSPACE */
   int inside_out;        /* colliders[].inside_out: material kept inside (a container); 0 or 1;
                             default 0 */
   mpm_def_rule rule;     /* colliders[].rule; default MPM_DEF_SLIP */
@@ -359,7 +362,7 @@ typedef struct mpm_solver_def {
   mpm_def_instability on_instability; /* solver.on_instability; default MPM_DEF_INSTABILITY_STOP */
   int max_retries;                    /* solver.max_retries, halvings of dt, 1..30; default 8 */
   mpm_def_kernel domain_kernel;       /* solver.domain_kernel, corner weights of particle domains:
-                                         linear, quadratic or cubic; default MPM_DEF_KERNEL_LINEAR */
+                                         linear, quadratic or cubic; default linear */
   double cg_tolerance;   /* implicit: solver.cg_tolerance, (0, 1); default 0: automatic, the
                             key left out */
   int cg_max_iterations; /* implicit: solver.cg_max_iterations, 1..100000; default 500 */
@@ -480,8 +483,9 @@ MPM_API mpm_shape_def mpm_shape_def_default(mpm_def_shape_type type);
 /// directory), and messages name the scene "<def>" (inside base_dir when given) and the field
 /// by its path. The def is not kept. On failure *out is NULL and err (of errlen bytes, may be
 /// NULL) holds the message: MPM_ERR_INVALID for a NULL def, a NULL array with a nonzero count, a
-/// negative count, an enum value out of range, a material index out of range or a name longer
-/// than 63 bytes, and the format's own status for everything the scene check refuses.
+/// negative count, an enum value out of range, a material index out of range, a name longer
+/// than 63 bytes, a field that would have no effect (said at each struct) or an `active` window
+/// with an open end, and the format's own status for everything the scene check refuses.
 MPM_API mpm_status mpm_sim_create_from_def(const mpm_scene_def *def, const char *base_dir,
                                            mpm_sim **out, char *err, size_t errlen);
 
