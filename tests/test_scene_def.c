@@ -8,158 +8,15 @@
  * one frame). The default test writes only the keys the format requires, so a _default() that
  * differs from the parser's default in any mirrored field fails it. Then the def's own checks
  * (NULLs, counts, enums, names: MPM_ERR_INVALID naming the field), the parser's messages under
- * the def's name, and mpm_scene_def_to_json read back. */
-#include "support.h"
-#include "mpm/mpm.h"
-#include "scene/scene.h"
+ * the def's name, and mpm_scene_def_to_json read back. The comparisons are scene_def_support.h's;
+ * the later fields (motion keyframes, forces, the multi-level grid, surfaces, the camera, ...)
+ * are test_scene_def_more.c's. */
+#include "scene_def_support.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* ---- comparing ------------------------------------------------------------------------- */
-
-#define SAME(a, b, f) assert_memory_equal(&(a)->f, &(b)->f, sizeof(a)->f)
-
-static void assert_same_shape(const mpm_shape_desc *a, const mpm_shape_desc *b) {
-  SAME(a, b, kind);
-  SAME(a, b, center);
-  SAME(a, b, half_extent);
-  SAME(a, b, radius);
-  SAME(a, b, axis);
-  SAME(a, b, half_height);
-  SAME(a, b, mesh_scale);
-  assert_string_equal(a->mesh_path, b->mesh_path);
-}
-
-/* Every field of a scene that the def mirrors. */
-static void assert_same_scene(const mpm_scene *a, const mpm_scene *b) {
-  assert_string_equal(a->name, b->name);
-  SAME(a, b, domain_min);
-  SAME(a, b, domain_max);
-  SAME(a, b, dx);
-  SAME(a, b, gravity);
-  SAME(a, b, wall_rule);
-  SAME(a, b, wall_friction);
-  SAME(a, b, wall_cells);
-  SAME(a, b, end_time);
-  SAME(a, b, fps);
-  /* the solver desc is written field by field into a zeroed scene: its padding is zero too */
-  SAME(a, b, solver);
-  assert_string_equal(a->output.directory, b->output.directory);
-  SAME(a, b, output.vtu);
-  SAME(a, b, output.ply);
-  SAME(a, b, output.stats);
-  SAME(a, b, output.checkpoint_every);
-  SAME(a, b, output.fields);
-  SAME(a, b, heat.enabled);
-  SAME(a, b, heat.temperature);
-  SAME(a, b, heat.pic);
-  assert_int_equal(a->material_count, b->material_count);
-  for (int i = 0; i < a->material_count; ++i) {
-    const mpm_material_desc *p = &a->materials[i], *q = &b->materials[i];
-    assert_string_equal(p->name, q->name);
-    SAME(p, q, model);
-    SAME(p, q, E);
-    SAME(p, q, nu);
-    SAME(p, q, density);
-    SAME(p, q, min_stretch);
-    SAME(p, q, friction_angle);
-    SAME(p, q, cohesion);
-    SAME(p, q, yield_stress);
-    SAME(p, q, theta_c);
-    SAME(p, q, theta_s);
-    SAME(p, q, hardening);
-    SAME(p, q, specific_heat);
-    SAME(p, q, conductivity);
-    SAME(p, q, melting);
-    SAME(p, q, melt_point);
-    SAME(p, q, melt_range);
-    SAME(p, q, melt_shear);
-    SAME(p, q, melt_bulk);
-  }
-  assert_int_equal(a->body_count, b->body_count);
-  for (int i = 0; i < a->body_count; ++i) {
-    const mpm_body_desc *p = &a->bodies[i], *q = &b->bodies[i];
-    assert_string_equal(p->name, q->name);
-    assert_same_shape(&p->shape, &q->shape);
-    SAME(p, q, material);
-    SAME(p, q, velocity);
-    SAME(p, q, angular_velocity);
-    SAME(p, q, particles_per_cell);
-    SAME(p, q, jitter);
-    SAME(p, q, seed);
-    SAME(p, q, domains);
-    SAME(p, q, has_temperature);
-    SAME(p, q, temperature);
-  }
-  assert_int_equal(a->collider_count, b->collider_count);
-  for (int i = 0; i < a->collider_count; ++i) {
-    const mpm_collider_desc *p = &a->colliders[i], *q = &b->colliders[i];
-    assert_string_equal(p->name, q->name);
-    assert_same_shape(&p->shape, &q->shape);
-    SAME(p, q, inside_out);
-    SAME(p, q, rule);
-    SAME(p, q, friction);
-    SAME(p, q, motion.velocity);
-    SAME(p, q, motion.axis);
-    SAME(p, q, motion.angular_speed);
-    SAME(p, q, heat_source);
-    SAME(p, q, temperature);
-    assert_int_equal(p->motion.keyframe_count, q->motion.keyframe_count);
-  }
-}
-
-static void assert_same_view(const mpm_sim *a, const mpm_sim *b) {
-  const mpm_particle_view va = mpm_sim_particles(a), vb = mpm_sim_particles(b);
-  assert_true(va.count > 0);
-  assert_int_equal(va.count, vb.count);
-  const size_t n = va.count * va.real_size;
-  for (int d = 0; d < 3; ++d) {
-    assert_memory_equal(va.x[d], vb.x[d], n);
-    assert_memory_equal(va.v[d], vb.v[d], n);
-  }
-  assert_memory_equal(va.mass, vb.mass, n);
-  assert_memory_equal(va.material, vb.material, va.count * sizeof *va.material);
-  assert_memory_equal(va.body, vb.body, va.count * sizeof *va.body);
-}
-
-/* The def and the JSON text make the same scene and the same simulation, before and after one
- * frame; base_dir resolves mesh files for both. */
-static void assert_def_is_json(const mpm_scene_def *def, const char *json, const char *base_dir) {
-  char err[2048];
-  /* the scenes: the def's text (mesh paths resolve against the same folder) and the JSON */
-  char *text = NULL;
-  assert_int_equal(mpm_scene_def_to_json(def, &text, err, sizeof err), MPM_OK);
-  char path[1100];
-  snprintf(path, sizeof path, "%s/<json>", base_dir ? base_dir : ".");
-  mpm_scene sa, sb;
-  mpm_error e;
-  if (mpm_scene_parse(text, path, &sa, &e) != MPM_OK) fail_msg("the def's JSON: %s", e.message);
-  if (mpm_scene_parse(json, path, &sb, &e) != MPM_OK) fail_msg("the JSON: %s", e.message);
-  assert_same_scene(&sa, &sb);
-  mpm_scene_free(&sa);
-  mpm_scene_free(&sb);
-  mpm_free_string(text);
-  /* the simulations */
-  mpm_sim *a = NULL, *b = NULL;
-  if (mpm_sim_create_from_def(def, base_dir, &a, err, sizeof err) != MPM_OK)
-    fail_msg("from the def: %s", err);
-  if (mpm_sim_create_from_json(json, base_dir, &b, err, sizeof err) != MPM_OK)
-    fail_msg("from the JSON: %s", err);
-  assert_int_equal(mpm_sim_frame_count(a), mpm_sim_frame_count(b));
-  assert_same_view(a, b);
-  assert_int_equal(mpm_sim_advance_frame(a), MPM_OK);
-  assert_int_equal(mpm_sim_advance_frame(b), MPM_OK);
-  assert_int_equal(mpm_sim_steps(a), mpm_sim_steps(b));
-  assert_true(mpm_sim_steps(a) > 0);
-  assert_same_view(a, b);
-  print_message("%zu particles, %lld steps in the first frame: the same\n",
-                mpm_sim_particle_count(a), (long long)mpm_sim_steps(a));
-  mpm_sim_destroy(a);
-  mpm_sim_destroy(b);
-}
 
 /* ---- (a) the defaults ------------------------------------------------------------------ */
 
@@ -452,27 +309,6 @@ static void test_heat_and_fields(void **state) {
 }
 
 /* ---- (c) what the def refuses ---------------------------------------------------------- */
-
-/* Refused by create and by to_json alike, MPM_ERR_INVALID, with `field` in the message. */
-static void assert_refused(const mpm_scene_def *def, const char *field) {
-  char err[2048] = "";
-  mpm_sim *sim = (mpm_sim *)&err; /* not NULL, to see it set to NULL */
-  assert_int_equal(mpm_sim_create_from_def(def, NULL, &sim, err, sizeof err), MPM_ERR_INVALID);
-  assert_null(sim);
-  print_message("%s\n", err);
-  if (!strstr(err, field)) fail_msg("'%s' does not name %s", err, field);
-  assert_non_null(strstr(err, "<def>: "));
-  char *text = (char *)err;
-  err[0] = '\0';
-  const mpm_status st = mpm_scene_def_to_json(def, &text, err, sizeof err);
-  if (strstr(field, ": expected")) { /* the parser's check, which to_json may not run */
-    if (st == MPM_OK) mpm_free_string(text);
-    return;
-  }
-  assert_int_equal(st, MPM_ERR_INVALID);
-  assert_null(text);
-  if (!strstr(err, field)) fail_msg("to_json: '%s' does not name %s", err, field);
-}
 
 static void test_refused(void **state) {
   (void)state;

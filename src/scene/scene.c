@@ -77,6 +77,15 @@ mpm_force_desc mpm_force_desc_default(void) {
   return f;
 }
 
+mpm_resample_desc mpm_resample_desc_default(void) {
+  mpm_resample_desc r;
+  memset(&r, 0, sizeof r);
+  r.split = r.merge = 1;
+  r.every = 1;
+  r.merge_margin = 1;
+  return r;
+}
+
 const char *mpm_scene_advice(const mpm_scene *scene) {
   if (scene->solver.kernel != MPM_KERNEL_LINEAR) return NULL;
   for (int b = 0; b < scene->body_count; ++b)

@@ -417,6 +417,8 @@ mpm_material_desc mpm_material_desc_default(void);
 mpm_body_desc mpm_body_desc_default(void);
 mpm_collider_desc mpm_collider_desc_default(void);
 mpm_force_desc mpm_force_desc_default(void);
+/* domain.resample's defaults, off (the loader turns `enabled` on when the key is given). */
+mpm_resample_desc mpm_resample_desc_default(void);
 /* Free the arrays a scene owns (not the struct). */
 void mpm_scene_free(mpm_scene *scene);
 

@@ -1,26 +1,24 @@
 /* scene_def.c - a scene built in code (include/mpm/scene_def.h): the defaults of the def
- * structs, the def written as the scene's JSON text, and the simulation made from that text by
- * mpm_sim_create_from_json, so that every check and message of the scene format is the def's
- * too (the format's key paths are the def's field paths).
+ * structs, the whole def written as the scene's JSON text (its parts: scene_def_write.c and
+ * scene_def_options.c), and the simulation made from that text by mpm_sim_create_from_json, so
+ * that every check and message of the scene format is the def's too (the format's key paths are
+ * the def's field paths).
  *
- * Only what the JSON text cannot carry is checked here: NULL pointers and negative counts, enum
- * values out of range, names longer than the format's 63 bytes (a C string has no length), a
- * material index out of range, and fields that the JSON leaves out for the object's model, shape
- * type or integrator yet were changed from their defaults. The format refuses such keys because
- * they would have no effect; dropping them silently would hide the same mistake.
+ * Only what the JSON text cannot carry is checked by the def: NULL pointers and negative counts,
+ * enum values out of range, names longer than the format's 63 bytes (a C string has no length),
+ * a material index out of range, and fields that the JSON leaves out for the object's model,
+ * shape type, rule kind, integrator or switch yet were changed from their defaults. The format
+ * refuses such keys because they would have no effect; dropping them silently would hide the
+ * same mistake.
  *
  * Numbers are written with the fewest digits that read back as the same double, so a def and
- * its JSON make bit-identical simulations (cJSON's own printer accepts a 15-digit form within
- * an epsilon, which can be one bit off). A non-finite number is written as null, which the
+ * its JSON make bit-identical simulations. A non-finite number is written as null, which the
  * format's check then names by its path. */
 #include "mpm/mpm.h"
-#include "scene/json_check.h"
 #include "scene/scene.h"
+#include "scene/scene_def_parts.h"
 
 #include <cjson/cJSON.h>
-#include <math.h>
-#include <stdarg.h>
-#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,6 +72,9 @@ mpm_body_def mpm_body_def_default(void) {
   d.domains = b.domains;
   d.has_temperature = b.has_temperature;
   d.temperature = b.temperature;
+  d.enrichment = b.enrichment;
+  d.enrichment_exit = 0; /* not written: the format's follows enrichment */
+  d.enrichment_metric = (mpm_def_enrichment_metric)b.enrichment_metric;
   return d;
 }
 
@@ -89,6 +90,46 @@ mpm_collider_def mpm_collider_def_default(void) {
   d.motion.angular_speed = c.motion.angular_speed;
   d.heat_source = c.heat_source;
   d.temperature = c.temperature;
+  d.active[0] = c.active[0];
+  d.active[1] = c.active[1];
+  return d;
+}
+
+mpm_force_def mpm_force_def_default(void) {
+  const mpm_force_desc f = mpm_force_desc_default();
+  mpm_force_def d;
+  memset(&d, 0, sizeof d);
+  d.shape = mpm_shape_def_default((mpm_def_shape_type)f.region.shape.kind);
+  d.inside_out = f.region.inside_out;
+  for (int k = 0; k < 3; ++k) {
+    d.motion.axis[k] = f.region.motion.axis[k];
+    d.acceleration[k] = f.acceleration[k];
+  }
+  d.motion.angular_speed = f.region.motion.angular_speed;
+  d.active[0] = f.region.active[0];
+  d.active[1] = f.region.active[1];
+  return d;
+}
+
+mpm_keyframe_def mpm_keyframe_def_default(void) {
+  mpm_keyframe_def d;
+  memset(&d, 0, sizeof d); /* the format's: no translation, no angle; time is required */
+  return d;
+}
+
+mpm_release_def mpm_release_def_default(void) {
+  mpm_release_def d;
+  memset(&d, 0, sizeof d); /* its keys are all required */
+  return d;
+}
+
+mpm_refine_def mpm_refine_def_default(void) {
+  mpm_refine_def d;
+  memset(&d, 0, sizeof d);
+  d.kind = MPM_DEF_REFINE_BOX;
+  d.level = 1; /* required: the first level finer than 0 */
+  d.collider = -1;
+  d.body = -1;
   return d;
 }
 
@@ -108,6 +149,18 @@ mpm_scene_def mpm_scene_def_default(void) {
   d.domain.walls.rule = (mpm_def_rule)s.wall_rule;
   d.domain.walls.friction = s.wall_friction;
   d.domain.walls.cells = s.wall_cells;
+  d.domain.resolution = 0;
+  d.domain.levels = s.levels;
+  d.domain.refine_every = s.refine_every;
+  const mpm_resample_desc r = mpm_resample_desc_default();
+  d.domain.resample.enabled = r.enabled;
+  d.domain.resample.split = r.split;
+  d.domain.resample.merge = r.merge;
+  d.domain.resample.every = r.every;
+  d.domain.resample.merge_margin = r.merge_margin;
+  d.domain.resample.max_per_cell = r.max_per_cell;
+  d.domain.resample.min_per_cell = r.min_per_cell;
+  d.domain.resample.seed = r.seed;
   d.time.end = s.end_time;
   d.time.fps = s.fps;
   d.solver.integrator = (mpm_def_integrator)s.solver.integrator;
@@ -118,445 +171,72 @@ mpm_scene_def mpm_scene_def_default(void) {
   d.solver.max_dt = s.solver.max_dt;
   d.solver.dt = s.solver.dt;
   d.solver.newton_iterations = s.solver.newton_iterations;
+  d.solver.grid = (mpm_def_grid)s.solver.grid;
+  d.solver.gimp_length = s.solver.gimp_length;
+  d.solver.on_instability = (mpm_def_instability)s.solver.on_instability;
+  d.solver.max_retries = s.solver.max_retries;
+  d.solver.domain_kernel = (mpm_def_kernel)s.solver.domain_kernel;
+  d.solver.cg_tolerance = s.solver.cg_tolerance;
+  d.solver.cg_max_iterations = s.solver.cg_max_iterations;
+  d.solver.on_cg_failure = (mpm_def_cg_failure)s.solver.on_cg_failure;
   d.output.directory = "out"; /* mpm_scene_default's, as a string of static storage */
   d.output.vtu = s.output.vtu;
   d.output.ply = s.output.ply;
   d.output.stats = s.output.stats;
   d.output.checkpoint_every = s.output.checkpoint_every;
   d.output.fields = s.output.fields;
+  d.output.surface.enabled = s.output.surface.enabled;
+  d.output.surface.voxel = s.output.surface.voxel;
+  d.output.surface.radius = s.output.surface.radius;
+  d.output.surface.smoothing = s.output.surface.smoothing;
+  d.output.surface.filter = (mpm_def_surface_filter)s.output.surface.filter;
+  d.output.surface.per_body = s.output.surface.per_body;
+  d.output.vdb = s.output.vdb;
+  d.output.vdb_density = s.output.vdb_density;
+  d.output.vdb_velocity = s.output.vdb_velocity;
   d.heat.enabled = s.heat.enabled;
   d.heat.temperature = s.heat.temperature;
   d.heat.pic = s.heat.pic;
+  d.camera.enabled = s.camera.set;
+  for (int k = 0; k < 3; ++k) {
+    d.camera.eye[k] = s.camera.eye[k];
+    d.camera.target[k] = s.camera.target[k];
+  }
+  d.camera.fov = s.camera.fov;
   return d;
 }
 
 /* The public enums are numbered as the internal ones, which the spellings below follow. */
 _Static_assert((int)MPM_DEF_SNOW == (int)MPM_MODEL_SNOW &&
                    (int)MPM_DEF_SEPARATE == (int)MPM_BOUNDARY_SEPARATE &&
+                   (int)MPM_DEF_REVOLVE == (int)MPM_SHAPE_REVOLVE &&
                    (int)MPM_DEF_KERNEL_UGIMP == (int)MPM_KERNEL_UGIMP &&
                    (int)MPM_DEF_FLIP == (int)MPM_TRANSFER_FLIP &&
                    (int)MPM_DEF_IMPLICIT == (int)MPM_INTEGRATOR_IMPLICIT &&
+                   (int)MPM_DEF_GRID_DENSE == (int)MPM_GRID_DENSE &&
+                   (int)MPM_DEF_INSTABILITY_RETRY == (int)MPM_INSTABILITY_RETRY &&
+                   (int)MPM_DEF_CG_STOP == (int)MPM_CG_FAILURE_STOP &&
+                   (int)MPM_DEF_FILTER_LAPLACIAN == (int)MPM_SURFACE_LAPLACIAN &&
+                   (int)MPM_DEF_REFINE_STRAIN == (int)MPM_REFINE_STRAIN &&
                    (int)MPM_DEF_FIELD_F == (int)MPM_FIELD_F && MPM_FIELD_F + 1 == MPM_FIELD_COUNT,
                "scene_def.h's enums must match scene.h's");
 
-/* ---- checks --------------------------------------------------------------------------- */
-
-typedef struct def_ctx {
-  char *err;
-  size_t errlen;
-  mpm_status status;
-} def_ctx;
-
-__attribute__((format(printf, 2, 3))) static int fail(def_ctx *c, const char *fmt, ...) {
-  c->status = MPM_ERR_INVALID;
-  if (c->err && c->errlen) {
-    int n = snprintf(c->err, c->errlen, "<def>: ");
-    if (n >= 0 && (size_t)n < c->errlen) {
-      va_list ap;
-      va_start(ap, fmt);
-      vsnprintf(c->err + n, c->errlen - (size_t)n, fmt, ap);
-      va_end(ap);
-    }
-  }
-  return -1;
-}
-
-typedef struct enum_table {
-  const char *type; /* the C enum, for messages */
-  const char *const *names;
-  int count;
-} enum_table;
-
-static const char *const MODEL_NAMES[] = {"fixed_corotated", "neo_hookean", "hencky_stvk",
-                                          "drucker_prager",  "von_mises",   "snow"};
-static const char *const RULE_NAMES[] = {"sticky", "slip", "separate"};
-static const char *const SHAPE_NAMES[] = {"box", "sphere", "cylinder", "mesh", "halfspace"};
-static const char *const KERNEL_NAMES[] = {"linear", "quadratic", "cubic", "ugimp"};
-static const char *const TRANSFER_NAMES[] = {"apic", "flip"};
-static const char *const INTEGRATOR_NAMES[] = {"explicit", "implicit"};
-#define TABLE(type, names)                                                                         \
-  { type, names, (int)(sizeof names / sizeof names[0]) }
-static const enum_table MODELS = TABLE("mpm_def_model", MODEL_NAMES);
-static const enum_table RULES = TABLE("mpm_def_rule", RULE_NAMES);
-static const enum_table SHAPES = TABLE("mpm_def_shape_type", SHAPE_NAMES);
-static const enum_table KERNELS = TABLE("mpm_def_kernel", KERNEL_NAMES);
-static const enum_table TRANSFERS = TABLE("mpm_def_transfer", TRANSFER_NAMES);
-static const enum_table INTEGRATORS = TABLE("mpm_def_integrator", INTEGRATOR_NAMES);
-
-/* The format's spelling of value v of an enum; NULL with the message when it has no such
- * value (an enum object may hold any int). */
-static const char *spell(def_ctx *c, const char *path, int v, const enum_table *t) {
-  if (v >= 0 && v < t->count) return t->names[v];
-  char list[160];
-  size_t o = 0;
-  list[0] = '\0';
-  for (int i = 0; i < t->count; ++i) {
-    int w = snprintf(list + o, sizeof list - o, "%s%d %s", i ? ", " : "", i, t->names[i]);
-    if (w < 0 || (size_t)w >= sizeof list - o) break;
-    o += (size_t)w;
-  }
-  fail(c, "%s: expected an %s (%s), got %d", path, t->type, list, v);
-  return NULL;
-}
-
-static int check_name(def_ctx *c, const char *path, const char *s) {
-  const size_t max = MPM_NAME_MAX - 1;
-  if (s && strlen(s) > max)
-    return fail(c, "%s: expected a name of at most %zu bytes, got %zu ('%.20s...')", path, max,
-                strlen(s), s);
-  return 0;
-}
-
-/* ---- writing JSON --------------------------------------------------------------------- */
-
-/* Builders that remember an allocation failure instead of returning it at every call: cJSON's
- * Add* functions take a NULL object (and free what they made), so writing goes on harmlessly
- * and the failure is reported once at the end. */
-typedef struct writer {
-  def_ctx *c;
-  int nomem;
-} writer;
-
-static cJSON *add_object(writer *w, cJSON *parent, const char *key) {
-  cJSON *o = cJSON_AddObjectToObject(parent, key);
-  if (!o) w->nomem = 1;
-  return o;
-}
-
-static cJSON *add_array(writer *w, cJSON *parent, const char *key) {
-  cJSON *a = cJSON_AddArrayToObject(parent, key);
-  if (!a) w->nomem = 1;
-  return a;
-}
-
-static cJSON *number_item(writer *w, double v) {
-  char buf[64];
-  if (isfinite(v))
-    mpm_json_format_number(v, buf, sizeof buf);
-  else
-    snprintf(buf, sizeof buf, "null");
-  cJSON *n = cJSON_CreateRaw(buf);
-  if (!n) w->nomem = 1;
-  return n;
-}
-
-static void add_number(writer *w, cJSON *obj, const char *key, double v) {
-  cJSON *n = number_item(w, v);
-  if (n && !cJSON_AddItemToObject(obj, key, n)) {
-    cJSON_Delete(n);
-    w->nomem = 1;
-  }
-}
-
-static void add_vec3(writer *w, cJSON *obj, const char *key, const double v[3]) {
-  cJSON *a = add_array(w, obj, key);
-  for (int k = 0; k < 3; ++k) {
-    cJSON *n = number_item(w, v[k]);
-    if (n && !cJSON_AddItemToArray(a, n)) {
-      cJSON_Delete(n);
-      w->nomem = 1;
-    }
-  }
-}
-
-static void add_bool(writer *w, cJSON *obj, const char *key, int v) {
-  if (!cJSON_AddBoolToObject(obj, key, v != 0)) w->nomem = 1;
-}
-
-static void add_string(writer *w, cJSON *obj, const char *key, const char *s) {
-  if (s && !cJSON_AddStringToObject(obj, key, s)) w->nomem = 1;
-}
-
-/* ---- the parts ------------------------------------------------------------------------ */
-
-static int vec3_equal(const double a[3], const double b[3]) {
-  return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
-}
-
-enum {
-  F_CENTER = 1 << 0,
-  F_HALF_EXTENT = 1 << 1,
-  F_RADIUS = 1 << 2,
-  F_AXIS = 1 << 3,
-  F_HALF_HEIGHT = 1 << 4,
-  F_FILE = 1 << 5,
-  F_SCALE = 1 << 6,
-  F_POINT = 1 << 7,
-  F_NORMAL = 1 << 8,
-};
-/* The fields of each mpm_def_shape_type: its keys in the format. */
-static const unsigned SHAPE_FIELDS[] = {
-    F_CENTER | F_HALF_EXTENT,                     /* box */
-    F_CENTER | F_RADIUS,                          /* sphere */
-    F_CENTER | F_RADIUS | F_AXIS | F_HALF_HEIGHT, /* cylinder */
-    F_FILE | F_CENTER | F_SCALE,                  /* mesh */
-    F_POINT | F_NORMAL,                           /* halfspace */
-};
-
-static int write_shape(writer *w, const char *path, const mpm_shape_def *s, cJSON *parent) {
-  char p[128];
-  snprintf(p, sizeof p, "%s.type", path);
-  const char *type = spell(w->c, p, (int)s->type, &SHAPES);
-  if (!type) return -1;
-  const mpm_shape_def d = mpm_shape_def_default(s->type);
-  const unsigned has = SHAPE_FIELDS[s->type];
-  const struct {
-    unsigned bit;
-    const char *key;
-    int changed;
-  } fields[] = {
-      {F_CENTER, "center", !vec3_equal(s->center, d.center)},
-      {F_HALF_EXTENT, "half_extent", !vec3_equal(s->half_extent, d.half_extent)},
-      {F_RADIUS, "radius", s->radius != d.radius},
-      {F_AXIS, "axis", !vec3_equal(s->axis, d.axis)},
-      {F_HALF_HEIGHT, "half_height", s->half_height != d.half_height},
-      {F_FILE, "file", s->file != NULL},
-      {F_SCALE, "scale", s->scale != d.scale},
-      {F_POINT, "point", !vec3_equal(s->point, d.point)},
-      {F_NORMAL, "normal", !vec3_equal(s->normal, d.normal)},
-  };
-  for (size_t k = 0; k < sizeof fields / sizeof fields[0]; ++k)
-    if (!(has & fields[k].bit) && fields[k].changed)
-      return fail(w->c,
-                  "%s.%s: not a field of a %s shape (it would have no effect); leave it at its "
-                  "default or change %s.type",
-                  path, fields[k].key, type, path);
-  cJSON *o = add_object(w, parent, "shape");
-  add_string(w, o, "type", type);
-  if (has & F_FILE) add_string(w, o, "file", s->file);
-  if (has & F_CENTER) add_vec3(w, o, "center", s->center);
-  if (has & F_HALF_EXTENT) add_vec3(w, o, "half_extent", s->half_extent);
-  if (has & F_RADIUS) add_number(w, o, "radius", s->radius);
-  if (has & F_AXIS) add_vec3(w, o, "axis", s->axis);
-  if (has & F_HALF_HEIGHT) add_number(w, o, "half_height", s->half_height);
-  if (has & F_SCALE) add_number(w, o, "scale", s->scale);
-  if (has & F_POINT) add_vec3(w, o, "point", s->point);
-  if (has & F_NORMAL) add_vec3(w, o, "normal", s->normal);
-  return 0;
-}
-
-/* The keys of some models only (scene_json_material.c's MODEL_ONLY_KEYS, with yield_stress). */
-static const struct {
-  const char *key;
-  size_t offset;
-  unsigned models; /* bit (1 << mpm_def_model) */
-} MODEL_ONLY[] = {
-    {"min_stretch", offsetof(mpm_material_def, min_stretch), 1u << MPM_DEF_NEO_HOOKEAN},
-    {"friction_angle", offsetof(mpm_material_def, friction_angle), 1u << MPM_DEF_DRUCKER_PRAGER},
-    {"cohesion", offsetof(mpm_material_def, cohesion), 1u << MPM_DEF_DRUCKER_PRAGER},
-    {"yield_stress", offsetof(mpm_material_def, yield_stress), 1u << MPM_DEF_VON_MISES},
-    {"theta_c", offsetof(mpm_material_def, theta_c), 1u << MPM_DEF_SNOW},
-    {"theta_s", offsetof(mpm_material_def, theta_s), 1u << MPM_DEF_SNOW},
-    {"hardening", offsetof(mpm_material_def, hardening), 1u << MPM_DEF_SNOW},
-};
-
-static double field_at(const mpm_material_def *m, size_t offset) {
-  double v;
-  memcpy(&v, (const char *)m + offset, sizeof v);
-  return v;
-}
-
-/* A heat field given without heat (it would do nothing: the format refuses it too). */
-static int no_heat(writer *w, const char *path, const char *field) {
-  return fail(w->c,
-              "%s.%s: a heat field, and the def's heat is off (it would have no effect); set "
-              "heat.enabled or leave it at its default",
-              path, field);
-}
-
-static int write_material(writer *w, int i, const mpm_material_def *m, const char *name, int heat,
-                          cJSON *arr) {
-  char p[64];
-  snprintf(p, sizeof p, "materials[%d].model", i);
-  const char *model = spell(w->c, p, (int)m->model, &MODELS);
-  if (!model) return -1;
-  const mpm_material_def d = mpm_material_def_default();
-  const unsigned bit = 1u << (unsigned)m->model;
-  for (size_t k = 0; k < sizeof MODEL_ONLY / sizeof MODEL_ONLY[0]; ++k)
-    if (!(MODEL_ONLY[k].models & bit) &&
-        field_at(m, MODEL_ONLY[k].offset) != field_at(&d, MODEL_ONLY[k].offset)) {
-      const unsigned models = MODEL_ONLY[k].models;
-      int owner = 0;
-      while (!(models & (1u << (unsigned)owner))) ++owner;
-      char dflt[48];
-      return fail(w->c,
-                  "materials[%d].%s: applies only to model %s, not to '%s' (it would have no "
-                  "effect); leave it at its default (%s) or change materials[%d].model",
-                  i, MODEL_ONLY[k].key, MODEL_NAMES[owner], model,
-                  mpm_json_format_number(field_at(&d, MODEL_ONLY[k].offset), dflt, sizeof dflt), i);
-    }
-  char where[32];
-  snprintf(where, sizeof where, "materials[%d]", i);
-  if (!heat) {
-    if (m->specific_heat != d.specific_heat) return no_heat(w, where, "specific_heat");
-    if (m->conductivity != d.conductivity) return no_heat(w, where, "conductivity");
-    if (m->melting) return no_heat(w, where, "melting");
-  }
-  if (!m->melting && (m->melt_point != d.melt_point || m->melt_range != d.melt_range ||
-                      m->melt_shear != d.melt_shear || m->melt_bulk != d.melt_bulk))
-    return fail(w->c,
-                "%s.melt_*: melting values with melting 0 (they would have no effect); set "
-                "%s.melting to 1 or leave them at their defaults",
-                where, where);
-  cJSON *o = cJSON_CreateObject();
-  if (!o || !cJSON_AddItemToArray(arr, o)) {
-    cJSON_Delete(o);
-    w->nomem = 1;
-    return 0;
-  }
-  add_string(w, o, "name", name);
-  add_string(w, o, "model", model);
-  if (heat) {
-    add_number(w, o, "specific_heat", m->specific_heat);
-    add_number(w, o, "conductivity", m->conductivity);
-  }
-  if (m->melting) {
-    cJSON *melt = add_object(w, o, "melting");
-    add_number(w, melt, "point", m->melt_point);
-    add_number(w, melt, "range", m->melt_range);
-    add_number(w, melt, "shear", m->melt_shear);
-    add_number(w, melt, "bulk", m->melt_bulk);
-  }
-  add_number(w, o, "E", m->E);
-  add_number(w, o, "nu", m->nu);
-  add_number(w, o, "density", m->density);
-  for (size_t k = 0; k < sizeof MODEL_ONLY / sizeof MODEL_ONLY[0]; ++k)
-    if (MODEL_ONLY[k].models & bit)
-      add_number(w, o, MODEL_ONLY[k].key, field_at(m, MODEL_ONLY[k].offset));
-  return 0;
-}
-
-static int write_body(writer *w, int i, const mpm_body_def *b, const mpm_scene_def *def,
-                      char (*material_names)[MPM_NAME_MAX], cJSON *arr) {
-  char p[64];
-  snprintf(p, sizeof p, "bodies[%d].name", i);
-  if (check_name(w->c, p, b->name) < 0) return -1;
-  snprintf(p, sizeof p, "bodies[%d].material_name", i);
-  if (check_name(w->c, p, b->material_name) < 0) return -1;
-  const char *material = b->material_name;
-  if (!material) {
-    if (def->material_count == 0)
-      return fail(w->c,
-                  "bodies[%d].material: the def has no materials for index %d; add one to "
-                  "materials, or name one with material_name",
-                  i, b->material);
-    if (b->material < 0 || b->material >= def->material_count)
-      return fail(w->c,
-                  "bodies[%d].material: expected an index into the def's materials (0 .. %d), "
-                  "got %d",
-                  i, def->material_count - 1, b->material);
-    material = material_names[b->material];
-  }
-  cJSON *o = cJSON_CreateObject();
-  if (!o || !cJSON_AddItemToArray(arr, o)) {
-    cJSON_Delete(o);
-    w->nomem = 1;
-    return 0;
-  }
-  snprintf(p, sizeof p, "bodies[%d].shape", i);
-  add_string(w, o, "name", b->name);
-  if (write_shape(w, p, &b->shape, o) < 0) return -1;
-  add_string(w, o, "material", material);
-  add_vec3(w, o, "velocity", b->velocity);
-  add_vec3(w, o, "angular_velocity", b->angular_velocity);
-  add_number(w, o, "particles_per_cell", b->particles_per_cell);
-  add_number(w, o, "jitter", b->jitter);
-  add_number(w, o, "seed", (double)b->seed);
-  add_bool(w, o, "domains", b->domains);
-  snprintf(p, sizeof p, "bodies[%d]", i);
-  if (b->has_temperature && !def->heat.enabled) return no_heat(w, p, "temperature");
-  if (!b->has_temperature && b->temperature != mpm_body_def_default().temperature)
-    return fail(w->c,
-                "%s.temperature: given with has_temperature 0 (it would have no effect); set "
-                "%s.has_temperature to 1 or leave it at its default",
-                p, p);
-  if (b->has_temperature) add_number(w, o, "temperature", b->temperature);
-  return 0;
-}
-
-static int write_collider(writer *w, int i, const mpm_collider_def *cd, int heat, cJSON *arr) {
-  char p[64];
-  snprintf(p, sizeof p, "colliders[%d].name", i);
-  if (check_name(w->c, p, cd->name) < 0) return -1;
-  snprintf(p, sizeof p, "colliders[%d].rule", i);
-  const char *rule = spell(w->c, p, (int)cd->rule, &RULES);
-  if (!rule) return -1;
-  cJSON *o = cJSON_CreateObject();
-  if (!o || !cJSON_AddItemToArray(arr, o)) {
-    cJSON_Delete(o);
-    w->nomem = 1;
-    return 0;
-  }
-  snprintf(p, sizeof p, "colliders[%d].shape", i);
-  add_string(w, o, "name", cd->name);
-  if (write_shape(w, p, &cd->shape, o) < 0) return -1;
-  add_bool(w, o, "inside_out", cd->inside_out);
-  add_string(w, o, "rule", rule);
-  add_number(w, o, "friction", cd->friction);
-  cJSON *m = add_object(w, o, "motion");
-  add_vec3(w, m, "velocity", cd->motion.velocity);
-  add_vec3(w, m, "axis", cd->motion.axis);
-  add_number(w, m, "angular_speed", cd->motion.angular_speed);
-  snprintf(p, sizeof p, "colliders[%d]", i);
-  if (cd->heat_source && !heat) return no_heat(w, p, "temperature");
-  if (!cd->heat_source && cd->temperature != mpm_collider_def_default().temperature)
-    return fail(w->c,
-                "%s.temperature: given with heat_source 0 (it would have no effect); set "
-                "%s.heat_source to 1 or leave it at its default",
-                p, p);
-  if (cd->heat_source) add_number(w, o, "temperature", cd->temperature);
-  return 0;
-}
-
-static int write_solver(writer *w, const mpm_solver_def *s, cJSON *root) {
-  const char *integrator = spell(w->c, "solver.integrator", (int)s->integrator, &INTEGRATORS);
-  const char *kernel = integrator ? spell(w->c, "solver.kernel", (int)s->kernel, &KERNELS) : NULL;
-  const char *transfer =
-      kernel ? spell(w->c, "solver.transfer", (int)s->transfer, &TRANSFERS) : NULL;
-  if (!transfer) return -1;
-  const int implicit = s->integrator == MPM_DEF_IMPLICIT;
-  const mpm_solver_def d = mpm_scene_def_default().solver;
-  if (!implicit && (s->dt != d.dt || s->newton_iterations != d.newton_iterations))
-    return fail(w->c,
-                "solver.%s: a field of the implicit integrator only (it would have no effect); "
-                "set solver.integrator to MPM_DEF_IMPLICIT or leave it at its default",
-                s->dt != d.dt ? "dt" : "newton_iterations");
-  cJSON *o = add_object(w, root, "solver");
-  add_string(w, o, "integrator", integrator);
-  add_string(w, o, "kernel", kernel);
-  add_string(w, o, "transfer", transfer);
-  add_number(w, o, "flip_alpha", s->flip_alpha);
-  add_number(w, o, "cfl", s->cfl);
-  add_number(w, o, "max_dt", s->max_dt);
-  if (implicit) {
-    add_number(w, o, "dt", s->dt);
-    add_number(w, o, "newton_iterations", s->newton_iterations);
-  }
-  return 0;
-}
-
-/* An array of the def: NULL only when empty, and a count >= 0. */
-static int check_array(def_ctx *c, const char *key, const char *count_key, const void *array,
-                       int count) {
-  if (count < 0) return fail(c, "%s: expected %s >= 0, got %d", key, count_key, count);
-  if (count > 0 && !array)
-    return fail(c, "%s: NULL with %s %d (give the array or a count of 0)", key, count_key, count);
-  return 0;
-}
+/* ---- the whole scene ------------------------------------------------------------------ */
 
 /* The def as a JSON tree; NULL with c's message (or status MPM_ERR_NOMEM) on failure. */
-static cJSON *build(def_ctx *c, const mpm_scene_def *def) {
+static cJSON *build(mpm_def_ctx *c, const mpm_scene_def *def) {
   if (!def) {
-    fail(c, "no scene def given (NULL)");
+    mpm_def_fail(c, "no scene def given (NULL)");
     return NULL;
   }
-  if (check_array(c, "materials", "material_count", def->materials, def->material_count) < 0 ||
-      check_array(c, "bodies", "body_count", def->bodies, def->body_count) < 0 ||
-      check_array(c, "colliders", "collider_count", def->colliders, def->collider_count) < 0 ||
-      check_name(c, "name", def->name) < 0)
+  if (mpm_def_check_array(c, "materials", "material_count", def->materials, def->material_count) <
+          0 ||
+      mpm_def_check_array(c, "bodies", "body_count", def->bodies, def->body_count) < 0 ||
+      mpm_def_check_array(c, "colliders", "collider_count", def->colliders, def->collider_count) <
+          0 ||
+      mpm_def_check_array(c, "forces", "force_count", def->forces, def->force_count) < 0 ||
+      mpm_def_check_name(c, "name", def->name) < 0)
     return NULL;
-  const char *wall_rule = spell(c, "domain.walls.rule", (int)def->domain.walls.rule, &RULES);
-  if (!wall_rule) return NULL;
   char(*names)[MPM_NAME_MAX] = calloc((size_t)def->material_count + 1, sizeof *names);
   cJSON *root = cJSON_CreateObject();
   if (!names || !root) {
@@ -565,74 +245,44 @@ static cJSON *build(def_ctx *c, const mpm_scene_def *def) {
     c->status = MPM_ERR_NOMEM;
     return NULL;
   }
-  writer w = {c, 0};
+  mpm_def_writer w = {c, 0};
   int bad = 0;
   for (int i = 0; i < def->material_count && !bad; ++i) {
     char p[64];
     snprintf(p, sizeof p, "materials[%d].name", i);
-    bad = check_name(c, p, def->materials[i].name) < 0;
-    snprintf(names[i], sizeof names[i], "%s", def->materials[i].name ? def->materials[i].name : "");
-    if (!def->materials[i].name) snprintf(names[i], sizeof names[i], "material%d", i);
+    bad = mpm_def_check_name(c, p, def->materials[i].name) < 0;
+    if (def->materials[i].name)
+      snprintf(names[i], sizeof names[i], "%s", def->materials[i].name);
+    else
+      snprintf(names[i], sizeof names[i], "material%d", i);
   }
-  add_string(&w, root, "name", def->name);
-  cJSON *dom = add_object(&w, root, "domain");
-  add_vec3(&w, dom, "min", def->domain.min);
-  add_vec3(&w, dom, "max", def->domain.max);
-  add_number(&w, dom, "dx", def->domain.dx);
-  cJSON *walls = add_object(&w, dom, "walls");
-  add_string(&w, walls, "rule", wall_rule);
-  add_number(&w, walls, "friction", def->domain.walls.friction);
-  add_number(&w, walls, "cells", def->domain.walls.cells);
-  add_vec3(&w, root, "gravity", def->gravity);
-  cJSON *time = add_object(&w, root, "time");
-  add_number(&w, time, "end", def->time.end);
-  add_number(&w, time, "fps", def->time.fps);
-  bad = bad || write_solver(&w, &def->solver, root) < 0;
-  cJSON *mats = add_array(&w, root, "materials");
+  mpm_def_add_string(&w, root, "name", def->name);
+  bad = bad || mpm_def_write_domain(&w, &def->domain, root) < 0;
+  mpm_def_add_vec3(&w, root, "gravity", def->gravity);
+  cJSON *time = mpm_def_add_object(&w, root, "time");
+  mpm_def_add_number(&w, time, "end", def->time.end);
+  mpm_def_add_number(&w, time, "fps", def->time.fps);
+  bad = bad || mpm_def_write_solver(&w, &def->solver, root) < 0;
+  cJSON *mats = mpm_def_add_array(&w, root, "materials");
   for (int i = 0; i < def->material_count && !bad; ++i)
-    bad = write_material(&w, i, &def->materials[i], names[i], def->heat.enabled, mats) < 0;
-  cJSON *bodies = add_array(&w, root, "bodies");
+    bad = mpm_def_write_material(&w, i, &def->materials[i], names[i], def->heat.enabled, mats) < 0;
+  cJSON *bodies = mpm_def_add_array(&w, root, "bodies");
   for (int i = 0; i < def->body_count && !bad; ++i)
-    bad = write_body(&w, i, &def->bodies[i], def, names, bodies) < 0;
+    bad = mpm_def_write_body(&w, i, &def->bodies[i], def, (const char(*)[MPM_NAME_MAX])names,
+                             bodies) < 0;
   if (def->collider_count > 0) {
-    cJSON *cols = add_array(&w, root, "colliders");
+    cJSON *cols = mpm_def_add_array(&w, root, "colliders");
     for (int i = 0; i < def->collider_count && !bad; ++i)
-      bad = write_collider(&w, i, &def->colliders[i], def->heat.enabled, cols) < 0;
+      bad = mpm_def_write_collider(&w, i, &def->colliders[i], def->heat.enabled, cols) < 0;
   }
-  cJSON *out = add_object(&w, root, "output");
-  add_string(&w, out, "directory", def->output.directory);
-  add_bool(&w, out, "vtu", def->output.vtu);
-  add_bool(&w, out, "ply", def->output.ply);
-  add_bool(&w, out, "stats", def->output.stats);
-  add_number(&w, out, "checkpoint_every", def->output.checkpoint_every);
-  if (!bad && def->output.fields >> MPM_FIELD_COUNT)
-    bad = fail(c,
-               "output.fields: bits above (1u << MPM_DEF_FIELD_F) are no mpm_def_field, got "
-               "0x%x",
-               def->output.fields) < 0;
-  if (!bad && def->output.fields) { /* in the enum's order, which is the file's */
-    cJSON *list = add_array(&w, out, "fields");
-    for (int f = 0; f < MPM_FIELD_COUNT; ++f)
-      if (def->output.fields >> f & 1u) {
-        cJSON *name = cJSON_CreateString(mpm_output_field_names[f]);
-        if (!name || !cJSON_AddItemToArray(list, name)) {
-          cJSON_Delete(name);
-          w.nomem = 1;
-        }
-      }
+  if (def->force_count > 0) {
+    cJSON *forces = mpm_def_add_array(&w, root, "forces");
+    for (int i = 0; i < def->force_count && !bad; ++i)
+      bad = mpm_def_write_force(&w, i, &def->forces[i], forces) < 0;
   }
-  const mpm_heat_def dh = mpm_scene_def_default().heat;
-  if (!bad && !def->heat.enabled &&
-      (def->heat.temperature != dh.temperature || def->heat.pic != dh.pic))
-    bad = fail(c,
-               "heat.%s: given with heat.enabled 0 (it would have no effect); set "
-               "heat.enabled or leave it at its default",
-               def->heat.temperature != dh.temperature ? "temperature" : "pic") < 0;
-  if (!bad && def->heat.enabled) {
-    cJSON *heat = add_object(&w, root, "heat");
-    add_number(&w, heat, "temperature", def->heat.temperature);
-    add_number(&w, heat, "pic", def->heat.pic);
-  }
+  bad = bad || mpm_def_write_output(&w, &def->output, root) < 0 ||
+        mpm_def_write_heat(&w, &def->heat, root) < 0 ||
+        mpm_def_write_camera(&w, &def->camera, root) < 0;
   free(names);
   if (!bad && w.nomem) {
     c->status = MPM_ERR_NOMEM;
@@ -650,9 +300,9 @@ static cJSON *build(def_ctx *c, const mpm_scene_def *def) {
 
 mpm_status mpm_scene_def_to_json(const mpm_scene_def *def, char **json_out, char *err,
                                  size_t errlen) {
-  def_ctx c = {err, errlen, MPM_OK};
+  mpm_def_ctx c = {err, errlen, MPM_OK};
   if (!json_out) {
-    fail(&c, "no place for the text given (json_out is NULL)");
+    mpm_def_fail(&c, "no place for the text given (json_out is NULL)");
     return c.status;
   }
   *json_out = NULL;
@@ -690,9 +340,9 @@ static void relabel(const char *msg, const char *base_dir, char *err, size_t err
 
 mpm_status mpm_sim_create_from_def(const mpm_scene_def *def, const char *base_dir, mpm_sim **out,
                                    char *err, size_t errlen) {
-  def_ctx c = {err, errlen, MPM_OK};
+  mpm_def_ctx c = {err, errlen, MPM_OK};
   if (!out) {
-    fail(&c, "no place for the simulation given (out is NULL)");
+    mpm_def_fail(&c, "no place for the simulation given (out is NULL)");
     return c.status;
   }
   *out = NULL;

@@ -167,10 +167,9 @@ static int parse_resample(mpm_json_ctx *c, const cJSON *dom, mpm_scene *s) {
                              "...}") < 0 ||
       mpm_json_check_keys(c, r, RESAMPLE_KEYS, NULL) < 0)
     return -1;
-  d->enabled = d->split = d->merge = 1;
-  d->every = 1;
-  d->merge_margin = 1;
-  long long every = 1, maxc = 0, minc = 0, seed = 0;
+  *d = mpm_resample_desc_default();
+  d->enabled = 1;
+  long long every = d->every, maxc = d->max_per_cell, minc = d->min_per_cell, seed = d->seed;
   if (mpm_json_bool(c, r, "split", 0, &d->split) < 0 ||
       mpm_json_bool(c, r, "merge", 0, &d->merge) < 0 ||
       mpm_json_integer(c, r, "every", 0, mpm_json_in('[', 1, 1e6, ']', "steps"), &every) < 0 ||
