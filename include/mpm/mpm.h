@@ -263,4 +263,6 @@ MPM_API mpm_status mpm_rest_error_frames(const char *rest_vtu, const char *final
 #endif
 /* a scene built in code (description structs), on the declarations above */
 #include "scene_def.h"
+/* pictures of a run's output folder (the software renderer) */
+#include "render.h"
 #endif
