@@ -3,7 +3,8 @@
 #   lib/libmpm.a            the static library
 #   lib/libmpmvdb.so        with OpenVDB: the shim both libraries open (dlopen) at the first
 #                           particle surface, from beside themselves
-#   include/mpm/mpm.h       the public header, and scene_def.h which it includes
+#   include/mpm/mpm.h       the public header, and scene_def.h, render.h and plot.h, which it
+#                           includes
 #   bin/mpm                 the program (MPM_BUILD_PROGRAM)
 #   lib/pkgconfig/mpm.pc    pkg-config: `pkg-config --cflags --libs mpm` (shared), --static lists
 #                           what libmpm.a needs
@@ -30,6 +31,7 @@ if(MPM_OPENVDB)
   install(FILES ${MPM_VDB_MODULE_FILE} DESTINATION ${CMAKE_INSTALL_LIBDIR} RENAME libmpmvdb.so)
 endif()
 install(FILES ${PROJECT_SOURCE_DIR}/include/mpm/mpm.h ${PROJECT_SOURCE_DIR}/include/mpm/scene_def.h
+              ${PROJECT_SOURCE_DIR}/include/mpm/render.h ${PROJECT_SOURCE_DIR}/include/mpm/plot.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/mpm)
 if(MPM_BUILD_PROGRAM)
   install(TARGETS mpm RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})

@@ -37,6 +37,7 @@ typedef enum mpm_status {
   MPM_ERR_NOMEM = 4,       /* an allocation failed */
   MPM_ERR_UNSTABLE = 5,    /* the simulation produced a non-finite or runaway value */
   MPM_ERR_INTERRUPTED = 6, /* the caller's interrupt flag was raised (between two steps) */
+  MPM_ERR_EXTERNAL = 7,    /* a program the call runs is missing or failed (gnuplot) */
 } mpm_status;
 
 /// Human-readable name of a status ("ok", "parse error", ...). Static storage.
@@ -263,4 +264,7 @@ MPM_API mpm_status mpm_rest_error_frames(const char *rest_vtu, const char *final
 #endif
 /* a scene built in code (description structs), on the declarations above */
 #include "scene_def.h"
+/* pictures of a run's output folder (the software renderer) and plots of its stats.csv */
+#include "render.h"
+#include "plot.h"
 #endif

@@ -38,6 +38,8 @@ const char *mpm_status_string(mpm_status s) {
     return "simulation unstable";
   case MPM_ERR_INTERRUPTED:
     return "interrupted";
+  case MPM_ERR_EXTERNAL:
+    return "external program failed";
   }
   return "unknown status";
 }

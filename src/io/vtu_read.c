@@ -1,5 +1,6 @@
 /* vtu_read.c - read back a particle frame written by vtu.c (VTK XML UnstructuredGrid, raw
- * appended data, UInt64 headers), for tools such as the renderer (app/render.c).
+ * appended data, UInt64 headers), for tools such as the renderer (render/renderer_draw.c) and
+ * the rest-state error.
  *
  * Only this engine's own layout is accepted: the header is scanned for DataArray elements with
  * type, Name, NumberOfComponents and offset attributes, the appended block starts after the

@@ -1,4 +1,5 @@
-/* image.c - the float framebuffer and its PNG encoding (libpng), written atomically. */
+/* image.c - the float framebuffer, its 8-bit sRGB pixels and their PNG encoding (libpng),
+ * written atomically. */
 #include "render/render.h"
 #include "io/io.h"
 
@@ -36,6 +37,11 @@ static unsigned char to_srgb8(float v) {
   v = v < 0 ? 0 : (v > 1 ? 1 : v);
   const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055;
   return (unsigned char)lrint(s * 255);
+}
+
+void mpm_image_to_srgb8(const mpm_image *img, unsigned char *rgb) {
+  const size_t n = 3 * (size_t)img->width * (size_t)img->height;
+  for (size_t i = 0; i < n; ++i) rgb[i] = to_srgb8(img->rgb[i]);
 }
 
 mpm_status mpm_image_write_png(const mpm_image *img, const char *path, mpm_error *err) {

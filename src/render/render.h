@@ -31,6 +31,10 @@ typedef struct mpm_image {
 mpm_status mpm_image_init(mpm_image *img, int width, int height, mpm_error *err);
 void mpm_image_free(mpm_image *img);
 
+/* img as 8-bit sRGB, 3 bytes a pixel, rows from the top, into rgb (width * height * 3 bytes):
+ * the pixels mpm_image_write_png writes. */
+void mpm_image_to_srgb8(const mpm_image *img, unsigned char *rgb);
+
 /* Write img as an 8-bit sRGB PNG, atomically (a temporary file renamed). */
 mpm_status mpm_image_write_png(const mpm_image *img, const char *path, mpm_error *err);
 

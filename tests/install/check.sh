@@ -35,7 +35,7 @@ pc=$(find "$prefix" -name mpm.pc | head -n 1)
 [ -n "$pc" ] || fail "no mpm.pc under $prefix"
 libdir=$(dirname "$(dirname "$pc")")
 for f in "$libdir/libmpm.so" "$libdir/libmpm.a" "$prefix/include/mpm/mpm.h" \
-  "$prefix/include/mpm/scene_def.h" \
+  "$prefix/include/mpm/scene_def.h" "$prefix/include/mpm/render.h" "$prefix/include/mpm/plot.h" \
   "$libdir/cmake/mpm/mpmConfig.cmake" "$libdir/cmake/mpm/mpmConfigVersion.cmake"; do
   [ -e "$f" ] || fail "$f was not installed"
 done
@@ -43,13 +43,14 @@ done
 # sections, .gomp_critical_user_*, are the runtime's, not ours)
 nm -D --defined-only "$libdir/libmpm.so" | awk '{print $3}' | grep -v '^\.gomp_critical_user_' |
   sort >"$tmp/exported"
-# (mpm.h includes scene_def.h: the declarations of both are the public API)
-cat "$prefix/include/mpm/mpm.h" "$prefix/include/mpm/scene_def.h" | grep -o 'mpm_[a-z_0-9]*(' |
+# (mpm.h includes scene_def.h, render.h and plot.h: the declarations of all are the public API)
+cat "$prefix/include/mpm/mpm.h" "$prefix/include/mpm/scene_def.h" \
+  "$prefix/include/mpm/render.h" "$prefix/include/mpm/plot.h" | grep -o 'mpm_[a-z_0-9]*(' |
   tr -d '(' | sort -u >"$tmp/declared"
 extra=$(comm -23 "$tmp/exported" "$tmp/declared")
-[ -z "$extra" ] || fail "libmpm.so exports symbols mpm.h and scene_def.h do not declare: $extra"
+[ -z "$extra" ] || fail "libmpm.so exports symbols the public headers do not declare: $extra"
 count=$(grep -c . "$tmp/exported")
-echo "libmpm.so exports $count functions, all of them declared in mpm.h and scene_def.h"
+echo "libmpm.so exports $count functions, all of them declared in the public headers"
 
 echo "== pkg-config"
 export PKG_CONFIG_PATH="$libdir/pkgconfig"

@@ -1,15 +1,24 @@
-/* plot_stats.c - reading `mpm run`'s stats.csv for `mpm plot` (plot_stats.h): the header must
- * be one that mpm_write_stats_csv wrote (today's, or an earlier version's, with three force
- * columns per collider after total_energy), every row must have its fields, and every field must
- * be a finite number. */
-#define _XOPEN_SOURCE 700 /* getline */
-#include "plot_stats.h"
+/* stats_read.c - reading `mpm run`'s stats.csv back (mpm/plot.h: mpm_stats_read; `mpm plot`):
+ * the header must be one that mpm_write_stats_csv (stats_csv.c) wrote (today's, or an earlier
+ * version's, with three force columns per collider after total_energy), every row must have its
+ * fields, and every field must be a finite number. */
+#define _XOPEN_SOURCE 700 /* getline, strdup */
+#include "core/error.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Files of earlier versions end here: before the implicit integrator, before dynamic enrichment,
+ * before the step range and the gravitational energy. */
+enum {
+  COL_LEGACY_COUNT = MPM_STATS_CG_ITERATIONS_MEAN,
+  COL_SOLVER_COUNT = MPM_STATS_ENRICHED_PERCENT,
+  COL_ENRICHED_COUNT = MPM_STATS_DT_MIN,
+  COL_COUNT = MPM_STATS_COLUMNS
+};
 
 static const char *const column_names[COL_COUNT] = {"frame",
                                                     "time",
@@ -37,9 +46,15 @@ static const char *const column_names[COL_COUNT] = {"frame",
                                                     "gravitational_energy",
                                                     "total_energy"};
 
-void mpm_stats_table_free(stats_table *t) {
-  free(t->rows);
+const char *mpm_stats_column_name(mpm_stats_column column) {
+  return (int)column >= 0 && (int)column < COL_COUNT ? column_names[column] : NULL;
+}
+
+void mpm_stats_free(mpm_stats_table *t) {
+  if (!t) return;
+  free(t->values);
   free(t->forces);
+  free(t->path);
   memset(t, 0, sizeof *t);
 }
 
@@ -140,10 +155,11 @@ static mpm_status parse_row(const char *path, long line_no, char *line, int colu
   return MPM_OK;
 }
 
-/* Read and check the whole file; blank lines are skipped. Needs at least two frames, so that
- * every plot (the per-frame ones start at frame 1) has a point. */
-mpm_status mpm_stats_read(const char *path, stats_table *t, mpm_error *err) {
-  memset(t, 0, sizeof *t);
+/* Read and check the whole file; blank lines are skipped. */
+static mpm_status read_table(const char *path, mpm_stats_table *t, mpm_error *err) {
+  t->stride = COL_COUNT;
+  if (!(t->path = strdup(path)))
+    return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory", path);
   FILE *f = fopen(path, "r");
   if (!f)
     return mpm_error_set(err, MPM_ERR_IO,
@@ -151,7 +167,7 @@ mpm_status mpm_stats_read(const char *path, stats_table *t, mpm_error *err) {
                          "of 'mpm run'?)",
                          path, strerror(errno));
   char *line = NULL;
-  size_t cap = 0;
+  size_t cap = 0, capacity = 0;
   long line_no = 0;
   int columns = COL_COUNT, extra = 0;
   mpm_status st = MPM_OK;
@@ -165,26 +181,26 @@ mpm_status mpm_stats_read(const char *path, stats_table *t, mpm_error *err) {
       continue;
     }
     if (is_blank(line)) continue;
-    if (t->count == t->capacity) {
-      const size_t want = t->capacity ? 2 * t->capacity : 256;
-      void *grown = realloc(t->rows, want * sizeof *t->rows);
-      if (grown) t->rows = grown;
-      void *grown_forces =
+    if (t->rows == capacity) {
+      const size_t want = capacity ? 2 * capacity : 256;
+      double *grown = realloc(t->values, want * COL_COUNT * sizeof *t->values);
+      if (grown) t->values = grown;
+      double *grown_forces =
           grown ? realloc(t->forces, want * (size_t)(extra + 1) * sizeof *t->forces) : NULL;
       if (!grown_forces) {
         st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory at line %ld", path, line_no);
         break;
       }
       t->forces = grown_forces;
-      t->capacity = want;
+      capacity = want;
     }
-    st = parse_row(path, line_no, line, columns, extra, t->rows[t->count],
-                   t->forces + t->count * (size_t)extra, err);
+    st = parse_row(path, line_no, line, columns, extra, t->values + t->rows * COL_COUNT,
+                   t->forces + t->rows * (size_t)extra, err);
     if (st != MPM_OK) break;
-    ++t->count;
+    ++t->rows;
   }
   t->columns = columns;
-  t->extra = extra;
+  t->colliders = extra / 3;
   const int read_error = ferror(f);
   const int read_errno = errno;
   free(line);
@@ -197,11 +213,20 @@ mpm_status mpm_stats_read(const char *path, stats_table *t, mpm_error *err) {
                        "%s: line 1: the file is empty (expected the header "
                        "'frame,time,...,wall_seconds')",
                        path);
-  else if (st == MPM_OK && t->count < 2)
-    st = mpm_error_set(err, MPM_ERR_PARSE,
-                       "%s: %zu frame%s: need at least 2 (the initial state and one simulated "
-                       "frame) to plot",
-                       path, t->count, t->count == 1 ? "" : "s");
-  if (st != MPM_OK) mpm_stats_table_free(t);
+  return st;
+}
+
+mpm_status mpm_stats_read(const char *path, mpm_stats_table *out, char *err, size_t errlen) {
+  if (err && errlen) err[0] = '\0';
+  if (!out) return MPM_ERR_INVALID;
+  memset(out, 0, sizeof *out);
+  mpm_error e;
+  mpm_error_clear(&e);
+  const mpm_status st = path ? read_table(path, out, &e)
+                             : mpm_error_set(&e, MPM_ERR_INVALID, "mpm_stats_read: no file given");
+  if (st != MPM_OK) {
+    mpm_stats_free(out);
+    if (err && errlen) snprintf(err, errlen, "%s", e.message);
+  }
   return st;
 }

@@ -1,6 +1,6 @@
-/* render_grid.c - `mpm render --grid`: the multi-level grid's cells as line segments over the
- * particles, from the grid_cells VTU files a run on levels writes. */
-#include "render_cmd.h"
+/* grid_edges.c - a renderer's `grid` option (`mpm render --grid`): the multi-level grid's cells
+ * as line segments over the particles, from the grid_cells VTU files a run on levels writes. */
+#include "render/renderer.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -15,10 +15,10 @@ static int cmp_u64(const void *a, const void *b) {
 /* The edges of the multi-level grid's fine leaves (OUTDIR/grid_cells_NNNN.vtu of a frame when
  * the run rebuilt its grid, else OUTDIR/grid_cells.vtu: 8 corners per voxel)
  * on the surfaces of the levels' regions, each once, coloured by level (the edge length):
- * segments for mpm_render_lines. 0 with
- * *n = 0 when the run has no such file; -1 with `why` on a bad file. */
-int mpm_render_grid_edges(const char *dir, int frame, float **ab, float **rgb, size_t *n, char *why,
-                          size_t cap) {
+ * segments for mpm_render_lines. MPM_OK with
+ * *n = 0 when the run has no such file; the status with err on a bad file or no memory. */
+mpm_status mpm_render_grid_edges(const char *dir, int frame, float **ab, float **rgb, size_t *n,
+                                 mpm_error *err) {
   *n = 0;
   char path[4200];
   snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", dir, frame);
@@ -27,15 +27,11 @@ int mpm_render_grid_edges(const char *dir, int frame, float **ab, float **rgb, s
     snprintf(path, sizeof path, "%s/grid_cells.vtu", dir);
     probe = fopen(path, "rb");
   }
-  if (!probe) return 0;
+  if (!probe) return MPM_OK;
   fclose(probe);
   mpm_vtu_frame fr;
-  mpm_error err;
-  mpm_error_clear(&err);
-  if (mpm_read_vtu(path, &fr, &err) != MPM_OK) {
-    snprintf(why, cap, "%s", err.message);
-    return -1;
-  }
+  const mpm_status st = mpm_read_vtu(path, &fr, err);
+  if (st != MPM_OK) return st;
   const mpm_vtu_array *pts = mpm_vtu_frame_array(&fr, "Points");
   const size_t cells = pts ? (size_t)fr.point_count / 8 : 0;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, h = INFINITY;
@@ -48,8 +44,7 @@ int mpm_render_grid_edges(const char *dir, int frame, float **ab, float **rgb, s
   uint64_t *key = malloc((12 * cells + 1) * sizeof *key);
   if (!key) {
     mpm_vtu_frame_free(&fr);
-    snprintf(why, cap, "out of memory for the grid's edges");
-    return -1;
+    return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the grid's edges", path);
   }
   size_t m = 0;
   static const int from[12] = {0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3};
@@ -80,8 +75,7 @@ int mpm_render_grid_edges(const char *dir, int frame, float **ab, float **rgb, s
   if (!*ab || !*rgb) {
     free(key);
     mpm_vtu_frame_free(&fr);
-    snprintf(why, cap, "out of memory for the grid's edges");
-    return -1;
+    return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the grid's edges", path);
   }
   for (size_t k = 0; k < u; ++k) {
     const int e = (int)(key[k] & 15), ax = (int)(key[k] >> 4 & 3);
@@ -98,5 +92,5 @@ int mpm_render_grid_edges(const char *dir, int frame, float **ab, float **rgb, s
   *n = u;
   free(key);
   mpm_vtu_frame_free(&fr);
-  return 0;
+  return MPM_OK;
 }

@@ -1,9 +1,9 @@
-/* render_survey.c - what `mpm render` decides before drawing: from a sample of the frames to
- * render, the box the material moves in (for a steady camera over the whole movie), whether
+/* survey.c - what a renderer (renderer.c) decides before drawing: from a sample of the frames
+ * to draw, the box the material moves in (for a steady camera over the whole movie), whether
  * its velocity is uniform (then colour by speed would paint everything one colour, so the
  * default colours by material instead), the labels present and the field's colour range
  * (2nd to 98th percentile, so that a few outliers do not wash out the picture). */
-#include "render_cmd.h"
+#include "render/renderer.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -18,30 +18,29 @@
 #define UNIFORM_ABS 1e-3
 #define UNIFORM_REL 0.01
 
-const char *const MPM_RENDER_FIELD_NAMES[FIELDS] = {"velocity", "J",    "stress",      "plastic",
-                                                    "material", "body", "temperature", "melt"};
+const char *const MPM_RENDER_FIELD_NAMES[MPM_RENDER_FIELDS] = {
+    "velocity", "J", "stress", "plastic", "material", "body", "temperature", "melt"};
 
 static int cmp_float(const void *a, const void *b) {
   const float x = *(const float *)a, y = *(const float *)b;
   return x < y ? -1 : x > y;
 }
 
-int mpm_render_field_values(const mpm_vtu_frame *fr, int field, float *out, char *why, size_t cap) {
+mpm_status mpm_render_field_values(const mpm_vtu_frame *fr, const char *path, int field, float *out,
+                                   mpm_error *err) {
   const char *name = MPM_RENDER_FIELD_NAMES[field];
   const mpm_vtu_array *a = mpm_vtu_frame_array(fr, name);
-  if (!a) {
-    snprintf(why, cap, "the frames have no '%s' array", name);
-    return -1;
-  }
+  if (!a)
+    return mpm_error_set(err, MPM_ERR_INVALID, "%s: the frames have no '%s' array", path, name);
   for (long i = 0; i < fr->point_count; ++i) {
-    if (field == FIELD_VELOCITY) {
+    if (field == MPM_RENDER_FIELD_VELOCITY) {
       const float *v = a->data + 3 * i;
       out[i] = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     } else {
       out[i] = a->data[i];
     }
   }
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_render_frame_box(const mpm_vtu_frame *fr, double lo[3], double hi[3]) {
@@ -70,21 +69,15 @@ static void percentiles(float *v, size_t n, double *p2, double *p98) {
   *p98 = v[(size_t)(0.98 * (double)(n - 1))];
 }
 
-static int read_frame(const char *dir, int k, mpm_vtu_frame *fr, char *why, size_t cap) {
-  char path[4200];
-  snprintf(path, sizeof path, "%s/frame_%04d.vtu", dir, k);
-  mpm_error err;
-  mpm_error_clear(&err);
-  if (mpm_read_vtu(path, fr, &err) != MPM_OK) {
-    snprintf(why, cap, "%s", err.message);
-    return -1;
-  }
-  return 0;
+static mpm_status read_frame(const char *dir, int k, mpm_vtu_frame *fr, char *path, size_t cap,
+                             mpm_error *err) {
+  snprintf(path, cap, "%s/frame_%04d.vtu", dir, k);
+  return mpm_read_vtu(path, fr, err);
 }
 
-/* One sampled frame into sv. */
-static int survey_frame(const render_opts *o, const mpm_vtu_frame *fr, render_survey *sv, char *why,
-                        size_t cap) {
+/* One sampled frame (read from path) into sv; field < 0: the speed's range. */
+static mpm_status survey_frame(int field_asked, const mpm_vtu_frame *fr, const char *path,
+                               render_survey *sv, mpm_error *err) {
   double lo[3], hi[3];
   mpm_render_frame_box(fr, lo, hi);
   for (int d = 0; d < 3; ++d)
@@ -96,27 +89,25 @@ static int survey_frame(const render_opts *o, const mpm_vtu_frame *fr, render_su
     if (mat && mat->data[i] > sv->max_material) sv->max_material = (int)mat->data[i];
     if (body && body->data[i] > sv->max_body) sv->max_body = (int)body->data[i];
   }
-  if (n == 0) return 0;
+  if (n == 0) return MPM_OK;
   float *v = malloc(n * sizeof *v);
-  if (!v) {
-    snprintf(why, cap, "out of memory for %zu particles", n);
-    return -1;
-  }
+  if (!v) return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for %zu particles", path, n);
   double p2, p98;
-  const int field = o->field < 0 ? FIELD_VELOCITY : o->field;
-  if (o->field < 0 || o->field == FIELD_VELOCITY) {
-    if (mpm_render_field_values(fr, FIELD_VELOCITY, v, why, cap)) {
+  mpm_status st;
+  const int field = field_asked < 0 ? MPM_RENDER_FIELD_VELOCITY : field_asked;
+  if (field_asked < 0 || field_asked == MPM_RENDER_FIELD_VELOCITY) {
+    if ((st = mpm_render_field_values(fr, path, MPM_RENDER_FIELD_VELOCITY, v, err)) != MPM_OK) {
       free(v);
-      return -1;
+      return st;
     }
     percentiles(v, n, &p2, &p98);
     if (p98 - p2 > UNIFORM_ABS + UNIFORM_REL * p98) sv->uniform_speed = 0;
   }
-  if (field != FIELD_MATERIAL && field != FIELD_BODY) {
-    if (field != FIELD_VELOCITY) {
-      if (mpm_render_field_values(fr, field, v, why, cap)) {
+  if (field != MPM_RENDER_FIELD_MATERIAL && field != MPM_RENDER_FIELD_BODY) {
+    if (field != MPM_RENDER_FIELD_VELOCITY) {
+      if ((st = mpm_render_field_values(fr, path, field, v, err)) != MPM_OK) {
         free(v);
-        return -1;
+        return st;
       }
       percentiles(v, n, &p2, &p98);
     }
@@ -124,29 +115,33 @@ static int survey_frame(const render_opts *o, const mpm_vtu_frame *fr, render_su
     sv->field_hi = fmax(sv->field_hi, p98);
   }
   free(v);
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_render_survey(const render_opts *o, const int *frames, int nf, render_survey *sv, char *why,
-                      size_t cap) {
+mpm_status mpm_render_survey(const char *dir, int field, int every, const int *frames, int nf,
+                             render_survey *sv, mpm_error *err) {
   memset(sv, 0, sizeof *sv);
   for (int d = 0; d < 3; ++d) sv->lo[d] = INFINITY, sv->hi[d] = -INFINITY;
   sv->uniform_speed = 1;
   sv->field_lo = INFINITY, sv->field_hi = -INFINITY;
-  const int rendered = (nf - 1) / o->every + 1;
+  const int rendered = (nf - 1) / every + 1;
   mpm_vtu_frame fr;
-  if (read_frame(o->dir, frames[0], &fr, why, cap)) return -1;
+  char path[4200];
+  mpm_status st = read_frame(dir, frames[0], &fr, path, sizeof path, err);
+  if (st != MPM_OK) return st;
+  sv->first_time = fr.time;
   /* small frames are all read: a fast body between two samples would leave the picture */
   const long per = fr.point_count > 0 ? fr.point_count : 1;
   long want = SURVEY_POINTS / per;
   if (want < SURVEY_SAMPLES) want = SURVEY_SAMPLES;
   const int samples = rendered < want ? rendered : (int)want;
-  int st = survey_frame(o, &fr, sv, why, cap);
+  st = survey_frame(field, &fr, path, sv, err);
   mpm_vtu_frame_free(&fr);
-  for (int s = 1; st == 0 && s < samples; ++s) {
+  for (int s = 1; st == MPM_OK && s < samples; ++s) {
     const long r = (long)s * (rendered - 1) / (samples - 1); /* a rendered frame's rank */
-    if (read_frame(o->dir, frames[r * o->every], &fr, why, cap)) return -1;
-    st = survey_frame(o, &fr, sv, why, cap);
+    st = read_frame(dir, frames[r * every], &fr, path, sizeof path, err);
+    if (st != MPM_OK) return st;
+    st = survey_frame(field, &fr, path, sv, err);
     mpm_vtu_frame_free(&fr);
   }
   sv->sampled = samples;

@@ -1,6 +1,6 @@
-/* render_surfaces.c - the particle surfaces of output.surface in `mpm render`: the per-frame
+/* surfaces.c - the particle surfaces of output.surface in a renderer's pictures: the per-frame
  * PLY meshes drawn as shaded triangles, and which particles they stand for. */
-#include "render_cmd.h"
+#include "render/renderer.h"
 #include "scene/mesh.h"
 
 #include <stdint.h>
@@ -10,10 +10,10 @@
 #include <sys/stat.h>
 
 /* The particle surfaces of frame k (output.surface): surface_NNNN.ply, or surface_bB_NNNN.ply
- * per body B < bodies. Each one found is drawn; *drawn counts them. -1 with `why` on a bad
- * file or no memory. */
-int mpm_render_draw_surfaces(const char *dir, int k, int bodies, mpm_image *img,
-                             const mpm_camera *cam, int *drawn, char *why, size_t cap) {
+ * per body B < bodies. Each one found is drawn; *drawn counts them. The status with err on a
+ * bad file or no memory. */
+mpm_status mpm_render_draw_surfaces(const char *dir, int k, int bodies, mpm_image *img,
+                                    const mpm_camera *cam, int *drawn, mpm_error *err) {
   *drawn = 0;
   for (int b = -1; b < bodies; ++b) {
     char path[4300];
@@ -24,37 +24,32 @@ int mpm_render_draw_surfaces(const char *dir, int k, int bodies, mpm_image *img,
     struct stat sb;
     if (stat(path, &sb) != 0) continue;
     mpm_mesh m;
-    mpm_error err;
-    mpm_error_clear(&err);
-    if (mpm_mesh_load(path, &m, &err) != MPM_OK) {
-      if (strstr(err.message, "no faces")) continue; /* an empty surface */
-      snprintf(why, cap, "%s", err.message);
-      return -1;
+    mpm_error load_err;
+    mpm_error_clear(&load_err);
+    if (mpm_mesh_load(path, &m, &load_err) != MPM_OK) {
+      if (strstr(load_err.message, "no faces")) continue; /* an empty surface */
+      return mpm_error_set(err, load_err.status, "%s", load_err.message);
     }
     float *xyz = malloc((3 * (size_t)m.vertex_count + 1) * sizeof *xyz);
     uint32_t *tri = malloc((3 * (size_t)m.triangle_count + 1) * sizeof *tri);
-    int st = 0;
+    mpm_status st = MPM_OK;
     if (!xyz || !tri) {
-      snprintf(why, cap, "out of memory for the surface of frame %d", k);
-      st = -1;
+      st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the surface", path);
     } else {
       for (size_t i = 0; i < 3 * (size_t)m.vertex_count; ++i) xyz[i] = (float)m.vertices[i];
       for (size_t i = 0; i < 3 * (size_t)m.triangle_count; ++i) tri[i] = (uint32_t)m.triangles[i];
       float rgb[3] = {0.80f, 0.70f, 0.52f}; /* one surface: sand; one per body: its colour */
       if (b >= 0) mpm_colormap_eval(MPM_CMAP_CATEGORY, b, rgb);
-      if (mpm_render_triangles(img, cam, (size_t)m.vertex_count, xyz, (size_t)m.triangle_count, tri,
-                               rgb, &err) != MPM_OK) {
-        snprintf(why, cap, "%s", err.message);
-        st = -1;
-      }
+      st = mpm_render_triangles(img, cam, (size_t)m.vertex_count, xyz, (size_t)m.triangle_count,
+                                tri, rgb, err);
       ++*drawn;
     }
     free(xyz);
     free(tri);
     mpm_mesh_free(&m);
-    if (st) return st;
+    if (st != MPM_OK) return st;
   }
-  return 0;
+  return MPM_OK;
 }
 
 /* Whether a particle of body b and material m is drawn by a surface (output.surface of the
