@@ -183,8 +183,16 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
       s->cp[d][k] = (mpm_real)mv[d];
       s->cf[d][k] = (mpm_real)f[d];
     }
-    if (apic)
+  }
+  /* APIC: m_a B_a, by position (apart from the loop above, whose scattered writes would double:
+   * measured) */
+  if (apic) {
+#pragma omp parallel for schedule(static)
+    for (long c = 0; c < nc; ++c) {
+      const uint32_t k = pos ? pos[c] : (uint32_t)c;
+      if (k == MPM_CORNER_PADS_NONE) continue;
       for (int e = 0; e < 9; ++e) mB[e][k] = s->cm[k] * s->cB[e][c];
+    }
   }
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
@@ -215,7 +223,9 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
 }
 
 void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
-  mpm_real gradv[9] = {0}; /* grad_X v = sum_i v_i grad_X omega_ip^T = sum_a v^g_a g_ap^T */
+  /* grad_X v = sum_i v_i grad_X omega_ip^T = sum_a v^g_a g_ap^T (mpm_domain_g2p has the same
+   * sums in its loop over the particles) */
+  mpm_real gradv[9] = {0};
   for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
     const uint32_t c = s->corner[q][a];
     const mpm_real *ga = s->g[q][a];
@@ -330,20 +340,27 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
 #pragma omp parallel for schedule(static) reduction(max : max_v2)
   for (long q = 0; q < n; ++q) {
     if (!s->active[q]) continue;
-    mpm_domain_update_F(s, (size_t)q, dt);
-    mpm_real *F[9];
-    for (int e = 0; e < 9; ++e) F[e] = p->F[e] + q;
-    const mpm_material *mat = &ctx->materials[p->material[q]];
-    if (mat->model->return_map) mat->model->return_map(mat, 1, F, p->plastic + q);
-    mpm_real x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    /* one pass over the 8 corners for grad_X v (F, Zhu eq. 7) and for x and v (the corners
+     * have moved already: they do not depend on F) */
+    mpm_real gradv[9] = {0}, x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
       const uint32_t c = s->corner[q][a];
-      const mpm_real w = s->w[q][a];
+      const mpm_real w = s->w[q][a], *ga = s->g[q][a];
+      const mpm_real vg[3] = {s->cvg[0][c], s->cvg[1][c], s->cvg[2][c]};
+      for (int r = 0; r < 3; ++r)
+        for (int t = 0; t < 3; ++t) gradv[3 * r + t] += vg[r] * ga[t];
       for (int d = 0; d < 3; ++d) {
         x[d] += w * s->cx[d][c];
         v[d] += w * s->cv[d][c];
       }
     }
+    mpm_real *F[9];
+    for (int e = 0; e < 9; ++e) {
+      F[e] = p->F[e] + q;
+      *F[e] += dt * gradv[e];
+    }
+    const mpm_material *mat = &ctx->materials[p->material[q]];
+    if (mat->model->return_map) mat->model->return_map(mat, 1, F, p->plastic + q);
     mpm_real check = 0, v2 = 0;
     for (int d = 0; d < 3; ++d) {
       p->x[d][q] = x[d];
