@@ -102,7 +102,8 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
    * then write their P2G values close to one another (measured: 10% of the domain step) */
   uint32_t *first = mpm_arena_alloc(scratch, (groups + 1) * sizeof *first);
   group_place *place = mpm_arena_alloc(scratch, (groups + 1) * sizeof *place);
-  if (!first || !place) return -1;
+  P->in_space = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->in_space);
+  if (!first || !place || !P->in_space) return -1;
   for (size_t q = 0; q < groups; ++q) {
     const int32_t *bc = sg->coord[mpm_scatter_schedule_group_key(S, P->block, q)];
     place[q].key = (uint64_t)(uint32_t)(bc[2] + (1 << 20)) << 42 |
@@ -114,6 +115,7 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   uint32_t next = 0;
   for (size_t j = 0; j < groups; ++j) {
     const uint32_t q = place[j].group;
+    P->in_space[j] = q;
     first[q] = next;
     next += S->group_start[q + 1] - S->group_start[q];
   }
@@ -358,8 +360,9 @@ ALWAYS_INLINE void gather_groups(const int W, const int apic, const mpm_corner_p
                                  mpm_domain_set *s, const mpm_kernel *k, const mpm_real *const v[3],
                                  const mpm_real *const v0[3]) {
   const long groups = (long)P->schedule.colour_start[MPM_SCHEDULE_COLOURS];
+  /* in the order of the positions: the corners' positions stream through memory */
 #pragma omp parallel for schedule(dynamic, 4)
-  for (long q = 0; q < groups; ++q) gather_group(W, apic, P, s, k, (size_t)q, v, v0);
+  for (long j = 0; j < groups; ++j) gather_group(W, apic, P, s, k, P->in_space[j], v, v0);
 }
 
 void mpm_corner_pads_gather(const mpm_corner_pads *P, mpm_domain_set *s, const mpm_kernel *k,

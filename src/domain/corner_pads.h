@@ -43,6 +43,7 @@ typedef struct mpm_corner_pads {
    * in it (so that a batch of corners is contiguous), and their positions x[d][k] */
   uint32_t *row;
   uint32_t *pos;                    /* per corner: its position, or MPM_CORNER_PADS_NONE */
+  uint32_t *in_space;               /* the groups in the order of their positions */
   size_t positions, grid_positions; /* all; of the groups (the enriched follow) */
   mpm_real *x[3];
   uint32_t (*cell_start)[MPM_BLOCK_NODES + 1]; /* per group: row[] of each cell (absolute) */
