@@ -1,8 +1,8 @@
 /* test_sim.c - scene-level checks of the explicit solver against conservation laws and
  * analytic motion: exact mass conservation, linear and (APIC) angular momentum conserved to
  * round-off without external forces, free fall = g t^2 / 2, a block resting on the floor
- * settles without energy growth, sparse grid = dense grid, and 1 and 2 threads give bitwise
- * identical particles. */
+ * settles without energy growth, sparse grid = dense grid, 1 and 2 threads give bitwise
+ * identical particles, and a body drifting slowly across a power of two keeps its shape. */
 #include "support.h"
 #include "sim_support.h"
 #include "core/parallel.h"
@@ -262,6 +262,65 @@ static void test_ugimp_lattice_body_stays_finite(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* A body of material points drifting slowly across x = 0.5, where the float spacing doubles,
+ * keeps its shape (issue 13): every particle's offset from the first (matched by id: the sort
+ * reorders them) against the start, after `steps` steps. The moves are about one float spacing
+ * per step. */
+static double mp_drift_shape_error(const char *transfer, const char *kernel, double speed,
+                                   int steps) {
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0, 0.3, 0.3], \"max\": [1.0, 0.7, 0.7], \"dx\": 0.04},"
+           " \"gravity\": [0, 0, 0], \"time\": {\"end\": 1000, \"fps\": 1},"
+           " \"solver\": {\"transfer\": \"%s\", \"kernel\": \"%s\"},"
+           " \"materials\": [{\"name\": \"soft\", \"model\": \"neo_hookean\", \"E\": 200, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5], "
+           "\"half_extent\": [0.1, 0.02, 0.02]}, \"material\": \"soft\", \"jitter\": 0, "
+           "\"velocity\": [%g, 0, 0]}]}",
+           transfer, kernel, speed);
+  mpm_sim *sim = test_sim_from_json(text, "drift.json");
+  const mpm_particles *p = &sim->particles;
+  const size_t n = p->count;
+  double(*x0)[3] = malloc(n * sizeof *x0);
+  uint32_t first = p->id[0];
+  for (size_t q = 0; q < n; ++q) {
+    assert_true(p->id[q] < n);
+    for (int d = 0; d < 3; ++d) x0[p->id[q]][d] = p->x[d][q];
+  }
+  run_steps(sim, steps, 0);
+  size_t at_first = 0;
+  for (size_t q = 0; q < n; ++q)
+    if (p->id[q] == first) at_first = q;
+  double worst = 0;
+  for (size_t q = 0; q < n; ++q)
+    for (int d = 0; d < 3; ++d) {
+      const double rel =
+          ((double)p->x[d][q] - (double)p->x[d][at_first]) - (x0[p->id[q]][d] - x0[first][d]);
+      worst = fmax(worst, fabs(rel));
+    }
+  const double moved = (double)p->x[0][at_first] - x0[first][0];
+  print_message("material points drifting across x = 0.5 (%s, %s, %.2g m/s): moved %.3g m in %d "
+                "steps of %.3g s; largest change of a particle's offset %.3g m\n",
+                transfer, kernel, speed, moved, steps, sim->last_dt, worst);
+  /* and it moved as far as its velocity says */
+  assert_close(moved, speed * sim->time, 0.002 * speed * sim->time);
+  free(x0);
+  mpm_sim_destroy(sim);
+  return worst;
+}
+
+static void test_slow_drift_keeps_shape(void **state) {
+  (void)state;
+  /* steps of 0.031 s; 6e-8 m is the float spacing above 0.5, 3e-8 below. At 1.5e-6 m/s a move
+   * of 4.6e-8 m rounded to 6e-8 on both sides (29% too far); at 6.5e-7 m/s one of 2e-8 m
+   * rounded to 3e-8 below 0.5 and to 0 above it, and the halves of the bar separated */
+  assert_true(mp_drift_shape_error("apic", "quadratic", 1.5e-6, 4000) < TOL(2e-7, 1e-14));
+  assert_true(mp_drift_shape_error("apic", "quadratic", 6.5e-7, 4000) < TOL(2e-7, 1e-14));
+  assert_true(mp_drift_shape_error("flip", "quadratic", 6.5e-7, 4000) < TOL(2e-7, 1e-14));
+  assert_true(mp_drift_shape_error("apic", "ugimp", 6.5e-7, 4000) < TOL(2e-7, 1e-14));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_grid_mass),
@@ -272,6 +331,7 @@ int main(void) {
       cmocka_unit_test(test_sparse_equals_dense),
       cmocka_unit_test(test_threads_bitwise_identical),
       cmocka_unit_test(test_ugimp_lattice_body_stays_finite),
+      cmocka_unit_test(test_slow_drift_keeps_shape),
   };
   return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
 }

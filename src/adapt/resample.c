@@ -47,6 +47,7 @@ int mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s, uint
     }
     for (int d = 0; d < 3; ++d) {
       p->x[d][j] = (mpm_real)(x0[d] + r[d]);
+      p->xc[d][j] = 0;
       if (s->apic)
         p->v[d][j] =
             (mpm_real)(v0[d] + C[3 * d] * r[0] + C[3 * d + 1] * r[1] + C[3 * d + 2] * r[2]);
@@ -136,6 +137,7 @@ void mpm_merge_particles(mpm_particles *p, const uint32_t *idx, int n, int apic)
   const size_t i = idx[0];
   for (int d = 0; d < 3; ++d) {
     p->x[d][i] = (mpm_real)xc[d];
+    p->xc[d][i] = 0;
     p->v[d][i] = (mpm_real)(mv[d] / M);
   }
   for (int c = 0; c < 9; ++c) {

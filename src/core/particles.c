@@ -15,6 +15,7 @@ void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_
   arrays[k++] = &p->mass;
   arrays[k++] = &p->vol0;
   arrays[k++] = &p->temperature;
+  for (int d = 0; d < 3; ++d) arrays[k++] = &p->xc[d];
 }
 
 static int regrow(void **ptr, size_t old_count, size_t new_count, size_t elem) {
@@ -63,6 +64,7 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
   size_t i = p->count++;
   for (int d = 0; d < 3; ++d) {
     p->x[d][i] = x[d];
+    p->xc[d][i] = 0;
     p->v[d][i] = v[d];
   }
   for (int d = 0; d < 9; ++d) {

@@ -14,6 +14,11 @@
 typedef struct mpm_particles {
   size_t count, capacity;
   mpm_real *x[3];        /* position, m */
+  mpm_real *xc[3];       /* what the rounded x could not hold of the position, m: the steps'
+                            moves are summed with compensation (Knuth's TwoSum), so that a body
+                            drifting slowly does not round differently on either side of a
+                            power of two in float, nor move farther than its velocity says
+                            (issue 13); 0 after a jump (sampling, split, merge, release) */
   mpm_real *v[3];        /* velocity, m/s */
   mpm_real *F[9];        /* deformation gradient, row-major components */
   mpm_real *B[9];        /* APIC affine moment B_p = C_p D_p (Jiang et al. 2015), m^2/s, row-major.
@@ -32,18 +37,18 @@ typedef struct mpm_particles {
 } mpm_particles;
 
 /* All real-valued component arrays, for loops that treat them alike (permute, grow). */
-#define MPM_PARTICLE_REAL_ARRAYS 28
+#define MPM_PARTICLE_REAL_ARRAYS 31
 
 int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
 void mpm_particles_free(mpm_particles *p);
 int mpm_particles_reserve(mpm_particles *p, size_t capacity);
 
-/* Append one particle at rest state (F = I, B = 0, level 0, temperature 0); returns its index or -1
- * on OOM. */
+/* Append one particle at rest state (F = I, B = 0, xc = 0, level 0, temperature 0); returns its
+ * index or -1 on OOM. */
 long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[3], mpm_real mass,
                         mpm_real vol0, int32_t material, int32_t body);
 
-/* Pointers to the 28 real arrays, in a fixed order. */
+/* Pointers to the 31 real arrays, in a fixed order (xc last). */
 void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]);
 
 /* Reorder all arrays so that new[i] = old[perm[i]]. scratch holds `count` reals and may be

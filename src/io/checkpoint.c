@@ -5,11 +5,11 @@
  *               max_speed, steps, frame, written_frames, dt_level, threads, next_id,
  *               particle_count, records, refined_cells, checksum (FNV-1a over all the
  *               others), content_checksum (over every array and record as read back)
- *   datasets    particle_reals [28][n] (the real arrays in mpm_particles_real_arrays order),
+ *   datasets    particle_reals [31][n] (the real arrays in mpm_particles_real_arrays order),
  *               particle_material [n], particle_body [n], particle_level [n], particle_id [n],
  *               frame_times [r], frame_files [r][64] (NUL-padded names), stats [r][25];
  *               with particle domains (attributes domain_particles nd, domain_corners nc):
- *               domain_reals [28][nd], domain_material, domain_body, domain_id, domain_active,
+ *               domain_reals [31][nd], domain_material, domain_body, domain_id, domain_active,
  *               domain_enriched (the enrichment flags: state, for their hysteresis)
  *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
  *               corner_reals [21][nc] (reference position, position, velocity, position

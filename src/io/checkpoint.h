@@ -22,7 +22,7 @@
 
 #include <stdint.h>
 
-#define MPM_CHECKPOINT_VERSION 8
+#define MPM_CHECKPOINT_VERSION 9
 #define MPM_FRAME_NAME_MAX 64
 #define MPM_CKPT_SOLVER_FIGURES 12
 

@@ -306,6 +306,7 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
         for (int d = 0; d < 3; ++d) {
           const mpm_real lo = (mpm_real)(sc->domain_min[d] + sc->dx),
                          hi = (mpm_real)(sc->domain_max[d] - sc->dx);
+          if (p->x[d][j] < lo || p->x[d][j] > hi) p->xc[d][j] = 0;
           p->x[d][j] = p->x[d][j] < lo ? lo : p->x[d][j] > hi ? hi : p->x[d][j];
         }
       uint32_t kids[8] = {(uint32_t)i};

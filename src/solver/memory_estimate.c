@@ -9,11 +9,12 @@
 #include <string.h>
 #include <unistd.h>
 
-/* Bytes per particle: the particle arrays (x, v, F, B: 24 reals; mass, vol0, plastic: 3 reals;
- * material, body, id: 3 x 4 bytes), the sort's permutation, keys and scratch (about 16 bytes),
- * and the sparse grid blocks the particles occupy (about 20% on top for 8 particles per cell).
- * Measured: 157 bytes per particle in the float build (README, `mpm bench step`). */
-#define BYTES_PER_PARTICLE (1.2 * (27.0 * (double)sizeof(mpm_real) + 12 + 16))
+/* Bytes per particle: the particle arrays (x, its compensation xc, v, F, B: 27 reals; mass,
+ * vol0, plastic, temperature: 4 reals; material, body, level, id: 4 x 4 bytes), the sort's
+ * permutation, keys and scratch (about 16 bytes), and the sparse grid blocks the particles
+ * occupy (about 20% on top for 8 particles per cell). Measured: 157 bytes per particle in the
+ * float build before xc and temperature (README, `mpm bench step`). */
+#define BYTES_PER_PARTICLE (1.2 * (31.0 * (double)sizeof(mpm_real) + 16 + 16))
 
 /* The implicit step's scratch per particle: the factored stress derivative (30 reals), F at the
  * displacement (9), the gathered gradients and the diagonal's quadratic forms (18); and per DOF

@@ -61,10 +61,18 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_tr
     check += Fn[c];
   }
   for (int d = 0; d < 3; ++d) {
-    mpm_real xn = p->x[d][i] + dt * o.v[d];
-    xn = xn < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : xn;
-    xn = xn > ctx->clamp_hi[d] ? ctx->clamp_hi[d] : xn;
+    /* x += dt v with compensation (particles.h, xc): y is the move plus what the last rounding
+     * lost, xn = x + y rounded and lost its rounding error exactly (Knuth's TwoSum) */
+    const mpm_real x = p->x[d][i], y = dt * o.v[d] + p->xc[d][i];
+    mpm_real xn = x + y;
+    const mpm_real yb = xn - x;
+    mpm_real lost = (x - (xn - yb)) + (y - yb);
+    if (xn < ctx->clamp_lo[d] || xn > ctx->clamp_hi[d]) { /* held at the clamp: exact there */
+      xn = xn < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : ctx->clamp_hi[d];
+      lost = 0;
+    }
     p->x[d][i] = xn;
+    p->xc[d][i] = lost;
     p->v[d][i] = v[d];
     check += xn + v[d];
   }
@@ -94,9 +102,16 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
   for (int d = 0; d < 3; ++d) {
     mpm_vl v = o->v[d];
     if (!apic) v = a * (mpm_lanes_load(p->v[d], idx, n, contiguous) + o->dv[d]) + (1 - a) * o->v[d];
-    mpm_vl xn = mpm_lanes_load(p->x[d], idx, n, contiguous) + dt * o->v[d];
-    xn = mpm_vl_min(mpm_vl_max(xn, mpm_vl_splat(ctx->clamp_lo[d])), mpm_vl_splat(ctx->clamp_hi[d]));
+    /* x += dt v with compensation (particles.h, xc; Knuth's TwoSum, as the scalar update) */
+    const mpm_vl x = mpm_lanes_load(p->x[d], idx, n, contiguous);
+    const mpm_vl y = dt * o->v[d] + mpm_lanes_load(p->xc[d], idx, n, contiguous);
+    const mpm_vl t = x + y, yb = t - x;
+    const mpm_vl lost = (x - (t - yb)) + (y - yb);
+    const mpm_vl xn =
+        mpm_vl_min(mpm_vl_max(t, mpm_vl_splat(ctx->clamp_lo[d])), mpm_vl_splat(ctx->clamp_hi[d]));
+    const mpm_vl zero = {0};
     mpm_lanes_store(p->x[d], idx, n, contiguous, xn);
+    mpm_lanes_store(p->xc[d], idx, n, contiguous, mpm_vl_select(xn == t, lost, zero));
     mpm_lanes_store(p->v[d], idx, n, contiguous, v);
     check += xn;
     v2 += v * v;
