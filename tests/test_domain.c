@@ -473,8 +473,7 @@ static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer
     assert_true(B > 0);
     /* B sums terms of |v| |a| D ~ |v| dx much larger than itself (a rotation's moment is
      * their difference): 10 times the tolerance */
-    for (int e = 0; e < 9; ++e)
-      assert_arrays_close(a.s.cB[e], b.s.cB[e], nc, 10 * tol, "corner B");
+    for (int e = 0; e < 9; ++e) assert_arrays_close(a.s.cB[e], b.s.cB[e], nc, 10 * tol, "corner B");
   }
   for (int e = 0; e < 9; ++e)
     assert_arrays_close(a.s.particles.F[e], b.s.particles.F[e], a.s.particles.count, tol,
