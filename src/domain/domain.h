@@ -90,6 +90,10 @@ typedef struct mpm_domain_set {
    * APIC factor a_e = D_a^-1 omega_i(x_a) (x_i - x_a), 1/m, and per corner D_a's diagonal, m^2
    * (interp/kernel.h) */
   mpm_real *apic_a[3], *apic_d[3];
+  /* per step (step scratch, set by P2G for G2P): each corner's new position, velocity and grid
+   * velocity side by side, written by G2P's corner loop for its particle loop, which reads 8
+   * corners per particle: one or two cache lines each instead of nine arrays' */
+  mpm_real (*corner_pack)[9];
   /* set by the step: 1 when it applies the corners' embedding as a matrix (the implicit
    * Hessian, domain_hessian.c), so that P2G builds corner_grid's rows; else on the sparse grid
    * the corner transfers go through pads (domain/corner_pads.h) and corner_grid is empty */

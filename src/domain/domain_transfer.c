@@ -148,6 +148,9 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
    *    particles' values are read in their order); with pads, corner c's values are written
    *    at its position s->pads.pos[c] */
   const uint32_t *pos = pads ? s->pads.pos : NULL;
+  /* G2P's packed copy of the corners (step scratch) */
+  s->corner_pack = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof *s->corner_pack);
+  if (!s->corner_pack) return -1;
   mpm_real *mB[9] = {NULL}; /* APIC: m_a B_a, by position as the other values */
   for (int e = 0; e < 9 && apic; ++e) {
     mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
@@ -331,6 +334,12 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
       s->cx[d][c] = t;
       s->cxc[d][c] = lost;
     }
+    mpm_real *pk = s->corner_pack[c]; /* what the particles read of the corner, together */
+    for (int d = 0; d < 3; ++d) {
+      pk[d] = s->cx[d][c];
+      pk[3 + d] = s->cv[d][c];
+      pk[6 + d] = s->cvg[d][c];
+    }
   }
   /* 2. particles: F from the grid velocities at the corners (Zhu eq. 7), the return map of
    *    plastic models, then position and velocity from the corners */
@@ -344,14 +353,13 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
      * have moved already: they do not depend on F) */
     mpm_real gradv[9] = {0}, x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
-      const uint32_t c = s->corner[q][a];
+      const mpm_real *pk = s->corner_pack[s->corner[q][a]]; /* x, v, v^g */
       const mpm_real w = s->w[q][a], *ga = s->g[q][a];
-      const mpm_real vg[3] = {s->cvg[0][c], s->cvg[1][c], s->cvg[2][c]};
       for (int r = 0; r < 3; ++r)
-        for (int t = 0; t < 3; ++t) gradv[3 * r + t] += vg[r] * ga[t];
+        for (int t = 0; t < 3; ++t) gradv[3 * r + t] += pk[6 + r] * ga[t];
       for (int d = 0; d < 3; ++d) {
-        x[d] += w * s->cx[d][c];
-        v[d] += w * s->cv[d][c];
+        x[d] += w * pk[d];
+        v[d] += w * pk[3 + d];
       }
     }
     mpm_real *F[9];
