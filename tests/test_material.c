@@ -12,7 +12,8 @@
  *    and dPsi along a clamped singular direction equals P there;
  *  - the clamped and unclamped paths agree at the threshold (continuity) and the fast path
  *    agrees with the SVD path; inverted, flat and zero F give finite output;
- *  - kirchhoff_batch equals pk1 F^T on chunks of 64 (and 37) particles;
+ *  - kirchhoff_batch equals pk1 F^T, and pk1_batch equals pk1, on chunks of 64 (and 37)
+ *    particles (fixed corotated, neo-Hookean, Hencky StVK);
  *  - dpdf_action_definite (Teran et al. 2005) equals the eigenvalue-clamped 9x9 matrix of
  *    dpdf_action, is symmetric semi-definite, and is dpdf_action where that is definite;
  *  - rest state F = I (and any rotation) has zero energy and stress;
@@ -35,7 +36,7 @@ static const double TOL_EXACT = TOL(2e-5, 1e-11); /* against closed forms */
 typedef struct worst {
   double fcr_p_fd, fcr_dp_fd, fcr_p_exact;
   double nh_p_fd, nh_dp_fd, nh_p_exact, nh_clamp_p, nh_clamp_dp, nh_clamp_dir, nh_psi_exact;
-  double batch, continuity, definite;
+  double batch, pk1_batch, continuity, definite;
 } worst;
 static worst W;
 
@@ -556,14 +557,35 @@ static void check_batch(const mpm_material *m, uint64_t *rng, int n, int mode) {
   }
   for (int c = 0; c < 9; ++c) /* nothing written past n */
     for (int i = n; i < MPM_STRESS_CHUNK; ++i) assert_true(tau[c][i] == (mpm_real)1e30);
+  /* pk1_batch against pk1, on the same chunk (inverted and clamped particles included) */
+  assert_non_null(m->model->pk1_batch);
+  mpm_real P[9][MPM_STRESS_CHUNK];
+  for (int c = 0; c < 9; ++c)
+    for (int i = 0; i < MPM_STRESS_CHUNK; ++i) P[c][i] = (mpm_real)1e30;
+  m->model->pk1_batch(m, n, Fp, P);
+  for (int i = 0; i < n; ++i) {
+    mpm_real F[9], Pi[9], got[9];
+    double Pe[9];
+    for (int c = 0; c < 9; ++c) F[c] = Fc[c][i];
+    m->model->pk1(m, F, Pi);
+    for (int c = 0; c < 9; ++c) {
+      Pe[c] = Pi[c];
+      got[c] = P[c][i];
+    }
+    check_err(rel_err(got, Pe, 9, fmax(maxabs(Pe, 9), (double)(m->mu + m->lambda))),
+              TOL(2e-5, 1e-12), &W.pk1_batch, m->model->name, i);
+  }
+  for (int c = 0; c < 9; ++c)
+    for (int i = n; i < MPM_STRESS_CHUNK; ++i) assert_true(P[c][i] == (mpm_real)1e30);
 }
 
 static void test_kirchhoff_batch(void **state) {
   (void)state;
   uint64_t rng = 26;
-  const mpm_material mats[2] = {make(MPM_MODEL_FIXED_COROTATED, 1e5, 0.3, 1000, 0.3),
-                                make(MPM_MODEL_NEO_HOOKEAN, 1e5, 0.3, 1000, 0.3)};
-  for (int k = 0; k < 2; ++k)
+  const mpm_material mats[3] = {make(MPM_MODEL_FIXED_COROTATED, 1e5, 0.3, 1000, 0.3),
+                                make(MPM_MODEL_NEO_HOOKEAN, 1e5, 0.3, 1000, 0.3),
+                                make(MPM_MODEL_HENCKY_STVK, 1e5, 0.3, 1000, 0.3)};
+  for (int k = 0; k < 3; ++k)
     for (int rep = 0; rep < 20; ++rep) {
       check_batch(&mats[k], &rng, MPM_STRESS_CHUNK, rep % 3 == 2);
       check_batch(&mats[k], &rng, 37, 0);
@@ -742,11 +764,11 @@ static void test_report(void **state) {
                 "fast vs SVD path %.3g\n"
                 "  neo-Hookean clamped: P %.3g, Psi %.3g, dP vs eq. 16 %.3g, dPsi along clamped "
                 "direction %.3g, threshold %.3g\n"
-                "  kirchhoff_batch vs pk1 F^T %.3g\n"
+                "  kirchhoff_batch vs pk1 F^T %.3g, pk1_batch vs pk1 %.3g\n"
                 "  definiteness fix vs eigenvalue-clamped 9x9 / semi-definite / plain %.3g\n",
                 MPM_REAL_NAME, W.fcr_p_fd, W.fcr_dp_fd, W.fcr_p_exact, W.nh_p_fd, W.nh_dp_fd,
                 W.nh_p_exact, W.nh_clamp_p, W.nh_psi_exact, W.nh_clamp_dp, W.nh_clamp_dir,
-                W.continuity, W.batch, W.definite);
+                W.continuity, W.batch, W.pk1_batch, W.definite);
 }
 
 int main(void) {

@@ -25,6 +25,8 @@
  * another order: the explicit domain scenes on the sparse grid were rewritten with it (the
  * enriched release, whose every corner is its own DOF, and every other scene are unchanged).
  *
+ * The domain particles' stresses come from the models' pk1_batch (vectorized logarithm and SVD),
+ * which rounds differently from pk1: the six domain scenes were rewritten with it.
  * The material points' moves are summed with compensation (particles.h, xc; issue 13: a body
  * drifting slowly moved up to 29% farther than its velocity said in float): every scene's
  * positions round differently since, and all digests were rewritten with it.

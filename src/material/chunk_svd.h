@@ -71,4 +71,18 @@ static inline void mpm_chunk_svd_tau(int n, const mpm_chunk_svd *d,
 #undef MPM_UDU
 }
 
+/* P[.][i] = U_i diag(dg[0][i], dg[1][i], dg[2][i]) V_i^T for the chunk's n particles: the first
+ * Piola-Kirchhoff stress of an isotropic model from its principal values (pk1_batch). */
+static inline void mpm_chunk_svd_pk1(int n, const mpm_chunk_svd *d,
+                                     const mpm_real dg[3][MPM_STRESS_CHUNK],
+                                     mpm_real P[9][MPM_STRESS_CHUNK]) {
+  const mpm_real(*U)[MPM_STRESS_CHUNK] = d->U, (*V)[MPM_STRESS_CHUNK] = d->V;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      for (int i = 0; i < n; ++i)
+        P[3 * r + c][i] = U[3 * r][i] * dg[0][i] * V[3 * c][i] +
+                          U[3 * r + 1][i] * dg[1][i] * V[3 * c + 1][i] +
+                          U[3 * r + 2][i] * dg[2][i] * V[3 * c + 2][i];
+}
+
 #endif

@@ -118,6 +118,7 @@ const mpm_model mpm_model_drucker_prager = {
     .dpdf_action_definite = mpm_hencky_dpdf_action_definite,
     .hessian_definite = mpm_hencky_hessian_definite,
     .kirchhoff_batch = mpm_hencky_kirchhoff_batch,
+    .pk1_batch = mpm_hencky_pk1_batch,
     .return_map = dp_return_map,
     .plastic_initial = 0,
 };

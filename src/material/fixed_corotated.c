@@ -156,6 +156,29 @@ void mpm_fcr_kirchhoff_scaled(const mpm_material *m, int n, const mpm_real *cons
   mpm_chunk_svd_tau(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, iso, tau);
 }
 
+/* P = 2 mu (F - R) + lambda (J - 1) cof F, with F - R = U diag(s - 1) V^T from the chunk's
+ * SVDs (R = U V^T: the signed singular values keep U and V rotations, as mpm_polar3's R) and the
+ * cofactor and J from F's entries, as fcr_pk1. */
+static void fcr_pk1_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                          mpm_real P[9][MPM_STRESS_CHUNK]) {
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, F, &d);
+  const mpm_real two_mu = 2 * m->mu, l = m->lambda;
+  mpm_real dg[3][MPM_STRESS_CHUNK];
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < n; ++i) dg[k][i] = two_mu * (d.s[k][i] - 1);
+  mpm_chunk_svd_pk1(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, P);
+  for (int i = 0; i < n; ++i) {
+    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
+                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
+    const mpm_real C[9] = {f4 * f8 - f5 * f7, f5 * f6 - f3 * f8, f3 * f7 - f4 * f6,
+                           f2 * f7 - f1 * f8, f0 * f8 - f2 * f6, f1 * f6 - f0 * f7,
+                           f1 * f5 - f2 * f4, f2 * f3 - f0 * f5, f0 * f4 - f1 * f3};
+    const mpm_real lj = l * (f0 * C[0] + f1 * C[1] + f2 * C[2] - 1);
+    for (int e = 0; e < 9; ++e) P[e][i] += lj * C[e];
+  }
+}
+
 static void fcr_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
                                 const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   (void)plastic; /* elastic: no plastic state */
@@ -170,6 +193,7 @@ const mpm_model mpm_model_fixed_corotated = {
     .dpdf_action_definite = fcr_dpdf_action_definite,
     .hessian_definite = fcr_hessian_definite,
     .kirchhoff_batch = fcr_kirchhoff_batch,
+    .pk1_batch = fcr_pk1_batch,
     .return_map = NULL,
     .plastic_initial = 1,
 };

@@ -37,6 +37,9 @@ void mpm_hencky_dpdf_action(const mpm_material *m, const mpm_real F[9], const mp
 void mpm_hencky_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
                                      const mpm_real dF[9], mpm_real dP[9]);
 void mpm_hencky_hessian_definite(const mpm_material *m, const mpm_real F[9], mpm_stress_hessian *H);
+/* P for n <= MPM_STRESS_CHUNK particles (the model's pk1_batch). */
+void mpm_hencky_pk1_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                          mpm_real P[9][MPM_STRESS_CHUNK]);
 /* tau for n <= MPM_STRESS_CHUNK particles; the plastic state plays no role in the elasticity. */
 void mpm_hencky_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
                                 const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]);

@@ -125,6 +125,30 @@ void mpm_hencky_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *co
   mpm_chunk_svd_tau(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, iso, tau);
 }
 
+/* P = U diag(sgn_i h_i) V^T, h_i = (2 mu e_i + lambda tr e) / c_i (mpm_hencky_pk1), from the
+ * chunk's SVDs and one vectorized logarithm. */
+void mpm_hencky_pk1_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                          mpm_real P[9][MPM_STRESS_CHUNK]) {
+  assert(n >= 0 && n <= MPM_STRESS_CHUNK);
+  mpm_chunk_svd d;
+  mpm_chunk_svd_compute(n, F, &d);
+  mpm_real c[3 * MPM_STRESS_CHUNK], e[3 * MPM_STRESS_CHUNK];
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < n; ++i)
+      c[k * MPM_STRESS_CHUNK + i] = mpm_fmax(mpm_fabs(d.s[k][i]), MPM_HENCKY_FLOOR);
+  for (int k = 0; k < 3; ++k) mpm_log_array(n, c + k * MPM_STRESS_CHUNK, e + k * MPM_STRESS_CHUNK);
+  const mpm_real mu2 = 2 * m->mu, l = m->lambda;
+  mpm_real dg[3][MPM_STRESS_CHUNK];
+  for (int i = 0; i < n; ++i) {
+    const mpm_real lt = l * (e[i] + e[MPM_STRESS_CHUNK + i] + e[2 * MPM_STRESS_CHUNK + i]);
+    for (int k = 0; k < 3; ++k) {
+      const mpm_real h = (mu2 * e[k * MPM_STRESS_CHUNK + i] + lt) / c[k * MPM_STRESS_CHUNK + i];
+      dg[k][i] = d.s[k][i] < 0 ? -h : h;
+    }
+  }
+  mpm_chunk_svd_pk1(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, P);
+}
+
 const mpm_model mpm_model_hencky_stvk = {
     .name = "hencky_stvk",
     .energy = mpm_hencky_energy,
@@ -133,6 +157,7 @@ const mpm_model mpm_model_hencky_stvk = {
     .dpdf_action_definite = mpm_hencky_dpdf_action_definite,
     .hessian_definite = mpm_hencky_hessian_definite,
     .kirchhoff_batch = mpm_hencky_kirchhoff_batch,
+    .pk1_batch = mpm_hencky_pk1_batch,
     .return_map = NULL,
     .plastic_initial = 1,
 };

@@ -67,6 +67,12 @@ struct mpm_model {
    * the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */
   void (*kirchhoff_batch)(const mpm_material *m, int n, const mpm_real *const F[9],
                           const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]);
+  /* Batch: the first Piola-Kirchhoff stress P of n <= MPM_STRESS_CHUNK particles, as pk1 gives
+   * it, into P[c][i] (the particle domains' forces need P, Zhu eq. 8; P from tau F^-T would
+   * lose accuracy where F is nearly singular). The material's own moduli: callers of models
+   * whose moduli vary per particle (mpm_material_varies) use pk1. NULL: no batch entry. */
+  void (*pk1_batch)(const mpm_material *m, int n, const mpm_real *const F[9],
+                    mpm_real P[9][MPM_STRESS_CHUNK]);
   /* Plastic models: project the trial elastic F of n particles (components F[0..8][0..n))
    * back to the yield surface in place and update their plastic state (Gao sec. 4.2). NULL
    * for purely elastic models. */

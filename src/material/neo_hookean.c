@@ -164,6 +164,46 @@ static void nh_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
 /* Two passes so that the common case stays a branch-free loop: the closed form
  * tau = mu (F F^T - I) + lambda ln J I for every particle, then the few particles that may be
  * clamped are redone in the diagonal space, tau = U diag(p_i s_i) U^T (= P F^T). */
+/* P = mu F + (lambda ln J - mu) F^-T (F^-T = cof F / J) as one loop over the chunk with the
+ * logarithm vectorized, then the particles that may be clamped through nh_pk1. */
+static void nh_pk1_batch(const mpm_material *m, int n, const mpm_real *const F[9],
+                         mpm_real P[9][MPM_STRESS_CHUNK]) {
+  assert(n >= 0 && n <= MPM_STRESS_CHUNK);
+  const mpm_real mu = m->mu, l = m->lambda, c = m->min_stretch;
+  mpm_real J[MPM_STRESS_CHUNK], Jc[MPM_STRESS_CHUNK], lnJ[MPM_STRESS_CHUNK];
+  int slow[MPM_STRESS_CHUNK], nslow = 0;
+  for (int i = 0; i < n; ++i) {
+    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
+                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
+    J[i] = f0 * (f4 * f8 - f5 * f7) + f1 * (f5 * f6 - f3 * f8) + f2 * (f3 * f7 - f4 * f6);
+    const mpm_real ff =
+        f0 * f0 + f1 * f1 + f2 * f2 + f3 * f3 + f4 * f4 + f5 * f5 + f6 * f6 + f7 * f7 + f8 * f8;
+    /* clamped (see nh_unclamped), or so flat that the vector logarithm's floor would apply */
+    slow[i] = !(J[i] > 0 && 2 * J[i] >= c * ff) || J[i] < MPM_REAL_EPS;
+    nslow += slow[i];
+    Jc[i] = mpm_fmax(J[i], MPM_REAL_EPS);
+  }
+  mpm_log_array(n, Jc, lnJ);
+  for (int i = 0; i < n; ++i) {
+    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
+                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
+    const mpm_real C[9] = {f4 * f8 - f5 * f7, f5 * f6 - f3 * f8, f3 * f7 - f4 * f6,
+                           f2 * f7 - f1 * f8, f0 * f8 - f2 * f6, f1 * f6 - f0 * f7,
+                           f1 * f5 - f2 * f4, f2 * f3 - f0 * f5, f0 * f4 - f1 * f3};
+    const mpm_real f[9] = {f0, f1, f2, f3, f4, f5, f6, f7, f8};
+    const mpm_real k = (l * lnJ[i] - mu) / Jc[i];
+    for (int e = 0; e < 9; ++e) P[e][i] = mu * f[e] + k * C[e];
+  }
+  if (nslow == 0) return;
+  for (int i = 0; i < n; ++i) {
+    if (!slow[i]) continue;
+    mpm_real Fi[9], Pi[9];
+    for (int e = 0; e < 9; ++e) Fi[e] = F[e][i];
+    nh_pk1(m, Fi, Pi);
+    for (int e = 0; e < 9; ++e) P[e][i] = Pi[e];
+  }
+}
+
 static void nh_kirchhoff_batch(const mpm_material *m, int n, const mpm_real *const F[9],
                                const mpm_real *plastic, mpm_real tau[9][MPM_STRESS_CHUNK]) {
   (void)plastic; /* elastic: no plastic state */
@@ -217,6 +257,7 @@ const mpm_model mpm_model_neo_hookean = {
     .dpdf_action_definite = nh_dpdf_action_definite,
     .hessian_definite = nh_hessian_definite,
     .kirchhoff_batch = nh_kirchhoff_batch,
+    .pk1_batch = nh_pk1_batch,
     .return_map = NULL,
     .plastic_initial = 1,
 };

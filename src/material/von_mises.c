@@ -52,6 +52,7 @@ const mpm_model mpm_model_von_mises = {
     .dpdf_action_definite = mpm_hencky_dpdf_action_definite,
     .hessian_definite = mpm_hencky_hessian_definite,
     .kirchhoff_batch = mpm_hencky_kirchhoff_batch,
+    .pk1_batch = mpm_hencky_pk1_batch,
     .return_map = vm_return_map,
     .plastic_initial = 1,
 };
