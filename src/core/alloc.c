@@ -85,6 +85,15 @@ void mpm_alloc_reset_peak(void) {
   atomic_store(&peak_bytes, atomic_load(&live_bytes));
 }
 
+int mpm_reserve(void **buf, size_t *cap, size_t need, size_t size) {
+  if (need <= *cap && *buf) return 0;
+  mpm_free(*buf);
+  const size_t n = need + need / 8 + 16;
+  *buf = mpm_alloc(n * size);
+  *cap = *buf ? n : 0;
+  return *buf ? 0 : -1;
+}
+
 int mpm_grow(void **buf, size_t *cap, size_t n, size_t size) {
   if (n <= *cap) return 0;
   size_t c = *cap ? *cap : 1024;

@@ -25,16 +25,6 @@ size_t mpm_embedding_bytes(const mpm_embedding *E) {
          mpm_scatter_schedule_bytes(&E->schedule);
 }
 
-/* Grow a buffer of `size`-byte items to hold `need`, without keeping its contents. */
-static int reserve(void **a, size_t *cap, size_t need, size_t size) {
-  if (need <= *cap && *a) return 0;
-  mpm_free(*a);
-  const size_t n = need + need / 8 + 16;
-  *a = mpm_alloc(n * size);
-  *cap = *a ? n : 0;
-  return *a ? 0 : -1;
-}
-
 int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
                          uint32_t uniform_len) {
   E->schedule.built = 0;
@@ -42,8 +32,8 @@ int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
   size_t rcap = E->row_capacity;
   if (rows + 1 > rcap) {
     size_t c2 = rcap;
-    if (reserve((void **)&E->row_start, &rcap, rows + 1, sizeof(uint32_t)) ||
-        reserve((void **)&E->row_len, &c2, rows + 1, sizeof(uint32_t))) {
+    if (mpm_reserve((void **)&E->row_start, &rcap, rows + 1, sizeof(uint32_t)) ||
+        mpm_reserve((void **)&E->row_len, &c2, rows + 1, sizeof(uint32_t))) {
       E->row_capacity = 0;
       return -1;
     }
@@ -58,8 +48,8 @@ int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
   if (total > UINT32_MAX) return -1;
   size_t ccap = E->entry_capacity, wcap = E->entry_capacity;
   if (total > E->entry_capacity || !E->col) {
-    if (reserve((void **)&E->col, &ccap, total, sizeof(uint32_t)) ||
-        reserve((void **)&E->w, &wcap, total, sizeof(mpm_real))) {
+    if (mpm_reserve((void **)&E->col, &ccap, total, sizeof(uint32_t)) ||
+        mpm_reserve((void **)&E->w, &wcap, total, sizeof(mpm_real))) {
       E->entry_capacity = 0;
       return -1;
     }

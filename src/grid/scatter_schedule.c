@@ -21,20 +21,11 @@ size_t mpm_scatter_schedule_bytes(const mpm_scatter_schedule *s) {
          s->key_capacity * sizeof(int32_t);
 }
 
-/* Grow a buffer of `size`-byte items to hold `need`, without keeping its contents. */
-static int reserve(void **a, size_t *cap, size_t need, size_t size) {
-  if (need <= *cap && *a) return 0;
-  mpm_free(*a);
-  const size_t n = need + need / 8 + 16;
-  *a = mpm_alloc(n * size);
-  *cap = *a ? n : 0;
-  return *a ? 0 : -1;
-}
-
 int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32_t *key,
                                size_t key_count, const uint8_t *key_colour) {
   s->built = 0;
-  if (reserve((void **)&s->key_group, &s->key_capacity, key_count + 1, sizeof(int32_t))) return -1;
+  if (mpm_reserve((void **)&s->key_group, &s->key_capacity, key_count + 1, sizeof(int32_t)))
+    return -1;
   /* the keys in use, numbered as groups in colour order, then key order */
   int32_t *kg = s->key_group;
   for (size_t k = 0; k < key_count; ++k) kg[k] = -1;
@@ -46,7 +37,7 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
     } else if (key[a] == MPM_SCHEDULE_OWN_COLUMNS) {
       ++own;
     }
-  if (reserve((void **)&s->own_row, &s->own_row_capacity, own + 1, sizeof(uint32_t))) return -1;
+  if (mpm_reserve((void **)&s->own_row, &s->own_row_capacity, own + 1, sizeof(uint32_t))) return -1;
   s->own_rows = 0;
   for (size_t a = 0; a < rows; ++a)
     if (key[a] == MPM_SCHEDULE_OWN_COLUMNS) s->own_row[s->own_rows++] = (uint32_t)a;
@@ -57,8 +48,8 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
       if (kg[k] >= 0 && key_colour[k] == colour) kg[k] = (int32_t)groups++;
   }
   s->colour_start[MPM_SCHEDULE_COLOURS] = groups;
-  if (reserve((void **)&s->group_start, &s->group_capacity, groups + 2, sizeof(uint32_t)) ||
-      reserve((void **)&s->group_row, &s->group_row_capacity, used_rows + 1, sizeof(uint32_t)))
+  if (mpm_reserve((void **)&s->group_start, &s->group_capacity, groups + 2, sizeof(uint32_t)) ||
+      mpm_reserve((void **)&s->group_row, &s->group_row_capacity, used_rows + 1, sizeof(uint32_t)))
     return -1;
   /* counting sort of the rows by group, stable in row order */
   uint32_t *start = s->group_start;

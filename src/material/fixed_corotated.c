@@ -169,12 +169,10 @@ static void fcr_pk1_batch(const mpm_material *m, int n, const mpm_real *const F[
     for (int i = 0; i < n; ++i) dg[k][i] = two_mu * (d.s[k][i] - 1);
   mpm_chunk_svd_pk1(n, &d, (const mpm_real(*)[MPM_STRESS_CHUNK])dg, P);
   for (int i = 0; i < n; ++i) {
-    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
-                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
-    const mpm_real C[9] = {f4 * f8 - f5 * f7, f5 * f6 - f3 * f8, f3 * f7 - f4 * f6,
-                           f2 * f7 - f1 * f8, f0 * f8 - f2 * f6, f1 * f6 - f0 * f7,
-                           f1 * f5 - f2 * f4, f2 * f3 - f0 * f5, f0 * f4 - f1 * f3};
-    const mpm_real lj = l * (f0 * C[0] + f1 * C[1] + f2 * C[2] - 1);
+    mpm_real Fi[9], C[9];
+    for (int e = 0; e < 9; ++e) Fi[e] = F[e][i];
+    mpm_m3_cofactor(Fi, C);
+    const mpm_real lj = l * (Fi[0] * C[0] + Fi[1] * C[1] + Fi[2] * C[2] - 1);
     for (int e = 0; e < 9; ++e) P[e][i] += lj * C[e];
   }
 }

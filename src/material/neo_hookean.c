@@ -185,14 +185,11 @@ static void nh_pk1_batch(const mpm_material *m, int n, const mpm_real *const F[9
   }
   mpm_log_array(n, Jc, lnJ);
   for (int i = 0; i < n; ++i) {
-    const mpm_real f0 = F[0][i], f1 = F[1][i], f2 = F[2][i], f3 = F[3][i], f4 = F[4][i],
-                   f5 = F[5][i], f6 = F[6][i], f7 = F[7][i], f8 = F[8][i];
-    const mpm_real C[9] = {f4 * f8 - f5 * f7, f5 * f6 - f3 * f8, f3 * f7 - f4 * f6,
-                           f2 * f7 - f1 * f8, f0 * f8 - f2 * f6, f1 * f6 - f0 * f7,
-                           f1 * f5 - f2 * f4, f2 * f3 - f0 * f5, f0 * f4 - f1 * f3};
-    const mpm_real f[9] = {f0, f1, f2, f3, f4, f5, f6, f7, f8};
+    mpm_real Fi[9], C[9];
+    for (int e = 0; e < 9; ++e) Fi[e] = F[e][i];
+    mpm_m3_cofactor(Fi, C);
     const mpm_real k = (l * lnJ[i] - mu) / Jc[i];
-    for (int e = 0; e < 9; ++e) P[e][i] = mu * f[e] + k * C[e];
+    for (int e = 0; e < 9; ++e) P[e][i] = mu * Fi[e] + k * C[e];
   }
   if (nslow == 0) return;
   for (int i = 0; i < n; ++i) {
