@@ -197,6 +197,7 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
   uint32_t dof[SIDE_MAX * SIDE_MAX * SIDE_MAX];
   mpm_vl pad[SIDE_MAX * SIDE_MAX * SIDE_MAX]; /* per node: the 7 fields and a spare lane */
   pad_dofs(P, q, S, dof);
+  /* the pad starts from the nodes' values and replaces them at the end (no pass that adds it) */
   for (int n = 0; n < S * S * S; ++n) {
     mpm_vl u = {0};
     for (int f = 0; f < SCATTER_FIELDS; ++f) u[f] = values[f][dof[n]];

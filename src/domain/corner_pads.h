@@ -75,18 +75,4 @@ void mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_s
 void mpm_corner_pads_gather(const mpm_corner_pads *P, struct mpm_domain_set *s, const mpm_kernel *k,
                             int apic, const mpm_real *const v[3], const mpm_real *const v0[3]);
 
-/* D_a's diagonal for APIC, sum_i w_i (x_i - x_a)^2 per axis, of stencil st at xr (the position
- * from the level's origin, m): the one expression the rows and the pads share. */
-static inline void mpm_corner_apic_d(const mpm_kernel *k, const mpm_stencil *st,
-                                     const mpm_real xr[3], mpm_real D[3]) {
-  for (int d = 0; d < 3; ++d) {
-    mpm_real sum = 0;
-    for (int i = 0; i < k->width; ++i) {
-      const mpm_real r = (mpm_real)(st->base[d] + i) * k->dx - xr[d];
-      sum += st->w[d][i] * r * r;
-    }
-    D[d] = sum;
-  }
-}
-
 #endif

@@ -1,6 +1,7 @@
 /* domain_transfer.c - two-step particle -> corner -> grid transfers and back (see
  * domain_transfer.h). */
 #include "domain/domain_transfer.h"
+#include "core/compensated.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "domain/corner_pads.h"
@@ -69,11 +70,15 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
         key[c] = -1;
         continue;
       }
-      if (apic) { /* D's diagonal: sum_i w_i (x_i - x_a)^2 per axis (interp/kernel.h) */
-        mpm_real D[3];
-        mpm_corner_apic_d(k, &st, xr, D);
-        for (int d = 0; d < 3; ++d) s->apic_d[d][c] = D[d];
-      }
+      if (apic) /* D's diagonal: sum_i w_i (x_i - x_a)^2 per axis (interp/kernel.h) */
+        for (int d = 0; d < 3; ++d) {
+          mpm_real D = 0;
+          for (int i = 0; i < W; ++i) {
+            const mpm_real r = (mpm_real)(st.base[d] + i) * k->dx - xr[d];
+            D += st.w[d][i] * r * r;
+          }
+          s->apic_d[d][c] = D;
+        }
       int e = 0;
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
@@ -359,18 +364,9 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     if (vg2 > max_v2) max_v2 = vg2;
     for (int d = 0; d < 3; ++d) {
       s->cv[d][c] = v[d];
-      /* Zhu eq. 9, summed with compensation: y is the move plus what the last rounding lost;
-       * t = x + y rounded, and `lost` its rounding error exactly (Knuth's TwoSum) */
-      const mpm_real x = s->cx[d][c], y = dt * vg[d] + s->cxc[d][c];
-      mpm_real t = x + y;
-      const mpm_real yb = t - x;
-      mpm_real lost = (x - (t - yb)) + (y - yb);
-      if (t < ctx->clamp_lo[d] || t > ctx->clamp_hi[d]) { /* held at the clamp: exact there */
-        t = t < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : ctx->clamp_hi[d];
-        lost = 0;
-      }
-      s->cx[d][c] = t;
-      s->cxc[d][c] = lost;
+      /* Zhu eq. 9, summed with compensation (core/compensated.h) */
+      s->cx[d][c] = mpm_compensated_move(s->cx[d][c], dt * vg[d], ctx->clamp_lo[d],
+                                         ctx->clamp_hi[d], &s->cxc[d][c]);
     }
     mpm_real *pk = s->corner_pack[c]; /* what the particles read of the corner, together */
     for (int d = 0; d < 3; ++d) {

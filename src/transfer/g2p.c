@@ -7,6 +7,7 @@
  * owner block into a pad and then takes the particles of one cell as SIMD lanes
  * (transfer_lanes.h); the dense reference uses the scalar bodies of transfer_core.h. */
 #include "transfer/transfer.h"
+#include "core/compensated.h"
 #include "transfer/batches.h"
 #include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
@@ -61,18 +62,10 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_tr
     check += Fn[c];
   }
   for (int d = 0; d < 3; ++d) {
-    /* x += dt v with compensation (particles.h, xc): y is the move plus what the last rounding
-     * lost, xn = x + y rounded and lost its rounding error exactly (Knuth's TwoSum) */
-    const mpm_real x = p->x[d][i], y = dt * o.v[d] + p->xc[d][i];
-    mpm_real xn = x + y;
-    const mpm_real yb = xn - x;
-    mpm_real lost = (x - (xn - yb)) + (y - yb);
-    if (xn < ctx->clamp_lo[d] || xn > ctx->clamp_hi[d]) { /* held at the clamp: exact there */
-      xn = xn < ctx->clamp_lo[d] ? ctx->clamp_lo[d] : ctx->clamp_hi[d];
-      lost = 0;
-    }
+    /* x += dt v with compensation (particles.h, xc; core/compensated.h) */
+    const mpm_real xn = mpm_compensated_move(p->x[d][i], dt * o.v[d], ctx->clamp_lo[d],
+                                             ctx->clamp_hi[d], &p->xc[d][i]);
     p->x[d][i] = xn;
-    p->xc[d][i] = lost;
     p->v[d][i] = v[d];
     check += xn + v[d];
   }
@@ -102,7 +95,7 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
   for (int d = 0; d < 3; ++d) {
     mpm_vl v = o->v[d];
     if (!apic) v = a * (mpm_lanes_load(p->v[d], idx, n, contiguous) + o->dv[d]) + (1 - a) * o->v[d];
-    /* x += dt v with compensation (particles.h, xc; Knuth's TwoSum, as the scalar update) */
+    /* x += dt v with compensation (particles.h, xc): mpm_compensated_move lane-wise */
     const mpm_vl x = mpm_lanes_load(p->x[d], idx, n, contiguous);
     const mpm_vl y = dt * o->v[d] + mpm_lanes_load(p->xc[d], idx, n, contiguous);
     const mpm_vl t = x + y, yb = t - x;
