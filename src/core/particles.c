@@ -18,6 +18,20 @@ void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_
   for (int d = 0; d < 3; ++d) arrays[k++] = &p->xc[d];
 }
 
+mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t count) {
+  mpm_particles v = *p;
+  v.count = v.capacity = count;
+  if (!p->capacity) return v; /* no arrays to offset */
+  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(&v, arrays);
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) *arrays[k] += begin;
+  v.material += begin;
+  v.body += begin;
+  v.level += begin;
+  v.id += begin;
+  return v;
+}
+
 static int regrow(void **ptr, size_t old_count, size_t new_count, size_t elem) {
   void *q = mpm_alloc(new_count * elem);
   if (!q) return -1;

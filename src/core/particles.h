@@ -51,6 +51,11 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
 /* Pointers to the 31 real arrays, in a fixed order (xc last). */
 void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]);
 
+/* Particles begin .. begin + count of p as a set of their own: every array of p offset, none
+ * copied (writes go to p). For transfers over a contiguous range (the multi-level grid's
+ * transfer grids); it offsets every array, so that an array added later cannot be left behind. */
+mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t count);
+
 /* Reorder all arrays so that new[i] = old[perm[i]]. scratch holds `count` reals and may be
  * swapped with an array (so its pointer changes). Parallel over particles. */
 void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,

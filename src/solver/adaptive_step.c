@@ -7,22 +7,6 @@
 #include <math.h>
 #include <string.h>
 
-/* Particles i .. i + n of p, as a set of their own (the arrays are shared). */
-static mpm_particles view_of(const mpm_particles *p, size_t i, size_t n) {
-  mpm_particles v = *p;
-  v.count = v.capacity = n;
-  for (int d = 0; d < 3; ++d) v.x[d] = p->x[d] + i, v.v[d] = p->v[d] + i;
-  for (int d = 0; d < 9; ++d) v.F[d] = p->F[d] + i, v.B[d] = p->B[d] + i;
-  v.plastic = p->plastic + i;
-  v.mass = p->mass + i;
-  v.vol0 = p->vol0 + i;
-  v.material = p->material + i;
-  v.body = p->body + i;
-  v.level = p->level + i;
-  v.id = p->id + i;
-  return v;
-}
-
 static int reserve(mpm_adaptive *a, size_t n) {
   if (n <= a->capacity) return 0;
   mpm_free(a->of);
@@ -162,7 +146,7 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim) {
   int sorted[MPM_TRANSFER_GRIDS_MAX] = {0};
   for (int t = 0; t < a->tgrid_count; ++t) {
     const mpm_transfer_grid *tg = &a->tgrid[t];
-    const mpm_particles v = view_of(p, a->range[t], a->range[t + 1] - a->range[t]);
+    const mpm_particles v = mpm_particles_range(p, a->range[t], a->range[t + 1] - a->range[t]);
     mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
     sorted[tg->G] = 1;
     if (!v.count && !g->impl.sparse.block_count) continue; /* empty, and already clear */
@@ -170,7 +154,7 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim) {
   }
   for (int G = 0; G >= 0; G = mpm_adaptive_grid_next(ag, G)) {
     if (sorted[G] || !mpm_adaptive_grid_at(ag, G)->impl.sparse.block_count) continue;
-    const mpm_particles none = view_of(p, 0, 0);
+    const mpm_particles none = mpm_particles_range(p, 0, 0);
     mpm_grid *g = mpm_adaptive_grid_at(ag, G);
     const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, g->dx, 0);
     if (g->ops->activate(g, &k, sim->material_count, &none, &sim->step_arena)) goto nomem;
@@ -241,7 +225,8 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
-    const mpm_particles v = view_of(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
+    const mpm_particles v =
+        mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
     const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
     t.kernel = tg->kernel;
@@ -269,7 +254,8 @@ mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
-    mpm_particles v = view_of(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
+    mpm_particles v =
+        mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
     const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
     t.kernel = tg->kernel;
