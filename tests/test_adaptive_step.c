@@ -307,8 +307,6 @@ static void test_key_errors(void **state) {
                MPM_ERR_INVALID, "domain.refine[0].distance", "> 0", NULL);
   expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'kernel': 'quadratic'}"), MPM_ERR_INVALID,
                "solver.kernel", "\"ugimp\"", NULL);
-  expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'integrator': 'implicit'}"),
-               MPM_ERR_INVALID, "solver.integrator", "not built yet", NULL);
   expect_error(LEVELS_SCENE("'levels': 2", ", 'solver': {'grid': 'dense'}"), MPM_ERR_INVALID,
                "solver.grid", "sparse", NULL);
   /* the default kernel on levels is uGIMP */

@@ -453,6 +453,19 @@ void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const
   }
 }
 
+void mpm_adaptive_grid_scatter_squared(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
+  const mpm_embedding *E = &g->ghosts;
+  for (int f = 0; f < fields; ++f) {
+    mpm_real *uf = u[f];
+    for (size_t a = 0; a < g->ghost_count; ++a) {
+      const mpm_real val = uf[g->ghost_slot[a]];
+      uf[g->ghost_slot[a]] = 0;
+      const uint32_t e1 = E->row_start[a] + E->row_len[a];
+      for (uint32_t e = E->row_start[a]; e < e1; ++e) uf[E->col[e]] += E->w[e] * E->w[e] * val;
+    }
+  }
+}
+
 void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
   const size_t n = g->ghost_count;
   if (!n) return;

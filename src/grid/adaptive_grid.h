@@ -130,6 +130,10 @@ int64_t mpm_adaptive_grid_slot(const mpm_adaptive_grid *g, int level, const int3
  * row order (deterministic). */
 void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const *u);
 
+/* u_i += sum_g E_gi^2 u_g, then u_g = 0 at every ghost: diag(E^T D E) for a diagonal D held at
+ * the slots (the implicit step's Jacobi preconditioner, solver/implicit.h). Serial. */
+void mpm_adaptive_grid_scatter_squared(mpm_adaptive_grid *g, int fields, mpm_real *const *u);
+
 /* u_g = sum_i E_gi u_i at every ghost, for the `fields` DOF arrays u[k]. */
 void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const *u);
 

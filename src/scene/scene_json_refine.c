@@ -292,10 +292,6 @@ int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (s->solver.grid != MPM_GRID_SPARSE)
     return mpm_json_fail_at(c, "grid", MPM_ERR_INVALID,
                             "expected \"sparse\" with domain.levels: the levels are sparse grids");
-  if (s->solver.integrator != MPM_INTEGRATOR_EXPLICIT)
-    return mpm_json_fail_at(c, "integrator", MPM_ERR_INVALID,
-                            "expected \"explicit\" with domain.levels: the implicit step on the "
-                            "multi-level grid is not built yet");
   if (s->solver.gimp_length > 0)
     return mpm_json_fail_at(c, "gimp_length", MPM_ERR_INVALID,
                             "not with domain.levels: a particle's box is the spacing of its "

@@ -3,6 +3,7 @@
 
 #include "core/alloc.h"
 #include "solver/sim.h"
+#include "transfer/operators.h"
 
 #include <math.h>
 #include <string.h>
@@ -230,7 +231,13 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
     const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
     t.kernel = tg->kernel;
-    mpm_p2g(&t, g, &val, &v);
+    if (!impulse && mpm_p2g_fuses_force(&t, g)) {
+      /* the implicit solve needs the momentum and the force apart (step.c, stage_p2g) */
+      mpm_p2g_mass_momentum(&t, g, &val, &v);
+      mpm_p2g_stress_force(&t, g, val.f, &v);
+    } else {
+      mpm_p2g(&t, g, &val, &v);
+    }
   }
   /* the ghosts' sums go to their real parents (Gao eq. 15) */
   if (apic) {

@@ -26,6 +26,16 @@
  * with the normal velocity of v* restored first: that is where separation and Coulomb friction
  * act (the friction sees the normal velocity the obstacle stopped).
  *
+ * On Gao et al.'s multi-level grid (solver/adaptive.h) the material points transfer in parts, one
+ * per transfer grid, and every slot of a transfer grid is a real node (a DOF of the system) or a
+ * ghost whose row E_g ties it to real nodes (grid/adaptive_grid.h). The unknowns are the real
+ * nodes of every level; the system is the slots' one pulled back through the rows,
+ *   K = E^T K_slots E,  f = E^T f_slots,
+ * so that displacements are gathered to the ghosts before the gradients and the scattered forces
+ * go from the ghosts to their parents after (Gao eq. 15, as in the explicit step's P2G): K stays
+ * symmetric, and definite where K_slots is. The Jacobi diagonal takes diag(E^T diag(K_slots) E).
+ * Ghosts hold no mass, so CG leaves them at zero.
+ *
  * Plasticity: the particles' F is the elastic part; the Hessian is that of the elastic energy
  * at the elastic F, and the return map runs after the F update in G2P, as in the explicit step. */
 #ifndef MPM_SOLVER_IMPLICIT_H
@@ -35,6 +45,7 @@
 #include "collide/boundary.h"
 #include "core/arena.h"
 #include "domain/domain_hessian.h"
+#include "grid/adaptive_grid.h"
 #include "solver/cg.h"
 #include "solver/dofs.h"
 #include "transfer/transfer.h"
@@ -54,6 +65,14 @@ typedef struct mpm_implicit_result {
   int line_search_failed;
 } mpm_implicit_result;
 
+/* Material points of p in begin .. begin + count (sorted into `grid` by its activation) that
+ * transfer on `grid` with `kernel`. */
+typedef struct mpm_implicit_part {
+  const mpm_grid *grid;
+  mpm_kernel kernel;
+  size_t begin, count;
+} mpm_implicit_part;
+
 /* The system of one step. The caller fills the inputs; mpm_implicit_init allocates scratch. */
 typedef struct mpm_implicit {
   /* inputs */
@@ -65,6 +84,11 @@ typedef struct mpm_implicit {
   const mpm_transfer_ctx *tc;
   const mpm_grid *grid; /* material points: one level, its DOFs from grid->dof_begin */
   const mpm_particles *p;
+  /* or, on the multi-level grid, parts (in place of grid: part_count 0 is one part, grid with
+   * tc->kernel over all of p) and the ghost rows (NULL: no ghosts) */
+  int part_count;
+  mpm_implicit_part part[MPM_TRANSFER_GRIDS_MAX];
+  mpm_adaptive_grid *levels;
   mpm_domain_set *domains; /* NULL or a set with active particles (its embedding built) */
   const mpm_boundary *boundary;
   int exact; /* 1: K is the model's own dP/dF (finite-difference tests), not the definite one */
@@ -87,6 +111,7 @@ typedef struct mpm_implicit {
   size_t corner_begin;  /* the first corner DOF (DOFs from here are constrained ahead) */
   mpm_real *depth;      /* DOF wall-band depths (solver/dofs.h) */
   mpm_real *accel[3];   /* with body-force regions: each DOF's gravity plus regions, m/s^2 */
+  mpm_real **ghosted;   /* on levels: a DOF vector with its ghosts gathered (E u) */
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). 0, or -1 when out of memory. */

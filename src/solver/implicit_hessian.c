@@ -7,6 +7,7 @@
 #include "core/lanes.h"
 #include "core/parallel.h"
 #include "core/mat3.h"
+#include "core/particles.h"
 #include "transfer/operators.h"
 
 #include <string.h>
@@ -36,6 +37,12 @@ int mpm_implicit_init(mpm_implicit *s) {
   s->apply_scale = s->dt * s->dt;
   for (int c = 0; c < 3; ++c) s->px[c] = NULL;
   s->depth = NULL;
+  if (s->part_count == 0 && s->p) { /* one grid, one kernel: one part */
+    s->part[0] = (mpm_implicit_part){s->grid, s->tc->kernel, 0, n};
+    s->part_count = 1;
+  }
+  s->ghosted = NULL;
+  if (ok && s->levels) ok = (s->ghosted = mpm_dofs_vector(s->dofs, "imp.ghosted")) != NULL;
   if (ok && s->domains)
     ok = mpm_domain_hessian_init(&s->dh, s->domains, s->tc->materials, s->arena) == 0;
   if (ok && s->domains) s->dh.exact = s->exact;
@@ -47,9 +54,72 @@ static mpm_material material_at(const mpm_implicit *s, size_t i) {
                                      s->p->temperature[i]);
 }
 
-/* A DOF-set vector as the grid level's node arrays. */
-static void level_view(const mpm_implicit *s, mpm_real *const u[3], mpm_real *v[3]) {
-  for (int c = 0; c < 3; ++c) v[c] = u[c] + s->grid->dof_begin;
+/* ---- the material points' transfers, part by part ------------------------------------------ */
+
+/* Part k's transfer context, particles and the per-particle arrays a[0 .. n) from its first
+ * particle. */
+static void part_view(const mpm_implicit *s, int k, mpm_transfer_ctx *tc, mpm_particles *v,
+                      mpm_real *const *a, int n, mpm_real **out) {
+  const mpm_implicit_part *pt = &s->part[k];
+  *tc = *s->tc;
+  tc->kernel = pt->kernel;
+  *v = mpm_particles_range(s->p, pt->begin, pt->count);
+  for (int c = 0; c < n; ++c) out[c] = a[c] + pt->begin;
+}
+
+/* A DOF-set vector as part k's grid's node arrays. */
+static void grid_view(const mpm_implicit *s, int k, mpm_real *const u[3], mpm_real *v[3]) {
+  for (int c = 0; c < 3; ++c) v[c] = u[c] + s->part[k].grid->dof_begin;
+}
+
+/* s->G = sum_j u_j grad w_jp^T for every material point; on levels from E u (the ghosts
+ * gathered from their parents). */
+static void gather_gradients(mpm_implicit *s, mpm_real *const u[3]) {
+  mpm_real *const *src = u;
+  if (s->levels) {
+    mpm_dofs_copy(s->dofs, u, s->ghosted);
+    mpm_adaptive_grid_gather(s->levels, 3, s->ghosted);
+    src = s->ghosted;
+  }
+  for (int k = 0; k < s->part_count; ++k) {
+    if (!s->part[k].count) continue;
+    mpm_transfer_ctx tc;
+    mpm_particles v;
+    mpm_real *G[9], *ul[3];
+    part_view(s, k, &tc, &v, s->G, 9, G);
+    grid_view(s, k, src, ul);
+    mpm_gather_gradients(&tc, s->part[k].grid, (const mpm_real *const *)ul, &v, G);
+  }
+}
+
+/* y += sum_p M_p grad w_ip over every part (M = s->G), then on levels the ghosts' sums to
+ * their parents (E^T). */
+static void scatter_matrices(mpm_implicit *s, mpm_real *const y[3]) {
+  for (int k = 0; k < s->part_count; ++k) {
+    if (!s->part[k].count) continue;
+    mpm_transfer_ctx tc;
+    mpm_particles v;
+    mpm_real *M[9], *yl[3];
+    part_view(s, k, &tc, &v, s->G, 9, M);
+    grid_view(s, k, y, yl);
+    mpm_scatter_matrices(&tc, s->part[k].grid, yl, (const mpm_real *const *)M, &v);
+  }
+  if (s->levels) mpm_adaptive_grid_scatter(s->levels, 3, y);
+}
+
+/* d += the quadratic forms Q (18 arrays) over every part, then on levels diag(E^T D E) of the
+ * ghosts' sums D. */
+static void scatter_quadratic_forms(mpm_implicit *s, mpm_real *const d[3], mpm_real *const Q[18]) {
+  for (int k = 0; k < s->part_count; ++k) {
+    if (!s->part[k].count) continue;
+    mpm_transfer_ctx tc;
+    mpm_particles v;
+    mpm_real *Qk[18], *dl[3];
+    part_view(s, k, &tc, &v, Q, 18, Qk);
+    grid_view(s, k, d, dl);
+    mpm_scatter_quadratic_forms(&tc, s->part[k].grid, dl, (const mpm_real *const *)Qk, &v);
+  }
+  if (s->levels) mpm_adaptive_grid_scatter_squared(s->levels, 3, d);
 }
 
 void mpm_implicit_displace(mpm_implicit *s, mpm_real *const u[3]) {
@@ -57,11 +127,7 @@ void mpm_implicit_displace(mpm_implicit *s, mpm_real *const u[3]) {
   const mpm_particles *p = s->p;
   const long n = p ? (long)p->count : 0;
   if (n > 0) {
-    if (u) {
-      mpm_real *ul[3];
-      level_view(s, u, ul);
-      mpm_gather_gradients(s->tc, s->grid, (const mpm_real *const *)ul, p, s->G);
-    }
+    if (u) gather_gradients(s, u);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
       mpm_real F[9], Fh[9];
@@ -192,11 +258,8 @@ void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mp
   const mpm_particles *p = s->p;
   const long n = p ? (long)p->count : 0;
   if (n > 0) {
-    mpm_real *xl[3], *yl[3];
-    level_view(s, x, xl);
-    level_view(s, y, yl);
     /* G_p = sum_j x_j grad w_jp^T, then M_p = scale V0 (C : G F) F^T in place of G */
-    mpm_gather_gradients(s->tc, s->grid, (const mpm_real *const *)xl, p, s->G);
+    gather_gradients(s, x);
     if (s->exact) {
 #pragma omp parallel for schedule(static)
       for (long i = 0; i < n; ++i) {
@@ -232,7 +295,7 @@ void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mp
         for (int c = 0; c < 9; ++c) Gp[c][i] = v * M[c];
       }
     }
-    mpm_scatter_matrices(s->tc, s->grid, yl, (const mpm_real *const *)s->G, p);
+    scatter_matrices(s, y);
   }
   if (s->domains) mpm_domain_hessian_apply(&s->dh, scale, x, y);
 }
@@ -255,9 +318,7 @@ void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]) {
       const mpm_real v = -p->vol0[i];
       for (int c = 0; c < 9; ++c) s->G[c][i] = v * M[c];
     }
-    mpm_real *fl[3];
-    level_view(s, f, fl);
-    mpm_scatter_matrices(s->tc, s->grid, fl, (const mpm_real *const *)s->G, p);
+    scatter_matrices(s, f);
   }
   if (s->domains) mpm_domain_hessian_forces(&s->dh, f);
 }
@@ -313,9 +374,7 @@ void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
         for (int k = 0; k < 6; ++k) Q[6 * a + k][i] = v * Qa[e6[k]];
       }
     }
-    mpm_real *dl[3];
-    level_view(s, d, dl);
-    mpm_scatter_quadratic_forms(s->tc, s->grid, dl, (const mpm_real *const *)Q, p);
+    scatter_quadratic_forms(s, d, Q);
   }
   if (s->domains) mpm_domain_hessian_diagonal(&s->dh, scale, d);
 }

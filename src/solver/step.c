@@ -236,6 +236,16 @@ static void implicit_system(mpm_sim *sim, step_ctx *c, mpm_implicit *s) {
   s->tc = &c->tc;
   s->grid = &sim->grid;
   s->p = &sim->particles;
+  if (sim->adaptive) { /* the material points by transfer grid, the ghosts' rows (implicit.h) */
+    mpm_adaptive *a = sim->adaptive;
+    s->grid = NULL;
+    for (int t = 0; t < a->tgrid_count; ++t)
+      s->part[t] =
+          (mpm_implicit_part){mpm_adaptive_grid_at(&a->grid, a->tgrid[t].G), a->tgrid[t].kernel,
+                              a->range[t], a->range[t + 1] - a->range[t]};
+    s->part_count = a->tgrid_count;
+    s->levels = a->grid.tree.levels > 1 ? &a->grid : NULL;
+  }
   s->domains = c->domains ? &sim->domains : NULL;
   s->boundary = &c->update.boundary;
   s->arena = &sim->step_arena;
