@@ -1,6 +1,7 @@
 /* domain_hessian.c - the particle domains' forces, energy, Hessian action and Jacobi diagonal
  * for the implicit solve (see domain_hessian.h). */
 #include "domain/domain_hessian.h"
+#include "core/ordered_sum.h"
 #include "domain/enrich.h"
 
 #include <string.h>
@@ -176,22 +177,24 @@ void mpm_domain_hessian_forces(mpm_domain_hessian *h, mpm_real *const f[3]) {
   corners_to_dofs(h, -1, f);
 }
 
-double mpm_domain_hessian_energy(const mpm_domain_hessian *h) {
+static double particle_energy(const void *ctx, size_t q) {
+  const mpm_domain_hessian *h = ctx;
   const mpm_domain_set *s = h->s;
-  const mpm_particles *p = &s->particles;
-  double e = 0; /* serial: the same sum for any thread count */
-  for (size_t q = 0; q < p->count; ++q) {
-    if (!s->active[q]) continue;
-    const mpm_material m = material_of(h, (long)q);
-    e += (double)p->vol0[q] * (double)m.model->energy(&m, h->Fh[q]);
-    if (h->kappa && h->kappa[q] > 0) {
-      double q2 = 0;
-      for (int al = 0; al < 4; ++al)
-        for (int d = 0; d < 3; ++d) q2 += (double)h->qh[q][al][d] * (double)h->qh[q][al][d];
-      e += 0.5 * (double)h->kappa[q] * q2;
-    }
+  if (!s->active[q]) return 0;
+  const mpm_material m = material_of(h, (long)q);
+  double e = (double)s->particles.vol0[q] * (double)m.model->energy(&m, h->Fh[q]);
+  if (h->kappa && h->kappa[q] > 0) {
+    double q2 = 0;
+    for (int al = 0; al < 4; ++al)
+      for (int d = 0; d < 3; ++d) q2 += (double)h->qh[q][al][d] * (double)h->qh[q][al][d];
+    e += 0.5 * (double)h->kappa[q] * q2;
   }
   return e;
+}
+
+double mpm_domain_hessian_energy(const mpm_domain_hessian *h) {
+  /* in ordered chunks: the same sum for any thread count */
+  return mpm_ordered_sum(h->s->particles.count, particle_energy, h);
 }
 
 /* S^c_jl = C_cj,cl for c = 0..2 (each symmetric): nine actions on e_c e_l^T. */

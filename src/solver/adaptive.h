@@ -20,8 +20,9 @@
  * One level and one particle type: one transfer grid without ghosts, the uniform step bitwise.
  *
  * APIC carries the ghosts' moments besides (adaptive_apic.c), so that angular momentum is
- * conserved across level changes. Not yet: particle domains and the implicit step on levels
- * (refused by the scene parser). */
+ * conserved across level changes. The implicit step solves for every level's real nodes
+ * (solver/implicit.h, mpm_implicit_part). Not yet: particle domains on levels (refused by the
+ * scene parser). */
 #ifndef MPM_SOLVER_ADAPTIVE_H
 #define MPM_SOLVER_ADAPTIVE_H
 

@@ -7,6 +7,7 @@
 #include "core/lanes.h"
 #include "core/parallel.h"
 #include "core/mat3.h"
+#include "core/ordered_sum.h"
 #include "core/particles.h"
 #include "transfer/operators.h"
 
@@ -323,15 +324,17 @@ void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]) {
   if (s->domains) mpm_domain_hessian_forces(&s->dh, f);
 }
 
+static double point_energy(const void *ctx, size_t i) {
+  const mpm_implicit *s = ctx;
+  const mpm_material m = material_at(s, i);
+  mpm_real Fh[9];
+  for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
+  return (double)s->p->vol0[i] * (double)m.model->energy(&m, Fh);
+}
+
 double mpm_implicit_energy(mpm_implicit *s) {
-  const mpm_particles *p = s->p;
-  double e = 0; /* serial, in particle order: the same sum for any thread count */
-  for (size_t i = 0; p && i < p->count; ++i) {
-    const mpm_material m = material_at(s, i);
-    mpm_real Fh[9];
-    for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
-    e += (double)p->vol0[i] * (double)m.model->energy(&m, Fh);
-  }
+  /* in ordered chunks: the same sum for any thread count (the line search compares them) */
+  double e = s->p ? mpm_ordered_sum(s->p->count, point_energy, s) : 0;
   if (s->domains) e += mpm_domain_hessian_energy(&s->dh);
   return e;
 }
