@@ -284,6 +284,16 @@ static void test_build_from_body(void **state) {
       assert_close(s.particles.x[d][i], ref.x[d][i], TOL(1e-6, 1e-14));
       assert_close(s.particles.v[d][i], ref.v[d][i], TOL(1e-6, 1e-13));
     }
+  /* lattice cubes: the transfers take w = 1/8 and g = +-1/(4h) from cube_g, which holds the
+   * stored g's magnitude bit for bit; a hexahedron off the pattern reads its stored values */
+  for (size_t i = 0; i < n; ++i) {
+    assert_true(s.cube_g[i] == s.g[i][7][0]);
+    assert_close(s.cube_g[i], 1 / (4 * h), TOL(1e-6, 1e-13) / h);
+  }
+  s.g[1][3][1] *= (mpm_real)1.01;
+  assert_int_equal(mpm_domain_set_rebuild(&s), 0);
+  assert_true(s.cube_g[1] == 0);
+  assert_true(s.cube_g[0] == s.g[0][7][0] && s.cube_g[2] == s.g[2][7][0]);
   mpm_domain_set_free(&s);
   mpm_scene_free(&scene);
 

@@ -41,6 +41,7 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_free(s->adj_start);
   mpm_free(s->adj);
   mpm_free(s->corner_use);
+  mpm_free(s->cube_g);
   mpm_embedding_free(&s->corner_grid);
   mpm_corner_pads_free(&s->pads);
   mpm_enrichment_free(&s->enrich);
@@ -142,7 +143,24 @@ int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
 }
 
 /* Rebuild the corner -> particle-slot adjacency (CSR) over the active particles. */
+/* s->cube_g (domain.h): the magnitude of g where w and g are exactly the cube's pattern. */
+static void cube_scales(mpm_domain_set *s) {
+  for (size_t q = 0; q < s->particles.count; ++q) {
+    const mpm_real m = s->g[q][MPM_HEX_CORNERS - 1][0]; /* the corner at +x, +y, +z */
+    int cube = m > 0;
+    for (int a = 0; a < MPM_HEX_CORNERS && cube; ++a) {
+      cube = s->w[q][a] == (mpm_real)0.125;
+      for (int d = 0; d < 3 && cube; ++d) cube = s->g[q][a][d] == (mpm_real)mpm_hex_sign(a, d) * m;
+    }
+    s->cube_g[q] = cube ? m : 0;
+  }
+}
+
 static int build_adjacency(mpm_domain_set *s) {
+  mpm_free(s->cube_g);
+  s->cube_g = mpm_alloc((s->particles.count + 1) * sizeof *s->cube_g);
+  if (!s->cube_g) return -1;
+  cube_scales(s);
   mpm_free(s->adj_start);
   mpm_free(s->adj);
   mpm_free(s->corner_use);

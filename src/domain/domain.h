@@ -62,7 +62,12 @@ typedef struct mpm_domain_set {
   uint32_t (*corner)[MPM_HEX_CORNERS]; /* corner indices of each particle's hexahedron */
   mpm_real (*w)[MPM_HEX_CORNERS];      /* omega_ap (Zhu eq. 6) */
   mpm_real (*g)[MPM_HEX_CORNERS][3];   /* reference gradient averages (Zhu eq. 5), 1/m */
-  uint8_t *active;                     /* 0 once switched off */
+  /* per particle (set with the adjacency): g's magnitude when the hexahedron is an axis-aligned
+   * cube, so that w[a] = 1/8 and g[a][d] = s_ad cube_g with s_ad = +-1 the corner's side
+   * (mpm_hex_sign), bit for bit as stored; 0 otherwise. Every lattice domain is such a cube: the
+   * transfers' loops take w and g from it instead of reading 32 values per particle */
+  mpm_real *cube_g;
+  uint8_t *active; /* 0 once switched off */
   size_t active_count;
   /* corners */
   size_t corner_count, corner_capacity;
@@ -109,6 +114,17 @@ void mpm_domain_set_free(mpm_domain_set *s);
  * corners, their values to be filled in (checkpoint reading); call mpm_domain_set_rebuild
  * after filling corner and active. Returns 0, -1 on OOM. */
 int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners);
+
+/* g_qa (Zhu eq. 5): from the cube's pattern into gc when particle q's hexahedron is a cube
+ * (cube_g; then w_qa = 1/8), else the stored one. The same values either way, bit for bit; the
+ * returned pointer is gc exactly when the pattern was used. */
+static inline const mpm_real *mpm_domain_gradient(const mpm_domain_set *s, uint32_t q, uint32_t a,
+                                                  mpm_real gc[3]) {
+  const mpm_real m = s->cube_g[q];
+  if (m == 0) return s->g[q][a];
+  for (int d = 0; d < 3; ++d) gc[d] = (a >> d) & 1 ? m : -m;
+  return gc;
+}
 
 /* omega_ap and the reference gradient averages of the hexahedron with reference corners X
  * (in corner order, hex.h), by 2x2x2 Gauss quadrature (exact for trilinear hexahedra), and

@@ -49,7 +49,8 @@ static void corner_gradient(const mpm_domain_hessian *h, long q, mpm_real dF[9])
   for (int e = 0; e < 9; ++e) dF[e] = 0;
   for (int a = 1; a < MPM_HEX_CORNERS; ++a) {
     const uint32_t c = s->corner[q][a];
-    const mpm_real *g = s->g[q][a];
+    mpm_real gc[3];
+    const mpm_real *g = mpm_domain_gradient(s, (uint32_t)q, (uint32_t)a, gc);
     for (int r = 0; r < 3; ++r) {
       const mpm_real du = h->cu[r][c] - ref[r];
       for (int t = 0; t < 3; ++t) dF[3 * r + t] += du * g[t];
@@ -116,7 +117,8 @@ static void corners_to_dofs(mpm_domain_hessian *h, mpm_real scale, mpm_real *con
     double f[3] = {0, 0, 0};
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
       const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
-      const mpm_real *g = s->g[q][a], *M = h->dP[q];
+      mpm_real gc[3];
+      const mpm_real *g = mpm_domain_gradient(s, q, a, gc), *M = h->dP[q];
       for (int d = 0; d < 3; ++d)
         f[d] += M[3 * d] * g[0] + M[3 * d + 1] * g[1] + M[3 * d + 2] * g[2];
       if (h->kappa) /* + sum_alpha h_alpha,a kappa q_alpha */

@@ -206,13 +206,14 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     double m = 0, mv[3] = {0, 0, 0}, f[3] = {0, 0, 0};
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
       const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
-      const double w = s->w[q][a];
+      mpm_real gc[3];
+      const mpm_real *gq = mpm_domain_gradient(s, q, a, gc), *vPq = vP[q];
+      const double w = gq == gc ? 0.125 : s->w[q][a];
       const double mq = p->mass[q];
       m += w * mq;
       if (!apic)
         for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
       /* f_a = -V0 P g_ap (Zhu eq. 8 with eq. 5) */
-      const mpm_real *gq = s->g[q][a], *vPq = vP[q];
       for (int d = 0; d < 3; ++d)
         f[d] -= vPq[3 * d] * gq[0] + vPq[3 * d + 1] * gq[1] + vPq[3 * d + 2] * gq[2];
       if (hourglass) /* f_a -= kappa sum_alpha h_alpha,a q_alpha */
@@ -388,7 +389,9 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     mpm_real gradv[9] = {0}, x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
       const mpm_real *pk = s->corner_pack[s->corner[q][a]]; /* x, v, v^g */
-      const mpm_real w = s->w[q][a], *ga = s->g[q][a];
+      mpm_real gc[3];
+      const mpm_real *ga = mpm_domain_gradient(s, q, a, gc);
+      const mpm_real w = ga == gc ? (mpm_real)0.125 : s->w[q][a];
       for (int r = 0; r < 3; ++r)
         for (int t = 0; t < 3; ++t) gradv[3 * r + t] += pk[6 + r] * ga[t];
       for (int d = 0; d < 3; ++d) {
