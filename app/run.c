@@ -355,8 +355,10 @@ int mpm_cmd_run(int argc, char **argv) {
               "mpm: done: %d frames, %lld steps, %.1f s wall; open %s/run.pvd in ParaView\n",
               mpm_sim_frame(sim), (long long)mpm_sim_steps(sim), pr.elapsed, in.output_dir);
     if (!quiet && in.refining)
-      fprintf(stderr, "mpm: refinement: %lld trees from the rules, %.2f s\n", in.refinements,
-              in.refinement_seconds);
+      fprintf(stderr,
+              "mpm: refinement: %lld trees from the rules (%lld the same as the one in use), "
+              "%.2f s\n",
+              in.refinements, in.refinements_unchanged, in.refinement_seconds);
     if (!quiet && in.resampling) {
       const double *dL = in.angular_momentum_change;
       fprintf(stderr,

@@ -236,6 +236,8 @@ typedef struct mpm_sim_info {
   int heat;
   size_t melted_domains;
   int conduction_substeps;
+  long long refinements_unchanged; /* of refinements: trees equal to the one in use, which was
+                                      kept (its caches stay valid) */
 } mpm_sim_info;
 
 MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size);

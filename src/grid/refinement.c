@@ -61,6 +61,23 @@ static int set_contains(const mpm_cell_set *s, const int32_t c[3]) {
   }
 }
 
+int mpm_refinement_same_cells(const mpm_refinement *a, const mpm_refinement *b) {
+  if (a->levels != b->levels || a->dx0 != b->dx0) return 0;
+  for (int d = 0; d < 3; ++d)
+    if (a->origin[d] != b->origin[d]) return 0;
+  for (int L = 0; L < a->levels; ++L) {
+    const mpm_cell_set *sa = &a->refined[L], *sb = &b->refined[L];
+    if (sa->count != sb->count) return 0;
+    for (size_t i = 0; i < sa->size; ++i) {
+      if (sa->keys[i] == EMPTY_KEY) continue;
+      int32_t c[3];
+      unpack(sa->keys[i], c);
+      if (!set_contains(sb, c)) return 0;
+    }
+  }
+  return 1;
+}
+
 static void set_put(uint64_t *keys, size_t size, uint64_t key) {
   size_t i = slot_of(key, size);
   while (keys[i] != EMPTY_KEY && keys[i] != key) i = (i + 1) & (size - 1);

@@ -69,6 +69,9 @@ static inline mpm_real mpm_refinement_dx(const mpm_refinement *r, int level) {
   return r->dx0 / (mpm_real)(1 << level);
 }
 
+/* 1 when a and b refine the same cells (the same tree up to its version), else 0. */
+int mpm_refinement_same_cells(const mpm_refinement *a, const mpm_refinement *b);
+
 /* Refine cell `cell` of `level` (0 <= level < levels - 1) and every ancestor. 0, or -1 when out
  * of memory or when the cell lies outside the coordinate range. */
 int mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]);

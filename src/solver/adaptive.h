@@ -84,6 +84,7 @@ typedef struct mpm_adaptive {
   mpm_real *moment, *dB, *work;
   size_t moment_capacity, dB_capacity, work_capacity;
   long long rebuilds;     /* trees made by domain.refine_every since creation */
+  long long unchanged_rebuilds; /* of those, the ones equal to the tree in use (kept) */
   double rebuild_seconds; /* their wall time */
 } mpm_adaptive;
 

@@ -467,7 +467,12 @@ mpm_status mpm_adaptive_refine(mpm_sim *sim) {
     mpm_refinement_free(&t);
     return st;
   }
-  swap_tree(a, &t);
+  /* the material moved less than the rules see: the same tree, whose caches (ghost rows, block
+   * flags, the particles' stable flags) stay valid */
+  if (mpm_refinement_same_cells(&t, &a->grid.tree))
+    mpm_refinement_free(&t), a->unchanged_rebuilds++;
+  else
+    swap_tree(a, &t);
   a->rebuilds++;
   a->rebuild_seconds += mpm_wall_seconds() - t0;
   return MPM_OK;

@@ -111,6 +111,7 @@ mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size)
   if (in.refining) {
     in.refinements = sim->adaptive->rebuilds;
     in.refinement_seconds = sim->adaptive->rebuild_seconds;
+    in.refinements_unchanged = sim->adaptive->unchanged_rebuilds;
   }
   in.resampling = sc->resample.enabled;
   in.splits = sim->resample_figures.splits;
