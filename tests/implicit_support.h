@@ -46,4 +46,38 @@ static inline void implicit_random(const mpm_dofs *d, uint64_t *rng, mpm_real *c
     for (int c = 0; c < 3; ++c) a[c][i] = d->mass[i] > 0 ? (mpm_real)test_rand(rng, -1, 1) : 0;
 }
 
+/* kinetic + elastic + gravitational (9.81 m/s^2 along -y) energy of the particles, J */
+static inline double implicit_total_energy(const mpm_sim *sim) {
+  const mpm_diagnostics d = mpm_sim_diagnostics(sim);
+  double pot = 0;
+  const mpm_particles *p = &sim->particles;
+  for (size_t i = 0; i < p->count; ++i) pot += (double)p->mass[i] * 9.81 * (double)p->x[1][i];
+  return d.kinetic + d.elastic + pot;
+}
+
+/* A stiff block's drop onto a floor: the step against the explicit CFL step at spacing dx, the
+ * energy at the start and the end, and the lowest any particle came, m. */
+typedef struct implicit_drop {
+  double dt_ratio, e0, e1, lowest;
+} implicit_drop;
+
+/* Every frame of sim (material 0 the block's), asserting that the energy never grows (a slack
+ * for the float sums of a body at rest). */
+static inline implicit_drop implicit_drop_run(mpm_sim *sim, double dx) {
+  implicit_drop r;
+  const double c = sqrt((double)(sim->materials[0].lambda + 2 * sim->materials[0].mu) / 1000);
+  r.e0 = r.e1 = implicit_total_energy(sim);
+  r.lowest = 1e30;
+  while (sim->frame < sim->frame_count) {
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", sim->error.message);
+    const double e = implicit_total_energy(sim);
+    assert_true(e <= r.e1 + TOL(1e-4, 1e-9) * fabs(r.e0));
+    r.e1 = e;
+    const mpm_particles *p = &sim->particles;
+    for (size_t i = 0; i < p->count; ++i) r.lowest = fmin(r.lowest, (double)p->x[1][i]);
+  }
+  r.dt_ratio = sim->last_dt / (sim->scene.solver.cfl * dx / c);
+  return r;
+}
+
 #endif
