@@ -15,7 +15,7 @@
 /* One step through the tuner taking `one` seconds on 1 thread and `many` on more; the count it
  * ran on. */
 static int step(mpm_thread_tuner *t, double one, double many) {
-  mpm_thread_tuner_before(t);
+  mpm_thread_tuner_before(t, 1u << 20);
   const int n = mpm_thread_count();
   mpm_thread_tuner_after(t, n == 1 ? one : many);
   return n;
@@ -74,10 +74,39 @@ static void test_environment_turns_it_off(void **state) {
   assert_int_equal(p.enabled, 0);
 }
 
+/* A step of fewer than MPM_SMALL_STEP_PARTICLES particles runs on one thread, spinning or
+ * passive, and the caller's count is back after it; MPM_THREADS_TUNE=0 keeps the caller's. */
+static void test_small_steps_run_on_one_thread(void **state) {
+  (void)state;
+#ifndef _OPENMP
+  skip();
+#endif
+  unsetenv("MPM_THREADS_TUNE");
+  setenv("OMP_WAIT_POLICY", "passive", 1);
+  mpm_set_threads(2);
+  mpm_thread_tuner t = {.enabled = -1};
+  for (int k = 0; k < 5; ++k) {
+    mpm_thread_tuner_before(&t, MPM_SMALL_STEP_PARTICLES - 1);
+    assert_int_equal(mpm_thread_count(), 1);
+    mpm_thread_tuner_after(&t, 1);
+    assert_int_equal(mpm_thread_count(), 2);
+    mpm_thread_tuner_before(&t, MPM_SMALL_STEP_PARTICLES);
+    assert_int_equal(mpm_thread_count(), 2);
+    mpm_thread_tuner_after(&t, 1);
+  }
+  setenv("MPM_THREADS_TUNE", "0", 1);
+  mpm_thread_tuner off = {.enabled = -1};
+  mpm_thread_tuner_before(&off, 10);
+  assert_int_equal(mpm_thread_count(), 2);
+  mpm_thread_tuner_after(&off, 1);
+  unsetenv("MPM_THREADS_TUNE");
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_switches_to_the_faster_count),
       cmocka_unit_test(test_environment_turns_it_off),
+      cmocka_unit_test(test_small_steps_run_on_one_thread),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -34,7 +34,7 @@ mpm_status mpm_sim_between_steps(mpm_sim *sim) {
 /* One step, counted into the frame's step figures; `shortened`: the frame loop cut the step
  * short to land on the frame's time, so it does not count towards the typical step. */
 static mpm_status counted_step(mpm_sim *sim, double max_dt, int shortened) {
-  mpm_thread_tuner_before(&sim->threads);
+  mpm_thread_tuner_before(&sim->threads, sim->particles.count + sim->domains.particles.count);
   const double raw0 = sim->times.total;
   mpm_status st = mpm_sim_between_steps(sim);
   if (st == MPM_OK) st = mpm_sim_guarded_step(sim, max_dt);

@@ -19,9 +19,10 @@ static void start(mpm_thread_tuner *t) {
    * beside jello_cubes: 4.8-5.0 s passive, 5.6-6.0 s passive and tuned), so only spinning
    * threads are tuned */
   const int passive = policy && !strcasecmp(policy, "passive");
-  const int allowed = !(env && !strcmp(env, "0")) && !passive;
+  t->allowed = !(env && !strcmp(env, "0"));
   t->max = mpm_thread_count();
-  t->enabled = allowed && t->max > 1;
+  t->enabled = t->allowed && !passive && t->max > 1;
+  t->small = 0;
   t->use_max = 1;
   t->probing = 0;
   t->interval = FIRST_INTERVAL;
@@ -29,9 +30,14 @@ static void start(mpm_thread_tuner *t) {
   t->cost[0] = t->cost[1] = 0;
 }
 
-void mpm_thread_tuner_before(mpm_thread_tuner *t) {
+void mpm_thread_tuner_before(mpm_thread_tuner *t, size_t particles) {
   if (t->enabled < 0) start(t);
   if (t->enabled >= 0 && mpm_thread_count() != t->max) start(t); /* the caller set a new count */
+  t->small = t->allowed && t->max > 1 && particles < MPM_SMALL_STEP_PARTICLES;
+  if (t->small) {
+    mpm_set_threads(1);
+    return;
+  }
   if (!t->enabled) return;
   t->probing = t->countdown <= 0;
   const int on_max = t->probing ? !t->use_max : t->use_max;
@@ -39,6 +45,11 @@ void mpm_thread_tuner_before(mpm_thread_tuner *t) {
 }
 
 void mpm_thread_tuner_after(mpm_thread_tuner *t, double seconds) {
+  if (t->small) { /* the caller's count again; a small step's time tells nothing of the rest */
+    mpm_set_threads(t->max);
+    t->small = 0;
+    return;
+  }
   if (t->enabled <= 0) return;
   mpm_set_threads(t->max); /* the caller's count again, outside the step */
   if (!(seconds > 0)) return;
