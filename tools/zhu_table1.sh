@@ -85,7 +85,7 @@ echo "| scene (paper's) | particles (paper) | grid (paper) | s/frame 1 thread | 
 echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for line in "${scenes[@]}"; do
   read -r s rest final pname pparts pgrid pmin perr <<< "$line"
-  parts=$("$mpm" check "$out/zhu/on_$s.json" | sed -E 's/.*ok \(([0-9]+) particles.*/\1/')
+  parts=$("$mpm" check "$out/zhu/on_$s.json" | grep -m1 " ok (" | sed -E 's/.*ok \(([0-9]+) particles.*/\1/')
   grid=$(python3 - "$out/zhu/on_$s.json" << 'PY'
 import json, sys
 s = json.load(open(sys.argv[1])); d = s["domain"]
