@@ -83,9 +83,9 @@ typedef struct mpm_adaptive {
   size_t ghost_entry_capacity;
   mpm_real *moment, *dB, *work;
   size_t moment_capacity, dB_capacity, work_capacity;
-  long long rebuilds;     /* trees made by domain.refine_every since creation */
+  long long rebuilds;           /* trees made by domain.refine_every since creation */
   long long unchanged_rebuilds; /* of those, the ones equal to the tree in use (kept) */
-  double rebuild_seconds; /* their wall time */
+  double rebuild_seconds;       /* their wall time */
 } mpm_adaptive;
 
 /* The tree from the scene's rules (colliders must exist), and the per-body boxes. */
