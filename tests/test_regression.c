@@ -30,6 +30,9 @@
  * The material points' moves are summed with compensation (particles.h, xc; issue 13: a body
  * drifting slowly moved up to 29% farther than its velocity said in float): every scene's
  * positions round differently since, and all digests were rewritten with it.
+ * A lattice domain's weights are stored as the cube's exact pattern (w = 1/8, g = +-1/(4h)),
+ * no longer as the quadrature's rounding of it: the float digests are unchanged (the same
+ * values), the double build's domain scenes were rewritten with it.
  *
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:

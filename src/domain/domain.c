@@ -241,11 +241,12 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
       }
       s->corner[q][a] = *slot;
     }
-    double w[MPM_HEX_CORNERS], g[MPM_HEX_CORNERS][3], V;
-    mpm_domain_weights(X, w, g, &V); /* a lattice cube: never degenerate */
+    /* a lattice cube of side h: omega_ap = 1/8 and g_ap = s_a / (4 h) exactly (what
+     * mpm_domain_weights' quadrature gives up to rounding), so that the transfers can take them
+     * from one value per particle (domain.h, cube_g) */
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
-      s->w[q][a] = (mpm_real)w[a];
-      for (int d = 0; d < 3; ++d) s->g[q][a][d] = (mpm_real)g[a][d];
+      s->w[q][a] = (mpm_real)0.125;
+      for (int d = 0; d < 3; ++d) s->g[q][a][d] = (mpm_real)(mpm_hex_sign(a, d) * 0.25 / h);
     }
     /* move the particle's state over */
     mpm_real pos[3], vel[3];
