@@ -526,12 +526,70 @@ static void test_dense_index_agrees(void **state) {
   mpm_refinement_free(&r);
 }
 
+/* The finest level a box meets, against the leaves themselves: every finest-level cell that
+ * meets the box (closed: touching counts) and its leaf's level, the largest of them. The query
+ * takes, as the tree descent it replaced did, the level-0 cells from the one holding the box's
+ * low corner on (a leaf below that cell, touching the box's low face, does not count). Boxes of
+ * every width up to two level-0 cells, half of them snapped to the finest lattice's half cells
+ * so that their faces lie on cell faces. */
+static void test_finest_level_in_against_leaves(void **state) {
+  (void)state;
+  for (int levels = 2; levels <= 4; ++levels) {
+    mpm_refinement r;
+    random_tree(&r, levels, 40 + (uint64_t)levels);
+    const int fs = levels - 1; /* finest cells per level-0 cell, as a shift */
+    const double fine = (double)r.dx0 / (1 << fs);
+    uint64_t rng = 11;
+    int seen[MPM_LEVELS_MAX] = {0};
+    for (int q = 0; q < 3000; ++q) {
+      mpm_real lo[3], hi[3];
+      const double w = test_rand(&rng, 0, 2) * (double)r.dx0;
+      for (int d = 0; d < 3; ++d) {
+        double a = test_rand(&rng, -REGION + 0.2, REGION - 2.2) * (double)r.dx0;
+        double b = a + w;
+        if (q % 2) { /* on the half cells of the finest lattice */
+          a = floor(a / (0.5 * fine)) * 0.5 * fine;
+          b = floor(b / (0.5 * fine)) * 0.5 * fine;
+        }
+        lo[d] = r.origin[d] + (mpm_real)a;
+        hi[d] = r.origin[d] + (mpm_real)b;
+      }
+      int32_t f0[3], f1[3];
+      for (int d = 0; d < 3; ++d) {
+        const double a = ((double)lo[d] - (double)r.origin[d]) / (double)r.dx0;
+        const double b = ((double)hi[d] - (double)r.origin[d]) / (double)r.dx0;
+        const int32_t touch = (int32_t)ceil(a * (1 << fs)) - 1;
+        const int32_t first = (int32_t)floor(a) * (1 << fs);
+        f0[d] = touch > first ? touch : first;
+        f1[d] = (int32_t)floor(b * (1 << fs));
+      }
+      int expect = 0;
+      for (int32_t i = f0[0]; i <= f1[0]; ++i)
+        for (int32_t j = f0[1]; j <= f1[1]; ++j)
+          for (int32_t k = f0[2]; k <= f1[2]; ++k) {
+            const int32_t c[3] = {i, j, k};
+            const int L = mpm_refinement_leaf_level(&r, c);
+            if (L > expect) expect = L;
+          }
+      assert_int_equal(mpm_refinement_finest_level_in(&r, lo, hi), expect);
+      seen[expect]++;
+    }
+    for (int L = 0; L < levels; ++L) assert_true(seen[L] > 0); /* every answer was asked for */
+    mpm_refinement_free(&r);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_single_level),          cmocka_unit_test(test_tjunction_rows),
-      cmocka_unit_test(test_random_rows_and_basis), cmocka_unit_test(test_gimp_weights),
-      cmocka_unit_test(test_gimp_c1_along_lines),   cmocka_unit_test(test_lian_negative_ours_not),
-      cmocka_unit_test(test_gimp_matches_ugimp),    cmocka_unit_test(test_dense_index_agrees),
+      cmocka_unit_test(test_single_level),
+      cmocka_unit_test(test_tjunction_rows),
+      cmocka_unit_test(test_random_rows_and_basis),
+      cmocka_unit_test(test_gimp_weights),
+      cmocka_unit_test(test_gimp_c1_along_lines),
+      cmocka_unit_test(test_lian_negative_ours_not),
+      cmocka_unit_test(test_gimp_matches_ugimp),
+      cmocka_unit_test(test_dense_index_agrees),
+      cmocka_unit_test(test_finest_level_in_against_leaves),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

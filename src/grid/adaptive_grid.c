@@ -35,6 +35,8 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   rows_free(&g->rows);
   mpm_free(g->blocks.keys);
   mpm_free(g->blocks.uniform);
+  mpm_free(g->blocks.ids_at);
+  mpm_free(g->blocks.ids);
   memset(g, 0, sizeof *g);
 }
 
@@ -254,20 +256,36 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
   return &c->entries[c->count++];
 }
 
-/* The row of a slot of transfer grid G, or 0 when the slot is a real node owned by its level
- * on the level's own grid. On an extra grid every slot is a ghost: a real node owned by the
- * level is a duplicate of the level grid's slot; a real node owned by a coarser level is a
- * duplicate of that level's slot on any grid. -1 past MPM_ROW_MAX or when out of memory. */
-static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], mpm_row_term *row) {
-  const int level = level_of(g, G), shift = fine_shift(&g->tree, level);
+static uint32_t *block_ids(mpm_adaptive_grid *g, int level, const int32_t bc[3]);
+
+/* The row cache's entry of node idx of `level`, through its block's ids (block_ids). NULL when
+ * out of memory or past MPM_ROW_MAX. */
+static const struct mpm_row_entry *entry_of(mpm_adaptive_grid *g, int level, const int32_t idx[3],
+                                            uint32_t *ids) {
+  const int local = local_of(idx);
+  if (ids[local] != UINT32_MAX) return &g->rows.entries[ids[local]];
+  const int shift = fine_shift(&g->tree, level);
   uint64_t key = 0; /* the position on the finest lattice, 21 bits per axis */
   for (int d = 0; d < 3; ++d) {
     const int64_t u =
         (int64_t)idx[d] * ((int64_t)1 << shift) + ((int64_t)1 << (MPM_REFINEMENT_COORD_BITS - 1));
-    if (u < 0 || u >= ((int64_t)1 << MPM_REFINEMENT_COORD_BITS)) return -1;
+    if (u < 0 || u >= ((int64_t)1 << MPM_REFINEMENT_COORD_BITS)) return NULL;
     key = (key << MPM_REFINEMENT_COORD_BITS) | (uint64_t)u;
   }
   const struct mpm_row_entry *e = row_of(g, level, idx, key);
+  if (e) ids[local] = (uint32_t)(e - g->rows.entries);
+  return e;
+}
+
+/* The row of a slot of transfer grid G, or 0 when the slot is a real node owned by its level
+ * on the level's own grid. On an extra grid every slot is a ghost: a real node owned by the
+ * level is a duplicate of the level grid's slot; a real node owned by a coarser level is a
+ * duplicate of that level's slot on any grid. `ids`: the slot's block's (block_ids). -1 past
+ * MPM_ROW_MAX or when out of memory. */
+static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t *ids,
+                    mpm_row_term *row) {
+  const int level = level_of(g, G);
+  const struct mpm_row_entry *e = entry_of(g, level, idx, ids);
   if (!e) return -1;
   if (e->owner >= 0) { /* real */
     if (e->owner == level && G < MPM_LEVELS_MAX) return 0;
@@ -295,12 +313,14 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
         if (u < 0) return -1;
         if (u) continue;
       }
+      uint32_t *ids = pending ? block_ids(g, level_of(g, G), sg->coord[b]) : NULL;
+      if (pending && !ids) return -1;
       while (pending) {
         const int local = __builtin_ctzll(pending);
         pending &= pending - 1;
         int32_t idx[3];
         node_of(sg, b, local, idx);
-        const int n = slot_row(g, G, idx, row);
+        const int n = slot_row(g, G, idx, ids, row);
         if (n < 0) return -1;
         if (n) g->ghost[G][b] |= (uint64_t)1 << local;
         /* parents are real nodes of the level grids: their own rows are empty, so nothing more
@@ -362,14 +382,17 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     const mpm_sparse_grid *sg = &lv->impl.sparse;
     if (!sg->block_count) continue;
     if (ensure_masks(g, G)) goto done;
-    for (size_t b = 0; b < sg->block_count; ++b)
-      for (uint64_t m = g->used[G][b] & g->ghost[G][b]; m; m &= m - 1) { /* close() found them */
+    for (size_t b = 0; b < sg->block_count; ++b) {
+      const uint64_t ghosts = g->used[G][b] & g->ghost[G][b]; /* close() found them */
+      uint32_t *ids = ghosts ? block_ids(g, level_of(g, G), sg->coord[b]) : NULL;
+      if (ghosts && !ids) goto done;
+      for (uint64_t m = ghosts; m; m &= m - 1) {
         const int local = __builtin_ctzll(m);
         int32_t idx[3];
         node_of(sg, b, local, idx);
         if (mpm_grow((void **)&terms, &terms_cap, term_count + MPM_ROW_MAX, sizeof *terms))
           goto done;
-        const int n = slot_row(g, G, idx, terms + term_count);
+        const int n = slot_row(g, G, idx, ids, terms + term_count);
         if (n < 0) goto done;
         if (n == 0) continue;
         const size_t a = g->ghost_count;
@@ -382,6 +405,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
         term_count += (size_t)n;
         g->ghost_slot[g->ghost_count++] = (uint32_t)(lv->dof_begin + b * MPM_BLOCK_NODES + local);
       }
+    }
   }
   if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto done;
   const size_t entries = g->ghosts.row_start[g->ghost_count];
@@ -512,12 +536,14 @@ void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real
   mpm_embedding_gather_moments(&g->ghosts, v, off, M);
 }
 
-int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
+/* The hash slot of (level, block bc) in g->blocks, made (with its uniform flag) on first use;
+ * the table is emptied when the tree changes. -1 when out of memory. */
+static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
   struct mpm_block_flags *f = &g->blocks;
   const mpm_refinement *r = &g->tree;
   if (f->version != r->version + 1) { /* + 1: a fresh cache is never valid */
     if (f->size) memset(f->keys, 0xff, f->size * sizeof *f->keys);
-    f->count = 0;
+    f->count = f->id_blocks = 0;
     f->version = r->version + 1;
   }
   uint64_t key = (uint64_t)level;
@@ -526,9 +552,11 @@ int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32
     const size_t size = f->size ? 2 * f->size : 4096;
     uint64_t *keys = mpm_alloc(size * sizeof *keys);
     uint8_t *uniform = mpm_alloc(size);
-    if (!keys || !uniform) {
+    uint32_t *ids_at = mpm_alloc(size * sizeof *ids_at);
+    if (!keys || !uniform || !ids_at) {
       mpm_free(keys);
       mpm_free(uniform);
+      mpm_free(ids_at);
       return -1;
     }
     memset(keys, 0xff, size * sizeof *keys);
@@ -538,16 +566,19 @@ int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32
         while (keys[t] != UINT64_MAX) t = (t + 1) & (size - 1);
         keys[t] = f->keys[s];
         uniform[t] = f->uniform[s];
+        ids_at[t] = f->ids_at[s];
       }
     mpm_free(f->keys);
     mpm_free(f->uniform);
+    mpm_free(f->ids_at);
     f->keys = keys;
     f->uniform = uniform;
+    f->ids_at = ids_at;
     f->size = size;
   }
   size_t s = (size_t)((key * 0x9e3779b97f4a7c15ull) >> 20) & (f->size - 1);
   for (; f->keys[s] != UINT64_MAX; s = (s + 1) & (f->size - 1))
-    if (f->keys[s] == key) return f->uniform[s];
+    if (f->keys[s] == key) return (int64_t)s;
   const double dx = (double)mpm_refinement_dx(r, level);
   mpm_real lo[3], hi[3];
   for (int d = 0; d < 3; ++d) {
@@ -560,8 +591,30 @@ int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32
                 mpm_refinement_coarsest_level_in(r, lo, hi) == level;
   f->keys[s] = key;
   f->uniform[s] = (uint8_t)u;
+  f->ids_at[s] = UINT32_MAX;
   f->count++;
-  return u;
+  return (int64_t)s;
+}
+
+int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
+  const int64_t s = block_slot(g, level, bc);
+  return s < 0 ? -1 : g->blocks.uniform[s];
+}
+
+/* The row-cache ids of the nodes of (level, block bc): valid until the next call (the pool may
+ * move). NULL when out of memory. */
+static uint32_t *block_ids(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
+  struct mpm_block_flags *f = &g->blocks;
+  const int64_t s = block_slot(g, level, bc);
+  if (s < 0) return NULL;
+  if (f->ids_at[s] == UINT32_MAX) {
+    if (mpm_grow((void **)&f->ids, &f->id_capacity, (f->id_blocks + 1) * MPM_BLOCK_NODES,
+                 sizeof *f->ids))
+      return NULL;
+    memset(f->ids + f->id_blocks * MPM_BLOCK_NODES, 0xff, MPM_BLOCK_NODES * sizeof *f->ids);
+    f->ids_at[s] = (uint32_t)f->id_blocks++;
+  }
+  return f->ids + (size_t)f->ids_at[s] * MPM_BLOCK_NODES;
 }
 
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {

@@ -73,13 +73,18 @@ typedef struct mpm_adaptive_grid {
     mpm_row_term *terms;
     size_t term_count, term_capacity;
   } rows;
-  /* per (level, block) whether its region holds leaves of the level only, while the tree stands
-   * (mpm_adaptive_grid_block_uniform) */
+  /* per (level, block), while the tree stands: whether its region holds leaves of the level only
+   * (mpm_adaptive_grid_block_uniform), and its nodes' entries in the row cache (64 ids from
+   * ids[ids_at], made when first asked; UINT32_MAX: not looked up yet), so that close() and
+   * build_rows() find a node's row through one lookup per block instead of one per node */
   struct mpm_block_flags {
     uint64_t version;
     uint64_t *keys;
     uint8_t *uniform;
+    uint32_t *ids_at;
     size_t size, count;
+    uint32_t *ids;
+    size_t id_blocks, id_capacity; /* in blocks of MPM_BLOCK_NODES ids */
   } blocks;
 } mpm_adaptive_grid;
 

@@ -5,6 +5,7 @@
 #include "core/alloc.h"
 
 #include <assert.h>
+#include <math.h>
 #include <string.h>
 
 #define EMPTY_KEY UINT64_MAX
@@ -225,9 +226,42 @@ int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[
   return extreme_level_in(r, lo, hi, 0);
 }
 
+/* The finest level of the leaves meeting the box, without descending the tree: a leaf of level
+ * L + 1 meets the box exactly when its refined parent of level L does (the children cover their
+ * parent), so the answer is one more than the finest level with a refined cell meeting the box,
+ * or 0. It asks about the cells extreme_under reaches, so that the answer is its answer bit for
+ * bit: closed at every level (a cell touching the box counts), but only under the level-0 cells
+ * from the one holding the box's low corner on, as extreme_level_in's loop starts there. Each
+ * level's cells meeting the box are a small range, so the particles' classification (a query
+ * per particle and step) asks a few bits of the dense index and stops at the first hit, finest
+ * level first. */
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]) {
-  return extreme_level_in(r, lo, hi, 1);
+  double a[3], b[3];
+  int32_t c0[3];
+  for (int d = 0; d < 3; ++d) {
+    a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
+    b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
+    c0[d] = (int32_t)floor(a[d]);
+  }
+  for (int L = r->levels - 2; L >= 0; --L) {
+    const mpm_cell_set *s = &r->refined[L];
+    if (!s->count) continue;
+    const double scale = (double)((int64_t)1 << L); /* exact: the recursion's doublings */
+    int32_t l[3], h[3];
+    for (int d = 0; d < 3; ++d) {
+      const int32_t touch = (int32_t)ceil(a[d] * scale) - 1, first = c0[d] * (1 << L);
+      l[d] = touch > first ? touch : first;
+      h[d] = (int32_t)floor(b[d] * scale);
+    }
+    for (int32_t i = l[0]; i <= h[0]; ++i)
+      for (int32_t j = l[1]; j <= h[1]; ++j)
+        for (int32_t k = l[2]; k <= h[2]; ++k) {
+          const int32_t c[3] = {i, j, k};
+          if (set_contains(s, c)) return L + 1;
+        }
+  }
+  return 0;
 }
 
 /* ---- nodes and their rows ---- */
