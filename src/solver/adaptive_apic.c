@@ -22,6 +22,7 @@
 #include "core/alloc.h"
 #include "solver/sim.h"
 
+#include <assert.h>
 #include <string.h>
 
 /* The DOF slots of the W^3 stencil at `base` (node coordinates of the grid) of a particle in
@@ -41,6 +42,21 @@ static void stencil_slots(const mpm_grid *g, size_t b, const int32_t base[3], in
         slot[n] =
             (uint32_t)(g->dof_begin + (size_t)sg->neighbor[b][o] * MPM_BLOCK_NODES + (size_t)local);
       }
+}
+
+/* Per cell c of a block (local index, x slowest) and pad block o (as sparse_grid.h's neighbor:
+ * x, y, z bits 2, 1, 0), the nodes of o that the W^3 stencil based at c covers, as a mask of
+ * local indices. */
+static void stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]) {
+  memset(reach, 0, MPM_BLOCK_NODES * 8 * sizeof(uint64_t));
+  for (int c = 0; c < MPM_BLOCK_NODES; ++c)
+    for (int i = 0; i < W; ++i)
+      for (int j = 0; j < W; ++j)
+        for (int k = 0; k < W; ++k) {
+          const int px = ((c >> 4) & 3) + i, py = ((c >> 2) & 3) + j, pz = (c & 3) + k;
+          reach[c][(px >> 2) << 2 | (py >> 2) << 1 | (pz >> 2)] |=
+              (uint64_t)1 << ((px & 3) << 4 | (py & 3) << 2 | (pz & 3));
+        }
 }
 
 /* The cells' entries by ghost (a counting sort, stable: cell order within a ghost) and each
@@ -78,10 +94,18 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
   if (mpm_grow((void **)&a->ghost_of, &a->ghost_of_capacity, dofs + 1, sizeof *a->ghost_of))
     goto nomem;
   memset(a->ghost_of, 0xff, dofs * sizeof *a->ghost_of);
+  /* the transfer grids' segments are whole blocks of 64 slots from slot 0 on (adaptive_layout),
+   * so slot / 64 names a block: most blocks' pads hold no such ghost and are passed over whole */
+  const size_t chunks = dofs / MPM_BLOCK_NODES + 1;
+  if (mpm_grow((void **)&a->block_multi, &a->block_multi_capacity, chunks, sizeof(uint64_t)))
+    goto nomem;
+  memset(a->block_multi, 0, chunks * sizeof(uint64_t));
   size_t multi = 0;
   for (size_t g = 0; g < ag->ghost_count; ++g)
     if (ag->ghosts.row_len[g] > 1) {
       a->ghost_of[ag->ghost_slot[g]] = (int32_t)g;
+      a->block_multi[ag->ghost_slot[g] / MPM_BLOCK_NODES] |=
+          (uint64_t)1 << (ag->ghost_slot[g] % MPM_BLOCK_NODES);
       ++multi;
     }
   /* the ghosts' affine moments (P2G) and velocity moments (G2P), zero at ghosts no boundary
@@ -98,8 +122,19 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     const mpm_sparse_grid *sg = &g->impl.sparse;
     const int W = tg->kernel.width, nodes = W * W * W;
     const size_t nmat = (size_t)sg->material_count;
-    for (size_t b = 0; b < sg->owner_count; ++b)
+    assert(g->dof_begin % MPM_BLOCK_NODES == 0);
+    uint64_t reach[MPM_BLOCK_NODES][8]; /* per cell of a block, its stencil's nodes per pad block */
+    stencil_masks(W, reach);
+    const uint64_t *multi_at = a->block_multi + g->dof_begin / MPM_BLOCK_NODES;
+    for (size_t b = 0; b < sg->owner_count; ++b) {
+      /* a stencil of the block reaches only its pad: the block and 7 neighbours */
+      uint64_t pad[8], near = 0;
+      for (int o = 0; o < 8; ++o) near |= pad[o] = multi_at[sg->neighbor[b][o]];
+      if (!near) continue;
       for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
+        uint64_t hit = 0;
+        for (int o = 0; o < 8; ++o) hit |= pad[o] & reach[c][o];
+        if (!hit) continue; /* its stencil reaches no such ghost */
         const size_t q0 = (b * nmat) * MPM_BLOCK_NODES + (size_t)c;
         int any = 0;
         for (size_t m = 0; m < nmat && !any; ++m)
@@ -142,6 +177,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
         }
         a->cell_count++;
       }
+    }
   }
   if (transpose_by_ghost(a, ag->ghost_count)) goto nomem;
   /* per boundary particle its B (kept over the P2G) and its B correction (G2P), and the P2G's
