@@ -238,12 +238,17 @@ int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]) {
   double a[3], b[3];
-  int32_t c0[3];
   for (int d = 0; d < 3; ++d) {
     a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
     b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
-    c0[d] = (int32_t)floor(a[d]);
   }
+  return mpm_refinement_finest_level_units(r, a, b);
+}
+
+int mpm_refinement_finest_level_units(const mpm_refinement *r, const double a[3],
+                                      const double b[3]) {
+  int32_t c0[3];
+  for (int d = 0; d < 3; ++d) c0[d] = (int32_t)floor(a[d]);
   for (int L = r->levels - 2; L >= 0; --L) {
     const mpm_cell_set *s = &r->refined[L];
     if (!s->count) continue;

@@ -88,6 +88,11 @@ int mpm_refinement_leaf_at(const mpm_refinement *r, const mpm_real x[3], int32_t
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]);
 
+/* The same for the box [a, b] given in level-0 cell units, a = (lo - origin) / dx0 in double (as
+ * mpm_refinement_finest_level_in computes it), for callers that compute many boxes at once. */
+int mpm_refinement_finest_level_units(const mpm_refinement *r, const double a[3],
+                                      const double b[3]);
+
 /* The coarsest level of the leaves that meet the box [lo, hi] (closed, as above). */
 int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                      const mpm_real hi[3]);

@@ -50,6 +50,10 @@ typedef struct mpm_adaptive {
    * the block's level only, mpm_adaptive_grid_block_uniform: a particle moves less than a cell
    * per step), valid for the step numbered stable_step */
   uint8_t *stable;
+  /* per (body, type) half its box, and per level met its transfer grid (adaptive_step.c) */
+  mpm_real *box_half;
+  int8_t *box_tgrid;
+  size_t box_half_capacity, box_tgrid_capacity;
   int64_t stable_step;
   uint32_t *perm;
   size_t capacity;

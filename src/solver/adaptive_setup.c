@@ -138,6 +138,8 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->of);
   mpm_free(a->perm);
   mpm_free(a->stable);
+  mpm_free(a->box_half);
+  mpm_free(a->box_tgrid);
   mpm_free(a->ghost_of);
   mpm_free(a->block_multi);
   mpm_free(a->boundary);

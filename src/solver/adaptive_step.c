@@ -59,58 +59,102 @@ static int transfer_grid(const mpm_adaptive *a, int level, double box) {
   return -1;
 }
 
-/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. */
-/* Particle i's transfer grid, or -1 when its box meets leaves more than 2 box widths finer,
- * -2 when its type is outside the levels; its level in *level. */
-static int transfer_grid_of(const mpm_adaptive *a, const mpm_particles *p, size_t i, int *level) {
+/* Per (body, type): half its box side (as the particle's box is computed) and, per level the
+ * box may meet, its transfer grid (-1 when the box is wider than 2 cells of the level), in
+ * a->box_half[b * levels + q] and a->box_tgrid[(b * levels + q) * levels + L]. -1 when out of
+ * memory. */
+static int make_box_table(mpm_adaptive *a, int bodies) {
   const mpm_refinement *r = &a->grid.tree;
-  const int q = p->level[i];
-  if (q < 0 || q >= r->levels) return -2;
-  const double box = ldexp(a->body_box[p->body[i]], -q);
-  mpm_real lo[3], hi[3];
-  for (int d = 0; d < 3; ++d) {
-    lo[d] = p->x[d][i] - (mpm_real)(0.5 * box);
-    hi[d] = p->x[d][i] + (mpm_real)(0.5 * box);
-  }
-  *level = r->levels > 1 ? mpm_refinement_finest_level_in(r, lo, hi) : 0;
-  if (box > 2 * (double)mpm_refinement_dx(r, *level) * (1 + 1e-6)) return -1;
-  return transfer_grid(a, *level, box); /* every pair a type can meet was made at setup */
+  const size_t nl = (size_t)r->levels, n = (size_t)bodies * nl;
+  if (mpm_grow((void **)&a->box_half, &a->box_half_capacity, n + 1, sizeof *a->box_half) ||
+      mpm_grow((void **)&a->box_tgrid, &a->box_tgrid_capacity, n * nl + 1, sizeof *a->box_tgrid))
+    return -1;
+  for (size_t b = 0; b < (size_t)bodies; ++b)
+    for (int q = 0; q < r->levels; ++q) {
+      const double box = ldexp(a->body_box[b], -q);
+      a->box_half[b * nl + (size_t)q] = (mpm_real)(0.5 * box);
+      for (int L = 0; L < r->levels; ++L)
+        a->box_tgrid[(b * nl + (size_t)q) * nl + (size_t)L] =
+            (int8_t)(box > 2 * (double)mpm_refinement_dx(r, L) * (1 + 1e-6)
+                         ? -1
+                         : transfer_grid(a, L, box));
+    }
+  return 0;
 }
 
-/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. */
+/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. The
+ * boxes of a chunk of particles are computed first, in a loop the compiler vectorizes (the
+ * divisions into level-0 units as mpm_refinement_finest_level_in computes them, bit for bit),
+ * then asked of the tree one by one. */
+#define CLASSIFY_CHUNK 64
 static mpm_status classify(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   const mpm_particles *p = &sim->particles;
+  const mpm_refinement *r = &a->grid.tree;
   const long n = (long)p->count;
   long bad = n;
   const uint8_t *stable = a->stable_step == sim->steps ? a->stable : NULL;
+  const int bodies = sim->scene.body_count, levels = r->levels;
+  if (make_box_table(a, bodies))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
+  const mpm_real *box_half = a->box_half;
+  const int8_t *box_tgrid = a->box_tgrid;
+  const double o[3] = {(double)r->origin[0], (double)r->origin[1], (double)r->origin[2]};
+  const double dx0 = (double)r->dx0;
 #pragma omp parallel for schedule(static) reduction(min : bad)
-  for (long i = 0; i < n; ++i) {
-    if (stable && stable[i]) continue; /* a.of[i] stands */
-    int level;
-    const int t = transfer_grid_of(a, p, (size_t)i, &level);
-    if (t < 0 && i < bad) bad = i;
-    a->of[i] = (uint8_t)(t < 0 ? 0 : t);
+  for (long c = 0; c < (n + CLASSIFY_CHUNK - 1) / CLASSIFY_CHUNK; ++c) {
+    const long i0 = c * CLASSIFY_CHUNK, m = n - i0 < CLASSIFY_CHUNK ? n - i0 : CLASSIFY_CHUNK;
+    mpm_real half[CLASSIFY_CHUNK];
+    double lo[3][CLASSIFY_CHUNK], hi[3][CLASSIFY_CHUNK];
+    for (long k = 0; k < m; ++k) {
+      const int q = p->level[i0 + k], b = p->body[i0 + k];
+      half[k] = q >= 0 && q < levels && b >= 0 && b < bodies ? box_half[b * levels + q] : 0;
+    }
+    for (int d = 0; d < 3; ++d) {
+      const mpm_real *x = p->x[d] + i0;
+#pragma omp simd
+      for (long k = 0; k < m; ++k) {
+        lo[d][k] = ((double)(x[k] - half[k]) - o[d]) / dx0;
+        hi[d][k] = ((double)(x[k] + half[k]) - o[d]) / dx0;
+      }
+    }
+    for (long k = 0; k < m; ++k) {
+      const long i = i0 + k;
+      if (stable && stable[i]) continue; /* a.of[i] stands */
+      const int q = p->level[i], b = p->body[i];
+      int t = -1;
+      if (q >= 0 && q < levels && b >= 0 && b < bodies) {
+        const double A[3] = {lo[0][k], lo[1][k], lo[2][k]}, B[3] = {hi[0][k], hi[1][k], hi[2][k]};
+        const int L = levels > 1 ? mpm_refinement_finest_level_units(r, A, B) : 0;
+        t = box_tgrid[(b * levels + q) * levels + L];
+      }
+      if (t < 0 && i < bad) bad = i;
+      a->of[i] = (uint8_t)(t < 0 ? 0 : t);
+    }
   }
   if (bad == n) return MPM_OK;
-  const mpm_refinement *r = &a->grid.tree;
-  int level = 0;
   const size_t i = (size_t)bad;
   const int q = p->level[i];
-  if (transfer_grid_of(a, p, i, &level) == -2)
+  if (q < 0 || q >= r->levels)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "step %lld: particle id %u has type %d, expected 0 .. %d (the grid's "
                          "levels)",
                          (long long)sim->steps, p->id[i], q, r->levels - 1);
+  const double box = ldexp(a->body_box[p->body[i]], -q);
+  mpm_real blo[3], bhi[3];
+  for (int d = 0; d < 3; ++d) {
+    blo[d] = p->x[d][i] - (mpm_real)(0.5 * box);
+    bhi[d] = p->x[d][i] + (mpm_real)(0.5 * box);
+  }
+  const int level = r->levels > 1 ? mpm_refinement_finest_level_in(r, blo, bhi) : 0;
   return mpm_error_set(
       &sim->error, MPM_ERR_INVALID,
       "step %lld: particle id %u (body %d) of type %d (box %g m) at (%g, %g, %g) meets a leaf of "
       "level %d, whose spacing %g m is less than half its box: the multi-level grid transfers "
       "boxes of at most 2 cells; let the refinement change by one level at a time near the "
       "material (domain.refine)",
-      (long long)sim->steps, p->id[i], p->body[i], q, ldexp(a->body_box[p->body[i]], -q),
-      (double)p->x[0][i], (double)p->x[1][i], (double)p->x[2][i], level,
-      (double)mpm_refinement_dx(r, level));
+      (long long)sim->steps, p->id[i], p->body[i], q, box, (double)p->x[0][i], (double)p->x[1][i],
+      (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
 }
 
 /* Keep the particles grouped by transfer grid: a stable counting sort when some particle
