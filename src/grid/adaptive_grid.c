@@ -141,29 +141,44 @@ int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_
   return 0;
 }
 
+void mpm_adaptive_grid_stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]) {
+  memset(reach, 0, MPM_BLOCK_NODES * 8 * sizeof(uint64_t));
+  for (int c = 0; c < MPM_BLOCK_NODES; ++c)
+    for (int i = 0; i < W; ++i)
+      for (int j = 0; j < W; ++j)
+        for (int k = 0; k < W; ++k) {
+          const int px = ((c >> 4) & 3) + i, py = ((c >> 2) & 3) + j, pz = (c & 3) + k;
+          reach[c][(px >> 2) << 2 | (py >> 2) << 1 | (pz >> 2)] |=
+              (uint64_t)1 << ((px & 3) << 4 | (py & 3) << 2 | (pz & 3));
+        }
+}
+
 int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
   mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
   if (ensure_masks(g, G)) return -1;
-  /* particles of one (block, material, cell) share their stencil: mark it once */
-  const size_t owners = sg->owner_count, nmat = (size_t)sg->material_count;
-  for (size_t b = 0; b < owners; ++b)
+  uint64_t reach[MPM_BLOCK_NODES][8];
+  mpm_adaptive_grid_stencil_masks(W, reach);
+  /* particles of one (block, material, cell) share their stencil: mark it once, through the
+   * owner block's pad (its blocks are active since the sort: no lookups). Blocks in parallel:
+   * pads overlap, so the marks are ORed atomically (the same bits for any order) */
+  const long owners = (long)sg->owner_count;
+  const size_t nmat = (size_t)sg->material_count;
+  uint64_t *used = g->used[G];
+#pragma omp parallel for schedule(static) if (owners > 256)
+  for (long b = 0; b < owners; ++b) {
+    uint64_t mark[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
       int any = 0;
       for (size_t m = 0; m < nmat && !any; ++m) {
-        const size_t q = (b * nmat + m) * MPM_BLOCK_NODES + (size_t)c;
+        const size_t q = ((size_t)b * nmat + m) * MPM_BLOCK_NODES + (size_t)c;
         any = sg->cell_start[q + 1] > sg->cell_start[q];
       }
       if (!any) continue;
-      /* through the owner block's pad (its blocks are active since the sort): no lookups */
-      uint64_t *used = g->used[G];
-      for (int i = 0; i < W; ++i)
-        for (int j = 0; j < W; ++j)
-          for (int k = 0; k < W; ++k) {
-            const int px = ((c >> 4) & 3) + i, py = ((c >> 2) & 3) + j, pz = (c & 3) + k;
-            const int32_t nb = sg->neighbor[b][(px >> 2) << 2 | (py >> 2) << 1 | (pz >> 2)];
-            used[nb] |= (uint64_t)1 << ((px & 3) << 4 | (py & 3) << 2 | (pz & 3));
-          }
+      for (int o = 0; o < 8; ++o) mark[o] |= reach[c][o];
     }
+    for (int o = 0; o < 8; ++o)
+      if (mark[o]) __atomic_fetch_or(&used[sg->neighbor[b][o]], mark[o], __ATOMIC_RELAXED);
+  }
   return 0;
 }
 

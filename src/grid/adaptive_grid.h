@@ -119,6 +119,11 @@ int mpm_adaptive_grid_next(const mpm_adaptive_grid *g, int G);
  * occupied base node used. 0, or -1 when out of memory. */
 int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W);
 
+/* Per cell c of a block (its local index) and pad block o (as mpm_sparse_grid.neighbor: the
+ * x, y, z offsets as bits 2, 1, 0), the nodes of o that the W^3 stencil based at c covers, as a
+ * mask of local indices. */
+void mpm_adaptive_grid_stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]);
+
 /* Activate and mark the parents of every used ghost. Parents are real, so one pass over the
  * used slots suffices. Serial. 0, or -1 when out of memory or when a row needs more than
  * MPM_ROW_MAX entries. */

@@ -65,6 +65,8 @@ typedef struct mpm_adaptive {
   size_t ghost_of_capacity;
   uint64_t *block_multi; /* per block of 64 DOF slots: a bit per slot holding such a ghost */
   size_t block_multi_capacity;
+  uint32_t *block_count; /* per owner block of a transfer grid: its boundary cells' counts */
+  size_t block_count_capacity;
   struct mpm_boundary_particle {
     uint32_t particle, cell; /* its index, and its cell (below) */
     uint16_t tgrid;

@@ -44,21 +44,6 @@ static void stencil_slots(const mpm_grid *g, size_t b, const int32_t base[3], in
       }
 }
 
-/* Per cell c of a block (local index, x slowest) and pad block o (as sparse_grid.h's neighbor:
- * x, y, z bits 2, 1, 0), the nodes of o that the W^3 stencil based at c covers, as a mask of
- * local indices. */
-static void stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]) {
-  memset(reach, 0, MPM_BLOCK_NODES * 8 * sizeof(uint64_t));
-  for (int c = 0; c < MPM_BLOCK_NODES; ++c)
-    for (int i = 0; i < W; ++i)
-      for (int j = 0; j < W; ++j)
-        for (int k = 0; k < W; ++k) {
-          const int px = ((c >> 4) & 3) + i, py = ((c >> 2) & 3) + j, pz = (c & 3) + k;
-          reach[c][(px >> 2) << 2 | (py >> 2) << 1 | (pz >> 2)] |=
-              (uint64_t)1 << ((px & 3) << 4 | (py & 3) << 2 | (pz & 3));
-        }
-}
-
 /* The cells' entries by ghost (a counting sort, stable: cell order within a ghost) and each
  * cell's range of boundary particles (pushed cell by cell, so contiguous and in cell order). */
 static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
@@ -84,6 +69,71 @@ static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
   for (size_t k = nb; k-- > 0;) a->cell_particle[a->boundary[k].cell] = (uint32_t)k;
   a->cell_particle[nc] = (uint32_t)nb;
   return 0;
+}
+
+/* The boundary cells of owner block b of transfer grid t (its occupied cells whose stencils
+ * reach a ghost of several real nodes), in cell order: with count, only their numbers (cells,
+ * entries, particles) in count[0..2]; with first, written from those indices on (cell c's
+ * entries run from cell[c] to the next cell's first, cell[c + 1], which the caller sets after
+ * the last cell). */
+static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOCK_NODES][8],
+                           size_t b, uint32_t count[3], uint32_t first[3]) {
+  const mpm_transfer_grid *tg = &a->tgrid[t];
+  const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
+  const mpm_sparse_grid *sg = &g->impl.sparse;
+  const int W = tg->kernel.width, nodes = W * W * W;
+  const size_t nmat = (size_t)sg->material_count;
+  const uint64_t *multi_at = a->block_multi + g->dof_begin / MPM_BLOCK_NODES;
+  uint32_t cells = 0, entries = 0, particles = 0;
+  if (count) count[0] = count[1] = count[2] = 0;
+  /* a stencil of the block reaches only its pad: the block and 7 neighbours */
+  uint64_t pad[8], near = 0;
+  for (int o = 0; o < 8; ++o) near |= pad[o] = multi_at[sg->neighbor[b][o]];
+  if (!near) return;
+  uint32_t slot[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
+  for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
+    uint64_t hit = 0;
+    int reached = 0;
+    for (int o = 0; o < 8; ++o) {
+      const uint64_t h = pad[o] & reach[c][o];
+      hit |= h;
+      reached += __builtin_popcountll(h);
+    }
+    if (!hit) continue; /* its stencil reaches no such ghost */
+    const size_t q0 = (b * nmat) * MPM_BLOCK_NODES + (size_t)c;
+    uint32_t held = 0;
+    for (size_t m = 0; m < nmat; ++m)
+      held +=
+          sg->cell_start[q0 + m * MPM_BLOCK_NODES + 1] - sg->cell_start[q0 + m * MPM_BLOCK_NODES];
+    if (!held) continue;
+    if (count) {
+      cells++, entries += (uint32_t)reached, particles += held;
+      continue;
+    }
+    const uint32_t cell = first[0] + cells++;
+    a->cell[cell] = first[1] + entries;
+    const int32_t base[3] = {sg->coord[b][0] * MPM_BLOCK + ((c >> 4) & 3),
+                             sg->coord[b][1] * MPM_BLOCK + ((c >> 2) & 3),
+                             sg->coord[b][2] * MPM_BLOCK + (c & 3)};
+    stencil_slots(g, b, base, W, slot);
+    for (int n = 0; n < nodes; ++n) {
+      const int32_t gh = a->ghost_of[slot[n]];
+      if (gh < 0) continue;
+      struct mpm_cell_ghost *e = &a->cell_ghost[first[1] + entries++];
+      e->node = (uint32_t)(n / (W * W) | (n / W % W) << 4 | (n % W) << 8); /* (i, j, k), 4 bits */
+      e->ghost = (uint32_t)gh;
+    }
+    for (size_t m = 0; m < nmat; ++m) {
+      const size_t q = q0 + m * MPM_BLOCK_NODES;
+      for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j) {
+        struct mpm_boundary_particle *bp = &a->boundary[first[2] + particles++];
+        bp->particle = (uint32_t)a->range[t] + sg->perm[j];
+        bp->tgrid = (uint16_t)t;
+        bp->cell = cell;
+      }
+    }
+  }
+  if (count) count[0] = cells, count[1] = entries, count[2] = particles;
 }
 
 mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
@@ -115,69 +165,43 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     goto nomem;
   memset(a->moment, 0, 18 * ag->ghost_count * sizeof *a->moment);
   if (!multi) return MPM_OK;
-  uint32_t slot[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
   for (int t = 0; t < a->tgrid_count; ++t) {
     const mpm_transfer_grid *tg = &a->tgrid[t];
     const mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
     const mpm_sparse_grid *sg = &g->impl.sparse;
-    const int W = tg->kernel.width, nodes = W * W * W;
-    const size_t nmat = (size_t)sg->material_count;
+    const long nblocks = (long)sg->owner_count;
     assert(g->dof_begin % MPM_BLOCK_NODES == 0);
     uint64_t reach[MPM_BLOCK_NODES][8]; /* per cell of a block, its stencil's nodes per pad block */
-    stencil_masks(W, reach);
-    const uint64_t *multi_at = a->block_multi + g->dof_begin / MPM_BLOCK_NODES;
-    for (size_t b = 0; b < sg->owner_count; ++b) {
-      /* a stencil of the block reaches only its pad: the block and 7 neighbours */
-      uint64_t pad[8], near = 0;
-      for (int o = 0; o < 8; ++o) near |= pad[o] = multi_at[sg->neighbor[b][o]];
-      if (!near) continue;
-      for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
-        uint64_t hit = 0;
-        for (int o = 0; o < 8; ++o) hit |= pad[o] & reach[c][o];
-        if (!hit) continue; /* its stencil reaches no such ghost */
-        const size_t q0 = (b * nmat) * MPM_BLOCK_NODES + (size_t)c;
-        int any = 0;
-        for (size_t m = 0; m < nmat && !any; ++m)
-          any = sg->cell_start[q0 + m * MPM_BLOCK_NODES + 1] >
-                sg->cell_start[q0 + m * MPM_BLOCK_NODES];
-        if (!any) continue;
-        const int32_t base[3] = {sg->coord[b][0] * MPM_BLOCK + ((c >> 4) & 3),
-                                 sg->coord[b][1] * MPM_BLOCK + ((c >> 2) & 3),
-                                 sg->coord[b][2] * MPM_BLOCK + (c & 3)};
-        stencil_slots(g, b, base, W, slot);
-        const size_t first = a->cell_ghost_count;
-        for (int n = 0; n < nodes; ++n) {
-          const int32_t gh = a->ghost_of[slot[n]];
-          if (gh < 0) continue;
-          if (mpm_grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, a->cell_ghost_count + 1,
-                       sizeof *a->cell_ghost))
-            goto nomem;
-          /* the node as (i, j, k), 4 bits each */
-          a->cell_ghost[a->cell_ghost_count].node =
-              (uint32_t)(n / (W * W) | (n / W % W) << 4 | (n % W) << 8);
-          a->cell_ghost[a->cell_ghost_count].ghost = (uint32_t)gh;
-          a->cell_ghost_count++;
-        }
-        if (a->cell_ghost_count == first) continue;
-        if (mpm_grow((void **)&a->cell, &a->cell_capacity, a->cell_count + 2, sizeof *a->cell))
-          goto nomem;
-        a->cell[a->cell_count] = (uint32_t)first;
-        a->cell[a->cell_count + 1] = (uint32_t)a->cell_ghost_count; /* the next cell's first */
-        for (size_t m = 0; m < nmat; ++m) {
-          const size_t q = q0 + m * MPM_BLOCK_NODES;
-          for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j) {
-            if (mpm_grow((void **)&a->boundary, &a->boundary_capacity, a->boundary_count + 1,
-                         sizeof *a->boundary))
-              goto nomem;
-            a->boundary[a->boundary_count].particle = (uint32_t)a->range[t] + sg->perm[j];
-            a->boundary[a->boundary_count].tgrid = (uint16_t)t;
-            a->boundary[a->boundary_count].cell = (uint32_t)a->cell_count;
-            a->boundary_count++;
-          }
-        }
-        a->cell_count++;
+    mpm_adaptive_grid_stencil_masks(tg->kernel.width, reach);
+    /* two passes over the blocks in parallel: count each block's cells, entries and particles,
+     * then (after the prefix sums) write them where the serial order puts them */
+    if (mpm_grow((void **)&a->block_count, &a->block_count_capacity, 3 * (size_t)nblocks + 3,
+                 sizeof *a->block_count))
+      goto nomem;
+    uint32_t *count = a->block_count; /* per block: cells, entries, particles */
+#pragma omp parallel for schedule(dynamic, 64) if (nblocks > 256)
+    for (long b = 0; b < nblocks; ++b) boundary_block(a, t, reach, (size_t)b, count + 3 * b, NULL);
+    size_t at[3] = {a->cell_count, a->cell_ghost_count, a->boundary_count};
+    for (long b = 0; b < nblocks; ++b)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t c = count[3 * b + k];
+        count[3 * b + k] = (uint32_t)at[k]; /* now the block's first */
+        at[k] += c;
       }
+    if (mpm_grow((void **)&a->cell, &a->cell_capacity, at[0] + 2, sizeof *a->cell) ||
+        mpm_grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, at[1] + 1,
+                 sizeof *a->cell_ghost) ||
+        mpm_grow((void **)&a->boundary, &a->boundary_capacity, at[2] + 1, sizeof *a->boundary))
+      goto nomem;
+#pragma omp parallel for schedule(dynamic, 64) if (nblocks > 256)
+    for (long b = 0; b < nblocks; ++b) {
+      uint32_t first[3] = {count[3 * b], count[3 * b + 1], count[3 * b + 2]};
+      boundary_block(a, t, reach, (size_t)b, NULL, first);
     }
+    a->cell_count = at[0];
+    a->cell_ghost_count = at[1];
+    a->boundary_count = at[2];
+    a->cell[a->cell_count] = (uint32_t)a->cell_ghost_count; /* the last cell's end */
   }
   if (transpose_by_ghost(a, ag->ghost_count)) goto nomem;
   /* per boundary particle its B (kept over the P2G) and its B correction (G2P), and the P2G's

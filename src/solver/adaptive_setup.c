@@ -142,6 +142,7 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->box_tgrid);
   mpm_free(a->ghost_of);
   mpm_free(a->block_multi);
+  mpm_free(a->block_count);
   mpm_free(a->boundary);
   mpm_free(a->cell);
   mpm_free(a->cell_ghost);
