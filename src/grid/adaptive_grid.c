@@ -437,16 +437,23 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
       goto done;
     }
   }
-  /* pass 2: the entries, their APIC offsets and the spreads */
+  /* pass 2: the entries, their APIC offsets and the spreads, ghosts in parallel (row a's terms
+   * are terms[row_start[a] ..): the layout packs the rows by len) */
   const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
-  const mpm_row_term *row = terms;
-  for (size_t a = 0; a < g->ghost_count; row += len[a], ++a) {
+  const long ghosts = (long)g->ghost_count;
+  int inactive = 0;
+#pragma omp parallel for schedule(static) reduction(| : inactive) if (ghosts > 4096)
+  for (long a = 0; a < ghosts; ++a) {
+    const mpm_row_term *row = terms + g->ghosts.row_start[a];
     double S[6] = {0, 0, 0, 0, 0, 0};
     for (uint32_t t = 0; t < len[a]; ++t) {
       const int64_t col = mpm_adaptive_grid_slot(g, row[t].level, row[t].idx);
-      if (col < 0) goto done; /* a parent not active: close() was not called */
+      if (col < 0) { /* a parent not active: close() was not called */
+        inactive = 1;
+        break;
+      }
       const uint32_t e = g->ghosts.row_start[a] + g->ghosts.row_len[a];
-      mpm_embedding_push(&g->ghosts, a, (uint32_t)col, (mpm_real)row[t].w);
+      mpm_embedding_push(&g->ghosts, (size_t)a, (uint32_t)col, (mpm_real)row[t].w);
       /* x_i - x_g exactly: both on the finest lattice */
       double r[3];
       for (int d = 0; d < 3; ++d) {
@@ -466,6 +473,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     }
     for (int q = 0; q < 6; ++q) g->spread[q][a] = (mpm_real)S[q];
   }
+  if (inactive) goto done;
   status = 0;
 done:
   mpm_free(len);

@@ -20,6 +20,7 @@
 #include "solver/adaptive.h"
 
 #include "core/alloc.h"
+#include "core/parallel.h"
 #include "solver/sim.h"
 
 #include <assert.h>
@@ -351,8 +352,10 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
 void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   mpm_particles *p = &sim->particles;
-  for (size_t k = 0; k < a->boundary_count; ++k)
-    for (int c = 0; c < 9; ++c) p->B[c][a->boundary[k].particle] = a->dB[9 * k + (size_t)c];
+  const long nb = (long)a->boundary_count; /* a particle is once in the list */
+#pragma omp parallel for schedule(static) if (nb > MPM_PARALLEL_MIN)
+  for (long k = 0; k < nb; ++k)
+    for (int c = 0; c < 9; ++c) p->B[c][a->boundary[k].particle] = a->dB[9 * (size_t)k + (size_t)c];
 }
 
 void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse) {
@@ -375,8 +378,9 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
   const mpm_real *const v[3] = {sim->dofs.v[0], sim->dofs.v[1], sim->dofs.v[2]};
   mpm_adaptive_grid_gather_moments(ag, v, M);
   mpm_real *Mi = a->moment; /* interleaved, for the particles' reads */
-  for (size_t g = 0; g < n; ++g)
-    for (int c = 0; c < 9; ++c) Mi[9 * g + (size_t)c] = M[c][g];
+#pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
+  for (long g = 0; g < (long)n; ++g)
+    for (int c = 0; c < 9; ++c) Mi[9 * (size_t)g + (size_t)c] = M[c][g];
   const long nb = (long)a->boundary_count;
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < nb; ++k) {
@@ -398,8 +402,10 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
 void mpm_adaptive_apic_g2p_after(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   mpm_particles *p = &sim->particles;
-  for (size_t k = 0; k < a->boundary_count; ++k) {
+  const long nb = (long)a->boundary_count;
+#pragma omp parallel for schedule(static) if (nb > MPM_PARALLEL_MIN)
+  for (long k = 0; k < nb; ++k) {
     const size_t i = a->boundary[k].particle;
-    for (int c = 0; c < 9; ++c) p->B[c][i] += a->dB[9 * k + (size_t)c];
+    for (int c = 0; c < 9; ++c) p->B[c][i] += a->dB[9 * (size_t)k + (size_t)c];
   }
 }
