@@ -353,11 +353,11 @@ static void test_apic_across_levels(void **state) {
           for (int d = 0; d < 3; ++d) r[d] = xs[d] - c.x[p][d];
           const double wg = (double)w[0][i] * w[1][j] * w[2][k];
           const int32_t a = ghost_of[s];
-          const double Sg[9] = {a >= 0 ? g.spread[0][a] : 0, a >= 0 ? g.spread[3][a] : 0,
-                                a >= 0 ? g.spread[4][a] : 0, a >= 0 ? g.spread[3][a] : 0,
-                                a >= 0 ? g.spread[1][a] : 0, a >= 0 ? g.spread[5][a] : 0,
-                                a >= 0 ? g.spread[4][a] : 0, a >= 0 ? g.spread[5][a] : 0,
-                                a >= 0 ? g.spread[2][a] : 0};
+          const double Sg[9] = {a >= 0 ? g.spread[6 * a + 0] : 0, a >= 0 ? g.spread[6 * a + 3] : 0,
+                                a >= 0 ? g.spread[6 * a + 4] : 0, a >= 0 ? g.spread[6 * a + 3] : 0,
+                                a >= 0 ? g.spread[6 * a + 1] : 0, a >= 0 ? g.spread[6 * a + 5] : 0,
+                                a >= 0 ? g.spread[6 * a + 4] : 0, a >= 0 ? g.spread[6 * a + 5] : 0,
+                                a >= 0 ? g.spread[6 * a + 2] : 0};
           for (int d = 0; d < 3; ++d)
             for (int q = 0; q < 3; ++q) {
               B[3 * d + q] += wg * (u[1 + d][s] * r[q] + (a >= 0 ? M[3 * d + q][a] : 0));

@@ -31,7 +31,7 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
     mpm_free(g->ghost[G]);
   }
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
-  for (int q = 0; q < 6; ++q) mpm_free(g->spread[q]);
+  mpm_free(g->spread);
   rows_free(&g->rows);
   mpm_free(g->blocks.keys);
   mpm_free(g->blocks.uniform);
@@ -363,19 +363,15 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
   while (cap < n) cap *= 2;
   uint32_t *slot = mpm_alloc(cap * sizeof *slot);
   mpm_real *scratch = mpm_alloc(4 * cap * sizeof *scratch);
-  mpm_real *spread[6];
-  int failed = !slot || !scratch;
-  for (int q = 0; q < 6; ++q) failed |= !(spread[q] = mpm_alloc(cap * sizeof(mpm_real)));
-  if (failed) {
+  mpm_real *spread = mpm_alloc(6 * cap * sizeof(mpm_real));
+  if (!slot || !scratch || !spread) {
     mpm_free(slot);
     mpm_free(scratch);
-    for (int q = 0; q < 6; ++q) mpm_free(spread[q]);
+    mpm_free(spread);
     return -1;
   }
-  for (int q = 0; q < 6; ++q) {
-    mpm_free(g->spread[q]);
-    g->spread[q] = spread[q]; /* filled by build_rows after every ghost is known */
-  }
+  mpm_free(g->spread);
+  g->spread = spread; /* filled by build_rows after every ghost is known */
   if (g->ghost_count) memcpy(slot, g->ghost_slot, g->ghost_count * sizeof *slot);
   mpm_free(g->ghost_slot);
   mpm_free(g->scratch);
@@ -471,7 +467,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
       S[4] += row[t].w * r[0] * r[2];
       S[5] += row[t].w * r[1] * r[2];
     }
-    for (int q = 0; q < 6; ++q) g->spread[q][a] = (mpm_real)S[q];
+    for (int q = 0; q < 6; ++q) g->spread[6 * (size_t)a + (size_t)q] = (mpm_real)S[q];
   }
   if (inactive) goto done;
   status = 0;

@@ -53,10 +53,10 @@ typedef struct mpm_adaptive_grid {
   mpm_real *scratch; /* 4 x ghost_capacity values for scatter and gather */
   /* APIC across levels (docs/adaptive-grid.md): per row entry e of ghost g and real slot i,
    * offset[j][e] = E_gi (x_i - x_g)_j; per ghost, spread S_g = sum_i E_gi (x_i - x_g)(x_i - x_g)^T
-   * as xx, yy, zz, xy, xz, yz */
+   * as xx, yy, zz, xy, xz, yz, the 6 of a ghost side by side (spread[6 g ..]) */
   mpm_real *offset[3];
   size_t offset_capacity;
-  mpm_real *spread[6];
+  mpm_real *spread;
   /* the nodes' rows, kept from step to step while the tree does not change (tree.version):
    * keyed by the node's position on the finest lattice, the owner level of a real node (row
    * empty) or the row of a constrained one, terms[start .. start + len) */

@@ -217,12 +217,13 @@ nomem:
                        (long long)sim->steps);
 }
 
-/* A boundary particle's 1D stencil factors, the distances f from its base node (cells), and
- * the ghost level's diagonal D~ (m^2) as the lanes compute it. */
+/* A boundary particle's 1D weights and base node, the distances f from its base node (cells),
+ * and the ghost level's diagonal D~ (m^2) as the lanes compute it. */
 typedef struct boundary_stencil {
   int W;
   double dx;
-  mpm_stencil s;
+  int base[3];
+  mpm_real w[3][MPM_STENCIL_MAX];
   double f[3], d[3];
 } boundary_stencil;
 
@@ -233,26 +234,23 @@ static void boundary_stencil_of(const mpm_adaptive *a, const mpm_sim *sim, size_
   const size_t i = a->boundary[k].particle;
   mpm_real x[3];
   for (int d = 0; d < 3; ++d) x[d] = p->x[d][i] - sim->origin[d];
-  mpm_kernel_stencil(&tg->kernel, x, &bs->s);
   bs->W = tg->kernel.width;
   bs->dx = (double)tg->kernel.dx;
   for (int d = 0; d < 3; ++d) {
-    bs->f[d] = (double)(x[d] * tg->kernel.inv_dx) - bs->s.base[d];
+    /* the weights as mpm_kernel_stencil gives them; the gradients and APIC factors, unused
+     * here, are left to the compiler to drop */
+    mpm_real dw[MPM_STENCIL_MAX], af[MPM_STENCIL_MAX];
+    bs->base[d] = mpm_kernel_1d(&tg->kernel, x[d] * tg->kernel.inv_dx, bs->w[d], dw, af);
+    bs->f[d] = (double)(x[d] * tg->kernel.inv_dx) - bs->base[d];
     double sum = 0;
-    for (int q = 0; q < bs->W; ++q) sum += (double)bs->s.w[d][q] * (q - bs->f[d]) * (q - bs->f[d]);
+    for (int q = 0; q < bs->W; ++q) sum += (double)bs->w[d][q] * (q - bs->f[d]) * (q - bs->f[d]);
     bs->d[d] = sum * bs->dx * bs->dx;
   }
 }
 
-/* Stencil node (i, j, k) packed 4 bits each: its weight and offset x_g - x_p. */
-static inline double node_weight(const boundary_stencil *bs, uint32_t n, double r[3]) {
-  const int idx[3] = {(int)(n & 15), (int)(n >> 4 & 15), (int)(n >> 8 & 15)};
-  double w = 1;
-  for (int d = 0; d < 3; ++d) {
-    w *= (double)bs->s.w[d][idx[d]];
-    r[d] = (idx[d] - bs->f[d]) * bs->dx;
-  }
-  return w;
+/* Stencil node (i, j, k) packed 4 bits each: its weight. */
+static inline double node_weight(const boundary_stencil *bs, uint32_t n) {
+  return (double)bs->w[0][n & 15] * (double)bs->w[1][n >> 4 & 15] * (double)bs->w[2][n >> 8 & 15];
 }
 
 /* Its weight alone, from 1D weights w[3][MPM_STENCIL_MAX]. */
@@ -284,8 +282,8 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   const mpm_adaptive_grid *ag = &a->grid;
   mpm_particles *p = &sim->particles;
   const size_t ng = ag->ghost_count;
-  const mpm_real *const *S = (const mpm_real *const *)ag->spread;
-  mpm_real *Cw = a->work; /* per boundary particle: m C (9), then its 1D weights (12) */
+  const mpm_real *S = ag->spread; /* 6 per ghost */
+  mpm_real *Cw = a->work;         /* per boundary particle: m C (9), then its 1D weights (12) */
   const long nb = (long)a->boundary_count;
   /* C_p and the lanes' B' = C D~ per particle, in parallel */
 #pragma omp parallel for schedule(static)
@@ -301,12 +299,10 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
     }
     /* the real-node D_p: the ghost level's plus the ghosts' spreads */
     const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
-    double r[3];
     for (uint32_t e = c0; e < c1; ++e) {
-      const double w = node_weight(&bs, a->cell_ghost[e].node, r);
-      const uint32_t gh = a->cell_ghost[e].ghost;
-      const double xx = S[0][gh], yy = S[1][gh], zz = S[2][gh], xy = S[3][gh], xz = S[4][gh],
-                   yz = S[5][gh];
+      const double w = node_weight(&bs, a->cell_ghost[e].node);
+      const mpm_real *Sg = S + 6 * (size_t)a->cell_ghost[e].ghost;
+      const double xx = Sg[0], yy = Sg[1], zz = Sg[2], xy = Sg[3], xz = Sg[4], yz = Sg[5];
       D[0] += w * xx, D[1] += w * xy, D[2] += w * xz;
       D[3] += w * xy, D[4] += w * yy, D[5] += w * yz;
       D[6] += w * xz, D[7] += w * yz, D[8] += w * zz;
@@ -314,7 +310,7 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
     mpm_real *out = Cw + 21 * (size_t)k;
     for (int d = 0; d < 3; ++d) /* its 1D weights, for the ghosts' sums and for G2P */
       for (int q = 0; q < MPM_STENCIL_MAX; ++q)
-        out[9 + MPM_STENCIL_MAX * d + q] = q < bs.W ? bs.s.w[d][q] : 0;
+        out[9 + MPM_STENCIL_MAX * d + q] = q < bs.W ? bs.w[d][q] : 0;
     if (!invert3(D, Dinv)) { /* no affine part from this particle (cannot happen for uGIMP) */
       memset(out, 0, 9 * sizeof *out);
       continue;
