@@ -32,6 +32,9 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   }
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
   mpm_free(g->spread);
+  mpm_free(g->build.len);
+  mpm_free(g->build.node);
+  mpm_free(g->build.terms);
   rows_free(&g->rows);
   mpm_free(g->blocks.keys);
   mpm_free(g->blocks.uniform);
@@ -384,9 +387,12 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
 int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   /* pass 1: the ghosts, their slots, nodes and rows (each row resolved once) */
   g->ghost_count = 0;
-  uint32_t *len = NULL;
-  mpm_row_term *node = NULL, *terms = NULL; /* ghost a's node; all rows, back to back */
-  size_t len_cap = 0, node_cap = 0, terms_cap = 0, term_count = 0;
+  /* kept from step to step (g->build): fresh pages for tens of MB every step cost more than
+   * filling them */
+  uint32_t *len = g->build.len;
+  mpm_row_term *node = g->build.node, *terms = g->build.terms; /* ghost a's node; all rows */
+  size_t len_cap = g->build.len_cap, node_cap = g->build.node_cap, terms_cap = g->build.terms_cap,
+         term_count = 0;
   int status = -1;
   FOR_GRIDS(g, G) {
     const mpm_grid *lv = grid_of(g, G);
@@ -472,9 +478,12 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   if (inactive) goto done;
   status = 0;
 done:
-  mpm_free(len);
-  mpm_free(node);
-  mpm_free(terms);
+  g->build.len = len;
+  g->build.node = node;
+  g->build.terms = terms;
+  g->build.len_cap = len_cap;
+  g->build.node_cap = node_cap;
+  g->build.terms_cap = terms_cap;
   return status;
 }
 
@@ -639,7 +648,9 @@ static uint32_t *block_ids(mpm_adaptive_grid *g, int level, const int32_t bc[3])
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
   size_t b = mpm_refinement_bytes(&g->tree) + mpm_embedding_bytes(&g->ghosts) +
              g->ghost_capacity * (sizeof(uint32_t) + 10 * sizeof(mpm_real)) +
-             3 * g->offset_capacity * sizeof(mpm_real);
+             3 * g->offset_capacity * sizeof(mpm_real) + g->build.len_cap * sizeof(uint32_t) +
+             (g->build.node_cap + g->build.terms_cap) * sizeof(mpm_row_term) +
+             g->blocks.id_capacity * sizeof(uint32_t);
   FOR_GRIDS(g, G)
   b += grid_of((mpm_adaptive_grid *)g, G)->ops->bytes(grid_of((mpm_adaptive_grid *)g, G));
   return b;

@@ -57,6 +57,11 @@ typedef struct mpm_adaptive_grid {
   mpm_real *offset[3];
   size_t offset_capacity;
   mpm_real *spread;
+  struct { /* build_rows' scratch: per ghost its row's length and its node, and the rows */
+    uint32_t *len;
+    mpm_row_term *node, *terms;
+    size_t len_cap, node_cap, terms_cap;
+  } build;
   /* the nodes' rows, kept from step to step while the tree does not change (tree.version):
    * keyed by the node's position on the finest lattice, the owner level of a real node (row
    * empty) or the row of a constrained one, terms[start .. start + len) */
