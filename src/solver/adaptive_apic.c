@@ -258,6 +258,11 @@ static inline mpm_real packed_weight(const mpm_real *w, uint32_t n) {
   return w[n & 15] * w[MPM_STENCIL_MAX + (n >> 4 & 15)] * w[2 * MPM_STENCIL_MAX + (n >> 8 & 15)];
 }
 
+/* Nine sums at once, as 8 lanes and one more: lane-wise products and sums are those of the
+ * scalar code (no contraction: the build is ISO C), so the sums are bit for bit the scalar
+ * ones, in a fraction of the instructions. */
+typedef mpm_real sum8r __attribute__((vector_size(8 * sizeof(mpm_real))));
+
 /* 3x3 inverse (row-major, double); 0 when singular. */
 static int invert3(const double A[9], double R[9]) {
   const double c0 = A[4] * A[8] - A[5] * A[7], c1 = A[5] * A[6] - A[3] * A[8],
@@ -332,16 +337,21 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   const struct mpm_ghost_entry *ge = a->ghost_entry;
 #pragma omp parallel for schedule(static)
   for (long g = 0; g < (long)ng; ++g) {
-    mpm_real A[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    sum8r A8 = {0, 0, 0, 0, 0, 0, 0, 0};
+    mpm_real A_8 = 0;
     for (uint32_t j = start[g]; j < start[g + 1]; ++j) {
       const uint32_t cell = ge[j].cell, node = a->cell_ghost[ge[j].entry].node;
       for (uint32_t k = first[cell]; k < first[cell + 1]; ++k) {
         const mpm_real *mC = Cw + 21 * (size_t)k, *w = mC + 9;
         const mpm_real we = packed_weight(w, node);
-        for (int c = 0; c < 9; ++c) A[c] += we * mC[c];
+        sum8r m8;
+        memcpy(&m8, mC, sizeof m8);
+        A8 += we * m8;
+        A_8 += we * mC[8];
       }
     }
-    for (int c = 0; c < 9; ++c) planes[(size_t)c * ng + (size_t)g] = A[c];
+    for (int c = 0; c < 8; ++c) planes[(size_t)c * ng + (size_t)g] = A8[c];
+    planes[(size_t)8 * ng + (size_t)g] = A_8;
   }
 }
 
