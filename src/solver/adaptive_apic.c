@@ -26,25 +26,6 @@
 #include <assert.h>
 #include <string.h>
 
-/* The DOF slots of the W^3 stencil at `base` (node coordinates of the grid) of a particle in
- * owner block b, through the block's pad. */
-static void stencil_slots(const mpm_grid *g, size_t b, const int32_t base[3], int W,
-                          uint32_t *slot) {
-  const mpm_sparse_grid *sg = &g->impl.sparse;
-  int n = 0;
-  for (int i = 0; i < W; ++i)
-    for (int j = 0; j < W; ++j)
-      for (int k = 0; k < W; ++k, ++n) {
-        const int32_t p[3] = {base[0] - sg->coord[b][0] * MPM_BLOCK + i,
-                              base[1] - sg->coord[b][1] * MPM_BLOCK + j,
-                              base[2] - sg->coord[b][2] * MPM_BLOCK + k}; /* 0 .. 6 in the pad */
-        const int o = (p[0] >> 2) << 2 | (p[1] >> 2) << 1 | (p[2] >> 2);
-        const int local = (p[0] & 3) << 4 | (p[1] & 3) << 2 | (p[2] & 3);
-        slot[n] =
-            (uint32_t)(g->dof_begin + (size_t)sg->neighbor[b][o] * MPM_BLOCK_NODES + (size_t)local);
-      }
-}
-
 /* The cells' entries by ghost (a counting sort, stable: cell order within a ghost) and each
  * cell's range of boundary particles (pushed cell by cell, so contiguous and in cell order). */
 static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
@@ -82,7 +63,7 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
   const mpm_transfer_grid *tg = &a->tgrid[t];
   const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
   const mpm_sparse_grid *sg = &g->impl.sparse;
-  const int W = tg->kernel.width, nodes = W * W * W;
+  const int W = tg->kernel.width;
   const size_t nmat = (size_t)sg->material_count;
   const uint64_t *multi_at = a->block_multi + g->dof_begin / MPM_BLOCK_NODES;
   uint32_t cells = 0, entries = 0, particles = 0;
@@ -91,7 +72,6 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
   uint64_t pad[8], near = 0;
   for (int o = 0; o < 8; ++o) near |= pad[o] = multi_at[sg->neighbor[b][o]];
   if (!near) return;
-  uint32_t slot[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
   for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
     uint64_t hit = 0;
     int reached = 0;
@@ -113,17 +93,22 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
     }
     const uint32_t cell = first[0] + cells++;
     a->cell[cell] = first[1] + entries;
-    const int32_t base[3] = {sg->coord[b][0] * MPM_BLOCK + ((c >> 4) & 3),
-                             sg->coord[b][1] * MPM_BLOCK + ((c >> 2) & 3),
-                             sg->coord[b][2] * MPM_BLOCK + (c & 3)};
-    stencil_slots(g, b, base, W, slot);
-    for (int n = 0; n < nodes; ++n) {
-      const int32_t gh = a->ghost_of[slot[n]];
-      if (gh < 0) continue;
-      struct mpm_cell_ghost *e = &a->cell_ghost[first[1] + entries++];
-      e->node = (uint32_t)(n / (W * W) | (n / W % W) << 4 | (n % W) << 8); /* (i, j, k), 4 bits */
-      e->ghost = (uint32_t)gh;
-    }
+    /* the stencil's nodes in (i, j, k) order, through the pad: a node holds such a ghost when
+     * its bit is set in its pad block's mask; only those are looked up */
+    const int cx = (c >> 4) & 3, cy = (c >> 2) & 3, cz = c & 3;
+    for (int i = 0; i < W; ++i)
+      for (int j = 0; j < W; ++j)
+        for (int k = 0; k < W; ++k) {
+          const int px = cx + i, py = cy + j, pz = cz + k;
+          const int o = (px >> 2) << 2 | (py >> 2) << 1 | (pz >> 2);
+          const int local = (px & 3) << 4 | (py & 3) << 2 | (pz & 3);
+          if (!(pad[o] >> local & 1)) continue;
+          const size_t slot =
+              g->dof_begin + (size_t)sg->neighbor[b][o] * MPM_BLOCK_NODES + (size_t)local;
+          struct mpm_cell_ghost *e = &a->cell_ghost[first[1] + entries++];
+          e->node = (uint32_t)(i | j << 4 | k << 8); /* (i, j, k), 4 bits each */
+          e->ghost = (uint32_t)a->ghost_of[slot];
+        }
     for (size_t m = 0; m < nmat; ++m) {
       const size_t q = q0 + m * MPM_BLOCK_NODES;
       for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j) {
