@@ -166,6 +166,30 @@ static void test_two_levels_threads_bitwise(void **state) {
   mpm_sim_destroy(b);
 }
 
+/* Three levels, bands around the body (Gao's static refinement), APIC: 1 and 2 threads give the
+ * same particles bit for bit. The body is large enough that the sort's parallel loops (the
+ * used-slot marks, the ghost rows' entries, the APIC boundary cells) run in parallel: more than
+ * 64 owner blocks on the finest grid, 1024 ghosts and MPM_PARALLEL_MIN boundary particles. */
+static void test_three_levels_threads_bitwise(void **state) {
+  (void)state;
+  const char *grid = ", \"levels\": 3, \"refine\": [{\"level\": 1, \"body\": 0, \"distance\": "
+                     "0.04}, {\"level\": 2, \"body\": 0, \"distance\": 0.02}]";
+  mpm_sim *s[2];
+  for (int t = 0; t < 2; ++t) {
+    mpm_set_threads(t + 1);
+    s[t] = sim_from_json(flying_box(grid, "apic", 0.45));
+    run_steps(s[t], 6);
+  }
+  mpm_set_threads(1);
+  const mpm_adaptive *a = s[1]->adaptive;
+  const mpm_grid *fine = mpm_adaptive_grid_at((mpm_adaptive_grid *)&a->grid, 2);
+  assert_true(fine->impl.sparse.owner_count > 64);
+  assert_true(a->grid.ghost_count > 1024);
+  assert_true(a->boundary_count > MPM_PARALLEL_MIN);
+  assert_same_particles(&s[0]->particles, &s[1]->particles);
+  for (int t = 0; t < 2; ++t) mpm_sim_destroy(s[t]);
+}
+
 static int leaf_level(const mpm_sim *sim, double x, double y, double z) {
   const mpm_real p[3] = {(mpm_real)x, (mpm_real)y, (mpm_real)z};
   int32_t cell[3];
@@ -324,6 +348,7 @@ int main(void) {
       cmocka_unit_test(test_single_level_is_uniform_bitwise),
       cmocka_unit_test(test_two_levels_conserve_across_the_level_change),
       cmocka_unit_test(test_two_levels_threads_bitwise),
+      cmocka_unit_test(test_three_levels_threads_bitwise),
       cmocka_unit_test(test_refinement_rules),
       cmocka_unit_test(test_steep_refinement_is_refused),
       cmocka_unit_test(test_refined_memory_is_checked),

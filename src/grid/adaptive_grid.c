@@ -167,7 +167,7 @@ int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
   const long owners = (long)sg->owner_count;
   const size_t nmat = (size_t)sg->material_count;
   uint64_t *used = g->used[G];
-#pragma omp parallel for schedule(static) if (owners > 256)
+#pragma omp parallel for schedule(static) if (owners > 64)
   for (long b = 0; b < owners; ++b) {
     uint64_t mark[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
@@ -444,7 +444,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
   const long ghosts = (long)g->ghost_count;
   int inactive = 0;
-#pragma omp parallel for schedule(static) reduction(| : inactive) if (ghosts > 4096)
+#pragma omp parallel for schedule(static) reduction(| : inactive) if (ghosts > 1024)
   for (long a = 0; a < ghosts; ++a) {
     const mpm_row_term *row = terms + g->ghosts.row_start[a];
     double S[6] = {0, 0, 0, 0, 0, 0};

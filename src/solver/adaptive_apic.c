@@ -165,7 +165,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
                  sizeof *a->block_count))
       goto nomem;
     uint32_t *count = a->block_count; /* per block: cells, entries, particles */
-#pragma omp parallel for schedule(dynamic, 64) if (nblocks > 256)
+#pragma omp parallel for schedule(dynamic, 16) if (nblocks > 64)
     for (long b = 0; b < nblocks; ++b) boundary_block(a, t, reach, (size_t)b, count + 3 * b, NULL);
     size_t at[3] = {a->cell_count, a->cell_ghost_count, a->boundary_count};
     for (long b = 0; b < nblocks; ++b)
@@ -179,7 +179,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
                  sizeof *a->cell_ghost) ||
         mpm_grow((void **)&a->boundary, &a->boundary_capacity, at[2] + 1, sizeof *a->boundary))
       goto nomem;
-#pragma omp parallel for schedule(dynamic, 64) if (nblocks > 256)
+#pragma omp parallel for schedule(dynamic, 16) if (nblocks > 64)
     for (long b = 0; b < nblocks; ++b) {
       uint32_t first[3] = {count[3 * b], count[3 * b + 1], count[3 * b + 2]};
       boundary_block(a, t, reach, (size_t)b, NULL, first);
