@@ -84,7 +84,11 @@ int mpm_refinement_leaf_level(const mpm_refinement *r, const int32_t c[3]);
 int mpm_refinement_leaf_at(const mpm_refinement *r, const mpm_real x[3], int32_t cell[3]);
 
 /* The finest level of the leaves that meet the box [lo, hi] (m; closed, so a leaf touching the
- * box counts: choosing a finer level than needed costs a wider stencil, never accuracy). */
+ * box counts: choosing a finer level than needed costs a wider stencil, never accuracy), with
+ * one exception kept from the first version, which descended from the level-0 cells holding the
+ * box: leaves in a level-0 cell below the one holding the box's low corner (on any axis) do not
+ * count where they only touch the box's low face (tests/test_refinement.c,
+ * test_finest_level_in_against_leaves). */
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]);
 
