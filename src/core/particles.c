@@ -120,3 +120,22 @@ void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **sc
     memcpy(iarrays[k], iscratch, (size_t)n * sizeof(uint32_t));
   }
 }
+
+void mpm_particles_move(mpm_particles *p, const uint32_t *dest, const uint32_t *src, size_t n,
+                        mpm_real *rscratch, uint32_t *iscratch) {
+  if (n == 0) return;
+  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(p, arrays);
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) {
+    mpm_real *a = *arrays[k];
+    for (size_t j = 0; j < n; ++j) rscratch[j] = a[src[j]];
+    for (size_t j = 0; j < n; ++j) a[dest[j]] = rscratch[j];
+  }
+  uint32_t *iarrays[4] = {(uint32_t *)p->material, (uint32_t *)p->body, (uint32_t *)p->level,
+                          p->id};
+  for (int k = 0; k < 4; ++k) {
+    uint32_t *a = iarrays[k];
+    for (size_t j = 0; j < n; ++j) iscratch[j] = a[src[j]];
+    for (size_t j = 0; j < n; ++j) a[dest[j]] = iscratch[j];
+  }
+}

@@ -61,4 +61,11 @@ mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t c
 void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,
                            uint32_t *iscratch);
 
+/* Move particle src[k] to slot dest[k] in every array, k < n, where dest is a permutation of src
+ * (the particles at those slots trade places; the others stay). rscratch holds n reals and
+ * iscratch n integers. For reorders that touch a few particles: a full permute reads and
+ * writes every array whole. */
+void mpm_particles_move(mpm_particles *p, const uint32_t *dest, const uint32_t *src, size_t n,
+                        mpm_real *rscratch, uint32_t *iscratch);
+
 #endif

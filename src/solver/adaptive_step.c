@@ -157,24 +157,49 @@ static mpm_status classify(mpm_sim *sim) {
       (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
 }
 
-/* Keep the particles grouped by transfer grid: a stable counting sort when some particle
- * changed grid. The ranges in a.range. */
+/* Keep the particles grouped by transfer grid, the ranges in a.range. When some particles
+ * changed grid, only they move: a particle outside its grid's new range trades places with
+ * another, the k-th such particle of grid t (in array order) going to the k-th slot of t's new
+ * range that holds a particle of another grid (as many of each). A step after a rebuild of the
+ * tree moves a few percent of the particles, not all of them. When more than half would move,
+ * a stable counting sort permutes the arrays whole instead. Either way the order depends only
+ * on the particles, not on the threads. */
 static mpm_status group(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   mpm_particles *p = &sim->particles;
+  const int nt = a->tgrid_count;
   size_t count[MPM_TRANSFER_GRIDS_MAX + 1] = {0};
   int grouped = 1;
   for (size_t i = 0; i < p->count; ++i) {
     count[a->of[i] + 1]++;
     grouped &= i == 0 || a->of[i] >= a->of[i - 1];
   }
-  for (int t = 0; t < a->tgrid_count; ++t) count[t + 1] += count[t];
-  for (int t = 0; t <= a->tgrid_count; ++t) a->range[t] = count[t];
+  for (int t = 0; t < nt; ++t) count[t + 1] += count[t];
+  for (int t = 0; t <= nt; ++t) a->range[t] = count[t];
   if (grouped) return MPM_OK;
-  for (size_t i = 0; i < p->count; ++i) a->perm[count[a->of[i]]++] = (uint32_t)i;
   if (mpm_sim_ensure_scratch(sim))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
-  mpm_particles_permute(p, a->perm, &sim->scratch, sim->iscratch);
+  /* the slots of each new range that hold another grid's particle */
+  size_t holes[MPM_TRANSFER_GRIDS_MAX + 1] = {0}, moving = 0;
+  for (int t = 0; t < nt; ++t)
+    for (size_t i = a->range[t]; i < a->range[t + 1]; ++i)
+      if (a->of[i] != t) holes[t + 1]++, moving++;
+  if (2 * moving > p->count) { /* most move: one stable counting sort */
+    for (size_t i = 0; i < p->count; ++i) a->perm[count[a->of[i]]++] = (uint32_t)i;
+    mpm_particles_permute(p, a->perm, &sim->scratch, sim->iscratch);
+    return MPM_OK;
+  }
+  for (int t = 0; t < nt; ++t) holes[t + 1] += holes[t];
+  uint32_t *dest = a->perm, *src = a->perm + moving; /* 2 moving <= n: a->perm holds n + 1 */
+  size_t at_dest[MPM_TRANSFER_GRIDS_MAX], at_src[MPM_TRANSFER_GRIDS_MAX];
+  for (int t = 0; t < nt; ++t) at_dest[t] = at_src[t] = holes[t];
+  for (int t = 0; t < nt; ++t)
+    for (size_t i = a->range[t]; i < a->range[t + 1]; ++i)
+      if (a->of[i] != t) {
+        dest[at_dest[t]++] = (uint32_t)i;      /* a hole of t */
+        src[at_src[a->of[i]]++] = (uint32_t)i; /* a particle bound for its grid's holes */
+      }
+  mpm_particles_move(p, dest, src, moving, sim->scratch, sim->iscratch);
   return MPM_OK;
 }
 
