@@ -579,6 +579,69 @@ static void test_finest_level_in_against_leaves(void **state) {
   }
 }
 
+/* The particles' transfer level (mpm_refinement_finest_level_overlapping): the finest level of
+ * the leaves a box overlaps with some volume, against the leaves themselves; and for boxes on
+ * the lattice (as sampled particles' are), whose faces lie on cell faces, the weights at that
+ * level equal those at the finer level of the leaves the closed box merely touches. */
+static void test_transfer_level_ignores_touching_leaves(void **state) {
+  (void)state;
+  const double tol = is_double ? 1e-9 : 3e-5;
+  for (int levels = 3; levels <= 4; ++levels) {
+    mpm_refinement r;
+    random_tree(&r, levels, 60 + (uint64_t)levels);
+    const int fs = levels - 1;
+    uint64_t rng = 13;
+    int coarser = 0;
+    double worst = 0;
+    static mpm_adaptive_weight w[MAXT], w2[MAXT];
+    for (int s = 0; s < 2000; ++s) {
+      const int q = (int)test_rand(&rng, 0, levels - 0.001); /* the particle's type */
+      const double dq = (double)r.dx0 / (1 << q);
+      mpm_real x[3];
+      for (int d = 0; d < 3; ++d) { /* a lattice point of type q: box faces on cell faces */
+        const double m = floor(test_rand(&rng, -REGION + 1, REGION - 1) * (1 << q));
+        x[d] = r.origin[d] + (mpm_real)((m + (test_rand(&rng, 0, 1) < 0.5 ? 0.25 : 0.75)) * dq);
+      }
+      const mpm_real Lp = (mpm_real)(0.5 * dq);
+      double a[3], b[3];
+      mpm_real lo[3], hi[3];
+      int32_t f0[3], f1[3];
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = x[d] - (mpm_real)(0.5 * Lp);
+        hi[d] = x[d] + (mpm_real)(0.5 * Lp);
+        a[d] = ((double)lo[d] - (double)r.origin[d]) / (double)r.dx0;
+        b[d] = ((double)hi[d] - (double)r.origin[d]) / (double)r.dx0;
+        f0[d] = (int32_t)floor(a[d] * (1 << fs));
+        f1[d] = (int32_t)ceil(b[d] * (1 << fs)) - 1;
+      }
+      int expect = 0;
+      for (int32_t i = f0[0]; i <= f1[0]; ++i)
+        for (int32_t j = f0[1]; j <= f1[1]; ++j)
+          for (int32_t k = f0[2]; k <= f1[2]; ++k) {
+            const int32_t c[3] = {i, j, k};
+            const int L = mpm_refinement_leaf_level(&r, c);
+            if (L > expect) expect = L;
+          }
+      const int open = mpm_refinement_finest_level_overlapping(&r, a, b);
+      assert_int_equal(open, expect);
+      const int closed = mpm_refinement_finest_level_in(&r, lo, hi);
+      assert_true(open <= closed);
+      if (open == closed || (double)Lp > 2 * (double)mpm_refinement_dx(&r, closed)) continue;
+      const int n = mpm_adaptive_weights(&r, x, Lp, open, w, MAXT, NULL);
+      const int n2 = mpm_adaptive_weights(&r, x, Lp, closed, w2, MAXT, NULL);
+      assert_true(n > 0 && n2 > 0);
+      worst = fmax(worst, weights_differ(w, n, w2, n2));
+      coarser++;
+    }
+    print_message("levels %d: %d of 2000 lattice boxes transfer on a coarser level than the "
+                  "leaves they touch; weights differ by at most %.2e\n",
+                  levels, coarser, worst);
+    assert_true(coarser > 0);
+    assert_true(worst < tol);
+    mpm_refinement_free(&r);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_single_level),
@@ -590,6 +653,7 @@ int main(void) {
       cmocka_unit_test(test_gimp_matches_ugimp),
       cmocka_unit_test(test_dense_index_agrees),
       cmocka_unit_test(test_finest_level_in_against_leaves),
+      cmocka_unit_test(test_transfer_level_ignores_touching_leaves),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

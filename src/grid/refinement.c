@@ -477,3 +477,27 @@ int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const in
   }
   return 0;
 }
+
+/* As mpm_refinement_finest_level_units, with the open box: a refined cell [c, c + 1] counts
+ * when it overlaps (a, b) with some volume, c < b and c + 1 > a, so at every level the cells
+ * floor(a) .. ceil(b) - 1. */
+int mpm_refinement_finest_level_overlapping(const mpm_refinement *r, const double a[3],
+                                            const double b[3]) {
+  for (int L = r->levels - 2; L >= 0; --L) {
+    const mpm_cell_set *s = &r->refined[L];
+    if (!s->count) continue;
+    const double scale = (double)((int64_t)1 << L);
+    int32_t l[3], h[3];
+    for (int d = 0; d < 3; ++d) {
+      l[d] = (int32_t)floor(a[d] * scale);
+      h[d] = (int32_t)ceil(b[d] * scale) - 1;
+    }
+    for (int32_t i = l[0]; i <= h[0]; ++i)
+      for (int32_t j = l[1]; j <= h[1]; ++j)
+        for (int32_t k = l[2]; k <= h[2]; ++k) {
+          const int32_t c[3] = {i, j, k};
+          if (set_contains(s, c)) return L + 1;
+        }
+  }
+  return 0;
+}

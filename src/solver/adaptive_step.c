@@ -82,10 +82,12 @@ static int make_box_table(mpm_adaptive *a, int bodies) {
   return 0;
 }
 
-/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. The
- * boxes of a chunk of particles are computed first, in a loop the compiler vectorizes (the
- * divisions into level-0 units as mpm_refinement_finest_level_in computes them, bit for bit),
- * then asked of the tree one by one. */
+/* Each particle's transfer grid (Gao sec. 6.1: the finest level its box meets), in a.of. A
+ * leaf that only touches the box (lattice-sampled particles' boxes end on cell faces) does not
+ * count: the weights are averages of the basis over the box, and on the finest level the box
+ * overlaps they are exact already, so such a particle keeps its own level's grid instead of a
+ * finer grid of its own whose every slot is a ghost. The boxes of a chunk of particles are
+ * computed first, in a loop the compiler vectorizes, then asked of the tree one by one. */
 #define CLASSIFY_CHUNK 64
 static mpm_status classify(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
@@ -125,7 +127,7 @@ static mpm_status classify(mpm_sim *sim) {
       int t = -1;
       if (q >= 0 && q < levels && b >= 0 && b < bodies) {
         const double A[3] = {lo[0][k], lo[1][k], lo[2][k]}, B[3] = {hi[0][k], hi[1][k], hi[2][k]};
-        const int L = levels > 1 ? mpm_refinement_finest_level_units(r, A, B) : 0;
+        const int L = levels > 1 ? mpm_refinement_finest_level_overlapping(r, A, B) : 0;
         t = box_tgrid[(b * levels + q) * levels + L];
       }
       if (t < 0 && i < bad) bad = i;
@@ -141,12 +143,12 @@ static mpm_status classify(mpm_sim *sim) {
                          "levels)",
                          (long long)sim->steps, p->id[i], q, r->levels - 1);
   const double box = ldexp(a->body_box[p->body[i]], -q);
-  mpm_real blo[3], bhi[3];
+  double blo[3], bhi[3]; /* as classified */
   for (int d = 0; d < 3; ++d) {
-    blo[d] = p->x[d][i] - (mpm_real)(0.5 * box);
-    bhi[d] = p->x[d][i] + (mpm_real)(0.5 * box);
+    blo[d] = ((double)(p->x[d][i] - (mpm_real)(0.5 * box)) - (double)r->origin[d]) / (double)r->dx0;
+    bhi[d] = ((double)(p->x[d][i] + (mpm_real)(0.5 * box)) - (double)r->origin[d]) / (double)r->dx0;
   }
-  const int level = r->levels > 1 ? mpm_refinement_finest_level_in(r, blo, bhi) : 0;
+  const int level = r->levels > 1 ? mpm_refinement_finest_level_overlapping(r, blo, bhi) : 0;
   return mpm_error_set(
       &sim->error, MPM_ERR_INVALID,
       "step %lld: particle id %u (body %d) of type %d (box %g m) at (%g, %g, %g) meets a leaf of "
