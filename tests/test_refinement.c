@@ -526,6 +526,19 @@ static void test_dense_index_agrees(void **state) {
   mpm_refinement_free(&r);
 }
 
+/* The finest level of the leaves holding the finest-level cells f0 .. f1 (inclusive). */
+static int finest_leaf_in(const mpm_refinement *r, const int32_t f0[3], const int32_t f1[3]) {
+  int finest = 0;
+  for (int32_t i = f0[0]; i <= f1[0]; ++i)
+    for (int32_t j = f0[1]; j <= f1[1]; ++j)
+      for (int32_t k = f0[2]; k <= f1[2]; ++k) {
+        const int32_t c[3] = {i, j, k};
+        const int L = mpm_refinement_leaf_level(r, c);
+        if (L > finest) finest = L;
+      }
+  return finest;
+}
+
 /* The finest level a box meets, against the leaves themselves: every finest-level cell that
  * meets the box (closed: touching counts) and its leaf's level, the largest of them. The query
  * takes, as the tree descent it replaced did, the level-0 cells from the one holding the box's
@@ -563,14 +576,7 @@ static void test_finest_level_in_against_leaves(void **state) {
         f0[d] = touch > first ? touch : first;
         f1[d] = (int32_t)floor(b * (1 << fs));
       }
-      int expect = 0;
-      for (int32_t i = f0[0]; i <= f1[0]; ++i)
-        for (int32_t j = f0[1]; j <= f1[1]; ++j)
-          for (int32_t k = f0[2]; k <= f1[2]; ++k) {
-            const int32_t c[3] = {i, j, k};
-            const int L = mpm_refinement_leaf_level(&r, c);
-            if (L > expect) expect = L;
-          }
+      const int expect = finest_leaf_in(&r, f0, f1);
       assert_int_equal(mpm_refinement_finest_level_in(&r, lo, hi), expect);
       seen[expect]++;
     }
@@ -614,14 +620,7 @@ static void test_transfer_level_ignores_touching_leaves(void **state) {
         f0[d] = (int32_t)floor(a[d] * (1 << fs));
         f1[d] = (int32_t)ceil(b[d] * (1 << fs)) - 1;
       }
-      int expect = 0;
-      for (int32_t i = f0[0]; i <= f1[0]; ++i)
-        for (int32_t j = f0[1]; j <= f1[1]; ++j)
-          for (int32_t k = f0[2]; k <= f1[2]; ++k) {
-            const int32_t c[3] = {i, j, k};
-            const int L = mpm_refinement_leaf_level(&r, c);
-            if (L > expect) expect = L;
-          }
+      const int expect = finest_leaf_in(&r, f0, f1);
       const int open = mpm_refinement_finest_level_overlapping(&r, a, b);
       assert_int_equal(open, expect);
       const int closed = mpm_refinement_finest_level_in(&r, lo, hi);

@@ -245,6 +245,17 @@ int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3]
   return mpm_refinement_finest_level_units(r, a, b);
 }
 
+/* 1 when a cell of set s lies in the index box l .. h (inclusive). */
+static int any_in(const mpm_cell_set *s, const int32_t l[3], const int32_t h[3]) {
+  for (int32_t i = l[0]; i <= h[0]; ++i)
+    for (int32_t j = l[1]; j <= h[1]; ++j)
+      for (int32_t k = l[2]; k <= h[2]; ++k) {
+        const int32_t c[3] = {i, j, k};
+        if (set_contains(s, c)) return 1;
+      }
+  return 0;
+}
+
 int mpm_refinement_finest_level_units(const mpm_refinement *r, const double a[3],
                                       const double b[3]) {
   int32_t c0[3];
@@ -259,12 +270,7 @@ int mpm_refinement_finest_level_units(const mpm_refinement *r, const double a[3]
       l[d] = touch > first ? touch : first;
       h[d] = (int32_t)floor(b[d] * scale);
     }
-    for (int32_t i = l[0]; i <= h[0]; ++i)
-      for (int32_t j = l[1]; j <= h[1]; ++j)
-        for (int32_t k = l[2]; k <= h[2]; ++k) {
-          const int32_t c[3] = {i, j, k};
-          if (set_contains(s, c)) return L + 1;
-        }
+    if (any_in(s, l, h)) return L + 1;
   }
   return 0;
 }
@@ -492,12 +498,7 @@ int mpm_refinement_finest_level_overlapping(const mpm_refinement *r, const doubl
       l[d] = (int32_t)floor(a[d] * scale);
       h[d] = (int32_t)ceil(b[d] * scale) - 1;
     }
-    for (int32_t i = l[0]; i <= h[0]; ++i)
-      for (int32_t j = l[1]; j <= h[1]; ++j)
-        for (int32_t k = l[2]; k <= h[2]; ++k) {
-          const int32_t c[3] = {i, j, k};
-          if (set_contains(s, c)) return L + 1;
-        }
+    if (any_in(s, l, h)) return L + 1;
   }
   return 0;
 }
