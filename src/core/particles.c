@@ -96,6 +96,14 @@ long mpm_particles_push(mpm_particles *p, const mpm_real x[3], const mpm_real v[
   return (long)i;
 }
 
+/* The 32-bit integer arrays, as words (permutes move them without looking inside). */
+static void int_arrays(mpm_particles *p, uint32_t *a[4]) {
+  a[0] = (uint32_t *)p->material;
+  a[1] = (uint32_t *)p->body;
+  a[2] = (uint32_t *)p->level;
+  a[3] = p->id;
+}
+
 void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,
                            uint32_t *iscratch) {
   const long n = (long)p->count;
@@ -111,8 +119,8 @@ void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **sc
     *arrays[k] = dst;
   }
   /* integer arrays go through the integer scratch the same way */
-  uint32_t *iarrays[4] = {(uint32_t *)p->material, (uint32_t *)p->body, (uint32_t *)p->level,
-                          p->id};
+  uint32_t *iarrays[4];
+  int_arrays(p, iarrays);
   for (int k = 0; k < 4; ++k) {
     const uint32_t *src = iarrays[k];
 #pragma omp parallel for schedule(static)
@@ -131,8 +139,8 @@ void mpm_particles_move(mpm_particles *p, const uint32_t *dest, const uint32_t *
     for (size_t j = 0; j < n; ++j) rscratch[j] = a[src[j]];
     for (size_t j = 0; j < n; ++j) a[dest[j]] = rscratch[j];
   }
-  uint32_t *iarrays[4] = {(uint32_t *)p->material, (uint32_t *)p->body, (uint32_t *)p->level,
-                          p->id};
+  uint32_t *iarrays[4];
+  int_arrays(p, iarrays);
   for (int k = 0; k < 4; ++k) {
     uint32_t *a = iarrays[k];
     for (size_t j = 0; j < n; ++j) iscratch[j] = a[src[j]];

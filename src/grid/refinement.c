@@ -174,13 +174,13 @@ int mpm_refinement_leaf_at(const mpm_refinement *r, const mpm_real x[3], int32_t
   return L;
 }
 
-/* The finest (or, with finest = 0, the coarsest) level of the leaves under cell c of level L
- * that meet [lo, hi] (in level L's cell units). */
-static int extreme_under(const mpm_refinement *r, int L, const int32_t c[3], const double lo[3],
-                         const double hi[3], int finest) {
+/* The coarsest level of the leaves under cell c of level L that meet [lo, hi] (in level L's
+ * cell units). */
+static int coarsest_under(const mpm_refinement *r, int L, const int32_t c[3], const double lo[3],
+                          const double hi[3]) {
   if (L == r->levels - 1 || !set_contains(&r->refined[L], c)) return L;
-  int best = finest ? L + 1 : r->levels - 1;
-  for (int k = 0; k < 8 && (finest ? best < r->levels - 1 : best > L + 1); ++k) {
+  int best = r->levels - 1;
+  for (int k = 0; k < 8 && best > L + 1; ++k) {
     int32_t child[3];
     double clo[3], chi[3];
     int meets = 1;
@@ -192,57 +192,40 @@ static int extreme_under(const mpm_refinement *r, int L, const int32_t c[3], con
       if (chi[d] < (double)child[d] || clo[d] > (double)child[d] + 1) meets = 0;
     }
     if (!meets) continue;
-    const int f = extreme_under(r, L + 1, child, clo, chi, finest);
-    if (finest ? f > best : f < best) best = f;
+    const int f = coarsest_under(r, L + 1, child, clo, chi);
+    if (f < best) best = f;
   }
   return best;
 }
 
-static int extreme_level_in(const mpm_refinement *r, const mpm_real lo[3], const mpm_real hi[3],
-                            int finest) {
-  double a[3], b[3];
-  int32_t c0[3], c1[3];
+/* The box [lo, hi] in level-0 cell units, as every query here computes it. */
+static void to_units(const mpm_refinement *r, const mpm_real lo[3], const mpm_real hi[3],
+                     double a[3], double b[3]) {
   for (int d = 0; d < 3; ++d) {
     a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
     b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
-    c0[d] = (int32_t)floor(a[d]);
-    c1[d] = (int32_t)floor(b[d]);
   }
-  const int last = finest ? r->levels - 1 : 0; /* nothing goes past it */
-  int best = finest ? 0 : r->levels - 1;
-  for (int32_t i = c0[0]; i <= c1[0]; ++i)
-    for (int32_t j = c0[1]; j <= c1[1]; ++j)
-      for (int32_t k = c0[2]; k <= c1[2]; ++k) {
-        const int32_t c[3] = {i, j, k};
-        const int f = extreme_under(r, 0, c, a, b, finest);
-        if (finest ? f > best : f < best) best = f;
-        if (best == last) return best;
-      }
-  return best;
 }
 
 int mpm_refinement_coarsest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                      const mpm_real hi[3]) {
-  return extreme_level_in(r, lo, hi, 0);
-}
-
-/* The finest level of the leaves meeting the box, without descending the tree: a leaf of level
- * L + 1 meets the box exactly when its refined parent of level L does (the children cover their
- * parent), so the answer is one more than the finest level with a refined cell meeting the box,
- * or 0. It asks about the cells extreme_under reaches, so that the answer is its answer bit for
- * bit: closed at every level (a cell touching the box counts), but only under the level-0 cells
- * from the one holding the box's low corner on, as extreme_level_in's loop starts there. Each
- * level's cells meeting the box are a small range, so the particles' classification (a query
- * per particle and step) asks a few bits of the dense index and stops at the first hit, finest
- * level first. */
-int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
-                                   const mpm_real hi[3]) {
   double a[3], b[3];
+  to_units(r, lo, hi, a, b);
+  int32_t c0[3], c1[3];
   for (int d = 0; d < 3; ++d) {
-    a[d] = ((double)lo[d] - (double)r->origin[d]) / (double)r->dx0;
-    b[d] = ((double)hi[d] - (double)r->origin[d]) / (double)r->dx0;
+    c0[d] = (int32_t)floor(a[d]);
+    c1[d] = (int32_t)floor(b[d]);
   }
-  return mpm_refinement_finest_level_units(r, a, b);
+  int best = r->levels - 1;
+  for (int32_t i = c0[0]; i <= c1[0]; ++i)
+    for (int32_t j = c0[1]; j <= c1[1]; ++j)
+      for (int32_t k = c0[2]; k <= c1[2]; ++k) {
+        const int32_t c[3] = {i, j, k};
+        const int f = coarsest_under(r, 0, c, a, b);
+        if (f < best) best = f;
+        if (best == 0) return 0; /* nothing goes past it */
+      }
+  return best;
 }
 
 /* 1 when a cell of set s lies in the index box l .. h (inclusive). */
@@ -256,14 +239,22 @@ static int any_in(const mpm_cell_set *s, const int32_t l[3], const int32_t h[3])
   return 0;
 }
 
-int mpm_refinement_finest_level_units(const mpm_refinement *r, const double a[3],
-                                      const double b[3]) {
+/* The finest level of the leaves meeting the box, without descending the tree: a leaf of level
+ * L + 1 meets the box exactly when its refined parent of level L does (the children cover their
+ * parent), so the answer is one more than the finest level with a refined cell meeting the box
+ * (finest level first), or 0. It asks about the cells the first version's descent reached, so
+ * that the answer is its answer bit for bit: closed at every level (a cell touching the box
+ * counts), but only under the level-0 cells from the one holding the box's low corner on. */
+int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
+                                   const mpm_real hi[3]) {
+  double a[3], b[3];
+  to_units(r, lo, hi, a, b);
   int32_t c0[3];
   for (int d = 0; d < 3; ++d) c0[d] = (int32_t)floor(a[d]);
   for (int L = r->levels - 2; L >= 0; --L) {
     const mpm_cell_set *s = &r->refined[L];
     if (!s->count) continue;
-    const double scale = (double)((int64_t)1 << L); /* exact: the recursion's doublings */
+    const double scale = (double)((int64_t)1 << L); /* exact: the descent's doublings */
     int32_t l[3], h[3];
     for (int d = 0; d < 3; ++d) {
       const int32_t touch = (int32_t)ceil(a[d] * scale) - 1, first = c0[d] * (1 << L);
@@ -484,7 +475,7 @@ int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const in
   return 0;
 }
 
-/* As mpm_refinement_finest_level_units, with the open box: a refined cell [c, c + 1] counts
+/* As mpm_refinement_finest_level_in, with the open box: a refined cell [c, c + 1] counts
  * when it overlaps (a, b) with some volume, c < b and c + 1 > a, so at every level the cells
  * floor(a) .. ceil(b) - 1. */
 int mpm_refinement_finest_level_overlapping(const mpm_refinement *r, const double a[3],

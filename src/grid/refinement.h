@@ -92,15 +92,11 @@ int mpm_refinement_leaf_at(const mpm_refinement *r, const mpm_real x[3], int32_t
 int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3],
                                    const mpm_real hi[3]);
 
-/* The same for the box [a, b] given in level-0 cell units, a = (lo - origin) / dx0 in double (as
- * mpm_refinement_finest_level_in computes it), for callers that compute many boxes at once. */
-int mpm_refinement_finest_level_units(const mpm_refinement *r, const double a[3],
-                                      const double b[3]);
-
-/* The finest level of the leaves that overlap the open box (a, b) (level-0 cell units, as
- * above) with some volume: a leaf touching the box at a face, edge or corner does not count.
- * The particles' transfer level (solver/adaptive_step.c): the box's weights are the basis's
- * averages over the box, which leaves meeting it in a set of no volume do not change. */
+/* The finest level of the leaves that overlap the open box (a, b), given in level-0 cell units
+ * (a = (lo - origin) / dx0 in double), with some volume: a leaf touching the box at a face, edge or
+ * corner does not count. The particles' transfer level (solver/adaptive_step.c): the box's weights
+ * are the basis's averages over the box, which leaves meeting it in a set of no volume do not
+ * change. */
 int mpm_refinement_finest_level_overlapping(const mpm_refinement *r, const double a[3],
                                             const double b[3]);
 

@@ -58,9 +58,9 @@ typedef struct mpm_adaptive {
   uint32_t *perm;
   size_t capacity;
   /* APIC across levels (adaptive_apic.c): per DOF slot its ghost when the ghost's row has
-   * several real nodes (else -1); the particles whose stencils reach such ghosts; the ghosts'
-   * moments (9 per ghost interleaved, then 9 planes of ghost_count) and the boundary particles'
-   * B corrections */
+   * several real nodes (written, and read, only where block_multi's bit is set); the particles
+   * whose stencils reach such ghosts; the ghosts' moments (9 per ghost interleaved, then 9 planes
+   * of ghost_count) and the boundary particles' B corrections */
   int32_t *ghost_of;
   size_t ghost_of_capacity;
   uint64_t *block_multi; /* per block of 64 DOF slots: a bit per slot holding such a ghost */

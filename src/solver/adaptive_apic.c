@@ -129,9 +129,9 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
   const size_t dofs = sim->dofs.count;
   if (mpm_grow((void **)&a->ghost_of, &a->ghost_of_capacity, dofs + 1, sizeof *a->ghost_of))
     goto nomem;
-  memset(a->ghost_of, 0xff, dofs * sizeof *a->ghost_of);
   /* the transfer grids' segments are whole blocks of 64 slots from slot 0 on (adaptive_layout),
-   * so slot / 64 names a block: most blocks' pads hold no such ghost and are passed over whole */
+   * so slot / 64 names a block: most blocks' pads hold no such ghost and are passed over whole.
+   * ghost_of is read only at slots whose bit is set here, so only those are written */
   const size_t chunks = dofs / MPM_BLOCK_NODES + 1;
   if (mpm_grow((void **)&a->block_multi, &a->block_multi_capacity, chunks, sizeof(uint64_t)))
     goto nomem;

@@ -89,6 +89,11 @@ static int make_box_table(mpm_adaptive *a, int bodies) {
  * finer grid of its own whose every slot is a ghost. The boxes of a chunk of particles are
  * computed first, in a loop the compiler vectorizes, then asked of the tree one by one. */
 #define CLASSIFY_CHUNK 64
+/* A coordinate of a box face (m) in level-0 cell units, as the tree's queries take it. */
+static inline double in_units(mpm_real v, double origin, double dx0) {
+  return ((double)v - origin) / dx0;
+}
+
 static mpm_status classify(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   const mpm_particles *p = &sim->particles;
@@ -116,8 +121,8 @@ static mpm_status classify(mpm_sim *sim) {
       const mpm_real *x = p->x[d] + i0;
 #pragma omp simd
       for (long k = 0; k < m; ++k) {
-        lo[d][k] = ((double)(x[k] - half[k]) - o[d]) / dx0;
-        hi[d][k] = ((double)(x[k] + half[k]) - o[d]) / dx0;
+        lo[d][k] = in_units(x[k] - half[k], o[d], dx0);
+        hi[d][k] = in_units(x[k] + half[k], o[d], dx0);
       }
     }
     for (long k = 0; k < m; ++k) {
@@ -145,8 +150,8 @@ static mpm_status classify(mpm_sim *sim) {
   const double box = ldexp(a->body_box[p->body[i]], -q);
   double blo[3], bhi[3]; /* as classified */
   for (int d = 0; d < 3; ++d) {
-    blo[d] = ((double)(p->x[d][i] - (mpm_real)(0.5 * box)) - (double)r->origin[d]) / (double)r->dx0;
-    bhi[d] = ((double)(p->x[d][i] + (mpm_real)(0.5 * box)) - (double)r->origin[d]) / (double)r->dx0;
+    blo[d] = in_units(p->x[d][i] - (mpm_real)(0.5 * box), r->origin[d], r->dx0);
+    bhi[d] = in_units(p->x[d][i] + (mpm_real)(0.5 * box), r->origin[d], r->dx0);
   }
   const int level = r->levels > 1 ? mpm_refinement_finest_level_overlapping(r, blo, bhi) : 0;
   return mpm_error_set(
