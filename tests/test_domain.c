@@ -374,6 +374,7 @@ static void block_setup(block_fixture *fx, mpm_kernel_kind kind, mpm_transfer_ki
   mpm_arena_init(&fx->scratch);
   assert_int_equal(fx->grid.ops->activate(&fx->grid, &ctx->kernel, 1, &fx->none, &fx->scratch), 0);
   assert_int_equal(mpm_domain_activate(s, &fx->grid, &ctx->kernel), 0);
+  assert_int_equal(mpm_domain_plan(s, &fx->grid, &ctx->kernel, &fx->scratch), 0);
   mpm_dofs_init(&fx->dofs);
   mpm_dofs_begin_layout(&fx->dofs);
   assert_int_equal(mpm_dofs_add_grid(&fx->dofs, &fx->grid), 0);
@@ -455,7 +456,8 @@ static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer
   block_fixture a, b;
   block_setup(&a, kind, transfer);
   block_setup(&b, kind, transfer);
-  b.s.corner_rows = 1;
+  b.s.corner_rows = 1; /* the implicit step's plan: rows */
+  assert_int_equal(mpm_domain_plan(&b.s, &b.grid, &b.ctx.kernel, &b.scratch), 0);
   assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), 0);
   assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), 0);
   assert_true(a.s.pads.on);
@@ -502,6 +504,84 @@ static void test_pads_match_rows(void **state) {
   run_pads_match_rows(MPM_KERNEL_QUADRATIC, MPM_TRANSFER_APIC, tol);
 }
 
+/* Renumbered corners (mpm_domain_set_permute_corners, a random order) give the transfers the
+ * same terms: grid values and the corners' and particles' state after G2P equal to rounding
+ * (sums over a corner's particles and a cell's corners go in another order), the particles'
+ * corners and the adjacency renumbered alike. Then the step's own renumbering
+ * (mpm_domain_order_corners) into the pads' order: afterwards the positions run through the
+ * corner numbers without a break. */
+static void run_permuted_corners(mpm_transfer_kind transfer) {
+  block_fixture a, b;
+  block_setup(&a, MPM_KERNEL_LINEAR, transfer);
+  block_setup(&b, MPM_KERNEL_LINEAR, transfer);
+  const size_t nc = b.s.corner_count, np = b.s.particles.count;
+  uint32_t *order = test_malloc(nc * sizeof *order), *inv = test_malloc(nc * sizeof *inv);
+  for (size_t k = 0; k < nc; ++k) order[k] = (uint32_t)k;
+  uint64_t rng = 99;
+  for (size_t k = nc - 1; k > 0; --k) {
+    const size_t j = (size_t)test_rand(&rng, 0, (double)k + 1) % (k + 1);
+    const uint32_t t = order[k];
+    order[k] = order[j];
+    order[j] = t;
+  }
+  for (size_t k = 0; k < nc; ++k) inv[order[k]] = (uint32_t)k;
+  assert_int_equal(mpm_domain_set_permute_corners(&b.s, order), 0);
+  for (size_t q = 0; q < np; ++q)
+    for (int c = 0; c < 8; ++c) assert_int_equal(b.s.corner[q][c], inv[a.s.corner[q][c]]);
+  for (size_t c = 0; c < nc; ++c) {
+    const uint32_t k = inv[c];
+    assert_int_equal(b.s.adj_start[k + 1] - b.s.adj_start[k], a.s.adj_start[c + 1] - a.s.adj_start[c]);
+    for (uint32_t j = 0; j < a.s.adj_start[c + 1] - a.s.adj_start[c]; ++j)
+      assert_int_equal(b.s.adj[b.s.adj_start[k] + j], a.s.adj[a.s.adj_start[c] + j]);
+    for (int d = 0; d < 3; ++d) assert_true(b.s.cx[d][k] == a.s.cx[d][c]);
+  }
+  assert_int_equal(mpm_domain_plan(&b.s, &b.grid, &b.ctx.kernel, &b.scratch), 0);
+  assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), 0);
+  assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), 0);
+  const double tol = TOL(1e-6, 1e-14);
+  const size_t nd = a.dofs.count;
+  assert_arrays_close(a.dofs.mass, b.dofs.mass, nd, tol, "grid mass");
+  for (int d = 0; d < 3; ++d) {
+    assert_arrays_close(a.dofs.v0[d], b.dofs.v0[d], nd, tol, "grid momentum");
+    assert_arrays_close(a.dofs.f[d], b.dofs.f[d], nd, tol, "grid force");
+  }
+  mpm_dofs_explicit_update(&a.u, MPM_P2G_MOMENTUM_FORCE, &a.dofs);
+  mpm_dofs_explicit_update(&b.u, MPM_P2G_MOMENTUM_FORCE, &b.dofs);
+  mpm_domain_g2p(&a.ctx, &a.s, &a.val, &a.u.boundary);
+  mpm_domain_g2p(&b.ctx, &b.s, &b.val, &b.u.boundary);
+  mpm_real *back = test_malloc(nc * sizeof *back);
+  for (int d = 0; d < 3; ++d) {
+    for (size_t c = 0; c < nc; ++c) back[c] = b.s.cx[d][inv[c]];
+    assert_arrays_close(back, a.s.cx[d], nc, tol, "corner position");
+    for (size_t c = 0; c < nc; ++c) back[c] = b.s.cv[d][inv[c]];
+    assert_arrays_close(back, a.s.cv[d], nc, tol, "corner velocity");
+  }
+  for (int e = 0; e < 9; ++e)
+    assert_arrays_close(b.s.particles.F[e], a.s.particles.F[e], np, tol, "particle F");
+  /* the step's renumbering: the lattice's numbers (a) break the pads' order everywhere */
+  assert_int_equal(mpm_domain_plan(&a.s, &a.grid, &a.ctx.kernel, &a.scratch), 0);
+  assert_true(a.s.pads.breaks > a.s.pads.grid_positions / 10);
+  uint32_t *done = NULL;
+  assert_int_equal(mpm_domain_order_corners(&a.s, &a.grid, &a.ctx.kernel, &a.scratch, &done), 0);
+  assert_non_null(done);
+  assert_true(a.s.pads.on);
+  assert_int_equal(a.s.pads.breaks, 0);
+  for (size_t k = 0; k < a.s.pads.positions; ++k) assert_int_equal(a.s.pads.row[k], k);
+  assert_int_equal(mpm_domain_order_corners(&a.s, &a.grid, &a.ctx.kernel, &a.scratch, &done), 0);
+  assert_null(done); /* in order: nothing to do */
+  test_free(back);
+  test_free(order);
+  test_free(inv);
+  block_free(&a);
+  block_free(&b);
+}
+
+static void test_permuted_corners(void **state) {
+  (void)state;
+  run_permuted_corners(MPM_TRANSFER_FLIP);
+  run_permuted_corners(MPM_TRANSFER_APIC);
+}
+
 static void test_conservation_linear(void **state) {
   (void)state;
   run_conservation(MPM_KERNEL_LINEAR);
@@ -517,6 +597,7 @@ int main(void) {
       cmocka_unit_test(test_two_step_equals_direct), cmocka_unit_test(test_affine_motion_exact_F),
       cmocka_unit_test(test_build_from_body),        cmocka_unit_test(test_conservation_linear),
       cmocka_unit_test(test_conservation_quadratic), cmocka_unit_test(test_pads_match_rows),
+      cmocka_unit_test(test_permuted_corners),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

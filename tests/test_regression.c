@@ -34,6 +34,11 @@
  * no longer as the quadrature's rounding of it: the float digests are unchanged (the same
  * values), the double build's domain scenes were rewritten with it.
  *
+ * The domain step's speed (issue 13, 2026-12-05): the corner -> grid scatter sums each batch's
+ * terms lane by lane and the lanes once per node, and the corners are renumbered into the order
+ * of the grid blocks their transfers go by (mpm_domain_order_corners), which changes the order
+ * of the sums over a corner's particles and a cell's corners: the five domain scenes were
+ * rewritten with it (the others are unchanged).
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:
  *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression

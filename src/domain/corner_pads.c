@@ -14,6 +14,7 @@
 #define SCATTER_FIELDS 7                           /* mass, momentum, force */
 #define SCATTER_STRIDE 8
 #define GATHER_STRIDE 6 /* v, v0 */
+#define PAD_NODES (SIDE_MAX * SIDE_MAX * SIDE_MAX)
 
 void mpm_corner_pads_free(mpm_corner_pads *P) {
   mpm_scatter_schedule_free(&P->schedule);
@@ -151,8 +152,11 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
     }
     for (int d = 0; d < 3; ++d) P->org[q][d] = bc[d] * MPM_BLOCK;
   }
-  P->grid_dofs = (uint32_t)g->dof_begin;
-  P->corner_dofs = (uint32_t)en->dof_begin;
+  long breaks = 0;
+  const long gp = (long)P->grid_positions;
+#pragma omp parallel for schedule(static) reduction(+ : breaks) if (gp > MPM_PARALLEL_MIN)
+  for (long j = 1; j < gp; ++j) breaks += P->row[j] != P->row[j - 1] + 1;
+  P->breaks = (size_t)breaks;
   for (int d = 0; d < 3; ++d) P->origin[d] = g->origin[d];
   P->on = 1;
   return 0;
@@ -190,19 +194,18 @@ ALWAYS_INLINE void node_apic(const mpm_lane_stencil *st, int i, int j, int l, mp
   A[2] = st->w[0][i] * (st->w[1][j] * st->a[2][l]);
 }
 
+/* Group q's scatter: each batch's terms are added to the pad lane by lane (acc[node][field], 8
+ * lanes each), and the lanes are summed once per node when the group is done, instead of once
+ * per node per batch (the material points' P2G does the same, transfer_lanes.h). With APIC the
+ * corners' m_a B_a are made here from their masses and B_a (read through P->row). */
 ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_pads *P,
-                                 const mpm_kernel *k, size_t q, const mpm_real *const carrier[7],
-                                 const mpm_real *const mB[9], mpm_real *const values[7]) {
+                                 const mpm_domain_set *s, const mpm_kernel *k, size_t q,
+                                 const mpm_real *const carrier[7], mpm_real *const values[7],
+                                 mpm_vl (*acc)[SCATTER_STRIDE]) {
   const int S = MPM_BLOCK + W - 1;
-  uint32_t dof[SIDE_MAX * SIDE_MAX * SIDE_MAX];
-  mpm_vl pad[SIDE_MAX * SIDE_MAX * SIDE_MAX]; /* per node: the 7 fields and a spare lane */
-  pad_dofs(P, q, S, dof);
-  /* the pad starts from the nodes' values and replaces them at the end (no pass that adds it) */
-  for (int n = 0; n < S * S * S; ++n) {
-    mpm_vl u = {0};
-    for (int f = 0; f < SCATTER_FIELDS; ++f) u[f] = values[f][dof[n]];
-    pad[n] = u;
-  }
+  const mpm_vl zero = {0};
+  for (int n = 0; n < S * S * S; ++n)
+    for (int f = 0; f < SCATTER_FIELDS; ++f) acc[n][f] = zero;
   const mpm_real *const x[3] = {P->x[0], P->x[1], P->x[2]};
   for (int cell = 0; cell < MPM_BLOCK_NODES; ++cell) {
     const uint32_t end = P->cell_start[q][cell + 1];
@@ -217,64 +220,76 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
       mpm_lane_stencil_eval(W, k, x, P->origin, pos, n, n == MPM_LANES, apic, base, &st);
       mpm_vl in[SCATTER_FIELDS], cm[9];
       for (int f = 0; f < SCATTER_FIELDS; ++f) in[f] = corner_lanes(carrier[f], pos, n, live);
-      if (apic)
-        for (int e = 0; e < 9; ++e) cm[e] = corner_lanes(mB[e], pos, n, live);
+      if (apic) { /* m_a B_a, B_a by corner */
+        const int run = mpm_batch_contiguous(P->row + r, n);
+        for (int e = 0; e < 9; ++e) cm[e] = in[0] * mpm_lanes_load(s->cB[e], P->row + r, n, run);
+      }
       const int off =
           ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
       for (int i = 0; i < W; ++i)
         for (int j = 0; j < W; ++j)
           for (int l = 0; l < W; ++l) {
             const mpm_vl w = node_weight(&st, i, j, l);
-            mpm_vl ch[8];
-            ch[0] = w * in[0];
+            mpm_vl *a = acc[off + (i * S + j) * S + l];
+            a[0] += w * in[0];
             for (int d = 0; d < 3; ++d) {
-              ch[1 + d] = w * in[1 + d];
-              ch[4 + d] = w * in[4 + d];
+              mpm_vl mom = w * in[1 + d];
+              if (apic) { /* the affine moment m_a B_a D^-1 (x_i - x_a) w */
+                mpm_vl A[3];
+                node_apic(&st, i, j, l, A);
+                mom += A[0] * cm[3 * d] + A[1] * cm[3 * d + 1] + A[2] * cm[3 * d + 2];
+              }
+              a[1 + d] += mom;
+              a[4 + d] += w * in[4 + d];
             }
-            ch[7] = (mpm_vl){0};
-            if (apic) { /* the affine moment m_a B_a D^-1 (x_i - x_a) w */
-              mpm_vl A[3];
-              node_apic(&st, i, j, l, A);
-              for (int d = 0; d < 3; ++d)
-                ch[1 + d] += A[0] * cm[3 * d] + A[1] * cm[3 * d + 1] + A[2] * cm[3 * d + 2];
-            }
-            pad[off + (i * S + j) * S + l] += mpm_vl_sum8(ch);
           }
     }
   }
-  for (int n = 0; n < S * S * S; ++n)
-    for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][dof[n]] = pad[n][f];
+  uint32_t dof[SIDE_MAX * SIDE_MAX * SIDE_MAX];
+  pad_dofs(P, q, S, dof);
+  for (int n = 0; n < S * S * S; ++n) {
+    acc[n][SCATTER_FIELDS] = zero;
+    const mpm_vl sum = mpm_vl_sum8(acc[n]);
+    for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][dof[n]] += sum[f];
+  }
 }
 
-/* The scatter of the groups of one colour with a kernel of width W. */
+/* The scatter of the groups of one colour with a kernel of width W (each thread's pad in acc). */
 ALWAYS_INLINE void scatter_colour(const int W, const int apic, const mpm_corner_pads *P,
-                                  const mpm_kernel *k, long g0, long g1,
-                                  const mpm_real *const carrier[7], const mpm_real *const mB[9],
-                                  mpm_real *const values[7]) {
-#pragma omp parallel for schedule(dynamic, 4)
-  for (long q = g0; q < g1; ++q) scatter_group(W, apic, P, k, (size_t)q, carrier, mB, values);
+                                  const mpm_domain_set *s, const mpm_kernel *k, long g0, long g1,
+                                  const mpm_real *const carrier[7], mpm_real *const values[7],
+                                  mpm_vl (*acc)[SCATTER_STRIDE]) {
+#pragma omp parallel
+  {
+    mpm_vl(*pad)[SCATTER_STRIDE] = acc + (size_t)mpm_thread_id() * PAD_NODES;
+#pragma omp for schedule(dynamic, 4)
+    for (long q = g0; q < g1; ++q) scatter_group(W, apic, P, s, k, (size_t)q, carrier, values, pad);
+  }
 }
 
-void mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, const mpm_kernel *k,
-                             const mpm_real *const carrier[7], const mpm_real *const mB[9],
-                             mpm_real *const values[7]) {
+int mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, const mpm_kernel *k,
+                            const mpm_real *const carrier[7], int apic, mpm_real *const values[7],
+                            mpm_arena *scratch) {
   const mpm_scatter_schedule *sch = &P->schedule;
+  mpm_vl(*acc)[SCATTER_STRIDE] =
+      mpm_arena_alloc(scratch, (size_t)mpm_thread_count() * PAD_NODES * sizeof *acc);
+  if (!acc) return -1;
   for (int colour = 0; colour < MPM_SCHEDULE_COLOURS; ++colour) {
     const long g0 = (long)sch->colour_start[colour], g1 = (long)sch->colour_start[colour + 1];
     /* the width and APIC constants in each copy: the stencil loops unroll */
-    const int w = k->width, apic = mB != NULL;
+    const int w = k->width;
     if (w == 2 && apic)
-      scatter_colour(2, 1, P, k, g0, g1, carrier, mB, values);
+      scatter_colour(2, 1, P, s, k, g0, g1, carrier, values, acc);
     else if (w == 2)
-      scatter_colour(2, 0, P, k, g0, g1, carrier, mB, values);
+      scatter_colour(2, 0, P, s, k, g0, g1, carrier, values, acc);
     else if (w == 3 && apic)
-      scatter_colour(3, 1, P, k, g0, g1, carrier, mB, values);
+      scatter_colour(3, 1, P, s, k, g0, g1, carrier, values, acc);
     else if (w == 3)
-      scatter_colour(3, 0, P, k, g0, g1, carrier, mB, values);
+      scatter_colour(3, 0, P, s, k, g0, g1, carrier, values, acc);
     else if (apic)
-      scatter_colour(4, 1, P, k, g0, g1, carrier, mB, values);
+      scatter_colour(4, 1, P, s, k, g0, g1, carrier, values, acc);
     else
-      scatter_colour(4, 0, P, k, g0, g1, carrier, mB, values);
+      scatter_colour(4, 0, P, s, k, g0, g1, carrier, values, acc);
   }
   /* enriched corners: identity rows into their DOFs (weight 1, APIC factors 0) */
   const long own = (long)sch->own_rows;
@@ -282,13 +297,16 @@ void mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, 
 #pragma omp parallel for schedule(static) if (own >= MPM_PARALLEL_MIN)
   for (long j = 0; j < own; ++j) {
     const size_t at = P->grid_positions + (size_t)j;
-    const uint32_t i = P->corner_dofs + s->enrich.slot[P->row[at]];
+    const uint32_t c = P->row[at], i = P->corner_dofs + s->enrich.slot[c];
     for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][i] += one * carrier[f][at];
-    if (mB)
-      for (int kk = 0; kk < 3; ++kk)
-        values[1 + kk][i] +=
-            zero * mB[3 * kk][at] + zero * mB[3 * kk + 1][at] + zero * mB[3 * kk + 2][at];
+    if (apic)
+      for (int kk = 0; kk < 3; ++kk) {
+        const mpm_real cm = carrier[0][at];
+        values[1 + kk][i] += zero * (cm * s->cB[3 * kk][c]) + zero * (cm * s->cB[3 * kk + 1][c]) +
+                             zero * (cm * s->cB[3 * kk + 2][c]);
+      }
   }
+  return 0;
 }
 
 ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pads *P,
@@ -339,9 +357,10 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
       /* the results by corner: the corner loop of G2P reads them in corner order, and these
        * stores cost less than its loads through P->pos would (measured) */
       const uint32_t *idx = P->row + r;
+      const int run = mpm_batch_contiguous(idx, n); /* corners numbered in the pads' order */
       for (int d = 0; d < 3; ++d) {
-        mpm_lanes_store(s->cvg[d], idx, n, 0, vg[d]);
-        mpm_lanes_store(P->dv[d], idx, n, 0, dv[d]);
+        mpm_lanes_store(s->cvg[d], idx, n, run, vg[d]);
+        mpm_lanes_store(P->dv[d], idx, n, run, dv[d]);
       }
       if (!apic) continue;
       /* B_a = (sum_i v_i a_i^T) D_a, D_a's diagonal sum_i w_i (x_i - x_a)^2 per axis */
@@ -351,7 +370,8 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
           const mpm_vl rr = ((mpm_real)i - st.f[t]) * dx;
           D += st.w[t][i] * rr * rr;
         }
-        for (int d = 0; d < 3; ++d) mpm_lanes_store(s->cB[3 * d + t], idx, n, 0, B[3 * d + t] * D);
+        for (int d = 0; d < 3; ++d)
+          mpm_lanes_store(s->cB[3 * d + t], idx, n, run, B[3 * d + t] * D);
       }
     }
   }

@@ -8,13 +8,16 @@
  * not stay in cache, and the scatter waited on it: the domain step was 6x the material-point
  * step (issue 13). The corners of one group share a base block, so their stencils reach only
  * that block and its 7 forward neighbours: the group's nodes are read into a small pad, every
- * corner's stencil is evaluated from its position and accumulated there, as the material
- * points' transfers do (transfer/p2g.c), and the pad is written back.
+ * corner's stencil is evaluated from its position and accumulated there, lane by lane, as the
+ * material points' transfers do (transfer/p2g.c), and the pad's lanes are summed and added to
+ * the nodes once.
  *
  * The corners of a group are sorted by the cell of their base node, so that those of one cell
  * share every node and are taken as SIMD lanes (transfer/transfer_lanes.h's lane stencils),
  * and their values are laid out in that order (P2G writes them there), so that a batch loads
- * with vector loads. The colours run in turn and each group adds its pad to the nodes once:
+ * with vector loads. The step numbers the corners in this order now and then
+ * (mpm_domain_order_corners), so that the values kept by corner (B_a, the grid velocity) move
+ * with vector loads and stores too. The colours run in turn and each group adds its pad to the nodes once:
  * deterministic for any number of threads. The terms are those of the rows, summed in another
  * order (lanes, then nodes): equal to rounding (tests/test_domain.c compares them, and pads
  * against rows on the dense grid in test_domain_sim). The rows are still built where they are
@@ -45,10 +48,11 @@ typedef struct mpm_corner_pads {
   uint32_t *pos;                    /* per corner: its position, or MPM_CORNER_PADS_NONE */
   uint32_t *in_space;               /* the groups in the order of their positions */
   size_t positions, grid_positions; /* all; of the groups (the enriched follow) */
+  size_t breaks; /* positions k of the groups whose corner is not row[k - 1] + 1 */
   mpm_real *x[3];
   uint32_t (*cell_start)[MPM_BLOCK_NODES + 1]; /* per group: row[] of each cell (absolute) */
-  uint32_t grid_dofs;                          /* the DOF of the level's node 0 */
-  uint32_t corner_dofs;                        /* the DOF of enriched corner 0 */
+  uint32_t grid_dofs;   /* the DOF of the level's node 0 (set by P2G: the layout follows) */
+  uint32_t corner_dofs; /* the DOF of enriched corner 0 (likewise) */
   mpm_real origin[3];                          /* the level's node (0, 0, 0), m */
   mpm_real *dv[3]; /* step scratch: G2P's FLIP increment per corner, m/s */
 } mpm_corner_pads;
@@ -62,12 +66,13 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const struct mpm_domain_set *s, con
                          const mpm_kernel *k, mpm_arena *scratch);
 
 /* values[f][DOF] += omega_i(x_a) carrier[f][k] for the 7 fields (mass, momentum, force) of
- * corner a = P->row[k], and with APIC (mB: the corners' m_a B_a, row-major, also by position) the
- * affine moment sum_j a_j mB[3k + j][a] added to values[1 + k] (momentum), as
- * mpm_embedding_scatter_moments does with the rows. */
-void mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_set *s,
-                             const mpm_kernel *k, const mpm_real *const carrier[7],
-                             const mpm_real *const mB[9], mpm_real *const values[7]);
+ * corner a = P->row[k], and with apic the affine moment sum_j a_j (m_a B_a)[3k + j] added to
+ * values[1 + k] (momentum), m_a = carrier[0] and B_a = s->cB by corner, as
+ * mpm_embedding_scatter_moments does with the rows. Each thread's pad of lanes comes from
+ * scratch: 0, or -1 when out of memory. */
+int mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_set *s,
+                            const mpm_kernel *k, const mpm_real *const carrier[7], int apic,
+                            mpm_real *const values[7], mpm_arena *scratch);
 
 /* The grid's velocities at the corners: s->cvg = sum_i omega_i(x_a) v_i, P->dv = sum_i
  * omega_i(x_a) (v_i - v0_i), and with apic s->cB = (sum_i v_i a_i^T) D_a, for every used

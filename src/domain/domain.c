@@ -4,6 +4,7 @@
 #include "domain/enrich.h"
 #include "domain/lattice_map.h"
 #include "core/alloc.h"
+#include "core/parallel.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -352,6 +353,73 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
   to->id[j] = p->id[i];
   s->active[i] = 0;
   s->active_count--;
+  return 0;
+}
+
+/* tmp[k] = a[order[k]], then back into a: one array of n elements of `size` bytes. */
+static void permute_array(void *a, void *tmp, size_t size, const uint32_t *order, size_t n) {
+  const long m = (long)n;
+  if (size == sizeof(uint32_t)) { /* mpm_real in float, and the slots */
+    uint32_t *x = a, *t = tmp;
+#pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
+    for (long k = 0; k < m; ++k) t[k] = x[order[k]];
+  } else if (size == sizeof(uint64_t)) {
+    uint64_t *x = a, *t = tmp;
+#pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
+    for (long k = 0; k < m; ++k) t[k] = x[order[k]];
+  } else {
+    uint8_t *x = a, *t = tmp;
+#pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
+    for (long k = 0; k < m; ++k) t[k] = x[order[k]];
+  }
+  memcpy(a, tmp, n * size);
+}
+
+int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order) {
+  const size_t nc = s->corner_count, np = s->particles.count;
+  uint32_t *inv = mpm_alloc((nc + 1) * sizeof *inv);
+  void *tmp = mpm_alloc((nc + 1) * sizeof(uint64_t));
+  uint32_t *adj_start = mpm_alloc((nc + 1) * sizeof *adj_start);
+  uint32_t *adj = mpm_alloc((s->adj_start[nc] + 1) * sizeof *adj);
+  if (!inv || !tmp || !adj_start || !adj) {
+    mpm_free(inv);
+    mpm_free(tmp);
+    mpm_free(adj_start);
+    mpm_free(adj);
+    return -1;
+  }
+  const long m = (long)nc;
+#pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
+  for (long k = 0; k < m; ++k) inv[order[k]] = (uint32_t)k;
+  mpm_real **a[CORNER_REAL_ARRAYS];
+  corner_arrays(s, a);
+  for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) permute_array(*a[k], tmp, sizeof(mpm_real), order, nc);
+  permute_array(s->corner_use, tmp, 1, order, nc);
+  mpm_domain_enrichment *en = &s->enrich;
+  if (en->count) { /* this step's marks, by corner; the enriched corners keep their DOF order */
+    permute_array(en->enriched, tmp, 1, order, nc);
+    permute_array(en->on_grid, tmp, 1, order, nc);
+    permute_array(en->slot, tmp, sizeof *en->slot, order, nc);
+    for (size_t k = 0; k < en->count; ++k) en->corner[k] = inv[en->corner[k]];
+  }
+  /* the adjacency: corner k's particle slots are those of corner order[k] */
+  adj_start[0] = 0;
+  for (size_t k = 0; k < nc; ++k)
+    adj_start[k + 1] = adj_start[k] + (s->adj_start[order[k] + 1] - s->adj_start[order[k]]);
+#pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
+  for (long k = 0; k < m; ++k)
+    memcpy(adj + adj_start[k], s->adj + s->adj_start[order[k]],
+           (adj_start[k + 1] - adj_start[k]) * sizeof *adj);
+  mpm_free(s->adj_start);
+  mpm_free(s->adj);
+  s->adj_start = adj_start;
+  s->adj = adj;
+  const long n = (long)np;
+#pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN / 8)
+  for (long q = 0; q < n; ++q)
+    for (int c = 0; c < MPM_HEX_CORNERS; ++c) s->corner[q][c] = inv[s->corner[q][c]];
+  mpm_free(inv);
+  mpm_free(tmp);
   return 0;
 }
 

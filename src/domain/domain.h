@@ -96,9 +96,10 @@ typedef struct mpm_domain_set {
    * (interp/kernel.h) */
   mpm_real *apic_a[3], *apic_d[3];
   /* per step (step scratch, set by P2G for G2P): each corner's new position, velocity and grid
-   * velocity side by side, written by G2P's corner loop for its particle loop, which reads 8
-   * corners per particle: one or two cache lines each instead of nine arrays' */
-  mpm_real (*corner_pack)[9];
+   * velocity side by side, each padded to 4 reals (x at 0, v at 4, v^g at 8; the pads 0), written
+   * by G2P's corner loop for its particle loop, which reads 8 corners per particle: one or two
+   * cache lines each instead of nine arrays', and each vector in one load */
+  mpm_real (*corner_pack)[12];
   /* set by the step: 1 when it applies the corners' embedding as a matrix (the implicit
    * Hessian, domain_hessian.c), so that P2G builds corner_grid's rows; else on the sparse grid
    * the corner transfers go through pads (domain/corner_pads.h) and corner_grid is empty */
@@ -148,6 +149,15 @@ void mpm_domain_set_sync_particles(mpm_domain_set *s);
  * point (APIC affine moment zero) and the slot becomes inactive. Returns 0, -1 on OOM. Call
  * mpm_domain_set_rebuild once after a batch of releases. */
 int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
+
+/* Renumber the corners: corner order[k] becomes corner k (order: a permutation of the corner
+ * indices). Every corner array, the particles' corner indices, the adjacency and this step's
+ * enrichment marks follow. The transfers take the same terms, and results change only by
+ * rounding: the sums over a corner's particles and over a cell's corners go in the new order.
+ * The step keeps the corners in the order of its grid blocks with it (domain_transfer.h,
+ * mpm_domain_order_corners).
+ * Returns 0, -1 on OOM (nothing changed then). */
+int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order);
 
 /* Rebuild the corner adjacency over the active particles. Returns 0, -1 on OOM. */
 int mpm_domain_set_rebuild(mpm_domain_set *s);

@@ -10,6 +10,43 @@
 #include <math.h>
 #include <string.h>
 
+/* Four reals (an SSE register in float, AVX in double) and four doubles: the corner loops below
+ * keep a corner's or a particle's three components in the first three lanes (the fourth is 0),
+ * so that one vector operation does the work of three scalar ones with the same roundings. */
+typedef mpm_real real4 __attribute__((vector_size(4 * sizeof(mpm_real))));
+typedef double double4 __attribute__((vector_size(4 * sizeof(double))));
+
+static inline real4 load4(const mpm_real *a) {
+  real4 v;
+  memcpy(&v, a, sizeof v);
+  return v;
+}
+
+/* What a particle gives its corners' forces, 16 reals (mpm_domain_p2g): the force on corner a
+ * is -V0 P g_a (Zhu eq. 8 with eq. 5), per component (V0 P)_d0 g_0 + (V0 P)_d1 g_1 + (V0 P)_d2 g_2
+ * in that order. For a cube's pattern (mpm_domain_gradient: g_at = s_at m, s = +-1) that is
+ * (s_0 r_0 + s_1 r_1) + s_2 r_2 with r_t the column t of V0 P times m, and the corners of
+ * opposite signs give opposite sums (rounding is symmetric): the four sums with s_0 = +1 (corner
+ * a = 2k + 1 at [4k, 4k + 3)) are all the particle's corners need, the same roundings as the sum
+ * per corner. Otherwise the columns of V0 P, column t at [4t, 4t + 3). Lane 3 of each is 0. */
+#define VP_STRIDE 16
+static inline void store_vp(mpm_real *vp, const mpm_real v0, const mpm_real P[9],
+                            const mpm_real m) {
+  mpm_real col[3][3]; /* col[t][d] */
+  for (int t = 0; t < 3; ++t)
+    for (int d = 0; d < 3; ++d) col[t][d] = v0 * P[3 * d + t];
+  memset(vp, 0, VP_STRIDE * sizeof *vp);
+  if (m == 0) {
+    for (int t = 0; t < 3; ++t)
+      for (int d = 0; d < 3; ++d) vp[4 * t + d] = col[t][d];
+    return;
+  }
+  for (int k = 0; k < 4; ++k) {
+    const mpm_real s1 = k & 1 ? m : -m, s2 = k & 2 ? m : -m;
+    for (int d = 0; d < 3; ++d) vp[4 * k + d] = col[0][d] * m + col[1][d] * s1 + col[2][d] * s2;
+  }
+}
+
 int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
   const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]};
   /* enriched corners (domain/enrich.h) do not touch the grid */
@@ -104,7 +141,7 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
 /* V0 P of particles [a, b) (< MPM_STRESS_CHUNK, all of material mat) one by one, with the
  * moduli of each particle's state where they vary. */
 static void stresses_one_by_one(const mpm_material *mat, const mpm_domain_set *s, long a, long b,
-                                mpm_real (*vP)[9]) {
+                                mpm_real (*vP)[VP_STRIDE]) {
   const mpm_particles *p = &s->particles;
   for (long q = a; q < b; ++q) {
     if (!s->active[q]) continue;
@@ -116,7 +153,7 @@ static void stresses_one_by_one(const mpm_material *mat, const mpm_domain_set *s
     } else {
       mat->model->pk1(mat, F, P);
     }
-    for (int e = 0; e < 9; ++e) vP[q][e] = p->vol0[q] * P[e];
+    store_vp(vP[q], p->vol0[q], P, s->cube_g[q]);
   }
 }
 
@@ -125,7 +162,7 @@ static void stresses_one_by_one(const mpm_material *mat, const mpm_domain_set *s
  * 402 ns a particle for fixed corotated, `mpm bench stress`), one by one where the moduli vary
  * per particle or the model has no batch entry. */
 static void domain_stresses(const mpm_transfer_ctx *ctx, const mpm_domain_set *s,
-                            mpm_real (*vP)[9]) {
+                            mpm_real (*vP)[VP_STRIDE]) {
   const mpm_particles *p = &s->particles;
   const long np = (long)p->count;
 #pragma omp parallel for schedule(dynamic, 4)
@@ -143,18 +180,52 @@ static void domain_stresses(const mpm_transfer_ctx *ctx, const mpm_domain_set *s
       for (int e = 0; e < 9; ++e) F[e] = p->F[e] + a;
       mpm_real P[9][MPM_STRESS_CHUNK];
       mat->model->pk1_batch(mat, (int)(b - a), F, P);
-      for (long q = a; q < b; ++q) /* inactive particles' P is not used */
-        for (int e = 0; e < 9; ++e) vP[q][e] = p->vol0[q] * P[e][q - a];
+      for (long q = a; q < b; ++q) { /* inactive particles' P is not used */
+        mpm_real Pq[9];
+        for (int e = 0; e < 9; ++e) Pq[e] = P[e][q - a];
+        store_vp(vP[q], p->vol0[q], Pq, s->cube_g[q]);
+      }
     }
   }
+}
+
+int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                    mpm_arena *scratch) {
+  s->pads.on = 0;
+  if (g->kind != MPM_GRID_SPARSE || s->corner_rows) return 0;
+  for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
+  s->corner_grid.rows = 0; /* not this step's */
+  s->corner_grid.schedule.built = 0;
+  return mpm_corner_pads_plan(&s->pads, s, g, k, scratch);
+}
+
+int mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                             mpm_arena *scratch, uint32_t **order) {
+  *order = NULL;
+  const mpm_corner_pads *P = &s->pads;
+  /* the pads read and write the corners' values in the order of their positions, lane by lane
+   * where the corner numbers of a batch are not consecutive: renumbered once a tenth of the
+   * positions break the run (the material points' rule, solver/step.c), so that batches move
+   * with vector loads and stores */
+  if (!P->on || (double)P->breaks <= 0.1 * (double)P->grid_positions) return 0;
+  const size_t nc = s->corner_count;
+  uint32_t *o = mpm_arena_alloc(scratch, (nc + 1) * sizeof *o);
+  if (!o) return -1;
+  memcpy(o, P->row, P->positions * sizeof *o); /* the used corners, then the others */
+  size_t next = P->positions;
+  for (size_t c = 0; c < nc; ++c)
+    if (P->pos[c] == MPM_CORNER_PADS_NONE) o[next++] = (uint32_t)c;
+  if (mpm_domain_set_permute_corners(s, o)) return -1;
+  *order = o;
+  return mpm_domain_plan(s, g, k, scratch);
 }
 
 int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
                    const mpm_grid_values *dof, mpm_arena *scratch) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
-  /* 0. V0 P of every active particle (domain_stresses) */
-  mpm_real(*vP)[9] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
+  /* 0. V0 P of every active particle (domain_stresses), by columns */
+  mpm_real(*vP)[VP_STRIDE] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
   if (!vP) return -1;
   /* hourglass control of particles touching enriched corners (domain/enrich.h): kappa q */
   const int hourglass = s->enrich.count > 0;
@@ -175,16 +246,13 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     }
   }
   domain_stresses(ctx, s, vP);
-  /* the corner -> grid step's plan first: on the sparse grid, unless the step applies the
-   * embedding as a matrix (s->corner_rows), the corners go to the grid through pads of nodes
-   * (domain/corner_pads.h), and their values are laid out in the pads' order */
-  s->pads.on = 0;
-  const int pads = g->kind == MPM_GRID_SPARSE && !s->corner_rows;
+  /* the corner -> grid step's plan (mpm_domain_plan): through pads, the corners' values are
+   * laid out in the pads' order; the DOFs are those of this step's layout, which follows the
+   * plan */
+  const int pads = s->pads.on;
   if (pads) {
-    for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
-    s->corner_grid.rows = 0; /* not this step's */
-    s->corner_grid.schedule.built = 0;
-    if (mpm_corner_pads_plan(&s->pads, s, g, &ctx->kernel, scratch)) return -1;
+    s->pads.grid_dofs = (uint32_t)g->dof_begin;
+    s->pads.corner_dofs = (uint32_t)s->enrich.dof_begin;
   }
   /* 1. particle -> corner, gathered per corner (each corner sums its <= 8 particle slots in
    *    slot order: no races, the same sums for any thread count), in corner order (the
@@ -194,8 +262,8 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   /* G2P's packed copy of the corners (step scratch) */
   s->corner_pack = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof *s->corner_pack);
   if (!s->corner_pack) return -1;
-  mpm_real *mB[9] = {NULL}; /* APIC: m_a B_a, by position as the other values */
-  for (int e = 0; e < 9 && apic; ++e) {
+  mpm_real *mB[9] = {NULL}; /* APIC on the rows: m_a B_a (the pads make it themselves) */
+  for (int e = 0; e < 9 && apic && !pads; ++e) {
     mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
     if (!mB[e]) return -1;
   }
@@ -203,19 +271,27 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   for (long c = 0; c < nc; ++c) {
     const uint32_t k = pos ? pos[c] : (uint32_t)c;
     if (k == MPM_CORNER_PADS_NONE) continue; /* unused */
-    double m = 0, mv[3] = {0, 0, 0}, f[3] = {0, 0, 0};
+    double m = 0, mv[3] = {0, 0, 0};
+    double4 f = {0, 0, 0, 0};
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
       const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
-      mpm_real gc[3];
-      const mpm_real *gq = mpm_domain_gradient(s, q, a, gc), *vPq = vP[q];
-      const double w = gq == gc ? 0.125 : s->w[q][a];
+      const mpm_real *vPq = vP[q];
+      const int cube = s->cube_g[q] != 0;
+      const double w = cube ? 0.125 : s->w[q][a];
       const double mq = p->mass[q];
       m += w * mq;
       if (!apic)
         for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
-      /* f_a = -V0 P g_ap (Zhu eq. 8 with eq. 5) */
-      for (int d = 0; d < 3; ++d)
-        f[d] -= vPq[3 * d] * gq[0] + vPq[3 * d + 1] * gq[1] + vPq[3 * d + 2] * gq[2];
+      /* f_a = -V0 P g_ap (store_vp: the cube's sums by corner, or the columns) */
+      real4 term;
+      if (cube) {
+        term = load4(vPq + 4 * ((a & 1 ? a : 7 - a) >> 1));
+        if (!(a & 1)) term = -term;
+      } else {
+        const mpm_real *gq = s->g[q][a];
+        term = load4(vPq) * gq[0] + load4(vPq + 4) * gq[1] + load4(vPq + 8) * gq[2];
+      }
+      f -= __builtin_convertvector(term, double4);
       if (hourglass) /* f_a -= kappa sum_alpha h_alpha,a q_alpha */
         for (int al = 0; al < 4; ++al)
           for (int d = 0; d < 3; ++d) f[d] -= mpm_hourglass_modes[al][a] * Q[q][al][d];
@@ -231,15 +307,13 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
       s->cf[d][k] = (mpm_real)f[d];
     }
   }
-  /* APIC: m_a B_a, by position (apart from the loop above, whose scattered writes would double:
+  /* APIC on the rows: m_a B_a (apart from the loop above, whose scattered writes would double:
    * measured) */
-  if (apic) {
+  if (apic && !pads) {
 #pragma omp parallel for schedule(static)
-    for (long c = 0; c < nc; ++c) {
-      const uint32_t k = pos ? pos[c] : (uint32_t)c;
-      if (k == MPM_CORNER_PADS_NONE) continue;
-      for (int e = 0; e < 9; ++e) mB[e][k] = s->cm[k] * s->cB[e][c];
-    }
+    for (long c = 0; c < nc; ++c)
+      if (s->corner_use[c])
+        for (int e = 0; e < 9; ++e) mB[e][c] = s->cm[c] * s->cB[e][c];
   }
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
@@ -248,18 +322,11 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};
-  if (!apic) {
-    if (pads)
-      mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, NULL, values);
-    else
-      mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
-    return 0;
-  }
   /* APIC at the corner -> grid step: the corner's affine moment m_a B_a (B_a from the last
-   * G2P, m_a B_a made in step 1) spread with the entries' APIC factors */
-  if (pads) {
-    const mpm_real *const cmB[9] = {mB[0], mB[1], mB[2], mB[3], mB[4], mB[5], mB[6], mB[7], mB[8]};
-    mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, cmB, values);
+   * G2P) spread with the entries' APIC factors */
+  if (pads) return mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, apic, values, scratch);
+  if (!apic) {
+    mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
     return 0;
   }
   const mpm_real *const a[3] = {s->apic_a[0], s->apic_a[1], s->apic_a[2]};
@@ -372,9 +439,10 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     mpm_real *pk = s->corner_pack[c]; /* what the particles read of the corner, together */
     for (int d = 0; d < 3; ++d) {
       pk[d] = s->cx[d][c];
-      pk[3 + d] = s->cv[d][c];
-      pk[6 + d] = s->cvg[d][c];
+      pk[4 + d] = s->cv[d][c];
+      pk[8 + d] = s->cvg[d][c];
     }
+    pk[3] = pk[7] = pk[11] = 0;
   }
   /* 2. particles: F from the grid velocities at the corners (Zhu eq. 7), the return map of
    *    plastic models, then position and velocity from the corners */
@@ -386,23 +454,24 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     if (!s->active[q]) continue;
     /* one pass over the 8 corners for grad_X v (F, Zhu eq. 7) and for x and v (the corners
      * have moved already: they do not depend on F) */
-    mpm_real gradv[9] = {0}, x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    /* G[t]'s lane r: (grad_X v)_rt; the lanes of x and v their components (the same sums, in
+     * the same order, as one scalar per component) */
+    real4 G[3] = {{0}, {0}, {0}}, X = {0}, V = {0};
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
       const mpm_real *pk = s->corner_pack[s->corner[q][a]]; /* x, v, v^g */
       mpm_real gc[3];
       const mpm_real *ga = mpm_domain_gradient(s, q, a, gc);
       const mpm_real w = ga == gc ? (mpm_real)0.125 : s->w[q][a];
-      for (int r = 0; r < 3; ++r)
-        for (int t = 0; t < 3; ++t) gradv[3 * r + t] += pk[6 + r] * ga[t];
-      for (int d = 0; d < 3; ++d) {
-        x[d] += w * pk[d];
-        v[d] += w * pk[3 + d];
-      }
+      const real4 vg = load4(pk + 8);
+      for (int t = 0; t < 3; ++t) G[t] += vg * ga[t];
+      X += w * load4(pk);
+      V += w * load4(pk + 4);
     }
+    const mpm_real x[3] = {X[0], X[1], X[2]}, v[3] = {V[0], V[1], V[2]};
     mpm_real *F[9];
     for (int e = 0; e < 9; ++e) {
       F[e] = p->F[e] + q;
-      *F[e] += dt * gradv[e];
+      *F[e] += dt * G[e % 3][e / 3];
     }
     const mpm_material *mat = &ctx->materials[p->material[q]];
     if (mat->model->return_map) mat->model->return_map(mat, 1, F, p->plastic + q);

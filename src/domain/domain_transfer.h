@@ -32,6 +32,22 @@
  * the standard particles, before the DOF layout). Returns 0, or -1 when out of memory. */
 int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k);
 
+/* The corner -> grid transfers' plan for this step, from the corners' positions (after
+ * mpm_domain_activate): on a sparse level, unless the step applies the embedding as a matrix
+ * (s->corner_rows: the implicit Hessian), the corners go to the grid through pads of nodes
+ * (domain/corner_pads.h, s->pads.on); otherwise P2G builds the embedding's rows. Returns 0, -1
+ * when out of memory. */
+int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                    mpm_arena *scratch);
+
+/* After mpm_domain_plan: when the corners' numbers have come apart from the pads' order,
+ * renumber the corners into it (mpm_domain_set_permute_corners) and plan again; *order is then
+ * the permutation (new -> old, step scratch) for copies of corner arrays held elsewhere, else
+ * NULL. The decision follows from the state alone (a resumed run takes the same). Returns 0,
+ * -1 when out of memory. */
+int mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                             mpm_arena *scratch, uint32_t **order);
+
 /* Rasterize the domain particles to their corners, and the corners to grid level g (its
  * DOFs from g->dof_begin) through the corners' embedding (s->corner_grid, built here): the DOF
  * set's mass, momentum (v0) and force (dof: the values of all DOFs, DOF 0 at index 0); the

@@ -110,6 +110,34 @@ int mpm_sim_ensure_scratch(mpm_sim *sim) {
   return 0;
 }
 
+/* The domain corners' transfer plan (domain_transfer.h), their renumbering into its order when
+ * it has come apart, and then the guard's copies of the corners' state (guard.c, a retry
+ * restores them) renumbered alike. */
+static mpm_status plan_corners(mpm_sim *sim, step_ctx *c) {
+  mpm_domain_set *s = &sim->domains;
+  s->corner_rows = sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT;
+  uint32_t *order = NULL;
+  if (mpm_domain_plan(s, &sim->grid, &c->dtc.kernel, &sim->step_arena) ||
+      mpm_domain_order_corners(s, &sim->grid, &c->dtc.kernel, &sim->step_arena, &order))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory planning the transfers of %zu domain corners",
+                         (long long)sim->steps, s->corner_count);
+  if (!order || sim->corner_backup_capacity < s->corner_count) return MPM_OK;
+  mpm_real *tmp = mpm_arena_alloc(&sim->step_arena, (s->corner_count + 1) * sizeof *tmp);
+  if (!tmp)
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory renumbering %zu domain corners",
+                         (long long)sim->steps, s->corner_count);
+  const long nc = (long)s->corner_count;
+  for (size_t k = 0; k < sizeof sim->corner_backup / sizeof *sim->corner_backup; ++k) {
+    mpm_real *b = sim->corner_backup[k];
+#pragma omp parallel for schedule(static) if (nc > MPM_PARALLEL_MIN)
+    for (long j = 0; j < nc; ++j) tmp[j] = b[order[j]];
+    memcpy(b, tmp, (size_t)nc * sizeof *b);
+  }
+  return MPM_OK;
+}
+
 static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
   if (sim->adaptive) return mpm_adaptive_sort(sim);
   mpm_grid *g = &sim->grid;
@@ -138,7 +166,7 @@ static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
                            "step %lld: out of memory activating the grid around domain particles",
                            (long long)sim->steps);
   }
-  return MPM_OK;
+  return c->domains ? plan_corners(sim, c) : MPM_OK;
 }
 
 static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
@@ -183,7 +211,6 @@ static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   }
   /* the implicit step applies the corners' embedding as a matrix (its Hessian): it needs the
    * rows, which the explicit step does without (domain/corner_pads.h) */
-  sim->domains.corner_rows = sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT;
   if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid, &c->all, &sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the stresses of %zu domain particles",
