@@ -96,10 +96,10 @@ typedef struct mpm_domain_set {
    * (interp/kernel.h) */
   mpm_real *apic_a[3], *apic_d[3];
   /* per step (step scratch, set by P2G for G2P): each corner's new position, velocity and grid
-   * velocity side by side, each padded to 4 reals (x at 0, v at 4, v^g at 8; the pads 0), written
-   * by G2P's corner loop for its particle loop, which reads 8 corners per particle: one or two
-   * cache lines each instead of nine arrays', and each vector in one load */
-  mpm_real (*corner_pack)[12];
+   * velocity side by side (x at 0, v at 3, v^g at 6; one row more, zeroed), written by G2P's
+   * corner loop for its particle loop, which reads 8 corners per particle: one or two cache
+   * lines each instead of nine arrays', each vector in one load of 4 lanes (the fourth unused) */
+  mpm_real (*corner_pack)[9];
   /* set by the step: 1 when it applies the corners' embedding as a matrix (the implicit
    * Hessian, domain_hessian.c), so that P2G builds corner_grid's rows; else on the sparse grid
    * the corner transfers go through pads (domain/corner_pads.h) and corner_grid is empty */

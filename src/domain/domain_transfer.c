@@ -22,28 +22,30 @@ static inline real4 load4(const mpm_real *a) {
   return v;
 }
 
-/* What a particle gives its corners' forces, 16 reals (mpm_domain_p2g): the force on corner a
+/* What a particle gives its corners' forces, 12 reals (mpm_domain_p2g): the force on corner a
  * is -V0 P g_a (Zhu eq. 8 with eq. 5), per component (V0 P)_d0 g_0 + (V0 P)_d1 g_1 + (V0 P)_d2 g_2
  * in that order. For a cube's pattern (mpm_domain_gradient: g_at = s_at m, s = +-1) that is
  * (s_0 r_0 + s_1 r_1) + s_2 r_2 with r_t the column t of V0 P times m, and the corners of
  * opposite signs give opposite sums (rounding is symmetric): the four sums with s_0 = +1 (corner
- * a = 2k + 1 at [4k, 4k + 3)) are all the particle's corners need, the same roundings as the sum
- * per corner. Otherwise the columns of V0 P, column t at [4t, 4t + 3). Lane 3 of each is 0. */
-#define VP_STRIDE 16
+ * a = 2k + 1 at [3k, 3k + 3)) are all the particle's corners need, the same roundings as the sum
+ * per corner. Otherwise the columns of V0 P, column t at [3t, 3t + 3). Each is read as 4 lanes,
+ * the fourth the next one's first (or the row after the last, which P2G zeroes), which no sum
+ * uses: 48 bytes a particle, written once and read by 8 corners (their traffic set the cost). */
+#define VP_STRIDE 12
 static inline void store_vp(mpm_real *vp, const mpm_real v0, const mpm_real P[9],
                             const mpm_real m) {
   mpm_real col[3][3]; /* col[t][d] */
   for (int t = 0; t < 3; ++t)
     for (int d = 0; d < 3; ++d) col[t][d] = v0 * P[3 * d + t];
-  memset(vp, 0, VP_STRIDE * sizeof *vp);
   if (m == 0) {
     for (int t = 0; t < 3; ++t)
-      for (int d = 0; d < 3; ++d) vp[4 * t + d] = col[t][d];
+      for (int d = 0; d < 3; ++d) vp[3 * t + d] = col[t][d];
+    for (int e = 9; e < VP_STRIDE; ++e) vp[e] = 0;
     return;
   }
   for (int k = 0; k < 4; ++k) {
     const mpm_real s1 = k & 1 ? m : -m, s2 = k & 2 ? m : -m;
-    for (int d = 0; d < 3; ++d) vp[4 * k + d] = col[0][d] * m + col[1][d] * s1 + col[2][d] * s2;
+    for (int d = 0; d < 3; ++d) vp[3 * k + d] = col[0][d] * m + col[1][d] * s1 + col[2][d] * s2;
   }
 }
 
@@ -227,6 +229,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   /* 0. V0 P of every active particle (domain_stresses), by columns */
   mpm_real(*vP)[VP_STRIDE] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
   if (!vP) return -1;
+  memset(vP[p->count], 0, sizeof *vP); /* the last particle's fourth lane (store_vp) */
   /* hourglass control of particles touching enriched corners (domain/enrich.h): kappa q */
   const int hourglass = s->enrich.count > 0;
   mpm_real(*Q)[4][3] = hourglass ? mpm_arena_alloc(scratch, (p->count + 1) * sizeof *Q) : NULL;
@@ -262,6 +265,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   /* G2P's packed copy of the corners (step scratch) */
   s->corner_pack = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof *s->corner_pack);
   if (!s->corner_pack) return -1;
+  memset(s->corner_pack[s->corner_count], 0, sizeof *s->corner_pack); /* the last one's lane 4 */
   mpm_real *mB[9] = {NULL}; /* APIC on the rows: m_a B_a (the pads make it themselves) */
   for (int e = 0; e < 9 && apic && !pads; ++e) {
     mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
@@ -285,11 +289,11 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
       /* f_a = -V0 P g_ap (store_vp: the cube's sums by corner, or the columns) */
       real4 term;
       if (cube) {
-        term = load4(vPq + 4 * ((a & 1 ? a : 7 - a) >> 1));
+        term = load4(vPq + 3 * ((a & 1 ? a : 7 - a) >> 1));
         if (!(a & 1)) term = -term;
       } else {
         const mpm_real *gq = s->g[q][a];
-        term = load4(vPq) * gq[0] + load4(vPq + 4) * gq[1] + load4(vPq + 8) * gq[2];
+        term = load4(vPq) * gq[0] + load4(vPq + 3) * gq[1] + load4(vPq + 6) * gq[2];
       }
       f -= __builtin_convertvector(term, double4);
       if (hourglass) /* f_a -= kappa sum_alpha h_alpha,a q_alpha */
@@ -439,10 +443,9 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     mpm_real *pk = s->corner_pack[c]; /* what the particles read of the corner, together */
     for (int d = 0; d < 3; ++d) {
       pk[d] = s->cx[d][c];
-      pk[4 + d] = s->cv[d][c];
-      pk[8 + d] = s->cvg[d][c];
+      pk[3 + d] = s->cv[d][c];
+      pk[6 + d] = s->cvg[d][c];
     }
-    pk[3] = pk[7] = pk[11] = 0;
   }
   /* 2. particles: F from the grid velocities at the corners (Zhu eq. 7), the return map of
    *    plastic models, then position and velocity from the corners */
@@ -462,10 +465,10 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
       mpm_real gc[3];
       const mpm_real *ga = mpm_domain_gradient(s, q, a, gc);
       const mpm_real w = ga == gc ? (mpm_real)0.125 : s->w[q][a];
-      const real4 vg = load4(pk + 8);
+      const real4 vg = load4(pk + 6); /* lane 3: the next corner's (unused) */
       for (int t = 0; t < 3; ++t) G[t] += vg * ga[t];
       X += w * load4(pk);
-      V += w * load4(pk + 4);
+      V += w * load4(pk + 3);
     }
     const mpm_real x[3] = {X[0], X[1], X[2]}, v[3] = {V[0], V[1], V[2]};
     mpm_real *F[9];
