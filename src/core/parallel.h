@@ -16,6 +16,9 @@ static inline int mpm_thread_count(void) {
 static inline int mpm_thread_id(void) {
   return omp_get_thread_num();
 }
+static inline int mpm_thread_team(void) { /* the threads of the current region */
+  return omp_get_num_threads();
+}
 static inline void mpm_set_threads(int n) {
   if (n > 0) omp_set_num_threads(n);
 }
@@ -25,6 +28,9 @@ static inline int mpm_thread_count(void) {
 }
 static inline int mpm_thread_id(void) {
   return 0;
+}
+static inline int mpm_thread_team(void) {
+  return 1;
 }
 static inline void mpm_set_threads(int n) {
   (void)n;

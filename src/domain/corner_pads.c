@@ -76,11 +76,10 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   }
   if (missing) return -1;
   /* the colour of a block is the parity of its coordinates (grid.c, stencil_nodes) */
-  for (size_t c = 0; c < nc; ++c)
-    if (P->block[c] >= 0) {
-      const int32_t *bc = sg->coord[P->block[c]];
-      key_colour[P->block[c]] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
-    }
+  for (size_t b = 0; b < nk; ++b) {
+    const int32_t *bc = sg->coord[b];
+    key_colour[b] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
+  }
   mpm_scatter_schedule *S = &P->schedule;
   if (mpm_scatter_schedule_build(S, nc, P->block, nk, key_colour)) return -1;
   const size_t groups = S->colour_start[MPM_SCHEDULE_COLOURS];
@@ -97,7 +96,8 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
     P->dv[d] = mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real));
     if (!P->x[d] || !P->dv[d]) return -1;
   }
-  memset(P->pos, 0xff, nc * sizeof *P->pos); /* MPM_CORNER_PADS_NONE */
+#pragma omp parallel for schedule(static) if (nc > MPM_PARALLEL_MIN)
+  for (long c = 0; c < (long)nc; ++c) P->pos[c] = MPM_CORNER_PADS_NONE;
   /* the groups' ranges of positions in the order of their blocks in space (z, y, x; x fastest),
    * not in the schedule's colour order: the corners, numbered as the samplers lay bodies out,
    * then write their P2G values close to one another (measured: 10% of the domain step) */

@@ -1,5 +1,7 @@
 /* grid.c - the two variants of the grid interface (grid.h): their tables of operations. */
 #include "grid/grid.h"
+#include "core/alloc.h"
+#include "core/parallel.h"
 
 #include <string.h>
 
@@ -29,21 +31,71 @@ static int pad_blocks(const mpm_sparse_grid *g, mpm_sparse_grid *activate, const
   return 0;
 }
 
+/* The base block of point i's stencil, packed (21 bits an axis, as the grid's coordinates
+ * allow), or UINT64_MAX when the point is not used. */
+static inline uint64_t point_block(const mpm_grid *g, const mpm_kernel *k, const mpm_real *const x[3],
+                                   const uint8_t *use, size_t i) {
+  if (use && !use[i]) return UINT64_MAX;
+  const mpm_real xr[3] = {x[0][i] - g->origin[0], x[1][i] - g->origin[1], x[2][i] - g->origin[2]};
+  int base[3];
+  mpm_kernel_base(k, xr, base);
+  uint64_t key = 0;
+  for (int d = 0; d < 3; ++d)
+    key = key << 21 | (uint64_t)((uint32_t)((base[d] >> MPM_BLOCK_BITS) + (1 << 20)) & 0x1FFFFF);
+  return key;
+}
+
+/* The points' base blocks in parallel, each thread keeping where its range's block changes
+ * (points such as domain corners come in block order, so runs are long); then the pads of
+ * those blocks activated in point order, one thread (the grid's insertions are serial). */
 static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
                                   const mpm_real *const x[3], const uint8_t *use) {
   mpm_sparse_grid *sg = &g->impl.sparse;
+  const int threads = n >= MPM_PARALLEL_MIN ? mpm_thread_count() : 1;
+  size_t *runs = mpm_calloc((size_t)threads + 1, sizeof *runs);
+  uint64_t *key = NULL;
+  int failed = !runs;
+#pragma omp parallel num_threads(threads) if (threads > 1 && !failed)
+  {
+    const int T = mpm_thread_team(), t = mpm_thread_id();
+    const size_t i0 = n * (size_t)t / (size_t)T, i1 = n * (size_t)(t + 1) / (size_t)T;
+    size_t mine = 0;
+    uint64_t last = UINT64_MAX;
+    for (size_t i = i0; i < i1; ++i) {
+      const uint64_t b = point_block(g, k, x, use, i);
+      if (b != UINT64_MAX && b != last) ++mine;
+      if (b != UINT64_MAX) last = b;
+    }
+    runs[t + 1] = mine;
+#pragma omp barrier
+#pragma omp single
+    {
+      for (int u = 0; u < T; ++u) runs[u + 1] += runs[u];
+      key = mpm_alloc((runs[T] + 1) * sizeof *key);
+      failed = !key;
+    }
+    if (!failed) {
+      size_t at = runs[t];
+      last = UINT64_MAX;
+      for (size_t i = i0; i < i1; ++i) {
+        const uint64_t b = point_block(g, k, x, use, i);
+        if (b != UINT64_MAX && b != last) key[at++] = b;
+        if (b != UINT64_MAX) last = b;
+      }
+    }
+  }
+  const size_t count = failed ? 0 : runs[threads];
   mpm_grid_cursor c;
   mpm_grid_cursor_init(&c);
-  for (size_t i = 0; i < n; ++i) {
-    if (use && !use[i]) continue;
-    const mpm_real xr[3] = {x[0][i] - g->origin[0], x[1][i] - g->origin[1], x[2][i] - g->origin[2]};
-    int base[3];
-    mpm_kernel_base(k, xr, base);
-    const int32_t bb[3] = {base[0] >> MPM_BLOCK_BITS, base[1] >> MPM_BLOCK_BITS,
-                           base[2] >> MPM_BLOCK_BITS};
-    if (pad_blocks(sg, sg, bb, &c)) return -1;
+  for (size_t r = 0; r < count && !failed; ++r) {
+    int32_t bb[3];
+    for (int d = 0; d < 3; ++d)
+      bb[d] = (int32_t)((key[r] >> (21 * (2 - d))) & 0x1FFFFF) - (1 << 20);
+    failed = pad_blocks(sg, sg, bb, &c) != 0;
   }
-  return 0;
+  mpm_free(key);
+  mpm_free(runs);
+  return failed ? -1 : 0;
 }
 
 static int sparse_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *c,
