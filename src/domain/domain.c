@@ -43,6 +43,7 @@ void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_free(s->adj);
   mpm_free(s->corner_use);
   mpm_free(s->cube_g);
+  mpm_free(s->cmass);
   mpm_embedding_free(&s->corner_grid);
   mpm_corner_pads_free(&s->pads);
   mpm_enrichment_free(&s->enrich);
@@ -184,6 +185,19 @@ static int build_adjacency(mpm_domain_set *s) {
       for (int a = 0; a < MPM_HEX_CORNERS; ++a)
         s->adj[fill[s->corner[p][a]]++] = (uint32_t)(p * MPM_HEX_CORNERS + (size_t)a);
   mpm_free(fill);
+  /* m_a = sum_p omega_ap m_p in slot order (domain.h, cmass) */
+  mpm_free(s->cmass);
+  s->cmass = mpm_alloc((s->corner_count + 1) * sizeof *s->cmass);
+  if (!s->cmass) return -1;
+  for (size_t c = 0; c < s->corner_count; ++c) {
+    double m = 0;
+    for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
+      const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
+      const double w = s->cube_g[q] != 0 ? 0.125 : s->w[q][a];
+      m += w * (double)s->particles.mass[q];
+    }
+    s->cmass[c] = m;
+  }
   return 0;
 }
 
@@ -395,6 +409,7 @@ int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order) {
   corner_arrays(s, a);
   for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) permute_array(*a[k], tmp, sizeof(mpm_real), order, nc);
   permute_array(s->corner_use, tmp, 1, order, nc);
+  permute_array(s->cmass, tmp, sizeof *s->cmass, order, nc);
   mpm_domain_enrichment *en = &s->enrich;
   if (en->count) { /* this step's marks, by corner; the enriched corners keep their DOF order */
     permute_array(en->enriched, tmp, 1, order, nc);

@@ -87,6 +87,10 @@ typedef struct mpm_domain_set {
   /* corner -> particle slots (p * 8 + a), CSR, for race-free particle -> corner gathers */
   uint32_t *adj_start, *adj;
   uint8_t *corner_use; /* 1 when an active particle uses the corner (it takes part in steps) */
+  /* the corner's mass m_a = sum_p omega_ap m_p over its particle slots in slot order, in double
+   * (made with the adjacency: the particles' masses and weights stay put between rebuilds), so
+   * that P2G need not sum it every step */
+  double *cmass;
   /* per step: the embedding of the corners in the grid (Zhu eqs. 2-3: row a holds the grid
    * nodes of corner a's stencil and their weights omega_i(x_a); rows of unused corners are
    * empty), and its scatter schedule: corners keyed by base block, blocks coloured by parity */

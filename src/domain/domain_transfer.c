@@ -275,17 +275,17 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   for (long c = 0; c < nc; ++c) {
     const uint32_t k = pos ? pos[c] : (uint32_t)c;
     if (k == MPM_CORNER_PADS_NONE) continue; /* unused */
-    double m = 0, mv[3] = {0, 0, 0};
+    const double m = s->cmass[c]; /* sum_p omega_ap m_p, made with the adjacency */
+    double mv[3] = {0, 0, 0};
     double4 f = {0, 0, 0, 0};
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
       const uint32_t q = s->adj[j] / MPM_HEX_CORNERS, a = s->adj[j] % MPM_HEX_CORNERS;
       const mpm_real *vPq = vP[q];
       const int cube = s->cube_g[q] != 0;
-      const double w = cube ? 0.125 : s->w[q][a];
-      const double mq = p->mass[q];
-      m += w * mq;
-      if (!apic)
+      if (!apic) {
+        const double w = cube ? 0.125 : s->w[q][a], mq = p->mass[q];
         for (int d = 0; d < 3; ++d) mv[d] += w * mq * p->v[d][q];
+      }
       /* f_a = -V0 P g_ap (store_vp: the cube's sums by corner, or the columns) */
       real4 term;
       if (cube) {
