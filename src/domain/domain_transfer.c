@@ -22,31 +22,21 @@ static inline real4 load4(const mpm_real *a) {
   return v;
 }
 
-/* What a particle gives its corners' forces, 12 reals (mpm_domain_p2g): the force on corner a
- * is -V0 P g_a (Zhu eq. 8 with eq. 5), per component (V0 P)_d0 g_0 + (V0 P)_d1 g_1 + (V0 P)_d2 g_2
- * in that order. For a cube's pattern (mpm_domain_gradient: g_at = s_at m, s = +-1) that is
- * (s_0 r_0 + s_1 r_1) + s_2 r_2 with r_t the column t of V0 P times m, and the corners of
- * opposite signs give opposite sums (rounding is symmetric): the four sums with s_0 = +1 (corner
- * a = 2k + 1 at [3k, 3k + 3)) are all the particle's corners need, the same roundings as the sum
- * per corner. Otherwise the columns of V0 P, column t at [3t, 3t + 3). Each is read as 4 lanes,
- * the fourth the next one's first (or the row after the last, which P2G zeroes), which no sum
- * uses: 48 bytes a particle, written once and read by 8 corners (their traffic set the cost). */
-#define VP_STRIDE 12
+/* What a particle gives its corners' forces, 9 reals (mpm_domain_p2g): the force on corner a is
+ * -V0 P g_a (Zhu eq. 8 with eq. 5), per component (V0 P)_d0 g_0 + (V0 P)_d1 g_1 + (V0 P)_d2 g_2
+ * in that order. For a cube's pattern (mpm_domain_gradient: g_at = s_at m, s = +-1) the
+ * products are +-r_t, r_t the column t of V0 P times m, which is what is kept (the signs are
+ * exact); otherwise the columns of V0 P. Column t at [3t, 3t + 3), read as 4 lanes, the fourth
+ * the next one's first (or the row after the last, which P2G zeroes), which no sum uses: 36
+ * bytes a particle, written once and read by 8 corners (their traffic sets the cost). */
+#define VP_STRIDE 9
 static inline void store_vp(mpm_real *vp, const mpm_real v0, const mpm_real P[9],
                             const mpm_real m) {
-  mpm_real col[3][3]; /* col[t][d] */
   for (int t = 0; t < 3; ++t)
-    for (int d = 0; d < 3; ++d) col[t][d] = v0 * P[3 * d + t];
-  if (m == 0) {
-    for (int t = 0; t < 3; ++t)
-      for (int d = 0; d < 3; ++d) vp[3 * t + d] = col[t][d];
-    for (int e = 9; e < VP_STRIDE; ++e) vp[e] = 0;
-    return;
-  }
-  for (int k = 0; k < 4; ++k) {
-    const mpm_real s1 = k & 1 ? m : -m, s2 = k & 2 ? m : -m;
-    for (int d = 0; d < 3; ++d) vp[3 * k + d] = col[0][d] * m + col[1][d] * s1 + col[2][d] * s2;
-  }
+    for (int d = 0; d < 3; ++d) {
+      const mpm_real col = v0 * P[3 * d + t];
+      vp[3 * t + d] = m == 0 ? col : col * m;
+    }
 }
 
 int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
@@ -288,9 +278,9 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
       }
       /* f_a = -V0 P g_ap (store_vp: the cube's sums by corner, or the columns) */
       real4 term;
-      if (cube) {
-        term = load4(vPq + 3 * ((a & 1 ? a : 7 - a) >> 1));
-        if (!(a & 1)) term = -term;
+      if (cube) { /* (s_0 r_0 + s_1 r_1) + s_2 r_2 */
+        const real4 r0 = load4(vPq), r1 = load4(vPq + 3), r2 = load4(vPq + 6);
+        term = ((a & 1 ? r0 : -r0) + (a & 2 ? r1 : -r1)) + (a & 4 ? r2 : -r2);
       } else {
         const mpm_real *gq = s->g[q][a];
         term = load4(vPq) * gq[0] + load4(vPq + 3) * gq[1] + load4(vPq + 6) * gq[2];
