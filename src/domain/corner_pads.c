@@ -91,10 +91,9 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   P->row = mpm_arena_alloc(scratch, (P->positions + 1) * sizeof *P->row);
   P->pos = mpm_arena_alloc(scratch, (nc + 1) * sizeof *P->pos);
   if (!P->pad || !P->org || !P->cell_start || !P->row || !P->pos) return -1;
-  for (int d = 0; d < 3; ++d) { /* positions by position (room for a last full vector) */
-    P->x[d] = mpm_arena_alloc(scratch, (P->positions + MPM_LANES) * sizeof(mpm_real));
+  for (int d = 0; d < 3; ++d) {
     P->dv[d] = mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real));
-    if (!P->x[d] || !P->dv[d]) return -1;
+    if (!P->dv[d]) return -1;
   }
 #pragma omp parallel for schedule(static) if (nc > MPM_PARALLEL_MIN)
   for (long c = 0; c < (long)nc; ++c) P->pos[c] = MPM_CORNER_PADS_NONE;
@@ -137,7 +136,6 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
       const uint32_t at_k = at[P->cell[c]]++;
       P->row[at_k] = c;
       P->pos[c] = at_k;
-      for (int d = 0; d < 3; ++d) P->x[d][at_k] = s->cx[d][c];
     }
   }
   for (size_t j = 0; j < S->own_rows; ++j) { /* the enriched corners follow, in corner order */
@@ -206,7 +204,7 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
   const mpm_vl zero = {0};
   for (int n = 0; n < S * S * S; ++n)
     for (int f = 0; f < SCATTER_FIELDS; ++f) acc[n][f] = zero;
-  const mpm_real *const x[3] = {P->x[0], P->x[1], P->x[2]};
+  const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]}; /* by corner */
   for (int cell = 0; cell < MPM_BLOCK_NODES; ++cell) {
     const uint32_t end = P->cell_start[q][cell + 1];
     for (uint32_t r = P->cell_start[q][cell]; r < end; r += MPM_LANES) {
@@ -217,7 +215,8 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
       for (int l = 0; l < n; ++l) live[l] = 1;
       mpm_lane_stencil st;
       int base[3];
-      mpm_lane_stencil_eval(W, k, x, P->origin, pos, n, n == MPM_LANES, apic, base, &st);
+      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n,
+                            mpm_batch_contiguous(P->row + r, n), apic, base, &st);
       mpm_vl in[SCATTER_FIELDS], cm[9];
       for (int f = 0; f < SCATTER_FIELDS; ++f) in[f] = corner_lanes(carrier[f], pos, n, live);
       if (apic) { /* m_a B_a, B_a by corner */
@@ -321,7 +320,7 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
       pad[n * GATHER_STRIDE + d] = v[d][dof[n]];
       pad[n * GATHER_STRIDE + 3 + d] = v0[d][dof[n]];
     }
-  const mpm_real *const x[3] = {P->x[0], P->x[1], P->x[2]};
+  const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]}; /* by corner */
   const mpm_real dx = k->dx;
   for (int cell = 0; cell < MPM_BLOCK_NODES; ++cell) {
     const uint32_t end = P->cell_start[q][cell + 1];
@@ -331,7 +330,8 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
       batch_positions(r, n, pos);
       mpm_lane_stencil st;
       int base[3];
-      mpm_lane_stencil_eval(W, k, x, P->origin, pos, n, n == MPM_LANES, apic, base, &st);
+      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n,
+                            mpm_batch_contiguous(P->row + r, n), apic, base, &st);
       const int off =
           ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
       /* v^g_a = sum_i omega_i(x_a) v_i^{n+1}, the FLIP increment sum_i omega_i(x_a) (v_i^{n+1}

@@ -43,13 +43,12 @@ typedef struct mpm_corner_pads {
   uint8_t *cell;                 /* step scratch: per corner, its base node's cell in its block */
   /* step scratch: the pads' order of the corners, position k -> corner row[k]: the groups'
    * corners (each group's by cell), then the enriched ones; P2G's corner values are laid out
-   * in it (so that a batch of corners is contiguous), and their positions x[d][k] */
+   * in it (so that a batch of corners is contiguous) */
   uint32_t *row;
   uint32_t *pos;                    /* per corner: its position, or MPM_CORNER_PADS_NONE */
   uint32_t *in_space;               /* the groups in the order of their positions */
   size_t positions, grid_positions; /* all; of the groups (the enriched follow) */
   size_t breaks; /* positions k of the groups whose corner is not row[k - 1] + 1 */
-  mpm_real *x[3];
   uint32_t (*cell_start)[MPM_BLOCK_NODES + 1]; /* per group: row[] of each cell (absolute) */
   uint32_t grid_dofs;   /* the DOF of the level's node 0 (set by P2G: the layout follows) */
   uint32_t corner_dofs; /* the DOF of enriched corner 0 (likewise) */
