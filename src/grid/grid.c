@@ -45,56 +45,53 @@ static inline uint64_t point_block(const mpm_grid *g, const mpm_kernel *k, const
   return key;
 }
 
-/* The points' base blocks in parallel, each thread keeping where its range's block changes
- * (points such as domain corners come in block order, so runs are long); then the pads of
- * those blocks activated in point order, one thread (the grid's insertions are serial). */
+/* The points' base blocks in parallel, each thread keeping, in a list of its own, where its
+ * range's block changes (points such as domain corners come in block order, so runs are
+ * long); then the pads of those blocks activated in point order, one thread (the grid's
+ * insertions are serial). */
 static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
                                   const mpm_real *const x[3], const uint8_t *use) {
   mpm_sparse_grid *sg = &g->impl.sparse;
   const int threads = n >= MPM_PARALLEL_MIN ? mpm_thread_count() : 1;
-  size_t *runs = mpm_calloc((size_t)threads + 1, sizeof *runs);
-  uint64_t *key = NULL;
-  int failed = !runs;
-#pragma omp parallel num_threads(threads) if (threads > 1 && !failed)
+  uint64_t **runs = mpm_calloc((size_t)threads, sizeof *runs);
+  size_t *count = mpm_calloc((size_t)threads, sizeof *count);
+  int failed = !runs || !count;
+#pragma omp parallel num_threads(threads) if (threads > 1 && !failed) reduction(| : failed)
   {
     const int T = mpm_thread_team(), t = mpm_thread_id();
     const size_t i0 = n * (size_t)t / (size_t)T, i1 = n * (size_t)(t + 1) / (size_t)T;
-    size_t mine = 0;
-    uint64_t last = UINT64_MAX;
-    for (size_t i = i0; i < i1; ++i) {
+    size_t cap = 256, m = 0;
+    uint64_t *list = mpm_alloc(cap * sizeof *list), last = UINT64_MAX;
+    for (size_t i = i0; i < i1 && list; ++i) {
       const uint64_t b = point_block(g, k, x, use, i);
-      if (b != UINT64_MAX && b != last) ++mine;
-      if (b != UINT64_MAX) last = b;
-    }
-    runs[t + 1] = mine;
-#pragma omp barrier
-#pragma omp single
-    {
-      for (int u = 0; u < T; ++u) runs[u + 1] += runs[u];
-      key = mpm_alloc((runs[T] + 1) * sizeof *key);
-      failed = !key;
-    }
-    if (!failed) {
-      size_t at = runs[t];
-      last = UINT64_MAX;
-      for (size_t i = i0; i < i1; ++i) {
-        const uint64_t b = point_block(g, k, x, use, i);
-        if (b != UINT64_MAX && b != last) key[at++] = b;
-        if (b != UINT64_MAX) last = b;
+      if (b == UINT64_MAX || b == last) continue;
+      last = b;
+      if (m == cap) {
+        uint64_t *grown = mpm_alloc(2 * cap * sizeof *grown);
+        if (grown) memcpy(grown, list, cap * sizeof *list);
+        mpm_free(list);
+        list = grown;
+        cap *= 2;
+        if (!list) break;
       }
+      list[m++] = b;
     }
+    if (!list) failed = 1;
+    runs[t] = list;
+    count[t] = m;
   }
-  const size_t count = failed ? 0 : runs[threads];
   mpm_grid_cursor c;
   mpm_grid_cursor_init(&c);
-  for (size_t r = 0; r < count && !failed; ++r) {
-    int32_t bb[3];
-    for (int d = 0; d < 3; ++d)
-      bb[d] = (int32_t)((key[r] >> (21 * (2 - d))) & 0x1FFFFF) - (1 << 20);
-    failed = pad_blocks(sg, sg, bb, &c) != 0;
-  }
-  mpm_free(key);
+  for (int t = 0; t < threads && !failed; ++t)
+    for (size_t r = 0; r < count[t] && !failed; ++r) {
+      int32_t bb[3];
+      for (int d = 0; d < 3; ++d)
+        bb[d] = (int32_t)((runs[t][r] >> (21 * (2 - d))) & 0x1FFFFF) - (1 << 20);
+      failed = pad_blocks(sg, sg, bb, &c) != 0;
+    }
+  for (int t = 0; t < threads && runs; ++t) mpm_free(runs[t]);
   mpm_free(runs);
+  mpm_free(count);
   return failed ? -1 : 0;
 }
 

@@ -294,7 +294,9 @@ mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim) {
    * so that the topology can change): a domain particle leaves its domain once its
    * temperature passes its material's melting point */
   mpm_domain_set *s = &sim->domains;
-  for (size_t i = 0; i < s->particles.count; ++i) {
+  int melts = 0;
+  for (int m = 0; m < sim->material_count; ++m) melts |= sim->materials[m].melting;
+  for (size_t i = 0; i < s->particles.count && melts; ++i) {
     if (!s->active[i]) continue;
     const mpm_material *m = &sim->materials[s->particles.material[i]];
     if (!m->melting || !(s->particles.temperature[i] > m->melt_point)) continue;
