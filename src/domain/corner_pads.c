@@ -318,7 +318,7 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
   for (int n = 0; n < S * S * S; ++n)
     for (int d = 0; d < 3; ++d) {
       pad[n * GATHER_STRIDE + d] = v[d][dof[n]];
-      pad[n * GATHER_STRIDE + 3 + d] = v0[d][dof[n]];
+      pad[n * GATHER_STRIDE + 3 + d] = apic ? 0 : v0[d][dof[n]]; /* v0: FLIP's increment only */
     }
   const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]}; /* by corner */
   const mpm_real dx = k->dx;
@@ -349,7 +349,7 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
             for (int d = 0; d < 3; ++d) {
               const mpm_vl u = mpm_vl_splat(node[d]);
               vg[d] += w * u;
-              dv[d] += w * (u - node[3 + d]);
+              if (!apic) dv[d] += w * (u - node[3 + d]); /* APIC takes v^g alone */
               if (apic)
                 for (int t = 0; t < 3; ++t) B[3 * d + t] += u * A[t];
             }
@@ -360,7 +360,7 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
       const int run = mpm_batch_contiguous(idx, n); /* corners numbered in the pads' order */
       for (int d = 0; d < 3; ++d) {
         mpm_lanes_store(s->cvg[d], idx, n, run, vg[d]);
-        mpm_lanes_store(P->dv[d], idx, n, run, dv[d]);
+        if (!apic) mpm_lanes_store(P->dv[d], idx, n, run, dv[d]);
       }
       if (!apic) continue;
       /* B_a = (sum_i v_i a_i^T) D_a, D_a's diagonal sum_i w_i (x_i - x_a)^2 per axis */

@@ -397,7 +397,7 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
     if (P->on) {
       for (int d = 0; d < 3; ++d) {
         vnew[d] = s->cvg[d][c];
-        dv[d] = P->dv[d][c];
+        dv[d] = apic ? 0 : P->dv[d][c]; /* the FLIP increment: not made for APIC */
       }
     } else {
       corner_velocity(s, dof, apic, (size_t)c, vnew, dv);
