@@ -401,12 +401,11 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
       }
     } else {
       corner_velocity(s, dof, apic, (size_t)c, vnew, dv);
+      for (int d = 0; d < 3; ++d) s->cvg[d][c] = vnew[d]; /* (the pads stored it already) */
     }
     mpm_real v[3];
-    for (int d = 0; d < 3; ++d) {
-      s->cvg[d][c] = vnew[d];
+    for (int d = 0; d < 3; ++d)
       v[d] = apic ? vnew[d] : alpha * (s->cv[d][c] + dv[d]) + (1 - alpha) * vnew[d];
-    }
     /* colliders and walls on the corners (Zhu sec. 7, Algorithm 1 line 24): the corner
      * velocity obeys the boundary rules, and the particles take their velocities from the
      * corners, which applies the collision impulse to them. The corner moves with the grid
