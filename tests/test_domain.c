@@ -525,7 +525,7 @@ static void run_permuted_corners(mpm_transfer_kind transfer) {
     order[j] = t;
   }
   for (size_t k = 0; k < nc; ++k) inv[order[k]] = (uint32_t)k;
-  assert_int_equal(mpm_domain_set_permute_corners(&b.s, order), 0);
+  assert_int_equal(mpm_domain_set_permute_corners(&b.s, order, &b.scratch), 0);
   for (size_t q = 0; q < np; ++q)
     for (int c = 0; c < 8; ++c) assert_int_equal(b.s.corner[q][c], inv[a.s.corner[q][c]]);
   for (size_t c = 0; c < nc; ++c) {

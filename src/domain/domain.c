@@ -4,6 +4,7 @@
 #include "domain/enrich.h"
 #include "domain/lattice_map.h"
 #include "core/alloc.h"
+#include "core/arena.h"
 #include "core/parallel.h"
 
 #include <math.h>
@@ -389,19 +390,13 @@ static void permute_array(void *a, void *tmp, size_t size, const uint32_t *order
   memcpy(a, tmp, n * size);
 }
 
-int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order) {
+int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm_arena *scratch) {
   const size_t nc = s->corner_count, np = s->particles.count;
-  uint32_t *inv = mpm_alloc((nc + 1) * sizeof *inv);
-  void *tmp = mpm_alloc((nc + 1) * sizeof(uint64_t));
-  uint32_t *adj_start = mpm_alloc((nc + 1) * sizeof *adj_start);
-  uint32_t *adj = mpm_alloc((s->adj_start[nc] + 1) * sizeof *adj);
-  if (!inv || !tmp || !adj_start || !adj) {
-    mpm_free(inv);
-    mpm_free(tmp);
-    mpm_free(adj_start);
-    mpm_free(adj);
-    return -1;
-  }
+  uint32_t *inv = mpm_arena_alloc(scratch, (nc + 1) * sizeof *inv);
+  void *tmp = mpm_arena_alloc(scratch, (nc + 1) * sizeof(uint64_t));
+  uint32_t *adj_start = mpm_arena_alloc(scratch, (nc + 1) * sizeof *adj_start);
+  uint32_t *adj = mpm_arena_alloc(scratch, (s->adj_start[nc] + 1) * sizeof *adj);
+  if (!inv || !tmp || !adj_start || !adj) return -1;
   const long m = (long)nc;
 #pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
   for (long k = 0; k < m; ++k) inv[order[k]] = (uint32_t)k;
@@ -425,16 +420,12 @@ int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order) {
   for (long k = 0; k < m; ++k)
     memcpy(adj + adj_start[k], s->adj + s->adj_start[order[k]],
            (adj_start[k + 1] - adj_start[k]) * sizeof *adj);
-  mpm_free(s->adj_start);
-  mpm_free(s->adj);
-  s->adj_start = adj_start;
-  s->adj = adj;
+  memcpy(s->adj_start, adj_start, (nc + 1) * sizeof *adj_start);
+  memcpy(s->adj, adj, adj_start[nc] * sizeof *adj);
   const long n = (long)np;
 #pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN / 8)
   for (long q = 0; q < n; ++q)
     for (int c = 0; c < MPM_HEX_CORNERS; ++c) s->corner[q][c] = inv[s->corner[q][c]];
-  mpm_free(inv);
-  mpm_free(tmp);
   return 0;
 }
 

@@ -18,6 +18,7 @@
 #ifndef MPM_DOMAIN_DOMAIN_H
 #define MPM_DOMAIN_DOMAIN_H
 
+#include "core/arena.h"
 #include "core/error.h"
 #include "core/particles.h"
 #include "domain/corner_pads.h"
@@ -159,9 +160,9 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
  * enrichment marks follow. The transfers take the same terms, and results change only by
  * rounding: the sums over a corner's particles and over a cell's corners go in the new order.
  * The step keeps the corners in the order of its grid blocks with it (domain_transfer.h,
- * mpm_domain_order_corners).
+ * mpm_domain_order_corners). Its scratch comes from `scratch`.
  * Returns 0, -1 on OOM (nothing changed then). */
-int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order);
+int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm_arena *scratch);
 
 /* Rebuild the corner adjacency over the active particles. Returns 0, -1 on OOM. */
 int mpm_domain_set_rebuild(mpm_domain_set *s);

@@ -207,7 +207,7 @@ int mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_ker
   size_t next = P->positions;
   for (size_t c = 0; c < nc; ++c)
     if (P->pos[c] == MPM_CORNER_PADS_NONE) o[next++] = (uint32_t)c;
-  if (mpm_domain_set_permute_corners(s, o)) return -1;
+  if (mpm_domain_set_permute_corners(s, o, scratch)) return -1;
   *order = o;
   return mpm_domain_plan(s, g, k, scratch);
 }

@@ -45,54 +45,46 @@ static inline uint64_t point_block(const mpm_grid *g, const mpm_kernel *k, const
   return key;
 }
 
-/* The points' base blocks in parallel, each thread keeping, in a list of its own, where its
- * range's block changes (points such as domain corners come in block order, so runs are
- * long); then the pads of those blocks activated in point order, one thread (the grid's
- * insertions are serial). */
+/* The points' base blocks in parallel, each thread listing where its range's block changes
+ * (from the index of its first point on: points such as domain corners come in block order,
+ * so runs are long and the list short); then the pads of those blocks activated in point
+ * order, one thread (the grid's insertions are serial). */
 static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
                                   const mpm_real *const x[3], const uint8_t *use) {
   mpm_sparse_grid *sg = &g->impl.sparse;
-  const int threads = n >= MPM_PARALLEL_MIN ? mpm_thread_count() : 1;
-  uint64_t **runs = mpm_calloc((size_t)threads, sizeof *runs);
-  size_t *count = mpm_calloc((size_t)threads, sizeof *count);
-  int failed = !runs || !count;
-#pragma omp parallel num_threads(threads) if (threads > 1 && !failed) reduction(| : failed)
+  if (mpm_reserve((void **)&sg->run_keys, &sg->run_capacity, n + 1, sizeof *sg->run_keys))
+    return -1;
+  uint64_t *keys = sg->run_keys;
+  enum { MAX_THREADS = 256 };
+  int threads = n >= MPM_PARALLEL_MIN ? mpm_thread_count() : 1;
+  if (threads > MAX_THREADS) threads = MAX_THREADS;
+  size_t first[MAX_THREADS], count[MAX_THREADS];
+#pragma omp parallel num_threads(threads) if (threads > 1)
   {
     const int T = mpm_thread_team(), t = mpm_thread_id();
     const size_t i0 = n * (size_t)t / (size_t)T, i1 = n * (size_t)(t + 1) / (size_t)T;
-    size_t cap = 256, m = 0;
-    uint64_t *list = mpm_alloc(cap * sizeof *list), last = UINT64_MAX;
-    for (size_t i = i0; i < i1 && list; ++i) {
+    size_t m = 0;
+    uint64_t last = UINT64_MAX;
+    for (size_t i = i0; i < i1; ++i) {
       const uint64_t b = point_block(g, k, x, use, i);
       if (b == UINT64_MAX || b == last) continue;
-      last = b;
-      if (m == cap) {
-        uint64_t *grown = mpm_alloc(2 * cap * sizeof *grown);
-        if (grown) memcpy(grown, list, cap * sizeof *list);
-        mpm_free(list);
-        list = grown;
-        cap *= 2;
-        if (!list) break;
-      }
-      list[m++] = b;
+      keys[i0 + m++] = last = b;
     }
-    if (!list) failed = 1;
-    runs[t] = list;
+    first[t] = i0;
     count[t] = m;
+#pragma omp single nowait
+    threads = T; /* the team given */
   }
   mpm_grid_cursor c;
   mpm_grid_cursor_init(&c);
-  for (int t = 0; t < threads && !failed; ++t)
-    for (size_t r = 0; r < count[t] && !failed; ++r) {
+  for (int t = 0; t < threads; ++t)
+    for (size_t r = 0; r < count[t]; ++r) {
+      const uint64_t key = keys[first[t] + r];
       int32_t bb[3];
-      for (int d = 0; d < 3; ++d)
-        bb[d] = (int32_t)((runs[t][r] >> (21 * (2 - d))) & 0x1FFFFF) - (1 << 20);
-      failed = pad_blocks(sg, sg, bb, &c) != 0;
+      for (int d = 0; d < 3; ++d) bb[d] = (int32_t)((key >> (21 * (2 - d))) & 0x1FFFFF) - (1 << 20);
+      if (pad_blocks(sg, sg, bb, &c)) return -1;
     }
-  for (int t = 0; t < threads && runs; ++t) mpm_free(runs[t]);
-  mpm_free(runs);
-  mpm_free(count);
-  return failed ? -1 : 0;
+  return 0;
 }
 
 static int sparse_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *c,

@@ -14,12 +14,15 @@ void mpm_scatter_schedule_free(mpm_scatter_schedule *s) {
   mpm_free(s->group_start);
   mpm_free(s->key_group);
   mpm_free(s->own_row);
+  mpm_free(s->count);
+  mpm_free(s->own_at);
   memset(s, 0, sizeof *s);
 }
 
 size_t mpm_scatter_schedule_bytes(const mpm_scatter_schedule *s) {
-  return (s->group_row_capacity + s->group_capacity + s->own_row_capacity) * sizeof(uint32_t) +
-         s->key_capacity * sizeof(int32_t);
+  return (s->group_row_capacity + s->group_capacity + s->own_row_capacity + s->count_capacity) *
+             sizeof(uint32_t) +
+         s->key_capacity * sizeof(int32_t) + s->own_at_capacity * sizeof(size_t);
 }
 
 /* Groups numbered in colour order, then key order, from the keys' row counts (used: > 0);
@@ -51,13 +54,15 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
   int threads = mpm_thread_count();
   if (rows < MPM_PARALLEL_MIN || (size_t)threads * (key_count + 1) > rows) threads = 1;
   const size_t stride = key_count + 1;
-  uint32_t *count = mpm_calloc((size_t)threads * stride + stride, sizeof *count);
-  size_t *own_at = mpm_calloc((size_t)threads + 1, sizeof *own_at);
-  if (!count || !own_at) {
-    mpm_free(count);
-    mpm_free(own_at);
+  if (mpm_reserve((void **)&s->count, &s->count_capacity, (size_t)threads * stride + stride,
+                  sizeof *s->count) ||
+      mpm_reserve((void **)&s->own_at, &s->own_at_capacity, (size_t)threads + 1,
+                  sizeof *s->own_at))
     return -1;
-  }
+  uint32_t *count = s->count;
+  size_t *own_at = s->own_at;
+  memset(count, 0, ((size_t)threads * stride + stride) * sizeof *count);
+  memset(own_at, 0, ((size_t)threads + 1) * sizeof *own_at);
   uint32_t *total = count + (size_t)threads * stride;
   int failed = 0;
 #pragma omp parallel num_threads(threads) if (threads > 1)
@@ -113,8 +118,6 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
           s->own_row[own_next++] = (uint32_t)a;
     }
   }
-  mpm_free(count);
-  mpm_free(own_at);
   if (failed) return -1;
   s->built = 1;
   return 0;

@@ -30,6 +30,11 @@ typedef struct mpm_scatter_schedule {
   size_t colour_start[MPM_SCHEDULE_COLOURS + 1];
   uint32_t *own_row; /* the rows of key MPM_SCHEDULE_OWN_COLUMNS, in row order */
   size_t own_rows, own_row_capacity;
+  /* the build's per-thread counts per key and own rows (kept: a warm step allocates nothing) */
+  uint32_t *count;
+  size_t count_capacity;
+  size_t *own_at;
+  size_t own_at_capacity;
 } mpm_scatter_schedule;
 
 void mpm_scatter_schedule_init(mpm_scatter_schedule *s);

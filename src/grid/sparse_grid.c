@@ -33,13 +33,15 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g) {
   mpm_free(g->cell_start);
   mpm_free(g->color_blocks);
   mpm_free(g->perm);
+  mpm_free(g->run_keys);
   memset(g, 0, sizeof *g);
 }
 
 size_t mpm_sparse_grid_bytes(const mpm_sparse_grid *g) {
   return g->table_size * (sizeof(uint64_t) + sizeof(int32_t)) +
          g->block_capacity * (sizeof(int32_t) * 3 + sizeof(int32_t) * 8 + sizeof(int32_t)) +
-         g->cell_capacity * sizeof(uint32_t) + g->particle_capacity * sizeof(uint32_t);
+         g->cell_capacity * sizeof(uint32_t) + g->particle_capacity * sizeof(uint32_t) +
+         g->run_capacity * sizeof(uint64_t);
 }
 
 static int grow_table(mpm_sparse_grid *g, size_t size) {

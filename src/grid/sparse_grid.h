@@ -47,6 +47,10 @@ typedef struct mpm_sparse_grid {
   uint32_t *perm;
   size_t particle_capacity;
   size_t particle_count; /* particles sorted by the last mpm_sparse_grid_sort */
+  /* the point activation's base blocks where they change, each thread's from the index of its
+   * first point (kept: a warm step allocates nothing) */
+  uint64_t *run_keys;
+  size_t run_capacity;
 } mpm_sparse_grid;
 
 void mpm_sparse_grid_init(mpm_sparse_grid *g);
