@@ -448,6 +448,22 @@ static void assert_arrays_close(const mpm_real *a, const mpm_real *b, size_t n, 
     fail_msg("%s: differ by %g (scale %g, tolerance %g)", what, worst, scale, tol);
 }
 
+/* After P2G on two fixtures of the same DOFs: their grid values equal to tol, then the grid
+ * update and G2P on both. */
+static void same_grid_then_g2p(block_fixture *a, block_fixture *b, double tol) {
+  const size_t nd = a->dofs.count;
+  assert_int_equal(nd, b->dofs.count);
+  assert_arrays_close(a->dofs.mass, b->dofs.mass, nd, tol, "grid mass");
+  for (int d = 0; d < 3; ++d) {
+    assert_arrays_close(a->dofs.v0[d], b->dofs.v0[d], nd, tol, "grid momentum");
+    assert_arrays_close(a->dofs.f[d], b->dofs.f[d], nd, tol, "grid force");
+  }
+  mpm_dofs_explicit_update(&a->u, MPM_P2G_MOMENTUM_FORCE, &a->dofs);
+  mpm_dofs_explicit_update(&b->u, MPM_P2G_MOMENTUM_FORCE, &b->dofs);
+  mpm_domain_g2p(&a->ctx, &a->s, &a->val, &a->u.boundary);
+  mpm_domain_g2p(&b->ctx, &b->s, &b->val, &b->u.boundary);
+}
+
 /* The corners' transfers through pads (domain/corner_pads.h, the explicit step on the sparse
  * grid) against the embedding's rows (s->corner_rows, the implicit step's path): the same
  * grid values after P2G, and the same corner velocities, affine moments and positions and
@@ -463,17 +479,8 @@ static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer
   assert_true(a.s.pads.on);
   assert_false(b.s.pads.on);
   assert_true(a.s.corner_grid.rows == 0 && b.s.corner_grid.rows == b.s.corner_count);
-  const size_t nd = a.dofs.count, nc = a.s.corner_count;
-  assert_int_equal(nd, b.dofs.count);
-  assert_arrays_close(a.dofs.mass, b.dofs.mass, nd, tol, "grid mass");
-  for (int d = 0; d < 3; ++d) {
-    assert_arrays_close(a.dofs.v0[d], b.dofs.v0[d], nd, tol, "grid momentum");
-    assert_arrays_close(a.dofs.f[d], b.dofs.f[d], nd, tol, "grid force");
-  }
-  mpm_dofs_explicit_update(&a.u, MPM_P2G_MOMENTUM_FORCE, &a.dofs);
-  mpm_dofs_explicit_update(&b.u, MPM_P2G_MOMENTUM_FORCE, &b.dofs);
-  mpm_domain_g2p(&a.ctx, &a.s, &a.val, &a.u.boundary);
-  mpm_domain_g2p(&b.ctx, &b.s, &b.val, &b.u.boundary);
+  const size_t nc = a.s.corner_count;
+  same_grid_then_g2p(&a, &b, tol);
   for (int d = 0; d < 3; ++d) {
     assert_arrays_close(a.s.cvg[d], b.s.cvg[d], nc, tol, "corner grid velocity");
     assert_arrays_close(a.s.cv[d], b.s.cv[d], nc, tol, "corner velocity");
@@ -539,16 +546,7 @@ static void run_permuted_corners(mpm_transfer_kind transfer) {
   assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), 0);
   assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), 0);
   const double tol = TOL(1e-6, 1e-14);
-  const size_t nd = a.dofs.count;
-  assert_arrays_close(a.dofs.mass, b.dofs.mass, nd, tol, "grid mass");
-  for (int d = 0; d < 3; ++d) {
-    assert_arrays_close(a.dofs.v0[d], b.dofs.v0[d], nd, tol, "grid momentum");
-    assert_arrays_close(a.dofs.f[d], b.dofs.f[d], nd, tol, "grid force");
-  }
-  mpm_dofs_explicit_update(&a.u, MPM_P2G_MOMENTUM_FORCE, &a.dofs);
-  mpm_dofs_explicit_update(&b.u, MPM_P2G_MOMENTUM_FORCE, &b.dofs);
-  mpm_domain_g2p(&a.ctx, &a.s, &a.val, &a.u.boundary);
-  mpm_domain_g2p(&b.ctx, &b.s, &b.val, &b.u.boundary);
+  same_grid_then_g2p(&a, &b, tol);
   mpm_real *back = test_malloc(nc * sizeof *back);
   for (int d = 0; d < 3; ++d) {
     for (size_t c = 0; c < nc; ++c) back[c] = b.s.cx[d][inv[c]];
