@@ -537,7 +537,8 @@ static void run_permuted_corners(mpm_transfer_kind transfer) {
     for (int c = 0; c < 8; ++c) assert_int_equal(b.s.corner[q][c], inv[a.s.corner[q][c]]);
   for (size_t c = 0; c < nc; ++c) {
     const uint32_t k = inv[c];
-    assert_int_equal(b.s.adj_start[k + 1] - b.s.adj_start[k], a.s.adj_start[c + 1] - a.s.adj_start[c]);
+    assert_int_equal(b.s.adj_start[k + 1] - b.s.adj_start[k],
+                     a.s.adj_start[c + 1] - a.s.adj_start[c]);
     for (uint32_t j = 0; j < a.s.adj_start[c + 1] - a.s.adj_start[c]; ++j)
       assert_int_equal(b.s.adj[b.s.adj_start[k] + j], a.s.adj[a.s.adj_start[c] + j]);
     for (int d = 0; d < 3; ++d) assert_true(b.s.cx[d][k] == a.s.cx[d][c]);

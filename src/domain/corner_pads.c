@@ -215,8 +215,8 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
       for (int l = 0; l < n; ++l) live[l] = 1;
       mpm_lane_stencil st;
       int base[3];
-      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n,
-                            mpm_batch_contiguous(P->row + r, n), apic, base, &st);
+      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n, mpm_batch_contiguous(P->row + r, n),
+                            apic, base, &st);
       mpm_vl in[SCATTER_FIELDS], cm[9];
       for (int f = 0; f < SCATTER_FIELDS; ++f) in[f] = corner_lanes(carrier[f], pos, n, live);
       if (apic) { /* m_a B_a, B_a by corner */
@@ -330,8 +330,8 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
       batch_positions(r, n, pos);
       mpm_lane_stencil st;
       int base[3];
-      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n,
-                            mpm_batch_contiguous(P->row + r, n), apic, base, &st);
+      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n, mpm_batch_contiguous(P->row + r, n),
+                            apic, base, &st);
       const int off =
           ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
       /* v^g_a = sum_i omega_i(x_a) v_i^{n+1}, the FLIP increment sum_i omega_i(x_a) (v_i^{n+1}

@@ -17,9 +17,9 @@
  * and their values are laid out in that order (P2G writes them there), so that a batch loads
  * with vector loads. The step numbers the corners in this order now and then
  * (mpm_domain_order_corners), so that the values kept by corner (B_a, the grid velocity) move
- * with vector loads and stores too. The colours run in turn and each group adds its pad to the nodes once:
- * deterministic for any number of threads. The terms are those of the rows, summed in another
- * order (lanes, then nodes): equal to rounding (tests/test_domain.c compares them, and pads
+ * with vector loads and stores too. The colours run in turn and each group adds its pad to the
+ * nodes once: deterministic for any number of threads. The terms are those of the rows, summed in
+ * another order (lanes, then nodes): equal to rounding (tests/test_domain.c compares them, and pads
  * against rows on the dense grid in test_domain_sim). The rows are still built where they are
  * applied as a matrix: the implicit step's Hessian (domain_hessian.c), and the dense grid. */
 #ifndef MPM_DOMAIN_CORNER_PADS_H
@@ -52,8 +52,8 @@ typedef struct mpm_corner_pads {
   uint32_t (*cell_start)[MPM_BLOCK_NODES + 1]; /* per group: row[] of each cell (absolute) */
   uint32_t grid_dofs;   /* the DOF of the level's node 0 (set by P2G: the layout follows) */
   uint32_t corner_dofs; /* the DOF of enriched corner 0 (likewise) */
-  mpm_real origin[3];                          /* the level's node (0, 0, 0), m */
-  mpm_real *dv[3]; /* step scratch: G2P's FLIP increment per corner, m/s */
+  mpm_real origin[3];   /* the level's node (0, 0, 0), m */
+  mpm_real *dv[3];      /* step scratch: G2P's FLIP increment per corner, m/s */
 } mpm_corner_pads;
 
 void mpm_corner_pads_free(mpm_corner_pads *P);

@@ -402,7 +402,8 @@ int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm
   for (long k = 0; k < m; ++k) inv[order[k]] = (uint32_t)k;
   mpm_real **a[CORNER_REAL_ARRAYS];
   corner_arrays(s, a);
-  for (int k = 0; k < CORNER_REAL_ARRAYS; ++k) permute_array(*a[k], tmp, sizeof(mpm_real), order, nc);
+  for (int k = 0; k < CORNER_REAL_ARRAYS; ++k)
+    permute_array(*a[k], tmp, sizeof(mpm_real), order, nc);
   permute_array(s->corner_use, tmp, 1, order, nc);
   permute_array(s->cmass, tmp, sizeof *s->cmass, order, nc);
   mpm_domain_enrichment *en = &s->enrich;

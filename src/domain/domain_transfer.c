@@ -181,8 +181,7 @@ static void domain_stresses(const mpm_transfer_ctx *ctx, const mpm_domain_set *s
   }
 }
 
-int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                    mpm_arena *scratch) {
+int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k, mpm_arena *scratch) {
   s->pads.on = 0;
   if (g->kind != MPM_GRID_SPARSE || s->corner_rows) return 0;
   for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
@@ -265,7 +264,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   for (long c = 0; c < nc; ++c) {
     const uint32_t k = pos ? pos[c] : (uint32_t)c;
     if (k == MPM_CORNER_PADS_NONE) continue; /* unused */
-    const double m = s->cmass[c]; /* sum_p omega_ap m_p, made with the adjacency */
+    const double m = s->cmass[c];            /* sum_p omega_ap m_p, made with the adjacency */
     double mv[3] = {0, 0, 0};
     double4 f = {0, 0, 0, 0};
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
@@ -318,7 +317,8 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
                                dof->f[0], dof->f[1],  dof->f[2]};
   /* APIC at the corner -> grid step: the corner's affine moment m_a B_a (B_a from the last
    * G2P) spread with the entries' APIC factors */
-  if (pads) return mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, apic, values, scratch);
+  if (pads)
+    return mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, apic, values, scratch);
   if (!apic) {
     mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
     return 0;

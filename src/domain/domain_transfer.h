@@ -37,8 +37,7 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k);
  * (s->corner_rows: the implicit Hessian), the corners go to the grid through pads of nodes
  * (domain/corner_pads.h, s->pads.on); otherwise P2G builds the embedding's rows. Returns 0, -1
  * when out of memory. */
-int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                    mpm_arena *scratch);
+int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k, mpm_arena *scratch);
 
 /* After mpm_domain_plan: when the corners' numbers have come apart from the pads' order,
  * renumber the corners into it (mpm_domain_set_permute_corners) and plan again; *order is then

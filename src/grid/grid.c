@@ -33,8 +33,8 @@ static int pad_blocks(const mpm_sparse_grid *g, mpm_sparse_grid *activate, const
 
 /* The base block of point i's stencil, packed (21 bits an axis, as the grid's coordinates
  * allow), or UINT64_MAX when the point is not used. */
-static inline uint64_t point_block(const mpm_grid *g, const mpm_kernel *k, const mpm_real *const x[3],
-                                   const uint8_t *use, size_t i) {
+static inline uint64_t point_block(const mpm_grid *g, const mpm_kernel *k,
+                                   const mpm_real *const x[3], const uint8_t *use, size_t i) {
   if (use && !use[i]) return UINT64_MAX;
   const mpm_real xr[3] = {x[0][i] - g->origin[0], x[1][i] - g->origin[1], x[2][i] - g->origin[2]};
   int base[3];

@@ -56,8 +56,7 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
   const size_t stride = key_count + 1;
   if (mpm_reserve((void **)&s->count, &s->count_capacity, (size_t)threads * stride + stride,
                   sizeof *s->count) ||
-      mpm_reserve((void **)&s->own_at, &s->own_at_capacity, (size_t)threads + 1,
-                  sizeof *s->own_at))
+      mpm_reserve((void **)&s->own_at, &s->own_at_capacity, (size_t)threads + 1, sizeof *s->own_at))
     return -1;
   uint32_t *count = s->count;
   size_t *own_at = s->own_at;
@@ -86,8 +85,7 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
       const size_t groups = number_groups(s, total, key_count, key_colour);
       if (mpm_reserve((void **)&s->own_row, &s->own_row_capacity, own_at[T] + 1,
                       sizeof(uint32_t)) ||
-          mpm_reserve((void **)&s->group_start, &s->group_capacity, groups + 2,
-                      sizeof(uint32_t)) ||
+          mpm_reserve((void **)&s->group_start, &s->group_capacity, groups + 2, sizeof(uint32_t)) ||
           mpm_reserve((void **)&s->group_row, &s->group_row_capacity, rows + 1, sizeof(uint32_t)))
         failed = 1;
       if (!failed) {
