@@ -213,16 +213,15 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
       batch_positions(r, n, pos);
       mpm_vl live = {0};
       for (int l = 0; l < n; ++l) live[l] = 1;
+      const uint32_t *idx = P->row + r;
+      const int run = mpm_batch_contiguous(idx, n); /* corners numbered in the pads' order */
       mpm_lane_stencil st;
       int base[3];
-      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n, mpm_batch_contiguous(P->row + r, n),
-                            apic, base, &st);
+      mpm_lane_stencil_eval(W, k, x, P->origin, idx, n, run, apic, base, &st);
       mpm_vl in[SCATTER_FIELDS], cm[9];
       for (int f = 0; f < SCATTER_FIELDS; ++f) in[f] = corner_lanes(carrier[f], pos, n, live);
-      if (apic) { /* m_a B_a, B_a by corner */
-        const int run = mpm_batch_contiguous(P->row + r, n);
-        for (int e = 0; e < 9; ++e) cm[e] = in[0] * mpm_lanes_load(s->cB[e], P->row + r, n, run);
-      }
+      if (apic) /* m_a B_a, B_a by corner */
+        for (int e = 0; e < 9; ++e) cm[e] = in[0] * mpm_lanes_load(s->cB[e], idx, n, run);
       const int off =
           ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
       for (int i = 0; i < W; ++i)
@@ -326,12 +325,11 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
     const uint32_t end = P->cell_start[q][cell + 1];
     for (uint32_t r = P->cell_start[q][cell]; r < end; r += MPM_LANES) {
       const int n = end - r < MPM_LANES ? (int)(end - r) : MPM_LANES;
-      uint32_t pos[MPM_LANES];
-      batch_positions(r, n, pos);
+      const uint32_t *idx = P->row + r;
+      const int run = mpm_batch_contiguous(idx, n); /* corners numbered in the pads' order */
       mpm_lane_stencil st;
       int base[3];
-      mpm_lane_stencil_eval(W, k, x, P->origin, P->row + r, n, mpm_batch_contiguous(P->row + r, n),
-                            apic, base, &st);
+      mpm_lane_stencil_eval(W, k, x, P->origin, idx, n, run, apic, base, &st);
       const int off =
           ((base[0] - P->org[q][0]) * S + (base[1] - P->org[q][1])) * S + (base[2] - P->org[q][2]);
       /* v^g_a = sum_i omega_i(x_a) v_i^{n+1}, the FLIP increment sum_i omega_i(x_a) (v_i^{n+1}
@@ -356,8 +354,6 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
           }
       /* the results by corner: the corner loop of G2P reads them in corner order, and these
        * stores cost less than its loads through P->pos would (measured) */
-      const uint32_t *idx = P->row + r;
-      const int run = mpm_batch_contiguous(idx, n); /* corners numbered in the pads' order */
       for (int d = 0; d < 3; ++d) {
         mpm_lanes_store(s->cvg[d], idx, n, run, vg[d]);
         if (!apic) mpm_lanes_store(P->dv[d], idx, n, run, dv[d]);

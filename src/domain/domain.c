@@ -371,8 +371,7 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
   return 0;
 }
 
-/* tmp[k] = a[order[k]], then back into a: one array of n elements of `size` bytes. */
-static void permute_array(void *a, void *tmp, size_t size, const uint32_t *order, size_t n) {
+void mpm_domain_permute_values(void *a, void *tmp, size_t size, const uint32_t *order, size_t n) {
   const long m = (long)n;
   if (size == sizeof(uint32_t)) { /* mpm_real in float, and the slots */
     uint32_t *x = a, *t = tmp;
@@ -403,14 +402,14 @@ int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm
   mpm_real **a[CORNER_REAL_ARRAYS];
   corner_arrays(s, a);
   for (int k = 0; k < CORNER_REAL_ARRAYS; ++k)
-    permute_array(*a[k], tmp, sizeof(mpm_real), order, nc);
-  permute_array(s->corner_use, tmp, 1, order, nc);
-  permute_array(s->cmass, tmp, sizeof *s->cmass, order, nc);
+    mpm_domain_permute_values(*a[k], tmp, sizeof(mpm_real), order, nc);
+  mpm_domain_permute_values(s->corner_use, tmp, 1, order, nc);
+  mpm_domain_permute_values(s->cmass, tmp, sizeof *s->cmass, order, nc);
   mpm_domain_enrichment *en = &s->enrich;
   if (en->count) { /* this step's marks, by corner; the enriched corners keep their DOF order */
-    permute_array(en->enriched, tmp, 1, order, nc);
-    permute_array(en->on_grid, tmp, 1, order, nc);
-    permute_array(en->slot, tmp, sizeof *en->slot, order, nc);
+    mpm_domain_permute_values(en->enriched, tmp, 1, order, nc);
+    mpm_domain_permute_values(en->on_grid, tmp, 1, order, nc);
+    mpm_domain_permute_values(en->slot, tmp, sizeof *en->slot, order, nc);
     for (size_t k = 0; k < en->count; ++k) en->corner[k] = inv[en->corner[k]];
   }
   /* the adjacency: corner k's particle slots are those of corner order[k] */

@@ -164,6 +164,10 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
  * Returns 0, -1 on OOM (nothing changed then). */
 int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm_arena *scratch);
 
+/* a[k] = a[order[k]] for n elements of `size` bytes (1, 4 or 8) through tmp (n elements): the
+ * renumbering of one corner array, for copies of corner values held elsewhere. */
+void mpm_domain_permute_values(void *a, void *tmp, size_t size, const uint32_t *order, size_t n);
+
 /* Rebuild the corner adjacency over the active particles. Returns 0, -1 on OOM. */
 int mpm_domain_set_rebuild(mpm_domain_set *s);
 

@@ -224,9 +224,9 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   mpm_real(*Q)[4][3] = hourglass ? mpm_arena_alloc(scratch, (p->count + 1) * sizeof *Q) : NULL;
   if (hourglass && !Q) return -1;
   const int apic = ctx->transfer == MPM_TRANSFER_APIC;
-#pragma omp parallel for schedule(static) if (hourglass)
-  for (long q = 0; q < (hourglass ? np : 0); ++q) {
-    { /* only particles touching an enriched corner have kappa > 0 */
+  if (hourglass) {
+#pragma omp parallel for schedule(static)
+    for (long q = 0; q < np; ++q) { /* only particles touching an enriched corner have kappa > 0 */
       const mpm_real kappa = mpm_hourglass_kappa(s, ctx->materials, (size_t)q);
       if (kappa > 0) {
         mpm_hourglass_q(s, (size_t)q, s->cx, Q[q]);

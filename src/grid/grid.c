@@ -59,6 +59,7 @@ static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
   int threads = n >= MPM_PARALLEL_MIN ? mpm_thread_count() : 1;
   if (threads > MAX_THREADS) threads = MAX_THREADS;
   size_t first[MAX_THREADS], count[MAX_THREADS];
+  int team = 1; /* the threads the region was given */
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
     const int T = mpm_thread_team(), t = mpm_thread_id();
@@ -73,11 +74,11 @@ static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
     first[t] = i0;
     count[t] = m;
 #pragma omp single nowait
-    threads = T; /* the team given */
+    team = T;
   }
   mpm_grid_cursor c;
   mpm_grid_cursor_init(&c);
-  for (int t = 0; t < threads; ++t)
+  for (int t = 0; t < team; ++t)
     for (size_t r = 0; r < count[t]; ++r) {
       const uint64_t key = keys[first[t] + r];
       int32_t bb[3];

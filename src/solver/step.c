@@ -128,13 +128,8 @@ static mpm_status plan_corners(mpm_sim *sim, step_ctx *c) {
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory renumbering %zu domain corners",
                          (long long)sim->steps, s->corner_count);
-  const long nc = (long)s->corner_count;
-  for (size_t k = 0; k < sizeof sim->corner_backup / sizeof *sim->corner_backup; ++k) {
-    mpm_real *b = sim->corner_backup[k];
-#pragma omp parallel for schedule(static) if (nc > MPM_PARALLEL_MIN)
-    for (long j = 0; j < nc; ++j) tmp[j] = b[order[j]];
-    memcpy(b, tmp, (size_t)nc * sizeof *b);
-  }
+  for (size_t k = 0; k < sizeof sim->corner_backup / sizeof *sim->corner_backup; ++k)
+    mpm_domain_permute_values(sim->corner_backup[k], tmp, sizeof(mpm_real), order, s->corner_count);
   return MPM_OK;
 }
 
