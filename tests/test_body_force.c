@@ -5,7 +5,8 @@
  * first translates rigidly with the region's acceleration integrated over the schedule
  * (v = integral of a f(t) dt, against the closed form), the second stays at rest exactly.
  * Explicit and implicit integrators, material points and enriched domains (whose corners are
- * DOFs of their own). Bad keys are refused with their key paths. */
+ * DOFs of their own). A region's drag slows the first block by 1 / (1 + drag dt) per step and
+ * leaves the second's velocity alone. Bad keys are refused with their key paths. */
 #include "support.h"
 #include "solver/sim.h"
 
@@ -104,6 +105,37 @@ static void test_enriched_domains(void **state) {
            "implicit, domains on the grid");
 }
 
+/* drag = 5 /s (no acceleration): both blocks start at 0.5 m/s along y; the one inside keeps
+ * 1 / (1 + 5 dt) of its velocity per step (collide/body_force.h; a rigid translation, so no
+ * elastic force mixes in), the one outside all of it. */
+static void drag_case(const char *solver, const char *body, const char *what) {
+  char text[4096], b[512];
+  snprintf(b, sizeof b, ", \"velocity\": [0, 0.5, 0]%s", body);
+  snprintf(text, sizeof text, SCENE, solver, b, b, ", \"drag\": 5");
+  mpm_sim *sim = test_sim_from_json(text, "drag.json");
+  double expect = 0.5, v0[3], x0[3], v1[3], x1[3];
+  while (sim->time < 0.2 - 1e-9) {
+    assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
+    expect /= 1 + 5 * sim->last_dt;
+  }
+  body_motion(sim, 0, v0, x0);
+  body_motion(sim, 1, v1, x1);
+  print_message("%s, drag: inside v_y %.6f (expected %.6f), outside %.6f (0.5)\n", what, v0[1],
+                expect, v1[1]);
+  assert_true(fabs(v0[1] - expect) <= 1e-4 * expect);
+  assert_true(fabs(v1[1] - 0.5) <= 1e-5);
+  assert_true(fabs(v0[0]) + fabs(v0[2]) < 1e-6 && fabs(v1[0]) + fabs(v1[2]) < 1e-6);
+  mpm_sim_destroy(sim);
+}
+
+static void test_drag(void **state) {
+  (void)state;
+  drag_case(EXPLICIT, "", "explicit");
+  drag_case(IMPLICIT, "", "implicit");
+  drag_case(IMPLICIT, ", \"domains\": true, \"particles_per_cell\": 1, \"enrichment\": 1",
+            "implicit, enriched domains");
+}
+
 static void expect_error(const char *force, const char *needle) {
   char text[4096];
   snprintf(text, sizeof text, SCENE, EXPLICIT, "", "", force);
@@ -126,22 +158,22 @@ static void test_bad_keys(void **state) {
   expect_error(", \"active\": [1, 0]", "forces[0].active");
   expect_error(", \"strength\": 1", "forces[0].strength: unknown key");
   expect_error(", \"acceleration\": [0, 1]", "forces[0].acceleration");
-  /* a region needs its acceleration */
+  expect_error(", \"drag\": -1", "forces[0].drag");
+  /* a region needs its acceleration or a drag */
   expect_error(", \"acceleration\": null, \"inside_out\": false", "forces[0].acceleration");
   char text[4096];
   snprintf(text, sizeof text, SCENE, EXPLICIT, "", "", "");
   mpm_scene scene;
   mpm_error err;
   assert_int_not_equal(mpm_scene_parse(text, "suction.json", &scene, &err), MPM_OK);
-  if (!strstr(err.message, "forces[0]") || !strstr(err.message, "acceleration"))
-    fail_msg("expected forces[0] and acceleration in: %s", err.message);
+  if (!strstr(err.message, "forces[0]") || !strstr(err.message, "\"acceleration\" or \"drag\""))
+    fail_msg("expected forces[0] and acceleration or drag in: %s", err.message);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_constant_region),
-      cmocka_unit_test(test_schedule),
-      cmocka_unit_test(test_enriched_domains),
+      cmocka_unit_test(test_constant_region),  cmocka_unit_test(test_schedule),
+      cmocka_unit_test(test_enriched_domains), cmocka_unit_test(test_drag),
       cmocka_unit_test(test_bad_keys),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -7,6 +7,7 @@
  * colliders are tested in test_collider.c. */
 #include "support.h"
 #include "collider_support.h"
+#include "collide/boundary.h"
 #include "collide/collider.h"
 
 #include <math.h>
@@ -226,7 +227,7 @@ static void test_collider_velocity_rotation(void **state) {
   const mpm_collider_pose pose = mpm_collider_pose_at(&c, 2.0); /* centre (1, 0, 0) */
   const mpm_real x[3] = {1, R_(0.9), 0};
   mpm_real v[3] = {3, 4, 5};
-  assert_int_equal(mpm_collider_apply(&pose, x, v), 1);
+  assert_int_equal(mpm_collider_apply(&pose, x, 0, v), 1);
   /* 0.5 x^ + 2 z^ x 0.9 y^ = (0.5 - 1.8, 0, 0) */
   assert_close(v[0], -1.3, TOL(1e-6, 1e-14));
   assert_close(v[1], 0.0, TOL(1e-6, 1e-14));
@@ -348,7 +349,7 @@ static void test_apply(void **state) {
           v[j] = v0[j] = (mpm_real)test_rand(&rng, -3, 3);
         }
         const mpm_real phi = mpm_collider_phi(&pose, x, n);
-        const int changed = mpm_collider_apply(&pose, x, v);
+        const int changed = mpm_collider_apply(&pose, x, 0, v);
         if (phi > 0) {
           ++outside;
           assert_int_equal(changed, 0);
@@ -367,11 +368,58 @@ static void test_apply(void **state) {
   }
 }
 
+/* A domain corner meets a slip obstacle as a separating one (mpm_boundary_rule_for,
+ * collider.h): inside a slip half-space or beyond a slip wall, a grid node loses its normal
+ * velocity whichever way it moves, a corner keeps it when it leaves (a corner projected onto a
+ * wall must be free to come off it), and the implicit constraints agree. Sticky and separating
+ * obstacles treat both alike. */
+static void test_corner_leaves_slip(void **state) {
+  (void)state;
+  for (int r = 0; r < 3; ++r) {
+    const mpm_boundary_rule rule = (mpm_boundary_rule)r;
+    mpm_collider_desc d = make_desc(MPM_SHAPE_HALFSPACE);
+    set3(d.shape.center, 0, 1, 0);
+    set3(d.shape.axis, 0, 1, 0); /* the floor y < 1 */
+    d.rule = rule;
+    mpm_collider c;
+    assert_int_equal(mpm_collider_init(&c, &d), 0);
+    const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0);
+    /* the floor alone, then the wall y > 2 alone */
+    const mpm_boundary floor = {{-9, -9, -9}, {9, 9, 9}, MPM_BOUNDARY_SLIP, 0, 1, &pose};
+    const mpm_boundary wall = {{-9, -9, -9}, {9, 2, 9}, rule, 0, 0, NULL};
+    const mpm_real in_floor[3] = {0, R_(0.999), 0}, in_wall[3] = {0, R_(2.001), 0};
+    for (int b = 0; b < 2; ++b) {
+      const mpm_boundary *bd = b ? &wall : &floor;
+      const mpm_real *x = b ? in_wall : in_floor;
+      const mpm_real out = b ? -1 : 1; /* the normal velocity that leaves the obstacle */
+      for (int corner = 0; corner < 2; ++corner)
+        for (int leaving = 0; leaving < 2; ++leaving) {
+          const mpm_real vy = leaving ? out : -out;
+          mpm_real v[3] = {R_(0.5), vy, 0}, n[4][3], vo[4][3];
+          mpm_boundary_apply(bd, x, 0, corner, v);
+          const int count =
+              mpm_boundary_constraints(bd, x, 0, corner, (mpm_real[3]){R_(0.5), vy, 0}, n, vo);
+          if (rule == MPM_BOUNDARY_STICKY) {
+            assert_true(v[0] == 0 && v[1] == 0 && count == -1);
+            continue;
+          }
+          /* kept: leaving a separating obstacle, or a slip one as a corner */
+          const int kept = leaving && (rule == MPM_BOUNDARY_SEPARATE || corner);
+          assert_true(v[0] == R_(0.5));
+          assert_true(v[1] == (kept ? vy : 0));
+          assert_int_equal(count, kept ? 0 : 1);
+        }
+    }
+    mpm_collider_free(&c);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_moving_phi),     cmocka_unit_test(test_constant_motion),
-      cmocka_unit_test(test_keyframes),      cmocka_unit_test(test_collider_velocity_rotation),
-      cmocka_unit_test(test_boundary_rules), cmocka_unit_test(test_apply),
+      cmocka_unit_test(test_moving_phi),         cmocka_unit_test(test_constant_motion),
+      cmocka_unit_test(test_keyframes),          cmocka_unit_test(test_collider_velocity_rotation),
+      cmocka_unit_test(test_boundary_rules),     cmocka_unit_test(test_apply),
+      cmocka_unit_test(test_corner_leaves_slip),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

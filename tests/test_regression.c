@@ -39,6 +39,9 @@
  * of the grid blocks their transfers go by (mpm_domain_order_corners), which changes the order
  * of the sums over a corner's particles and a cell's corners: the five domain scenes were
  * rewritten with it (the others are unchanged).
+ * The hourglass stiffness (issue 13, 2026-12-05): kappa from mu h / 80 to E h / 48, the
+ * linear-elastic cost of a bent domain (domain/enrich.h): the two enriched scenes were
+ * rewritten with it (the others are unchanged).
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:
  *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression

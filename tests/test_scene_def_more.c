@@ -285,6 +285,7 @@ static mpm_scene_def implicit_def(void) {
   for (int k = 0; k < 3; ++k) b[0].shape.half_extent[k] = 0.08;
   b[0].enrichment = 0.6, b[0].enrichment_exit = 0.9;
   b[0].enrichment_metric = MPM_DEF_METRIC_FROBENIUS;
+  b[0].hourglass = MPM_DEF_HOURGLASS_ALL;
   b[0].domain_release = releases, b[0].domain_release_count = 2;
   b[1].name = "points";
   b[1].shape.center[0] = 0.55, b[1].shape.center[1] = b[1].shape.center[2] = 0.4;
@@ -298,6 +299,7 @@ static mpm_scene_def implicit_def(void) {
   for (int k = 0; k < 3; ++k) implicit_force.shape.half_extent[k] = 0.1;
   implicit_force.motion.keyframes = push_keys, implicit_force.motion.keyframe_count = 3;
   implicit_force.acceleration[0] = -3;
+  implicit_force.drag = 2;
   mpm_scene_def d = mpm_scene_def_default();
   d.domain.max[0] = d.domain.max[1] = d.domain.max[2] = 0.8;
   d.domain.resolution = 16;
@@ -332,7 +334,7 @@ static void test_implicit_and_domain_fields(void **state) {
       " \"bodies\": [{\"name\": \"domains\", \"shape\": {\"type\": \"box\","
       "   \"center\": [0.3, 0.4, 0.4], \"half_extent\": [0.08, 0.08, 0.08]},"
       "   \"material\": \"rubber\", \"domains\": true, \"enrichment\": 0.6,"
-      "   \"enrichment_exit\": 0.9, \"enrichment_metric\": \"frobenius\","
+      "   \"enrichment_exit\": 0.9, \"enrichment_metric\": \"frobenius\", \"hourglass\": \"all\","
       "   \"domain_release\": [{\"time\": 0.004, \"min\": [0, 0, 0], \"max\": [0.4, 0.8, 0.8]},"
       "     {\"time\": 0.008, \"min\": [0.4, 0, 0], \"max\": [0.8, 0.8, 0.8]}]},"
       "  {\"name\": \"points\", \"shape\": {\"type\": \"box\", \"center\": [0.55, 0.4, 0.4],"
@@ -340,7 +342,7 @@ static void test_implicit_and_domain_fields(void **state) {
       " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0, 0.3, 0],"
       "   \"normal\": [0, 1, 0]}, \"active\": [0, 0.006]}],"
       " \"forces\": [{\"shape\": {\"type\": \"box\", \"center\": [0.55, 0.4, 0.4],"
-      "   \"half_extent\": [0.1, 0.1, 0.1]}, \"acceleration\": [-3, 0, 0],"
+      "   \"half_extent\": [0.1, 0.1, 0.1]}, \"acceleration\": [-3, 0, 0], \"drag\": 2,"
       "   \"motion\": {\"keyframes\": [{\"time\": 0}, {\"time\": 0.005, \"translation\": [0, 0.01, "
       "0]},"
       "     {\"time\": 0.01, \"translation\": [0.01, 0.01, 0], \"angle\": 0.2}]}}],"
@@ -456,10 +458,15 @@ static void test_refused_by_def(void **state) {
     assert_refused(&d, "bodies[0].enrichment: a field of particle domains, and bodies[0].domains");
     bodies[0].enrichment = 0, bodies[0].enrichment_exit = 0;
     bodies[0].enrichment_metric = MPM_DEF_METRIC_CONDITION;
+    assert_refused(&d, "bodies[0].hourglass: a field of particle domains");
+    bodies[0].hourglass = MPM_DEF_HOURGLASS_ENRICHED;
     assert_refused(&d, "bodies[0].domain_release: a field of particle domains");
     memcpy(bodies, implicit_bodies, sizeof bodies);
     d = imp, d.bodies = bodies, bodies[0].enrichment_metric = (mpm_def_enrichment_metric)2;
     assert_refused(&d, "bodies[0].enrichment_metric: expected an mpm_def_enrichment_metric");
+    memcpy(bodies, implicit_bodies, sizeof bodies);
+    d = imp, d.bodies = bodies, bodies[0].hourglass = (mpm_def_hourglass)2;
+    assert_refused(&d, "bodies[0].hourglass: expected an mpm_def_hourglass");
   }
 }
 

@@ -113,6 +113,12 @@ typedef enum mpm_def_enrichment_metric {
   MPM_DEF_METRIC_FROBENIUS = 1, /* "frobenius": 3 / (|F| |F^-1|) */
 } mpm_def_enrichment_metric;
 
+/// bodies[].hourglass
+typedef enum mpm_def_hourglass {
+  MPM_DEF_HOURGLASS_ENRICHED = 0, /* "enriched": particles touching an enriched corner (default) */
+  MPM_DEF_HOURGLASS_ALL = 1,      /* "all": every domain particle */
+} mpm_def_hourglass;
+
 /// output.surface.filter
 typedef enum mpm_def_surface_filter {
   MPM_DEF_FILTER_MEAN_CURVATURE = 0, /* "mean_curvature" (the default) */
@@ -221,6 +227,7 @@ typedef struct mpm_body_def {
   const mpm_release_def *domain_release;       /* bodies[].domain_release, at most 16; the
                                                   caller's array; default NULL */
   int domain_release_count;
+  mpm_def_hourglass hourglass; /* bodies[].hourglass; default MPM_DEF_HOURGLASS_ENRICHED */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).
@@ -263,7 +270,7 @@ typedef struct mpm_collider_def {
 
 /// A body-force region (forces[i], Zhu Fig. 9): inside the shape, which moves as a collider's
 /// does and acts in its `active` window, every grid node gets `acceleration` times the
-/// schedule's factor on top of gravity.
+/// schedule's factor on top of gravity, and a drag of `drag` times the factor.
 typedef struct mpm_force_def {
   const char *name;            /* forces[].name, 1..63 bytes; default NULL: "force<i>" */
   mpm_shape_def shape;         /* forces[].shape: box, sphere, cylinder, halfspace or revolve;
@@ -271,10 +278,11 @@ typedef struct mpm_force_def {
   int inside_out;              /* forces[].inside_out: the region is outside the shape; default 0 */
   mpm_motion_def motion;       /* forces[].motion; default at rest */
   double active[2];            /* forces[].active, s, as a collider's; default {0, HUGE_VAL} */
-  double acceleration[3];      /* forces[].acceleration, m/s^2; required key: default 0 */
+  double acceleration[3];      /* forces[].acceleration, m/s^2; default 0 */
   const double (*schedule)[2]; /* forces[].schedule: schedule_count keyframes [time s, factor],
                                   1..16, as a material's strength; default NULL, 0: factor 1 */
   int schedule_count;
+  double drag; /* forces[].drag, 1/s, [0, 1e6]: dv/dt = -drag v inside; default 0, not written */
 } mpm_force_def;
 
 /// domain.walls

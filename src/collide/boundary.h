@@ -10,7 +10,9 @@
 /* Colliders and the domain walls. The walls are the planes wall_lo[d] and wall_hi[d] (m); a
  * point more than `depth` beyond one (half a cell for grid nodes, which sit on the lattice; 0
  * for corners: solver/dofs.h, boundary_depth) is in the wall band and gets the wall
- * rule with the inward normal (one axis after the other, after the colliders). */
+ * rule with the inward normal (one axis after the other, after the colliders). `corner`: the
+ * point is a domain corner, which meets slip obstacles as separating ones
+ * (mpm_boundary_rule_for, collider.h). */
 typedef struct mpm_boundary {
   mpm_real wall_lo[3], wall_hi[3];
   mpm_boundary_rule wall_rule;
@@ -21,24 +23,25 @@ typedef struct mpm_boundary {
 
 /* The walls alone (after the colliders, in mpm_boundary_apply). */
 MPM_ALWAYS_INLINE void mpm_boundary_apply_walls(const mpm_boundary *b, const mpm_real x[3],
-                                                mpm_real depth, mpm_real v[3]) {
+                                                mpm_real depth, int corner, mpm_real v[3]) {
   static const mpm_real zero[3] = {0, 0, 0};
+  const mpm_boundary_rule rule = mpm_boundary_rule_for(b->wall_rule, corner);
   for (int d = 0; d < 3; ++d) {
     const mpm_real lo_plane = b->wall_lo[d] - depth, hi_plane = b->wall_hi[d] + depth;
     const int lo = x[d]<lo_plane, hi = x[d]> hi_plane;
     if (lo || hi) {
       mpm_real n[3] = {0, 0, 0};
       n[d] = lo ? 1 : -1;
-      mpm_boundary_project(b->wall_rule, b->wall_friction, n, zero, v);
+      mpm_boundary_project(rule, b->wall_friction, n, zero, v);
     }
   }
 }
 
 /* Apply the colliders, then the walls, to velocity v at position x; depth as above. */
 MPM_ALWAYS_INLINE void mpm_boundary_apply(const mpm_boundary *b, const mpm_real x[3],
-                                          mpm_real depth, mpm_real v[3]) {
-  for (int c = 0; c < b->collider_count; ++c) mpm_collider_apply(&b->poses[c], x, v);
-  mpm_boundary_apply_walls(b, x, depth, v);
+                                          mpm_real depth, int corner, mpm_real v[3]) {
+  for (int c = 0; c < b->collider_count; ++c) mpm_collider_apply(&b->poses[c], x, corner, v);
+  mpm_boundary_apply_walls(b, x, depth, corner, v);
 }
 
 /* mpm_boundary_apply at a DOF of the given mass, adding to taken[3 c + e] the momentum
@@ -46,51 +49,53 @@ MPM_ALWAYS_INLINE void mpm_boundary_apply(const mpm_boundary *b, const mpm_real 
  * kg m/s: what the material gave the collider, whose force on it is that over dt. The same
  * velocities as mpm_boundary_apply, bitwise. */
 MPM_ALWAYS_INLINE void mpm_boundary_apply_taken(const mpm_boundary *b, const mpm_real x[3],
-                                                mpm_real depth, mpm_real mass, mpm_real v[3],
-                                                double *taken) {
+                                                mpm_real depth, int corner, mpm_real mass,
+                                                mpm_real v[3], double *taken) {
   for (int c = 0; c < b->collider_count; ++c) {
     const mpm_real before[3] = {v[0], v[1], v[2]};
-    if (mpm_collider_apply(&b->poses[c], x, v))
+    if (mpm_collider_apply(&b->poses[c], x, corner, v))
       for (int e = 0; e < 3; ++e) taken[3 * c + e] += (double)mass * (double)(before[e] - v[e]);
   }
-  mpm_boundary_apply_walls(b, x, depth, v);
+  mpm_boundary_apply_walls(b, x, depth, corner, v);
 }
 
 /* The constraints the implicit solve enforces inside CG at a DOF at x (the same colliders and
  * wall bands as mpm_boundary_apply, in the same order): a sticky obstacle fixes the whole
  * velocity (returns -1, its velocity in vo[0]); a slip obstacle constrains the normal
  * component; a separating one only when the predicted velocity v moves into it, (v - vo).n <
- * 0. Up to 4 normals n[k] with obstacle velocities vo[k]; returns their count. */
+ * 0; a corner meets a slip obstacle as a separating one. Up to 4 normals n[k] with obstacle
+ * velocities vo[k]; returns their count. */
 MPM_ALWAYS_INLINE int mpm_boundary_constraints(const mpm_boundary *b, const mpm_real x[3],
-                                               mpm_real depth, const mpm_real v[3],
+                                               mpm_real depth, int corner, const mpm_real v[3],
                                                mpm_real n[4][3], mpm_real vo[4][3]) {
   int count = 0;
   for (int c = 0; c < b->collider_count; ++c) {
     mpm_real nc[3], vc[3];
     if (mpm_collider_phi(&b->poses[c], x, nc) > 0) continue;
     mpm_collider_velocity(&b->poses[c], x, vc);
-    const mpm_collider_desc *d = &b->poses[c].collider->desc;
-    if (d->rule == MPM_BOUNDARY_STICKY) {
+    const mpm_boundary_rule rule = mpm_boundary_rule_for(b->poses[c].collider->desc.rule, corner);
+    if (rule == MPM_BOUNDARY_STICKY) {
       for (int e = 0; e < 3; ++e) vo[0][e] = vc[e];
       return -1;
     }
     const mpm_real vn = (v[0] - vc[0]) * nc[0] + (v[1] - vc[1]) * nc[1] + (v[2] - vc[2]) * nc[2];
-    if (d->rule == MPM_BOUNDARY_SEPARATE && vn >= 0) continue;
+    if (rule == MPM_BOUNDARY_SEPARATE && vn >= 0) continue;
     if (count < 4) {
       for (int e = 0; e < 3; ++e) n[count][e] = nc[e], vo[count][e] = vc[e];
       ++count;
     }
   }
+  const mpm_boundary_rule wall_rule = mpm_boundary_rule_for(b->wall_rule, corner);
   for (int d = 0; d < 3; ++d) {
     const mpm_real lo_plane = b->wall_lo[d] - depth, hi_plane = b->wall_hi[d] + depth;
     const int lo = x[d]<lo_plane, hi = x[d]> hi_plane;
     if (!lo && !hi) continue;
-    if (b->wall_rule == MPM_BOUNDARY_STICKY) {
+    if (wall_rule == MPM_BOUNDARY_STICKY) {
       vo[0][0] = vo[0][1] = vo[0][2] = 0;
       return -1;
     }
     const mpm_real s = lo ? 1 : -1;
-    if (b->wall_rule == MPM_BOUNDARY_SEPARATE && s * v[d] >= 0) continue;
+    if (wall_rule == MPM_BOUNDARY_SEPARATE && s * v[d] >= 0) continue;
     if (count < 4) {
       n[count][0] = n[count][1] = n[count][2] = 0;
       n[count][d] = s;

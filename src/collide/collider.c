@@ -220,13 +220,14 @@ void mpm_collider_velocity(const mpm_collider_pose *pose, const mpm_real x[3], m
   for (int d = 0; d < 3; ++d) v[d] += pose->velocity[d];
 }
 
-int mpm_collider_apply(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real v[3]) {
+int mpm_collider_apply(const mpm_collider_pose *pose, const mpm_real x[3], int corner,
+                       mpm_real v[3]) {
   mpm_real n[3];
   if (mpm_collider_phi(pose, x, n) > 0) return 0;
   mpm_real vo[3];
   mpm_collider_velocity(pose, x, vo);
   const mpm_collider_desc *d = &pose->collider->desc;
-  mpm_boundary_project(d->rule, (mpm_real)d->friction, n, vo, v);
+  mpm_boundary_project(mpm_boundary_rule_for(d->rule, corner), (mpm_real)d->friction, n, vo, v);
   return 1;
 }
 

@@ -36,9 +36,20 @@ mpm_real mpm_collider_phi(const mpm_collider_pose *pose, const mpm_real x[3], mp
 /* Velocity of the collider's material point at x, m/s. */
 void mpm_collider_velocity(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real v[3]);
 
-/* Apply the boundary rule to the grid velocity v at x if x is inside (phi <= 0).
- * Returns 1 if v was changed. */
-int mpm_collider_apply(const mpm_collider_pose *pose, const mpm_real x[3], mpm_real v[3]);
+/* The rule a domain corner meets (corner != 0) where a grid node meets `rule`: a slip
+ * obstacle lets a corner go. A grid node in an obstacle's band is one of many that carry the
+ * material, which leaves the obstacle through the nodes beyond the band; a corner is the
+ * material's own node, and a slip rule that removed its outgoing normal velocity too would hold
+ * it on the surface it was projected to (Zhu sec. 7) for good: a body pressed flat against a
+ * slip wall would stay flat. So corners meet slip obstacles as frictionless separating ones. */
+static inline mpm_boundary_rule mpm_boundary_rule_for(mpm_boundary_rule rule, int corner) {
+  return corner && rule == MPM_BOUNDARY_SLIP ? MPM_BOUNDARY_SEPARATE : rule;
+}
+
+/* Apply the boundary rule (as met by a corner when `corner`, above) to the velocity v at x if
+ * x is inside (phi <= 0). Returns 1 if v was changed. */
+int mpm_collider_apply(const mpm_collider_pose *pose, const mpm_real x[3], int corner,
+                       mpm_real v[3]);
 
 /* The rule itself, shared with the domain walls: given the unit normal n and the obstacle
  * velocity vo, project v (sticky: v = vo; slip: remove the normal part of v - vo; separate:

@@ -29,13 +29,16 @@
 
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */
 typedef struct mpm_domain_enrichment {
-  mpm_real *epsilon; /* per body: enriched when K(F) <= epsilon (0: never) */
-  mpm_real *exit_k;  /* per body: an enriched particle stays enriched while K(F) <= exit_k
-                        (>= epsilon: hysteresis) */
-  int *metric;       /* per body: MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
-  mpm_real *spacing; /* per body: the domain lattice's spacing h, m */
+  mpm_real *epsilon;  /* per body: enriched when K(F) <= epsilon (0: never) */
+  mpm_real *exit_k;   /* per body: an enriched particle stays enriched while K(F) <= exit_k
+                         (>= epsilon: hysteresis) */
+  int *metric;        /* per body: MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
+  mpm_real *spacing;  /* per body: the domain lattice's spacing h, m */
+  int *hourglass_all; /* per body: hourglass control on every particle, not only on those
+                         touching an enriched corner (domain/enrich.h) */
   int body_count;
   int any;             /* some body has epsilon > 0 */
+  int hourglass_any;   /* some body has hourglass_all */
   uint8_t *flag;       /* per particle: enriched this step (K(F_p) <= epsilon, or <= exit_k
                           when it was last step): state, kept in checkpoints */
   uint8_t *category;   /* per particle: MPM_DOMAIN_UNENRICHED / TRANSITIONAL / ENRICHED */

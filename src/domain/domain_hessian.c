@@ -21,7 +21,7 @@ int mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s, const mpm_
     h->cy[d] = mpm_arena_alloc(arena, nc * sizeof(mpm_real));
     ok = ok && h->cu[d] && h->cy[d];
   }
-  if (ok && s->enrich.count) {
+  if (ok && mpm_hourglass_on(s)) {
     h->kappa = mpm_arena_alloc(arena, np * sizeof *h->kappa);
     h->qh = mpm_arena_alloc(arena, np * sizeof *h->qh);
     h->Q = mpm_arena_alloc(arena, np * sizeof *h->Q);

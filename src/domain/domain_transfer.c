@@ -219,14 +219,15 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   mpm_real(*vP)[VP_STRIDE] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
   if (!vP) return -1;
   memset(vP[p->count], 0, sizeof *vP); /* the last particle's fourth lane (store_vp) */
-  /* hourglass control of particles touching enriched corners (domain/enrich.h): kappa q */
-  const int hourglass = s->enrich.count > 0;
+  /* hourglass control of particles touching enriched corners, or of every particle of a body
+   * with hourglass "all" (domain/enrich.h): kappa q */
+  const int hourglass = mpm_hourglass_on(s);
   mpm_real(*Q)[4][3] = hourglass ? mpm_arena_alloc(scratch, (p->count + 1) * sizeof *Q) : NULL;
   if (hourglass && !Q) return -1;
   const int apic = ctx->transfer == MPM_TRANSFER_APIC;
   if (hourglass) {
 #pragma omp parallel for schedule(static)
-    for (long q = 0; q < np; ++q) { /* only particles touching an enriched corner have kappa > 0 */
+    for (long q = 0; q < np; ++q) { /* kappa 0: no control */
       const mpm_real kappa = mpm_hourglass_kappa(s, ctx->materials, (size_t)q);
       if (kappa > 0) {
         mpm_hourglass_q(s, (size_t)q, s->cx, Q[q]);
@@ -413,7 +414,7 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
      * gradient of the corner positions (F = sum_a x_a g_ap^T) */
     mpm_real vg[3] = {vnew[0], vnew[1], vnew[2]};
     const mpm_real xn[3] = {s->cx[0][c], s->cx[1][c], s->cx[2][c]};
-    mpm_boundary_apply(boundary, xn, 0, v);
+    mpm_boundary_apply(boundary, xn, 0, 1, v);
     /* an enriched corner moves with its own velocity, which obeyed the obstacles only where
      * the step began: its motion is projected back to any surface it would cross (Zhu
      * sec. 7), in the velocity F takes too */

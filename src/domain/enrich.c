@@ -20,9 +20,16 @@ const mpm_real mpm_hourglass_modes[4][MPM_HEX_CORNERS] = {
 
 mpm_real mpm_hourglass_kappa(const mpm_domain_set *s, const mpm_material *materials, size_t q) {
   const mpm_domain_enrichment *e = &s->enrich;
-  if (!s->active[q] || !e->count || e->category[q] == MPM_DOMAIN_UNENRICHED) return 0;
+  if (!s->active[q]) return 0;
+  const int b = s->particles.body[q];
+  const int all = b >= 0 && b < e->body_count && e->hourglass_all[b];
+  if (!all && (!e->count || e->category[q] == MPM_DOMAIN_UNENRICHED)) return 0;
   const mpm_real h = (mpm_real)cbrt((double)s->particles.vol0[q]);
-  return materials[s->particles.material[q]].mu * h / 80;
+  const mpm_material *m = &materials[s->particles.material[q]];
+  /* Young's modulus from the Lame parameters (0 while a strength schedule zeroes them) */
+  const double mu = (double)m->mu, lambda = (double)m->lambda;
+  const double E = mu + lambda > 0 ? mu * (3 * lambda + 2 * mu) / (lambda + mu) : 0;
+  return (mpm_real)(E * (double)h / 48);
 }
 
 mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c) {
@@ -59,7 +66,7 @@ mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c) {
 }
 
 int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
-                               int metric, mpm_real h) {
+                               int metric, int hourglass_all, mpm_real h) {
   mpm_domain_enrichment *e = &s->enrich;
   if (b < 0) return -1;
   if (b >= e->body_count) {
@@ -67,11 +74,13 @@ int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_r
     mpm_real *grown_x = mpm_alloc((size_t)(b + 1) * sizeof *grown_x);
     mpm_real *grown_h = mpm_alloc((size_t)(b + 1) * sizeof *grown_h);
     int *grown_m = mpm_alloc((size_t)(b + 1) * sizeof *grown_m);
-    if (!grown || !grown_x || !grown_h || !grown_m) {
+    int *grown_a = mpm_alloc((size_t)(b + 1) * sizeof *grown_a);
+    if (!grown || !grown_x || !grown_h || !grown_m || !grown_a) {
       mpm_free(grown);
       mpm_free(grown_x);
       mpm_free(grown_h);
       mpm_free(grown_m);
+      mpm_free(grown_a);
       return -1;
     }
     for (int k = 0; k <= b; ++k) {
@@ -79,31 +88,57 @@ int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_r
       grown_x[k] = k < e->body_count ? e->exit_k[k] : 0;
       grown_h[k] = k < e->body_count ? e->spacing[k] : 0;
       grown_m[k] = k < e->body_count ? e->metric[k] : MPM_ENRICHMENT_CONDITION;
+      grown_a[k] = k < e->body_count ? e->hourglass_all[k] : 0;
     }
     mpm_free(e->epsilon);
     mpm_free(e->exit_k);
     mpm_free(e->spacing);
     mpm_free(e->metric);
+    mpm_free(e->hourglass_all);
     e->epsilon = grown;
     e->exit_k = grown_x;
     e->spacing = grown_h;
     e->metric = grown_m;
+    e->hourglass_all = grown_a;
     e->body_count = b + 1;
   }
   e->epsilon[b] = epsilon;
   e->exit_k[b] = exit_k > epsilon ? exit_k : epsilon;
   e->spacing[b] = h;
   e->metric[b] = metric;
-  e->any = 0;
-  for (int k = 0; k < e->body_count; ++k)
+  e->hourglass_all[b] = hourglass_all != 0;
+  e->any = e->hourglass_any = 0;
+  for (int k = 0; k < e->body_count; ++k) {
     if (e->epsilon[k] > 0) e->any = 1;
+    if (e->hourglass_all[k]) e->hourglass_any = 1;
+  }
   return 0;
+}
+
+void mpm_enrichment_move_settings(mpm_domain_enrichment *to, mpm_domain_enrichment *from) {
+  mpm_free(to->epsilon);
+  mpm_free(to->exit_k);
+  mpm_free(to->metric);
+  mpm_free(to->hourglass_all);
+  mpm_free(to->spacing);
+  to->epsilon = from->epsilon;
+  to->exit_k = from->exit_k;
+  to->metric = from->metric;
+  to->hourglass_all = from->hourglass_all;
+  to->spacing = from->spacing;
+  to->body_count = from->body_count;
+  to->any = from->any;
+  to->hourglass_any = from->hourglass_any;
+  from->epsilon = from->exit_k = from->spacing = NULL;
+  from->metric = from->hourglass_all = NULL;
+  from->body_count = from->any = from->hourglass_any = 0;
 }
 
 void mpm_enrichment_free(mpm_domain_enrichment *e) {
   mpm_free(e->epsilon);
   mpm_free(e->exit_k);
   mpm_free(e->metric);
+  mpm_free(e->hourglass_all);
   mpm_free(e->spacing);
   mpm_free(e->flag);
   mpm_free(e->category);

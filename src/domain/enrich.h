@@ -66,11 +66,16 @@ static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
 }
 
 /* Set body b's threshold epsilon, its exit threshold (an enriched particle stays enriched while
- * K <= exit_k; raised to epsilon when below), metric (MPM_ENRICHMENT_*) and lattice spacing h
- * (sim setup). 0, or -1 when
- * out of memory. */
+ * K <= exit_k; raised to epsilon when below), metric (MPM_ENRICHMENT_*), hourglass control on
+ * every particle (hourglass_all, below) and lattice spacing h (sim setup). 0, or -1 when out
+ * of memory. */
 int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
-                               int metric, mpm_real h);
+                               int metric, int hourglass_all, mpm_real h);
+
+/* Move the per-body settings (mpm_enrichment_set_epsilon's: thresholds, metrics, hourglass
+ * control, spacings) from `from` to `to`, freeing those `to` held; `from` is left without any.
+ * The marks stay where they are (a resumed state keeps the scene's settings). */
+void mpm_enrichment_move_settings(mpm_domain_enrichment *to, mpm_domain_enrichment *from);
 
 void mpm_enrichment_free(mpm_domain_enrichment *e);
 
@@ -84,25 +89,44 @@ int mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t co
  * Flanagan and Belytschko 1981, stiffness form, on the reference lattice cube (where the
  * hourglass vectors h_alpha are orthogonal to every linear field, so gamma = h): with
  *   q_alpha = sum_a h_alpha,a x_a   (m; zero for every affine motion, rotations included),
- *   E_hg = 1/2 kappa sum_alpha |q_alpha|^2,  kappa = mu h / 80 (N/m),
+ *   E_hg = 1/2 kappa sum_alpha |q_alpha|^2,  kappa = E h / 48 (N/m, E Young's modulus),
  *   f_a  = -kappa sum_alpha h_alpha,a q_alpha,
- * an hourglass pattern of corner amplitude d costs 0.4 mu h d^2, about what a smooth
- * deformation of the same amplitude costs. Applied to the particles that touch an enriched
- * corner (category other than unenriched), so the unenriched path is unchanged. */
+ * an hourglass pattern of corner amplitude d (q = 8 d) costs 32 kappa d^2 = (2/3) E h d^2:
+ * what linear elasticity gives a cube of side h bent by the pattern u_x = d xi eta (a one-domain
+ * layer bent, e.g. a thin ear: the strain 2 d eta / h along x in uniaxial stress, averaged over
+ * the cube). The warping pattern u_z = d xi eta costs (4/3) mu h d^2 there and xi eta zeta
+ * (2/9)(lambda + 4 mu) h d^2, 1.3 and 1.4 times less at nu = 0.3: one kappa for all modes
+ * errs on the stiff side for those two so that bending is right. (mu h / 80, a quarter of the
+ * bending stiffness, left the bunnies' enriched ears bent for good: docs/zhu-table1.md.)
+ * Applied to the particles that touch an enriched corner (category other than unenriched), so
+ * the unenriched path is unchanged; with the body's `hourglass: "all"` to every particle: the
+ * grid moves the corners of an unenriched layer one domain thick too, bends it without the
+ * single quadrature point seeing the strain, and the energy is the same (through the corners'
+ * embedding, E^T f to the grid nodes). */
 extern const mpm_real mpm_hourglass_modes[4][MPM_HEX_CORNERS];
 
-/* kappa of particle q (0 for unenriched particles and inactive ones). */
+/* Whether some particle has hourglass control this step. */
+static inline int mpm_hourglass_on(const mpm_domain_set *s) {
+  return s->enrich.count > 0 || s->enrich.hourglass_any;
+}
+
+/* kappa of particle q (0 for inactive particles, and for unenriched ones unless their body's
+ * hourglass control is on every particle). */
 mpm_real mpm_hourglass_kappa(const mpm_domain_set *s, const mpm_material *materials, size_t q);
 
-/* q_alpha of particle q from per-corner values v[3] (positions or displacements). */
+/* q_alpha of particle q from per-corner values v[3] (positions or displacements). Each h_alpha
+ * sums to 0, so corner 0's values are taken off first: the same q in exact arithmetic, and the
+ * sums of positions far from the origin round at the domain's size, not at the positions'. */
 static inline void mpm_hourglass_q(const mpm_domain_set *s, size_t q, mpm_real *const v[3],
                                    mpm_real out[4][3]) {
+  const uint32_t c0 = s->corner[q][0];
+  const mpm_real ref[3] = {v[0][c0], v[1][c0], v[2][c0]};
   for (int al = 0; al < 4; ++al) {
     out[al][0] = out[al][1] = out[al][2] = 0;
-    for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
+    for (int a = 1; a < MPM_HEX_CORNERS; ++a) {
       const uint32_t c = s->corner[q][a];
       const mpm_real w = mpm_hourglass_modes[al][a];
-      for (int d = 0; d < 3; ++d) out[al][d] += w * v[d][c];
+      for (int d = 0; d < 3; ++d) out[al][d] += w * (v[d][c] - ref[d]);
     }
   }
 }

@@ -140,6 +140,9 @@ typedef struct mpm_body_desc {
                                  (hysteresis); default 0.95, or `enrichment` when larger */
   int enrichment_metric;      /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
                                  Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
+  int hourglass;              /* domains: hourglass control of the particles touching an
+                                 enriched corner (0, "enriched", the default) or of every domain
+                                 particle (1, "all"; domain/enrich.h) */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
   int resample;        /* domain.resample on: its particles split and merge (all bodies unless
@@ -182,10 +185,11 @@ typedef struct mpm_collider_desc {
 /* A body-force region (Zhu Fig. 9: a rabbit sucked up a straw): inside the region (a
  * collider's shape, with its motion and its `active` window; the rule and friction are unused)
  * every DOF gets `acceleration` times the schedule's factor at the step's end, on top of
- * gravity. */
+ * gravity, and a drag that takes `drag` times the factor of its velocity per second. */
 typedef struct mpm_force_desc {
   mpm_collider_desc region;
   double acceleration[3]; /* m/s^2 */
+  double drag;            /* 1/s, >= 0: dv/dt = -drag v (air drag, a settling bath); 0: none */
   int schedule_count;     /* keyframes (time s, factor), interpolated linearly, held outside;
                              none: factor 1 */
   double schedule[MPM_STRENGTH_KEYS][2];

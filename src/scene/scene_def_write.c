@@ -44,6 +44,7 @@ static const char *const MODEL_NAMES[] = {"fixed_corotated", "neo_hookean", "hen
 static const char *const SHAPE_NAMES[] = {"box",  "sphere",    "cylinder",
                                           "mesh", "halfspace", "revolve"};
 static const char *const METRIC_NAMES[] = {"condition", "frobenius"};
+static const char *const HOURGLASS_NAMES[] = {"enriched", "all"};
 #define TABLE(type, names)                                                                         \
   { type, names, (int)(sizeof names / sizeof names[0]) }
 const mpm_def_enum mpm_def_rules = TABLE("mpm_def_rule", RULE_NAMES);
@@ -58,6 +59,7 @@ const mpm_def_enum mpm_def_refine_kinds = TABLE("mpm_def_refine_kind", REFINE_NA
 static const mpm_def_enum MODELS = TABLE("mpm_def_model", MODEL_NAMES);
 static const mpm_def_enum SHAPES = TABLE("mpm_def_shape_type", SHAPE_NAMES);
 static const mpm_def_enum METRICS = TABLE("mpm_def_enrichment_metric", METRIC_NAMES);
+static const mpm_def_enum HOURGLASSES = TABLE("mpm_def_hourglass", HOURGLASS_NAMES);
 
 /* An enum object may hold any int: say which values the enum has. */
 const char *mpm_def_spell(mpm_def_ctx *c, const char *path, int v, const mpm_def_enum *t) {
@@ -414,6 +416,7 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
   const char *changed = b->enrichment != d.enrichment                 ? "enrichment"
                         : b->enrichment_exit != d.enrichment_exit     ? "enrichment_exit"
                         : b->enrichment_metric != d.enrichment_metric ? "enrichment_metric"
+                        : b->hourglass != d.hourglass                 ? "hourglass"
                         : b->domain_release_count != 0                ? "domain_release"
                                                                       : NULL;
   if (!b->domains) {
@@ -430,6 +433,12 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
   if (b->enrichment_exit != d.enrichment_exit)
     mpm_def_add_number(w, o, "enrichment_exit", b->enrichment_exit);
   mpm_def_add_string(w, o, "enrichment_metric", metric);
+  if (b->hourglass != d.hourglass) { /* written when not the default: older files unchanged */
+    snprintf(p, sizeof p, "%s.hourglass", path);
+    const char *hourglass = mpm_def_spell(w->c, p, (int)b->hourglass, &HOURGLASSES);
+    if (!hourglass) return -1;
+    mpm_def_add_string(w, o, "hourglass", hourglass);
+  }
   if (b->domain_release_count == 0) return 0;
   cJSON *arr = mpm_def_add_array(w, o, "domain_release");
   for (int k = 0; k < b->domain_release_count; ++k) {
@@ -526,5 +535,6 @@ int mpm_def_write_force(mpm_def_writer *w, int i, const mpm_force_def *f, cJSON 
   snprintf(p, sizeof p, "forces[%d]", i);
   if (write_motion(w, p, &f->motion, o) < 0 || write_active(w, p, f->active, o) < 0) return -1;
   mpm_def_add_vec3(w, o, "acceleration", f->acceleration);
+  if (f->drag != 0) mpm_def_add_number(w, o, "drag", f->drag);
   return write_schedule(w, p, "schedule", "schedule_count", f->schedule, f->schedule_count, o);
 }

@@ -30,13 +30,14 @@ static const char *const BODY_KEYS[] = {"name",
                                         "enrichment",
                                         "enrichment_exit",
                                         "enrichment_metric",
+                                        "hourglass",
                                         "temperature",
                                         NULL};
 static const char *const RELEASE_KEYS[] = {"time", "min", "max", NULL};
 static const char *const COLLIDER_KEYS[] = {"name",   "shape",  "inside_out",  "rule", "friction",
                                             "motion", "active", "temperature", NULL};
-static const char *const FORCE_KEYS[] = {"name",   "shape",        "inside_out", "motion",
-                                         "active", "acceleration", "schedule",   NULL};
+static const char *const FORCE_KEYS[] = {"name",         "shape", "inside_out", "motion", "active",
+                                         "acceleration", "drag",  "schedule",   NULL};
 static const char *const MOTION_KEYS[] = {"velocity", "axis", "angular_speed", "keyframes", NULL};
 static const char *const KEYFRAME_KEYS[] = {"time", "translation", "angle", NULL};
 
@@ -420,8 +421,8 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
    * enrichment) */
   b->enrichment = 0;
   static const char *const enrichment_keys[] = {"enrichment", "enrichment_exit",
-                                                "enrichment_metric"};
-  for (int k = 0; k < 3; ++k)
+                                                "enrichment_metric", "hourglass"};
+  for (int k = 0; k < 4; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
@@ -429,6 +430,9 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   b->enrichment_metric = 0;
   if (mpm_json_enum(c, node, "enrichment_metric", 0, metric_names, &b->enrichment_metric) < 0)
     return -1;
+  static const char *const hourglass_names[] = {"enriched", "all", NULL};
+  b->hourglass = 0;
+  if (mpm_json_enum(c, node, "hourglass", 0, hourglass_names, &b->hourglass) < 0) return -1;
   if (mpm_json_number(c, node, "enrichment", 0,
                       mpm_json_in('[', 0, 1, ']', "threshold on the enrichment metric K(F)"),
                       &b->enrichment) < 0)
@@ -614,9 +618,14 @@ int mpm_sj_parse_forces(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
         parse_shape(c, e, 0, s->path, &d->shape) < 0 ||
         mpm_json_bool(c, e, "inside_out", 0, &d->inside_out) < 0 ||
         parse_motion(c, e, &d->motion) < 0 || parse_active(c, e, d->active) < 0 ||
-        mpm_json_vec3(c, e, "acceleration", 1, mpm_json_any("m/s^2"), f->acceleration) < 0 ||
+        mpm_json_vec3(c, e, "acceleration", 0, mpm_json_any("m/s^2"), f->acceleration) < 0 ||
+        mpm_json_number(c, e, "drag", 0, mpm_json_in('[', 0, 1e6, ']', "drag rate, 1/s"),
+                        &f->drag) < 0 ||
         mpm_sj_parse_schedule(c, e, "schedule", f->schedule, &f->schedule_count) < 0)
       return -1;
+    if (!mpm_json_get(e, "acceleration") && !mpm_json_get(e, "drag"))
+      return mpm_json_fail(c, MPM_ERR_INVALID,
+                           "a body-force region needs \"acceleration\" or \"drag\" (or both)");
     mpm_json_pop(c, o2);
   }
   mpm_json_pop(c, old);

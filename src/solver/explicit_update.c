@@ -15,22 +15,23 @@ MPM_ALWAYS_INLINE void update_dof(const mpm_explicit_update *u, const int impuls
     return;
   }
   const mpm_real inv_m = 1 / mass;
-  mpm_real v0[3], v[3], g[3] = {u->gravity[0], u->gravity[1], u->gravity[2]};
-  if (u->region_count) mpm_force_regions_add(u->regions, u->region_count, x, g);
+  mpm_real v0[3], v[3], g[3] = {u->gravity[0], u->gravity[1], u->gravity[2]}, drag = 0;
+  if (u->region_count) drag = mpm_force_regions_add(u->regions, u->region_count, x, g);
   for (int c = 0; c < 3; ++c) {
     v0[c] = d->v0[c][i] * inv_m;
     v[c] = impulse ? v0[c] + u->dt * g[c] : v0[c] + u->dt * (d->f[c][i] * inv_m + g[c]);
   }
+  mpm_force_drag(drag, u->dt, v);
   if (taken) /* a constant after inlining: the loops without colliders do not see it */
-    mpm_boundary_apply_taken(&u->boundary, x, depth, mass, v, taken);
+    mpm_boundary_apply_taken(&u->boundary, x, depth, ahead, mass, v, taken);
   else
-    mpm_boundary_apply(&u->boundary, x, depth, v);
+    mpm_boundary_apply(&u->boundary, x, depth, ahead, v);
   if (ahead) {
     const mpm_real y[3] = {x[0] + u->dt * v[0], x[1] + u->dt * v[1], x[2] + u->dt * v[2]};
     if (taken)
-      mpm_boundary_apply_taken(&u->boundary, y, depth, mass, v, taken);
+      mpm_boundary_apply_taken(&u->boundary, y, depth, ahead, mass, v, taken);
     else
-      mpm_boundary_apply(&u->boundary, y, depth, v);
+      mpm_boundary_apply(&u->boundary, y, depth, ahead, v);
   }
   for (int c = 0; c < 3; ++c) {
     d->v0[c][i] = v0[c];

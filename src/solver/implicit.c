@@ -103,12 +103,13 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
     if (!(d->mass[i] > 0)) continue;
     mpm_real vi[3] = {v[0][i], v[1][i], v[2][i]}, nn[4][3], vo[4][3];
     const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
-    int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], vi, nn, vo);
-    if (count == 0 && (size_t)i >= s->corner_begin) {
+    const int corner = (size_t)i >= s->corner_begin;
+    int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], corner, vi, nn, vo);
+    if (count == 0 && corner) {
       /* a corner DOF free where it is: constrained where the predicted step takes it
        * (explicit_update.c) */
       const mpm_real y[3] = {x[0] + s->dt * vi[0], x[1] + s->dt * vi[1], x[2] + s->dt * vi[2]};
-      count = mpm_boundary_constraints(s->boundary, y, s->depth[i], vi, nn, vo);
+      count = mpm_boundary_constraints(s->boundary, y, s->depth[i], corner, vi, nn, vo);
     }
     flag[i] = (uint8_t)constrain_dof(count, nn, vo, vi, P[i]);
     for (int c = 0; c < 3; ++c) v[c][i] = vi[c];
@@ -154,7 +155,8 @@ static void cg_project(void *user, mpm_real *const v[3]) {
 }
 
 /* With body-force regions, each DOF's acceleration (gravity plus the regions at its
- * position) into s->accel. 0, or -1 when out of memory. */
+ * position) into s->accel, and where a region drags each DOF's drag rate into s->drag. 0, or
+ * -1 when out of memory. */
 static int dof_accelerations(mpm_implicit *s) {
   mpm_dofs *d = s->dofs;
   if (!s->px[0] && dof_positions(s, s->px, &s->depth)) return -1;
@@ -162,13 +164,18 @@ static int dof_accelerations(mpm_implicit *s) {
     s->accel[c] = mpm_arena_alloc(s->arena, (d->count + 1) * sizeof(mpm_real));
     if (!s->accel[c]) return -1;
   }
+  int drags = 0;
+  for (int k = 0; k < s->region_count; ++k) drags |= s->regions[k].drag > 0;
+  s->drag = drags ? mpm_arena_alloc(s->arena, (d->count + 1) * sizeof(mpm_real)) : NULL;
+  if (drags && !s->drag) return -1;
   const long n = (long)d->count;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
     const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
     mpm_real g[3] = {s->gravity[0], s->gravity[1], s->gravity[2]};
-    mpm_force_regions_add(s->regions, s->region_count, x, g);
+    const mpm_real drag = mpm_force_regions_add(s->regions, s->region_count, x, g);
     for (int c = 0; c < 3; ++c) s->accel[c][i] = g[c];
+    if (s->drag) s->drag[i] = drag;
   }
   return 0;
 }
@@ -237,8 +244,9 @@ static void jacobi(mpm_implicit *s, mpm_real *const diag[3]) {
   }
 }
 
-/* After the solve: the constrained components take v*'s values back, then the full boundary
- * rule (colliders, walls) runs on every DOF, as in the explicit update. */
+/* After the solve: the constrained components take v*'s values back, then the regions' drag
+ * (collide/body_force.h: split from the solve) and the full boundary rule (colliders, walls)
+ * act on every DOF, as in the explicit update. */
 static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
   mpm_dofs *d = s->dofs;
   const long nk = (long)s->constraint_count;
@@ -258,11 +266,13 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
   for (long i = 0; i < n; ++i) {
     if (!(d->mass[i] > 0)) continue;
     mpm_real v[3] = {d->v[0][i], d->v[1][i], d->v[2][i]};
+    if (s->drag) mpm_force_drag(s->drag[i], s->dt, v);
     const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
-    mpm_boundary_apply(s->boundary, x, s->depth[i], v);
-    if ((size_t)i >= s->corner_begin) { /* corners: and where the step takes them */
+    const int corner = (size_t)i >= s->corner_begin;
+    mpm_boundary_apply(s->boundary, x, s->depth[i], corner, v);
+    if (corner) { /* corners: and where the step takes them */
       const mpm_real y[3] = {x[0] + s->dt * v[0], x[1] + s->dt * v[1], x[2] + s->dt * v[2]};
-      mpm_boundary_apply(s->boundary, y, s->depth[i], v);
+      mpm_boundary_apply(s->boundary, y, s->depth[i], 1, v);
     }
     for (int c = 0; c < 3; ++c) d->v[c][i] = v[c];
   }

@@ -111,6 +111,7 @@ typedef struct mpm_implicit {
   size_t corner_begin;  /* the first corner DOF (DOFs from here are constrained ahead) */
   mpm_real *depth;      /* DOF wall-band depths (solver/dofs.h) */
   mpm_real *accel[3];   /* with body-force regions: each DOF's gravity plus regions, m/s^2 */
+  mpm_real *drag;       /* with regions that drag: each DOF's drag rate, 1/s (else NULL) */
   mpm_real **ghosted;   /* on levels: a DOF vector with its ghosts gathered (E u) */
 } mpm_implicit;
 

@@ -169,7 +169,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       if (st != MPM_OK) goto fail;
       if (mpm_enrichment_set_epsilon(&sim->domains, b, (mpm_real)sc->bodies[b].enrichment,
                                      (mpm_real)sc->bodies[b].enrichment_exit,
-                                     sc->bodies[b].enrichment_metric, (mpm_real)h)) {
+                                     sc->bodies[b].enrichment_metric, sc->bodies[b].hourglass,
+                                     (mpm_real)h)) {
         st = oom(err, "the enrichment thresholds");
         goto fail;
       }

@@ -8,6 +8,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "core/parallel.h"
+#include "domain/enrich.h"
 #include "io/checkpoint.h"
 #include "core/alloc.h"
 #include "solver/adaptive.h"
@@ -206,27 +207,13 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   memset(&c->particles, 0, sizeof c->particles);
   /* the enrichment thresholds and spacings are the scene's (they stay); the marks are made
    * anew from the state, as every step makes them */
-  mpm_domain_enrichment *was = &sim->domains.enrich;
-  mpm_real *epsilon = was->epsilon, *spacing = was->spacing, *exit_k = was->exit_k;
-  int *metric = was->metric;
-  const int body_count = was->body_count, any = was->any;
-  was->epsilon = was->spacing = was->exit_k = NULL;
-  was->metric = NULL;
+  mpm_domain_enrichment settings = {0};
+  mpm_enrichment_move_settings(&settings, &sim->domains.enrich);
   mpm_domain_set_free(&sim->domains);
   sim->domains = c->domains;
   memset(&c->domains, 0, sizeof c->domains);
-  mpm_domain_enrichment *e = &sim->domains.enrich;
-  mpm_free(e->epsilon);
-  mpm_free(e->spacing);
-  mpm_free(e->exit_k);
-  mpm_free(e->metric);
-  e->metric = metric;
-  e->epsilon = epsilon;
-  e->spacing = spacing;
-  e->exit_k = exit_k;
-  e->body_count = body_count;
-  e->any = any;
-  e->valid = 0;
+  mpm_enrichment_move_settings(&sim->domains.enrich, &settings);
+  sim->domains.enrich.valid = 0;
   sim->time = c->time;
   sim->last_dt = c->last_dt;
   sim->max_speed = (mpm_real)c->max_speed;

@@ -448,6 +448,7 @@ static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
     mpm_force_region *r = &sim->force_regions[regions++];
     r->pose = mpm_collider_pose_at(&sim->force_colliders[k], t_end);
     for (int d = 0; d < 3; ++d) r->acceleration[d] = (mpm_real)(f * fd->acceleration[d]);
+    r->drag = (mpm_real)(f * fd->drag);
   }
   u->region_count = regions;
   u->regions = sim->force_regions;
