@@ -21,12 +21,12 @@ ln -sfn "$root/examples/meshes" "$out/meshes" # the scenes name ../meshes/bunny.
 # scene  rest-frame  final-frame  paper: name particles grid min/frame error
 scenes=(
   "bar_twist_compress_release 0 48 Buddha 2918 32x40x32 6.34 2.4e-4"
-  "bunny_hit_by_ball 9 180 Armadillo 3134 30x16x13 6.15 2.5e-3"
-  "bunny_tunnel_squeeze 12 240 Egea 4269 24x64x24 14.94 2.3e-5"
-  "bunny_collapse_recover 12 240 Gorilla 4649 32x80x32 8.42 5.4e-3"
-  "bunny_funnel 3 240 Kitty 5226 96x88x96 13.85 3.7e-3"
-  "bunny_rolled_by_cylinder 12 240 Bunny 3559 56x16x16 12.38 1.2e-3"
-  "rabbit_straw 12 240 Rabbit 2635 24x104x24 7.15 1.8e-4"
+  "bunny_hit_by_ball 0 180 Armadillo 3134 30x16x13 6.15 2.5e-3"
+  "bunny_tunnel_squeeze 0 240 Egea 4269 24x64x24 14.94 2.3e-5"
+  "bunny_collapse_recover 0 240 Gorilla 4649 32x80x32 8.42 5.4e-3"
+  "bunny_funnel 0 240 Kitty 5226 96x88x96 13.85 3.7e-3"
+  "bunny_rolled_by_cylinder 0 240 Bunny 3559 56x16x16 12.38 1.2e-3"
+  "rabbit_straw 0 240 Rabbit 2635 24x104x24 7.15 1.8e-4"
   "melting_bunny 3 150 Melting_bunny 60000 24x22x24 15.10 N/A"
   "bunny_snowball 9 90 Armadillo_snowball 16587 120x72x52 15.17 N/A"
 )
