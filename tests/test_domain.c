@@ -241,6 +241,57 @@ static void test_affine_motion_exact_F(void **state) {
   mpm_domain_set_free(&s);
 }
 
+/* Fragments (domain.h, MPM_DOMAIN_MIN_FRAGMENT): a 3 x 3 x 3 block with a particle touching it
+ * at a corner, a pair touching it along an edge and a row of 8 touching it at a corner: the
+ * single and the pair are dropped, the row (8 particles) and the block stay; a body that is
+ * only a pair keeps it (its largest component). */
+static void push_cell(mpm_particles *p, double h, int i, int j, int k, uint32_t id) {
+  const mpm_real x[3] = {(mpm_real)((i + 0.5) * h + 0.2), (mpm_real)((j + 0.5) * h + 0.2),
+                         (mpm_real)((k + 0.5) * h + 0.2)};
+  const mpm_real v[3] = {0, 0, 0};
+  mpm_particles_push(p, x, v, 1, (mpm_real)(h * h * h), 0, 0);
+  p->id[p->count - 1] = id;
+}
+
+static void test_fragments_dropped(void **state) {
+  (void)state;
+  const double h = 0.05, origin[3] = {0, 0, 0};
+  for (int alone = 0; alone < 2; ++alone) {
+    mpm_domain_set s;
+    mpm_domain_set_init(&s);
+    mpm_particles p;
+    mpm_particles_init(&p, 64);
+    uint32_t id = 0;
+    if (!alone)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          for (int k = 0; k < 3; ++k) push_cell(&p, h, i, j, k, id++);
+    push_cell(&p, h, 5, 5, 5, 100); /* a pair, alone or away from the block */
+    push_cell(&p, h, 5, 5, 6, 101);
+    if (!alone) {
+      push_cell(&p, h, 3, 3, 1, 200); /* the edge pair */
+      push_cell(&p, h, 3, 3, 2, 201);
+      for (int i = 0; i < 8; ++i) push_cell(&p, h, -1 - i, -1, -1, 300 + (uint32_t)i); /* row */
+    }
+    mpm_error err;
+    assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, origin, h, "bodies[0]", &err), MPM_OK);
+    assert_int_equal(p.count, 0);
+    int kept[400] = {0};
+    for (size_t q = 0; q < s.particles.count; ++q) kept[s.particles.id[q]] = 1;
+    if (alone) {
+      assert_int_equal(s.particles.count, 2);
+    } else {
+      /* the block, the row; not the pair at (5, 5, 5) that touches the block at no point nor
+       * the edge pair */
+      assert_int_equal(s.particles.count, 27 + 8);
+      assert_true(kept[0] && kept[26] && kept[300] && kept[307]);
+      assert_true(!kept[100] && !kept[101] && !kept[200] && !kept[201]);
+    }
+    mpm_particles_free(&p);
+    mpm_domain_set_free(&s);
+  }
+}
+
 /* A sphere body with a rigid rotation: corners shared, particles reproduced by their corners,
  * the rotation field carried over exactly; a body off the lattice is refused. */
 static void test_build_from_body(void **state) {
@@ -596,7 +647,7 @@ int main(void) {
       cmocka_unit_test(test_two_step_equals_direct), cmocka_unit_test(test_affine_motion_exact_F),
       cmocka_unit_test(test_build_from_body),        cmocka_unit_test(test_conservation_linear),
       cmocka_unit_test(test_conservation_quadratic), cmocka_unit_test(test_pads_match_rows),
-      cmocka_unit_test(test_permuted_corners),
+      cmocka_unit_test(test_permuted_corners),       cmocka_unit_test(test_fragments_dropped),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

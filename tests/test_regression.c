@@ -42,6 +42,9 @@
  * The hourglass stiffness (issue 13, 2026-12-05): kappa from mu h / 80 to E h / 48, the
  * linear-elastic cost of a bent domain (domain/enrich.h): the two enriched scenes were
  * rewritten with it (the others are unchanged).
+ * Lattice fragments (issue 13, 2026-12-05): a mesh body's particles that touch the rest only
+ * along an edge or at a corner are dropped when its domains are made (domain.h,
+ * MPM_DOMAIN_MIN_FRAGMENT): the two bunny scenes were rewritten with it.
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:
  *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression

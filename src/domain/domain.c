@@ -202,10 +202,91 @@ static int build_adjacency(mpm_domain_set *s) {
   return 0;
 }
 
+/* keep[i] = 0 for the particles of fragments (domain.h, MPM_DOMAIN_MIN_FRAGMENT): the
+ * components of the lattice cells k[0..n) joined through faces, smaller than the minimum and
+ * than the largest component. Returns the count kept, or (size_t)-1 when out of memory. */
+static size_t drop_fragments(const int64_t (*k)[3], size_t n, uint8_t *keep) {
+  mpm_lattice_map m;
+  uint32_t *comp = mpm_alloc((n + 1) * sizeof *comp), *stack = mpm_alloc((n + 1) * sizeof *stack);
+  uint32_t *size = mpm_alloc((n + 1) * sizeof *size);
+  size_t kept = (size_t)-1;
+  if (mpm_lattice_map_init(&m, n) || !comp || !stack || !size) goto done;
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t key = mpm_lattice_key(k[i]);
+    const size_t at = mpm_lattice_map_slot(&m, key);
+    m.keys[at] = key;
+    m.values[at] = (uint32_t)i;
+    comp[i] = UINT32_MAX;
+  }
+  uint32_t comps = 0, largest = 0;
+  for (size_t i = 0; i < n; ++i) { /* depth-first over the face neighbours */
+    if (comp[i] != UINT32_MAX) continue;
+    size_t top = 0;
+    stack[top++] = (uint32_t)i;
+    comp[i] = comps;
+    size[comps] = 0;
+    while (top) {
+      const uint32_t j = stack[--top];
+      ++size[comps];
+      for (int f = 0; f < 6; ++f) {
+        int64_t nb[3] = {k[j][0], k[j][1], k[j][2]};
+        nb[f / 2] += f % 2 ? 1 : -1;
+        const uint64_t key = mpm_lattice_key(nb);
+        const size_t at = mpm_lattice_map_slot(&m, key);
+        if (m.keys[at] != key || comp[m.values[at]] != UINT32_MAX) continue;
+        comp[m.values[at]] = comps;
+        stack[top++] = m.values[at];
+      }
+    }
+    if (size[comps] > size[largest]) largest = comps;
+    ++comps;
+  }
+  kept = 0;
+  for (size_t i = 0; i < n; ++i) {
+    keep[i] = comp[i] == largest || size[comp[i]] >= MPM_DOMAIN_MIN_FRAGMENT;
+    kept += keep[i];
+  }
+done:
+  mpm_lattice_map_free(&m);
+  mpm_free(comp);
+  mpm_free(stack);
+  mpm_free(size);
+  return kept;
+}
+
 mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_t first,
                                       const double lattice_origin[3], double h,
                                       const char *body_name, mpm_error *err) {
-  const size_t n = p->count - first;
+  const size_t all = p->count - first;
+  /* the particles' lattice cells, then the fragments dropped */
+  int64_t(*k)[3] = mpm_alloc((all + 1) * sizeof *k);
+  uint8_t *keep = mpm_alloc(all + 1);
+  if (!k || !keep) {
+    mpm_free(k);
+    mpm_free(keep);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
+                         body_name);
+  }
+  for (size_t i = first; i < p->count; ++i)
+    for (int d = 0; d < 3; ++d) {
+      const double u = ((double)p->x[d][i] - lattice_origin[d]) / h - 0.5;
+      k[i - first][d] = (int64_t)llround(u);
+      if (fabs(u - (double)k[i - first][d]) > 1e-3) {
+        mpm_free(k);
+        mpm_free(keep);
+        return mpm_error_set(err, MPM_ERR_INVALID,
+                             "%s: particle domains need particles on the body's lattice (jitter "
+                             "0); a particle is %.3g spacings off it",
+                             body_name, fabs(u - (double)k[i - first][d]));
+      }
+    }
+  const size_t n = drop_fragments((const int64_t(*)[3])k, all, keep);
+  if (n == (size_t)-1) {
+    mpm_free(k);
+    mpm_free(keep);
+    return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
+                         body_name);
+  }
   if (reserve_particles(s, s->particles.count + n) ||
       reserve_corners(s, s->corner_count + 2 * n + 64))
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the particle domains of %s",
@@ -219,19 +300,8 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
   mpm_status st = MPM_OK;
   mpm_particles *dp = &s->particles;
   for (size_t i = first; i < p->count && st == MPM_OK; ++i) {
-    int64_t k[3] = {0, 0, 0};
-    for (int d = 0; d < 3; ++d) {
-      const double u = ((double)p->x[d][i] - lattice_origin[d]) / h - 0.5;
-      k[d] = (int64_t)llround(u);
-      if (fabs(u - (double)k[d]) > 1e-3) {
-        st = mpm_error_set(err, MPM_ERR_INVALID,
-                           "%s: particle domains need particles on the body's lattice (jitter "
-                           "0); a particle is %.3g spacings off it",
-                           body_name, fabs(u - (double)k[d]));
-        break;
-      }
-    }
-    if (st != MPM_OK) break;
+    if (!keep[i - first]) continue; /* a fragment */
+    const int64_t *ki = k[i - first];
     if (reserve_corners(s, s->corner_count + MPM_HEX_CORNERS)) {
       st = mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s", body_name);
       break;
@@ -239,7 +309,7 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     const size_t q = dp->count;
     double X[MPM_HEX_CORNERS][3];
     for (int a = 0; a < MPM_HEX_CORNERS; ++a) {
-      const int64_t v[3] = {k[0] + ((a >> 0) & 1), k[1] + ((a >> 1) & 1), k[2] + ((a >> 2) & 1)};
+      const int64_t v[3] = {ki[0] + ((a >> 0) & 1), ki[1] + ((a >> 1) & 1), ki[2] + ((a >> 2) & 1)};
       for (int d = 0; d < 3; ++d) X[a][d] = lattice_origin[d] + (double)v[d] * h;
       const uint64_t key = mpm_lattice_key(v);
       const size_t at = mpm_lattice_map_slot(&m, key);
@@ -279,8 +349,10 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     s->active_count++;
   }
   mpm_lattice_map_free(&m);
+  mpm_free(k);
+  mpm_free(keep);
   if (st != MPM_OK) return st;
-  p->count = first; /* the body's particles now live in the domain set */
+  p->count = first; /* the body's particles now live in the domain set, fragments dropped */
   if (build_adjacency(s))
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory building the domains of %s", body_name);
   /* corner velocities: the least-squares affine fit v0 + A (x - c) of the body's particle
@@ -316,14 +388,14 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
       for (int t = 0; t < 3; ++t)
         for (int u = 0; u < 3; ++u) A[r][t] += M[r][u] * Ci[u][t];
   }
-  for (size_t k = 0; k < s->corner_count; ++k) {
-    if (s->adj_start[k] == s->adj_start[k + 1]) continue;
-    const uint32_t first_slot = s->adj[s->adj_start[k]] / MPM_HEX_CORNERS;
+  for (size_t cn = 0; cn < s->corner_count; ++cn) {
+    if (s->adj_start[cn] == s->adj_start[cn + 1]) continue;
+    const uint32_t first_slot = s->adj[s->adj_start[cn]] / MPM_HEX_CORNERS;
     if (first_slot < q0) continue; /* a corner of an earlier body */
     for (int r = 0; r < 3; ++r) {
       double v = v0[r];
-      for (int t = 0; t < 3; ++t) v += A[r][t] * ((double)s->cX[t][k] - c[t]);
-      s->cv[r][k] = (mpm_real)v;
+      for (int t = 0; t < 3; ++t) v += A[r][t] * ((double)s->cX[t][cn] - c[t]);
+      s->cv[r][cn] = (mpm_real)v;
     }
   }
   mpm_domain_set_sync_particles(s);
