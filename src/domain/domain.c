@@ -271,13 +271,14 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
     for (int d = 0; d < 3; ++d) {
       const double u = ((double)p->x[d][i] - lattice_origin[d]) / h - 0.5;
       k[i - first][d] = (int64_t)llround(u);
-      if (fabs(u - (double)k[i - first][d]) > 1e-3) {
+      const double off = fabs(u - (double)k[i - first][d]);
+      if (off > 1e-3) {
         mpm_free(k);
         mpm_free(keep);
         return mpm_error_set(err, MPM_ERR_INVALID,
                              "%s: particle domains need particles on the body's lattice (jitter "
                              "0); a particle is %.3g spacings off it",
-                             body_name, fabs(u - (double)k[i - first][d]));
+                             body_name, off);
       }
     }
   const size_t n = drop_fragments((const int64_t(*)[3])k, all, keep);
