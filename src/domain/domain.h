@@ -27,15 +27,20 @@
 
 #include <stdint.h>
 
+/* A body's enrichment settings (the scene's; all 0 for a body without them). */
+typedef struct mpm_enrichment_body {
+  mpm_real epsilon;  /* enriched when K(F) <= epsilon (0: never) */
+  mpm_real exit_k;   /* an enriched particle stays enriched while K(F) <= exit_k (>= epsilon:
+                        hysteresis) */
+  mpm_real spacing;  /* the domain lattice's spacing h, m */
+  int metric;        /* MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
+  int hourglass_all; /* hourglass control on every particle, not only on those touching an
+                        enriched corner (domain/enrich.h) */
+} mpm_enrichment_body;
+
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */
 typedef struct mpm_domain_enrichment {
-  mpm_real *epsilon;  /* per body: enriched when K(F) <= epsilon (0: never) */
-  mpm_real *exit_k;   /* per body: an enriched particle stays enriched while K(F) <= exit_k
-                         (>= epsilon: hysteresis) */
-  int *metric;        /* per body: MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
-  mpm_real *spacing;  /* per body: the domain lattice's spacing h, m */
-  int *hourglass_all; /* per body: hourglass control on every particle, not only on those
-                         touching an enriched corner (domain/enrich.h) */
+  mpm_enrichment_body *body; /* per body */
   int body_count;
   int any;             /* some body has epsilon > 0 */
   int hourglass_any;   /* some body has hourglass_all */

@@ -55,14 +55,21 @@ mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c);
 mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c);
 
 /* Mark the corners and classify the particles of the set from their current F (materials: the
- * clamp of each particle's material; s->enrich.epsilon per body), and list the enriched
+ * clamp of each particle's material; s->enrich.body[b].epsilon), and list the enriched
  * corners in corner order with their positions (the DOF segment's). Deterministic, parallel.
  * Returns 0, or -1 when out of memory. */
 int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials);
 
+/* Body b's settings: all 0 (never enriched, the condition metric) for a body without any. */
+static inline const mpm_enrichment_body *mpm_enrichment_body_of(const mpm_domain_enrichment *e,
+                                                                int b) {
+  static const mpm_enrichment_body none = {0, 0, 0, MPM_ENRICHMENT_CONDITION, 0};
+  return b >= 0 && b < e->body_count ? &e->body[b] : &none;
+}
+
 /* The threshold of body b (0: never enriched). */
 static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
-  return b >= 0 && b < s->enrich.body_count ? s->enrich.epsilon[b] : 0;
+  return mpm_enrichment_body_of(&s->enrich, b)->epsilon;
 }
 
 /* Set body b's threshold epsilon, its exit threshold (an enriched particle stays enriched while
