@@ -7,6 +7,7 @@
  *   - surface with resampling: the band follows the free surface and the particles follow the
  *     band (fine near the surface, coarse deep inside);
  *   - strain: only where the material is strained;
+ *   - a body rule's `within`: only its part in the box is born fine;
  *   - 1 and 2 threads, and a run resumed from a checkpoint taken between two rebuilds, give the
  *     same particles and tree bit for bit;
  *   - key mistakes name the key path. */
@@ -258,8 +259,45 @@ static void test_resume_between_rebuilds(void **state) {
   "'E': 1e4, 'nu': 0.3, 'density': 1000}], 'bodies': [{'name': 'b', 'shape': {'type': "            \
   "'sphere', 'center': [0.5, 0.5, 0.5], 'radius': 0.1}, 'material': 'm'}]}"
 
+/* A body rule's `within`: only the part of the body's band in the box is born fine (Gao sec. 9:
+ * refine where contact will be, not the whole free surface). */
+static void test_body_rule_within(void **state) {
+  (void)state;
+  size_t fine[2] = {0, 0};
+  for (int w = 0; w < 2; ++w) {
+    mpm_sim *sim = sim_from_json(flying_box(
+        w ? ", \"refine\": [{\"level\": 1, \"body\": \"b\", \"distance\": 0.03, \"within\": "
+            "{\"min\": [0.4, 0, 0], \"max\": [1, 1, 1]}}]"
+          : ", \"refine\": [{\"level\": 1, \"body\": \"b\", \"distance\": 0.03}]",
+        ""));
+    const mpm_particles *p = &sim->particles;
+    mpm_real lo = 1;
+    for (size_t i = 0; i < p->count; ++i)
+      if (p->level[i] == 1) {
+        fine[w]++;
+        lo = p->x[0][i] < lo ? p->x[0][i] : lo;
+      }
+    print_message("within: %s, %zu fine particles of %zu, the least x of a fine one %.4f\n",
+                  w ? "x >= 0.4" : "none", fine[w], p->count, (double)lo);
+    /* the box x in [0.23, 0.47]: the band's cells of level 0 (0.04 m) at x >= 0.4 only, or
+       every face's */
+    if (w)
+      assert_true(lo >= (mpm_real)0.4);
+    else
+      assert_true(lo < (mpm_real)0.25);
+    mpm_sim_destroy(sim);
+  }
+  assert_true(fine[1] > 0 && 3 * fine[1] < fine[0]);
+}
+
 static void test_key_errors(void **state) {
   (void)state;
+  expect_error(RF_SCENE("'levels': 2, 'refine': [{'level': 1, 'box': {'min': [0, 0, 0], 'max': "
+                        "[1, 1, 1]}, 'within': {'min': [0, 0, 0], 'max': [1, 1, 1]}}]"),
+               MPM_ERR_INVALID, "domain.refine[0].within", "body rules only", NULL);
+  expect_error(RF_SCENE("'levels': 2, 'refine': [{'level': 1, 'body': 'b', 'within': {'min': [0, "
+                        "0, 0], 'max': [1, 0, 1]}}]"),
+               MPM_ERR_INVALID, "domain.refine[0].within.max", "greater than min", NULL);
   expect_error(RF_SCENE("'refine_every': 2"), MPM_ERR_INVALID, "domain.refine_every",
                "domain.levels", NULL);
   expect_error(RF_SCENE("'levels': 2, 'refine': [{'level': 1, 'types': true}]"), MPM_ERR_INVALID,
@@ -289,6 +327,7 @@ int main(void) {
       cmocka_unit_test(test_strain_rule),
       cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_resume_between_rebuilds),
+      cmocka_unit_test(test_body_rule_within),
       cmocka_unit_test(test_key_errors),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));

@@ -178,6 +178,7 @@ static mpm_scene_def grid_def(void) {
   for (int k = 0; k < 3; ++k) r[0].box.min[k] = 0.25, r[0].box.max[k] = 0.45;
   r[1].kind = MPM_DEF_REFINE_COLLIDER, r[1].collider_name = "paddle", r[1].distance = 0.05;
   r[2].kind = MPM_DEF_REFINE_BODY, r[2].body = 1, r[2].distance = 0.03;
+  r[2].box.min[0] = 0.5, r[2].box.max[0] = r[2].box.max[1] = r[2].box.max[2] = 0.8; /* within */
   r[3].kind = MPM_DEF_REFINE_SURFACE, r[3].surface = 0.04, r[3].body_name = "cube";
   r[4].kind = MPM_DEF_REFINE_TYPES, r[4].distance = 0.02;
   r[5].kind = MPM_DEF_REFINE_STRAIN, r[5].strain = 0.1, r[5].distance = 0.01;
@@ -219,7 +220,8 @@ static const char *const grid_json =
     "   \"refine\": [{\"level\": 1, \"box\": {\"min\": [0.25, 0.25, 0.25],"
     "       \"max\": [0.45, 0.45, 0.45]}},"
     "     {\"level\": 1, \"collider\": \"paddle\", \"distance\": 0.05},"
-    "     {\"level\": 1, \"body\": 1, \"distance\": 0.03},"
+    "     {\"level\": 1, \"body\": 1, \"distance\": 0.03, \"within\": {\"min\": [0.5, 0, 0],"
+    "       \"max\": [0.8, 0.8, 0.8]}},"
     "     {\"level\": 1, \"surface\": 0.04, \"body\": \"cube\"},"
     "     {\"level\": 1, \"types\": true, \"distance\": 0.02},"
     "     {\"level\": 1, \"strain\": 0.1, \"distance\": 0.01}],"

@@ -299,7 +299,7 @@ typedef struct mpm_refine_def {
   int level;                /* refine[].level, 1 .. levels - 1; required key: default 1 */
   struct {
     double min[3], max[3];   /* box.min, box.max, m, max > min; default 0 (refused) */
-  } box;                     /* box */
+  } box;                     /* box; a body rule's within (default 0: all of the body) */
   int collider;              /* collider: index into the def's colliders; default -1: none (a
                                 collider rule needs it or collider_name) */
   const char *collider_name; /* collider, by name (wins over the index); default NULL */

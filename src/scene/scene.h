@@ -334,7 +334,8 @@ typedef enum mpm_refine_kind {
 typedef struct mpm_refine_desc {
   mpm_refine_kind kind;
   int level;             /* 1 .. levels - 1 */
-  double min[3], max[3]; /* box, m */
+  double min[3], max[3]; /* box, or a body rule's `within` (when `within`), m */
+  int within;            /* body rules: only the cells whose points lie in [min, max] */
   int collider, body;
   double distance; /* collider (required), body (0: all of it), surface (required), types,
                       strain: m */

@@ -24,12 +24,12 @@ enum {
 };
 /* The fields of each mpm_def_refine_kind (scene_json_refine.c's rules). */
 static const unsigned RULE_FIELDS[] = {
-    R_BOX,                   /* box */
-    R_COLLIDER | R_DISTANCE, /* collider */
-    R_BODY | R_DISTANCE,     /* body */
-    R_SURFACE | R_BODY,      /* surface: the body is optional */
-    R_DISTANCE,              /* types */
-    R_STRAIN | R_DISTANCE,   /* strain */
+    R_BOX,                       /* box */
+    R_COLLIDER | R_DISTANCE,     /* collider */
+    R_BODY | R_DISTANCE | R_BOX, /* body: the box is its `within` */
+    R_SURFACE | R_BODY,          /* surface: the body is optional */
+    R_DISTANCE,                  /* types */
+    R_STRAIN | R_DISTANCE,       /* strain */
 };
 
 /* A body, collider... given by name (when not NULL) or index (-1: none). */
@@ -95,6 +95,11 @@ static int write_rule(mpm_def_writer *w, int i, const mpm_refine_def *r, cJSON *
   case MPM_DEF_REFINE_BODY:
     add_reference(w, o, "body", r->body_name, r->body);
     if (r->distance != d.distance) mpm_def_add_number(w, o, "distance", r->distance);
+    if (fields[0].changed) {
+      cJSON *box = mpm_def_add_object(w, o, "within");
+      mpm_def_add_vec3(w, box, "min", r->box.min);
+      mpm_def_add_vec3(w, box, "max", r->box.max);
+    }
     break;
   case MPM_DEF_REFINE_SURFACE:
     mpm_def_add_number(w, o, "surface", r->surface);

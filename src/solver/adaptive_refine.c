@@ -5,7 +5,8 @@
  *   collider  the cells within a distance of a collider's surface, at its pose of the time
  *             (setup and rebuilds: the refinement follows a moving collider)
  *   body      the cells of a body's material sampled at the rule's level, or a band around its
- *             surface (setup only: where its particles are born fine)
+ *             surface, or of either the part in a box (`within`; setup only: where its
+ *             particles are born fine)
  *   surface   a band within a distance of the current material's free surface, on both sides,
  *             from the particles' boxes (rebuilds: Gao's free-surface refinement)
  *   types     the cells of level q - 1 that a particle of type q overlaps (rebuilds: the grid
@@ -141,8 +142,9 @@ static void erode(uint8_t *m, const long n[3], long k, int edge, uint8_t *line, 
  * holding x when none is). */
 typedef struct lattice {
   double h;
-  long lo[3], n[3], k; /* k: the band's half width in points */
-  int close;           /* fill holes of a point first (particles' boxes) */
+  long lo[3], n[3], k;                   /* k: the band's half width in points */
+  int close;                             /* fill holes of a point first (particles' boxes) */
+  const double *within_min, *within_max; /* refine only points in this box (NULL: all) */
   uint8_t *in;
 } lattice;
 
@@ -248,6 +250,7 @@ static int lattice_refine(const mpm_scene *sc, mpm_refinement *r, int level, lat
         for (int d = 0; d < 3; ++d) {
           x[d] = sc->domain_min[d] + ((double)idx[d] + 0.5) * l->h;
           inside &= x[d] > sc->domain_min[d] && x[d] < sc->domain_max[d];
+          if (l->within_min) inside &= x[d] >= l->within_min[d] && x[d] <= l->within_max[d];
         }
         if (!inside) continue;
         int32_t cell[3];
@@ -275,9 +278,12 @@ static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_
   if (st == MPM_OK) {
     const box_source s = {&p, NULL, NULL};
     lattice l;
-    if (lattice_make(sc, &s, h, rule->distance, &l) ||
-        (l.in && lattice_refine(sc, r, rule->level - 1, &l)))
-      st = MPM_ERR_NOMEM;
+    const int failed = lattice_make(sc, &s, h, rule->distance, &l);
+    if (rule->within) { /* the band is of the whole body; only its part in the box is refined */
+      l.within_min = rule->min;
+      l.within_max = rule->max;
+    }
+    if (failed || (l.in && lattice_refine(sc, r, rule->level - 1, &l))) st = MPM_ERR_NOMEM;
     free(l.in);
   }
   mpm_particles_free(&p);

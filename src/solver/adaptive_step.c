@@ -302,6 +302,7 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
+    if (a->range[k + 1] == a->range[k]) continue; /* an empty grid: nothing to add */
     const mpm_particles v =
         mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
@@ -337,6 +338,7 @@ mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
+    if (a->range[k + 1] == a->range[k]) continue; /* no particle to update */
     mpm_particles v =
         mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
