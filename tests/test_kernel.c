@@ -2,7 +2,8 @@
  * partition of unity, linear reproduction, non-negativity, sum of gradients zero, gradients
  * equal finite differences of the weights, uGIMP with L_p = dx equals the quadratic B-spline,
  * the wide uGIMP (dx < L_p <= 2 dx, 4 nodes) equals the general box average of interp/gimp.h,
- * and the APIC factors reproduce D_p^{-1} (sum a_i (x_i - x_p) = 1, sum a_i = 0). */
+ * the APIC factors reproduce D_p^{-1} (sum a_i (x_i - x_p) = 1, sum a_i = 0), and the paired
+ * uGIMP (4 nodes from an even base) is the uGIMP moved by a node. */
 #include "support.h"
 #include "interp/gimp.h"
 #include "interp/kernel.h"
@@ -18,10 +19,15 @@ static double w3(const mpm_stencil *s, int i, int j, int k) {
   return (double)s->w[0][i] * s->w[1][j] * s->w[2][k];
 }
 
+static void check_kernel_made(const mpm_kernel k, uint64_t rng);
+
 static void check_kernel(mpm_kernel_kind kind, double gimp_len) {
-  const double dx = 0.037;
-  mpm_kernel k = mpm_kernel_make(kind, (mpm_real)dx, (mpm_real)gimp_len);
-  uint64_t rng = 12345 + (uint64_t)kind;
+  check_kernel_made(mpm_kernel_make(kind, (mpm_real)0.037, (mpm_real)gimp_len),
+                    12345 + (uint64_t)kind);
+}
+
+static void check_kernel_made(const mpm_kernel k, uint64_t rng) {
+  const double dx = (double)k.dx;
   const double tol = TOL(2e-5, 1e-12);
   for (int trial = 0; trial < 2000; ++trial) {
     mpm_real x[3];
@@ -282,6 +288,66 @@ static void test_lane_stencils_match_scalar(void **state) {
   }
 }
 
+/* The paired uGIMP (mpm_kernel_paired): the kernel's defining properties, its base the even
+ * node at or below the uGIMP base, its 4 weights the uGIMP's 3 moved up one node when that base
+ * is odd, and its SIMD lanes, 8 particles from a 2 x 2 x 2 block of cells, equal to the scalar
+ * kernel. */
+static void test_paired_ugimp(void **state) {
+  (void)state;
+  const double dx = 0.037;
+  static const double lengths[] = {0.75, 0.9, 1.0};
+  for (size_t c = 0; c < sizeof lengths / sizeof lengths[0]; ++c) {
+    const mpm_kernel u =
+        mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)(lengths[c] * dx));
+    const mpm_kernel k = mpm_kernel_paired(u);
+    assert_int_equal(k.kind, MPM_KERNEL_UGIMP_PAIRED);
+    assert_int_equal(k.width, 4);
+    check_kernel_made(k, 77 + c);
+    uint64_t rng = 99 + c;
+    for (int trial = 0; trial < 2000; ++trial) {
+      const mpm_real xg = (mpm_real)test_rand(&rng, -7, 7);
+      mpm_real w[4], dw[4], a[4], wu[4], dwu[4], au[4];
+      const int b = mpm_kernel_1d(&k, xg, w, dw, a), bu = mpm_kernel_1d(&u, xg, wu, dwu, au);
+      assert_int_equal(b & 1, 0);
+      assert_true(bu == b || bu == b + 1);
+      const int o = bu - b;
+      assert_true(w[o == 0 ? 3 : 0] == 0 && dw[o == 0 ? 3 : 0] == 0 && a[o == 0 ? 3 : 0] == 0);
+      for (int q = 0; q < 3; ++q) {
+        assert_true(w[q + o] == wu[q]);
+        assert_true(dw[q + o] == dwu[q]);
+        assert_true(a[q + o] == au[q]);
+      }
+    }
+    const mpm_kernel *kinds2[1] = {&k};
+    for (int trial = 0; trial < 200; ++trial) {
+      mpm_real xs[3][MPM_LANES];
+      uint32_t idx[MPM_LANES];
+      for (int l = 0; l < MPM_LANES; ++l) {
+        idx[l] = (uint32_t)l;
+        for (int d = 0; d < 3; ++d) /* bases 10 + 2 d and 11 + 2 d: one pair */
+          xs[d][l] = (mpm_real)((10 + 2 * d + k.shift + test_rand(&rng, 0.01, 1.99)) * dx);
+      }
+      const mpm_real *x[3] = {xs[0], xs[1], xs[2]};
+      const mpm_real origin[3] = {0, 0, 0};
+      const int n = 1 + trial % MPM_LANES;
+      int base[3];
+      mpm_lane_stencil s;
+      mpm_lane_stencil_eval(4, kinds2[0], x, origin, idx, n, trial % 2, 1, base, &s);
+      for (int l = 0; l < n; ++l)
+        for (int d = 0; d < 3; ++d) {
+          mpm_real w[4], dw[4], a[4];
+          const int b = mpm_kernel_1d(&k, xs[d][l] / (mpm_real)dx, w, dw, a);
+          assert_int_equal(b, base[d]);
+          for (int q = 0; q < 4; ++q) {
+            assert_close(s.w[d][q][l], w[q], TOL(2e-6, 1e-13));
+            assert_close(s.dw[d][q][l] * dx, dw[q] * dx, TOL(2e-5, 1e-12));
+            assert_close(s.a[d][q][l] * dx, a[q] * dx, TOL(2e-4, 1e-11));
+          }
+        }
+    }
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_linear),
@@ -294,6 +360,7 @@ int main(void) {
       cmocka_unit_test(test_quadratic_apic_factor),
       cmocka_unit_test(test_ugimp_edge_weights_accurate),
       cmocka_unit_test(test_lane_stencils_match_scalar),
+      cmocka_unit_test(test_paired_ugimp),
   };
   return cmocka_run_group_tests_name("kernel", tests, NULL, NULL);
 }

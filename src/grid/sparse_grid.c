@@ -169,13 +169,14 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
 
   /* 1. base node of each particle's stencil -> (owner block, cell in block), in parallel */
   const mpm_real inv_dx = k->inv_dx, shift = k->shift;
+  const int32_t pair = k->kind == MPM_KERNEL_UGIMP_PAIRED ? ~1 : ~0; /* as mpm_kernel_base */
   const mpm_real *x0 = p->x[0], *x1 = p->x[1], *x2 = p->x[2];
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < (long)n; ++i) {
     /* int32 first: that conversion vectorizes, the direct one to int64 does not */
-    const int32_t ix = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift);
-    const int32_t iy = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift);
-    const int32_t iz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift);
+    const int32_t ix = (int32_t)mpm_floor((x0[i] - origin[0]) * inv_dx - shift) & pair;
+    const int32_t iy = (int32_t)mpm_floor((x1[i] - origin[1]) * inv_dx - shift) & pair;
+    const int32_t iz = (int32_t)mpm_floor((x2[i] - origin[2]) * inv_dx - shift) & pair;
     pk[i] = particle_key(ix, iy, iz);
   }
   /* 2. block indices through the hash. Particles come mostly in runs of one block (they were

@@ -11,6 +11,7 @@ const char *mpm_kernel_name(mpm_kernel_kind kind) {
     return "cubic";
   case MPM_KERNEL_UGIMP:
   case MPM_KERNEL_UGIMP_WIDE:
+  case MPM_KERNEL_UGIMP_PAIRED:
     return "ugimp";
   }
   return "unknown";
@@ -36,6 +37,7 @@ mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_leng
     break;
   case MPM_KERNEL_UGIMP:
   case MPM_KERNEL_UGIMP_WIDE:
+  case MPM_KERNEL_UGIMP_PAIRED:
     /* support |x_i - x_p| < dx + L_p/2: up to 1.5 dx, three nodes from floor(x/dx - 1/2); up
        to 2 dx, four nodes from floor(x/dx - 1) */
     k.half_len = gimp_length / (2 * dx);
@@ -47,5 +49,12 @@ mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_leng
     k.shift = k.half_len > R_(0.5) ? 1 : R_(0.5);
     break;
   }
+  return k;
+}
+
+mpm_kernel mpm_kernel_paired(mpm_kernel k) {
+  if (k.kind != MPM_KERNEL_UGIMP) return k;
+  k.kind = MPM_KERNEL_UGIMP_PAIRED;
+  k.width = 4; /* the even node below and 3 from the base: both bases of a pair */
   return k;
 }

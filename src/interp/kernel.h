@@ -49,6 +49,14 @@ typedef struct mpm_stencil {
 /* gimp_length: L_p for uGIMP (ignored otherwise), in (0, 2 dx]. */
 mpm_kernel mpm_kernel_make(mpm_kernel_kind kind, mpm_real dx, mpm_real gimp_length);
 
+/* The uGIMP kernel k (box <= dx) with its stencils taken from the even node at or below the
+ * base, 4 nodes per axis: the same weights, the 4th node's zero. On the multi-level grid the
+ * particles one level coarser than the grid they transfer on (Gao sec. 6.1) lie one per cell;
+ * with bases paired, the 8 of a 2 x 2 x 2 block of cells share a stencil and fill the SIMD
+ * lanes of one batch (transfer_lanes.h) instead of 8 batches of one lane each. Other kernels
+ * are returned as they are. */
+mpm_kernel mpm_kernel_paired(mpm_kernel k);
+
 const char *mpm_kernel_name(mpm_kernel_kind kind);
 
 /* ---- implementation (inline so that the transfer loops see through it) ---- */
@@ -106,6 +114,22 @@ static inline void mpm_apic_factors(const int n, const mpm_real *w, mpm_real f, 
   }
   const mpm_real s = inv_dx / d;
   for (int i = 0; i < n; ++i) a[i] = w[i] * ((mpm_real)i - f) * s;
+}
+
+/* uGIMP's 3 nodes (Gao eqs. 5-6 in 1D) at distance f in [1/2, 3/2) cells from the first, box
+ * half width h <= 1/2. The support |x_i - x_p| < dx + L_p/2 <= 1.5 dx covers three nodes; the
+ * outer two in closed form, the middle one by partition of unity. */
+static inline __attribute__((always_inline)) void mpm_ugimp_1d(mpm_real h, mpm_real f,
+                                                               mpm_real inv_dx, mpm_real *w,
+                                                               mpm_real *dw, mpm_real *a) {
+  mpm_real g0, g2;
+  w[0] = mpm_ugimp_outer(f, h, &g0);
+  w[2] = mpm_ugimp_outer(2 - f, h, &g2);
+  w[1] = 1 - w[0] - w[2];
+  dw[0] = g0 * inv_dx;  /* d(distance)/dx = +1 for node 0 */
+  dw[2] = -g2 * inv_dx; /* and -1 for node 2 */
+  dw[1] = -dw[0] - dw[2];
+  mpm_apic_factors(3, w, f, inv_dx, a);
 }
 
 /* 1D weights for grid coordinate xg = (x - origin) / dx: base node, weights, d/dx and APIC
@@ -167,19 +191,15 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
     mpm_apic_factors(4, w, f, inv_dx, a);
     break;
   }
-  case MPM_KERNEL_UGIMP: {
-    /* Gao eqs. 5-6 in 1D. The support |x_i - x_p| < dx + L_p/2 <= 1.5 dx covers three nodes;
-       the outer two in closed form, the middle one by partition of unity. */
-    const mpm_real h = k->half_len;
-    mpm_real g0, g2;
-    w[0] = mpm_ugimp_outer(f, h, &g0);
-    w[2] = mpm_ugimp_outer(2 - f, h, &g2);
-    w[1] = 1 - w[0] - w[2];
-    dw[0] = g0 * inv_dx;  /* d(distance)/dx = +1 for node 0 */
-    dw[2] = -g2 * inv_dx; /* and -1 for node 2 */
-    dw[1] = -dw[0] - dw[2];
-    mpm_apic_factors(3, w, f, inv_dx, a);
+  case MPM_KERNEL_UGIMP:
+    mpm_ugimp_1d(k->half_len, f, inv_dx, w, dw, a);
     break;
+  case MPM_KERNEL_UGIMP_PAIRED: {
+    /* the base's own 3 nodes, then moved up one node when the base is odd */
+    const int odd = base & 1;
+    mpm_ugimp_1d(k->half_len, f, inv_dx, w + odd, dw + odd, a + odd);
+    w[3 - 3 * odd] = dw[3 - 3 * odd] = a[3 - 3 * odd] = 0;
+    return base - odd;
   }
   }
   return base;
@@ -189,7 +209,8 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
  * mpm_kernel_stencil gives it: for sorting and activation, which need no weights. */
 static inline __attribute__((always_inline)) void
 mpm_kernel_base(const mpm_kernel *k, const mpm_real x[3], int base[3]) {
-  for (int d = 0; d < 3; ++d) base[d] = (int)mpm_floor(x[d] * k->inv_dx - k->shift);
+  const int pair = k->kind == MPM_KERNEL_UGIMP_PAIRED ? ~1 : ~0; /* the even node at or below */
+  for (int d = 0; d < 3; ++d) base[d] = (int)mpm_floor(x[d] * k->inv_dx - k->shift) & pair;
 }
 
 /* Full stencil of a particle at position x (relative to the grid origin, m). */

@@ -61,8 +61,12 @@ static mpm_status make_transfer_grids(mpm_sim *sim, mpm_error *err) {
                            "%s: the bodies' particle spacings need more than %d extra transfer "
                            "grids; give more bodies the same particles_per_cell",
                            sc->path, MPM_EXTRA_GRIDS_MAX);
-    tg->kernel =
-        mpm_kernel_make(MPM_KERNEL_UGIMP, mpm_refinement_dx(r, tg->level), (mpm_real)tg->box);
+    const double dx = (double)mpm_refinement_dx(r, tg->level);
+    tg->kernel = mpm_kernel_make(MPM_KERNEL_UGIMP, (mpm_real)dx, (mpm_real)tg->box);
+    /* boxes near a cell wide (particles of a coarser type) lie about one per cell: paired
+       bases put 8 of them in a batch of 4-wide stencils instead of 8 batches of one lane
+       (mpm_kernel_paired); from 0.7 dx, where a cell holds fewer than 3 */
+    if (tg->box > 0.7 * dx) tg->kernel = mpm_kernel_paired(tg->kernel);
   }
   a->tgrid_count = n;
   return MPM_OK;

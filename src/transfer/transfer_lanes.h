@@ -106,6 +106,32 @@ typedef struct mpm_lane_stencil {
   mpm_vl f[3]; /* distance from the base node, cells */
 } mpm_lane_stencil;
 
+/* uGIMP's 3 nodes per lane at distances f in [1/2, 3/2) cells from the first (box half width
+ * h <= 1/2); see mpm_ugimp_outer in kernel.h: outer nodes in closed form, the middle one by
+ * partition of unity. The APIC factors a only if need_a. */
+MPM_ALWAYS_INLINE void mpm_lane_ugimp(const mpm_real h, const mpm_real inv_dx, const mpm_vl f,
+                                      const int need_a, mpm_vl *w, mpm_vl *dw, mpm_vl *a) {
+  const mpm_real inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
+  const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
+  const mpm_vl x0 = 1 - f, x2 = f - 1; /* 1 - distance to nodes 0 and 2 */
+  const mpm_vl q0 = mpm_vl_max(x0 + h, zero), q2 = mpm_vl_max(x2 + h, zero);
+  w[0] = mpm_vl_select(x0 >= hv, x0, q0 * q0 * inv_4h);
+  w[2] = mpm_vl_select(x2 >= hv, x2, q2 * q2 * inv_4h);
+  w[1] = 1 - w[0] - w[2];
+  dw[0] = mpm_vl_select(x0 >= hv, mpm_vl_splat(-inv_dx), q0 * (-inv_2h * inv_dx));
+  dw[2] = mpm_vl_select(x2 >= hv, mpm_vl_splat(inv_dx), q2 * (inv_2h * inv_dx));
+  dw[1] = -dw[0] - dw[2];
+  mpm_vl dsum = {0};
+  for (int q = 0; q < 3; ++q) {
+    const mpm_vl r = (mpm_real)q - f;
+    dsum += w[q] * r * r;
+  }
+  if (need_a) {
+    const mpm_vl sc = inv_dx / dsum;
+    for (int q = 0; q < 3; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
+  }
+}
+
 /* Stencils of n particles that share their base node (the APIC factors a only if need_a) (lanes >=
  * n copy lane 0 so that every value stays finite). Because the base is common, the weights are
  * polynomials of the lane's offset f from it and vectorize without branches (uGIMP's piecewise
@@ -118,9 +144,26 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const int W, const mpm_kernel *k,
   for (int d = 0; d < 3; ++d) {
     const mpm_vl xg = (mpm_lanes_load(x[d], idx, n, contiguous) - origin[d]) * inv_dx;
     base[d] = (int)mpm_floor(xg[0] - k->shift);
+    if (W == 4 && k->kind == MPM_KERNEL_UGIMP_PAIRED) base[d] &= ~1; /* the even node below */
     const mpm_vl f = xg - (mpm_real)base[d];
     s->f[d] = f;
     mpm_vl *w = s->w[d], *dw = s->dw[d], *a = s->a[d];
+    if (W == 4 && k->kind == MPM_KERNEL_UGIMP_PAIRED) {
+      /* a lane whose own base is odd (f >= 3/2) has its 3 nodes one node up */
+      const mpm_vl_index odd = f >= mpm_vl_splat(R_(1.5));
+      const mpm_vl zero = {0}, one = mpm_vl_splat(1);
+      mpm_vl w3[3], dw3[3], a3[3] = {zero, zero, zero};
+      mpm_lane_ugimp(k->half_len, inv_dx, f - mpm_vl_select(odd, one, zero), need_a, w3, dw3,
+                     a3);
+      mpm_vl *out[3] = {w, dw, a}, *in[3] = {w3, dw3, a3};
+      for (int c = 0; c < 3; ++c) {
+        out[c][0] = mpm_vl_select(odd, zero, in[c][0]);
+        out[c][1] = mpm_vl_select(odd, in[c][0], in[c][1]);
+        out[c][2] = mpm_vl_select(odd, in[c][1], in[c][2]);
+        out[c][3] = mpm_vl_select(odd, in[c][2], zero);
+      }
+      continue;
+    }
     if (W == 4 && k->kind == MPM_KERNEL_UGIMP_WIDE) {
       /* the wide box (mpm_ugimp_wide_outer and _inner in kernel.h), the three pieces of the
          inner node as selects, node 2 by partition of unity; outside the switch and behind the
@@ -187,30 +230,9 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const int W, const mpm_kernel *k,
         for (int q = 0; q < 4; ++q) a[q] = (3 * inv_dx) * w[q] * ((mpm_real)q - f); /* D = dx^2/3 */
       break;
     }
-    case MPM_KERNEL_UGIMP: {
-      /* see mpm_ugimp_outer in kernel.h: outer nodes in closed form, the middle one by
-         partition of unity */
-      const mpm_real h = k->half_len, inv_4h = 1 / (4 * h), inv_2h = 1 / (2 * h);
-      const mpm_vl zero = {0}, hv = mpm_vl_splat(h);
-      const mpm_vl x0 = 1 - f, x2 = f - 1; /* 1 - distance to nodes 0 and 2 */
-      const mpm_vl q0 = mpm_vl_max(x0 + h, zero), q2 = mpm_vl_max(x2 + h, zero);
-      w[0] = mpm_vl_select(x0 >= hv, x0, q0 * q0 * inv_4h);
-      w[2] = mpm_vl_select(x2 >= hv, x2, q2 * q2 * inv_4h);
-      w[1] = 1 - w[0] - w[2];
-      dw[0] = mpm_vl_select(x0 >= hv, mpm_vl_splat(-inv_dx), q0 * (-inv_2h * inv_dx));
-      dw[2] = mpm_vl_select(x2 >= hv, mpm_vl_splat(inv_dx), q2 * (inv_2h * inv_dx));
-      dw[1] = -dw[0] - dw[2];
-      mpm_vl dsum = {0};
-      for (int q = 0; q < 3; ++q) {
-        const mpm_vl r = (mpm_real)q - f;
-        dsum += w[q] * r * r;
-      }
-      if (need_a) {
-        const mpm_vl sc = inv_dx / dsum;
-        for (int q = 0; q < 3; ++q) a[q] = w[q] * ((mpm_real)q - f) * sc;
-      }
+    case MPM_KERNEL_UGIMP:
+      mpm_lane_ugimp(k->half_len, inv_dx, f, need_a, w, dw, a);
       break;
-    }
     }
   }
 }
