@@ -108,7 +108,7 @@ static mpm_status classify(mpm_sim *sim) {
   const int8_t *box_tgrid = a->box_tgrid;
   const double o[3] = {(double)r->origin[0], (double)r->origin[1], (double)r->origin[2]};
   const double dx0 = (double)r->dx0;
-#pragma omp parallel for schedule(static) reduction(min : bad)
+#pragma omp parallel for schedule(dynamic, 4) reduction(min : bad)
   for (long c = 0; c < (n + CLASSIFY_CHUNK - 1) / CLASSIFY_CHUNK; ++c) {
     const long i0 = c * CLASSIFY_CHUNK, m = n - i0 < CLASSIFY_CHUNK ? n - i0 : CLASSIFY_CHUNK;
     mpm_real half[CLASSIFY_CHUNK];
