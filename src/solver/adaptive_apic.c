@@ -291,6 +291,7 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
     const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
     for (uint32_t e = c0; e < c1; ++e) {
       const double w = node_weight(&bs, a->cell_ghost[e].node);
+      if (w == 0) continue; /* outside a paired stencil's particle (mpm_kernel_paired) */
       const mpm_real *Sg = S + 6 * (size_t)a->cell_ghost[e].ghost;
       const double xx = Sg[0], yy = Sg[1], zz = Sg[2], xy = Sg[3], xz = Sg[4], yz = Sg[5];
       D[0] += w * xx, D[1] += w * xy, D[2] += w * xz;
@@ -383,6 +384,7 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
       const uint32_t node = a->cell_ghost[e].node;
       const double w = (double)wk[node & 15] * (double)wk[MPM_STENCIL_MAX + (node >> 4 & 15)] *
                        (double)wk[2 * MPM_STENCIL_MAX + (node >> 8 & 15)];
+      if (w == 0) continue;
       const mpm_real *Mg = Mi + 9 * (size_t)a->cell_ghost[e].ghost;
       for (int c = 0; c < 9; ++c) dB[c] += w * (double)Mg[c];
     }
