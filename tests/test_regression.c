@@ -45,6 +45,9 @@
  * Lattice fragments (issue 13, 2026-12-05): a mesh body's particles that touch the rest only
  * along an edge or at a corner are dropped when its domains are made (domain.h,
  * MPM_DOMAIN_MIN_FRAGMENT): the two bunny scenes were rewritten with it.
+ * The multi-level grid (issue 16, 2026-12-05): level_crossing, levels_contact and levels_sand
+ * were added with the paired transfers (mpm_kernel_paired); for them the labels include the
+ * particles' types and the clock the refined cells.
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:
  *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression
@@ -53,6 +56,7 @@
  * build is ISO C: no FMA contraction), on the x86-64 machines this project runs on. */
 #include "support.h"
 #include "core/hash.h"
+#include "solver/adaptive.h"
 #include "solver/sim.h"
 
 #include <stdio.h>
@@ -98,6 +102,13 @@ static void digest_particles(const mpm_particles *p, const size_t *order, state_
   s->h[7] = digest_gather(s->h[7], p->id, sizeof(uint32_t), n, order);
 }
 
+static int by_cell(const void *a, const void *b) {
+  const int32_t *x = a, *y = b;
+  for (int k = 0; k < 4; ++k)
+    if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+  return 0;
+}
+
 static state_digest digest_sim(const mpm_sim *sim) {
   state_digest s;
   for (int q = 0; q < STATE_QUANTITIES; ++q) s.h[q] = 0x5eed0000u + (uint64_t)q;
@@ -120,6 +131,15 @@ static state_digest digest_sim(const mpm_sim *sim) {
     if (slot[i] != SIZE_MAX) order[k++] = slot[i];
   assert_int_equal(k, p->count);
   digest_particles(p, order, &s);
+  if (sim->adaptive) { /* the multi-level grid: the particles' types and the tree */
+    s.h[7] = digest_gather(s.h[7], p->level, sizeof *p->level, p->count, order);
+    size_t cells = 0;
+    int32_t(*tree)[4] = mpm_adaptive_tree_cells(sim, &cells);
+    assert_non_null(tree);
+    qsort(tree, cells, sizeof *tree, by_cell); /* the order of a hash table's slots: not ours */
+    s.h[0] = mpm_hash64_words(tree, cells * sizeof *tree, s.h[0]);
+    free(tree);
+  }
   free(slot);
   free(order);
   /* domain particles are never reordered; their corners neither */
@@ -170,6 +190,44 @@ static const char release_scene[] = RELEASE_SCENE("");
 /* the same with every domain enriched from the start (epsilon = 1) */
 static const char release_scene_enriched[] = RELEASE_SCENE(" \"enrichment\": 1,");
 
+/* Two jellos meeting on 3 levels (examples/gao/jello_collision_256_contact.json, small): fine
+ * only where they meet (a body rule's within), the grid following the particle types every 2
+ * steps, middle particles on the fine grid with paired transfers; and sand on 2 levels whose
+ * band follows its free surface, its particles split and merged to follow the band. */
+static const char levels_contact_scene[] =
+    "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.0625, \"levels\": 3,"
+    " \"refine_every\": 2, \"refine\": ["
+    "  {\"level\": 1, \"body\": \"l\", \"distance\": 0.08, \"within\": {\"min\": [0.3,0,0],"
+    " \"max\": [1,1,1]}},"
+    "  {\"level\": 2, \"body\": \"l\", \"distance\": 0.03, \"within\": {\"min\": [0.42,0,0],"
+    " \"max\": [1,1,1]}},"
+    "  {\"level\": 1, \"body\": \"r\", \"distance\": 0.08, \"within\": {\"min\": [0,0,0],"
+    " \"max\": [0.7,1,1]}},"
+    "  {\"level\": 2, \"body\": \"r\", \"distance\": 0.03, \"within\": {\"min\": [0,0,0],"
+    " \"max\": [0.58,1,1]}},"
+    "  {\"level\": 2, \"types\": true, \"distance\": 0.015}]},"
+    " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
+    " \"solver\": {\"transfer\": \"apic\", \"cfl\": 0.5},"
+    " \"materials\": [{\"name\": \"j\", \"model\": \"fixed_corotated\", \"E\": 2e4, \"nu\": 0.3,"
+    " \"density\": 1000}],"
+    " \"bodies\": [{\"name\": \"l\", \"shape\": {\"type\": \"box\", \"center\": [0.35,0.5,0.5],"
+    " \"half_extent\": [0.09,0.09,0.09]}, \"material\": \"j\", \"velocity\": [1.5,0,0],"
+    " \"jitter\": 0},"
+    "  {\"name\": \"r\", \"shape\": {\"type\": \"box\", \"center\": [0.65,0.53,0.5],"
+    " \"half_extent\": [0.09,0.09,0.09]}, \"material\": \"j\", \"velocity\": [-1.5,0,0],"
+    " \"jitter\": 0}]}";
+static const char levels_sand_scene[] =
+    "{\"domain\": {\"min\": [0,0,0], \"max\": [0.6,0.6,0.6], \"dx\": 0.05, \"levels\": 2,"
+    " \"refine_every\": 2, \"refine\": [{\"level\": 1, \"body\": \"s\", \"distance\": 0.05},"
+    " {\"level\": 1, \"surface\": 0.04}], \"resample\": {\"merge_margin\": 0.25,"
+    " \"min_per_cell\": 8}},"
+    " \"time\": {\"end\": 1, \"fps\": 24},"
+    " \"solver\": {\"transfer\": \"apic\", \"cfl\": 0.5},"
+    " \"materials\": [{\"name\": \"d\", \"model\": \"drucker_prager\", \"E\": 3e5, \"nu\": 0.3,"
+    " \"density\": 1600, \"friction_angle\": 30}],"
+    " \"bodies\": [{\"name\": \"s\", \"shape\": {\"type\": \"box\", \"center\": [0.3,0.3,0.3],"
+    " \"half_extent\": [0.12,0.12,0.12]}, \"material\": \"d\", \"velocity\": [0,-1,0]}]}";
+
 typedef struct regression_case {
   const char *name; /* as in the digest file */
   const char *path; /* an example scene, or NULL for json */
@@ -192,6 +250,9 @@ static const regression_case cases[] = {
     {"domain_release", NULL, release_scene, 3, 0},
     {"ball_bunny_enriched", "examples/ball_bunny.json", NULL, 2, 0.6},
     {"domain_release_enriched", NULL, release_scene_enriched, 3, -1},
+    {"level_crossing", "examples/gao/level_crossing.json", NULL, 2, -1},
+    {"levels_contact", NULL, levels_contact_scene, 2, -1},
+    {"levels_sand", NULL, levels_sand_scene, 2, -1},
 };
 #define CASE_COUNT (sizeof cases / sizeof cases[0])
 
