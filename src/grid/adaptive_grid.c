@@ -40,6 +40,7 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   mpm_free(g->blocks.uniform);
   mpm_free(g->blocks.ids_at);
   mpm_free(g->blocks.ids);
+  mpm_free(g->blocks.owned);
   memset(g, 0, sizeof *g);
 }
 
@@ -291,8 +292,18 @@ static const struct mpm_row_entry *entry_of(mpm_adaptive_grid *g, int level, con
     key = (key << MPM_REFINEMENT_COORD_BITS) | (uint64_t)u;
   }
   const struct mpm_row_entry *e = row_of(g, level, idx, key);
-  if (e) ids[local] = (uint32_t)(e - g->rows.entries);
+  if (e) {
+    ids[local] = (uint32_t)(e - g->rows.entries);
+    if (e->owner == level) /* see owned_of */
+      g->blocks.owned[(size_t)(ids - g->blocks.ids) / MPM_BLOCK_NODES] |= (uint64_t)1 << local;
+  }
   return e;
+}
+
+/* The nodes of a block (its ids, from block_ids) known to be real nodes owned by its level: a
+ * mask of local indices, set as their rows are first looked up. */
+static inline uint64_t owned_of(const mpm_adaptive_grid *g, const uint32_t *ids) {
+  return g->blocks.owned[(size_t)(ids - g->blocks.ids) / MPM_BLOCK_NODES];
 }
 
 /* The row of a slot of transfer grid G, or 0 when the slot is a real node owned by its level
@@ -333,11 +344,20 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
       }
       uint32_t *ids = pending ? block_ids(g, level_of(g, G), sg->coord[b]) : NULL;
       if (pending && !ids) return -1;
+      /* a real node owned by the level has no row on the level's grid; on an extra grid it is a
+       * duplicate of the level grid's node (slot_row), here without the lookup */
+      const uint64_t own = pending ? owned_of(g, ids) : 0;
+      if (G < MPM_LEVELS_MAX) pending &= ~own;
       while (pending) {
         const int local = __builtin_ctzll(pending);
         pending &= pending - 1;
         int32_t idx[3];
         node_of(sg, b, local, idx);
+        if (own >> local & 1) {
+          g->ghost[G][b] |= (uint64_t)1 << local;
+          if (mark(g, level_of(g, G), idx) < 0) return -1;
+          continue;
+        }
         const int n = slot_row(g, G, idx, ids, row);
         if (n < 0) return -1;
         if (n) g->ghost[G][b] |= (uint64_t)1 << local;
@@ -639,7 +659,10 @@ static uint32_t *block_ids(mpm_adaptive_grid *g, int level, const int32_t bc[3])
     if (mpm_grow((void **)&f->ids, &f->id_capacity, (f->id_blocks + 1) * MPM_BLOCK_NODES,
                  sizeof *f->ids))
       return NULL;
+    if (mpm_grow((void **)&f->owned, &f->owned_capacity, f->id_blocks + 1, sizeof *f->owned))
+      return NULL;
     memset(f->ids + f->id_blocks * MPM_BLOCK_NODES, 0xff, MPM_BLOCK_NODES * sizeof *f->ids);
+    f->owned[f->id_blocks] = 0;
     f->ids_at[s] = (uint32_t)f->id_blocks++;
   }
   return f->ids + (size_t)f->ids_at[s] * MPM_BLOCK_NODES;
@@ -650,7 +673,7 @@ size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
              g->ghost_capacity * (sizeof(uint32_t) + 10 * sizeof(mpm_real)) +
              3 * g->offset_capacity * sizeof(mpm_real) + g->build.len_cap * sizeof(uint32_t) +
              (g->build.node_cap + g->build.terms_cap) * sizeof(mpm_row_term) +
-             g->blocks.id_capacity * sizeof(uint32_t);
+             g->blocks.id_capacity * sizeof(uint32_t) + g->blocks.owned_capacity * sizeof(uint64_t);
   FOR_GRIDS(g, G)
   b += grid_of((mpm_adaptive_grid *)g, G)->ops->bytes(grid_of((mpm_adaptive_grid *)g, G));
   return b;

@@ -90,6 +90,8 @@ typedef struct mpm_adaptive_grid {
     size_t size, count;
     uint32_t *ids;
     size_t id_blocks, id_capacity; /* in blocks of MPM_BLOCK_NODES ids */
+    uint64_t *owned;               /* per block of ids: its nodes owned by its level (a mask) */
+    size_t owned_capacity;
   } blocks;
 } mpm_adaptive_grid;
 
