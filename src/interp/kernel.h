@@ -119,9 +119,8 @@ static inline void mpm_apic_factors(const int n, const mpm_real *w, mpm_real f, 
 /* uGIMP's 3 nodes (Gao eqs. 5-6 in 1D) at distance f in [1/2, 3/2) cells from the first, box
  * half width h <= 1/2. The support |x_i - x_p| < dx + L_p/2 <= 1.5 dx covers three nodes; the
  * outer two in closed form, the middle one by partition of unity. */
-static inline __attribute__((always_inline)) void mpm_ugimp_1d(mpm_real h, mpm_real f,
-                                                               mpm_real inv_dx, mpm_real *w,
-                                                               mpm_real *dw, mpm_real *a) {
+static inline __attribute__((always_inline)) void
+mpm_ugimp_1d(mpm_real h, mpm_real f, mpm_real inv_dx, mpm_real *w, mpm_real *dw, mpm_real *a) {
   mpm_real g0, g2;
   w[0] = mpm_ugimp_outer(f, h, &g0);
   w[2] = mpm_ugimp_outer(2 - f, h, &g2);

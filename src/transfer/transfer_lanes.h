@@ -153,8 +153,7 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const int W, const mpm_kernel *k,
       const mpm_vl_index odd = f >= mpm_vl_splat(R_(1.5));
       const mpm_vl zero = {0}, one = mpm_vl_splat(1);
       mpm_vl w3[3], dw3[3], a3[3] = {zero, zero, zero};
-      mpm_lane_ugimp(k->half_len, inv_dx, f - mpm_vl_select(odd, one, zero), need_a, w3, dw3,
-                     a3);
+      mpm_lane_ugimp(k->half_len, inv_dx, f - mpm_vl_select(odd, one, zero), need_a, w3, dw3, a3);
       mpm_vl *out[3] = {w, dw, a}, *in[3] = {w3, dw3, a3};
       for (int c = 0; c < 3; ++c) {
         out[c][0] = mpm_vl_select(odd, zero, in[c][0]);
