@@ -35,6 +35,7 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   mpm_free(g->build.len);
   mpm_free(g->build.node);
   mpm_free(g->build.terms);
+  mpm_free(g->build.where);
   rows_free(&g->rows);
   mpm_free(g->blocks.keys);
   mpm_free(g->blocks.uniform);
@@ -329,8 +330,34 @@ static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t 
   return (int)e->len;
 }
 
+/* Record ghost (G, b, local) at node idx of `level` with the row's n terms at
+ * build.terms[build.term_count ..): build_rows lays them out. Room for the 64 ghosts of a block
+ * first: 0, or -1 when out of memory. */
+static int reserve_block_ghosts(mpm_adaptive_grid *g) {
+  const size_t a = g->build.count + MPM_BLOCK_NODES;
+  return mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
+         mpm_grow((void **)&g->build.node, &g->build.node_cap, a, sizeof *g->build.node) ||
+         mpm_grow((void **)&g->build.where, &g->build.where_cap, a, sizeof *g->build.where) ||
+         mpm_grow((void **)&g->build.terms, &g->build.terms_cap,
+                  g->build.term_count + MPM_BLOCK_NODES * MPM_ROW_MAX, sizeof *g->build.terms);
+}
+
+/* (room for a block's ghosts made by reserve_block_ghosts) */
+static void record_ghost(mpm_adaptive_grid *g, int G, size_t b, int local, int level,
+                         const int32_t idx[3], int n) {
+  const size_t a = g->build.count;
+  g->build.len[a] = (uint32_t)n;
+  g->build.node[a].level = level;
+  for (int d = 0; d < 3; ++d) g->build.node[a].idx[d] = idx[d];
+  g->build.where[a][0] = (uint32_t)G;
+  g->build.where[a][1] = (uint32_t)b;
+  g->build.where[a][2] = (uint32_t)local;
+  g->build.term_count += (size_t)n;
+  g->build.count = a + 1;
+}
+
 int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
-  mpm_row_term row[MPM_ROW_MAX];
+  g->build.count = g->build.term_count = 0;
   FOR_GRIDS(g, G) {
     if (ensure_masks(g, G)) return -1;
     const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
@@ -348,19 +375,27 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
        * duplicate of the level grid's node (slot_row), here without the lookup */
       const uint64_t own = pending ? owned_of(g, ids) : 0;
       if (G < MPM_LEVELS_MAX) pending &= ~own;
+      if (pending && reserve_block_ghosts(g)) return -1;
       while (pending) {
         const int local = __builtin_ctzll(pending);
         pending &= pending - 1;
         int32_t idx[3];
         node_of(sg, b, local, idx);
-        if (own >> local & 1) {
-          g->ghost[G][b] |= (uint64_t)1 << local;
-          if (mark(g, level_of(g, G), idx) < 0) return -1;
-          continue;
+        mpm_row_term *row = g->build.terms + g->build.term_count;
+        int n;
+        if (own >> local & 1) { /* slot_row's duplicate of the level grid's node */
+          row[0].level = level_of(g, G);
+          for (int d = 0; d < 3; ++d) row[0].idx[d] = idx[d];
+          row[0].w = 1;
+          n = 1;
+        } else {
+          n = slot_row(g, G, idx, ids, row);
+          if (n < 0) return -1;
         }
-        const int n = slot_row(g, G, idx, ids, row);
-        if (n < 0) return -1;
-        if (n) g->ghost[G][b] |= (uint64_t)1 << local;
+        if (n) {
+          g->ghost[G][b] |= (uint64_t)1 << local;
+          record_ghost(g, G, b, local, level_of(g, G), idx, n);
+        }
         /* parents are real nodes of the level grids: their own rows are empty, so nothing more
          * follows from them */
         for (int t = 0; t < n; ++t)
@@ -405,45 +440,19 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
 }
 
 int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
-  /* pass 1: the ghosts, their slots, nodes and rows (each row resolved once) */
+  /* pass 1: the ghosts close() found, in its order (grid, block, slot), and their slots now
+   * that the layout is known; the build arrays are kept from step to step: fresh pages for tens
+   * of MB every step cost more than filling them */
+  const uint32_t *len = g->build.len;
+  const mpm_row_term *node = g->build.node, *terms = g->build.terms; /* ghost a's node; rows */
   g->ghost_count = 0;
-  /* kept from step to step (g->build): fresh pages for tens of MB every step cost more than
-   * filling them */
-  uint32_t *len = g->build.len;
-  mpm_row_term *node = g->build.node, *terms = g->build.terms; /* ghost a's node; all rows */
-  size_t len_cap = g->build.len_cap, node_cap = g->build.node_cap, terms_cap = g->build.terms_cap,
-         term_count = 0;
-  int status = -1;
-  FOR_GRIDS(g, G) {
-    const mpm_grid *lv = grid_of(g, G);
-    const mpm_sparse_grid *sg = &lv->impl.sparse;
-    if (!sg->block_count) continue;
-    if (ensure_masks(g, G)) goto done;
-    for (size_t b = 0; b < sg->block_count; ++b) {
-      const uint64_t ghosts = g->used[G][b] & g->ghost[G][b]; /* close() found them */
-      uint32_t *ids = ghosts ? block_ids(g, level_of(g, G), sg->coord[b]) : NULL;
-      if (ghosts && !ids) goto done;
-      for (uint64_t m = ghosts; m; m &= m - 1) {
-        const int local = __builtin_ctzll(m);
-        int32_t idx[3];
-        node_of(sg, b, local, idx);
-        if (mpm_grow((void **)&terms, &terms_cap, term_count + MPM_ROW_MAX, sizeof *terms))
-          goto done;
-        const int n = slot_row(g, G, idx, ids, terms + term_count);
-        if (n < 0) goto done;
-        if (n == 0) continue;
-        const size_t a = g->ghost_count;
-        if (reserve_ghosts(g, a + 1) || mpm_grow((void **)&len, &len_cap, a + 1, sizeof *len) ||
-            mpm_grow((void **)&node, &node_cap, a + 1, sizeof *node))
-          goto done;
-        len[a] = (uint32_t)n;
-        node[a].level = level_of(g, G);
-        for (int d = 0; d < 3; ++d) node[a].idx[d] = idx[d];
-        term_count += (size_t)n;
-        g->ghost_slot[g->ghost_count++] = (uint32_t)(lv->dof_begin + b * MPM_BLOCK_NODES + local);
-      }
-    }
+  if (reserve_ghosts(g, g->build.count + 1)) return -1;
+  for (size_t a = 0; a < g->build.count; ++a) {
+    const uint32_t *w = g->build.where[a];
+    g->ghost_slot[a] = (uint32_t)(grid_of(g, (int)w[0])->dof_begin + w[1] * MPM_BLOCK_NODES + w[2]);
   }
+  g->ghost_count = g->build.count;
+  int status = -1;
   if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto done;
   const size_t entries = g->ghosts.row_start[g->ghost_count];
   if (entries > g->offset_capacity) {
@@ -498,12 +507,6 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   if (inactive) goto done;
   status = 0;
 done:
-  g->build.len = len;
-  g->build.node = node;
-  g->build.terms = terms;
-  g->build.len_cap = len_cap;
-  g->build.node_cap = node_cap;
-  g->build.terms_cap = terms_cap;
   return status;
 }
 
@@ -673,6 +676,7 @@ size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
              g->ghost_capacity * (sizeof(uint32_t) + 10 * sizeof(mpm_real)) +
              3 * g->offset_capacity * sizeof(mpm_real) + g->build.len_cap * sizeof(uint32_t) +
              (g->build.node_cap + g->build.terms_cap) * sizeof(mpm_row_term) +
+             g->build.where_cap * sizeof *g->build.where +
              g->blocks.id_capacity * sizeof(uint32_t) + g->blocks.owned_capacity * sizeof(uint64_t);
   FOR_GRIDS(g, G)
   b += grid_of((mpm_adaptive_grid *)g, G)->ops->bytes(grid_of((mpm_adaptive_grid *)g, G));
