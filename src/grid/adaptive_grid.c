@@ -330,9 +330,8 @@ static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t 
   return (int)e->len;
 }
 
-/* Record ghost (G, b, local) at node idx of `level` with the row's n terms at
- * build.terms[build.term_count ..): build_rows lays them out. Room for the 64 ghosts of a block
- * first: 0, or -1 when out of memory. */
+/* Room in g->build for the ghosts of one block (64) and their rows. 0, or -1 when out of
+ * memory. */
 static int reserve_block_ghosts(mpm_adaptive_grid *g) {
   const size_t a = g->build.count + MPM_BLOCK_NODES;
   return mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
@@ -342,7 +341,8 @@ static int reserve_block_ghosts(mpm_adaptive_grid *g) {
                   g->build.term_count + MPM_BLOCK_NODES * MPM_ROW_MAX, sizeof *g->build.terms);
 }
 
-/* (room for a block's ghosts made by reserve_block_ghosts) */
+/* Record ghost (G, b, local) at node idx of `level`, its row's n terms already at
+ * build.terms[build.term_count ..), for build_rows (room made by reserve_block_ghosts). */
 static void record_ghost(mpm_adaptive_grid *g, int G, size_t b, int local, int level,
                          const int32_t idx[3], int n) {
   const size_t a = g->build.count;

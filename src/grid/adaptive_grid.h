@@ -133,13 +133,13 @@ int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W);
  * mask of local indices. */
 void mpm_adaptive_grid_stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]);
 
-/* Activate and mark the parents of every used ghost. Parents are real, so one pass over the
- * used slots suffices. Serial. 0, or -1 when out of memory or when a row needs more than
- * MPM_ROW_MAX entries. */
+/* Activate and mark the parents of every used ghost, and record the ghosts with their rows for
+ * mpm_adaptive_grid_build_rows. Parents are real, so one pass over the used slots suffices.
+ * Serial. 0, or -1 when out of memory or when a row needs more than MPM_ROW_MAX entries. */
 int mpm_adaptive_grid_close(mpm_adaptive_grid *g);
 
-/* After the DOF layout (each level's dof_begin set): the ghost rows. 0, or -1 when out of
- * memory. */
+/* After the DOF layout (each level's dof_begin set): the rows of the ghosts the last
+ * mpm_adaptive_grid_close found. 0, or -1 when out of memory. */
 int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g);
 
 /* The slot (DOF index) of node idx of `level`, or -1 when it is not active. */
