@@ -33,7 +33,6 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   for (int d = 0; d < 3; ++d) mpm_free(g->offset[d]);
   mpm_free(g->spread);
   mpm_free(g->build.len);
-  mpm_free(g->build.node);
   mpm_free(g->build.terms);
   mpm_free(g->build.where);
   rows_free(&g->rows);
@@ -312,6 +311,17 @@ static inline uint64_t owned_of(const mpm_adaptive_grid *g, const uint32_t *ids)
  * level is a duplicate of the level grid's slot; a real node owned by a coarser level is a
  * duplicate of that level's slot on any grid. `ids`: the slot's block's (block_ids). -1 past
  * MPM_ROW_MAX or when out of memory. */
+/* The row of a duplicate: node idx of `level`, a real node owned by `owner`, is the owner's node
+ * at the same position. 1 term. */
+static int duplicate_row(int level, int owner, const int32_t idx[3], mpm_row_term *row) {
+  row[0].level = owner;
+  for (int d = 0; d < 3; ++d) /* exact: the same position as a node of the owner */
+    row[0].idx[d] =
+        owner < level ? idx[d] / (1 << (level - owner)) : idx[d] * (1 << (owner - level));
+  row[0].w = 1;
+  return 1;
+}
+
 static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t *ids,
                     mpm_row_term *row) {
   const int level = level_of(g, G);
@@ -319,12 +329,7 @@ static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t 
   if (!e) return -1;
   if (e->owner >= 0) { /* real */
     if (e->owner == level && G < MPM_LEVELS_MAX) return 0;
-    row[0].level = e->owner;    /* a duplicate: the owner's node, the same position */
-    for (int d = 0; d < 3; ++d) /* exact: the same position as a node of the owner */
-      row[0].idx[d] = e->owner < level ? idx[d] / (1 << (level - e->owner))
-                                       : idx[d] * (1 << (e->owner - level));
-    row[0].w = 1;
-    return 1;
+    return duplicate_row(level, e->owner, idx, row);
   }
   memcpy(row, g->rows.terms + e->start, e->len * sizeof *row);
   return (int)e->len;
@@ -335,20 +340,16 @@ static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t 
 static int reserve_block_ghosts(mpm_adaptive_grid *g) {
   const size_t a = g->build.count + MPM_BLOCK_NODES;
   return mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
-         mpm_grow((void **)&g->build.node, &g->build.node_cap, a, sizeof *g->build.node) ||
          mpm_grow((void **)&g->build.where, &g->build.where_cap, a, sizeof *g->build.where) ||
          mpm_grow((void **)&g->build.terms, &g->build.terms_cap,
                   g->build.term_count + MPM_BLOCK_NODES * MPM_ROW_MAX, sizeof *g->build.terms);
 }
 
-/* Record ghost (G, b, local) at node idx of `level`, its row's n terms already at
- * build.terms[build.term_count ..), for build_rows (room made by reserve_block_ghosts). */
-static void record_ghost(mpm_adaptive_grid *g, int G, size_t b, int local, int level,
-                         const int32_t idx[3], int n) {
+/* Record ghost (G, b, local), its row's n terms already at build.terms[build.term_count ..),
+ * for build_rows (room made by reserve_block_ghosts). */
+static void record_ghost(mpm_adaptive_grid *g, int G, size_t b, int local, int n) {
   const size_t a = g->build.count;
   g->build.len[a] = (uint32_t)n;
-  g->build.node[a].level = level;
-  for (int d = 0; d < 3; ++d) g->build.node[a].idx[d] = idx[d];
   g->build.where[a][0] = (uint32_t)G;
   g->build.where[a][1] = (uint32_t)b;
   g->build.where[a][2] = (uint32_t)local;
@@ -361,6 +362,7 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
   FOR_GRIDS(g, G) {
     if (ensure_masks(g, G)) return -1;
     const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
+    const int level = level_of(g, G);
     for (size_t b = 0; b < sg->block_count; ++b) {
       uint64_t pending = g->used[G][b] & ~g->done[G][b];
       g->done[G][b] |= pending;
@@ -369,7 +371,7 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
         if (u < 0) return -1;
         if (u) continue;
       }
-      uint32_t *ids = pending ? block_ids(g, level_of(g, G), sg->coord[b]) : NULL;
+      uint32_t *ids = pending ? block_ids(g, level, sg->coord[b]) : NULL;
       if (pending && !ids) return -1;
       /* a real node owned by the level has no row on the level's grid; on an extra grid it is a
        * duplicate of the level grid's node (slot_row), here without the lookup */
@@ -384,17 +386,14 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
         mpm_row_term *row = g->build.terms + g->build.term_count;
         int n;
         if (own >> local & 1) { /* slot_row's duplicate of the level grid's node */
-          row[0].level = level_of(g, G);
-          for (int d = 0; d < 3; ++d) row[0].idx[d] = idx[d];
-          row[0].w = 1;
-          n = 1;
+          n = duplicate_row(level, level, idx, row);
         } else {
           n = slot_row(g, G, idx, ids, row);
           if (n < 0) return -1;
         }
         if (n) {
           g->ghost[G][b] |= (uint64_t)1 << local;
-          record_ghost(g, G, b, local, level_of(g, G), idx, n);
+          record_ghost(g, G, b, local, n);
         }
         /* parents are real nodes of the level grids: their own rows are empty, so nothing more
          * follows from them */
@@ -440,17 +439,12 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
 }
 
 int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
-  /* pass 1: the ghosts close() found, in its order (grid, block, slot), and their slots now
-   * that the layout is known; the build arrays are kept from step to step: fresh pages for tens
-   * of MB every step cost more than filling them */
-  const uint32_t *len = g->build.len;
-  const mpm_row_term *node = g->build.node, *terms = g->build.terms; /* ghost a's node; rows */
+  /* the ghosts close() found, in its order (grid, block, slot); the build arrays are kept from
+   * step to step: fresh pages for tens of MB every step cost more than filling them */
+  const uint32_t *len = g->build.len, (*where)[3] = g->build.where;
+  const mpm_row_term *terms = g->build.terms;
   g->ghost_count = 0;
   if (reserve_ghosts(g, g->build.count + 1)) return -1;
-  for (size_t a = 0; a < g->build.count; ++a) {
-    const uint32_t *w = g->build.where[a];
-    g->ghost_slot[a] = (uint32_t)(grid_of(g, (int)w[0])->dof_begin + w[1] * MPM_BLOCK_NODES + w[2]);
-  }
   g->ghost_count = g->build.count;
   int status = -1;
   if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto done;
@@ -468,13 +462,19 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
       goto done;
     }
   }
-  /* pass 2: the entries, their APIC offsets and the spreads, ghosts in parallel (row a's terms
-   * are terms[row_start[a] ..): the layout packs the rows by len) */
+  /* each ghost's slot now that the layout is known, its entries, their APIC offsets and its
+   * spread, ghosts in parallel (row a's terms are terms[row_start[a] ..): the layout packs the
+   * rows by len) */
   const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
   const long ghosts = (long)g->ghost_count;
   int inactive = 0;
 #pragma omp parallel for schedule(static) reduction(| : inactive) if (ghosts > 1024)
   for (long a = 0; a < ghosts; ++a) {
+    const mpm_grid *lv = grid_of(g, (int)where[a][0]);
+    g->ghost_slot[a] = (uint32_t)(lv->dof_begin + where[a][1] * MPM_BLOCK_NODES + where[a][2]);
+    const int level = level_of(g, (int)where[a][0]);
+    int32_t idx[3]; /* the ghost's node */
+    node_of(&lv->impl.sparse, where[a][1], (int)where[a][2], idx);
     const mpm_row_term *row = terms + g->ghosts.row_start[a];
     double S[6] = {0, 0, 0, 0, 0, 0};
     for (uint32_t t = 0; t < len[a]; ++t) {
@@ -490,8 +490,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
       for (int d = 0; d < 3; ++d) {
         const int64_t Xi =
             (int64_t)row[t].idx[d] * ((int64_t)1 << fine_shift(&g->tree, row[t].level));
-        const int64_t Xg =
-            (int64_t)node[a].idx[d] * ((int64_t)1 << fine_shift(&g->tree, node[a].level));
+        const int64_t Xg = (int64_t)idx[d] * ((int64_t)1 << fine_shift(&g->tree, level));
         r[d] = (double)(Xi - Xg) * fine;
         g->offset[d][e] = (mpm_real)(row[t].w * r[d]);
       }
@@ -675,7 +674,7 @@ size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
   size_t b = mpm_refinement_bytes(&g->tree) + mpm_embedding_bytes(&g->ghosts) +
              g->ghost_capacity * (sizeof(uint32_t) + 10 * sizeof(mpm_real)) +
              3 * g->offset_capacity * sizeof(mpm_real) + g->build.len_cap * sizeof(uint32_t) +
-             (g->build.node_cap + g->build.terms_cap) * sizeof(mpm_row_term) +
+             g->build.terms_cap * sizeof(mpm_row_term) +
              g->build.where_cap * sizeof *g->build.where +
              g->blocks.id_capacity * sizeof(uint32_t) + g->blocks.owned_capacity * sizeof(uint64_t);
   FOR_GRIDS(g, G)

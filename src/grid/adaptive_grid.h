@@ -57,12 +57,12 @@ typedef struct mpm_adaptive_grid {
   mpm_real *offset[3];
   size_t offset_capacity;
   mpm_real *spread;
-  struct { /* the ghosts close() found, for build_rows: per ghost its row's length, its node
-              and its slot (grid, block, local index), and the rows */
+  struct { /* the ghosts close() found, for build_rows: per ghost its row's length and its
+              slot (grid, block, local index), and the rows */
     uint32_t *len;
-    mpm_row_term *node, *terms;
+    mpm_row_term *terms;
     uint32_t (*where)[3];
-    size_t len_cap, node_cap, terms_cap, where_cap, count, term_count;
+    size_t len_cap, terms_cap, where_cap, count, term_count;
   } build;
   /* the nodes' rows, kept from step to step while the tree does not change (tree.version):
    * keyed by the node's position on the finest lattice, the owner level of a real node (row

@@ -169,7 +169,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
 
   /* 1. base node of each particle's stencil -> (owner block, cell in block), in parallel */
   const mpm_real inv_dx = k->inv_dx, shift = k->shift;
-  const int32_t pair = k->kind == MPM_KERNEL_UGIMP_PAIRED ? ~1 : ~0; /* as mpm_kernel_base */
+  const int32_t pair = mpm_kernel_base_mask(k);
   const mpm_real *x0 = p->x[0], *x1 = p->x[1], *x2 = p->x[2];
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < (long)n; ++i) {

@@ -204,11 +204,17 @@ mpm_kernel_1d(const mpm_kernel *k, mpm_real xg, mpm_real *w, mpm_real *dw, mpm_r
   return base;
 }
 
+/* ANDed with floor(x/dx - shift), the base node: the even node at or below for the paired
+ * kernel (mpm_kernel_paired), the node itself for the others. */
+static inline int mpm_kernel_base_mask(const mpm_kernel *k) {
+  return k->kind == MPM_KERNEL_UGIMP_PAIRED ? ~1 : ~0;
+}
+
 /* The base node of the stencil at position x (relative to the grid origin, m) alone, as
  * mpm_kernel_stencil gives it: for sorting and activation, which need no weights. */
 static inline __attribute__((always_inline)) void
 mpm_kernel_base(const mpm_kernel *k, const mpm_real x[3], int base[3]) {
-  const int pair = k->kind == MPM_KERNEL_UGIMP_PAIRED ? ~1 : ~0; /* the even node at or below */
+  const int pair = mpm_kernel_base_mask(k);
   for (int d = 0; d < 3; ++d) base[d] = (int)mpm_floor(x[d] * k->inv_dx - k->shift) & pair;
 }
 

@@ -144,7 +144,7 @@ MPM_ALWAYS_INLINE void mpm_lane_stencil_eval(const int W, const mpm_kernel *k,
   for (int d = 0; d < 3; ++d) {
     const mpm_vl xg = (mpm_lanes_load(x[d], idx, n, contiguous) - origin[d]) * inv_dx;
     base[d] = (int)mpm_floor(xg[0] - k->shift);
-    if (W == 4 && k->kind == MPM_KERNEL_UGIMP_PAIRED) base[d] &= ~1; /* the even node below */
+    if (W == 4) base[d] &= mpm_kernel_base_mask(k); /* paired: the even node below */
     const mpm_vl f = xg - (mpm_real)base[d];
     s->f[d] = f;
     mpm_vl *w = s->w[d], *dw = s->dw[d], *a = s->a[d];
