@@ -41,6 +41,8 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   mpm_free(g->blocks.ids_at);
   mpm_free(g->blocks.ids);
   mpm_free(g->blocks.owned);
+  mpm_free(g->closing.pending);
+  mpm_free(g->closing.count);
   memset(g, 0, sizeof *g);
 }
 
@@ -276,6 +278,7 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
 }
 
 static uint32_t *block_ids(mpm_adaptive_grid *g, int level, const int32_t bc[3]);
+static int64_t block_slot_find(const mpm_adaptive_grid *g, int level, const int32_t bc[3]);
 
 /* The row cache's entry of node idx of `level`, through its block's ids (block_ids). NULL when
  * out of memory or past MPM_ROW_MAX. */
@@ -357,50 +360,173 @@ static void record_ghost(mpm_adaptive_grid *g, int G, size_t b, int local, int n
   g->build.count = a + 1;
 }
 
+/* Close block b of transfer grid G on the serial path: look its pending slots' rows up (made in
+ * the caches on first use), record its ghosts and mark their parents (activating their
+ * blocks). 0, or -1 when out of memory or past MPM_ROW_MAX. */
+static int close_block_serial(mpm_adaptive_grid *g, int G, size_t b, uint64_t pending) {
+  const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
+  const int level = level_of(g, G);
+  if (!pending) return 0;
+  if (G < MPM_LEVELS_MAX) { /* a block of owned real nodes has no rows */
+    const int u = mpm_adaptive_grid_block_uniform(g, G, sg->coord[b]);
+    if (u < 0) return -1;
+    if (u) return 0;
+  }
+  uint32_t *ids = block_ids(g, level, sg->coord[b]);
+  if (!ids) return -1;
+  /* a real node owned by the level has no row on the level's grid; on an extra grid it is a
+   * duplicate of the level grid's node (slot_row), here without the lookup */
+  const uint64_t own = owned_of(g, ids);
+  if (G < MPM_LEVELS_MAX) pending &= ~own;
+  if (pending && reserve_block_ghosts(g)) return -1;
+  while (pending) {
+    const int local = __builtin_ctzll(pending);
+    pending &= pending - 1;
+    int32_t idx[3];
+    node_of(sg, b, local, idx);
+    mpm_row_term *row = g->build.terms + g->build.term_count;
+    int n;
+    if (own >> local & 1) { /* slot_row's duplicate of the level grid's node */
+      n = duplicate_row(level, level, idx, row);
+    } else {
+      n = slot_row(g, G, idx, ids, row);
+      if (n < 0) return -1;
+    }
+    if (n) {
+      g->ghost[G][b] |= (uint64_t)1 << local;
+      record_ghost(g, G, b, local, n);
+    }
+    /* parents are real nodes of the level grids: their own rows are empty, so nothing more
+     * follows from them */
+    for (int t = 0; t < n; ++t)
+      if (mark(g, row[t].level, row[t].idx) < 0) return -1;
+  }
+  return 0;
+}
+
+/* Block b of transfer grid G (its pending slots) closed from the caches alone, changing none of
+ * them and activating no block, so that blocks run in parallel. Without `at`: its ghosts and
+ * their row terms counted into count[0..1]; -1 when a lookup misses or a parent's block is not
+ * active (the block then takes the serial path). With `at` (after a counting pass returned 0):
+ * its ghosts recorded from build index at[0] and term index at[1] on, as the serial path would
+ * (parents' blocks are active, their used bits not needed: a parent's own row is empty). */
+static int close_block_cached(mpm_adaptive_grid *g, int G, size_t b, uint64_t pending,
+                              uint32_t count[2], const uint32_t at[2]) {
+  const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
+  const int level = level_of(g, G);
+  if (count) count[0] = count[1] = 0;
+  if (!pending) return 0;
+  const struct mpm_block_flags *f = &g->blocks;
+  const int64_t s = block_slot_find(g, level, sg->coord[b]);
+  if (s < 0) return -1;
+  if (G < MPM_LEVELS_MAX && f->uniform[s]) return 0;
+  if (f->ids_at[s] == UINT32_MAX) return -1;
+  const uint32_t *ids = f->ids + (size_t)f->ids_at[s] * MPM_BLOCK_NODES;
+  const uint64_t own = f->owned[f->ids_at[s]];
+  if (G < MPM_LEVELS_MAX) pending &= ~own;
+  uint32_t ghosts = 0, terms = 0;
+  mpm_row_term local_row[MPM_ROW_MAX];
+  while (pending) {
+    const int local = __builtin_ctzll(pending);
+    pending &= pending - 1;
+    int32_t idx[3];
+    node_of(sg, b, local, idx);
+    mpm_row_term *row = at ? g->build.terms + at[1] + terms : local_row;
+    int n;
+    if (own >> local & 1) {
+      n = duplicate_row(level, level, idx, row);
+    } else {
+      if (ids[local] == UINT32_MAX) return -1;
+      const struct mpm_row_entry *e = &g->rows.entries[ids[local]];
+      if (e->owner >= 0)
+        n = e->owner == level && G < MPM_LEVELS_MAX ? 0 : duplicate_row(level, e->owner, idx, row);
+      else {
+        memcpy(row, g->rows.terms + e->start, e->len * sizeof *row);
+        n = (int)e->len;
+      }
+    }
+    if (!n) continue;
+    if (at) {
+      const size_t a = at[0] + ghosts;
+      g->ghost[G][b] |= (uint64_t)1 << local;
+      g->build.len[a] = (uint32_t)n;
+      g->build.where[a][0] = (uint32_t)G;
+      g->build.where[a][1] = (uint32_t)b;
+      g->build.where[a][2] = (uint32_t)local;
+    } else {
+      for (int t = 0; t < n; ++t) {
+        const int32_t bc[3] = {block_of(row[t].idx[0]), block_of(row[t].idx[1]),
+                               block_of(row[t].idx[2])};
+        if (mpm_sparse_grid_find(&g->level[row[t].level].impl.sparse, bc) < 0) return -1;
+      }
+    }
+    ghosts++;
+    terms += (uint32_t)n;
+  }
+  if (count) count[0] = ghosts, count[1] = terms;
+  return 0;
+}
+
+/* The ghosts among the used slots, grid by grid in block order, with their rows; their parents
+ * active. Blocks whose rows the caches hold (every step between two rebuilds, nearly all) are
+ * counted and then recorded in parallel; the others take the serial path in their turn, so
+ * that records, caches and new blocks come in the serial order whatever the threads. */
 int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
   g->build.count = g->build.term_count = 0;
   FOR_GRIDS(g, G) {
     if (ensure_masks(g, G)) return -1;
     const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
-    const int level = level_of(g, G);
-    for (size_t b = 0; b < sg->block_count; ++b) {
-      uint64_t pending = g->used[G][b] & ~g->done[G][b];
-      g->done[G][b] |= pending;
-      if (pending && G < MPM_LEVELS_MAX) { /* a block of owned real nodes has no rows */
-        const int u = mpm_adaptive_grid_block_uniform(g, G, sg->coord[b]);
-        if (u < 0) return -1;
-        if (u) continue;
-      }
-      uint32_t *ids = pending ? block_ids(g, level, sg->coord[b]) : NULL;
-      if (pending && !ids) return -1;
-      /* a real node owned by the level has no row on the level's grid; on an extra grid it is a
-       * duplicate of the level grid's node (slot_row), here without the lookup */
-      const uint64_t own = pending ? owned_of(g, ids) : 0;
-      if (G < MPM_LEVELS_MAX) pending &= ~own;
-      if (pending && reserve_block_ghosts(g)) return -1;
-      while (pending) {
-        const int local = __builtin_ctzll(pending);
-        pending &= pending - 1;
-        int32_t idx[3];
-        node_of(sg, b, local, idx);
-        mpm_row_term *row = g->build.terms + g->build.term_count;
-        int n;
-        if (own >> local & 1) { /* slot_row's duplicate of the level grid's node */
-          n = duplicate_row(level, level, idx, row);
-        } else {
-          n = slot_row(g, G, idx, ids, row);
-          if (n < 0) return -1;
-        }
-        if (n) {
-          g->ghost[G][b] |= (uint64_t)1 << local;
-          record_ghost(g, G, b, local, n);
-        }
-        /* parents are real nodes of the level grids: their own rows are empty, so nothing more
-         * follows from them */
-        for (int t = 0; t < n; ++t)
-          if (mark(g, row[t].level, row[t].idx) < 0) return -1;
-      }
+    const long nb = (long)sg->block_count;
+    if (mpm_grow((void **)&g->closing.pending, &g->closing.pending_cap, (size_t)nb + 1,
+                 sizeof *g->closing.pending) ||
+        mpm_grow((void **)&g->closing.count, &g->closing.count_cap, (size_t)nb + 1,
+                 sizeof *g->closing.count))
+      return -1;
+    uint64_t *pend = g->closing.pending;
+    uint32_t(*count)[2] = g->closing.count;
+    /* the caches are the tree's (else every block takes the serial path, which renews them) */
+    const int cached = g->rows.version == g->tree.version &&
+                       g->blocks.version == g->tree.version + 1 && g->blocks.size;
+    uint64_t *used = g->used[G], *done = g->done[G];
+#pragma omp parallel for schedule(dynamic, 32) if (nb > 256)
+    for (long b = 0; b < nb; ++b) {
+      const uint64_t p = used[b] & ~done[b];
+      done[b] |= p;
+      pend[b] = p;
+      if (!cached || close_block_cached(g, G, (size_t)b, p, count[b], NULL))
+        count[b][0] = UINT32_MAX;
     }
+    for (long b = 0; b < nb; ++b) {
+      if (count[b][0] == UINT32_MAX) {
+        if (close_block_serial(g, G, (size_t)b, pend[b])) return -1;
+        pend[b] = 0; /* done */
+        continue;
+      }
+      const uint32_t ghosts = count[b][0], terms = count[b][1];
+      if (!ghosts) {
+        pend[b] = 0;
+        continue;
+      }
+      const size_t a = g->build.count + ghosts, t = g->build.term_count + terms;
+      if (mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
+          mpm_grow((void **)&g->build.where, &g->build.where_cap, a, sizeof *g->build.where) ||
+          mpm_grow((void **)&g->build.terms, &g->build.terms_cap, t, sizeof *g->build.terms))
+        return -1;
+      count[b][0] = (uint32_t)g->build.count; /* now where its records start */
+      count[b][1] = (uint32_t)g->build.term_count;
+      g->build.count = a;
+      g->build.term_count = t;
+    }
+    /* blocks the serial path activated on this grid (parents of its own level: real, no rows) */
+    for (size_t b = (size_t)nb; b < sg->block_count; ++b) {
+      if (ensure_masks(g, G)) return -1;
+      const uint64_t p = g->used[G][b] & ~g->done[G][b];
+      g->done[G][b] |= p;
+      if (close_block_serial(g, G, b, p)) return -1;
+    }
+#pragma omp parallel for schedule(dynamic, 32) if (nb > 256)
+    for (long b = 0; b < nb; ++b)
+      if (pend[b]) close_block_cached(g, G, (size_t)b, pend[b], NULL, count[b]);
   }
   return 0;
 }
@@ -586,6 +712,28 @@ void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real
   mpm_embedding_gather_moments(&g->ghosts, v, off, M);
 }
 
+static inline uint64_t block_flags_key(int level, const int32_t bc[3]) {
+  uint64_t key = (uint64_t)level;
+  for (int d = 0; d < 3; ++d) key = key << 20 | ((uint64_t)(bc[d] + (1 << 19)) & 0xfffff);
+  return key;
+}
+
+static inline size_t block_flags_hash(uint64_t key, size_t size) {
+  return (size_t)((key * 0x9e3779b97f4a7c15ull) >> 20) & (size - 1);
+}
+
+/* The hash slot of (level, block bc) in g->blocks if it was made (block_slot), else -1; reads
+ * only (the caller checked that the table is the tree's). */
+static int64_t block_slot_find(const mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
+  const struct mpm_block_flags *f = &g->blocks;
+  if (!f->size) return -1;
+  const uint64_t key = block_flags_key(level, bc);
+  for (size_t s = block_flags_hash(key, f->size); f->keys[s] != UINT64_MAX;
+       s = (s + 1) & (f->size - 1))
+    if (f->keys[s] == key) return (int64_t)s;
+  return -1;
+}
+
 /* The hash slot of (level, block bc) in g->blocks, made (with its uniform flag) on first use;
  * the table is emptied when the tree changes. -1 when out of memory. */
 static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
@@ -596,8 +744,7 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
     f->count = f->id_blocks = 0;
     f->version = r->version + 1;
   }
-  uint64_t key = (uint64_t)level;
-  for (int d = 0; d < 3; ++d) key = key << 20 | ((uint64_t)(bc[d] + (1 << 19)) & 0xfffff);
+  const uint64_t key = block_flags_key(level, bc);
   if (2 * (f->count + 1) > f->size) {
     const size_t size = f->size ? 2 * f->size : 4096;
     uint64_t *keys = mpm_alloc(size * sizeof *keys);
@@ -612,7 +759,7 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
     memset(keys, 0xff, size * sizeof *keys);
     for (size_t s = 0; s < f->size; ++s)
       if (f->keys[s] != UINT64_MAX) {
-        size_t t = (size_t)((f->keys[s] * 0x9e3779b97f4a7c15ull) >> 20) & (size - 1);
+        size_t t = block_flags_hash(f->keys[s], size);
         while (keys[t] != UINT64_MAX) t = (t + 1) & (size - 1);
         keys[t] = f->keys[s];
         uniform[t] = f->uniform[s];
@@ -626,7 +773,7 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
     f->ids_at = ids_at;
     f->size = size;
   }
-  size_t s = (size_t)((key * 0x9e3779b97f4a7c15ull) >> 20) & (f->size - 1);
+  size_t s = block_flags_hash(key, f->size);
   for (; f->keys[s] != UINT64_MAX; s = (s + 1) & (f->size - 1))
     if (f->keys[s] == key) return (int64_t)s;
   const double dx = (double)mpm_refinement_dx(r, level);

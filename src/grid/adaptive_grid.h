@@ -64,6 +64,14 @@ typedef struct mpm_adaptive_grid {
     uint32_t (*where)[3];
     size_t len_cap, terms_cap, where_cap, count, term_count;
   } build;
+  /* close()'s scratch per block of the grid it closes: the block's pending slots, and its
+   * ghosts and row terms as the parallel pass counts them (UINT32_MAX ghosts: the block takes
+   * the serial path), then where its records start in build */
+  struct {
+    uint64_t *pending;
+    uint32_t (*count)[2];
+    size_t pending_cap, count_cap;
+  } closing;
   /* the nodes' rows, kept from step to step while the tree does not change (tree.version):
    * keyed by the node's position on the finest lattice, the owner level of a real node (row
    * empty) or the row of a constrained one, terms[start .. start + len) */
