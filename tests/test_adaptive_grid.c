@@ -63,6 +63,29 @@ static void slot_position(const mpm_adaptive_grid *g, size_t slot, double x[3]) 
 
 static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed);
 
+/* The ghosts' scatter schedule: built, every ghost in one group, and no two groups of one colour
+ * with a parent in common (the parallel scatter's condition, grid/scatter_schedule.h). */
+static void check_schedule(const mpm_adaptive_grid *g, size_t total) {
+  const mpm_embedding *E = &g->ghosts;
+  const mpm_scatter_schedule *S = &E->schedule;
+  assert_true(S->built);
+  int32_t *owner = malloc(total * sizeof *owner); /* per column: the group that wrote it */
+  size_t rows = 0;
+  for (int colour = 0; colour < MPM_SCHEDULE_COLOURS; ++colour) {
+    for (size_t i = 0; i < total; ++i) owner[i] = -1;
+    for (size_t q = S->colour_start[colour]; q < S->colour_start[colour + 1]; ++q)
+      for (uint32_t j = S->group_start[q]; j < S->group_start[q + 1]; ++j, ++rows) {
+        const uint32_t a = S->group_row[j];
+        for (uint32_t e = E->row_start[a]; e < E->row_start[a] + E->row_len[a]; ++e) {
+          assert_true(owner[E->col[e]] == -1 || owner[E->col[e]] == (int32_t)q);
+          owner[E->col[e]] = (int32_t)q;
+        }
+      }
+  }
+  assert_int_equal(rows + S->own_rows, g->ghost_count);
+  free(owner);
+}
+
 static void run(int levels, uint64_t seed) {
   static mpm_adaptive_grid g;
   static cloud c;
@@ -74,6 +97,7 @@ static void run(int levels, uint64_t seed) {
     assert_int_equal(g.ghost_count, 0);
   } else {
     assert_true(g.ghost_count > 0);
+    check_schedule(&g, total);
   }
   mpm_real *u[4];
   double *ref = calloc(total, sizeof *ref);

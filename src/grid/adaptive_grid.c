@@ -41,6 +41,10 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   mpm_free(g->blocks.ids_at);
   mpm_free(g->blocks.ids);
   mpm_free(g->blocks.owned);
+  mpm_free(g->schedule.key);
+  mpm_free(g->schedule.colour);
+  mpm_free(g->schedule.table_block);
+  mpm_free(g->schedule.table_key);
   mpm_free(g->closing.pending);
   mpm_free(g->closing.count);
   memset(g, 0, sizeof *g);
@@ -564,6 +568,67 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
   return 0;
 }
 
+/* The ghosts' scatter in parallel, the same sums for any number of threads: ghosts grouped by
+ * the level-0 block they lie in, coloured by its parity. A ghost's parents lie less than two
+ * level-0 cells from it (build_rows checks, else the scatter stays serial), so ghosts in two
+ * blocks of one colour, 4 level-0 cells apart at least, never share a parent. 0, or -1 when out
+ * of memory. */
+static int build_schedule(mpm_adaptive_grid *g) {
+  const size_t n = g->ghost_count;
+  if (mpm_grow((void **)&g->schedule.key, &g->schedule.key_cap, n + 1, sizeof(int32_t))) return -1;
+  /* the table of blocks: at most one key per ghost block (where[a][0..1]), at most half full */
+  size_t size = g->schedule.table_size ? g->schedule.table_size : 1024;
+  while (size < 2 * (n / 8 + 16)) size *= 2; /* grown below if the blocks are more */
+  int32_t keys = 0;
+  uint32_t lastG = UINT32_MAX, lastb = UINT32_MAX;
+  int32_t key = -1;
+  for (;;) {
+    if (size != g->schedule.table_size) {
+      mpm_free(g->schedule.table_block);
+      mpm_free(g->schedule.table_key);
+      g->schedule.table_block = mpm_alloc(size * sizeof(uint64_t));
+      g->schedule.table_key = mpm_alloc(size * sizeof(int32_t));
+      g->schedule.table_size = g->schedule.table_block && g->schedule.table_key ? size : 0;
+      if (!g->schedule.table_size) return -1;
+    }
+    memset(g->schedule.table_block, 0xff, size * sizeof(uint64_t));
+    keys = 0;
+    lastG = lastb = UINT32_MAX;
+    int full = 0;
+    for (size_t a = 0; a < n && !full; ++a) {
+      const uint32_t G = g->build.where[a][0], b = g->build.where[a][1];
+      if (G != lastG || b != lastb) { /* ghosts of one block are consecutive: one lookup each */
+        lastG = G, lastb = b;
+        const int32_t *c = grid_of(g, (int)G)->impl.sparse.coord[b];
+        const int L = level_of(g, (int)G);
+        uint64_t block = 0;
+        for (int d = 0; d < 3; ++d) /* arithmetic shift: floor */
+          block = block << 21 | ((uint64_t)((c[d] >> L) + (1 << 20)) & 0x1fffff);
+        size_t s = (size_t)((block * 0x9e3779b97f4a7c15ull) >> 24) & (size - 1);
+        while (g->schedule.table_block[s] != UINT64_MAX && g->schedule.table_block[s] != block)
+          s = (s + 1) & (size - 1);
+        if (g->schedule.table_block[s] == UINT64_MAX) {
+          if (2 * (size_t)(keys + 1) > size) {
+            full = 1;
+            break;
+          }
+          g->schedule.table_block[s] = block;
+          g->schedule.table_key[s] = keys++;
+          if (mpm_grow((void **)&g->schedule.colour, &g->schedule.colour_cap, (size_t)keys, 1))
+            return -1;
+          g->schedule.colour[keys - 1] =
+              (uint8_t)(((c[0] >> L) & 1) << 2 | ((c[1] >> L) & 1) << 1 | ((c[2] >> L) & 1));
+        }
+        key = g->schedule.table_key[s];
+      }
+      g->schedule.key[a] = key;
+    }
+    if (!full) break;
+    size *= 4; /* more blocks than guessed: once more with room for them */
+  }
+  return mpm_embedding_schedule(&g->ghosts, g->schedule.key, (size_t)keys, g->schedule.colour);
+}
+
 int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   /* the ghosts close() found, in its order (grid, block, slot); the build arrays are kept from
    * step to step: fresh pages for tens of MB every step cost more than filling them */
@@ -593,8 +658,9 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
    * rows by len) */
   const double fine = (double)mpm_refinement_dx(&g->tree, g->tree.levels - 1);
   const long ghosts = (long)g->ghost_count;
-  int inactive = 0;
-#pragma omp parallel for schedule(static) reduction(| : inactive) if (ghosts > 1024)
+  const int64_t reach = (int64_t)2 << fine_shift(&g->tree, 0); /* 2 level-0 cells */
+  int inactive = 0, far = 0;
+#pragma omp parallel for schedule(static) reduction(| : inactive, far) if (ghosts > 1024)
   for (long a = 0; a < ghosts; ++a) {
     const mpm_grid *lv = grid_of(g, (int)where[a][0]);
     g->ghost_slot[a] = (uint32_t)(lv->dof_begin + where[a][1] * MPM_BLOCK_NODES + where[a][2]);
@@ -618,6 +684,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
             (int64_t)row[t].idx[d] * ((int64_t)1 << fine_shift(&g->tree, row[t].level));
         const int64_t Xg = (int64_t)idx[d] * ((int64_t)1 << fine_shift(&g->tree, level));
         r[d] = (double)(Xi - Xg) * fine;
+        far |= Xi - Xg >= reach || Xg - Xi >= reach;
         g->offset[d][e] = (mpm_real)(row[t].w * r[d]);
       }
       S[0] += row[t].w * r[0] * r[0];
@@ -630,7 +697,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     for (int q = 0; q < 6; ++q) g->spread[6 * (size_t)a + (size_t)q] = (mpm_real)S[q];
   }
   if (inactive) goto done;
-  status = 0;
+  status = far ? 0 : build_schedule(g);
 done:
   return status;
 }

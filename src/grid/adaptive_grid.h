@@ -64,6 +64,16 @@ typedef struct mpm_adaptive_grid {
     uint32_t (*where)[3];
     size_t len_cap, terms_cap, where_cap, count, term_count;
   } build;
+  /* the ghosts' scatter schedule (build_rows, grid/scatter_schedule.h): per ghost its key, the
+   * level-0 block it lies in; per key its colour, the block's parity; a table from blocks to
+   * keys */
+  struct {
+    int32_t *key;
+    uint8_t *colour;
+    uint64_t *table_block;
+    int32_t *table_key;
+    size_t key_cap, colour_cap, table_size;
+  } schedule;
   /* close()'s scratch per block of the grid it closes: the block's pending slots, and its
    * ghosts and row terms as the parallel pass counts them (UINT32_MAX ghosts: the block takes
    * the serial path), then where its records start in build */
