@@ -200,6 +200,18 @@ static void run(int levels, uint64_t seed) {
   mpm_adaptive_grid_free(&g);
 }
 
+/* Mark the stencil of every particle of the cloud used (activating its blocks). */
+static void mark_cloud(mpm_adaptive_grid *g, const cloud *c) {
+  for (int p = 0; p < PARTICLES; ++p) {
+    int base[3], n[3];
+    mpm_real w[3][MPM_GIMP_NODES_MAX];
+    stencil(g, c, p, base, n, w);
+    const int32_t blo[3] = {base[0], base[1], base[2]};
+    const int32_t bhi[3] = {base[0] + n[0] - 1, base[1] + n[1] - 1, base[2] + n[2] - 1};
+    assert_int_equal(mpm_adaptive_grid_activate_box(g, c->level[p], blo, bhi), 0);
+  }
+}
+
 /* The tree, the cloud and the activated, closed, laid-out grid of run(), for the APIC test. */
 static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed) {
   const mpm_real o[3] = {R_(0.1), R_(-0.2), R_(0.05)};
@@ -225,13 +237,8 @@ static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed) {
       hi[d] = c->x[p][d] + c->Lp[p] / 2;
     }
     c->level[p] = mpm_refinement_finest_level_in(&g->tree, lo, hi);
-    int base[3], n[3];
-    mpm_real w[3][MPM_GIMP_NODES_MAX];
-    stencil(g, c, p, base, n, w);
-    const int32_t blo[3] = {base[0], base[1], base[2]};
-    const int32_t bhi[3] = {base[0] + n[0] - 1, base[1] + n[1] - 1, base[2] + n[2] - 1};
-    assert_int_equal(mpm_adaptive_grid_activate_box(g, c->level[p], blo, bhi), 0);
   }
+  mark_cloud(g, c);
   assert_int_equal(mpm_adaptive_grid_close(g), 0);
   size_t total = 0;
   for (int L = 0; L < levels; ++L) {
@@ -435,12 +442,58 @@ static void test_four_levels(void **state) {
   run(4, 8);
 }
 
+/* A second close of the same marks, the tree unchanged, finds every row in the caches (the
+ * path that runs blocks in parallel): the same ghosts, rows and blocks as the first close, which
+ * took the serial path and filled the caches. */
+static void test_close_from_caches(void **state) {
+  (void)state;
+  static mpm_adaptive_grid g;
+  static cloud c;
+  for (int levels = 3; levels <= 4; ++levels) {
+    const size_t total = setup(&g, &c, levels, 11 + (uint64_t)levels);
+    const size_t n = g.build.count, nt = g.build.term_count;
+    assert_true(n > 0);
+    uint32_t *len = malloc(n * sizeof *len), (*where)[3] = malloc(n * sizeof *where);
+    mpm_row_term *terms = malloc(nt * sizeof *terms);
+    uint32_t *slot = malloc(n * sizeof *slot);
+    memcpy(len, g.build.len, n * sizeof *len);
+    memcpy(where, g.build.where, n * sizeof *where);
+    memcpy(terms, g.build.terms, nt * sizeof *terms);
+    memcpy(slot, g.ghost_slot, n * sizeof *slot);
+    size_t blocks[MPM_LEVELS_MAX];
+    for (int L = 0; L < levels; ++L) blocks[L] = g.level[L].impl.sparse.block_count;
+    mpm_adaptive_grid_clear_marks(&g);
+    mark_cloud(&g, &c);
+    assert_int_equal(mpm_adaptive_grid_close(&g), 0);
+    assert_int_equal(g.build.count, n);
+    assert_int_equal(g.build.term_count, nt);
+    assert_memory_equal(g.build.len, len, n * sizeof *len);
+    assert_memory_equal(g.build.where, where, n * sizeof *where);
+    assert_memory_equal(g.build.terms, terms, nt * sizeof *terms);
+    size_t total2 = 0;
+    for (int L = 0; L < levels; ++L) {
+      assert_int_equal(g.level[L].impl.sparse.block_count, blocks[L]);
+      g.level[L].dof_begin = total2;
+      total2 += g.level[L].ops->node_count(&g.level[L]);
+    }
+    assert_int_equal(total2, total);
+    assert_int_equal(mpm_adaptive_grid_build_rows(&g), 0);
+    assert_memory_equal(g.ghost_slot, slot, n * sizeof *slot);
+    print_message("%d levels: %zu ghosts, %zu row terms, the same from the caches\n", levels, n,
+                  nt);
+    free(len);
+    free(where);
+    free(terms);
+    free(slot);
+    mpm_adaptive_grid_free(&g);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_one_level),
-      cmocka_unit_test(test_three_levels),
-      cmocka_unit_test(test_four_levels),
-      cmocka_unit_test(test_apic_across_levels),
+      cmocka_unit_test(test_one_level),         cmocka_unit_test(test_three_levels),
+      cmocka_unit_test(test_four_levels),       cmocka_unit_test(test_apic_across_levels),
+      cmocka_unit_test(test_close_from_caches),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
