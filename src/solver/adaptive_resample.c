@@ -205,9 +205,10 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
   mpm_particles *p = &sim->particles;
   const size_t n = p->count;
   const int apic = sc->solver.transfer == MPM_TRANSFER_APIC;
-  /* what each particle does, and its leaf cell */
-  uint8_t *action = mpm_alloc(n + 1), *gone = NULL;
-  cell_key *leaf = mpm_alloc((n + 1) * sizeof *leaf);
+  /* what each particle does, and its leaf cell: step scratch (core/arena.h; the next step's
+   * reset takes it back), so that resampling every step allocates nothing once warm */
+  uint8_t *action = mpm_arena_alloc(&sim->step_arena, n + 1), *gone = NULL;
+  cell_key *leaf = mpm_arena_alloc(&sim->step_arena, (n + 1) * sizeof *leaf);
   candidate *cand = NULL;
   cell_table t = {0};
   mpm_status st = MPM_OK;
@@ -336,8 +337,6 @@ nomem:
                      "step %lld: out of memory resampling %zu particles (domain.resample)",
                      (long long)sim->steps, n);
 done:
-  mpm_free(action);
-  mpm_free(leaf);
   free(cand);
   free(gone);
   free(t.keys);
