@@ -521,10 +521,12 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
       g->build.count = a;
       g->build.term_count = t;
     }
-    /* blocks the serial path activated on this grid (parents of its own level: real, no rows) */
-    for (size_t b = (size_t)nb; b < sg->block_count; ++b) {
-      if (ensure_masks(g, G)) return -1;
+    /* slots the serial path marked on this grid itself, new blocks included (parents of its
+     * own level: real, so without rows; not expected, but closed as the serial loop would) */
+    if (ensure_masks(g, G)) return -1;
+    for (size_t b = 0; b < sg->block_count; ++b) {
       const uint64_t p = g->used[G][b] & ~g->done[G][b];
+      if (!p) continue;
       g->done[G][b] |= p;
       if (close_block_serial(g, G, b, p)) return -1;
     }
