@@ -577,56 +577,47 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
  * of memory. */
 static int build_schedule(mpm_adaptive_grid *g) {
   const size_t n = g->ghost_count;
-  if (mpm_grow((void **)&g->schedule.key, &g->schedule.key_cap, n + 1, sizeof(int32_t))) return -1;
-  /* the table of blocks: at most one key per ghost block (where[a][0..1]), at most half full */
-  size_t size = g->schedule.table_size ? g->schedule.table_size : 1024;
-  while (size < 2 * (n / 8 + 16)) size *= 2; /* grown below if the blocks are more */
-  int32_t keys = 0;
-  uint32_t lastG = UINT32_MAX, lastb = UINT32_MAX;
-  int32_t key = -1;
-  for (;;) {
-    if (size != g->schedule.table_size) {
-      mpm_free(g->schedule.table_block);
-      mpm_free(g->schedule.table_key);
-      g->schedule.table_block = mpm_alloc(size * sizeof(uint64_t));
-      g->schedule.table_key = mpm_alloc(size * sizeof(int32_t));
-      g->schedule.table_size = g->schedule.table_block && g->schedule.table_key ? size : 0;
-      if (!g->schedule.table_size) return -1;
-    }
-    memset(g->schedule.table_block, 0xff, size * sizeof(uint64_t));
-    keys = 0;
-    lastG = lastb = UINT32_MAX;
-    int full = 0;
-    for (size_t a = 0; a < n && !full; ++a) {
-      const uint32_t G = g->build.where[a][0], b = g->build.where[a][1];
-      if (G != lastG || b != lastb) { /* ghosts of one block are consecutive: one lookup each */
-        lastG = G, lastb = b;
-        const int32_t *c = grid_of(g, (int)G)->impl.sparse.coord[b];
-        const int L = level_of(g, (int)G);
-        uint64_t block = 0;
-        for (int d = 0; d < 3; ++d) /* arithmetic shift: floor */
-          block = block << 21 | ((uint64_t)((c[d] >> L) + (1 << 20)) & 0x1fffff);
-        size_t s = (size_t)((block * 0x9e3779b97f4a7c15ull) >> 24) & (size - 1);
-        while (g->schedule.table_block[s] != UINT64_MAX && g->schedule.table_block[s] != block)
-          s = (s + 1) & (size - 1);
-        if (g->schedule.table_block[s] == UINT64_MAX) {
-          if (2 * (size_t)(keys + 1) > size) {
-            full = 1;
-            break;
-          }
-          g->schedule.table_block[s] = block;
-          g->schedule.table_key[s] = keys++;
-          if (mpm_grow((void **)&g->schedule.colour, &g->schedule.colour_cap, (size_t)keys, 1))
-            return -1;
-          g->schedule.colour[keys - 1] =
-              (uint8_t)(((c[0] >> L) & 1) << 2 | ((c[1] >> L) & 1) << 1 | ((c[2] >> L) & 1));
-        }
-        key = g->schedule.table_key[s];
+  const uint32_t(*where)[3] = g->build.where;
+  /* ghosts of one block are consecutive: at most one key per run of a block, so a table twice
+   * the runs' count never fills */
+  size_t runs = 0;
+  for (size_t a = 0; a < n; ++a)
+    runs += a == 0 || where[a][0] != where[a - 1][0] || where[a][1] != where[a - 1][1];
+  size_t size = 1024;
+  while (size < 2 * runs) size *= 2;
+  if (size > g->schedule.table_size) {
+    mpm_free(g->schedule.table_block);
+    mpm_free(g->schedule.table_key);
+    g->schedule.table_block = mpm_alloc(size * sizeof(uint64_t));
+    g->schedule.table_key = mpm_alloc(size * sizeof(int32_t));
+    g->schedule.table_size = g->schedule.table_block && g->schedule.table_key ? size : 0;
+    if (!g->schedule.table_size) return -1;
+  }
+  size = g->schedule.table_size;
+  if (mpm_grow((void **)&g->schedule.key, &g->schedule.key_cap, n + 1, sizeof(int32_t)) ||
+      mpm_grow((void **)&g->schedule.colour, &g->schedule.colour_cap, runs + 1, 1))
+    return -1;
+  memset(g->schedule.table_block, 0xff, size * sizeof(uint64_t));
+  int32_t keys = 0, key = -1;
+  for (size_t a = 0; a < n; ++a) {
+    if (a == 0 || where[a][0] != where[a - 1][0] || where[a][1] != where[a - 1][1]) {
+      const int G = (int)where[a][0], L = level_of(g, G);
+      const int32_t *c = grid_of(g, G)->impl.sparse.coord[where[a][1]];
+      uint64_t block = 0;
+      for (int d = 0; d < 3; ++d) /* arithmetic shift: floor */
+        block = block << 21 | ((uint64_t)((c[d] >> L) + (1 << 20)) & 0x1fffff);
+      size_t s = (size_t)((block * 0x9e3779b97f4a7c15ull) >> 24) & (size - 1);
+      while (g->schedule.table_block[s] != UINT64_MAX && g->schedule.table_block[s] != block)
+        s = (s + 1) & (size - 1);
+      if (g->schedule.table_block[s] == UINT64_MAX) {
+        g->schedule.table_block[s] = block;
+        g->schedule.table_key[s] = keys;
+        g->schedule.colour[keys++] =
+            (uint8_t)(((c[0] >> L) & 1) << 2 | ((c[1] >> L) & 1) << 1 | ((c[2] >> L) & 1));
       }
-      g->schedule.key[a] = key;
+      key = g->schedule.table_key[s];
     }
-    if (!full) break;
-    size *= 4; /* more blocks than guessed: once more with room for them */
+    g->schedule.key[a] = key;
   }
   return mpm_embedding_schedule(&g->ghosts, g->schedule.key, (size_t)keys, g->schedule.colour);
 }
