@@ -8,6 +8,8 @@
  *  - epsilon = 1: the body never touches the grid (no grid node carries it), translates
  *    exactly, and a bar twisted and released comes back to its rest shape (to a rest-state
  *    error far below the unenriched body's);
+ *  - the bend K(F) does not see (a domain bent by an hourglass pattern, F = I) enriched by the
+ *    body's bend threshold, and released once straight;
  *  - 1 and 2 threads give bitwise the same state; the scene key's errors. */
 #include "support.h"
 #include "analysis/rest_error.h"
@@ -262,9 +264,11 @@ static void test_categories(void **state) {
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 0);
   /* without hysteresis (enrichment_exit = enrichment) the stretch of 1.5 releases it at once */
-  assert_int_equal(mpm_enrichment_set_epsilon(s, 0, (mpm_real)0.6, (mpm_real)0.6,
-                                              MPM_ENRICHMENT_FROBENIUS, 0, (mpm_real)0.02),
-                   0);
+  const mpm_enrichment_body no_exit = {.epsilon = (mpm_real)0.6,
+                                       .exit_k = (mpm_real)0.6,
+                                       .spacing = (mpm_real)0.02,
+                                       .metric = MPM_ENRICHMENT_FROBENIUS};
+  assert_int_equal(mpm_enrichment_set_body(s, 0, no_exit), 0);
   stretch_particle(sim, q0, 4);
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 8);
@@ -273,8 +277,8 @@ static void test_categories(void **state) {
   assert_int_equal(e->count, 0);
   /* epsilon 0 never enriches */
   stretch_particle(sim, q0, 4);
-  assert_int_equal(
-      mpm_enrichment_set_epsilon(s, 0, 0, 0, MPM_ENRICHMENT_FROBENIUS, 0, (mpm_real)0.02), 0);
+  const mpm_enrichment_body never = {.spacing = (mpm_real)0.02, .metric = MPM_ENRICHMENT_FROBENIUS};
+  assert_int_equal(mpm_enrichment_set_body(s, 0, never), 0);
   assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
   assert_int_equal(e->count, 0);
   assert_int_equal(e->particles[MPM_DOMAIN_UNENRICHED], 40);
@@ -518,6 +522,50 @@ static void test_hourglass_modes(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The bend K(F) does not see (enrich.h, bodies[].enrichment_hourglass): a domain of the bar
+ * bent by the pattern u_x = d s_i s_j (a layer one domain thick, bent) while every F stays I
+ * (K = 1). Its hourglass strain is 2 d / h (the bending strain at its faces); the body's bend
+ * threshold enriches it, and exactly the particles whose strain reaches the threshold (its
+ * neighbours share some of its moved corners), plain epsilon does not, and it returns to the
+ * grid once straight again (K = 1 > exit 0.95). */
+static void test_bend_enrichment(void **state) {
+  (void)state;
+  const double h = 0.02, bend = 0.05; /* bar()'s lattice spacing */
+  mpm_sim *plain = bar(", \"enrichment\": 0.6", "");
+  mpm_sim *sim = bar(", \"enrichment\": 0.6, \"enrichment_hourglass\": 0.05", "");
+  const size_t q0 = 17;
+  for (int k = 0; k < 2; ++k) {
+    mpm_domain_set *s = k ? &sim->domains : &plain->domains;
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a) /* d = 0.03 h: strain 0.06 */
+      s->cx[0][s->corner[q0][a]] += (mpm_real)(0.03 * h * mpm_hourglass_modes[0][a]);
+    assert_close(mpm_enrichment_hourglass_strain(s, q0, (mpm_real)h), 0.06, TOL(1e-4, 1e-12));
+  }
+  /* straight neighbours far from q0: strain 0 */
+  assert_close(mpm_enrichment_hourglass_strain(&sim->domains, 0, (mpm_real)h), 0, TOL(1e-4, 1e-12));
+  assert_int_equal(mpm_domain_mark_enrichment(&plain->domains, plain->materials), 0);
+  assert_int_equal(plain->domains.enrich.count, 0);
+  mpm_domain_set *s = &sim->domains;
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  const mpm_domain_enrichment *e = &s->enrich;
+  assert_int_equal(e->category[q0], MPM_DOMAIN_ENRICHED);
+  size_t flagged = 0;
+  for (size_t q = 0; q < s->particles.count; ++q) {
+    const double g = mpm_enrichment_hourglass_strain(s, q, (mpm_real)h);
+    assert_int_equal(e->flag[q], g >= bend);
+    flagged += e->flag[q];
+  }
+  print_message("bent domain: %zu of %zu particles enriched, %zu corners\n", flagged,
+                s->particles.count, e->count);
+  assert_true(e->count >= 8);
+  /* straight again: back to the grid */
+  for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+    s->cx[0][s->corner[q0][a]] -= (mpm_real)(0.03 * h * mpm_hourglass_modes[0][a]);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(e->count, 0);
+  mpm_sim_destroy(plain);
+  mpm_sim_destroy(sim);
+}
+
 /* kappa (domain/enrich.h): a domain bent by a hourglass pattern u_d = b s_i s_j (d one of the
  * axes i, j: a layer one domain thick, bent) costs 1/2 kappa sum |q|^2 = what linear elasticity
  * gives the trilinear field in uniaxial stress, 1/2 E eps_dd^2 integrated over the cube (2x2x2
@@ -644,6 +692,8 @@ static void test_scene_key(void **state) {
       {"\"enrichment_exit\": 1.2", "bodies[0].enrichment_exit"},
       {"\"enrichment_metric\": \"spectral\"", "bodies[0].enrichment_metric"},
       {"\"hourglass\": \"some\"", "bodies[0].hourglass"},
+      {"\"enrichment_hourglass\": 1.5", "bodies[0].enrichment_hourglass"},
+      {"\"enrichment_hourglass\": -0.01", "bodies[0].enrichment_hourglass"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
     char text[1024];
@@ -678,6 +728,10 @@ static void test_scene_key(void **state) {
            (int)(strstr(text, "\"enrichment\"") - text), text);
   assert_int_not_equal(mpm_scene_parse(without, "e.json", &scene, &err), MPM_OK);
   assert_non_null(strstr(err.message, "bodies[0].hourglass"));
+  snprintf(without, sizeof without, "%.*s\"enrichment_hourglass\": 0.05}]}",
+           (int)(strstr(text, "\"enrichment\"") - text), text);
+  assert_int_not_equal(mpm_scene_parse(without, "e.json", &scene, &err), MPM_OK);
+  assert_non_null(strstr(err.message, "bodies[0].enrichment_hourglass"));
 }
 
 int main(void) {
@@ -690,6 +744,7 @@ int main(void) {
       cmocka_unit_test(test_twist_release),
       cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_hourglass_modes),
+      cmocka_unit_test(test_bend_enrichment),
       cmocka_unit_test(test_hourglass_bending),
       cmocka_unit_test(test_hourglass_cantilever),
       cmocka_unit_test(test_scene_key),

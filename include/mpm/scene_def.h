@@ -228,6 +228,9 @@ typedef struct mpm_body_def {
                                                   caller's array; default NULL */
   int domain_release_count;
   mpm_def_hourglass hourglass; /* bodies[].hourglass; default MPM_DEF_HOURGLASS_ENRICHED */
+  double enrichment_hourglass; /* bodies[].enrichment_hourglass, hourglass strain at or above
+                                  which a particle is enriched (beyond Zhu), [0, 1]; default 0:
+                                  never */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).

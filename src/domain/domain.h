@@ -33,6 +33,8 @@ typedef struct mpm_enrichment_body {
   mpm_real exit_k;   /* an enriched particle stays enriched while K(F) <= exit_k (>= epsilon:
                         hysteresis) */
   mpm_real spacing;  /* the domain lattice's spacing h, m */
+  mpm_real bend;     /* also enriched when the hourglass strain of the particle's hexahedron
+                        (mpm_enrichment_hourglass_strain) is >= bend (0: never; beyond Zhu) */
   int metric;        /* MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
   int hourglass_all; /* hourglass control on every particle, not only on those touching an
                         enriched corner (domain/enrich.h) */
@@ -42,7 +44,7 @@ typedef struct mpm_enrichment_body {
 typedef struct mpm_domain_enrichment {
   mpm_enrichment_body *body; /* per body */
   int body_count;
-  int any;             /* some body has epsilon > 0 */
+  int any;             /* some body has epsilon > 0 or bend > 0 */
   int hourglass_any;   /* some body has hourglass_all */
   uint8_t *flag;       /* per particle: enriched this step (K(F_p) <= epsilon, or <= exit_k
                           when it was last step): state, kept in checkpoints */

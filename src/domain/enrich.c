@@ -31,6 +31,18 @@ mpm_real mpm_hourglass_kappa(const mpm_domain_set *s, const mpm_material *materi
   return (mpm_real)(E * (double)h / 48);
 }
 
+mpm_real mpm_enrichment_hourglass_strain(const mpm_domain_set *s, size_t q, mpm_real h) {
+  mpm_real qa[4][3];
+  mpm_hourglass_q(s, q, s->cx, qa);
+  double m2 = 0;
+  for (int al = 0; al < 4; ++al) {
+    double n2 = 0;
+    for (int d = 0; d < 3; ++d) n2 += (double)qa[al][d] * (double)qa[al][d];
+    m2 = n2 > m2 ? n2 : m2;
+  }
+  return (mpm_real)(sqrt(m2) / (4 * (double)h));
+}
+
 mpm_real mpm_enrichment_metric(const mpm_real F[9], mpm_real c) {
   const double J = (double)mpm_m3_det(F), f2 = (double)mpm_m3_ddot(F, F);
   /* sigma_min >= 2 J / ||F||^2 (sigma_1 sigma_2 <= ||F||^2 / 2): when that is >= c no singular
@@ -64,8 +76,7 @@ mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c) {
   return (mpm_real)(lo / hi);
 }
 
-int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
-                               int metric, int hourglass_all, mpm_real h) {
+int mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settings) {
   mpm_domain_enrichment *e = &s->enrich;
   if (b < 0) return -1;
   if (b >= e->body_count) {
@@ -77,11 +88,12 @@ int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_r
     e->body = grown;
     e->body_count = b + 1;
   }
-  e->body[b] = (mpm_enrichment_body){epsilon, exit_k > epsilon ? exit_k : epsilon, h, metric,
-                                     hourglass_all != 0};
+  if (settings.exit_k < settings.epsilon) settings.exit_k = settings.epsilon;
+  settings.hourglass_all = settings.hourglass_all != 0;
+  e->body[b] = settings;
   e->any = e->hourglass_any = 0;
   for (int k = 0; k < e->body_count; ++k) {
-    if (e->body[k].epsilon > 0) e->any = 1;
+    if (e->body[k].epsilon > 0 || e->body[k].bend > 0) e->any = 1;
     if (e->body[k].hourglass_all) e->hourglass_any = 1;
   }
   return 0;
@@ -164,15 +176,12 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
   for (long q = 0; q < np; ++q) {
     const int was = e->flag[q];
     e->flag[q] = 0;
-    const mpm_real eps = mpm_enrichment_epsilon(s, p->body[q]);
-    if (!s->active[q] || !(eps > 0)) continue;
+    const mpm_enrichment_body *eb = mpm_enrichment_body_of(e, p->body[q]);
+    const mpm_real eps = eb->epsilon;
+    if (!s->active[q] || !(eps > 0 || eb->bend > 0)) continue;
     mpm_real F[9];
     for (int k = 0; k < 9; ++k) F[k] = p->F[k][q];
     const mpm_real c = materials[p->material[q]].min_stretch;
-    /* K <= 1 always: epsilon 1 enriches every particle, even where rounding puts K a hair
-     * above 1 (F = I) */
-    const int b = p->body[q];
-    const mpm_enrichment_body *eb = mpm_enrichment_body_of(e, b);
     const mpm_real exit_k = eb->exit_k;
     /* K <= 1 always: epsilon 1 enriches every particle, even where rounding puts K a hair
      * above 1 (F = I). An enriched particle goes back to the grid only above exit_k: a
@@ -184,7 +193,10 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
     const mpm_real K = eps >= 1                           ? 1
                        : kind == MPM_ENRICHMENT_FROBENIUS ? mpm_enrichment_metric(F, cc)
                                                           : mpm_enrichment_condition(F, cc);
-    e->flag[q] = eps >= 1 || K <= eps || (was && K <= exit_k);
+    /* the bend K does not see (enrich.h) */
+    const int bent = eb->bend > 0 && eps < 1 &&
+                     mpm_enrichment_hourglass_strain(s, (size_t)q, eb->spacing) >= eb->bend;
+    e->flag[q] = eps >= 1 || K <= eps || bent || (was && K <= exit_k);
   }
   /* 2. a corner is enriched when one of its particles is (gathered per corner: no races) */
 #pragma omp parallel for schedule(static) if (nc >= MPM_PARALLEL_MIN)

@@ -31,6 +31,19 @@
  * particle stays enriched while K <= the body's exit threshold (bodies[].enrichment_exit >=
  * epsilon): the flags are state.
  *
+ * Bending the metric does not see (beyond Zhu; bodies[].enrichment_hourglass). A domain has one
+ * quadrature point, so K(F) sees only its hexahedron's average gradient. A layer one domain
+ * thick (a bunny's ear) bends through its hexahedra's hourglass modes while its particles' F
+ * stay rotations (K = 1): no threshold on K enriches it. While the grid carries its corners
+ * (8 nodes per cell for 27 corners) it can add such a sub-cell shape but not take it away, so
+ * the bend stays in the body at rest (measured on examples/zhu/bunny_tunnel_squeeze.json: an
+ * unenriched ear 0.13 m out of place at rest, 1.9e-4 of the diagonal). A body's bend threshold
+ * enriches a particle also when the hourglass strain of its hexahedron,
+ *   gamma = max_alpha |q_alpha| / (4 h),   q_alpha = sum_a h_alpha,a x_a   (below),
+ * reaches it: gamma is the bending strain at the faces of a cube of side h bent by the pattern
+ * u = d xi eta (q = 8 d, strain 2 d / h), zero for every affine motion. Such a particle stays
+ * enriched while K <= exit_k or gamma >= the threshold.
+ *
  * The explicit time step. Grid nodes are dx apart whatever the material does, but enriched
  * corners are the material's own nodes: h apart at rest, h sigma_min apart in a compressed
  * particle, whose stiffness also grows (like 1/sigma_min^2 for neo-Hookean). The marks give
@@ -63,7 +76,7 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
 /* Body b's settings: all 0 (never enriched, the condition metric) for a body without any. */
 static inline const mpm_enrichment_body *mpm_enrichment_body_of(const mpm_domain_enrichment *e,
                                                                 int b) {
-  static const mpm_enrichment_body none = {0, 0, 0, MPM_ENRICHMENT_CONDITION, 0};
+  static const mpm_enrichment_body none = {0, 0, 0, 0, MPM_ENRICHMENT_CONDITION, 0};
   return b >= 0 && b < e->body_count ? &e->body[b] : &none;
 }
 
@@ -72,12 +85,15 @@ static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
   return mpm_enrichment_body_of(&s->enrich, b)->epsilon;
 }
 
-/* Set body b's threshold epsilon, its exit threshold (an enriched particle stays enriched while
- * K <= exit_k; raised to epsilon when below), metric (MPM_ENRICHMENT_*), hourglass control on
- * every particle (hourglass_all, below) and lattice spacing h (sim setup). 0, or -1 when out
- * of memory. */
-int mpm_enrichment_set_epsilon(mpm_domain_set *s, int b, mpm_real epsilon, mpm_real exit_k,
-                               int metric, int hourglass_all, mpm_real h);
+/* Set body b's settings (sim setup): the threshold epsilon, the exit threshold (an enriched
+ * particle stays enriched while K <= exit_k; raised to epsilon when below), the bend threshold,
+ * the metric (MPM_ENRICHMENT_*), hourglass control on every particle (hourglass_all, below)
+ * and the lattice spacing h. 0, or -1 when out of memory. */
+int mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settings);
+
+/* The hourglass strain gamma = max_alpha |q_alpha| / (4 h) of particle q's hexahedron at its
+ * corners' current positions (above; h: the body's lattice spacing). */
+mpm_real mpm_enrichment_hourglass_strain(const mpm_domain_set *s, size_t q, mpm_real h);
 
 /* Move the per-body settings (mpm_enrichment_set_epsilon's: thresholds, metrics, hourglass
  * control, spacings) from `from` to `to`, freeing those `to` held; `from` is left without any.

@@ -413,12 +413,13 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
                           b->domain_release_count) < 0)
     return -1;
   const mpm_body_def d = mpm_body_def_default();
-  const char *changed = b->enrichment != d.enrichment                 ? "enrichment"
-                        : b->enrichment_exit != d.enrichment_exit     ? "enrichment_exit"
-                        : b->enrichment_metric != d.enrichment_metric ? "enrichment_metric"
-                        : b->hourglass != d.hourglass                 ? "hourglass"
-                        : b->domain_release_count != 0                ? "domain_release"
-                                                                      : NULL;
+  const char *changed = b->enrichment != d.enrichment                       ? "enrichment"
+                        : b->enrichment_exit != d.enrichment_exit           ? "enrichment_exit"
+                        : b->enrichment_metric != d.enrichment_metric       ? "enrichment_metric"
+                        : b->enrichment_hourglass != d.enrichment_hourglass ? "enrichment_hourglass"
+                        : b->hourglass != d.hourglass                       ? "hourglass"
+                        : b->domain_release_count != 0                      ? "domain_release"
+                                                                            : NULL;
   if (!b->domains) {
     if (!changed) return 0;
     return mpm_def_fail(w->c,
@@ -433,6 +434,8 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
   if (b->enrichment_exit != d.enrichment_exit)
     mpm_def_add_number(w, o, "enrichment_exit", b->enrichment_exit);
   mpm_def_add_string(w, o, "enrichment_metric", metric);
+  if (b->enrichment_hourglass != d.enrichment_hourglass) /* older files unchanged */
+    mpm_def_add_number(w, o, "enrichment_hourglass", b->enrichment_hourglass);
   if (b->hourglass != d.hourglass) { /* written when not the default: older files unchanged */
     snprintf(p, sizeof p, "%s.hourglass", path);
     const char *hourglass = mpm_def_spell(w->c, p, (int)b->hourglass, &HOURGLASSES);

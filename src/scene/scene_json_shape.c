@@ -29,6 +29,7 @@ static const char *const BODY_KEYS[] = {"name",
                                         "domain_release",
                                         "enrichment",
                                         "enrichment_exit",
+                                        "enrichment_hourglass",
                                         "enrichment_metric",
                                         "hourglass",
                                         "temperature",
@@ -420,9 +421,9 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
    * enrichment) */
   b->enrichment = 0;
-  static const char *const enrichment_keys[] = {"enrichment", "enrichment_exit",
-                                                "enrichment_metric", "hourglass"};
-  for (int k = 0; k < 4; ++k)
+  static const char *const enrichment_keys[] = {
+      "enrichment", "enrichment_exit", "enrichment_hourglass", "enrichment_metric", "hourglass"};
+  for (int k = 0; k < 5; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
@@ -444,6 +445,12 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
            b->enrichment);
   if (mpm_json_number(c, node, "enrichment_exit", 0,
                       mpm_json_in('[', b->enrichment, 1, ']', exit_note), &b->enrichment_exit) < 0)
+    return -1;
+  b->enrichment_hourglass = 0;
+  if (mpm_json_number(c, node, "enrichment_hourglass", 0,
+                      mpm_json_in('[', 0, 1, ']',
+                                  "threshold on the hourglass strain of a particle's hexahedron"),
+                      &b->enrichment_hourglass) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,

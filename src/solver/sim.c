@@ -167,10 +167,14 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->domain_min, h,
                                       name, err);
       if (st != MPM_OK) goto fail;
-      if (mpm_enrichment_set_epsilon(&sim->domains, b, (mpm_real)sc->bodies[b].enrichment,
-                                     (mpm_real)sc->bodies[b].enrichment_exit,
-                                     sc->bodies[b].enrichment_metric, sc->bodies[b].hourglass,
-                                     (mpm_real)h)) {
+      const mpm_body_desc *bd = &sc->bodies[b];
+      const mpm_enrichment_body settings = {.epsilon = (mpm_real)bd->enrichment,
+                                            .exit_k = (mpm_real)bd->enrichment_exit,
+                                            .spacing = (mpm_real)h,
+                                            .bend = (mpm_real)bd->enrichment_hourglass,
+                                            .metric = bd->enrichment_metric,
+                                            .hourglass_all = bd->hourglass};
+      if (mpm_enrichment_set_body(&sim->domains, b, settings)) {
         st = oom(err, "the enrichment thresholds");
         goto fail;
       }
