@@ -42,7 +42,9 @@
  *   gamma = max_alpha |q_alpha| / (4 h),   q_alpha = sum_a h_alpha,a x_a   (below),
  * reaches it: gamma is the bending strain at the faces of a cube of side h bent by the pattern
  * u = d xi eta (q = 8 d, strain 2 d / h), zero for every affine motion. Such a particle stays
- * enriched while K <= exit_k or gamma >= the threshold.
+ * enriched while K <= exit_k or gamma >= the threshold: with exit_k < 1 it returns to the grid
+ * as soon as gamma is below the threshold, and keeps that much bend (a plate one domain thick,
+ * bent and released: tests/test_enrich.c, test_bend_release).
  *
  * The explicit time step. Grid nodes are dx apart whatever the material does, but enriched
  * corners are the material's own nodes: h apart at rest, h sigma_min apart in a compressed
