@@ -513,8 +513,10 @@ static void test_resume_fallbacks_and_refusals(void **state) {
  * dynamically enriched (Zhu sec. 5, with the exit threshold's hysteresis: last step's flags
  * are state and travel in the checkpoint) and half of them switched off during the run,
  * resumed from a checkpoint ends with the same frames, domain meshes (with their enrichment
- * categories) and stats as an uninterrupted run; with hourglass control on every particle, a
- * setting of the scene the resumed run keeps (mpm_enrichment_move_settings). */
+ * categories) and stats as an uninterrupted run; with hourglass control on every particle and
+ * the bend threshold (enrichment_hourglass: most of the bar is enriched by it in the first
+ * frames, before K(F) reaches 0.6), settings of the scene the resumed run keeps
+ * (mpm_enrichment_move_settings). */
 static void test_resume_with_domains(void **state) {
   (void)state;
   const char *dir = test_temp_dir("checkpoint_domains");
@@ -528,7 +530,8 @@ static void test_resume_with_domains(void **state) {
              "2e4, \"nu\": 0.3, \"density\": 1000}],"
              " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.8, 0.5, 0.5], "
              "\"half_extent\": [0.2, 0.04, 0.04]}, \"material\": \"rubber\", \"domains\": true,"
-             " \"enrichment\": 0.97, \"enrichment_exit\": 0.999, \"hourglass\": \"all\","
+             " \"enrichment\": 0.6, \"enrichment_exit\": 0.999, \"enrichment_hourglass\": "
+             "0.01, \"hourglass\": \"all\","
              " \"domain_release\": [{\"time\": 0.5, \"min\": [0.9, 0, 0], \"max\": [2, 1, 1]}]}],"
              " \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": [0.6, 0.5, 0.5], "
              "\"half_extent\": [0.05, 0.08, 0.08]}, \"rule\": \"sticky\", \"motion\": "
