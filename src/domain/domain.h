@@ -38,6 +38,8 @@ typedef struct mpm_enrichment_body {
   int metric;        /* MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
   int hourglass_all; /* hourglass control on every particle, not only on those touching an
                         enriched corner (domain/enrich.h) */
+  int contact;       /* its enriched corners meet the material points' material on the grid
+                        (domain/enrich_contact.h) */
 } mpm_enrichment_body;
 
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */

@@ -76,6 +76,7 @@ mpm_body_def mpm_body_def_default(void) {
   d.enrichment_exit = 0; /* not written: the format's follows enrichment */
   d.enrichment_metric = (mpm_def_enrichment_metric)b.enrichment_metric;
   d.enrichment_hourglass = b.enrichment_hourglass;
+  d.enrichment_contact = b.enrichment_contact;
   d.hourglass = (mpm_def_hourglass)b.hourglass;
   return d;
 }

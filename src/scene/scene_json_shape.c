@@ -30,6 +30,7 @@ static const char *const BODY_KEYS[] = {"name",
                                         "enrichment",
                                         "enrichment_exit",
                                         "enrichment_hourglass",
+                                        "enrichment_contact",
                                         "enrichment_metric",
                                         "hourglass",
                                         "temperature",
@@ -421,9 +422,10 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
    * enrichment) */
   b->enrichment = 0;
-  static const char *const enrichment_keys[] = {
-      "enrichment", "enrichment_exit", "enrichment_hourglass", "enrichment_metric", "hourglass"};
-  for (int k = 0; k < 5; ++k)
+  static const char *const enrichment_keys[] = {"enrichment",           "enrichment_exit",
+                                                "enrichment_hourglass", "enrichment_contact",
+                                                "enrichment_metric",    "hourglass"};
+  for (int k = 0; k < 6; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
@@ -452,6 +454,8 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
                                   "threshold on the hourglass strain of a particle's hexahedron"),
                       &b->enrichment_hourglass) < 0)
     return -1;
+  b->enrichment_contact = 0;
+  if (mpm_json_bool(c, node, "enrichment_contact", 0, &b->enrichment_contact) < 0) return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,
                             "expected 0 with \"domains\": true (particle domains are the cells "

@@ -173,7 +173,8 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
                                             .spacing = (mpm_real)h,
                                             .bend = (mpm_real)bd->enrichment_hourglass,
                                             .metric = bd->enrichment_metric,
-                                            .hourglass_all = bd->hourglass};
+                                            .hourglass_all = bd->hourglass,
+                                            .contact = bd->enrichment_contact};
       if (mpm_enrichment_set_body(&sim->domains, b, settings)) {
         st = oom(err, "the enrichment thresholds");
         goto fail;

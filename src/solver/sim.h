@@ -99,6 +99,8 @@ struct mpm_sim {
   mpm_step_figures step_figures;           /* the steps of this frame (frame.c) */
   long long implicit_steps, cg_iterations; /* implicit steps and their CG iterations since
                                               creation (benchmarks) */
+  long long enriched_contacts; /* enriched corners' contacts with the grid's material since
+                                  creation (domain/enrich_contact.h) */
   /* outputs */
   int output_enabled;
   char output_dir[MPM_PATH_MAX];

@@ -24,6 +24,7 @@
 #include "core/alloc.h"
 #include "domain/domain_transfer.h"
 #include "domain/enrich.h"
+#include "domain/enrich_contact.h"
 #include "solver/adaptive.h"
 #include "solver/explicit_update.h"
 #include "solver/implicit.h"
@@ -115,7 +116,10 @@ int mpm_sim_ensure_scratch(mpm_sim *sim) {
  * restores them) renumbered alike. */
 static mpm_status plan_corners(mpm_sim *sim, step_ctx *c) {
   mpm_domain_set *s = &sim->domains;
-  s->corner_rows = sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT;
+  /* the implicit Hessian and the enriched corners' contact (enrich_contact.h) apply the
+   * embedding's rows */
+  s->corner_rows =
+      sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT || mpm_enrich_contact_on(s);
   uint32_t *order = NULL;
   if (mpm_domain_plan(s, &sim->grid, &c->dtc.kernel, &sim->step_arena) ||
       mpm_domain_order_corners(s, &sim->grid, &c->dtc.kernel, &sim->step_arena, &order))
@@ -320,6 +324,20 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
   return MPM_OK;
 }
 
+/* Enriched corners meet the material points' material on the grid (enrich_contact.h), after
+ * the velocity update and before G2P reads it. */
+static mpm_status stage_contact(mpm_sim *sim, step_ctx *c) {
+  if (!c->domains || sim->adaptive || !mpm_enrich_contact_on(&sim->domains)) return MPM_OK;
+  size_t contacts = 0;
+  if (mpm_enrich_contact(&sim->domains, &sim->grid, &c->dtc.kernel, &c->all, sim->dofs.count,
+                         &sim->step_arena, &contacts))
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                         "step %lld: out of memory for the contacts of %zu enriched corners",
+                         (long long)sim->steps, sim->domains.enrich.count);
+  sim->enriched_contacts += contacts;
+  return MPM_OK;
+}
+
 static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
   if (sim->adaptive) {
     c->r = mpm_adaptive_g2p(sim, &c->tc);
@@ -377,6 +395,7 @@ static const stage explicit_stages[] = {
     {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
     {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
     {"update", stage_update, offsetof(mpm_stage_times, grid)},
+    {"contact", stage_contact, offsetof(mpm_stage_times, grid)},
     {"heat", stage_heat, offsetof(mpm_stage_times, heat)},
     {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
 };
@@ -387,6 +406,7 @@ static const stage implicit_stages[] = {
     {"layout", stage_layout, offsetof(mpm_stage_times, sort)},
     {"p2g", stage_p2g, offsetof(mpm_stage_times, p2g)},
     {"solve", stage_solve, offsetof(mpm_stage_times, grid)},
+    {"contact", stage_contact, offsetof(mpm_stage_times, grid)},
     {"heat", stage_heat, offsetof(mpm_stage_times, heat)},
     {"g2p", stage_g2p, offsetof(mpm_stage_times, g2p)},
 };

@@ -1,0 +1,100 @@
+/* enrich_contact.c - enriched corners meet the material points' material on the grid (see
+ * enrich_contact.h). */
+#include "domain/enrich_contact.h"
+#include "domain/enrich.h"
+#include "grid/embedding.h"
+
+#include <math.h>
+#include <string.h>
+
+int mpm_enrich_contact_on(const mpm_domain_set *s) {
+  const mpm_domain_enrichment *e = &s->enrich;
+  if (!e->count) return 0;
+  for (int b = 0; b < e->body_count; ++b)
+    if (e->body[b].contact) return 1;
+  return 0;
+}
+
+/* The body of corner c (its first particle's: a lattice is one body's). */
+static int corner_body(const mpm_domain_set *s, size_t c) {
+  if (s->adj_start[c] == s->adj_start[c + 1]) return -1;
+  return s->particles.body[s->adj[s->adj_start[c]] / MPM_HEX_CORNERS];
+}
+
+int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                       const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
+                       size_t *contacts) {
+  *contacts = 0;
+  const mpm_domain_enrichment *e = &s->enrich;
+  if (!mpm_enrich_contact_on(s) || !s->corner_grid.rows) return 0;
+  /* the unenriched corners' mass on the grid, through the embedding's rows (P2G's sums again,
+   * in the same order) */
+  mpm_real *corner_mass = mpm_arena_alloc(scratch, (count + 1) * sizeof *corner_mass);
+  if (!corner_mass) return -1;
+  memset(corner_mass, 0, (count + 1) * sizeof *corner_mass);
+  const mpm_real *carrier[1] = {s->cm};
+  mpm_real *const values[1] = {corner_mass};
+  mpm_embedding_scatter(&s->corner_grid, 1, carrier, values);
+  const int W = k->width;
+  const uint32_t dof_begin = (uint32_t)g->dof_begin;
+  mpm_grid_cursor cursor;
+  mpm_grid_cursor_init(&cursor);
+  for (size_t j = 0; j < e->count; ++j) {
+    const uint32_t c = e->corner[j];
+    const int b = corner_body(s, c);
+    if (b < 0 || !mpm_enrichment_body_of(e, b)->contact) continue;
+    const size_t own = e->dof_begin + j;
+    const double mc = (double)dofs->mass[own];
+    if (!(mc > 0)) continue;
+    const mpm_real xr[3] = {s->cx[0][c] - g->origin[0], s->cx[1][c] - g->origin[1],
+                            s->cx[2][c] - g->origin[2]};
+    mpm_stencil st;
+    mpm_kernel_stencil(k, xr, &st);
+    uint32_t nodes[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
+    int32_t key;
+    uint8_t colour;
+    if (g->ops->stencil_nodes(g, st.base, W, &cursor, nodes, &key, &colour)) continue;
+    /* the material points' mass about the corner, its gradient, and the grid's mass and
+     * momentum there */
+    double mp = 0, grad[3] = {0, 0, 0}, M = 0, P[3] = {0, 0, 0};
+    double w[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
+    int n = 0;
+    for (int a = 0; a < W; ++a)
+      for (int bb = 0; bb < W; ++bb)
+        for (int l = 0; l < W; ++l, ++n) {
+          const uint32_t i = dof_begin + nodes[n];
+          const double wi = (double)st.w[0][a] * st.w[1][bb] * st.w[2][l];
+          const double gi[3] = {(double)st.dw[0][a] * st.w[1][bb] * st.w[2][l],
+                                (double)st.w[0][a] * st.dw[1][bb] * st.w[2][l],
+                                (double)st.w[0][a] * st.w[1][bb] * st.dw[2][l]};
+          w[n] = wi;
+          const double m = (double)dofs->mass[i];
+          /* what the material points gave (rounding leaves a trace where they gave none) */
+          double m_mp = m - (double)corner_mass[i];
+          if (!(m_mp > 1e-4 * m)) m_mp = 0;
+          mp += wi * m_mp;
+          M += wi * m;
+          for (int d = 0; d < 3; ++d) {
+            grad[d] += gi[d] * m_mp;
+            P[d] += wi * m * (double)dofs->v[d][i];
+          }
+        }
+    const double gn = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
+    if (!(mp > 0) || !(M > 0) || !(gn > 0)) continue;
+    double vn = 0;
+    for (int d = 0; d < 3; ++d) vn += ((double)dofs->v[d][own] - P[d] / M) * (grad[d] / gn);
+    if (!(vn > 0)) continue; /* separating, or sliding */
+    const double jn = mc * M / (mc + M) * vn;
+    for (int d = 0; d < 3; ++d) {
+      const double nd = grad[d] / gn;
+      dofs->v[d][own] = (mpm_real)((double)dofs->v[d][own] - jn / mc * nd);
+      for (int q = 0; q < n; ++q) {
+        const uint32_t i = dof_begin + nodes[q];
+        if (w[q] == 0 || !(dofs->mass[i] > 0)) continue;
+        dofs->v[d][i] = (mpm_real)((double)dofs->v[d][i] + jn * w[q] / M * nd);
+      }
+    }
+    ++*contacts;
+  }
+  return 0;
+}
