@@ -408,6 +408,20 @@ static double rest_error(const mpm_sim *sim) {
   return r.mean;
 }
 
+/* Every particle's F made the gradient of its corners' positions (F = sum_a x_a g_qa^T, as the
+ * step keeps it), and its position and velocity from its corners. */
+static void match_corners(mpm_domain_set *s) {
+  for (size_t q = 0; q < s->particles.count; ++q)
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) {
+        double f = 0;
+        for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+          f += (double)s->cx[r][s->corner[q][a]] * (double)s->g[q][a][t];
+        s->particles.F[3 * r + t][q] = (mpm_real)f;
+      }
+  mpm_domain_set_sync_particles(s);
+}
+
 /* A bar twisted about its axis (corner by corner, F to match) and released comes back to its
  * rest shape when enriched; without enrichment the grid leaves much of the twist in. */
 static double twist_and_release(const char *extra, const char *solver, double seconds) {
@@ -422,16 +436,7 @@ static double twist_and_release(const char *extra, const char *solver, double se
     s->cx[2][c] = (mpm_real)(x0[2] + sin(th) * y + cos(th) * z);
     for (int d = 0; d < 3; ++d) s->cv[d][c] = 0;
   }
-  for (size_t q = 0; q < s->particles.count; ++q) { /* F = sum_a x_a g_qa^T */
-    for (int r = 0; r < 3; ++r)
-      for (int t = 0; t < 3; ++t) {
-        double f = 0;
-        for (int a = 0; a < MPM_HEX_CORNERS; ++a)
-          f += (double)s->cx[r][s->corner[q][a]] * (double)s->g[q][a][t];
-        s->particles.F[3 * r + t][q] = (mpm_real)f;
-      }
-  }
-  mpm_domain_set_sync_particles(s);
+  match_corners(s);
   const double twisted = rest_error(sim);
   while (sim->time < seconds)
     if (mpm_sim_step(sim, 0) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
@@ -488,15 +493,7 @@ static double bend_and_release(const char *extra, double R, double seconds) {
     s->cx[1][c] = (mpm_real)(y0 + R - (R - Y) * cos(th));
     for (int d = 0; d < 3; ++d) s->cv[d][c] = 0;
   }
-  for (size_t q = 0; q < s->particles.count; ++q) /* F = sum_a x_a g_qa^T */
-    for (int r = 0; r < 3; ++r)
-      for (int t = 0; t < 3; ++t) {
-        double f = 0;
-        for (int a = 0; a < MPM_HEX_CORNERS; ++a)
-          f += (double)s->cx[r][s->corner[q][a]] * (double)s->g[q][a][t];
-        s->particles.F[3 * r + t][q] = (mpm_real)f;
-      }
-  mpm_domain_set_sync_particles(s);
+  match_corners(s);
   double kmin = 1, gmax = 0;
   for (size_t q = 0; q < s->particles.count; ++q) {
     mpm_real F[9];
