@@ -1,8 +1,8 @@
-/* test_enrich_contact.c - enriched corners meet the material points' material on the grid
+/* test_enrich_contact.c - enriched corners meet other material on the grid
  * (domain/enrich_contact.h, bodies[].enrichment_contact):
  *  - a ball of material points thrown at a block whose domains are all enriched (epsilon 1)
  *    passes into it without the contact (the block is not on the grid) and bounces off it with
- *    the contact;
+ *    the contact; a ball with unenriched domains bounces off it too;
  *  - linear momentum of the two bodies is conserved through the contacts (the impulse a corner
  *    takes the grid gets back);
  *  - 1 and 2 threads give bitwise the same state;
@@ -17,7 +17,7 @@
 
 /* The block (body 0: 8 x 8 x 8 domains of 0.02 m, every one enriched) at x = 0.6 m and the ball
  * (body 1: material points, radius 0.07 m) at x = 0.35 m coming at it at 2 m/s; no gravity. */
-static mpm_sim *scene(int contact) {
+static mpm_sim *scene(int contact, int ball_domains) {
   char text[2048];
   snprintf(text, sizeof text,
            "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.04},"
@@ -29,25 +29,29 @@ static mpm_sim *scene(int contact) {
            "[0.6, 0.5, 0.5], \"half_extent\": [0.08, 0.08, 0.08]}, \"material\": \"rubber\", "
            "\"domains\": true, \"enrichment\": 1, \"enrichment_contact\": %s},"
            " {\"name\": \"ball\", \"shape\": {\"type\": \"sphere\", \"center\": [0.35, 0.5, 0.5], "
-           "\"radius\": 0.07}, \"material\": \"rubber\", \"velocity\": [2, 0, 0]}]}",
-           contact ? "true" : "false");
+           "\"radius\": 0.07}, \"material\": \"rubber\", \"velocity\": [2, 0, 0]%s}]}",
+           contact ? "true" : "false", ball_domains ? ", \"domains\": true" : "");
   return test_sim_from_json(text, "contact.json");
 }
 
-/* The ball's mean x and x velocity, and the least x of the block's particles. */
+/* The ball's (body 1's) mean x and x velocity, and the least x of the block's (body 0's)
+ * particles. */
 static void measure(const mpm_sim *sim, double *ball_x, double *ball_v, double *block_lo) {
-  const mpm_particles *p = &sim->particles;
-  double x = 0, v = 0, m = 0;
-  for (size_t i = 0; i < p->count; ++i) {
-    x += p->mass[i] * p->x[0][i];
-    v += p->mass[i] * p->v[0][i];
-    m += p->mass[i];
+  double x = 0, v = 0, m = 0, lo = 1e30;
+  for (int set = 0; set < 2; ++set) {
+    const mpm_particles *p = set ? &sim->domains.particles : &sim->particles;
+    for (size_t i = 0; i < p->count; ++i) {
+      if (p->body[i] == 0) {
+        lo = fmin(lo, p->x[0][i]);
+        continue;
+      }
+      x += p->mass[i] * p->x[0][i];
+      v += p->mass[i] * p->v[0][i];
+      m += p->mass[i];
+    }
   }
   *ball_x = x / m;
   *ball_v = v / m;
-  const mpm_particles *q = &sim->domains.particles;
-  double lo = 1e30;
-  for (size_t i = 0; i < q->count; ++i) lo = fmin(lo, q->x[0][i]);
   *block_lo = lo;
 }
 
@@ -58,10 +62,10 @@ static void run_for(mpm_sim *sim, double seconds) {
 
 static void test_ball_bounces(void **state) {
   (void)state;
-  double x[2], v[2], lo[2], drift[2];
-  long long contacts[2];
-  for (int on = 0; on < 2; ++on) {
-    mpm_sim *sim = scene(on);
+  double x[3], v[3], lo[3], drift[3];
+  long long contacts[3];
+  for (int on = 0; on < 3; ++on) {
+    mpm_sim *sim = scene(on > 0, on == 2);
     const mpm_diagnostics d0 = mpm_sim_diagnostics(sim);
     run_for(sim, 0.25);
     const mpm_diagnostics d1 = mpm_sim_diagnostics(sim);
@@ -72,7 +76,10 @@ static void test_ball_bounces(void **state) {
     contacts[on] = sim->enriched_contacts;
     print_message("contact %s: ball at x = %.3f m moving at %.3f m/s, block from x = %.3f m; "
                   "momentum drift %.2e of the ball's; %lld corner contacts\n",
-                  on ? "on" : "off", x[on], v[on], lo[on], drift[on], contacts[on]);
+                  on == 2 ? "on, a ball with domains"
+                  : on    ? "on"
+                          : "off",
+                  x[on], v[on], lo[on], drift[on], contacts[on]);
     mpm_sim_destroy(sim);
   }
   /* without contact the enriched block is not on the grid: the ball flies on through it (and
@@ -85,6 +92,11 @@ static void test_ball_bounces(void **state) {
   assert_true(x[1] + 0.07 < lo[1] + 0.02);
   /* the impulses conserve linear momentum (FLIP transfers conserve it too) */
   assert_true(drift[1] < TOL(1e-4, 1e-10));
+  /* a ball with domains (unenriched: on the grid through its corners) bounces off it too */
+  assert_true(contacts[2] > 0);
+  assert_true(v[2] < 0);
+  assert_true(x[2] + 0.07 < lo[2] + 0.02);
+  assert_true(drift[2] < TOL(1e-4, 1e-10));
 }
 
 static void test_threads_bitwise(void **state) {
@@ -92,7 +104,7 @@ static void test_threads_bitwise(void **state) {
   mpm_sim *run[2];
   for (int t = 0; t < 2; ++t) {
     mpm_set_threads(t + 1);
-    run[t] = scene(1);
+    run[t] = scene(1, 0);
     run_for(run[t], 0.15);
   }
   mpm_set_threads(0);

@@ -21,18 +21,17 @@ static int corner_body(const mpm_domain_set *s, size_t c) {
   return s->particles.body[s->adj[s->adj_start[c]] / MPM_HEX_CORNERS];
 }
 
-int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                       const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
-                       size_t *contacts) {
-  *contacts = 0;
+/* The contacts of body b's enriched corners (body: each corner's body; own_mass, corner_mass:
+ * scratch of nc and count values). */
+static void contact_body(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                         const mpm_grid_values *dofs, size_t count, int b, const int32_t *body,
+                         mpm_real *own_mass, mpm_real *corner_mass, size_t *contacts) {
   const mpm_domain_enrichment *e = &s->enrich;
-  if (!mpm_enrich_contact_on(s) || !s->corner_grid.rows) return 0;
-  /* the unenriched corners' mass on the grid, through the embedding's rows (P2G's sums again,
-   * in the same order) */
-  mpm_real *corner_mass = mpm_arena_alloc(scratch, (count + 1) * sizeof *corner_mass);
-  if (!corner_mass) return -1;
+  /* the body's own corners' mass on the grid, through the embedding's rows (P2G's sums again,
+   * in the same order): the rest of the nodes' mass is other material's */
+  for (size_t c = 0; c < s->corner_count; ++c) own_mass[c] = body[c] == b ? s->cm[c] : 0;
   memset(corner_mass, 0, (count + 1) * sizeof *corner_mass);
-  const mpm_real *carrier[1] = {s->cm};
+  const mpm_real *carrier[1] = {own_mass};
   mpm_real *const values[1] = {corner_mass};
   mpm_embedding_scatter(&s->corner_grid, 1, carrier, values);
   const int W = k->width;
@@ -41,8 +40,7 @@ int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_ker
   mpm_grid_cursor_init(&cursor);
   for (size_t j = 0; j < e->count; ++j) {
     const uint32_t c = e->corner[j];
-    const int b = corner_body(s, c);
-    if (b < 0 || !mpm_enrichment_body_of(e, b)->contact) continue;
+    if (body[c] != b) continue;
     const size_t own = e->dof_begin + j;
     const double mc = (double)dofs->mass[own];
     if (!(mc > 0)) continue;
@@ -54,8 +52,8 @@ int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_ker
     int32_t key;
     uint8_t colour;
     if (g->ops->stencil_nodes(g, st.base, W, &cursor, nodes, &key, &colour)) continue;
-    /* the material points' mass about the corner, its gradient, and the grid's mass and
-     * momentum there */
+    /* other material's mass about the corner, its gradient, and the grid's mass and momentum
+     * there */
     double mp = 0, grad[3] = {0, 0, 0}, M = 0, P[3] = {0, 0, 0};
     double w[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
     int n = 0;
@@ -69,7 +67,7 @@ int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_ker
                                 (double)st.w[0][a] * st.w[1][bb] * st.dw[2][l]};
           w[n] = wi;
           const double m = (double)dofs->mass[i];
-          /* what the material points gave (rounding leaves a trace where they gave none) */
+          /* what other material gave (rounding leaves a trace where it gave none) */
           double m_mp = m - (double)corner_mass[i];
           if (!(m_mp > 1e-4 * m)) m_mp = 0;
           mp += wi * m_mp;
@@ -96,5 +94,22 @@ int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_ker
     }
     ++*contacts;
   }
+}
+
+int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                       const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
+                       size_t *contacts) {
+  *contacts = 0;
+  const mpm_domain_enrichment *e = &s->enrich;
+  if (!mpm_enrich_contact_on(s) || !s->corner_grid.rows) return 0;
+  const size_t nc = s->corner_count;
+  mpm_real *corner_mass = mpm_arena_alloc(scratch, (count + 1) * sizeof *corner_mass);
+  mpm_real *own_mass = mpm_arena_alloc(scratch, (nc + 1) * sizeof *own_mass);
+  int32_t *body = mpm_arena_alloc(scratch, (nc + 1) * sizeof *body);
+  if (!corner_mass || !own_mass || !body) return -1;
+  for (size_t c = 0; c < nc; ++c) body[c] = corner_body(s, c);
+  for (int b = 0; b < e->body_count; ++b)
+    if (e->body[b].contact)
+      contact_body(s, g, k, dofs, count, b, body, own_mass, corner_mass, contacts);
   return 0;
 }

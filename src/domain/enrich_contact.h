@@ -1,5 +1,6 @@
-/* enrich_contact.h - enriched corners meet the material points' material on the grid (beyond
- * Zhu et al. 2017, whose sec. 8 leaves contact of enriched parts out).
+/* enrich_contact.h - enriched corners meet other material on the grid: material points and
+ * other bodies' unenriched corners (beyond Zhu et al. 2017, whose sec. 8 leaves contact of
+ * enriched parts out).
  *
  * Why: an enriched corner is a DOF of its own (domain/enrich.h): its particles give their mass
  * and forces to it, not to the grid, so another body's material on the grid does not see the
@@ -8,17 +9,20 @@
  *
  * What: after the velocity update (explicit or implicit), before G2P, every enriched corner of a
  * body with `enrichment_contact` looks at the grid around it (the corner kernel's stencil at its
- * position). Of the grid's mass, the part the material points gave, m_mp (the nodes' mass less
- * what the unenriched corners rasterized), says where other material is: its kernel-weighted
- * sum at the corner, and its gradient n (unit, pointing into that material). The grid's
+ * position). Of the grid's mass, the part other material gave, m_o (the nodes' mass less what
+ * the body's own unenriched corners rasterized: material points and other domain bodies),
+ * says where it is: its kernel-weighted sum at the corner, and its gradient n (unit, pointing
+ * into that material). The grid's
  * velocity there is v_g = sum_i w_i m_i v_i / M, M = sum_i w_i m_i. A corner that approaches
  * it, (v_c - v_g) . n > 0, and the grid take the impulse that brings their normal velocities
  * together, as two bodies in a slip contact of reduced mass mu = m_c M / (m_c + M):
  *   j = mu (v_c - v_g) . n,   v_c -= (j / m_c) n,   v_i += (j w_i / M) n   (i in the stencil),
  * so that sum_i m_i dv_i = j n: linear momentum is conserved exactly (up to rounding), and the
  * tangential velocities are left alone. Corners touch the grid one after the other in corner
- * order (deterministic; a handful of corners in Zhu's scenes). The unenriched corners' mass on
- * the grid comes from the embedding's rows, which the step then builds (s->corner_rows). */
+ * order, body by body (deterministic, serial: a few hundred corners in Zhu's scenes). The body's
+ * own corners' mass on the grid comes from the embedding's rows, which the step then builds
+ * (s->corner_rows). Enriched parts meeting each other (of two bodies, or of one) are not seen:
+ * neither is on the grid. */
 #ifndef MPM_DOMAIN_ENRICH_CONTACT_H
 #define MPM_DOMAIN_ENRICH_CONTACT_H
 
@@ -26,7 +30,7 @@
 #include "domain/domain.h"
 #include "grid/grid.h"
 
-/* Whether some body's enriched corners meet the grid's material (and some corner is enriched). */
+/* Whether some body's enriched corners meet other material (and some corner is enriched). */
 int mpm_enrich_contact_on(const mpm_domain_set *s);
 
 /* The contacts of this step (above): dofs holds every DOF's mass and its velocity after the
