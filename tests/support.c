@@ -1,6 +1,8 @@
 /* support.c - shared helpers for the cmocka test programs. */
 #include "support.h"
+#include "analysis/rest_error.h"
 #include "core/svd3.h"
+#include "domain/domain.h"
 #include "scene/scene.h"
 #include "solver/sim.h"
 
@@ -115,4 +117,39 @@ struct mpm_sim *test_sim_from_json(const char *text, const char *name) {
   if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
   mpm_scene_free(&scene);
   return sim;
+}
+
+/* Rest-state error of the domain particles against their reference positions. */
+double test_domain_rest_error(const struct mpm_sim *sim) {
+  const mpm_domain_set *s = &sim->domains;
+  const size_t n = s->particles.count;
+  double(*X)[3] = malloc(n * sizeof *X), (*x)[3] = malloc(n * sizeof *x);
+  for (size_t q = 0; q < n; ++q)
+    for (int d = 0; d < 3; ++d) {
+      double c = 0;
+      for (int a = 0; a < MPM_HEX_CORNERS; ++a) c += s->w[q][a] * s->cX[d][s->corner[q][a]];
+      X[q][d] = c;
+      x[q][d] = s->particles.x[d][q];
+    }
+  const mpm_point_cloud rest = {n, (const double(*)[3])X, s->particles.id, NULL};
+  const mpm_point_cloud final = {n, (const double(*)[3])x, s->particles.id, NULL};
+  mpm_rest_error r;
+  assert_int_equal(mpm_rest_error_compute(&rest, &final, &r), 0);
+  free(X);
+  free(x);
+  return r.mean;
+}
+
+/* Every particle's F made the gradient of its corners' positions (F = sum_a x_a g_qa^T, as the
+ * step keeps it), and its position and velocity from its corners. */
+void test_domain_match_corners(struct mpm_domain_set *s) {
+  for (size_t q = 0; q < s->particles.count; ++q)
+    for (int r = 0; r < 3; ++r)
+      for (int t = 0; t < 3; ++t) {
+        double f = 0;
+        for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+          f += (double)s->cx[r][s->corner[q][a]] * (double)s->g[q][a][t];
+        s->particles.F[3 * r + t][q] = (mpm_real)f;
+      }
+  mpm_domain_set_sync_particles(s);
 }

@@ -37,6 +37,15 @@ int test_cleanup(int failures);
 struct mpm_sim;
 struct mpm_sim *test_sim_from_json(const char *text, const char *name);
 
+/* The rest-state error (analysis/rest_error.h) of the simulation's domain particles against
+ * their reference positions (from their corners' reference positions). */
+double test_domain_rest_error(const struct mpm_sim *sim);
+
+/* Every domain particle's F made the gradient of its corners' positions (F = sum_a x_a g_qa^T,
+ * as the step keeps it), and its position and velocity from its corners. */
+struct mpm_domain_set;
+void test_domain_match_corners(struct mpm_domain_set *s);
+
 /* Path of the mpm program (from MPM_BIN, set by ctest) or NULL. */
 const char *test_mpm_bin(void);
 

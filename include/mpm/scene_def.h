@@ -231,8 +231,8 @@ typedef struct mpm_body_def {
   double enrichment_hourglass; /* bodies[].enrichment_hourglass, hourglass strain at or above
                                   which a particle is enriched (beyond Zhu), [0, 1]; default 0:
                                   never */
-  int enrichment_contact; /* bodies[].enrichment_contact: its enriched corners meet the material
-                             points' material on the grid (beyond Zhu); 0 or 1; default 0 */
+  int enrichment_contact;      /* bodies[].enrichment_contact: its enriched corners meet other
+                                  material on the grid (beyond Zhu); 0 or 1; default 0 */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).

@@ -38,7 +38,7 @@ typedef struct mpm_enrichment_body {
   int metric;        /* MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
   int hourglass_all; /* hourglass control on every particle, not only on those touching an
                         enriched corner (domain/enrich.h) */
-  int contact;       /* its enriched corners meet the material points' material on the grid
+  int contact;       /* its enriched corners meet other material on the grid
                         (domain/enrich_contact.h) */
 } mpm_enrichment_body;
 

@@ -44,7 +44,7 @@
  * u = d xi eta (q = 8 d, strain 2 d / h), zero for every affine motion. Such a particle stays
  * enriched while K <= exit_k or gamma >= the threshold: with exit_k < 1 it returns to the grid
  * as soon as gamma is below the threshold, and keeps that much bend (a plate one domain thick,
- * bent and released: tests/test_enrich.c, test_bend_release).
+ * bent and released: tests/test_enrich_bend.c).
  *
  * The explicit time step. Grid nodes are dx apart whatever the material does, but enriched
  * corners are the material's own nodes: h apart at rest, h sigma_min apart in a compressed

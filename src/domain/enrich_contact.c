@@ -1,5 +1,4 @@
-/* enrich_contact.c - enriched corners meet the material points' material on the grid (see
- * enrich_contact.h). */
+/* enrich_contact.c - enriched corners meet other material on the grid (see enrich_contact.h). */
 #include "domain/enrich_contact.h"
 #include "domain/enrich.h"
 #include "grid/embedding.h"
@@ -54,7 +53,7 @@ static void contact_body(const mpm_domain_set *s, const mpm_grid *g, const mpm_k
     if (g->ops->stencil_nodes(g, st.base, W, &cursor, nodes, &key, &colour)) continue;
     /* other material's mass about the corner, its gradient, and the grid's mass and momentum
      * there */
-    double mp = 0, grad[3] = {0, 0, 0}, M = 0, P[3] = {0, 0, 0};
+    double mo = 0, grad[3] = {0, 0, 0}, M = 0, P[3] = {0, 0, 0};
     double w[MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX];
     int n = 0;
     for (int a = 0; a < W; ++a)
@@ -68,17 +67,17 @@ static void contact_body(const mpm_domain_set *s, const mpm_grid *g, const mpm_k
           w[n] = wi;
           const double m = (double)dofs->mass[i];
           /* what other material gave (rounding leaves a trace where it gave none) */
-          double m_mp = m - (double)corner_mass[i];
-          if (!(m_mp > 1e-4 * m)) m_mp = 0;
-          mp += wi * m_mp;
+          double m_o = m - (double)corner_mass[i];
+          if (!(m_o > 1e-4 * m)) m_o = 0;
+          mo += wi * m_o;
           M += wi * m;
           for (int d = 0; d < 3; ++d) {
-            grad[d] += gi[d] * m_mp;
+            grad[d] += gi[d] * m_o;
             P[d] += wi * m * (double)dofs->v[d][i];
           }
         }
     const double gn = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
-    if (!(mp > 0) || !(M > 0) || !(gn > 0)) continue;
+    if (!(mo > 0) || !(M > 0) || !(gn > 0)) continue;
     double vn = 0;
     for (int d = 0; d < 3; ++d) vn += ((double)dofs->v[d][own] - P[d] / M) * (grad[d] / gn);
     if (!(vn > 0)) continue; /* separating, or sliding */

@@ -143,7 +143,7 @@ typedef struct mpm_body_desc {
   double enrichment_hourglass; /* domains: also enrich where the hexahedron's hourglass strain
                                   is >= this (domain/enrich.h: bending K(F) does not see);
                                   default 0: never (beyond Zhu) */
-  int enrichment_contact;      /* domains: enriched corners meet the material points' material
+  int enrichment_contact;      /* domains: enriched corners meet other material
                                   on the grid (domain/enrich_contact.h); default 0 */
   int enrichment_metric;       /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
                                   Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */

@@ -324,8 +324,8 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
   return MPM_OK;
 }
 
-/* Enriched corners meet the material points' material on the grid (enrich_contact.h), after
- * the velocity update and before G2P reads it. */
+/* Enriched corners meet other material on the grid (enrich_contact.h), after the velocity
+ * update and before G2P reads it. */
 static mpm_status stage_contact(mpm_sim *sim, step_ctx *c) {
   if (!c->domains || sim->adaptive || !mpm_enrich_contact_on(&sim->domains)) return MPM_OK;
   size_t contacts = 0;
