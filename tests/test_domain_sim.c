@@ -339,12 +339,69 @@ static void test_slow_drift_keeps_shape(void **state) {
   assert_true(drift_shape_error("1", "apic", 4000) < TOL(1e-6, 1e-14));
 }
 
+/* The corners' motion taken 8 at a time (domain/corner_motion.h, mpm_corner_move_lanes: no
+ * collider, no corner in a wall band) is bit for bit the corner-by-corner one: a block falls
+ * onto the floor (its lowest corners enter the wall band, the others do not) with and without
+ * a collider it never meets, which sends every corner one by one. FLIP and APIC. */
+static mpm_sim *falling_block(const char *transfer, int far_collider) {
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.05},"
+           " \"time\": {\"end\": 0.3, \"fps\": 10}, \"solver\": {\"transfer\": \"%s\"},"
+           " \"materials\": [{\"name\": \"jelly\", \"model\": \"neo_hookean\", \"E\": 2e4, "
+           "\"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.25, 0.5], "
+           "\"half_extent\": [0.12, 0.1, 0.12]}, \"material\": \"jelly\", "
+           "\"velocity\": [0.3, -1, 0.1], \"domains\": true}]%s}",
+           transfer,
+           far_collider ? ", \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": "
+                          "[0.9, 0.9, 0.9], \"half_extent\": [0.02, 0.02, 0.02]}, "
+                          "\"rule\": \"slip\"}]"
+                        : "");
+  mpm_sim *sim = test_sim_from_json(text, "falling_block.json");
+  for (int f = 0; f < 3; ++f)
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  return sim;
+}
+
+static void test_corner_lanes_match_one_by_one(void **state) {
+  (void)state;
+  const char *transfers[2] = {"flip", "apic"};
+  for (int t = 0; t < 2; ++t) {
+    mpm_sim *run[2] = {falling_block(transfers[t], 0), falling_block(transfers[t], 1)};
+    const mpm_domain_set *a = &run[0]->domains, *b = &run[1]->domains;
+    assert_int_equal(run[0]->steps, run[1]->steps);
+    assert_true(a->pads.on && b->pads.on);
+    const size_t nc = a->corner_count, np = a->particles.count;
+    double lowest = 1;
+    for (int d = 0; d < 3; ++d) {
+      assert_memory_equal(a->cx[d], b->cx[d], nc * sizeof(mpm_real));
+      assert_memory_equal(a->cxc[d], b->cxc[d], nc * sizeof(mpm_real));
+      assert_memory_equal(a->cv[d], b->cv[d], nc * sizeof(mpm_real));
+      assert_memory_equal(a->particles.x[d], b->particles.x[d], np * sizeof(mpm_real));
+      assert_memory_equal(a->particles.v[d], b->particles.v[d], np * sizeof(mpm_real));
+    }
+    for (int e = 0; e < 9; ++e)
+      assert_memory_equal(a->particles.F[e], b->particles.F[e], np * sizeof(mpm_real));
+    for (size_t c = 0; c < nc; ++c) lowest = fmin(lowest, a->cx[1][c]);
+    /* its lowest corners went into the floor's wall band (solver/step.c: wall_cells cells) */
+    const double floor = run[0]->grid.origin[1] + run[0]->scene.wall_cells * run[0]->grid.dx;
+    assert_true(lowest < floor && floor > 0.1);
+    mpm_sim_destroy(run[0]);
+    mpm_sim_destroy(run[1]);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_dense_equals_sparse),        cmocka_unit_test(test_stretched_bar),
-      cmocka_unit_test(test_release_from_scene_and_api), cmocka_unit_test(test_domain_scene_keys),
-      cmocka_unit_test(test_embedded_surface),           cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_dense_equals_sparse),
+      cmocka_unit_test(test_stretched_bar),
+      cmocka_unit_test(test_release_from_scene_and_api),
+      cmocka_unit_test(test_domain_scene_keys),
+      cmocka_unit_test(test_embedded_surface),
+      cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_slow_drift_keeps_shape),
+      cmocka_unit_test(test_corner_lanes_match_one_by_one),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -2,6 +2,7 @@
  * (see corner_pads.h). */
 #include "domain/corner_pads.h"
 #include "core/parallel.h"
+#include "domain/corner_motion.h"
 #include "domain/domain.h"
 #include "grid/sparse_grid.h"
 #include "transfer/transfer_lanes.h"
@@ -91,10 +92,6 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   P->row = mpm_arena_alloc(scratch, (P->positions + 1) * sizeof *P->row);
   P->pos = mpm_arena_alloc(scratch, (nc + 1) * sizeof *P->pos);
   if (!P->pad || !P->org || !P->cell_start || !P->row || !P->pos) return -1;
-  for (int d = 0; d < 3; ++d) {
-    P->dv[d] = mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real));
-    if (!P->dv[d]) return -1;
-  }
 #pragma omp parallel for schedule(static) if (nc > MPM_PARALLEL_MIN)
   for (long c = 0; c < (long)nc; ++c) P->pos[c] = MPM_CORNER_PADS_NONE;
   /* the groups' ranges of positions in the order of their blocks in space (z, y, x; x fastest),
@@ -307,9 +304,10 @@ int mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, c
   return 0;
 }
 
-ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pads *P,
-                                mpm_domain_set *s, const mpm_kernel *k, size_t q,
-                                const mpm_real *const v[3], const mpm_real *const v0[3]) {
+ALWAYS_INLINE mpm_real gather_group(const int W, const int apic, const mpm_corner_pads *P,
+                                    mpm_domain_set *s, const mpm_kernel *k, size_t q,
+                                    const mpm_real *const v[3], const mpm_real *const v0[3],
+                                    const mpm_corner_motion *motion) {
   const int S = MPM_BLOCK + W - 1;
   uint32_t dof[SIDE_MAX * SIDE_MAX * SIDE_MAX];
   mpm_real pad[SIDE_MAX * SIDE_MAX * SIDE_MAX * GATHER_STRIDE];
@@ -321,6 +319,7 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
     }
   const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]}; /* by corner */
   const mpm_real dx = k->dx;
+  mpm_real max_v2 = 0;
   for (int cell = 0; cell < MPM_BLOCK_NODES; ++cell) {
     const uint32_t end = P->cell_start[q][cell + 1];
     for (uint32_t r = P->cell_start[q][cell]; r < end; r += MPM_LANES) {
@@ -352,12 +351,14 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
                 for (int t = 0; t < 3; ++t) B[3 * d + t] += u * A[t];
             }
           }
-      /* the results by corner: the corner loop of G2P reads them in corner order, and these
-       * stores cost less than its loads through P->pos would (measured) */
-      for (int d = 0; d < 3; ++d) {
-        mpm_lanes_store(s->cvg[d], idx, n, run, vg[d]);
-        if (!apic) mpm_lanes_store(P->dv[d], idx, n, run, dv[d]);
-      }
+      /* the grid velocity by corner, and each corner moved now (corner_motion.h) */
+      if (!(run && mpm_corner_move_lanes(s, motion, idx[0], vg, dv, &max_v2)))
+        for (int l = 0; l < n; ++l) {
+          const mpm_real vn[3] = {vg[0][l], vg[1][l], vg[2][l]};
+          const mpm_real inc[3] = {dv[0][l], dv[1][l], dv[2][l]}; /* (APIC: unused) */
+          const mpm_real vg2 = mpm_corner_move(s, motion, idx[l], vn, inc);
+          if (vg2 > max_v2) max_v2 = vg2;
+        }
       if (!apic) continue;
       /* B_a = (sum_i v_i a_i^T) D_a, D_a's diagonal sum_i w_i (x_i - x_a)^2 per axis */
       for (int t = 0; t < 3; ++t) {
@@ -371,48 +372,60 @@ ALWAYS_INLINE void gather_group(const int W, const int apic, const mpm_corner_pa
       }
     }
   }
+  return max_v2;
 }
 
-ALWAYS_INLINE void gather_groups(const int W, const int apic, const mpm_corner_pads *P,
-                                 mpm_domain_set *s, const mpm_kernel *k, const mpm_real *const v[3],
-                                 const mpm_real *const v0[3]) {
+ALWAYS_INLINE mpm_real gather_groups(const int W, const int apic, const mpm_corner_pads *P,
+                                     mpm_domain_set *s, const mpm_kernel *k,
+                                     const mpm_real *const v[3], const mpm_real *const v0[3],
+                                     const mpm_corner_motion *motion) {
   const long groups = (long)P->schedule.colour_start[MPM_SCHEDULE_COLOURS];
+  mpm_real max_v2 = 0;
   /* in the order of the positions: the corners' positions stream through memory */
-#pragma omp parallel for schedule(dynamic, 4)
-  for (long j = 0; j < groups; ++j) gather_group(W, apic, P, s, k, P->in_space[j], v, v0);
+#pragma omp parallel for schedule(dynamic, 4) reduction(max : max_v2)
+  for (long j = 0; j < groups; ++j) {
+    const mpm_real m = gather_group(W, apic, P, s, k, P->in_space[j], v, v0, motion);
+    if (m > max_v2) max_v2 = m;
+  }
+  return max_v2;
 }
 
-void mpm_corner_pads_gather(const mpm_corner_pads *P, mpm_domain_set *s, const mpm_kernel *k,
-                            int apic, const mpm_real *const v[3], const mpm_real *const v0[3]) {
-  /* reads only: every group at once, in parallel */
-  const int w = k->width;
+mpm_real mpm_corner_pads_gather(const mpm_corner_pads *P, mpm_domain_set *s, const mpm_kernel *k,
+                                const mpm_real *const v[3], const mpm_real *const v0[3],
+                                const mpm_corner_motion *motion) {
+  /* reads of the grid only, and each corner's own values: every group at once, in parallel */
+  const int w = k->width, apic = motion->apic;
+  mpm_real max_v2;
   if (w == 2 && apic)
-    gather_groups(2, 1, P, s, k, v, v0);
+    max_v2 = gather_groups(2, 1, P, s, k, v, v0, motion);
   else if (w == 2)
-    gather_groups(2, 0, P, s, k, v, v0);
+    max_v2 = gather_groups(2, 0, P, s, k, v, v0, motion);
   else if (w == 3 && apic)
-    gather_groups(3, 1, P, s, k, v, v0);
+    max_v2 = gather_groups(3, 1, P, s, k, v, v0, motion);
   else if (w == 3)
-    gather_groups(3, 0, P, s, k, v, v0);
+    max_v2 = gather_groups(3, 0, P, s, k, v, v0, motion);
   else if (apic)
-    gather_groups(4, 1, P, s, k, v, v0);
+    max_v2 = gather_groups(4, 1, P, s, k, v, v0, motion);
   else
-    gather_groups(4, 0, P, s, k, v, v0);
+    max_v2 = gather_groups(4, 0, P, s, k, v, v0, motion);
   const mpm_scatter_schedule *sch = &P->schedule;
   const long own = (long)sch->own_rows;
   const mpm_real one = 1;
-#pragma omp parallel for schedule(static) if (own >= MPM_PARALLEL_MIN)
+#pragma omp parallel for schedule(static) reduction(max : max_v2) if (own >= MPM_PARALLEL_MIN)
   for (long j = 0; j < own; ++j) { /* an enriched corner: its own DOF's velocity, B_a = 0 */
     const uint32_t c = sch->own_row[j];
     const uint32_t i = P->corner_dofs + s->enrich.slot[c];
+    mpm_real vnew[3], dv[3];
     for (int d = 0; d < 3; ++d) {
-      mpm_real vnew = 0, dv = 0;
-      vnew += one * v[d][i];
-      dv += one * (v[d][i] - v0[d][i]);
-      s->cvg[d][c] = vnew;
-      P->dv[d][c] = dv;
+      vnew[d] = 0;
+      dv[d] = 0;
+      vnew[d] += one * v[d][i];
+      dv[d] += one * (v[d][i] - v0[d][i]);
     }
     if (apic)
       for (int e = 0; e < 9; ++e) s->cB[e][c] = 0;
+    const mpm_real vg2 = mpm_corner_move(s, motion, c, vnew, dv);
+    if (vg2 > max_v2) max_v2 = vg2;
   }
+  return max_v2;
 }

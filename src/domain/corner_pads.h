@@ -53,7 +53,6 @@ typedef struct mpm_corner_pads {
   uint32_t grid_dofs;   /* the DOF of the level's node 0 (set by P2G: the layout follows) */
   uint32_t corner_dofs; /* the DOF of enriched corner 0 (likewise) */
   mpm_real origin[3];   /* the level's node (0, 0, 0), m */
-  mpm_real *dv[3];      /* step scratch: G2P's FLIP increment per corner, m/s */
 } mpm_corner_pads;
 
 void mpm_corner_pads_free(mpm_corner_pads *P);
@@ -73,10 +72,15 @@ int mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_se
                             const mpm_kernel *k, const mpm_real *const carrier[7], int apic,
                             mpm_real *const values[7], mpm_arena *scratch);
 
-/* The grid's velocities at the corners: s->cvg = sum_i omega_i(x_a) v_i, P->dv = sum_i
- * omega_i(x_a) (v_i - v0_i), and with apic s->cB = (sum_i v_i a_i^T) D_a, for every used
- * corner (enriched ones from their DOFs). */
-void mpm_corner_pads_gather(const mpm_corner_pads *P, struct mpm_domain_set *s, const mpm_kernel *k,
-                            int apic, const mpm_real *const v[3], const mpm_real *const v0[3]);
+/* The grid's velocities at the corners, and the corners moved with them (G2P's corner half):
+ * for every used corner v^g_a = sum_i omega_i(x_a) v_i (into s->corner_pack), with apic s->cB =
+ * (sum_i v_i a_i^T) D_a (enriched corners: from their DOFs, B_a = 0), and the corner moved by
+ * mpm_corner_move with the FLIP increment sum_i omega_i(x_a) (v_i - v0_i). Returns the largest
+ * |v^g|^2. */
+struct mpm_corner_motion;
+mpm_real mpm_corner_pads_gather(const mpm_corner_pads *P, struct mpm_domain_set *s,
+                                const mpm_kernel *k, const mpm_real *const v[3],
+                                const mpm_real *const v0[3],
+                                const struct mpm_corner_motion *motion);
 
 #endif

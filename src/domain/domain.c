@@ -17,7 +17,7 @@ void mpm_domain_set_init(mpm_domain_set *s) {
 }
 
 /* The real-valued corner arrays, for loops that treat them alike (grow, free). */
-static void corner_arrays(mpm_domain_set *s, mpm_real **out[31]) {
+static void corner_arrays(mpm_domain_set *s, mpm_real **out[28]) {
   int k = 0;
   for (int d = 0; d < 3; ++d) out[k++] = &s->cX[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cx[d];
@@ -26,10 +26,9 @@ static void corner_arrays(mpm_domain_set *s, mpm_real **out[31]) {
   out[k++] = &s->cm;
   for (int d = 0; d < 3; ++d) out[k++] = &s->cp[d];
   for (int d = 0; d < 3; ++d) out[k++] = &s->cf[d];
-  for (int d = 0; d < 3; ++d) out[k++] = &s->cvg[d];
   for (int e = 0; e < 9; ++e) out[k++] = &s->cB[e];
 }
-#define CORNER_REAL_ARRAYS 31
+#define CORNER_REAL_ARRAYS 28
 
 void mpm_domain_set_free(mpm_domain_set *s) {
   mpm_particles_free(&s->particles);

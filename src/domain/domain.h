@@ -95,8 +95,9 @@ typedef struct mpm_domain_set {
    * omega_i(x_a) v_i (x_i - x_a)^T (Jiang et al. 2015 at the corner -> grid step), m^2/s,
    * row-major; 0 for enriched corners (their own DOF: no grid stencil) */
   mpm_real *cB[9];
-  /* per step: rasterized mass, momentum and force; the grid (PIC) velocity at the corner */
-  mpm_real *cm, *cp[3], *cf[3], *cvg[3];
+  /* per step: rasterized mass, momentum and force (the grid's velocity at the corner, v^g, is
+   * in corner_pack: nothing else reads it) */
+  mpm_real *cm, *cp[3], *cf[3];
   /* corner -> particle slots (p * 8 + a), CSR, for race-free particle -> corner gathers */
   uint32_t *adj_start, *adj;
   uint8_t *corner_use; /* 1 when an active particle uses the corner (it takes part in steps) */
@@ -113,9 +114,10 @@ typedef struct mpm_domain_set {
    * (interp/kernel.h) */
   mpm_real *apic_a[3], *apic_d[3];
   /* per step (step scratch, set by P2G for G2P): each corner's new position, velocity and grid
-   * velocity side by side (x at 0, v at 3, v^g at 6; one row more, zeroed), written by G2P's
-   * corner loop for its particle loop, which reads 8 corners per particle: one or two cache
-   * lines each instead of nine arrays', each vector in one load of 4 lanes (the fourth unused) */
+   * velocity v^g (the grid's PIC velocity at the corner, which moved it) side by side (x at 0,
+   * v at 3, v^g at 6; one row more, zeroed), written by G2P's corner half (corner_motion.h)
+   * for its particle loop, which reads 8 corners per particle: one or two cache lines each
+   * instead of nine arrays', each vector in one load of 4 lanes (the fourth unused) */
   mpm_real (*corner_pack)[9];
   /* set by the step: 1 when it applies the corners' embedding as a matrix (the implicit
    * Hessian, domain_hessian.c), so that P2G builds corner_grid's rows; else on the sparse grid

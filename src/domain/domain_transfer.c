@@ -1,9 +1,9 @@
 /* domain_transfer.c - two-step particle -> corner -> grid transfers and back (see
  * domain_transfer.h). */
 #include "domain/domain_transfer.h"
-#include "core/compensated.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
+#include "domain/corner_motion.h"
 #include "domain/corner_pads.h"
 #include "domain/enrich.h"
 
@@ -331,7 +331,7 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   return 0;
 }
 
-void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
+void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt, const mpm_real *const vg[3]) {
   /* grad_X v = sum_i v_i grad_X omega_ip^T = sum_a v^g_a g_ap^T (mpm_domain_g2p has the same
    * sums in its loop over the particles) */
   mpm_real gradv[9] = {0};
@@ -339,7 +339,7 @@ void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt) {
     const uint32_t c = s->corner[q][a];
     const mpm_real *ga = s->g[q][a];
     for (int r = 0; r < 3; ++r)
-      for (int t = 0; t < 3; ++t) gradv[3 * r + t] += s->cvg[r][c] * ga[t];
+      for (int t = 0; t < 3; ++t) gradv[3 * r + t] += vg[r][c] * ga[t];
   }
   for (int e = 0; e < 9; ++e) s->particles.F[e][q] += dt * gradv[e];
 }
@@ -380,61 +380,24 @@ mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
   /* APIC: the corner takes the grid's velocity (PIC) and its affine moment; otherwise the
    * scene's PIC/FLIP blend */
   const mpm_real dt = ctx->dt, alpha = ctx->flip_alpha;
-  const mpm_domain_enrichment *en = &s->enrich;
-  const int enriched = en->count > 0;
-  /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity */
-  if (P->on) { /* the same sums from the corners' positions (domain/corner_pads.h) */
+  /* 1. grid -> corner: the grid velocity (PIC) and the hybrid PIC/FLIP corner velocity, and
+   *    the corners moved (domain/corner_motion.h) */
+  const mpm_corner_motion motion = {boundary, dt, alpha, apic, ctx->clamp_lo, ctx->clamp_hi};
+  mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
+  if (P->on) {         /* the same sums from the corners' positions (domain/corner_pads.h) */
     const mpm_real *const v[3] = {dof->v[0], dof->v[1], dof->v[2]};
     const mpm_real *const v0[3] = {dof->v0[0], dof->v0[1], dof->v0[2]};
-    mpm_corner_pads_gather(P, s, &ctx->kernel, apic, v, v0);
-  }
-  mpm_real max_v2 = 0; /* corners move at their grid velocity: it bounds the next dt too */
+    max_v2 = mpm_corner_pads_gather(P, s, &ctx->kernel, v, v0, &motion);
+  } else {
 #pragma omp parallel for schedule(static) reduction(max : max_v2)
-  for (long c = 0; c < nc; ++c) {
-    if (!s->corner_use[c]) continue;
-    /* the embedding applied to the grid's velocities: v^g_a = sum_i E_ai v_i^{n+1}, and the
-     * FLIP increment sum_i E_ai (v_i^{n+1} - v_i^n) */
-    mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
-    if (P->on) {
-      for (int d = 0; d < 3; ++d) {
-        vnew[d] = s->cvg[d][c];
-        dv[d] = apic ? 0 : P->dv[d][c]; /* the FLIP increment: not made for APIC */
-      }
-    } else {
+    for (long c = 0; c < nc; ++c) {
+      if (!s->corner_use[c]) continue;
+      /* the embedding applied to the grid's velocities: v^g_a = sum_i E_ai v_i^{n+1}, and the
+       * FLIP increment sum_i E_ai (v_i^{n+1} - v_i^n) */
+      mpm_real vnew[3] = {0, 0, 0}, dv[3] = {0, 0, 0};
       corner_velocity(s, dof, apic, (size_t)c, vnew, dv);
-      for (int d = 0; d < 3; ++d) s->cvg[d][c] = vnew[d]; /* (the pads stored it already) */
-    }
-    mpm_real v[3];
-    for (int d = 0; d < 3; ++d)
-      v[d] = apic ? vnew[d] : alpha * (s->cv[d][c] + dv[d]) + (1 - alpha) * vnew[d];
-    /* colliders and walls on the corners (Zhu sec. 7, Algorithm 1 line 24): the corner
-     * velocity obeys the boundary rules, and the particles take their velocities from the
-     * corners, which applies the collision impulse to them. The corner moves with the grid
-     * velocity (which the grid update already made obey the boundary), as F does: F stays the
-     * gradient of the corner positions (F = sum_a x_a g_ap^T) */
-    mpm_real vg[3] = {vnew[0], vnew[1], vnew[2]};
-    const mpm_real xn[3] = {s->cx[0][c], s->cx[1][c], s->cx[2][c]};
-    mpm_boundary_apply(boundary, xn, 0, 1, v);
-    /* an enriched corner moves with its own velocity, which obeyed the obstacles only where
-     * the step began: its motion is projected back to any surface it would cross (Zhu
-     * sec. 7), in the velocity F takes too */
-    if (enriched && en->enriched[c]) {
-      mpm_boundary_project_motion(boundary, xn, dt, vg);
-      for (int d = 0; d < 3; ++d) s->cvg[d][c] = vg[d];
-    }
-    const mpm_real vg2 = vg[0] * vg[0] + vg[1] * vg[1] + vg[2] * vg[2];
-    if (vg2 > max_v2) max_v2 = vg2;
-    for (int d = 0; d < 3; ++d) {
-      s->cv[d][c] = v[d];
-      /* Zhu eq. 9, summed with compensation (core/compensated.h) */
-      s->cx[d][c] = mpm_compensated_move(s->cx[d][c], dt * vg[d], ctx->clamp_lo[d],
-                                         ctx->clamp_hi[d], &s->cxc[d][c]);
-    }
-    mpm_real *pk = s->corner_pack[c]; /* what the particles read of the corner, together */
-    for (int d = 0; d < 3; ++d) {
-      pk[d] = s->cx[d][c];
-      pk[3 + d] = s->cv[d][c];
-      pk[6 + d] = s->cvg[d][c];
+      const mpm_real vg2 = mpm_corner_move(s, &motion, (size_t)c, vnew, dv);
+      if (vg2 > max_v2) max_v2 = vg2;
     }
   }
   /* 2. particles: F from the grid velocities at the corners (Zhu eq. 7), the return map of

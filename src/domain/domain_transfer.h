@@ -61,8 +61,8 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
 mpm_g2p_result mpm_domain_g2p(const mpm_transfer_ctx *ctx, mpm_domain_set *s,
                               const mpm_grid_values *dof, const mpm_boundary *boundary);
 
-/* F_p^{n+1} = F_p^n + dt grad_X v (Zhu eq. 7) of particle q from the grid velocities at its
- * corners (s->cvg), as mpm_domain_g2p does it; exposed for tests. */
-void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt);
+/* F_p^{n+1} = F_p^n + dt grad_X v (Zhu eq. 7) of particle q from the grid velocities vg at its
+ * corners (by corner), as mpm_domain_g2p does it; exposed for tests. */
+void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt, const mpm_real *const vg[3]);
 
 #endif
