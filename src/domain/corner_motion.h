@@ -86,18 +86,11 @@ MPM_ALWAYS_INLINE int mpm_corner_move_lanes(mpm_domain_set *s, const mpm_corner_
     memcpy(&cv, s->cv[d] + c0, sizeof cv);
     memcpy(&rem, s->cxc[d] + c0, sizeof rem);
     const mpm_vl v = m->apic ? vnew[d] : m->alpha * (cv + dv[d]) + (1 - m->alpha) * vnew[d];
-    /* mpm_compensated_move, lane by lane */
-    const mpm_vl y = m->dt * vnew[d] + rem;
-    mpm_vl t = x[d] + y;
-    const mpm_vl yb = t - x[d];
-    mpm_vl lost = (x[d] - (t - yb)) + (y - yb);
-    const mpm_vl lo = mpm_vl_splat(m->clamp_lo[d]), hi = mpm_vl_splat(m->clamp_hi[d]);
-    const mpm_vl_index out = (t < lo) | (t > hi);
-    t = mpm_vl_select(out, mpm_vl_select(t < lo, lo, hi), t);
-    lost = mpm_vl_select(out, mpm_vl_splat(0), lost);
+    const mpm_vl t =
+        mpm_compensated_move_lanes(x[d], m->dt * vnew[d], m->clamp_lo[d], m->clamp_hi[d], &rem);
     memcpy(s->cv[d] + c0, &v, sizeof v);
     memcpy(s->cx[d] + c0, &t, sizeof t);
-    memcpy(s->cxc[d] + c0, &lost, sizeof lost);
+    memcpy(s->cxc[d] + c0, &rem, sizeof rem);
     for (int l = 0; l < MPM_LANES; ++l) {
       mpm_real *pk = s->corner_pack[c0 + (uint32_t)l];
       pk[d] = t[l];

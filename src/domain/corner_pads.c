@@ -351,7 +351,7 @@ ALWAYS_INLINE mpm_real gather_group(const int W, const int apic, const mpm_corne
                 for (int t = 0; t < 3; ++t) B[3 * d + t] += u * A[t];
             }
           }
-      /* the grid velocity by corner, and each corner moved now (corner_motion.h) */
+      /* each corner moved now (corner_motion.h) */
       if (!(run && mpm_corner_move_lanes(s, motion, idx[0], vg, dv, &max_v2)))
         for (int l = 0; l < n; ++l) {
           const mpm_real vn[3] = {vg[0][l], vg[1][l], vg[2][l]};

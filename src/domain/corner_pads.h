@@ -16,7 +16,7 @@
  * share every node and are taken as SIMD lanes (transfer/transfer_lanes.h's lane stencils),
  * and their values are laid out in that order (P2G writes them there), so that a batch loads
  * with vector loads. The step numbers the corners in this order now and then
- * (mpm_domain_order_corners), so that the values kept by corner (B_a, the grid velocity) move
+ * (mpm_domain_order_corners), so that the values kept by corner (positions, velocities, B_a) move
  * with vector loads and stores too. The colours run in turn and each group adds its pad to the
  * nodes once: deterministic for any number of threads. The terms are those of the rows, summed in
  * another order (lanes, then nodes): equal to rounding (tests/test_domain.c compares them, and pads

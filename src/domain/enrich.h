@@ -97,7 +97,7 @@ int mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settin
  * corners' current positions (above; h: the body's lattice spacing). */
 mpm_real mpm_enrichment_hourglass_strain(const mpm_domain_set *s, size_t q, mpm_real h);
 
-/* Move the per-body settings (mpm_enrichment_set_epsilon's: thresholds, metrics, hourglass
+/* Move the per-body settings (mpm_enrichment_set_body's: thresholds, metrics, hourglass
  * control, spacings) from `from` to `to`, freeing those `to` held; `from` is left without any.
  * The marks stay where they are (a resumed state keeps the scene's settings). */
 void mpm_enrichment_move_settings(mpm_domain_enrichment *to, mpm_domain_enrichment *from);

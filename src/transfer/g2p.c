@@ -95,16 +95,13 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
   for (int d = 0; d < 3; ++d) {
     mpm_vl v = o->v[d];
     if (!apic) v = a * (mpm_lanes_load(p->v[d], idx, n, contiguous) + o->dv[d]) + (1 - a) * o->v[d];
-    /* x += dt v with compensation (particles.h, xc): mpm_compensated_move lane-wise */
-    const mpm_vl x = mpm_lanes_load(p->x[d], idx, n, contiguous);
-    const mpm_vl y = dt * o->v[d] + mpm_lanes_load(p->xc[d], idx, n, contiguous);
-    const mpm_vl t = x + y, yb = t - x;
-    const mpm_vl lost = (x - (t - yb)) + (y - yb);
+    /* x += dt v with compensation (particles.h, xc; core/compensated.h) */
+    mpm_vl rem = mpm_lanes_load(p->xc[d], idx, n, contiguous);
     const mpm_vl xn =
-        mpm_vl_min(mpm_vl_max(t, mpm_vl_splat(ctx->clamp_lo[d])), mpm_vl_splat(ctx->clamp_hi[d]));
-    const mpm_vl zero = {0};
+        mpm_compensated_move_lanes(mpm_lanes_load(p->x[d], idx, n, contiguous), dt * o->v[d],
+                                   ctx->clamp_lo[d], ctx->clamp_hi[d], &rem);
     mpm_lanes_store(p->x[d], idx, n, contiguous, xn);
-    mpm_lanes_store(p->xc[d], idx, n, contiguous, mpm_vl_select(xn == t, lost, zero));
+    mpm_lanes_store(p->xc[d], idx, n, contiguous, rem);
     mpm_lanes_store(p->v[d], idx, n, contiguous, v);
     check += xn;
     v2 += v * v;
