@@ -13,7 +13,6 @@
 #endif
 
 #include <signal.h>
-#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -135,51 +134,6 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
   return 128 + sig;
 }
 
-/* A file a run writes into its output folder (frames, domain and surface meshes, level sets,
- * checkpoints, their damaged copies, stats, the PVD indexes, the scene copy). */
-static int is_run_file(const char *name) {
-  static const char *const prefix[] = {"frame_",    "domains_",    "surface_",
-                                       "levelset_", "checkpoint_", "grid_cells"};
-  for (size_t k = 0; k < sizeof prefix / sizeof prefix[0]; ++k)
-    if (!strncmp(name, prefix[k], strlen(prefix[k]))) return 1;
-  return !strcmp(name, "stats.csv") || !strcmp(name, "frames.pvd") || !strcmp(name, "run.pvd") ||
-         !strcmp(name, "scene.json");
-}
-
-/* An output folder belongs to one run (issue 17: a second run into a folder left the first
- * one's later frames and checkpoints, which render and --resume then mixed in). Without
- * `overwrite`, a folder holding a run's files is refused, naming some of them; with it, those
- * files are removed first (nothing else in the folder is touched). 0, or an exit code. */
-static int claim_output_dir(const char *dir, int overwrite) {
-  DIR *d = opendir(dir);
-  if (!d) return 0; /* a new folder */
-  char names[3][128];
-  int found = 0, failed = 0;
-  for (struct dirent *e = readdir(d); e; e = readdir(d)) {
-    if (!is_run_file(e->d_name)) continue;
-    if (found < 3) snprintf(names[found], sizeof names[0], "%.127s", e->d_name);
-    ++found;
-    if (overwrite) {
-      char path[4400];
-      snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-      if (remove(path) != 0) {
-        fprintf(stderr, "mpm run: cannot remove %s to overwrite it: %s\n", path, strerror(errno));
-        failed = 1;
-      }
-    }
-  }
-  closedir(d);
-  if (failed) return MPM_EXIT_FAILURE;
-  if (!found || overwrite) return 0;
-  fprintf(stderr,
-          "mpm run: %s holds the files of a run (%s%s%s%s%s, %d in all); an output folder holds "
-          "one run: continue that one with --resume %s, replace it with --overwrite, or write "
-          "this one elsewhere with -o DIR\n",
-          dir, names[0], found > 1 ? ", " : "", found > 1 ? names[1] : "", found > 2 ? ", " : "",
-          found > 2 ? names[2] : "", found, dir);
-  return MPM_EXIT_USAGE;
-}
-
 int mpm_cmd_run(int argc, char **argv) {
   const char *scene_path = NULL, *out_dir = NULL, *resume_dir = NULL;
   int threads = 0, quiet = 0, max_frames = 0, render = 0, overwrite = 0;
@@ -269,17 +223,20 @@ int mpm_cmd_run(int argc, char **argv) {
     }
     print_warnings(sim, scene_path); /* the scene's; where the bodies started is past */
   } else {
-    const int claim = claim_output_dir(out_dir ? out_dir : info_of(sim).output_dir, overwrite);
-    if (claim) {
-      mpm_sim_destroy(sim);
-      return claim;
-    }
-    /* frame 0 and the copy of the scene (scene.json, for `mpm render`) */
-    st = mpm_sim_enable_output(sim, out_dir);
+    /* the folder locked for this run (a second run into it is refused), an earlier run's
+       files refused or, with --overwrite, removed (those alone); then frame 0 and the copy of
+       the scene (scene.json, for `mpm render`) */
+    st = mpm_sim_open_output(sim, out_dir, overwrite ? MPM_OUTPUT_OVERWRITE : MPM_OUTPUT_NEW);
     if (st != MPM_OK) {
-      fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
+      const char *dir = out_dir ? out_dir : info_of(sim).output_dir;
+      fprintf(stderr, "mpm run: %s\n", mpm_sim_last_error(sim));
+      if (st == MPM_ERR_INVALID)
+        fprintf(stderr,
+                "mpm run: continue that run with --resume %s, replace it with --overwrite, or "
+                "write this one elsewhere with -o DIR\n",
+                dir);
       mpm_sim_destroy(sim);
-      return MPM_EXIT_FAILURE;
+      return st == MPM_ERR_INVALID ? MPM_EXIT_USAGE : MPM_EXIT_FAILURE;
     }
   }
   stop_signal = 0;

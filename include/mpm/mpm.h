@@ -89,9 +89,26 @@ MPM_API int64_t mpm_sim_steps(const mpm_sim *sim);
 MPM_API int mpm_sim_frame(const mpm_sim *sim);
 MPM_API int mpm_sim_frame_count(const mpm_sim *sim);
 
+/// An output folder holds one run. What mpm_sim_open_output does with a folder that holds the
+/// files of an earlier run (frames, checkpoints, stats.csv, the PVD indexes, scene.json, the
+/// surfaces and level sets, and their temporaries, recognised by their exact names):
+typedef enum mpm_output_mode {
+  /// refuse it (MPM_ERR_INVALID, naming some of the files); nothing is touched
+  MPM_OUTPUT_NEW = 0,
+  /// remove exactly those files first, and nothing else: never a folder, a symbolic link, a
+  /// file of another name, nor this simulation's scene file or meshes. Every one is checked
+  /// before any is removed: a folder or a link bearing such a name refuses the whole (MPM_ERR_IO)
+  MPM_OUTPUT_OVERWRITE = 1,
+} mpm_output_mode;
+
 /// Turn per-frame output on into `dir` (created if missing; NULL: the scene's output.directory;
 /// the scene's `output` keys choose the files) and write frame 0. Checkpoints need it:
-/// mpm_sim_write_checkpoint writes into `dir`.
+/// mpm_sim_write_checkpoint writes into `dir`. The folder is locked for this simulation until
+/// it is destroyed (a lock file `.mpm.lock` in it, flock): another simulation, in this process
+/// or another, that opens or resumes output there gets MPM_ERR_IO naming the folder and the
+/// process that holds it.
+MPM_API mpm_status mpm_sim_open_output(mpm_sim *sim, const char *dir, mpm_output_mode mode);
+/// mpm_sim_open_output with MPM_OUTPUT_NEW.
 MPM_API mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
 
 /// Checkpoints (HDF5, see docs/scene-format.md "Checkpoints"). Write the complete state into
@@ -102,6 +119,8 @@ MPM_API mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap
 /// `dir` (older ones are tried when the newest is damaged) and continue writing frames there.
 /// The scene must be the one the checkpoint was written from. The checkpoint used is copied
 /// to `path` (may be NULL). The run then continues bit-identically to an uninterrupted one.
+/// The folder is locked as mpm_sim_open_output locks it, and the temporaries a killed run
+/// left there (.NAME.tmp.PID) are removed.
 MPM_API mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap);
 /// Stop between two steps when *flag becomes nonzero (set it from a signal handler):
 /// mpm_sim_advance_frame then returns MPM_ERR_INTERRUPTED with the state consistent, ready

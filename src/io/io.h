@@ -20,6 +20,11 @@ typedef struct mpm_atomic_file {
 } mpm_atomic_file;
 
 mpm_status mpm_atomic_open(mpm_atomic_file *f, const char *path, mpm_error *err);
+/* Create a new temporary beside `path` (`.name.tmp.PID`, another suffix when that name is
+ * taken) without following links or opening an existing file: its name goes to temp (cap
+ * bytes), its descriptor is returned for writing; -1 with the message on failure. For writers
+ * that need the file itself rather than a stream (the OpenVDB shim). */
+int mpm_temp_create(const char *path, char *temp, size_t cap, mpm_error *err);
 /* flush, fsync-free close, rename over the final path */
 mpm_status mpm_atomic_commit(mpm_atomic_file *f, mpm_error *err);
 /* close and remove the temporary (after a failure); the final path is untouched */

@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* ---- exact orientation in the (y, z) plane ---------------------------------------------- */
 
@@ -246,10 +247,7 @@ static int analytic_inside(const shape_ctx *sc, const double x[3]) {
   }
 }
 
-/* Resolve a mesh path: absolute as given; relative against the scene file's folder when that
- * file exists, else as given (relative to the working directory). */
-static void resolve_mesh_path(const mpm_scene *scene, const char *mesh_path, char *out,
-                              size_t size) {
+void mpm_scene_mesh_file(const mpm_scene *scene, const char *mesh_path, char *out, size_t size) {
   snprintf(out, size, "%s", mesh_path);
   if (mesh_path[0] == '/') return;
   const char *slash = strrchr(scene->path, '/');
@@ -257,11 +255,8 @@ static void resolve_mesh_path(const mpm_scene *scene, const char *mesh_path, cha
   char candidate[2 * MPM_PATH_MAX];
   snprintf(candidate, sizeof candidate, "%.*s/%s", (int)(slash - scene->path), scene->path,
            mesh_path);
-  FILE *f = fopen(candidate, "rb");
-  if (f) {
-    fclose(f);
+  if (access(candidate, F_OK) == 0) /* not opened: a FIFO there would block */
     snprintf(out, size, "%s", candidate);
-  }
 }
 
 /* Check the shape, compute its bounds and prepare what the inside test needs. */
@@ -319,7 +314,7 @@ static mpm_status shape_prepare(const mpm_scene *scene, int bi, shape_ctx *sc, d
                            "%s: bodies[%d].shape.mesh_scale is %g, expected > 0", file, bi,
                            s->mesh_scale);
     char path[2 * MPM_PATH_MAX];
-    resolve_mesh_path(scene, s->mesh_path, path, sizeof path);
+    mpm_scene_mesh_file(scene, s->mesh_path, path, sizeof path);
     mpm_error merr;
     mpm_error_clear(&merr);
     mpm_status st = mpm_mesh_load(path, &sc->mesh, &merr);

@@ -57,4 +57,8 @@ void mpm_sample_spin(const mpm_scene *scene, int body_index, mpm_particles *p, s
 mpm_status mpm_sample_body_mesh(const mpm_scene *scene, int body_index, mpm_mesh *mesh,
                                 mpm_error *err);
 
+/* The file a mesh body reads: an absolute mesh_path as given; a relative one against the scene
+ * file's folder when a file is there, else as given (against the working directory). */
+void mpm_scene_mesh_file(const mpm_scene *scene, const char *mesh_path, char *out, size_t size);
+
 #endif

@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 
 #include "solver/sim.h"
+#include "io/run_folder.h"
 #include "solver/adaptive.h"
 #include "domain/enrich.h"
 #include "core/alloc.h"
@@ -67,6 +68,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   if (!sim) return oom(err, "the simulation");
   sim->scene = *scene;
   memset(scene, 0, sizeof *scene); /* the simulation owns the arrays now */
+  sim->output_lock = -1;
   const mpm_scene *sc = &sim->scene;
   /* refuse a scene the machine cannot hold before allocating anything for it */
   mpm_status st = mpm_scene_check_memory(sc, err);
@@ -407,6 +409,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim->stats_forces);
   mpm_scene_free(&sim->scene);
   free(sim->scene_copy);
+  mpm_run_folder_unlock(sim->output_lock); /* after the last file is written */
   free(sim);
 }
 

@@ -104,6 +104,7 @@ struct mpm_sim {
   /* outputs */
   int output_enabled;
   char output_dir[MPM_PATH_MAX];
+  int output_lock; /* the descriptor holding output_dir's lock (io/run_folder.h), -1: none */
   int written_frames;
   double *frame_times;
   char (*frame_files)[64];
@@ -226,6 +227,12 @@ mpm_status mpm_sim_mark_enrichment(mpm_sim *sim);
 /* Scale the materials' moduli by their strength schedules at time t (sim.c); a no-op without
  * schedules. */
 void mpm_sim_apply_strength(mpm_sim *sim, double t);
+
+/* Take the lock of the output folder `dir` for this simulation (releasing the one it held) and
+ * make the folder ready: how == MPM_RUN_CLAIM_NEW refuses a folder holding a run's files,
+ * OVERWRITE removes them, RESUME removes stale temporaries; the scene file and its meshes are
+ * never touched. The folder must exist. On failure the lock held before is kept. */
+mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how);
 
 /* Output bookkeeping for frame_count + 1 records (sim_output.c). */
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);

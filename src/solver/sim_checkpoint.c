@@ -10,11 +10,14 @@
 #include "core/parallel.h"
 #include "domain/enrich.h"
 #include "io/checkpoint.h"
+#include "io/run_folder.h"
 #include "core/alloc.h"
 #include "solver/adaptive.h"
 #include "solver/sim.h"
 
 #include <dirent.h>
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -48,6 +51,10 @@ static int list_checkpoints(const char *dir, char ***out) {
   char **names = NULL;
   for (struct dirent *e; (e = readdir(d));) {
     if (!is_checkpoint_name(e->d_name)) continue;
+    /* only what a run writes: a folder, link or FIFO of that name is not a checkpoint */
+    struct stat st;
+    if (fstatat(dirfd(d), e->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(st.st_mode))
+      continue;
     if (n == cap) {
       cap = cap ? 2 * cap : 8;
       char **bigger = realloc(names, (size_t)cap * sizeof *names);
@@ -254,6 +261,9 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   return MPM_OK;
 }
 
+static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n, char *path,
+                              size_t cap);
+
 mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap) {
   if (strlen(dir) >= sizeof sim->output_dir)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
@@ -261,6 +271,25 @@ mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap)
   const int n = list_checkpoints(dir, &names);
   if (n < 0)
     return mpm_error_set(&sim->error, MPM_ERR_IO, "%s: cannot read the output directory", dir);
+  /* the folder is this run's from here (no other simulation writes there while it resumes):
+     its stale temporaries are a killed run's, and go */
+  const int had_lock = sim->output_lock >= 0;
+  mpm_status claimed = mpm_sim_claim_output(sim, dir, MPM_RUN_CLAIM_RESUME);
+  if (claimed != MPM_OK) {
+    free_names(names, n);
+    return claimed;
+  }
+  mpm_status st = resume_from(sim, dir, names, n, path, cap);
+  if (st != MPM_OK && !had_lock) { /* nothing resumed: the folder is free again */
+    mpm_run_folder_unlock(sim->output_lock);
+    sim->output_lock = -1;
+  }
+  return st;
+}
+
+/* mpm_sim_resume once the folder is locked: the newest checkpoint of `names` that fits. */
+static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n, char *path,
+                              size_t cap) {
   if (n == 0) {
     free(names);
     return mpm_error_set(&sim->error, MPM_ERR_IO,

@@ -7,6 +7,8 @@
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "domain/enrich.h"
+#include "io/run_folder.h"
+#include "scene/sample.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,10 +29,58 @@ mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
   return MPM_OK;
 }
 
-mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
-  if (dir) snprintf(sim->output_dir, sizeof sim->output_dir, "%s", dir);
-  mpm_status st = mpm_make_dirs(sim->output_dir, &sim->error);
-  if (st == MPM_OK) st = mpm_sim_alloc_output(sim, 0);
+mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
+  /* the run's inputs: never removed, whatever their names (a scene kept as out/scene.json) */
+  const mpm_scene *sc = &sim->scene;
+  char(*meshes)[MPM_PATH_MAX] = calloc((size_t)sc->body_count + 1, sizeof *meshes);
+  const char **keep = calloc((size_t)sc->body_count + 2, sizeof *keep);
+  if (!meshes || !keep) {
+    free(meshes);
+    free(keep);
+    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory claiming %s", dir);
+  }
+  int n = 0;
+  if (sc->path[0]) keep[n++] = sc->path;
+  for (int b = 0; b < sc->body_count; ++b)
+    if (sc->bodies[b].shape.kind == MPM_SHAPE_MESH && sc->bodies[b].shape.mesh_path[0]) {
+      mpm_scene_mesh_file(sc, sc->bodies[b].shape.mesh_path, meshes[b], sizeof meshes[b]);
+      keep[n++] = meshes[b];
+    }
+  int lock = -1;
+  mpm_status st = MPM_OK;
+  const int same = sim->output_lock >= 0 && mpm_same_file(dir, sim->output_dir);
+  if (!same) st = mpm_run_folder_lock(dir, &lock, &sim->error);
+  if (st == MPM_OK) st = mpm_run_folder_claim(dir, (mpm_run_claim)how, keep, n, &sim->error);
+  free(meshes);
+  free(keep);
+  if (st != MPM_OK) {
+    mpm_run_folder_unlock(lock);
+    return st;
+  }
+  if (!same) {
+    mpm_run_folder_unlock(sim->output_lock);
+    sim->output_lock = lock;
+  }
+  return MPM_OK;
+}
+
+mpm_status mpm_sim_open_output(mpm_sim *sim, const char *dir, mpm_output_mode mode) {
+  if (mode != MPM_OUTPUT_NEW && mode != MPM_OUTPUT_OVERWRITE)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "mpm_sim_open_output: mode %d is neither MPM_OUTPUT_NEW nor "
+                         "MPM_OUTPUT_OVERWRITE",
+                         (int)mode);
+  if (dir && strlen(dir) >= sizeof sim->output_dir)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
+  char target[MPM_PATH_MAX];
+  snprintf(target, sizeof target, "%s", dir ? dir : sim->output_dir);
+  mpm_status st = mpm_make_dirs(target, &sim->error);
+  if (st == MPM_OK)
+    st = mpm_sim_claim_output(
+        sim, target, mode == MPM_OUTPUT_OVERWRITE ? MPM_RUN_CLAIM_OVERWRITE : MPM_RUN_CLAIM_NEW);
+  if (st != MPM_OK) return st;
+  snprintf(sim->output_dir, sizeof sim->output_dir, "%s", target);
+  st = mpm_sim_alloc_output(sim, 0);
   if (st != MPM_OK) return st;
   st = mpm_sim_write_scene_copy(sim);
   if (st != MPM_OK) return st;
@@ -40,6 +90,10 @@ mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   st = mpm_sim_write_frame(sim);
   mpm_sim_threads_leave(sim, saved);
   return st;
+}
+
+mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
+  return mpm_sim_open_output(sim, dir, MPM_OUTPUT_NEW);
 }
 
 int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {

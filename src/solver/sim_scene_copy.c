@@ -5,6 +5,7 @@
  * change its working directory), and written by mpm_sim_enable_output. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "solver/sim.h"
+#include "io/run_folder.h"
 
 #include <cjson/cJSON.h>
 #include <limits.h>
@@ -63,6 +64,9 @@ mpm_status mpm_sim_write_scene_copy(mpm_sim *sim) {
   if (!sim->scene_copy) return MPM_OK; /* made from a scene struct: no JSON to keep */
   char path[MPM_PATH_MAX + 16];
   snprintf(path, sizeof path, "%s/scene.json", sim->output_dir);
+  /* the scene run is that file itself (`mpm run out/scene.json -o out`): it is left as the
+     user wrote it (renaming the copy over it would replace the user's file) */
+  if (sim->scene.path[0] && mpm_same_file(path, sim->scene.path)) return MPM_OK;
   mpm_atomic_file f;
   mpm_status st = mpm_atomic_open(&f, path, &sim->error);
   if (st != MPM_OK) return st;

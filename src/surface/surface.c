@@ -177,16 +177,23 @@ mpm_status mpm_surface_write_ply(const char *path, const mpm_surface_mesh *m, mp
 
 mpm_status mpm_surface_write_vdb(const char *path, const mpm_vdb_grid *grid, int density,
                                  const mpm_vdb_vector_grid *velocity, mpm_error *err) {
-  /* OpenVDB writes the file itself: to a temporary beside it, renamed on success */
+  /* OpenVDB opens the file it writes by name: it gets a new temporary beside the final path,
+     made as the atomic writers make theirs (never a planted file or link), and reaches it
+     through this process's descriptor of it where /proc has one, so that the name cannot be
+     swapped in between; the temporary is renamed into place on success */
   char temp[1100];
-  const char *slash = strrchr(path, '/');
-  const int dir_len = slash ? (int)(slash - path + 1) : 0;
-  snprintf(temp, sizeof temp, "%.*s.%s.tmp.%ld", dir_len, path, slash ? slash + 1 : path,
-           (long)getpid());
+  const int fd = mpm_temp_create(path, temp, sizeof temp, err);
+  if (fd < 0) return MPM_ERR_IO;
+  char by_fd[64];
+  snprintf(by_fd, sizeof by_fd, "/proc/self/fd/%d", fd);
+  const char *target = access(by_fd, W_OK) == 0 ? by_fd : temp;
   char msg[600];
-  if (mpm_vdb_write(grid, temp, density, velocity, msg, sizeof msg) != MPM_VDB_OK) {
+  const int wrote = mpm_vdb_write(grid, target, density, velocity, msg, sizeof msg);
+  close(fd);
+  if (wrote != MPM_VDB_OK) {
     remove(temp);
-    return mpm_error_set(err, MPM_ERR_IO, "%s", msg);
+    return mpm_error_set(err, MPM_ERR_IO, "cannot write '%s' (through its temporary %s): %s", path,
+                         temp, msg);
   }
   if (rename(temp, path) != 0) {
     remove(temp);
