@@ -198,7 +198,7 @@ static void test_command(void **state) {
   expect_output("usage: mpm error");
   snprintf(args, sizeof args, "error '%s/out' 0", dir); /* two arguments are two frame files */
   assert_int_equal(mpm(args), 2);
-  expect_output("/out: not a particle frame");
+  expect_output("/out: cannot open: it is a folder, not a regular file");
   snprintf(args, sizeof args, "error '%s/out' 0 9", dir);
   assert_int_equal(mpm(args), 2);
   expect_output("frame_0009.vtu");

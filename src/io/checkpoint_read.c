@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "domain/enrich.h"
+#include "io/input_file.h"
 #include "io/checkpoint_format.h"
 #include "scene/scene.h"
 
@@ -421,9 +422,10 @@ done:
 
 /* The whole file; NULL with err set when it cannot be read. */
 static unsigned char *read_file(const char *path, size_t *size, mpm_error *err) {
-  FILE *f = fopen(path, "rb");
+  char why[128];
+  FILE *f = mpm_open_input(path, NULL, why, sizeof why);
   if (!f) {
-    mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the checkpoint", path);
+    mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the checkpoint: %s", path, why);
     return NULL;
   }
   long end = -1;

@@ -4,6 +4,7 @@
  * fields, and every field must be a finite number. */
 #define _XOPEN_SOURCE 700 /* getline, strdup */
 #include "core/error.h"
+#include "io/input_file.h"
 
 #include <errno.h>
 #include <math.h>
@@ -160,12 +161,13 @@ static mpm_status read_table(const char *path, mpm_stats_table *t, mpm_error *er
   t->stride = COL_COUNT;
   if (!(t->path = strdup(path)))
     return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory", path);
-  FILE *f = fopen(path, "r");
+  char why[128];
+  FILE *f = mpm_open_input(path, NULL, why, sizeof why);
   if (!f)
     return mpm_error_set(err, MPM_ERR_IO,
                          "cannot open '%s': %s (is this the output directory "
                          "of 'mpm run'?)",
-                         path, strerror(errno));
+                         path, why);
   char *line = NULL;
   size_t cap = 0, capacity = 0;
   long line_no = 0;

@@ -9,6 +9,7 @@
  * Anything else - another writer's encoding, a truncated file, counts that disagree - is a
  * clear error naming the file and the array. */
 #include "io/io.h"
+#include "io/input_file.h"
 
 #include <errno.h>
 #include <stdint.h>
@@ -86,8 +87,9 @@ const mpm_vtu_array *mpm_vtu_frame_array(const mpm_vtu_frame *f, const char *nam
 
 mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err) {
   memset(out, 0, sizeof *out);
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+  char why[128];
+  FILE *fp = mpm_open_input(path, NULL, why, sizeof why);
+  if (!fp) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open: %s", path, why);
   char *head = malloc(VTU_HEADER_MAX + 1);
   unsigned char *buf = NULL;
   mpm_status st = MPM_OK;

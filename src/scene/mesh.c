@@ -12,6 +12,7 @@
  * a, b, c the corners relative to the query point. w = sum Omega / 4 pi is 1 inside and 0
  * outside a closed mesh, and degrades gracefully (w ~ 1/2 only near holes) for open ones. */
 #include "scene/mesh.h"
+#include "io/input_file.h"
 #include "core/alloc.h"
 
 #include <ctype.h>
@@ -59,8 +60,9 @@ static mpm_status oom(mpm_error *err, const char *path) {
 
 /* Whole file, NUL-terminated, allocated with mpm_alloc. */
 static mpm_status read_whole_file(const char *path, char **out, size_t *len, mpm_error *err) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open mesh: %s", path, strerror(errno));
+  char why[128];
+  FILE *f = mpm_open_input(path, NULL, why, sizeof why);
+  if (!f) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open mesh: %s", path, why);
   char *buf = NULL;
   long size = -1;
   if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);

@@ -14,6 +14,7 @@
  * materials are checked in scene_json_material.c, shapes, bodies and colliders in
  * scene_json_shape.c (shared declarations: scene_json_parts.h). */
 #include "core/hash.h"
+#include "io/input_file.h"
 #include "scene/json_check.h"
 #include "scene/scene.h"
 #include "scene/scene_json_parts.h"
@@ -431,11 +432,9 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
   mpm_scene_default(scene);
   if (!path || !path[0])
     return mpm_error_set(err, MPM_ERR_IO, "cannot read a scene file: no path given");
-  FILE *f = fopen(path, "rb");
-  if (!f) {
-    int e = errno;
-    return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open the scene file: %s", path, strerror(e));
-  }
+  char why[128];
+  FILE *f = mpm_open_input(path, NULL, why, sizeof why);
+  if (!f) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open the scene file: %s", path, why);
   size_t cap = 1 << 16, len = 0;
   char *buf = malloc(cap);
   int read_errno = 0;

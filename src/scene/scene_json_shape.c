@@ -6,6 +6,7 @@
  * (body-force regions: a collider's shape, motion and window with an acceleration).
  * Part of the scene parser of scene_json.c (shared declarations: scene_json_parts.h). */
 #include "scene/json_check.h"
+#include "io/input_file.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
 #include "scene/scene_json_parts.h"
@@ -85,12 +86,11 @@ static const char *format_vec3(const double v[3], char *buf, size_t cap) {
 /* Bounding box of a mesh body: the mesh's box scaled about its centre, moved to `center`. */
 static int mesh_bounds(mpm_json_ctx *c, mpm_shape_desc *sh, double lo[3], double hi[3], char *note,
                        size_t note_cap) {
-  FILE *f = fopen(sh->mesh_path, "rb");
-  if (!f) {
-    int e = errno;
+  char why[128];
+  FILE *f = mpm_open_input(sh->mesh_path, NULL, why, sizeof why);
+  if (!f)
     return mpm_json_fail_at(c, "file", MPM_ERR_IO, "cannot open mesh file '%s': %s", sh->mesh_path,
-                            strerror(e));
-  }
+                            why);
   errno = 0;
   (void)fgetc(f);
   int bad = ferror(f), e = errno;

@@ -5,6 +5,7 @@
  * change its working directory), and written by mpm_sim_enable_output. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "solver/sim.h"
+#include "io/input_file.h"
 #include "io/run_folder.h"
 
 #include <cjson/cJSON.h>
@@ -14,7 +15,8 @@
 #include <string.h>
 
 static char *read_text(const char *path) {
-  FILE *fp = fopen(path, "rb");
+  char why[128];
+  FILE *fp = mpm_open_input(path, NULL, why, sizeof why);
   if (!fp) return NULL;
   char *text = NULL;
   if (fseek(fp, 0, SEEK_END) == 0) {
