@@ -131,8 +131,10 @@ static void test_surface_band_with_resampling(void **state) {
       deep_coarse += p->level[i] == 0;
     }
   }
-  /* merges take 8 at a time: a few may be left over in a cell */
-  assert_true(deep > 0 && deep_coarse > 0.8 * (double)deep);
+  /* merges take 8 at a time: a few may be left over in a cell (9 of 49 with steps that crossed
+     the frames' times, 12 of 52 since steps land on them) */
+  if (!(deep > 0 && deep_coarse > 0.75 * (double)deep))
+    fail_msg("%zu of the %zu particles deep inside are coarse", deep_coarse, deep);
   assert_true(sim->resample_figures.splits + sim->resample_figures.merges > 0);
   print_message("surface: %zu particles (%zu of %zu deep inside coarse), %lld splits, %lld "
                 "merges, %lld rebuilds\n",

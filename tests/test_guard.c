@@ -211,9 +211,41 @@ static void test_guard_scene_keys(void **state) {
   mpm_scene_free(&scene);
 }
 
+/* A simulation whose step failed does not step again: mpm_sim_step, mpm_sim_advance_frame and
+ * mpm_sim_write_checkpoint return the failure's status, naming its step, and leave the state
+ * as it was; an interrupt is not a failure: the next call goes on. */
+static void test_failed_simulation_refuses_steps(void **state) {
+  (void)state;
+  mpm_sim *sim = block("stop", 8, "fixed_corotated");
+  assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("guard-failed")), MPM_OK);
+  volatile int flag = 1;
+  mpm_sim_set_interrupt(sim, &flag);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_ERR_INTERRUPTED);
+  flag = 0;
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_OK); /* usable after an interrupt */
+  launch(sim);
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
+  const long long steps = sim->steps;
+  const double time = sim->time;
+  const mpm_real x = sim->particles.x[0][0];
+  for (int k = 0; k < 3; ++k) {
+    const mpm_status st = k == 0   ? mpm_sim_step(sim, 0)
+                          : k == 1 ? mpm_sim_advance_frame(sim)
+                                   : mpm_sim_write_checkpoint(sim, NULL, 0);
+    assert_int_equal(st, MPM_ERR_UNSTABLE);
+    expect_message(sim, "failed at step");
+    expect_message(sim, "violated the CFL condition"); /* the first failure, kept */
+  }
+  assert_int_equal(sim->steps, steps);
+  assert_true(sim->time == time);
+  assert_true(sim->particles.x[0][0] == x);
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cfl_violation_stops),
+      cmocka_unit_test(test_failed_simulation_refuses_steps),
       cmocka_unit_test(test_cfl_violation_domains),
       cmocka_unit_test(test_retry_halves_dt_until_stable),
       cmocka_unit_test(test_retry_gives_up),
@@ -221,5 +253,5 @@ int main(void) {
       cmocka_unit_test(test_inversion_model_cannot_take),
       cmocka_unit_test(test_guard_scene_keys),
   };
-  return cmocka_run_group_tests(tests, NULL, NULL);
+  return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

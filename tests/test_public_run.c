@@ -5,6 +5,7 @@
  * mpm_sim_enable_output keeps for `mpm render`. */
 #include "support.h"
 #include "mpm/mpm.h"
+#include "mpm/plot.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -192,7 +193,7 @@ static void test_scene_copy(void **state) {
   assert_int_equal(mpm_sim_create_from_file("examples/ball_bunny.json", &sim, err, sizeof err),
                    MPM_OK);
   const char *dir = test_temp_dir("public_run_copy");
-  assert_int_equal(mpm_sim_enable_output(sim, dir), MPM_OK);
+  if (mpm_sim_enable_output(sim, dir) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
   char path[1200];
   snprintf(path, sizeof path, "%s/scene.json", dir);
   const char *text = read_all(path);
@@ -244,6 +245,85 @@ static void test_rest_error_frames(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* mpm_sim_step and mpm_sim_advance_frame are one frame loop: a step never passes the frame's
+ * time, a step that lands on it completes the frame (counted, written), so time and the frames'
+ * records only go forward whatever the mix of calls; past the end time both refuse. */
+static void test_step_and_frame_agree(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic"); /* 40 frames per second to 0.1 s: 4 frames */
+  char out[600];
+  snprintf(out, sizeof out, "%s", test_temp_dir("step-frame"));
+  assert_int_equal(mpm_sim_enable_output(sim, out), MPM_OK);
+  double last = 0;
+  int calls = 0;
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
+    const int frame = mpm_sim_frame(sim);
+    /* steps of 7 ms (not a divisor of the frame's 25 ms) for frames 0 and 2, whole frames else */
+    const mpm_status st = frame % 2 == 0 ? mpm_sim_step(sim, 0.007) : mpm_sim_advance_frame(sim);
+    assert_int_equal(st, MPM_OK);
+    assert_true(mpm_sim_time(sim) > last);
+    assert_true(mpm_sim_time(sim) <= (frame + 1) * 0.025 + 1e-12);
+    if (mpm_sim_frame(sim) > frame) /* landed on the frame's time */
+      assert_true(fabs(mpm_sim_time(sim) - (frame + 1) * 0.025) < 1e-12);
+    last = mpm_sim_time(sim);
+    assert_true(++calls < 100);
+  }
+  assert_true(fabs(mpm_sim_time(sim) - 0.1) < 1e-12);
+  assert_int_equal(mpm_sim_step(sim, 0.007), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "end time"));
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_ERR_INVALID);
+  mpm_sim_destroy(sim);
+  /* stats.csv: a row per frame at the frame's time */
+  char path[700], err[512];
+  snprintf(path, sizeof path, "%s/stats.csv", out);
+  mpm_stats_table t;
+  assert_int_equal(mpm_stats_read(path, &t, err, sizeof err), MPM_OK);
+  assert_int_equal(t.rows, 5);
+  for (size_t r = 0; r < t.rows; ++r)
+    assert_true(fabs(t.values[r * (size_t)t.stride + MPM_STATS_TIME] - 0.025 * (double)r) < 1e-9);
+  mpm_stats_free(&t);
+}
+
+/* An implicit scene's fixed solver.dt longer than a frame takes one step per frame (it used to
+ * take a step of the whole dt); solver.max_dt bounds solver.dt too. */
+static void test_implicit_dt_fits_the_frame(void **state) {
+  (void)state;
+  static const double dts[][2] = {{5e4, 0}, {0.02, 0.004}};
+  for (int k = 0; k < 2; ++k) {
+    char json[2048];
+    snprintf(json, sizeof json,
+             "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.1},"
+             " \"time\": {\"end\": 0.1, \"fps\": 24},"
+             " \"solver\": {\"integrator\": \"implicit\", \"dt\": %g, \"max_dt\": %g},"
+             " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4,"
+             "   \"nu\": 0.3, \"density\": 1000}],"
+             " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5],"
+             "   \"half_extent\": [0.2,0.2,0.2]}, \"material\": \"m\"}]}",
+             dts[k][0], dts[k][1]);
+    mpm_sim *sim = NULL;
+    char err[1024];
+    if (mpm_sim_create_from_json(json, NULL, &sim, err, sizeof err) != MPM_OK)
+      fail_msg("create: %s", err);
+    char out[600];
+    snprintf(out, sizeof out, "%s", test_temp_dir("implicit-dt"));
+    assert_int_equal(mpm_sim_enable_output(sim, out), MPM_OK);
+    assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+    assert_true(fabs(mpm_sim_time(sim) - 1.0 / 24) < 1e-12);
+    /* one step of the frame; eleven of at most 4 ms */
+    assert_int_equal(mpm_sim_steps(sim), k == 0 ? 1 : 11);
+    mpm_sim_destroy(sim);
+    char path[700];
+    snprintf(path, sizeof path, "%s/stats.csv", out);
+    mpm_stats_table t;
+    assert_int_equal(mpm_stats_read(path, &t, err, sizeof err), MPM_OK);
+    const double *row = t.values + (size_t)t.stride;
+    if (!(row[MPM_STATS_DT_MAX] <= (k == 0 ? 1.0 / 24 : 0.004) * (1 + 1e-9)))
+      fail_msg("solver.dt %g, max_dt %g: the longest step of the frame took %g s", dts[k][0],
+               dts[k][1], row[MPM_STATS_DT_MAX]);
+    mpm_stats_free(&t);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_info),
@@ -253,6 +333,8 @@ int main(void) {
       cmocka_unit_test(test_next_dt),
       cmocka_unit_test(test_scene_copy),
       cmocka_unit_test(test_rest_error_frames),
+      cmocka_unit_test(test_step_and_frame_agree),
+      cmocka_unit_test(test_implicit_dt_fits_the_frame),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -66,10 +66,21 @@ MPM_API mpm_status mpm_sim_create_from_json(const char *json_text, const char *b
 /// Destroy a simulation; NULL is fine.
 MPM_API void mpm_sim_destroy(mpm_sim *sim);
 
-/// Advance the simulation to the end of the next frame (several substeps).
+/// Advance the simulation to the end of the frame in progress (the steps it still needs, which
+/// may be none after mpm_sim_step calls) and complete the frame: the frame count goes up and,
+/// with output on, the frame is written (and a checkpoint when output.checkpoint_every says).
+/// MPM_ERR_INVALID once every frame is done (the end time reached).
+///
+/// A step that fails with MPM_ERR_UNSTABLE or MPM_ERR_NOMEM loses the state: from then on
+/// mpm_sim_advance_frame, mpm_sim_step and mpm_sim_write_checkpoint return that status, naming
+/// the step that failed, and change nothing; destroy the simulation (or create it again and
+/// resume from a checkpoint). MPM_ERR_INTERRUPTED loses nothing: the next call goes on.
 MPM_API mpm_status mpm_sim_advance_frame(mpm_sim *sim);
 
-/// Advance by exactly one time step of at most max_dt seconds (the CFL bound applies too).
+/// Advance by one time step of at most max_dt seconds (0: no bound of the caller's; the CFL
+/// bound applies too), never past the time of the frame in progress: the step is shortened to
+/// land on it, and then the frame is completed as mpm_sim_advance_frame completes it. Steps and
+/// frames may be mixed freely; time only goes forward. MPM_ERR_INVALID past the end time.
 MPM_API mpm_status mpm_sim_step(mpm_sim *sim, double max_dt);
 
 /// The message of the last failure of this simulation ("" when none). Owned by sim.

@@ -10,6 +10,7 @@
 #include "solver/adaptive.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 typedef struct between_stage {
@@ -54,48 +55,72 @@ static mpm_status counted_step(mpm_sim *sim, double max_dt, int shortened) {
   return MPM_OK;
 }
 
-mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
-  const int saved = mpm_sim_threads_enter(sim);
-  const mpm_status st = counted_step(sim, max_dt, 0);
-  mpm_sim_threads_leave(sim, saved);
+/* The end of the frame in progress: the next frame's time, or the end time. */
+static double frame_end(const mpm_sim *sim) {
+  const double end = (sim->frame + 1) * sim->frame_dt;
+  return end > sim->scene.end_time ? sim->scene.end_time : end;
+}
+
+/* Whether the frame in progress has reached its time (a tiny remainder is merged into the
+ * last step, so steps land exactly on the frame's time). */
+static int frame_reached(const mpm_sim *sim) {
+  const double end = frame_end(sim);
+  return !(sim->time < end - 1e-12 * (1 + end));
+}
+
+/* A simulation whose state is lost (non-finite, or half-updated when memory ran out) steps no
+ * further: the first failure's status and message come back until it is destroyed. */
+static mpm_status refuse_if_failed(mpm_sim *sim, const char *what) {
+  if (sim->failed == MPM_OK) return MPM_OK;
+  return mpm_error_set(&sim->error, sim->failed,
+                       "%s: the simulation failed at step %lld and cannot go on (%s); destroy it, "
+                       "or create it again and resume from a checkpoint",
+                       what, (long long)sim->steps, sim->failed_message);
+}
+
+/* Record a failure that lost the state (see refuse_if_failed); others pass through. */
+static mpm_status latch(mpm_sim *sim, mpm_status st) {
+  if ((st == MPM_ERR_UNSTABLE || st == MPM_ERR_NOMEM) && sim->failed == MPM_OK) {
+    sim->failed = st;
+    snprintf(sim->failed_message, sizeof sim->failed_message, "%s", sim->error.message);
+  }
   return st;
 }
 
-static mpm_status advance_frame(mpm_sim *sim) {
-  if (sim->frame >= sim->frame_count)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                         "the simulation already reached its end time");
-  sim->frame_wall_start = mpm_wall_seconds();
-  double end = (sim->frame + 1) * sim->frame_dt;
-  if (end > sim->scene.end_time) end = sim->scene.end_time;
-  /* steps land exactly on the frame time; a tiny remainder is merged into the last step */
-  while (sim->time < end - 1e-12 * (1 + end)) {
-    /* only between two steps: the state is whole, a checkpoint of it resumes exactly */
-    if (sim->interrupt && *sim->interrupt)
-      return mpm_error_set(&sim->error, MPM_ERR_INTERRUPTED,
-                           "interrupted at step %lld (t = %.6g s, frame %d of %d)",
-                           (long long)sim->steps, sim->time, sim->frame, sim->frame_count);
-    double remaining = end - sim->time;
-    /* after an unstable step the retry guard runs on halved steps for a while */
-    const mpm_status marked = mpm_sim_mark_enrichment(sim); /* they bound dt */
-    if (marked != MPM_OK) return marked;
-    const double nominal = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
-    double dt = nominal;
-    const mpm_solver_desc *sd = &sim->scene.solver;
-    if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) {
-      /* a fixed step: the frame's remaining time in equal steps no longer than dt */
-      dt = remaining / ceil(remaining / dt - 1e-6); /* dt read from text may be a hair short */
-    } else if (dt >= remaining) {
-      dt = remaining;
-    } else if (dt > 0.5 * remaining) {
-      dt = 0.5 * remaining;
-    }
-    /* the relative margin: the fixed step's even division may round a hair below dt */
-    mpm_status st = counted_step(sim, dt, dt < nominal * (1 - 1e-9));
-    if (st != MPM_OK) return st;
-    if (sim->on_step) sim->on_step(sim->on_step_ctx, sim);
+/* One step of the frame in progress, of at most max_dt (0: no bound of the caller's), never
+ * past the frame's time. */
+static mpm_status frame_step(mpm_sim *sim, double max_dt) {
+  /* only between two steps: the state is whole, a checkpoint of it resumes exactly */
+  if (sim->interrupt && *sim->interrupt)
+    return mpm_error_set(&sim->error, MPM_ERR_INTERRUPTED,
+                         "interrupted at step %lld (t = %.6g s, frame %d of %d)",
+                         (long long)sim->steps, sim->time, sim->frame, sim->frame_count);
+  const double remaining = frame_end(sim) - sim->time;
+  /* after an unstable step the retry guard runs on halved steps for a while */
+  const mpm_status marked = mpm_sim_mark_enrichment(sim); /* they bound dt */
+  if (marked != MPM_OK) return marked;
+  double nominal = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
+  const int callers = max_dt > 0 && max_dt < nominal; /* the caller's bound is the step */
+  if (callers) nominal = max_dt;
+  double dt = nominal;
+  const mpm_solver_desc *sd = &sim->scene.solver;
+  if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0 && !callers) {
+    /* a fixed step: the frame's remaining time in equal steps no longer than dt (one step when
+       dt is longer than the frame); dt read from text may be a hair short */
+    const double steps = ceil(remaining / dt - 1e-6);
+    dt = remaining / (steps > 1 ? steps : 1);
+  } else if (dt >= remaining * (1 - 1e-9)) { /* (a remainder of rounding is not a step) */
+    dt = remaining;
+  } else if (dt > 0.5 * remaining && !callers) {
+    dt = 0.5 * remaining; /* two even steps rather than a full one and a sliver */
   }
-  sim->time = end;
+  /* the relative margin: the fixed step's even division may round a hair below dt */
+  return counted_step(sim, dt, dt < nominal * (1 - 1e-9));
+}
+
+/* The frame has reached its time: count it, write its outputs, and a checkpoint when due. */
+static mpm_status complete_frame(mpm_sim *sim) {
+  sim->time = frame_end(sim);
   sim->frame++;
   if (sim->dt_level > 0) sim->dt_level--; /* one halving is given back per calm frame */
   mpm_status st = sim->output_enabled ? mpm_sim_write_frame(sim) : MPM_OK;
@@ -105,12 +130,51 @@ static mpm_status advance_frame(mpm_sim *sim) {
   memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
   memset(&sim->step_figures, 0, sizeof sim->step_figures);
   memset(sim->collider_frame, 0, 3 * (size_t)sim->collider_count * sizeof *sim->collider_frame);
+  sim->frame_wall_start = mpm_wall_seconds(); /* the next frame's, for steps taken one by one */
   if (!sim->output_enabled) return st;
   const int every = sim->scene.output.checkpoint_every;
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
       sim->time < sim->scene.end_time * (1 - 1e-12))
     st = mpm_sim_write_checkpoint(sim, NULL, 0);
   return st;
+}
+
+static mpm_status at_end(mpm_sim *sim) {
+  return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                       "the simulation already reached its end time (t = %g s, frame %d of %d)",
+                       sim->time, sim->frame, sim->frame_count);
+}
+
+static mpm_status step(mpm_sim *sim, double max_dt) {
+  mpm_status st = refuse_if_failed(sim, "mpm_sim_step");
+  if (st != MPM_OK) return st;
+  if (sim->frame >= sim->frame_count) return at_end(sim);
+  if (!frame_reached(sim)) {
+    st = latch(sim, frame_step(sim, max_dt));
+    if (st != MPM_OK) return st;
+  }
+  /* (a frame's outputs failing loses no state: not latched) */
+  return frame_reached(sim) ? complete_frame(sim) : MPM_OK;
+}
+
+mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
+  const int saved = mpm_sim_threads_enter(sim);
+  const mpm_status st = step(sim, max_dt);
+  mpm_sim_threads_leave(sim, saved);
+  return st;
+}
+
+static mpm_status advance_frame(mpm_sim *sim) {
+  mpm_status st = refuse_if_failed(sim, "mpm_sim_advance_frame");
+  if (st != MPM_OK) return st;
+  if (sim->frame >= sim->frame_count) return at_end(sim);
+  sim->frame_wall_start = mpm_wall_seconds();
+  while (!frame_reached(sim)) {
+    st = latch(sim, frame_step(sim, 0));
+    if (st != MPM_OK) return st;
+    if (sim->on_step) sim->on_step(sim->on_step_ctx, sim);
+  }
+  return complete_frame(sim);
 }
 
 mpm_status mpm_sim_advance_frame(mpm_sim *sim) {

@@ -125,6 +125,10 @@ struct mpm_sim {
   mpm_real *corner_backup[18];
   size_t corner_backup_capacity;
   const volatile int *interrupt;
+  /* a step that lost the state (MPM_ERR_UNSTABLE, MPM_ERR_NOMEM; frame.c): its status and
+   * message, MPM_OK while the state is whole */
+  mpm_status failed;
+  char failed_message[sizeof(((mpm_error *)0)->message)];
   /* called after every step inside mpm_sim_advance_frame (the CLI's progress within a frame) */
   void (*on_step)(void *ctx, const mpm_sim *sim);
   void *on_step_ctx;

@@ -80,6 +80,10 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     return mpm_error_set(
         &sim->error, MPM_ERR_INVALID,
         "a checkpoint needs an output directory: call mpm_sim_enable_output first");
+  if (sim->failed != MPM_OK) /* its state is not one to resume from */
+    return mpm_error_set(&sim->error, sim->failed,
+                         "no checkpoint of a simulation that failed at step %lld (%s)",
+                         (long long)sim->steps, sim->failed_message);
   mpm_checkpoint c;
   memset(&c, 0, sizeof c);
   c.scene_hash = sim->scene.source_hash;

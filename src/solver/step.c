@@ -42,7 +42,8 @@ double mpm_sim_finest_dx(const mpm_sim *sim) {
 
 double mpm_sim_cfl_dt(const mpm_sim *sim) {
   const mpm_solver_desc *sd = &sim->scene.solver;
-  if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0) return sd->dt;
+  if (sd->integrator == MPM_INTEGRATOR_IMPLICIT && sd->dt > 0)
+    return sd->max_dt > 0 && sd->max_dt < sd->dt ? sd->max_dt : sd->dt; /* max_dt bounds it too */
   /* implicit: sim->wave_speed is 0, so the step follows particle speed alone */
   const double speed = (double)sim->wave_speed + (double)sim->max_speed;
   /* the multi-level grid: the finest level's spacing bounds the step */
