@@ -578,6 +578,48 @@ static void test_resume_with_domains(void **state) {
   assert_true(enriched > 0 && least < 100);
 }
 
+/* A checkpoint resumes only with the meshes its run read: a mesh body with particle domains and
+ * its embedded surface, whose mesh file is replaced after the checkpoint (the scene text the
+ * same), is refused with exit 2 naming the key and the file (it crashed in the surface's
+ * embedding, or wrote a wrong surface); the same bytes written back resume. */
+static void test_resume_refuses_changed_mesh(void **state) {
+  (void)state;
+  static const char *const cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\n"
+                                  "v 1 1 1\nv 0 1 1\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+                                  "f 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n";
+  /* in the same box as the cube: the scene text and the body's bounds unchanged */
+  static const char *const octahedron = "v 1 .5 .5\nv 0 .5 .5\nv .5 1 .5\nv .5 0 .5\n"
+                                        "v .5 .5 1\nv .5 .5 0\nf 1 3 5\nf 3 2 5\nf 2 4 5\n"
+                                        "f 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+  const char *dir = test_temp_dir("ckpt-mesh");
+  char mesh[600], scene[600], out[600], args[2000];
+  snprintf(mesh, sizeof mesh, "%s/body.obj", dir);
+  snprintf(scene, sizeof scene, "%s/s.json", dir);
+  snprintf(out, sizeof out, "%s/out", dir);
+  write_file(mesh, cube);
+  write_file(scene,
+             "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.1},"
+             " \"time\": {\"end\": 0.15, \"fps\": 20}, \"output\": {\"checkpoint_every\": 1},"
+             " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4,"
+             "   \"nu\": 0.3, \"density\": 1000}],"
+             " \"bodies\": [{\"shape\": {\"type\": \"mesh\", \"file\": \"body.obj\","
+             "   \"center\": [0.5,0.5,0.5], \"scale\": 0.4}, \"material\": \"m\","
+             "   \"domains\": true}]}");
+  snprintf(args, sizeof args, "run '%s' -o '%s' --quiet --frames 1", scene, out);
+  if (mpm(args) != 0) fail_msg("%s", output);
+  write_file(mesh, octahedron);
+  snprintf(args, sizeof args, "run '%s' --resume '%s' --quiet", scene, out);
+  assert_int_equal(mpm(args), 2);
+  expect_output("bodies[0].shape.file");
+  expect_output(mesh);
+  expect_output("content changed");
+  write_file(mesh, cube);
+  if (mpm(args) != 0) fail_msg("%s", output);
+  char last[700];
+  snprintf(last, sizeof last, "%s/surface_body0_0003.obj", out);
+  assert_true(exists(last));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_resume_is_bit_identical),
@@ -589,6 +631,7 @@ int main(void) {
       cmocka_unit_test(test_sigkill_at_random_moments),
       cmocka_unit_test(test_resume_fallbacks_and_refusals),
       cmocka_unit_test(test_resume_with_domains),
+      cmocka_unit_test(test_resume_refuses_changed_mesh),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

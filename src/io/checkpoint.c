@@ -14,7 +14,9 @@
  *               [nd], domain_corner [8][nd], domain_weights [32][nd] (omega_ap, then g_ap),
  *               corner_reals [21][nc] (reference position, position, velocity, position
  *               compensation, APIC affine moment); with a multi-level grid rebuilt during
- *               the run (refined_cells t > 0), refined_cells [4][t] (level, i, j, k)
+ *               the run (refined_cells t > 0), refined_cells [4][t] (level, i, j, k); with
+ *               colliders (attribute colliders nc) collider_forces [(r + 1) 3 nc]; with mesh
+ *               bodies (attribute meshes b, the scene's body count) mesh_digests [b]
  * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
  * must exist with the right class and shape, each dataset must have exactly the dimensions
  * the attributes announce, counts are bounded by the file's size before anything is
@@ -205,6 +207,11 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       rc = put_attr(f, "colliders", H5T_NATIVE_INT, &c->colliders) ||
            put_dataset(f, "collider_forces", H5T_NATIVE_DOUBLE, 0,
                        (r + 1) * 3 * (hsize_t)c->colliders, &forces);
+    /* only with mesh bodies, likewise */
+    const void *digests = c->mesh_digests;
+    if (!rc && c->mesh_count > 0)
+      rc = put_attr(f, "meshes", H5T_NATIVE_INT, &c->mesh_count) ||
+           put_dataset(f, "mesh_digests", H5T_NATIVE_UINT64, 0, (hsize_t)c->mesh_count, &digests);
   }
   free(stats);
   free(srows);

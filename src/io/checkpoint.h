@@ -57,6 +57,11 @@ typedef struct mpm_checkpoint {
    * momentum they took in the frame in progress (kg m/s), then the records' mean forces (N) */
   int colliders;
   double *collider_forces;
+  /* a digest of each body's mesh file as the run read it (io/input_file.h), 0 for a body
+   * without one: mesh_count entries (the scene's bodies) when the scene has a mesh body, else 0
+   * and NULL (as in checkpoints from before them) */
+  int mesh_count;
+  uint64_t *mesh_digests;
 } mpm_checkpoint;
 
 /* Write *c to `path` atomically (a temporary in the same directory, renamed when complete).

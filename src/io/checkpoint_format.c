@@ -189,5 +189,6 @@ void mpm_checkpoint_free(mpm_checkpoint *c) {
   free(c->frame_files);
   free(c->stats);
   free(c->collider_forces);
+  free(c->mesh_digests);
   memset(c, 0, sizeof *c);
 }

@@ -408,6 +408,23 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
         goto done;
       }
   }
+  if (H5Aexists(r->file, "meshes") > 0) { /* the mesh files' digests */
+    if (get_attr(r, "meshes", H5T_INTEGER, H5T_NATIVE_INT, &c->mesh_count)) goto done;
+    if (c->mesh_count <= 0 || c->mesh_count > 1000000 ||
+        (size_t)c->mesh_count * sizeof(uint64_t) > r->file_bytes) {
+      c->mesh_count = 0;
+      bad(r, "%s", "the 'meshes' attribute is out of range");
+      goto done;
+    }
+    void *digests = c->mesh_digests = malloc((size_t)c->mesh_count * sizeof *c->mesh_digests);
+    if (!digests) {
+      mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the mesh digests", r->path);
+      goto done;
+    }
+    if (get_dataset(r, "mesh_digests", H5T_INTEGER, 8, H5T_NATIVE_UINT64, 0, (hsize_t)c->mesh_count,
+                    &digests))
+      goto done;
+  }
   if (content != mpm_ckpt_content_checksum(c)) {
     bad(r, "%s", "the data do not match their checksum (damaged)");
     goto done;

@@ -8,11 +8,16 @@
 #ifndef MPM_IO_INPUT_FILE_H
 #define MPM_IO_INPUT_FILE_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 /* Open `path` for reading. NULL when it cannot be opened or is not a regular file, with the
  * reason in `why` (cap bytes): strerror's text, or "it is a FIFO (named pipe), not a regular
  * file" and the like. *size (may be NULL) gets the file's size in bytes. */
 FILE *mpm_open_input(const char *path, long long *size, char *why, size_t cap);
+
+/* A digest of the file's bytes (64 bits; a changed file changes it, for checkpoints that must
+ * resume with the inputs they were made from). 0, or -1 with the reason in `why`. */
+int mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap);
 
 #endif

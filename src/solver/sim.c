@@ -202,6 +202,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     }
   }
   sim->next_id = next_id;
+  if ((st = mpm_sim_digest_meshes(sim, err)) != MPM_OK) goto fail;
 
   /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
   double lp = sc->solver.gimp_length;
@@ -409,6 +410,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   free(sim->stats_forces);
   mpm_scene_free(&sim->scene);
   free(sim->scene_copy);
+  free(sim->mesh_digests);
   mpm_run_folder_unlock(sim->output_lock); /* after the last file is written */
   free(sim);
 }

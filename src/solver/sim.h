@@ -139,6 +139,9 @@ struct mpm_sim {
   /* the scene's JSON, mesh paths made absolute, for the output folder's scene.json (made when
    * created from a file or JSON text; NULL when created from a scene struct) */
   char *scene_copy;
+  /* a digest of each body's mesh file as sampled (io/input_file.h), 0 for a body without one;
+   * NULL when no body is a mesh (sim_checkpoint.c: a checkpoint resumes with the same meshes) */
+  uint64_t *mesh_digests;
   mpm_error error;
 };
 
@@ -237,6 +240,10 @@ void mpm_sim_apply_strength(mpm_sim *sim, double t);
  * OVERWRITE removes them, RESUME removes stale temporaries; the scene file and its meshes are
  * never touched. The folder must exist. On failure the lock held before is kept. */
 mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how);
+
+/* sim->mesh_digests from the scene's mesh files (sim_checkpoint.c); MPM_ERR_IO naming the key
+ * and file when one cannot be read. */
+mpm_status mpm_sim_digest_meshes(mpm_sim *sim, mpm_error *err);
 
 /* Output bookkeeping for frame_count + 1 records (sim_output.c). */
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records);

@@ -11,6 +11,8 @@
 #include "domain/enrich.h"
 #include "io/checkpoint.h"
 #include "io/run_folder.h"
+#include "io/input_file.h"
+#include "scene/sample.h"
 #include "core/alloc.h"
 #include "solver/adaptive.h"
 #include "solver/sim.h"
@@ -129,6 +131,10 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     c.colliders = sim->collider_count;
     c.collider_forces = forces;
   }
+  if (sim->mesh_digests) { /* borrowed */
+    c.mesh_count = sim->scene.body_count;
+    c.mesh_digests = sim->mesh_digests;
+  }
   char file[MPM_PATH_MAX + 32];
   snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->output_dir, NAME_DIGITS,
            (long long)sim->steps);
@@ -170,6 +176,22 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   return MPM_OK;
 }
 
+mpm_status mpm_sim_digest_meshes(mpm_sim *sim, mpm_error *err) {
+  const mpm_scene *sc = &sim->scene;
+  for (int b = 0; b < sc->body_count; ++b) {
+    if (sc->bodies[b].shape.kind != MPM_SHAPE_MESH) continue;
+    if (!sim->mesh_digests &&
+        !(sim->mesh_digests = calloc((size_t)sc->body_count, sizeof(uint64_t))))
+      return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for the mesh digests");
+    char file[2 * MPM_PATH_MAX], why[128];
+    mpm_scene_mesh_file(sc, sc->bodies[b].shape.mesh_path, file, sizeof file);
+    if (mpm_input_digest(file, &sim->mesh_digests[b], why, sizeof why))
+      return mpm_error_set(err, MPM_ERR_IO, "%s: bodies[%d].shape.file: cannot read '%s': %s",
+                           sc->path, b, file, why);
+  }
+  return MPM_OK;
+}
+
 /* Check a checkpoint that read back whole against this simulation's scene. */
 static mpm_status check_fits(const mpm_sim *sim, const mpm_checkpoint *c, const char *file,
                              mpm_error *err) {
@@ -179,6 +201,34 @@ static mpm_status check_fits(const mpm_sim *sim, const mpm_checkpoint *c, const 
                          "of it): resume with the scene the run started with, or start a new run "
                          "in another output directory",
                          file, sim->scene.path);
+  /* the meshes the bodies were made from: the same files, byte for byte */
+  const mpm_scene *sc = &sim->scene;
+  if (c->mesh_count && c->mesh_count != sc->body_count)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s was written for %d bodies and %s has %d: resume with the scene the "
+                         "run started with",
+                         file, c->mesh_count, sc->path, sc->body_count);
+  for (int b = 0; b < c->mesh_count; ++b) {
+    const uint64_t now = sim->mesh_digests ? sim->mesh_digests[b] : 0;
+    if (c->mesh_digests[b] == now) continue;
+    char mesh[2 * MPM_PATH_MAX] = "no mesh";
+    if (sc->bodies[b].shape.kind == MPM_SHAPE_MESH)
+      mpm_scene_mesh_file(sc, sc->bodies[b].shape.mesh_path, mesh, sizeof mesh);
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: bodies[%d].shape.file: the mesh file %s is not the one %s was "
+                         "written with (its content changed): resume with the mesh the run "
+                         "started with, or start a new run",
+                         sc->path, b, mesh, file);
+  }
+  /* the particle domains the bodies make (a checkpoint from before the digests: a mesh that
+     changed shows here) */
+  if (c->domains.particles.count != sim->domains.particles.count ||
+      c->domains.corner_count != sim->domains.corner_count)
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s holds %zu domain particles and %zu corners, and the bodies of %s make "
+                         "%zu and %zu: it was written from other bodies or meshes",
+                         file, c->domains.particles.count, c->domains.corner_count, sc->path,
+                         sim->domains.particles.count, sim->domains.corner_count);
   if (c->written_frames != c->frame + 1 || c->frame > sim->frame_count ||
       c->time > sim->scene.end_time * (1 + 1e-12))
     return mpm_error_set(err, MPM_ERR_PARSE,
