@@ -98,7 +98,9 @@ static void test_resting_implicit(void **state) {
   struct mpm_sim *sim =
       block_on_floor(1.0, "", ", \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.005}");
   run_all(sim, "rest-implicit");
-  check_resting(sim, 2e-3, 5, 0.01, 0.005);
+  /* the free DOFs' momentum out of balance: within cg_tolerance (1e-2) of the step's weight
+     impulse (implicit.c's convergence test) */
+  check_resting(sim, 1e-2, 5, 0.01, 0.005);
   mpm_sim_destroy(sim);
 }
 

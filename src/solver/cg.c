@@ -49,8 +49,14 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
   if (project) project(user, z); /* P M^-1 P: a diagonal need not commute with a slip projection */
   double rz = mpm_dofs_dot(d, NULL, r, z);
   result->residual0 = result->residual = sqrt(rz);
-  const double target =
-      options->rel_tol * (result->rhs > result->residual0 ? result->rhs : result->residual0);
+  result->scale = options->scale > 0                ? options->scale
+                  : result->rhs > result->residual0 ? result->rhs
+                                                    : result->residual0;
+  double target = options->rel_tol * result->scale;
+  if (options->scale > 0 && options->floor_drop * result->residual0 > target) {
+    target = options->floor_drop * result->residual0;
+    result->scale = target / options->rel_tol; /* the scale the answer is good to */
+  }
   result->converged = result->residual <= target;
   if (result->converged) return 0;
   mpm_dofs_copy(d, z, p);

@@ -15,7 +15,9 @@
  * when |r|_D <= rel_tol max(|P b|_D, |r0|_D) or after max_iterations. Both scales are the
  * problem's own: |b| (for MPM the momentum M v*) credits a good initial guess, |r0| (the
  * elastic correction dt^2 K v* a stiff body needs) asks for that correction to rel_tol, not for
- * the momentum of a body at rest to it. Without a preconditioner D = I.
+ * the momentum of a body at rest to it. A caller may give its own scale instead (the implicit
+ * step does: |M v*| of a falling body let CG stop with an error that strained it). Without a
+ * preconditioner D = I.
  *
  * Every reduction is mpm_dofs_dot's (fixed chunks, fixed order), so the iterates, the
  * iteration count and the answer are bitwise the same for any number of threads. The work
@@ -33,13 +35,21 @@ typedef void (*mpm_cg_project_fn)(void *user, mpm_real *const v[3]);
 typedef struct mpm_cg_options {
   double rel_tol;     /* relative residual to reach, > 0 */
   int max_iterations; /* >= 1 */
+  /* > 0: the scale of the caller's that rel_tol is relative to (|r|_D <= rel_tol scale), in
+   * place of max(|P b|_D, |r0|_D); the implicit step gives the impulse of the step's forces,
+   * which a body's momentum does not inflate (implicit.c). 0: the problem's own scales */
+  double scale;
+  /* with `scale`: the least drop asked of |r0|_D, so that a scale below what the real type can
+   * resolve does not run CG to max_iterations (|r|_D <= floor_drop |r0|_D also converges) */
+  double floor_drop;
 } mpm_cg_options;
 
 typedef struct mpm_cg_result {
   int iterations;
   double residual0, residual; /* |r|_D at the start and at the end */
   double rhs;                 /* |P b|_D */
-  int converged;              /* residual <= rel_tol max(rhs, residual0) */
+  double scale;               /* what the tolerance was relative to */
+  int converged;              /* residual <= rel_tol scale */
 } mpm_cg_result;
 
 /* Solve A x = b: x holds the initial guess and receives the solution. diag: the Jacobi

@@ -280,16 +280,97 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
 
 static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
   r->cg_iterations += cg->iterations;
-  const double scale = cg->rhs > cg->residual0 ? cg->rhs : cg->residual0;
-  const double rel = scale > 0 ? cg->residual / scale : 0;
+  const double rel = cg->scale > 0 ? cg->residual / cg->scale : 0;
   if (rel > r->cg_residual) r->cg_residual = rel;
   if (!cg->converged) r->cg_converged = 0;
 }
 
+/* sqrt(<P v, D^-1 P v>) with v projected in place (D the Jacobi diagonal, I without one); w:
+ * work. */
+static double free_norm(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const v[3],
+                        mpm_real *const w[3]) {
+  mpm_dofs *d = s->dofs;
+  mpm_implicit_project(s, v);
+  if (!diag) return sqrt(mpm_dofs_dot(d, NULL, v, v));
+  const long n = (long)d->count;
+  for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict vc = v[c], *restrict dc = diag[c];
+    mpm_real *restrict wc = w[c];
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+    for (long i = 0; i < n; ++i) wc[i] = vc[i] / dc[i];
+  }
+  return sqrt(mpm_dofs_dot(d, NULL, v, w));
+}
+
+/* The scale the step's residuals are measured against: the larger of the impulses over the step
+ * of the elastic forces at its start and of gravity (with the regions), dt f^n and dt m g, on
+ * the free DOFs, in the preconditioner's norm. A residual is a momentum out of balance; this
+ * scale does not grow with the body's own momentum (|M v*| of a body falling fast let CG stop
+ * with an error that strained it: elastic energy out of nothing), does not count the reactions
+ * of the DOFs that obstacles hold (a clamped beam's support force let the test pass with the
+ * free part out of balance: the beam froze short of its deflection), and does not vanish for a
+ * body at rest (a relative drop of a tiny residual cost a resting body full price every step).
+ * t, w: work. */
+static double impulse_scale(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const t[3],
+                            mpm_real *const w[3]) {
+  mpm_dofs *d = s->dofs;
+  const long n = (long)d->count;
+  for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict fc = d->f[c];
+    mpm_real *restrict tc = t[c];
+    const mpm_real dt = s->dt;
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+    for (long i = 0; i < n; ++i) tc[i] = dt * fc[i];
+  }
+  const double elastic = free_norm(s, diag, t, w);
+  for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict m = d->mass, *restrict a = s->accel[c];
+    mpm_real *restrict tc = t[c];
+    const mpm_real dt = s->dt, g = s->gravity[c];
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+    for (long i = 0; i < n; ++i) tc[i] = dt * m[i] * (a ? a[i] : g);
+  }
+  const double weight = free_norm(s, diag, t, w);
+  return elastic > weight ? elastic : weight;
+}
+
+/* The impulse below which the real type cannot tell a force apart, on the free DOFs in the
+ * preconditioner's norm: a stress is resolved to eps E (the rounding of F near I, eps of the
+ * real type), a DOF's force to about eps K_ii dx / sqrt(27) (K_ii = (D_ii - m_i) / dt^2 the
+ * DOF's stiffness, about E dx; the roundings of the particles it sums add in quadrature), so
+ * its impulse over the step to 0.2 eps dx (D_ii - m_i) / dt. A 1e9 Pa block at
+ * rest at dx = 2 cm holds its weight as a strain of 13 ulps of F in float: its forces are
+ * resolved to about its weight, and a tolerance below that cannot be met. 0 without a
+ * preconditioner. t, w: work. */
+static double resolution_scale(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const t[3],
+                               mpm_real *const w[3]) {
+  if (!diag) return 0;
+  mpm_dofs *d = s->dofs;
+  const long n = (long)d->count;
+  const mpm_real eps = sizeof(mpm_real) == 4 ? R_(1.1920929e-7) : R_(2.220446049250313e-16);
+  /* the roundings of the stencil's some 27 particles add in quadrature: sqrt(27) / 27 */
+  const mpm_real k = R_(0.2) * eps * s->tc->kernel.dx / s->dt;
+  for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict m = d->mass, *restrict dc = diag[c];
+    mpm_real *restrict tc = t[c];
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+    for (long i = 0; i < n; ++i) tc[i] = m[i] > 0 && dc[i] > m[i] ? k * (dc[i] - m[i]) : 0;
+  }
+  return free_norm(s, diag, t, w);
+}
+
+/* The rounding of an incremental potential of size |E| in the real type: differences below it
+ * are not a change of E. */
+static double energy_noise(double E) {
+  return 16 * (sizeof(mpm_real) == 4 ? 1.1920929e-7 : 2.220446049250313e-16) * fabs(E);
+}
+
 /* With Newton iterations, Zhu's step v_1 is searched too: from v_0 (the constrained components
  * of v_1, zero elsewhere: no motion but what the obstacles impose) along v_1 - v_0, the
- * longest of 1, 1/2, ... whose incremental potential is below E(v_0). A linearized step across
- * an impact or a large rotation can overshoot badly; this keeps every iterate a descent. Returns
+ * longest of 1, 1/2, ... whose incremental potential is below E(v_0) beyond rounding (the whole
+ * step also when E cannot tell them apart: near rest v_1 and v_0 differ by less than E
+ * resolves, and v_1 is kept). A linearized step across an
+ * impact or a large rotation can overshoot badly; this keeps every iterate a descent. Returns
  * 1 when no step lowers E (v is then v_0). */
 static int first_step_search(mpm_implicit *s, mpm_real *const u[3], mpm_real *const d0[3],
                              mpm_real *const t[3]) {
@@ -300,13 +381,17 @@ static int first_step_search(mpm_implicit *s, mpm_real *const u[3], mpm_real *co
   displacement(s, d->v, u);
   mpm_implicit_displace(s, u);
   const double E0 = incremental_potential(s, d->v, t);
+  const double noise = energy_noise(E0);
   double alpha = 1;
   for (int h = 0; h < 12; ++h, alpha *= 0.5) {
     mpm_dofs_copy(d, d->v, t);
     mpm_dofs_axpy(d, (mpm_real)alpha, d0, t);
     displacement(s, t, u);
     mpm_implicit_displace(s, u);
-    if (incremental_potential(s, t, u) < E0) {
+    /* the whole step where E cannot tell it from no motion; a part of it only where E is
+       lower beyond rounding (a sliver of a step is not a descent E can see) */
+    const double E = incremental_potential(s, t, u);
+    if (h == 0 ? E <= E0 + noise : E < E0 - noise) {
       mpm_dofs_axpy(d, (mpm_real)alpha, d0, d->v);
       return 0;
     }
@@ -314,17 +399,101 @@ static int first_step_search(mpm_implicit *s, mpm_real *const u[3], mpm_real *co
   return 1;
 }
 
+/* |P (b - A x)|_D (D = diag, or I); r, w: work. */
+static double residual_norm(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const b[3],
+                            mpm_real *const x[3], mpm_real *const r[3], mpm_real *const w[3]) {
+  mpm_implicit_apply(s, 1, s->apply_scale, x, r);
+  mpm_dofs_xpby(s->dofs, b, -1, r); /* r = b - A x */
+  return free_norm(s, diag, r, w);
+}
+
+/* The first solve's initial guess: the one of v^n + dt g (exact for a body in free fall),
+ * v^n (a body in steady motion) and rest (a stiff body at rest) whose residual is smallest,
+ * each with the constrained components of v (which holds v* moved onto the constraints) and
+ * their free part its own. Not v* = v^n + dt (g + f^n / m): it is the explicit step, which at
+ * an implicit step's length multiplies a stiff mode's error by about (omega dt)^2 (10^4 for a
+ * 1e9 Pa block at dt = 1 ms); a residual below the tolerance ends the solve at once, so from v*
+ * errors of the rounding's size grew step after step up to the tolerance, and stayed there as
+ * elastic energy out of nothing. g, r, w, keep: work. */
+static void initial_guess(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const b[3],
+                          mpm_real *const g[3], mpm_real *const r[3], mpm_real *const w[3],
+                          mpm_real *const keep[3]) {
+  mpm_dofs *d = s->dofs;
+  const long n = (long)d->count;
+  double best = INFINITY;
+  for (int k = 0; k < 3; ++k) {
+    /* g = v + P (candidate - v): the candidate's free part, v's constrained one */
+    for (int c = 0; c < 3; ++c) {
+      const mpm_real *restrict vc = d->v[c], *restrict v0 = d->v0[c], *restrict a = s->accel[c];
+      mpm_real *restrict gc = g[c];
+      const mpm_real dt = s->dt, gr = s->gravity[c];
+      if (k == 0) {
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+        for (long i = 0; i < n; ++i)
+          gc[i] = d->mass[i] > 0 ? v0[i] + dt * (a ? a[i] : gr) - vc[i] : 0;
+      } else if (k == 1) {
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+        for (long i = 0; i < n; ++i) gc[i] = v0[i] - vc[i];
+      } else {
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+        for (long i = 0; i < n; ++i) gc[i] = -vc[i];
+      }
+    }
+    mpm_implicit_project(s, g);
+    mpm_dofs_axpy(d, 1, d->v, g);
+    const double norm = residual_norm(s, diag, b, g, r, w);
+    if (norm < best) {
+      best = norm;
+      mpm_dofs_copy(d, g, keep);
+    }
+  }
+  mpm_dofs_copy(d, keep, d->v);
+}
+
+/* -grad E at v = d->v into b, projected, and its free norm (E into *E):
+ *   grad E = m (v - v^n - dt g) - dt f(dt v)
+ * with F^ displaced to dt v (left so for the Hessian). t, u, w: work. */
+static double neg_gradient(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const b[3],
+                           mpm_real *const t[3], mpm_real *const u[3], mpm_real *const w[3],
+                           double *E) {
+  mpm_dofs *d = s->dofs;
+  displacement(s, d->v, u);
+  mpm_implicit_displace(s, u);
+  *E = incremental_potential(s, d->v, t); /* t = v - v^n - dt g */
+  mpm_implicit_forces(s, b);
+  const long n = (long)d->count;
+  for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict m = d->mass, *restrict tc = t[c];
+    mpm_real *restrict bc = b[c];
+    const mpm_real dt = s->dt;
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+    for (long i = 0; i < n; ++i) bc[i] = -(m[i] * tc[i] - dt * bc[i]);
+  }
+  return free_norm(s, diag, b, w);
+}
+
+/* The precision a solve can reach from its first residual in the real type: CG asks no more
+ * of |r0| than this drop (cg.h, floor_drop). */
+#define REACHABLE_DROP (sizeof(mpm_real) == 4 ? 1e-5 : 1e-10)
+
 int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_implicit_result *r) {
   memset(r, 0, sizeof *r);
   r->cg_converged = 1;
   mpm_dofs *d = s->dofs;
   mpm_real **vstar = mpm_dofs_vector(d, "imp.vstar"), **b = mpm_dofs_vector(d, "imp.b");
   mpm_real **diag = mpm_dofs_vector(d, "imp.diag"), **t = mpm_dofs_vector(d, "imp.t");
-  if (!vstar || !b || !diag || !t) return -1;
+  mpm_real **u = mpm_dofs_vector(d, "imp.u"), **dv = mpm_dofs_vector(d, "imp.dv");
+  mpm_real **v1 = mpm_dofs_vector(d, "imp.v1");
+  if (!vstar || !b || !diag || !t || !u || !dv || !v1) return -1;
+  /* f^n as the incremental potential's own gradient has it at u = 0, in place of P2G's: the
+     batched stresses of P2G differ from it by a few ulps of a stress that mostly balances the
+     weight, which made a body at rest look 5% of its weight out of balance to the Newton test
+     (and Zhu's step aim at another v* than the potential's) */
+  mpm_implicit_displace(s, NULL);
+  mpm_implicit_forces(s, d->f);
   if (predictor(s)) return -1;
   mpm_dofs_copy(d, d->v, vstar);
   if (mpm_implicit_constraints(s, d->v)) return -1; /* the initial guess obeys them */
-  const mpm_cg_options cg_opt = {o->cg_tolerance, o->cg_max_iterations};
   /* Newton iteration 1 (Zhu eq. 12): (M + dt^2 K(0)) v = M v* */
   const long n = (long)d->count;
   for (int c = 0; c < 3; ++c) {
@@ -333,43 +502,60 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
     for (long i = 0; i < n; ++i) bc[i] = m[i] * vs[i];
   }
-  mpm_implicit_displace(s, NULL);
-  mpm_implicit_build(s);
+  mpm_implicit_build(s); /* at u = 0 (displaced above) */
   if (o->precondition) jacobi(s, diag);
+  mpm_real *const *D = o->precondition ? diag : NULL;
+  /* the tolerance is relative to the step's impulses, and never below what the real type
+     resolves */
+  const double resolved = resolution_scale(s, D, t, u) / o->cg_tolerance;
+  double scale = impulse_scale(s, D, t, u);
+  if (resolved > scale) scale = resolved;
+  /* the first solve to the tolerance (or as far as the real type reaches); the Newton
+     directions after it as inexact Newton does, to the tolerance of their own residual */
+  const mpm_cg_options first = {o->cg_tolerance, o->cg_max_iterations, scale, REACHABLE_DROP};
+  const mpm_cg_options direction = {o->cg_tolerance, o->cg_max_iterations, scale, o->cg_tolerance};
+  initial_guess(s, D, b, dv, t, u, v1);
   mpm_cg_result cg;
-  if (mpm_cg_solve(d, cg_apply, cg_project, s, o->precondition ? diag : NULL, b, d->v, &cg_opt,
-                   &cg))
-    return -1;
+  if (mpm_cg_solve(d, cg_apply, cg_project, s, D, b, d->v, &first, &cg)) return -1;
   cg_record(r, &cg);
   r->newton_iterations = 1;
-  /* Newton iterations 2.. on E (Gast et al. 2015): the gradient in b, the step in t */
-  mpm_real **u = mpm_dofs_vector(d, "imp.u"), **dv = mpm_dofs_vector(d, "imp.dv");
-  if (o->newton_iterations > 1 && (!u || !dv)) return -1;
-  const double b_norm = sqrt(mpm_dofs_dot(d, NULL, b, b));
-  if (o->newton_iterations > 1 && first_step_search(s, u, dv, t)) r->line_search_failed = 1;
-  for (int k = 1; k < o->newton_iterations; ++k) {
-    displacement(s, d->v, u);
-    mpm_implicit_displace(s, u);
-    const double E0 = incremental_potential(s, d->v, t);
-    /* grad E = m (v - v^n - dt g) - dt f(u): t holds v - v^n - dt g */
-    mpm_implicit_forces(s, b);
-    for (int c = 0; c < 3; ++c) {
-      const mpm_real *restrict m = d->mass, *restrict tc = t[c];
-      mpm_real *restrict bc = b[c];
-#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
-      for (long i = 0; i < n; ++i) bc[i] = -(m[i] * tc[i] - s->dt * bc[i]); /* -grad E */
+  /* Newton iterations 2.. on E (Gast et al. 2015): the gradient in b, the step in dv; the step
+     is done when the free DOFs' momentum out of balance is within the tolerance of the scale */
+  int searched = 0;
+  const int near = cg.residual0 <= 10 * o->cg_tolerance * scale;
+  for (int k = 1; k < o->newton_iterations;) {
+    double E0;
+    const double gn = neg_gradient(s, D, b, t, u, dv, &E0);
+    if (!(gn > o->cg_tolerance * scale)) break; /* converged */
+    /* Near balance (Zhu's step began within 10 tolerances of it) the step cannot overshoot,
+       and E is no guide: its differences are below its rounding (a 1e9 Pa block at rest in
+       float: E(v_0 + a (v_1 - v_0)) scattered by 20% over a, and a sliver of the step "won",
+       which stopped the body). There, a step that did not halve the imbalance its linear
+       model removed is final: the model predicts nothing below this level (in float, the
+       rounding of F at the small displacements of a body nearly at rest), and more Newton
+       iterations would only chase it, every step. */
+    if (!searched && near && gn >= 0.5 * cg.residual0) break;
+    const int search = !searched && !near;
+    searched = 1;
+    if (search) { /* Zhu's step checked against no motion first, once */
+      mpm_dofs_copy(d, d->v, v1);
+      if (first_step_search(s, u, dv, t)) {
+        /* no step along it lowers E: the one out of balance the less is kept, not rest by
+           default (which froze a beam short of its deflection) */
+        double E;
+        if (neg_gradient(s, D, b, t, u, dv, &E) >= gn)
+          mpm_dofs_copy(d, v1, d->v);
+        else
+          r->line_search_failed = 1;
+      }
+      continue; /* the gradient where the search left v */
     }
-    mpm_implicit_project(s, b);
-    const double g_norm = sqrt(mpm_dofs_dot(d, NULL, b, b));
-    if (!(g_norm > o->cg_tolerance * b_norm)) break; /* converged: the step is stationary */
     mpm_implicit_build(s);
     if (o->precondition) jacobi(s, diag);
     for (int c = 0; c < 3; ++c) memset(dv[c], 0, (size_t)n * sizeof(mpm_real));
-    if (mpm_cg_solve(d, cg_apply, cg_project, s, o->precondition ? diag : NULL, b, dv, &cg_opt,
-                     &cg))
-      return -1;
+    if (mpm_cg_solve(d, cg_apply, cg_project, s, D, b, dv, &direction, &cg)) return -1;
     cg_record(r, &cg);
-    r->newton_iterations = k + 1;
+    r->newton_iterations = ++k;
     /* backtracking: the longest of 1, 1/2, 1/4, ... that lowers E enough (Armijo) */
     const double slope = -mpm_dofs_dot(d, NULL, b, dv); /* <grad E, dv> */
     double alpha = 1;
@@ -380,7 +566,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
       displacement(s, t, u);
       mpm_implicit_displace(s, u);
       const double E = incremental_potential(s, t, u); /* u reused as work */
-      if (E <= E0 + 1e-4 * alpha * slope) {
+      if (E <= E0 + 1e-4 * alpha * slope + energy_noise(E0)) {
         accepted = 1;
         mpm_dofs_axpy(d, (mpm_real)alpha, dv, d->v);
       }
