@@ -155,6 +155,38 @@ static void test_linear_kernel_warning(void **state) {
   expect_output("more than 10^4");
 }
 
+/* A friction angle in radians by mistake (0.61 for 35 degrees) is accepted, as the key takes
+ * degrees, but check warns of it with the key path and the angle it would be; 30 degrees does
+ * not warn. */
+static void test_friction_angle_warning(void **state) {
+  (void)state;
+  char dir[400], path[512], args[1200];
+  snprintf(dir, sizeof dir, "%s", test_temp_dir("friction"));
+  static const double angles[] = {0.61, 30};
+  for (int c = 0; c < 2; ++c) {
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.1}, "
+             "\"time\": {\"end\": 0.02, \"fps\": 100}, "
+             "\"materials\": [{\"name\": \"sand\", \"model\": \"drucker_prager\", "
+             "\"E\": 3.5e5, \"nu\": 0.3, \"density\": 1600, \"friction_angle\": %g}], "
+             "\"bodies\": [{\"material\": \"sand\", \"shape\": {\"type\": \"box\", "
+             "\"center\": [0.5, 0.5, 0.5], \"half_extent\": [0.15, 0.15, 0.15]}}]}",
+             angles[c]);
+    snprintf(path, sizeof path, "%s/sand%d.json", dir, c);
+    write_file(path, json);
+    snprintf(args, sizeof args, "check '%s'", path);
+    assert_int_equal(mpm(args), 0);
+    if (c == 0) {
+      expect_output("warning");
+      expect_output("materials[0].friction_angle is 0.61 degrees");
+      expect_output("35 degrees");
+    } else {
+      assert_null(strstr(output, "warning"));
+    }
+  }
+}
+
 /* Issue 17: check and run report bodies that overlap (twice as dense there) and bodies that
  * start inside a slip collider; a sticky one holding material is a grip and is not reported. */
 static void test_placement_warnings(void **state) {
@@ -461,6 +493,7 @@ int main(void) {
       cmocka_unit_test(test_bad_scenes_exit_2_and_write_nothing),
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_linear_kernel_warning),
+      cmocka_unit_test(test_friction_angle_warning),
       cmocka_unit_test(test_placement_warnings),
       cmocka_unit_test(test_readme_cites_papers),
       cmocka_unit_test(test_meshes_readme_shape),

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <math.h>
+#include <stdarg.h>
 #include <string.h>
 
 static mpm_shape_desc shape_default(mpm_shape_kind kind) {
@@ -86,16 +87,43 @@ mpm_resample_desc mpm_resample_desc_default(void) {
   return r;
 }
 
-const char *mpm_scene_advice(const mpm_scene *scene) {
-  if (scene->solver.kernel != MPM_KERNEL_LINEAR) return NULL;
-  for (int b = 0; b < scene->body_count; ++b)
-    if (!scene->bodies[b].domains)
-      return "solver.kernel \"linear\": the linear kernel's weight gradient jumps when a particle "
-             "crosses a cell face (the cell-crossing instability), so stressed bodies of material "
-             "points ring and can blow up once their particles cross into new cells, whatever the "
-             "transfer or time step; use \"ugimp\" (as cheap on this grid, Gao et al. 2017) or "
-             "\"quadratic\" for anything but a quick preview";
-  return NULL;
+/* Append one line of advice to buf (after a '\n' when it holds some already). */
+static void advise(char *buf, size_t cap, size_t *len, int *count, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static void advise(char *buf, size_t cap, size_t *len, int *count, const char *fmt, ...) {
+  ++*count;
+  if (!buf || *len + 1 >= cap) return;
+  if (*len) buf[(*len)++] = '\n';
+  va_list ap;
+  va_start(ap, fmt);
+  const int n = vsnprintf(buf + *len, cap - *len, fmt, ap);
+  va_end(ap);
+  if (n > 0) *len += (size_t)n < cap - *len ? (size_t)n : cap - *len - 1;
+}
+
+int mpm_scene_advice(const mpm_scene *scene, char *buf, size_t cap) {
+  size_t len = 0;
+  int count = 0;
+  if (buf && cap) buf[0] = 0;
+  int points = 0; /* bodies of material points */
+  for (int b = 0; b < scene->body_count; ++b) points |= !scene->bodies[b].domains;
+  if (scene->solver.kernel == MPM_KERNEL_LINEAR && points)
+    advise(buf, cap, &len, &count, "%s",
+           "solver.kernel \"linear\": the linear kernel's weight gradient jumps when a particle "
+           "crosses a cell face (the cell-crossing instability), so stressed bodies of material "
+           "points ring and can blow up once their particles cross into new cells, whatever the "
+           "transfer or time step; use \"ugimp\" (as cheap on this grid, Gao et al. 2017) or "
+           "\"quadratic\" for anything but a quick preview");
+  for (int m = 0; m < scene->material_count; ++m) {
+    const mpm_material_desc *md = &scene->materials[m];
+    if (md->model == MPM_MODEL_DRUCKER_PRAGER && md->friction_angle < 2)
+      advise(buf, cap, &len, &count,
+             "materials[%d].friction_angle is %g degrees (the key takes degrees): sand of so small "
+             "a friction angle flows like a liquid; if radians were meant, that is %.3g degrees "
+             "(typical sand: 30 to 35)",
+             m, md->friction_angle, md->friction_angle * 57.29577951308232);
+  }
+  return count;
 }
 
 void mpm_scene_default(mpm_scene *scene) {

@@ -414,13 +414,17 @@ double mpm_schedule_at(const double (*keys)[2], int n, double t);
 /* A material's strength factor at time t (1 without a schedule). */
 double mpm_material_strength(const mpm_material_desc *m, double t);
 
-/* Advice on a valid scene that is likely to misbehave, for the CLI to print as a warning (and a
- * host program to show): NULL when there is none. Today: material points with the linear
- * kernel. Its weight gradient jumps when a particle crosses a cell face, so the force a particle
- * receives jumps too (the cell-crossing instability, Bardenhagen and Kober 2004): a stressed
- * elastic body rings, then blows up shortly after its particles cross into new cells, for every
- * transfer and time step. */
-const char *mpm_scene_advice(const mpm_scene *scene);
+/* Advice on a valid scene that is likely to misbehave, for the CLI to print as warnings (and a
+ * host program to show): one line each into buf (cap bytes, NUL-terminated, lines separated by
+ * '\n'); returns how many. Today:
+ *   - material points with the linear kernel. Its weight gradient jumps when a particle crosses
+ *     a cell face, so the force a particle receives jumps too (the cell-crossing instability,
+ *     Bardenhagen and Kober 2004): a stressed elastic body rings, then blows up shortly after its
+ *     particles cross into new cells, for every transfer and time step;
+ *   - a Drucker-Prager friction angle below 2 degrees: the key takes degrees, and such an angle
+ *     is almost always radians given by mistake (0.61 for 35 degrees): sand that flows like a
+ *     liquid. */
+int mpm_scene_advice(const mpm_scene *scene, char *buf, size_t cap);
 
 /* Fill every default; arrays empty. */
 void mpm_scene_default(mpm_scene *scene);

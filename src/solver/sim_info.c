@@ -44,11 +44,8 @@ int mpm_sim_warnings(const mpm_sim *sim, char *buf, size_t cap) {
   size_t len = 0;
   int found = 0;
   if (buf && cap) buf[0] = 0;
-  const char *advice = mpm_scene_advice(&sim->scene);
-  if (advice) {
-    if (buf && cap) len += (size_t)snprintf(buf, cap, "%s", advice);
-    ++found;
-  }
+  found += mpm_scene_advice(&sim->scene, buf, cap);
+  if (buf && cap) len = strlen(buf);
   /* where the bodies start: only the initial state can say (a resumed run has moved on) */
   if (sim->steps == 0) {
     char text[4096];
