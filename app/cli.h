@@ -12,6 +12,14 @@ int mpm_cmd_render(int argc, char **argv); /* render.c */
 int mpm_cmd_plot(int argc, char **argv);   /* plot.c */
 int mpm_cmd_error(int argc, char **argv);  /* error.c */
 
+/* The word of `known` (NULL-terminated) closest to `word` by edit distance, when it is close
+ * enough to be a typing slip (at most 2 edits, and fewer than half the word); NULL otherwise.
+ * For "did you mean" on mistyped options and commands. */
+const char *mpm_cli_suggest(const char *word, const char *const *known);
+
+/* "unknown option 'X'" for `cmd`, with "did you mean 'Y'?" when one of `known` is close. */
+void mpm_cli_unknown_option(const char *cmd, const char *option, const char *const *known);
+
 /* Parse a positive integer option value; prints an error naming the option on failure. */
 int mpm_cli_parse_int(const char *opt, const char *value, int lo, int hi, int *out);
 

@@ -108,6 +108,49 @@ static void usage(FILE *out) {
   usage_of(out, NULL);
 }
 
+/* Edit distance of a and b with adjacent transpositions counted as one edit ("rnu" is one from
+ * "run"; optimal string alignment); words over 63 characters count as far. */
+static int edit_distance(const char *a, const char *b) {
+  const int la = (int)strlen(a), lb = (int)strlen(b);
+  if (la > 63 || lb > 63) return 64;
+  int d[64][64];
+  for (int i = 0; i <= la; ++i) d[i][0] = i;
+  for (int j = 0; j <= lb; ++j) d[0][j] = j;
+  for (int i = 1; i <= la; ++i)
+    for (int j = 1; j <= lb; ++j) {
+      int best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
+      if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
+      if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+          d[i - 2][j - 2] + 1 < best)
+        best = d[i - 2][j - 2] + 1;
+      d[i][j] = best;
+    }
+  return d[la][lb];
+}
+
+const char *mpm_cli_suggest(const char *word, const char *const *known) {
+  const char *best = NULL;
+  int best_d = 3;
+  for (int k = 0; known[k]; ++k) {
+    const int d = edit_distance(word, known[k]);
+    if (d < best_d && 2 * d < (int)strlen(word)) {
+      best_d = d;
+      best = known[k];
+    }
+  }
+  return best;
+}
+
+void mpm_cli_unknown_option(const char *cmd, const char *option, const char *const *known) {
+  const char *near = mpm_cli_suggest(option, known);
+  if (near)
+    fprintf(stderr, "mpm %s: unknown option '%s': did you mean '%s'? (mpm %s --help lists them)\n",
+            cmd, option, near, cmd);
+  else
+    fprintf(stderr, "mpm %s: unknown option '%s' (mpm %s --help lists them)\n", cmd, option, cmd);
+}
+
 int mpm_cli_parse_int(const char *opt, const char *value, int lo, int hi, int *out) {
   if (!value) {
     fprintf(stderr, "mpm: %s needs a value (an integer from %d to %d)\n", opt, lo, hi);
@@ -172,6 +215,13 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "render")) return mpm_cmd_render(argc - 2, argv + 2);
   if (!strcmp(cmd, "plot")) return mpm_cmd_plot(argc - 2, argv + 2);
   if (!strcmp(cmd, "error")) return mpm_cmd_error(argc - 2, argv + 2);
-  fprintf(stderr, "mpm: unknown command '%s' (try 'mpm --help')\n", cmd);
+  static const char *const commands[] = {"run",   "check",  "bench",     "render", "plot",
+                                         "error", "--help", "--version", NULL};
+  const char *near = mpm_cli_suggest(cmd, commands);
+  if (near)
+    fprintf(stderr, "mpm: unknown command '%s': did you mean '%s'? (try 'mpm --help')\n", cmd,
+            near);
+  else
+    fprintf(stderr, "mpm: unknown command '%s' (try 'mpm --help')\n", cmd);
   return MPM_EXIT_USAGE;
 }

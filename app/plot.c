@@ -44,7 +44,8 @@ int mpm_cmd_plot(int argc, char **argv) {
       usage(stdout);
       return MPM_EXIT_OK;
     } else if (argv[i][0] == '-') {
-      fprintf(stderr, "mpm plot: unknown option '%s'\n", argv[i]);
+      static const char *const known[] = {"--out", "-o", "--quiet", "-q", "--help", NULL};
+      mpm_cli_unknown_option("plot", argv[i], known);
       usage(stderr);
       return MPM_EXIT_USAGE;
     } else if (!run_dir) {

@@ -110,7 +110,15 @@ static int parse_args(int argc, char **argv, render_cli *c) {
     } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
       c->quiet = 1;
     } else if (a[0] == '-') {
-      fprintf(stderr, "mpm render: unknown option or missing value '%s'\n", a);
+      static const char *const known[] = {
+          "--field",     "--colormap", "--size",  "--range", "--frame",     "--margin",
+          "--every",     "--scene",    "--out",   "--grid",  "--particles", "--no-shadow",
+          "--no-legend", "--no-time",  "--movie", "--quiet", NULL};
+      const char *near = mpm_cli_suggest(a, known);
+      if (near && strcmp(near, a))
+        fprintf(stderr, "mpm render: unknown option '%s': did you mean '%s'?\n", a, near);
+      else
+        fprintf(stderr, "mpm render: unknown option or missing value '%s'\n", a);
       return -1;
     } else if (!c->dir) {
       c->dir = a;

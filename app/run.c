@@ -92,12 +92,17 @@ int mpm_cmd_check(int argc, char **argv) {
   st = mpm_sim_next_dt(sim, &dt);
   if (st == MPM_OK) {
     const double per_frame = dt > 0 ? ceil(in.frame_dt / dt - 1e-9) : 0;
+    /* the rule the step follows: explicit steps are bounded by the stiffest material's wave
+       speed, implicit ones by particle speed alone (or fixed) */
+    const char *rule =
+        in.fixed_dt   ? "; implicit: the scene's fixed solver.dt, each frame in equal steps"
+        : in.implicit ? "; implicit: the step follows the particles' speed alone (no wave-speed "
+                        "bound; at rest it is the frame or solver.max_dt) and shrinks as they "
+                        "speed up"
+                      : "; the step follows the material's wave speed and shrinks as it speeds up";
     printf("%s: first step dt = %.3g s, about %.0f steps per frame (%g frames per second)%s\n",
-           argv[0], dt, per_frame, in.fps,
-           in.fixed_dt
-               ? ""
-               : "; the step follows the material's wave speed and shrinks as it speeds up");
-    if (per_frame > 1e4)
+           argv[0], dt, per_frame, in.fps, rule);
+    if (per_frame > 1e4 && !in.implicit)
       fprintf(stderr,
               "mpm: warning: %s: a frame will need about %.0f steps (more than 10^4): check the "
               "units of E (Pa) and dx (m), or use a coarser dx, a softer material or the "
@@ -165,7 +170,10 @@ int mpm_cmd_run(int argc, char **argv) {
     } else if (!strcmp(argv[i], "--overwrite")) {
       overwrite = 1;
     } else if (argv[i][0] == '-') {
-      fprintf(stderr, "mpm run: unknown option '%s' (try 'mpm --help')\n", argv[i]);
+      static const char *const known[] = {"-o",        "--output",    "--resume",
+                                          "--threads", "--frames",    "--quiet",
+                                          "--render",  "--overwrite", NULL};
+      mpm_cli_unknown_option("run", argv[i], known);
       return MPM_EXIT_USAGE;
     } else if (!scene_path) {
       scene_path = argv[i];

@@ -187,6 +187,30 @@ static void test_friction_angle_warning(void **state) {
   }
 }
 
+/* A mistyped command or option gets "did you mean" (as scene keys do); a far one does not. mpm
+ * check on an implicit scene says the implicit step's rule, not the explicit wave-speed one. */
+static void test_did_you_mean_and_implicit_check(void **state) {
+  (void)state;
+  static const struct {
+    const char *args, *said;
+  } slips[] = {
+      {"rnu x.json", "did you mean 'run'?"},
+      {"run x.json --overwrit", "did you mean '--overwrite'?"},
+      {"run x.json --thread 2", "did you mean '--threads'?"},
+      {"render out --feild J", "did you mean '--field'?"},
+      {"plot out --quite", "did you mean '--quiet'?"},
+  };
+  for (size_t k = 0; k < sizeof slips / sizeof slips[0]; ++k) {
+    assert_int_equal(mpm(slips[k].args), 2);
+    expect_output(slips[k].said);
+  }
+  assert_int_equal(mpm("run x.json --zzzz"), 2);
+  assert_null(strstr(output, "did you mean"));
+  assert_int_equal(mpm("check examples/stiff_bar_bending.json"), 0);
+  expect_output("implicit: the scene's fixed solver.dt");
+  assert_null(strstr(output, "wave speed"));
+}
+
 /* Issue 17: check and run report bodies that overlap (twice as dense there) and bodies that
  * start inside a slip collider; a sticky one holding material is a grip and is not reported. */
 static void test_placement_warnings(void **state) {
@@ -494,6 +518,7 @@ int main(void) {
       cmocka_unit_test(test_check_examples),
       cmocka_unit_test(test_linear_kernel_warning),
       cmocka_unit_test(test_friction_angle_warning),
+      cmocka_unit_test(test_did_you_mean_and_implicit_check),
       cmocka_unit_test(test_placement_warnings),
       cmocka_unit_test(test_readme_cites_papers),
       cmocka_unit_test(test_meshes_readme_shape),
