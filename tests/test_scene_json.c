@@ -168,7 +168,7 @@ static void test_minimal_scene_defaults(void **state) {
   assert_close(s.solver.gimp_length, 0.0, 0);
   assert_string_equal(s.output.directory, "out");
   assert_int_equal(s.output.vtu, 1);
-  assert_int_equal(s.output.ply, 0);
+  assert_int_equal(s.output.ply, 1); /* PLY points by default: Houdini and Blender read them */
   assert_int_equal(s.output.stats, 1);
   assert_int_equal(s.material_count, 1);
   assert_int_equal(s.body_count, 1);

@@ -160,7 +160,7 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->solver.domain_kernel = MPM_KERNEL_LINEAR;
   snprintf(scene->output.directory, sizeof scene->output.directory, "out");
   scene->output.vtu = 1;
-  scene->output.ply = 0;
+  scene->output.ply = 1; /* Houdini, Blender (and the add-on) read these */
   scene->output.stats = 1;
   scene->output.checkpoint_every = 10;
   scene->camera.set = 0;
