@@ -187,6 +187,38 @@ static void test_friction_angle_warning(void **state) {
   }
 }
 
+/* A heat conductivity that makes conduction take more than 100 substeps a step (1e30 W/(m K),
+ * a unit slip: 10^6 substeps, minutes a step) is warned of by check, with the count; an
+ * ordinary one is not. */
+static void test_heat_cost_warning(void **state) {
+  (void)state;
+  char dir[400], path[512], args[1200];
+  snprintf(dir, sizeof dir, "%s", test_temp_dir("heatcost"));
+  static const double k[] = {1e30, 0.5};
+  for (int c = 0; c < 2; ++c) {
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.1}, "
+             "\"time\": {\"end\": 0.02, \"fps\": 100}, \"heat\": {\"temperature\": 20}, "
+             "\"materials\": [{\"name\": \"wax\", \"model\": \"neo_hookean\", "
+             "\"E\": 1e4, \"nu\": 0.3, \"density\": 1000, \"conductivity\": %g}], "
+             "\"bodies\": [{\"material\": \"wax\", \"shape\": {\"type\": \"box\", "
+             "\"center\": [0.5, 0.5, 0.5], \"half_extent\": [0.15, 0.15, 0.15]}}]}",
+             k[c]);
+    snprintf(path, sizeof path, "%s/heat%d.json", dir, c);
+    write_file(path, json);
+    snprintf(args, sizeof args, "check '%s'", path);
+    assert_int_equal(mpm(args), 0);
+    if (c == 0) {
+      expect_output("warning");
+      expect_output("heat: conduction needs 1000000 (the cap) substeps per step");
+      expect_output("materials[].conductivity");
+    } else {
+      assert_null(strstr(output, "warning"));
+    }
+  }
+}
+
 /* A mistyped command or option gets "did you mean" (as scene keys do); a far one does not. mpm
  * check on an implicit scene says the implicit step's rule, not the explicit wave-speed one. */
 static void test_did_you_mean_and_implicit_check(void **state) {
@@ -519,6 +551,7 @@ int main(void) {
       cmocka_unit_test(test_linear_kernel_warning),
       cmocka_unit_test(test_friction_angle_warning),
       cmocka_unit_test(test_did_you_mean_and_implicit_check),
+      cmocka_unit_test(test_heat_cost_warning),
       cmocka_unit_test(test_placement_warnings),
       cmocka_unit_test(test_readme_cites_papers),
       cmocka_unit_test(test_meshes_readme_shape),

@@ -3,6 +3,7 @@
  * warnings and the next step's dt. `mpm run` and `mpm check` are written on these alone. */
 #include "solver/adaptive.h"
 #include "solver/sim.h"
+#include "heat/heat.h"
 #include "core/parallel.h"
 
 #include <math.h>
@@ -40,12 +41,33 @@ void mpm_sim_set_step_callback(mpm_sim *sim, mpm_step_callback callback, void *c
   sim->on_step_ctx = callback ? ctx : NULL;
 }
 
+/* Conduction substeps per step past which check and run warn of the cost. */
+#define HEAT_SUBSTEPS_WARN 100
+
 int mpm_sim_warnings(const mpm_sim *sim, char *buf, size_t cap) {
   size_t len = 0;
   int found = 0;
   if (buf && cap) buf[0] = 0;
   found += mpm_scene_advice(&sim->scene, buf, cap);
   if (buf && cap) len = strlen(buf);
+  /* heat: conduction substeps each step at its stable rate; a conductivity typed in the wrong
+     unit (1e30) made every step take minutes at the cap of 10^6 without a word */
+  if (sim->scene.heat.enabled) {
+    const double dt = mpm_sim_cfl_dt(sim);
+    const int n =
+        mpm_heat_substeps(dt, mpm_sim_finest_dx(sim), sim->materials, sim->material_count);
+    if (n > HEAT_SUBSTEPS_WARN) {
+      if (buf && len < cap)
+        snprintf(buf + len, cap - len,
+                 "%sheat: conduction needs %d%s substeps per step (dt = %.3g s, dx = %g m): each "
+                 "step costs that many conduction passes over the grid; check the units of "
+                 "materials[].conductivity (W/(m K)), specific_heat (J/(kg K)) and density, "
+                 "or use a coarser dx",
+                 len ? "\n" : "", n, n >= 1000000 ? " (the cap)" : "", dt, mpm_sim_finest_dx(sim));
+      len = buf && cap ? strlen(buf) : 0;
+      ++found;
+    }
+  }
   /* where the bodies start: only the initial state can say (a resumed run has moved on) */
   if (sim->steps == 0) {
     char text[4096];
