@@ -45,6 +45,13 @@ static int int_buf_push(int_buf *b, int v) {
   return 0;
 }
 
+/* The source (line or face index) of a polygon's n triangles. */
+static int push_sources(int_buf *sources, int source, int n) {
+  for (int k = 0; k < n; ++k)
+    if (int_buf_push(sources, source)) return -1;
+  return 0;
+}
+
 /* Fan-triangulate a polygon of n >= 3 vertex indices into tris. */
 static int push_fan(int_buf *tris, const int *poly, int n) {
   for (int k = 1; k + 1 < n; ++k)
@@ -134,7 +141,7 @@ static mpm_status obj_parse(const char *path, char *text, size_t len, mpm_mesh *
   m->vertices = mpm_alloc((size_t)(total_v ? total_v : 1) * 3 * sizeof(double));
   if (!m->vertices) return oom(err, name);
 
-  int_buf tris = {0}, poly = {0};
+  int_buf tris = {0}, poly = {0}, sources = {0};
   mpm_status st = MPM_OK;
   long nv = 0, lineno = 0;
   for (char *line = text; line < text + len; line += strlen(line) + 1) {
@@ -210,7 +217,8 @@ static mpm_status obj_parse(const char *path, char *text, size_t len, mpm_mesh *
                            name, lineno, poly.count);
         goto done;
       }
-      if (push_fan(&tris, poly.data, (int)poly.count)) {
+      if (push_fan(&tris, poly.data, (int)poly.count) ||
+          push_sources(&sources, (int)lineno, (int)poly.count - 2)) {
         st = oom(err, name);
         goto done;
       }
@@ -229,9 +237,12 @@ static mpm_status obj_parse(const char *path, char *text, size_t len, mpm_mesh *
   m->vertex_count = (int)nv;
   m->triangle_count = (int)(tris.count / 3);
   m->triangles = tris.data;
-  tris.data = NULL;
+  m->triangle_source = sources.data;
+  m->source_is_line = 1;
+  tris.data = sources.data = NULL;
 done:
   mpm_free(tris.data);
+  mpm_free(sources.data);
   mpm_free(poly.data);
   return st;
 }
@@ -561,7 +572,7 @@ static mpm_status ply_parse(const char *path, char *text, size_t len, mpm_mesh *
 
   m->vertices = mpm_alloc((size_t)(nv ? nv : 1) * 3 * sizeof(double));
   if (!m->vertices) return oom(err, name);
-  int_buf tris = {0}, poly = {0};
+  int_buf tris = {0}, poly = {0}, sources = {0};
   ply_reader r = {name, data, text + len, format, lines + 1};
   char where[600];
   for (int e = 0; e < el_count; ++e) {
@@ -612,7 +623,8 @@ static mpm_status ply_parse(const char *path, char *text, size_t len, mpm_mesh *
             goto done;
           }
         }
-        if (is_face && push_fan(&tris, poly.data, (int)poly.count)) {
+        if (is_face && (push_fan(&tris, poly.data, (int)poly.count) ||
+                        push_sources(&sources, (int)i, (int)poly.count - 2))) {
           st = oom(err, name);
           goto done;
         }
@@ -633,9 +645,12 @@ static mpm_status ply_parse(const char *path, char *text, size_t len, mpm_mesh *
   m->vertex_count = (int)nv;
   m->triangle_count = (int)(tris.count / 3);
   m->triangles = tris.data;
-  tris.data = NULL;
+  m->triangle_source = sources.data;
+  m->source_is_line = 0;
+  tris.data = sources.data = NULL;
 done:
   mpm_free(tris.data);
+  mpm_free(sources.data);
   mpm_free(poly.data);
   return st;
 }
@@ -691,6 +706,7 @@ void mpm_mesh_free(mpm_mesh *mesh) {
   if (!mesh) return;
   mpm_free(mesh->vertices);
   mpm_free(mesh->triangles);
+  mpm_free(mesh->triangle_source);
   memset(mesh, 0, sizeof *mesh);
 }
 
@@ -712,7 +728,9 @@ static int cmp_u64(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-long mpm_mesh_boundary_edges(const mpm_mesh *mesh) {
+int mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out) {
+  memset(out, 0, sizeof *out);
+  out->a = out->b = -1;
   size_t n = 0;
   uint64_t *keys =
       mpm_alloc((size_t)(mesh->triangle_count ? mesh->triangle_count : 1) * 3 * sizeof *keys);
@@ -725,15 +743,34 @@ long mpm_mesh_boundary_edges(const mpm_mesh *mesh) {
       keys[n++] = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
     }
   qsort(keys, n, sizeof *keys, cmp_u64);
-  long boundary = 0;
   for (size_t i = 0; i < n;) {
     size_t j = i;
     while (j < n && keys[j] == keys[i]) ++j;
-    if (j - i == 1) ++boundary;
+    if (j - i == 1) ++out->boundary;
+    if (j - i > 2 && out->non_manifold++ == 0) {
+      out->a = (int)(keys[i] >> 32);
+      out->b = (int)(keys[i] & 0xffffffffu);
+      out->shared = (int)(j - i);
+    }
     i = j;
   }
   mpm_free(keys);
-  return boundary;
+  /* the first non-manifold edge's triangles, in the file's order */
+  int found = 0;
+  for (int t = 0; out->shared && t < mesh->triangle_count && found < 4; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh->triangles[3 * t + k], b = mesh->triangles[3 * t + (k + 1) % 3];
+      if ((a == out->a && b == out->b) || (a == out->b && b == out->a)) {
+        out->triangles[found++] = t;
+        break;
+      }
+    }
+  return 0;
+}
+
+long mpm_mesh_boundary_edges(const mpm_mesh *mesh) {
+  mpm_mesh_edges e;
+  return mpm_mesh_edge_check(mesh, &e) ? -1 : e.boundary;
 }
 
 double mpm_mesh_winding_number(const mpm_mesh *mesh, const double p[3]) {

@@ -16,6 +16,10 @@ typedef struct mpm_mesh {
   int vertex_count, triangle_count;
   double *vertices; /* 3 per vertex: x y z, in the file's units */
   int *triangles;   /* 3 per triangle: zero-based vertex indices */
+  /* per triangle, where the loader read its face: the OBJ line of its `f` record, or the
+     index of its PLY `face` element (source_is_line 0); NULL for meshes made otherwise */
+  int *triangle_source;
+  int source_is_line;
 } mpm_mesh;
 
 /// Read a triangle mesh; the format is chosen by the extension (.obj or .ply, any case).
@@ -49,6 +53,19 @@ void mpm_mesh_bounds(const mpm_mesh *mesh, double lo[3], double hi[3]);
 /// Number of edges used by exactly one triangle (0 for a closed, watertight mesh).
 /// Allocates a temporary edge list; returns -1 when out of memory.
 long mpm_mesh_boundary_edges(const mpm_mesh *mesh);
+
+/// The edges of a mesh by the number of triangles that share them: `boundary` edges of one
+/// triangle (a hole), `non_manifold` edges of more than two (surfaces that meet along a line:
+/// inside and outside are not defined there), and the first such edge (its zero-based
+/// vertices a, b) with up to 4 of its triangles (zero-based, `shared` of them in all).
+typedef struct mpm_mesh_edges {
+  long boundary, non_manifold;
+  int a, b;
+  int triangles[4], shared;
+} mpm_mesh_edges;
+
+/// Count the edges as above; 0, or -1 when out of memory.
+int mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out);
 
 /// 1 when p is inside the mesh: |generalized winding number| > 1/2. Exact 0/1 for closed
 /// meshes away from the surface, and a sensible answer for meshes with small holes; the

@@ -108,7 +108,21 @@ static int mesh_bounds(mpm_json_ctx *c, mpm_shape_desc *sh, double lo[3], double
                             merr.message);
   /* a body must enclose a volume: the mesh must be closed (every edge shared by two
      triangles) and its triangles must span a volume, or inside and outside mean nothing */
-  const long open_edges = mpm_mesh_boundary_edges(&mesh);
+  mpm_mesh_edges edges;
+  if (mpm_mesh_edge_check(&mesh, &edges)) {
+    mpm_mesh_free(&mesh);
+    return mpm_json_fail_at(c, "file", MPM_ERR_NOMEM, "out of memory checking mesh file '%s'",
+                            sh->mesh_path);
+  }
+  const long open_edges = edges.boundary;
+  /* where the file has the faces of its first non-manifold edge (refused below, after the
+     checks that say more of a flat or open mesh) */
+  char where[160] = "";
+  size_t where_len = 0;
+  for (int q = 0; q < edges.shared && q < 4 && mesh.triangle_source; ++q)
+    where_len += (size_t)snprintf(where + where_len, sizeof where - where_len, "%s%d",
+                                  q ? ", " : "", mesh.triangle_source[edges.triangles[q]]);
+  const char *where_what = mesh.source_is_line ? "lines" : "face elements";
   double area = 0, volume = 0;
   for (int t = 0; t < mesh.triangle_count; ++t) {
     const double *a = mesh.vertices + 3 * mesh.triangles[3 * t];
@@ -140,6 +154,15 @@ static int mesh_bounds(mpm_json_ctx *c, mpm_shape_desc *sh, double lo[3], double
                             "mesh file '%s' encloses no volume (it is flat or its triangles "
                             "cancel out)",
                             sh->mesh_path);
+  if (edges.non_manifold > 0)
+    return mpm_json_fail_at(
+        c, "file", MPM_ERR_INVALID,
+        "mesh file '%s' is not a closed 2-manifold: the edge between vertices %d and %d (counted "
+        "from 1) belongs to %d triangles (the faces at %s %s%s), %ld such edge%s in all; a body "
+        "needs a surface where every edge joins exactly two faces (touching or overlapping "
+        "shells make inside and outside ambiguous: join them into one)",
+        sh->mesh_path, edges.a + 1, edges.b + 1, edges.shared, where_what, where,
+        edges.shared > 4 ? ", ..." : "", edges.non_manifold, edges.non_manifold == 1 ? "" : "s");
   char ex[3][40], sc[40];
   for (int d = 0; d < 3; ++d) mpm_json_format_short(mhi[d] - mlo[d], ex[d], sizeof ex[d]);
   snprintf(note, note_cap, " (the mesh is %s x %s x %s in file units, times scale %s)", ex[0],
