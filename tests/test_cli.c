@@ -500,7 +500,9 @@ static void test_blow_up_is_reported(void **state) {
                     "               \"material\": \"j\", \"velocity\": [1e200, 0, 0]}]}");
   snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
   assert_int_equal(mpm(args), 1);
-  expect_output("blew up at step");
+  /* in float 1e200 m/s is inf already: frame 0 is refused, naming the quantity; in double the
+     first step blows up */
+  if (!strstr(output, "has a non-finite velocity")) expect_output("blew up at step");
   expect_output("particle id");
 }
 

@@ -242,10 +242,41 @@ static void test_failed_simulation_refuses_steps(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* A value past what the real type holds reaches a frame (a heat temperature of 1e308: inf at
+ * once in float, after the first conduction in double): the frame is not written, the call
+ * says which particle and quantity, and the simulation stops there (it wrote inf into every
+ * frame and exited 0). */
+static void test_non_finite_frame_refused(void **state) {
+  (void)state;
+  mpm_scene scene;
+  mpm_error err;
+  const char *text =
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.1},"
+      " \"time\": {\"end\": 0.2, \"fps\": 20}, \"heat\": {\"temperature\": 1e308},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
+      " \"density\": 1000, \"conductivity\": 1}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5],"
+      " \"half_extent\": [0.15,0.15,0.15]}, \"material\": \"m\"}]}";
+  if (mpm_scene_parse(text, "hot.json", &scene, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_sim *sim = NULL;
+  if (mpm_sim_create_from_scene(&scene, &sim, &err) != MPM_OK) fail_msg("%s", err.message);
+  mpm_scene_free(&scene);
+  mpm_status st = mpm_sim_enable_output(sim, test_temp_dir("guard-hot"));
+  while (st == MPM_OK && mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    st = mpm_sim_advance_frame(sim);
+  assert_int_equal(st, MPM_ERR_UNSTABLE);
+  expect_message(sim, "has a non-finite temperature");
+  expect_message(sim, "particle id ");
+  expect_message(sim, "heat.temperature");
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_ERR_UNSTABLE); /* and it stops there */
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_cfl_violation_stops),
       cmocka_unit_test(test_failed_simulation_refuses_steps),
+      cmocka_unit_test(test_non_finite_frame_refused),
       cmocka_unit_test(test_cfl_violation_domains),
       cmocka_unit_test(test_retry_halves_dt_until_stable),
       cmocka_unit_test(test_retry_gives_up),

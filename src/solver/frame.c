@@ -87,6 +87,12 @@ static mpm_status latch(mpm_sim *sim, mpm_status st) {
   return st;
 }
 
+/* A frame's outputs: their failures lose no state (a full disk), except a non-finite value
+ * found in the state they write. */
+static mpm_status latch_unstable(mpm_sim *sim, mpm_status st) {
+  return st == MPM_ERR_UNSTABLE ? latch(sim, st) : st;
+}
+
 /* One step of the frame in progress, of at most max_dt (0: no bound of the caller's), never
  * past the frame's time. */
 static mpm_status frame_step(mpm_sim *sim, double max_dt) {
@@ -153,8 +159,8 @@ static mpm_status step(mpm_sim *sim, double max_dt) {
     st = latch(sim, frame_step(sim, max_dt));
     if (st != MPM_OK) return st;
   }
-  /* (a frame's outputs failing loses no state: not latched) */
-  return frame_reached(sim) ? complete_frame(sim) : MPM_OK;
+  /* (a frame's outputs failing loses no state: not latched, unless they found it non-finite) */
+  return frame_reached(sim) ? latch_unstable(sim, complete_frame(sim)) : MPM_OK;
 }
 
 mpm_status mpm_sim_step(mpm_sim *sim, double max_dt) {
@@ -174,7 +180,7 @@ static mpm_status advance_frame(mpm_sim *sim) {
     if (st != MPM_OK) return st;
     if (sim->on_step) sim->on_step(sim->on_step_ctx, sim);
   }
-  return complete_frame(sim);
+  return latch_unstable(sim, complete_frame(sim));
 }
 
 mpm_status mpm_sim_advance_frame(mpm_sim *sim) {

@@ -10,6 +10,7 @@
 #include "io/run_folder.h"
 #include "scene/sample.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -165,6 +166,46 @@ done:
   return st;
 }
 
+/* The first particle (in p's order) with a non-finite quantity of those a frame writes, as an
+ * MPM_ERR_UNSTABLE naming the frame, the particle, its body and material, and the quantity. J
+ * and stress may be NULL (not computed). */
+static mpm_status scan_frame_fields(mpm_sim *sim, const mpm_particles *p, const mpm_real *J,
+                                    const mpm_real *stress, int frame) {
+  const long n = (long)p->count;
+  long first = n;
+#pragma omp parallel for schedule(static) reduction(min : first)
+  for (long i = 0; i < n; ++i) {
+    int ok = isfinite(p->mass[i]) && isfinite(p->vol0[i]) && isfinite(p->temperature[i]) &&
+             (!J || isfinite(J[i])) && (!stress || isfinite(stress[i]));
+    for (int d = 0; d < 3; ++d) ok = ok && isfinite(p->x[d][i]) && isfinite(p->v[d][i]);
+    if (!ok && i < first) first = i;
+  }
+  if (first == n) return MPM_OK;
+  const long i = first;
+  const char *what = !isfinite(p->mass[i])            ? "mass"
+                     : !isfinite(p->vol0[i])          ? "volume"
+                     : !isfinite(p->temperature[i])   ? "temperature"
+                     : J && !isfinite(J[i])           ? "J (det F)"
+                     : stress && !isfinite(stress[i]) ? "stress"
+                     : !isfinite(p->x[0][i]) || !isfinite(p->x[1][i]) || !isfinite(p->x[2][i])
+                         ? "position"
+                         : "velocity";
+  const double value = !isfinite(p->mass[i])            ? (double)p->mass[i]
+                       : !isfinite(p->vol0[i])          ? (double)p->vol0[i]
+                       : !isfinite(p->temperature[i])   ? (double)p->temperature[i]
+                       : J && !isfinite(J[i])           ? (double)J[i]
+                       : stress && !isfinite(stress[i]) ? (double)stress[i]
+                                                        : NAN;
+  const int m = p->material[i];
+  return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
+                       "frame %d (t = %.6g s, step %lld): particle id %u (body %d, material %d "
+                       "'%s') has a non-finite %s (%g); the frame is not written (a value past "
+                       "what the %s build holds: check the scene's magnitudes, e.g. "
+                       "materials[%d].density, heat.temperature, hardening)",
+                       frame, sim->time, (long long)sim->steps, p->id[i], p->body[i], m,
+                       sim->scene.materials[m].name, what, value, mpm_real_type(), m);
+}
+
 mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   mpm_particles combined;
   memset(&combined, 0, sizeof combined);
@@ -221,6 +262,11 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
         melt[i] = mpm_material_melt_fraction(&sim->materials[p->material[i]], p->temperature[i]);
     }
   }
+  /* nothing non-finite goes into a frame: the step's guard scans positions and F, but a mass,
+     a temperature or a stress can overflow alone (a density of 1e308, a temperature of 1e308,
+     a snow hardening of 1e300 wrote inf into every frame and exited 0) */
+  st = scan_frame_fields(sim, p, J, stress, frame);
+  if (st != MPM_OK) goto done;
   if (category) { /* as mpm_sim_all_particles orders them: material points, then active domains */
     size_t j = 0;
     for (; j < sim->particles.count; ++j) category[j] = -1;
