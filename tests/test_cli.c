@@ -497,12 +497,10 @@ static void test_blow_up_is_reported(void **state) {
                     "1e4, \"nu\": 0.3, \"density\": 1000}],"
                     " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
                     "\"half_extent\": [0.1,0.1,0.1]},"
-                    "               \"material\": \"j\", \"velocity\": [1e200, 0, 0]}]}");
+                    "               \"material\": \"j\", \"velocity\": [1e30, 0, 0]}]}");
   snprintf(args, sizeof args, "run '%s' -o '%s/out' --quiet", scene, dir);
   assert_int_equal(mpm(args), 1);
-  /* in float 1e200 m/s is inf already: frame 0 is refused, naming the quantity; in double the
-     first step blows up */
-  if (!strstr(output, "has a non-finite velocity")) expect_output("blew up at step");
+  expect_output("blew up at step");
   expect_output("particle id");
 }
 

@@ -6,7 +6,9 @@
  * is active is then replaced by '.', so messages read the same everywhere; all character
  * tests are plain ASCII comparisons (no <ctype.h>). See json_check.h for the contract. */
 #include "scene/json_check.h"
+#include "core/real.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -315,6 +317,13 @@ static int check_number(mpm_json_ctx *c, const cJSON *node, const mpm_json_range
   if (!mpm_json_in_range(r, v))
     return mpm_json_fail(c, MPM_ERR_INVALID, "expected %s, got %s", want,
                          mpm_json_format_number(v, got, sizeof got));
+  /* the float build's particles and grid hold values up to FLT_MAX: a density, velocity or
+     temperature past it is infinite from the first frame on */
+  if (sizeof(mpm_real) == 4 && fabs(v) > FLT_MAX)
+    return mpm_json_fail(c, MPM_ERR_INVALID,
+                         "expected %s, got %s: past the largest number of the float build "
+                         "(3.4e38; the double build, make build-double, holds it)",
+                         want, mpm_json_format_number(v, got, sizeof got));
   *out = v;
   return 0;
 }
