@@ -502,7 +502,8 @@ static void test_load_files(void **state) {
   /* a directory */
   assert_int_equal(mpm_scene_load(dir, &s, &err), MPM_ERR_IO);
   assert_non_null(strstr(err.message, dir));
-  assert_non_null(strstr(err.message, "cannot open the scene file: it is a folder, not a regular file"));
+  assert_non_null(
+      strstr(err.message, "cannot open the scene file: it is a folder, not a regular file"));
 
   /* a binary file */
   snprintf(bad, sizeof bad, "%s/binary.json", dir);

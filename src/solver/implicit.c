@@ -347,9 +347,8 @@ static double resolution_scale(mpm_implicit *s, mpm_real *const diag[3], mpm_rea
   if (!diag) return 0;
   mpm_dofs *d = s->dofs;
   const long n = (long)d->count;
-  const mpm_real eps = sizeof(mpm_real) == 4 ? R_(1.1920929e-7) : R_(2.220446049250313e-16);
   /* the roundings of the stencil's some 27 particles add in quadrature: sqrt(27) / 27 */
-  const mpm_real k = R_(0.2) * eps * s->tc->kernel.dx / s->dt;
+  const mpm_real k = R_(0.2) * MPM_REAL_EPS * s->tc->kernel.dx / s->dt;
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict m = d->mass, *restrict dc = diag[c];
     mpm_real *restrict tc = t[c];
@@ -362,7 +361,7 @@ static double resolution_scale(mpm_implicit *s, mpm_real *const diag[3], mpm_rea
 /* The rounding of an incremental potential of size |E| in the real type: differences below it
  * are not a change of E. */
 static double energy_noise(double E) {
-  return 16 * (sizeof(mpm_real) == 4 ? 1.1920929e-7 : 2.220446049250313e-16) * fabs(E);
+  return 16 * (double)MPM_REAL_EPS * fabs(E);
 }
 
 /* With Newton iterations, Zhu's step v_1 is searched too: from v_0 (the constrained components
