@@ -7,6 +7,7 @@
 #include "cli.h"
 #include "mpm/mpm.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,14 +28,52 @@ static double now(void) {
 
 static int usage(void) {
   fprintf(stderr, "usage: mpm render OUTDIR [--field velocity|J|stress|plastic|material|body|\n"
-                  "                                     temperature|melt]\n"
+                  "                                     temperature|melt|ARRAY[.x|.xy]]\n"
                   "                  [--size WxH] [--colormap viridis|coolwarm|category]\n"
-                  "                  [--range LO:HI] [--every N] [--scene SCENE.json] [--out DIR]\n"
-                  "                  [--frame material|follow|domain] [--margin F] [--no-shadow]\n"
-                  "                  [--no-legend] [--no-time]\n"
+                  "                  [--range LO:HI] [--every N] [--frames FIRST:LAST]\n"
+                  "                  [--scene SCENE.json] [--out DIR]\n"
+                  "                  [--frame material|follow|domain] [--margin F]\n"
+                  "                  [--eye X,Y,Z] [--target X,Y,Z] [--fov DEG]\n"
+                  "                  [--no-shadow] [--no-legend] [--no-time]\n"
                   "                  [--movie] [--grid] [--particles] [--quiet]\n"
                   "(mpm render --help says what each does)\n");
   return MPM_EXIT_USAGE;
+}
+
+/* "X,Y,Z" into p: three finite numbers. */
+static int parse_point(const char *opt, const char *v, double p[3]) {
+  char tail;
+  if (!v || sscanf(v, "%lf,%lf,%lf%c", &p[0], &p[1], &p[2], &tail) != 3 ||
+      !isfinite(p[0] + p[1] + p[2])) {
+    fprintf(stderr, "mpm render: %s expects X,Y,Z (metres, three numbers), got '%s'\n", opt,
+            v ? v : "");
+    return -1;
+  }
+  return 0;
+}
+
+/* "FIRST:LAST", "FIRST:", ":LAST" or "N" (that frame alone) into the options' frame range. */
+static int parse_frames(const char *v, mpm_render_options *o) {
+  int a = 0, b = -1, n = 0;
+  char tail;
+  const char *colon = v ? strchr(v, ':') : NULL;
+  int ok = v && *v;
+  if (ok && !colon) {
+    ok = sscanf(v, "%d%c", &a, &tail) == 1;
+    b = a;
+  } else if (ok) {
+    if (colon != v) ok = sscanf(v, "%d%n", &a, &n) == 1 && v + n == colon;
+    if (ok && colon[1]) ok = sscanf(colon + 1, "%d%c", &b, &tail) == 1;
+  }
+  if (!ok || a < 0 || b < -1 || (b >= 0 && b < a)) {
+    fprintf(stderr,
+            "mpm render: --frames expects FIRST:LAST frame numbers with 0 <= FIRST <= LAST "
+            "(FIRST: or :LAST for open ends, N for one frame), got '%s'\n",
+            v ? v : "");
+    return -1;
+  }
+  o->first_frame = a, o->last_frame = b;
+  return 0;
 }
 
 static int parse_args(int argc, char **argv, render_cli *c) {
@@ -44,13 +83,25 @@ static int parse_args(int argc, char **argv, render_cli *c) {
   for (int i = 0; i < argc; ++i) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     if (!strcmp(a, "--field") && v) {
-      if (mpm_render_field_from_name(v, &o->field) != MPM_OK) {
+      /* a field of its own, or any point array the frames hold (the renderer checks it) */
+      if (mpm_render_field_from_name(v, &o->field) != MPM_OK) o->field_array = v;
+      ++i;
+    } else if (!strcmp(a, "--eye") || !strcmp(a, "--target")) {
+      if (parse_point(a, v, a[2] == 'e' ? o->eye : o->target)) return -1;
+      ++i;
+    } else if (!strcmp(a, "--fov")) {
+      char *end = NULL;
+      o->fov = v ? strtod(v, &end) : 0;
+      if (!v || *end || end == v || !(o->fov >= 1 && o->fov <= 170)) {
         fprintf(stderr,
-                "mpm render: --field expects one of velocity, J, stress, plastic, "
-                "material, body, temperature, melt, got '%s'\n",
-                v);
+                "mpm render: --fov expects the vertical field of view, 1 to 170 degrees, "
+                "got '%s'\n",
+                v ? v : "");
         return -1;
       }
+      ++i;
+    } else if (!strcmp(a, "--frames")) {
+      if (parse_frames(v, o)) return -1;
       ++i;
     } else if (!strcmp(a, "--colormap") && v) {
       if (mpm_render_colormap_from_name(v, &o->colormap) != MPM_OK) {
@@ -113,7 +164,8 @@ static int parse_args(int argc, char **argv, render_cli *c) {
       static const char *const known[] = {
           "--field",     "--colormap", "--size",  "--range", "--frame",     "--margin",
           "--every",     "--scene",    "--out",   "--grid",  "--particles", "--no-shadow",
-          "--no-legend", "--no-time",  "--movie", "--quiet", NULL};
+          "--no-legend", "--no-time",  "--movie", "--quiet", "--eye",       "--target",
+          "--fov",       "--frames",   NULL};
       const char *near = mpm_cli_suggest(a, known);
       if (near && strcmp(near, a))
         fprintf(stderr, "mpm render: unknown option '%s': did you mean '%s'?\n", a, near);
@@ -194,12 +246,17 @@ int mpm_cmd_render(int argc, char **argv) {
         printf("%s (%zu particles, %.2f s)\n", png, fi.particles, dt);
     }
   }
-  if (code == MPM_EXIT_OK && !c.quiet)
+  if (code == MPM_EXIT_OK && !c.quiet) {
     printf("mpm render: %d frames, %.2f s per frame (%dx%d, %s %g..%g, %s, %d threads)\n", rendered,
-           total / rendered, info.width, info.height, mpm_render_field_name(info.field),
-           info.range_lo, info.range_hi,
-           info.scene_camera ? "the scene's camera" : mpm_render_framing_name(info.framing),
+           total / rendered, info.width, info.height, info.field_label, info.range_lo,
+           info.range_hi,
+           info.scene_camera ? "the scene's or the given camera"
+                             : mpm_render_framing_name(info.framing),
            info.threads);
+    printf("mpm render: camera --eye %.6g,%.6g,%.6g --target %.6g,%.6g,%.6g --fov %.6g\n",
+           info.eye[0], info.eye[1], info.eye[2], info.target[0], info.target[1], info.target[2],
+           info.fov);
+  }
   if (code == MPM_EXIT_OK && c.movie)
     code = make_movie(c.quiet, info.out_dir, (info.fps > 0 ? info.fps : 24) / info.every);
   mpm_renderer_destroy(r);

@@ -150,7 +150,9 @@ static void test_camera_and_splat(void **state) {
   mpm_error err;
   mpm_error_clear(&err);
   assert_int_equal(mpm_image_init(&img, 64, 48, &err), MPM_OK);
-  mpm_render_background(&img, &cam, 0, lo, hi, NULL, 0);
+  mpm_ground flat;
+  mpm_ground_level(&flat, 0);
+  mpm_render_background(&img, &cam, &flat, lo, hi, NULL, 0, -1);
   const float xyz[3] = {(float)cam.target[0], (float)cam.target[1], (float)cam.target[2]};
   const float red[3] = {1, 0, 0};
   assert_int_equal(mpm_render_particles(&img, &cam, 1, xyz, NULL, 0.05f, red, &err), MPM_OK);

@@ -187,7 +187,7 @@ static void test_camera_fit(void **state) {
     for (int r = 0; r < 2; ++r) {
       const double *lo = boxes[b], *hi = boxes[b] + 3;
       const int *rc = rects[r];
-      const mpm_camera cam = mpm_camera_fit_box(lo, hi, 320, 180, rc);
+      const mpm_camera cam = mpm_camera_fit_box(lo, hi, 320, 180, rc, NULL, 0);
       double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
       for (int k = 0; k < 8; ++k) {
         const double p[3] = {k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]};
@@ -224,23 +224,31 @@ static size_t block(float *xyz, double y0) {
   return n;
 }
 
-/* The ground's darkening by a block at height y0 over a floor at 0: pixels darker, pixels
- * lighter (none allowed), the largest darkening of one channel. */
-static void shadow_of(double y0, int *darker, int *lighter, float *most) {
-  const double lo[3] = {0.2, 0, 0.2}, hi[3] = {0.8, 0.6, 0.8};
+/* The ground's darkening by a block at height y0 over the ground g (a level floor at 0, or a
+ * slope through (0.5, 0, 0.5), the block then turned onto it): pixels darker, pixels lighter
+ * (none allowed), the largest darkening of one channel. */
+static void shadow_on(const mpm_ground *g, double y0, int *darker, int *lighter, float *most) {
+  const mpm_ground flat = *g;
+  const double lo[3] = {0.2, g->level ? 0 : -0.2, 0.2}, hi[3] = {0.8, 0.6, 0.8};
   const int w = 320, h = 180;
   const int rect[4] = {10, 10, 310, 170};
-  const mpm_camera cam = mpm_camera_fit_box(lo, hi, w, h, rect);
+  const mpm_camera cam = mpm_camera_fit_box(lo, hi, w, h, rect, NULL, 0);
   mpm_image a, b;
   mpm_error err;
   mpm_error_clear(&err);
   assert_int_equal(mpm_image_init(&a, w, h, &err), MPM_OK);
   assert_int_equal(mpm_image_init(&b, w, h, &err), MPM_OK);
-  mpm_render_background(&a, &cam, 0, lo, hi, NULL, 0);
-  mpm_render_background(&b, &cam, 0, lo, hi, NULL, 0);
+  mpm_render_background(&a, &cam, &flat, lo, hi, NULL, 0, -1);
+  mpm_render_background(&b, &cam, &flat, lo, hi, NULL, 0, -1);
   static float xyz[3 * 1000];
   const size_t n = block(xyz, y0);
-  assert_int_equal(mpm_render_ground_shadow(&b, &cam, 0, n, xyz, NULL, 0.015f, &err), MPM_OK);
+  if (!g->level) /* onto the slope: (x - 0.5, y, z - 0.5) in the plane's frame */
+    for (size_t i = 0; i < n; ++i) {
+      const double u = xyz[3 * i] - 0.5, y = xyz[3 * i + 1], v = xyz[3 * i + 2] - 0.5;
+      for (int d = 0; d < 3; ++d)
+        xyz[3 * i + d] = (float)(g->point[d] + u * g->e1[d] + y * g->normal[d] + v * g->e2[d]);
+    }
+  assert_int_equal(mpm_render_ground_shadow(&b, &cam, &flat, n, xyz, NULL, 0.015f, &err), MPM_OK);
   *darker = *lighter = 0;
   *most = 0;
   for (int i = 0; i < w * h; ++i) {
@@ -257,18 +265,25 @@ static void shadow_of(double y0, int *darker, int *lighter, float *most) {
 
 static void test_ground_shadow(void **state) {
   (void)state;
-  int darker, lighter, darker_up, lighter_up;
-  float most, most_up;
-  shadow_of(0, &darker, &lighter, &most);
-  shadow_of(0.4, &darker_up, &lighter_up, &most_up);
-  print_message("resting: %d pixels darker (by up to %.3f); lifted 0.4: %d (%.3f)\n", darker, most,
-                darker_up, most_up);
-  assert_int_equal(lighter, 0);
-  assert_int_equal(lighter_up, 0);
-  assert_true(darker > 1000);    /* the ground under and around the block's foot */
-  assert_true(darker_up > 1000); /* a lifted block still casts a shadow */
-  assert_true(most > 0.15f);
-  assert_true(most > most_up + 0.03f); /* darkest where it touches the ground */
+  mpm_ground grounds[2];
+  mpm_ground_level(&grounds[0], 0);
+  const double p[3] = {0.5, 0, 0.5}, n[3] = {0.5, 0.8660254037844386, 0}; /* 30 degrees */
+  mpm_ground_make(&grounds[1], p, n);
+  for (int k = 0; k < 2; ++k) {
+    int darker, lighter, darker_up, lighter_up;
+    float most, most_up;
+    shadow_on(&grounds[k], 0, &darker, &lighter, &most);
+    shadow_on(&grounds[k], 0.4, &darker_up, &lighter_up, &most_up);
+    print_message("%s: resting: %d pixels darker (by up to %.3f); lifted 0.4: %d (%.3f)\n",
+                  k ? "slope" : "floor", darker, most, darker_up, most_up);
+    assert_int_equal(lighter, 0);
+    assert_int_equal(lighter_up, 0);
+    assert_true(darker > 1000);    /* the ground under and around the block's foot */
+    assert_true(darker_up > 1000); /* a lifted block still casts a shadow */
+    assert_true(most > 0.15f);
+    assert_true(most > most_up + 0.03f); /* darkest where it touches the ground */
+  }
+  const mpm_ground flat = grounds[0];
   /* no particles over the ground: nothing to do */
   mpm_image img;
   mpm_error err;
@@ -276,10 +291,11 @@ static void test_ground_shadow(void **state) {
   assert_int_equal(mpm_image_init(&img, 32, 18, &err), MPM_OK);
   const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
   const mpm_camera cam = mpm_camera_frame_box(lo, hi, 32, 18);
-  mpm_render_background(&img, &cam, 0, lo, hi, NULL, 0);
+  mpm_render_background(&img, &cam, &flat, lo, hi, NULL, 0, -1);
   const float below[3] = {0.5f, -1, 0.5f};
-  assert_int_equal(mpm_render_ground_shadow(&img, &cam, 0, 1, below, NULL, 0.01f, &err), MPM_OK);
-  assert_int_equal(mpm_render_ground_shadow(&img, &cam, 0, 0, NULL, NULL, 0.01f, &err), MPM_OK);
+  assert_int_equal(mpm_render_ground_shadow(&img, &cam, &flat, 1, below, NULL, 0.01f, &err),
+                   MPM_OK);
+  assert_int_equal(mpm_render_ground_shadow(&img, &cam, &flat, 0, NULL, NULL, 0.01f, &err), MPM_OK);
   mpm_image_free(&img);
 }
 

@@ -46,6 +46,7 @@ typedef enum mpm_render_field {
   MPM_RENDER_FIELD_BODY = 5,        /* "body": the body index */
   MPM_RENDER_FIELD_TEMPERATURE = 6, /* "temperature": runs with heat (scene `heat`) */
   MPM_RENDER_FIELD_MELT = 7,        /* "melt": the melt fraction, 0 to 1 */
+  MPM_RENDER_FIELD_ARRAY = 8,       /* the point array mpm_render_options.field_array names */
 } mpm_render_field;
 
 /// Colour maps.
@@ -64,8 +65,8 @@ typedef enum mpm_render_framing {
 } mpm_render_framing;
 
 /// The names `mpm render` spells them by ("velocity", "viridis", "material", ...): static
-/// storage, NULL for a value out of range (AUTO included). _from_name: MPM_ERR_INVALID for an
-/// unknown name (*out unchanged).
+/// storage, NULL for a value out of range (AUTO and ARRAY included). _from_name: MPM_ERR_INVALID
+/// for an unknown name (*out unchanged).
 MPM_API const char *mpm_render_field_name(mpm_render_field field);
 MPM_API mpm_status mpm_render_field_from_name(const char *name, mpm_render_field *out);
 MPM_API const char *mpm_render_colormap_name(mpm_render_colormap map);
@@ -100,6 +101,18 @@ typedef struct mpm_render_options {
   const char *out_dir;        /* where mpm_render_run writes; default NULL: RUN_DIR/render */
   int threads;                /* OpenMP threads for the calls (0, the default: the caller's
                                  setting), restored after each call as mpm_sim_set_threads does */
+  /* any point array the run wrote (output.fields), over `field`: "pressure", "cauchy_stress";
+     a vector's or tensor's magnitude, or one component as "velocity.y", "cauchy_stress.xy",
+     "F.zz"; a signed range is centred on 0 with the coolwarm map. Default NULL: `field` */
+  const char *field_array;
+  int first_frame, last_frame; /* draw the frame files numbered first to last (inclusive);
+                                  default 0 and -1 (to the last) */
+  /* the camera, over the scene's and the framing's: where it is, what it looks at (m) and its
+     vertical field of view (degrees, 1 to 170). Default NAN, NAN and 0: the automatic one's;
+     an eye alone looks at the automatic target, a target alone is seen from the automatic
+     direction and distance, a field of view alone refits the framing */
+  double eye[3], target[3];
+  double fov;
 } mpm_render_options;
 
 /// Fill *opts with the defaults; `size` is sizeof *opts (what mpm_render_options_default passes).
@@ -146,11 +159,16 @@ typedef struct mpm_render_info {
   const char *run_dir;
   const char *out_dir; /* where mpm_render_run writes (opts.out_dir or RUN_DIR/render) */
   /* the last picture drawn by mpm_renderer_draw (frame -1 before the first) */
-  int frame;              /* its frame number, of frame_NNNN.vtu */
-  double time;            /* its simulated time, s */
-  size_t particles;       /* the particles of the frame */
-  size_t particles_drawn; /* drawn as spheres (those a particle surface stands for left out) */
-  int surfaces;           /* particle surfaces drawn */
+  int frame;               /* its frame number, of frame_NNNN.vtu */
+  double time;             /* its simulated time, s */
+  size_t particles;        /* the particles of the frame */
+  size_t particles_drawn;  /* drawn as spheres (those a particle surface stands for left out) */
+  int surfaces;            /* particle surfaces drawn */
+  const char *field_label; /* the field as named: "velocity", or the array as asked */
+  /* the camera of the pictures (with framing follow, the steady framing's): pass these back
+     as options to keep the view and move it */
+  double eye[3], target[3], fov;
+  int first_frame, last_frame; /* the frame numbers drawn, first and last */
 } mpm_render_info;
 
 MPM_API mpm_status mpm_renderer_get_info(const mpm_renderer *r, mpm_render_info *info, size_t size);

@@ -29,6 +29,11 @@ void mpm_camera_setup(mpm_camera *cam, int width, int height) {
   cam->focal = 0.5 * height / tan(0.5 * cam->fov_deg * 3.14159265358979323846 / 180);
 }
 
+void mpm_camera_default_view(double view[3]) {
+  view[0] = 0.55, view[1] = 0.5, view[2] = 1.0; /* front right, above */
+  normalize(view);
+}
+
 mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int width, int height) {
   mpm_camera cam;
   double c[3], r = 0;
@@ -42,8 +47,8 @@ mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int widt
   const double half_v = 0.5 * cam.fov_deg * 3.14159265358979323846 / 180;
   const double half_h = atan(tan(half_v) * width / height);
   const double dist = 0.85 * r / sin(fmin(half_v, half_h)); /* a box fills less than its sphere */
-  double dir[3] = {0.55, 0.5, 1.0};                         /* front right, above */
-  normalize(dir);
+  double dir[3];
+  mpm_camera_default_view(dir);
   for (int d = 0; d < 3; ++d) {
     cam.target[d] = c[d];
     cam.eye[d] = c[d] + dist * dir[d];
@@ -93,7 +98,7 @@ static double centre_shift(const double *x, const double *z, double k0, double k
 }
 
 mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width, int height,
-                              const int rect[4]) {
+                              const int rect[4], const double view[3], double fov_deg) {
   mpm_camera cam;
   double c[3], r = 0;
   for (int d = 0; d < 3; ++d) {
@@ -101,9 +106,14 @@ mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width,
     r += 0.25 * (hi[d] - lo[d]) * (hi[d] - lo[d]);
   }
   r = fmax(sqrt(r), 1e-6);
-  cam.fov_deg = 35;
-  double dir[3] = {0.55, 0.5, 1.0}; /* front right, above: as mpm_camera_frame_box */
-  normalize(dir);
+  cam.fov_deg = fov_deg > 0 ? fov_deg : 35;
+  double dir[3];
+  if (view) {
+    for (int d = 0; d < 3; ++d) dir[d] = view[d];
+    normalize(dir);
+  } else {
+    mpm_camera_default_view(dir);
+  }
   for (int d = 0; d < 3; ++d) {
     cam.target[d] = c[d];
     cam.eye[d] = c[d] + dir[d];

@@ -63,15 +63,10 @@ static double trace(const mpm_collider_pose *pose, const double eye[3], const do
   return INFINITY;
 }
 
-/* A floor collider (a half-space facing up) is drawn as the ground plane instead. */
-static int is_floor(const mpm_collider_pose *pose) {
-  const mpm_collider_desc *d = &pose->collider->desc;
-  return d->shape.kind == MPM_SHAPE_HALFSPACE && !d->inside_out && d->shape.axis[1] > 0.99;
-}
-
-void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y,
+void mpm_render_background(mpm_image *img, const mpm_camera *cam, const mpm_ground *ground,
                            const double lo[3], const double hi[3],
-                           const mpm_collider_pose *colliders, int collider_count) {
+                           const mpm_collider_pose *colliders, int collider_count,
+                           int ground_collider) {
   const int w = img->width, h = img->height;
   double size = 0;
   for (int d = 0; d < 3; ++d) size = fmax(size, hi[d] - lo[d]);
@@ -89,12 +84,15 @@ void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y
                       (float)(0.68 + 0.25 * up)};
       double best = INFINITY;
       /* ground plane */
-      if (dir[1] < -1e-9) {
-        const double t = (floor_y - cam->eye[1]) / dir[1];
-        if (t > 0 && t < far) {
-          const double x = cam->eye[0] + t * dir[0], z = cam->eye[2] + t * dir[2];
+      {
+        const double t = mpm_ground_hit(ground, cam->eye, dir);
+        if (t < far) {
+          double p[3], u, v;
+          for (int d = 0; d < 3; ++d) p[d] = cam->eye[d] + t * dir[d];
+          mpm_ground_coords(ground, p, &u, &v);
+          const double x = p[0], z = p[2];
           const int inside = x >= lo[0] && x <= hi[0] && z >= lo[2] && z <= hi[2];
-          const int check = ((int)floor(x / cell) + (int)floor(z / cell)) & 1;
+          const int check = ((int)floor(u / cell) + (int)floor(v / cell)) & 1;
           const float g = inside ? (check ? 0.62f : 0.52f) : 0.42f;
           const float fog = (float)exp(-t / (6 * size));
           for (int c = 0; c < 3; ++c) rgb[c] = fog * g + (1 - fog) * rgb[c];
@@ -103,7 +101,7 @@ void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y
       }
       /* colliders */
       for (int k = 0; k < collider_count; ++k) {
-        if (is_floor(&colliders[k])) continue;
+        if (k == ground_collider) continue; /* drawn as the ground plane */
         double n[3];
         const double t = trace(&colliders[k], cam->eye, dir, fmin(best, far), eps, n);
         if (t < best) {

@@ -1,7 +1,8 @@
 /* render.h - a software renderer for particle frames: no GPU, no display.
  *
  * A frame is drawn in three passes into a float RGB image with a depth buffer:
- *   1. the background: a vertical sky gradient, a checkered ground plane at the domain floor,
+ *   1. the background: a vertical sky gradient, a checkered ground plane (the domain floor, a
+ *      floor collider or a slope: mpm_ground),
  *      and the scene's colliders found by sphere tracing their level sets (collide/collider.h);
  *      containers (inside-out colliders) show their far wall, so what they hold stays visible;
  *   1b. the ground's shadow under the particles (shadow.c), on the pixels that show the ground;
@@ -53,10 +54,35 @@ void mpm_camera_setup(mpm_camera *cam, int width, int height);
 /* A camera that frames the box [lo, hi] from the front-right and above. */
 mpm_camera mpm_camera_frame_box(const double lo[3], const double hi[3], int width, int height);
 
-/* A camera from the same direction that is as near the box [lo, hi] as lets all of its
- * corners project into the pixel rectangle rect = {x0, y0, x1, y1}, centred in it. */
+/* The view direction (from the target towards the eye) of mpm_camera_frame_box and
+ * mpm_camera_fit_box: front right, above. */
+void mpm_camera_default_view(double view[3]);
+
+/* A camera looking along -view (NULL: the default view) with a vertical field of view of
+ * fov_deg (0: 35 degrees) that is as near the box [lo, hi] as lets all of its corners project
+ * into the pixel rectangle rect = {x0, y0, x1, y1}, centred in it. */
 mpm_camera mpm_camera_fit_box(const double lo[3], const double hi[3], int width, int height,
-                              const int rect[4]);
+                              const int rect[4], const double view[3], double fov_deg);
+
+/* The ground: the plane the material stands on (ground.c). A level floor at height y, or any
+ * plane whose normal points up (a slope: a tilted half-space collider). */
+typedef struct mpm_ground {
+  double point[3], normal[3]; /* a point of the plane; its unit normal, upwards */
+  double e1[3], e2[3];        /* unit tangents: x and z on a level floor */
+  int level;                  /* the normal is +y exactly */
+} mpm_ground;
+
+void mpm_ground_make(mpm_ground *g, const double point[3], const double normal[3]);
+void mpm_ground_level(mpm_ground *g, double y);
+/* Signed height of x over the plane, along its normal. */
+double mpm_ground_height(const mpm_ground *g, const double x[3]);
+/* The plane's height at (x, z) (normal[1] > 0). */
+double mpm_ground_y_at(const mpm_ground *g, double x, double z);
+/* Distance along the unit ray eye + t dir to the plane seen from above, or INFINITY. */
+double mpm_ground_hit(const mpm_ground *g, const double eye[3], const double dir[3]);
+/* x's coordinates along e1 and e2 (x and z on a level floor), and back to the plane's point. */
+void mpm_ground_coords(const mpm_ground *g, const double x[3], double *u, double *w);
+void mpm_ground_point(const mpm_ground *g, double u, double w, double x[3]);
 
 /* Colour maps: t in [0, 1] (clamped) to linear RGB. */
 typedef enum mpm_colormap {
@@ -69,10 +95,13 @@ void mpm_colormap_eval(mpm_colormap map, double t, float rgb[3]);
 /* The map of a name (viridis, coolwarm, category); -1 for an unknown one. */
 int mpm_colormap_of(const char *name);
 
-/* Pass 1. floor_y: height of the ground plane (the domain floor); colliders may be NULL. */
-void mpm_render_background(mpm_image *img, const mpm_camera *cam, double floor_y,
+/* Pass 1. ground: the plane drawn checkered (the checkers lighter over the domain's x and z
+ * span); colliders may be NULL; the collider ground_collider (-1: none) is the ground itself and
+ * is not traced. */
+void mpm_render_background(mpm_image *img, const mpm_camera *cam, const mpm_ground *ground,
                            const double domain_lo[3], const double domain_hi[3],
-                           const mpm_collider_pose *colliders, int collider_count);
+                           const mpm_collider_pose *colliders, int collider_count,
+                           int ground_collider);
 
 /* Pass 2. Particle i at xyz[3i..3i+2] with radius radius[i] (or `radius_all` when radius is
  * NULL) and linear colour rgb[3i..3i+2]. */
@@ -94,10 +123,10 @@ mpm_status mpm_render_triangles(mpm_image *img, const mpm_camera *cam, size_t ve
                                 const float rgb[3], mpm_error *err);
 
 /* Pass 1b, the ground's shadow: the n particles at xyz (radius[i], or radius_all when radius is
- * NULL) darken the ground plane at height floor_y below them, sharply where they touch it and
+ * NULL) darken the ground plane below them (along its normal), sharply where they touch it and
  * more softly the higher they are (shadow.c). Only pixels that show the ground are changed. */
-mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, double floor_y, size_t n,
-                                    const float *xyz, const float *radius, float radius_all,
-                                    mpm_error *err);
+mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, const mpm_ground *ground,
+                                    size_t n, const float *xyz, const float *radius,
+                                    float radius_all, mpm_error *err);
 
 #endif

@@ -90,6 +90,8 @@ static mpm_render_options defaults(void) {
   o.margin = 0.06;
   o.every = 1;
   o.shadow = o.legend = o.time_label = 1;
+  o.last_frame = -1;
+  for (int d = 0; d < 3; ++d) o.eye[d] = o.target[d] = NAN;
   return o;
 }
 
@@ -140,6 +142,32 @@ static mpm_status take_options(const mpm_render_options *in, mpm_render_options 
                          "mpm_render_options.threads: expected >= 0 (0: the caller's OpenMP "
                          "setting), got %d",
                          o->threads);
+  if (o->first_frame < 0 || o->last_frame < -1 ||
+      (o->last_frame >= 0 && o->last_frame < o->first_frame))
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "mpm_render_options.first_frame, last_frame: expected 0 <= first <= last "
+                         "(last -1: to the end), got %d and %d",
+                         o->first_frame, o->last_frame);
+  if (!(o->fov == 0 || (o->fov >= 1 && o->fov <= 170)))
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "mpm_render_options.fov: expected 1 to 170 degrees (0: automatic), got %g",
+                         o->fov);
+  const double *pts[2] = {o->eye, o->target};
+  const char *names[2] = {"eye", "target"};
+  for (int k = 0; k < 2; ++k) {
+    const int given = !isnan(pts[k][0]) + !isnan(pts[k][1]) + !isnan(pts[k][2]);
+    if (given != 0 && (given != 3 || !isfinite(pts[k][0] + pts[k][1] + pts[k][2])))
+      return mpm_error_set(err, MPM_ERR_INVALID,
+                           "mpm_render_options.%s: expected three finite coordinates (or all "
+                           "NAN: automatic), got %g, %g, %g",
+                           names[k], pts[k][0], pts[k][1], pts[k][2]);
+  }
+  if (!isnan(o->eye[0]) && !isnan(o->target[0]) && o->eye[0] == o->target[0] &&
+      o->eye[1] == o->target[1] && o->eye[2] == o->target[2])
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "mpm_render_options.eye, target: the same point (%g, %g, %g): the camera "
+                         "must look from somewhere else",
+                         o->eye[0], o->eye[1], o->eye[2]);
   return MPM_OK;
 }
 
@@ -168,7 +196,8 @@ static mpm_status list_frames(mpm_renderer *r) {
   for (struct dirent *e; f && (e = readdir(d));) {
     int k;
     char tail[8];
-    if (sscanf(e->d_name, "frame_%d.%7s", &k, tail) == 2 && !strcmp(tail, "vtu") && k >= 0) {
+    if (sscanf(e->d_name, "frame_%d.%7s", &k, tail) == 2 && !strcmp(tail, "vtu") && k >= 0 &&
+        k >= r->opts.first_frame && (r->opts.last_frame < 0 || k <= r->opts.last_frame)) {
       if (n == cap) {
         int *g = realloc(f, (size_t)(cap *= 2) * sizeof *f);
         if (!g) {
@@ -188,6 +217,11 @@ static mpm_status list_frames(mpm_renderer *r) {
   qsort(f, (size_t)n, sizeof *f, cmp_int);
   r->frames = f;
   r->frame_count = n;
+  if (n == 0 && (r->opts.first_frame > 0 || r->opts.last_frame >= 0))
+    return mpm_error_set(&r->error, MPM_ERR_INVALID,
+                         "%s: no frame_NNNN.vtu files numbered %d to %d "
+                         "(mpm_render_options.first_frame, last_frame)",
+                         r->run_dir, r->opts.first_frame, r->opts.last_frame);
   if (n == 0)
     return mpm_error_set(&r->error, MPM_ERR_INVALID,
                          "%s: no frame_NNNN.vtu files (render needs the run's VTU output, "
@@ -219,12 +253,23 @@ static mpm_status load_scene(mpm_renderer *r, const char *scene) {
   return MPM_OK;
 }
 
+/* The units of an output.fields array in the colour bar's title. */
+static const char *array_unit(const char *name) {
+  static const char *const pa[] = {"pressure", "cauchy_stress", "stress", NULL};
+  for (int k = 0; pa[k]; ++k)
+    if (!strcmp(name, pa[k])) return " (Pa)";
+  if (!strcmp(name, "velocity")) return " (m/s)";
+  if (!strcmp(name, "mass")) return " (kg)";
+  if (!strcmp(name, "volume")) return " (m3)";
+  return "";
+}
+
 /* The field when none was asked for: speed, unless the particles all move alike in every
  * sampled frame (a run at rest, a body in free flight), where speed would paint everything one
  * colour; then material, or body when the bodies share one material. */
 static void choose_field(mpm_renderer *r) {
   const render_survey *sv = &r->survey;
-  r->field = r->opts.field;
+  r->field = (mpm_render_field)r->spec.field;
   if (r->field < 0)
     r->field = !sv->uniform_speed                          ? MPM_RENDER_FIELD_VELOCITY
                : sv->max_material > 0 || sv->max_body == 0 ? MPM_RENDER_FIELD_MATERIAL
@@ -236,6 +281,11 @@ static void choose_field(mpm_renderer *r) {
     r->colormap = labels                           ? MPM_CMAP_CATEGORY
                   : r->field == MPM_RENDER_FIELD_J ? MPM_CMAP_COOLWARM
                                                    : MPM_CMAP_VIRIDIS;
+  r->spec.field = r->field;
+  if (r->field == MPM_RENDER_FIELD_ARRAY)
+    snprintf(r->title, sizeof r->title, "%s%s", r->spec.label, array_unit(r->spec.array));
+  else
+    snprintf(r->title, sizeof r->title, "%s", FIELD_TITLES[r->field]);
 }
 
 /* The colour range from the survey unless the options gave one: speed and stress from 0, the
@@ -256,6 +306,11 @@ static void choose_range(mpm_renderer *r) {
     const double d = fmax(fmax(fabs(hi - 1), fabs(1 - lo)), 1e-3);
     lo = 1 - d, hi = 1 + d;
   }
+  if (f == MPM_RENDER_FIELD_ARRAY && lo < 0 && hi > 0) { /* signed: centred on 0 */
+    const double d = fmax(-lo, hi);
+    lo = -d, hi = d;
+    if (r->opts.colormap < 0) r->colormap = MPM_CMAP_COOLWARM;
+  }
   if (!(hi > lo)) hi = lo + 1;
   r->lo = lo, r->hi = hi;
 }
@@ -264,7 +319,7 @@ static void choose_range(mpm_renderer *r) {
 static void make_legend(mpm_renderer *r) {
   const mpm_scene *sc = &r->scene;
   const int f = r->field;
-  mpm_legend lg = {r->colormap, FIELD_TITLES[f], r->lo, r->hi, 0, r->names};
+  mpm_legend lg = {r->colormap, r->title, r->lo, r->hi, 0, r->names};
   if (r->colormap == MPM_CMAP_CATEGORY) {
     const int top = f == MPM_RENDER_FIELD_BODY ? r->survey.max_body : r->survey.max_material;
     lg.count = top + 1 < MPM_RENDER_KEY_MAX ? top + 1 : MPM_RENDER_KEY_MAX;
@@ -279,15 +334,50 @@ static void make_legend(mpm_renderer *r) {
   r->legend = lg;
 }
 
-/* The ground's height: the domain's floor, or an upward half-space collider above it. */
-static double floor_height(const mpm_scene *scene, double lowest) {
-  double y = scene ? scene->domain_min[1] : lowest;
-  for (int k = 0; scene && k < scene->collider_count; ++k) {
-    const mpm_shape_desc *s = &scene->colliders[k].shape;
-    if (s->kind == MPM_SHAPE_HALFSPACE && !scene->colliders[k].inside_out && s->axis[1] > 0.99)
-      y = fmax(y, s->center[1]);
+/* Whether collider c may be the ground: a half-space facing up, tilted 60 degrees at most, that
+ * never moves and acts all the time. */
+static int ground_candidate(const mpm_collider_desc *c) {
+  const mpm_shape_desc *s = &c->shape;
+  const mpm_motion_desc *m = &c->motion;
+  const double n =
+      sqrt(s->axis[0] * s->axis[0] + s->axis[1] * s->axis[1] + s->axis[2] * s->axis[2]);
+  return s->kind == MPM_SHAPE_HALFSPACE && !c->inside_out && n > 0 && s->axis[1] >= 0.5 * n &&
+         m->velocity[0] == 0 && m->velocity[1] == 0 && m->velocity[2] == 0 &&
+         m->angular_speed == 0 && m->keyframe_count == 0 && c->active[0] <= 0 &&
+         isinf(c->active[1]);
+}
+
+/* The ground: the domain's floor, or the ground candidate highest over the domain's centre
+ * above it (a floor collider, or a slope). A slope is seen across: the view turns about the
+ * vertical until it looks along the slope's contour lines, from the side nearer the default
+ * view, so that the slope shows in profile and from above. */
+static void choose_ground(mpm_renderer *r) {
+  mpm_ground_level(&r->ground, r->dom_lo[1]);
+  r->ground_collider = -1;
+  mpm_camera_default_view(r->view);
+  if (!r->have_scene) return;
+  const double cx = 0.5 * (r->dom_lo[0] + r->dom_hi[0]), cz = 0.5 * (r->dom_lo[2] + r->dom_hi[2]);
+  double best = r->dom_lo[1];
+  for (int k = 0; k < r->collider_count; ++k) {
+    const mpm_collider_desc *c = &r->colliders[k].desc;
+    if (!ground_candidate(c)) continue;
+    mpm_ground g;
+    mpm_ground_make(&g, c->shape.center, c->shape.axis);
+    const double y = mpm_ground_y_at(&g, cx, cz);
+    if (y > best || (r->ground_collider < 0 && y >= best)) {
+      best = y;
+      r->ground = g;
+      r->ground_collider = k;
+    }
   }
-  return y;
+  const double *n = r->ground.normal;
+  const double tilt = sqrt(n[0] * n[0] + n[2] * n[2]);
+  if (tilt < 1e-3) return; /* level (within 0.06 degrees): the default view */
+  /* the contour direction, horizontal and across the downhill one (n[0], n[2]) */
+  double a[2] = {-n[2] / tilt, n[0] / tilt};
+  const double *v = r->view, h = sqrt(v[0] * v[0] + v[2] * v[2]);
+  if (a[0] * v[0] + a[1] * v[2] < 0) a[0] = -a[0], a[1] = -a[1];
+  r->view[0] = a[0] * h, r->view[2] = a[1] * h; /* the default's elevation kept */
 }
 
 mpm_camera mpm_renderer_fit_material(const mpm_renderer *r, const double box_lo[3],
@@ -301,14 +391,16 @@ mpm_camera mpm_renderer_fit_material(const mpm_renderer *r, const double box_lo[
     }
     size = fmax(size, hi[d] - lo[d]);
   }
-  if (lo[1] > r->floor_y && lo[1] - r->floor_y <= size) lo[1] = r->floor_y;
+  /* down to the ground under the box's centre when it is near (a level floor: all of it) */
+  const double gy = mpm_ground_y_at(&r->ground, 0.5 * (lo[0] + hi[0]), 0.5 * (lo[2] + hi[2]));
+  if (lo[1] > gy && lo[1] - gy <= size) lo[1] = gy;
   const int w = r->opts.width, h = r->opts.height, m = (int)lround(r->opts.margin * h);
   int rect[4] = {m, m, w - m, h - m};
   if (r->opts.legend) rect[2] -= w - mpm_legend_box(&r->legend, w, h).x0;
   if (r->opts.time_label) rect[1] += mpm_label_box(label, w, h).y1;
   if (rect[2] - rect[0] < w / 4) rect[0] = w / 2 - w / 8, rect[2] = w / 2 + w / 8;
   if (rect[3] - rect[1] < h / 4) rect[1] = h / 2 - h / 8, rect[3] = h / 2 + h / 8;
-  return mpm_camera_fit_box(lo, hi, w, h, rect);
+  return mpm_camera_fit_box(lo, hi, w, h, rect, r->view, r->opts.fov);
 }
 
 void mpm_renderer_time_text(char *buf, size_t cap, double t, int frame, double fps) {
@@ -322,10 +414,10 @@ void mpm_renderer_time_text(char *buf, size_t cap, double t, int frame, double f
  * time label. */
 static void steady_camera(mpm_renderer *r) {
   const int w = r->opts.width, h = r->opts.height;
-  if (r->own_camera) {
+  if (r->have_scene && r->scene.camera.set) {
     memcpy(r->cam.eye, r->scene.camera.eye, sizeof r->cam.eye);
     memcpy(r->cam.target, r->scene.camera.target, sizeof r->cam.target);
-    r->cam.fov_deg = r->scene.camera.fov;
+    r->cam.fov_deg = r->opts.fov > 0 ? r->opts.fov : r->scene.camera.fov;
     mpm_camera_setup(&r->cam, w, h);
   } else if (r->opts.framing == MPM_RENDER_FRAMING_DOMAIN) {
     double lo[3], hi[3];
@@ -333,11 +425,24 @@ static void steady_camera(mpm_renderer *r) {
     if (r->have_scene) hi[1] = fmin(hi[1], r->survey.hi[1] + 0.3 * (hi[0] - lo[0]));
     if (!(hi[1] > lo[1])) hi[1] = lo[1] + 1;
     r->cam = mpm_camera_frame_box(lo, hi, w, h);
+    if (r->opts.fov > 0) r->cam.fov_deg = r->opts.fov, mpm_camera_setup(&r->cam, w, h);
   } else {
     char label[160];
     mpm_renderer_time_text(label, sizeof label, r->survey.first_time, r->frames[0], r->fps);
     r->cam = mpm_renderer_fit_material(r, r->survey.lo, r->survey.hi, label);
   }
+  /* the options' eye and target over the automatic ones; either alone keeps the other, or the
+     automatic direction and distance */
+  const double *eye = r->opts.eye, *target = r->opts.target;
+  const int has_eye = !isnan(eye[0]), has_target = !isnan(target[0]);
+  if (!has_eye && !has_target) return;
+  double off[3];
+  for (int d = 0; d < 3; ++d) off[d] = r->cam.eye[d] - r->cam.target[d];
+  for (int d = 0; d < 3; ++d) {
+    if (has_target) r->cam.target[d] = target[d];
+    r->cam.eye[d] = has_eye ? eye[d] : r->cam.target[d] + off[d];
+  }
+  mpm_camera_setup(&r->cam, w, h);
 }
 
 static mpm_status setup(mpm_renderer *r, const mpm_render_options *opts, const char *run_dir) {
@@ -362,8 +467,17 @@ static mpm_status setup(mpm_renderer *r, const mpm_render_options *opts, const c
   if ((st = list_frames(r)) != MPM_OK) return st;
   r->pictures = (r->frame_count - 1) / r->opts.every + 1;
   if ((st = load_scene(r, scene)) != MPM_OK) return st;
-  st = mpm_render_survey(r->run_dir, r->opts.field, r->opts.every, r->frames, r->frame_count,
-                         &r->survey, &r->error);
+  memset(&r->spec, 0, sizeof r->spec);
+  r->spec.field = r->opts.field;
+  r->spec.component = -1;
+  if (r->opts.field_array && mpm_render_field_parse(r->opts.field_array, &r->spec) != 0)
+    return mpm_error_set(&r->error, MPM_ERR_INVALID,
+                         "mpm_render_options.field_array: '%.80s' is no array name (NAME, "
+                         "NAME.x .. NAME.z or NAME.xx .. NAME.zz, at most %d bytes)",
+                         r->opts.field_array, MPM_VTU_NAME_MAX - 1);
+  r->opts.field_array = NULL; /* the caller's string is not kept */
+  st = mpm_render_survey(r->run_dir, &r->spec, r->opts.every, r->frames, r->frame_count, &r->survey,
+                         &r->error);
   if (st != MPM_OK) return st;
   choose_field(r);
   choose_range(r);
@@ -374,8 +488,9 @@ static mpm_status setup(mpm_renderer *r, const mpm_render_options *opts, const c
     r->dom_hi[d] = r->have_scene ? r->scene.domain_max[d] : r->survey.hi[d];
     if (!(r->dom_hi[d] > r->dom_lo[d])) r->dom_lo[d] -= 0.5, r->dom_hi[d] += 0.5;
   }
-  r->floor_y = floor_height(r->have_scene ? &r->scene : NULL, r->dom_lo[1]);
-  r->own_camera = r->have_scene && r->scene.camera.set;
+  choose_ground(r);
+  r->own_camera =
+      (r->have_scene && r->scene.camera.set) || !isnan(r->opts.eye[0]) || !isnan(r->opts.target[0]);
   if ((st = mpm_image_init(&r->img, r->opts.width, r->opts.height, &r->error)) != MPM_OK ||
       (st = mpm_image_init(&r->bg, r->opts.width, r->opts.height, &r->error)) != MPM_OK)
     return st;
@@ -461,6 +576,13 @@ mpm_status mpm_renderer_get_info(const mpm_renderer *r, mpm_render_info *info, s
   in.particles = r->drawn_particles;
   in.particles_drawn = r->drawn_spheres;
   in.surfaces = r->drawn_surfaces;
+  in.field_label =
+      r->field == MPM_RENDER_FIELD_ARRAY ? r->spec.label : MPM_RENDER_FIELD_NAMES[r->field];
+  const mpm_camera *cam = &r->cam;
+  for (int d = 0; d < 3; ++d) in.eye[d] = cam->eye[d], in.target[d] = cam->target[d];
+  in.fov = cam->fov_deg;
+  in.first_frame = r->frames[0];
+  in.last_frame = r->frames[(r->pictures - 1) * r->opts.every];
   memcpy(info, &in, size < sizeof in ? size : sizeof in);
   return MPM_OK;
 }

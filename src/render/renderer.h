@@ -15,12 +15,27 @@
 #define MPM_RENDER_FIELDS 8   /* mpm_render_field's values from VELOCITY to MELT */
 #define MPM_RENDER_KEY_MAX 10 /* categories in the key: the category map's colours repeat */
 
+/* What the particles are coloured by: one of mpm_render_field's, or a point array of the frames
+ * named by mpm_render_options.field_array (field MPM_RENDER_FIELD_ARRAY). */
+typedef struct render_field_spec {
+  int field;                        /* mpm_render_field; MPM_RENDER_FIELD_AUTO: not chosen yet */
+  char array[MPM_VTU_NAME_MAX];     /* ARRAY: the point array read */
+  int component;                    /* ARRAY: -1 the value (one component) or the magnitude, else
+                                       the component (.x .. .z, .xx .. .zz) */
+  char label[MPM_VTU_NAME_MAX + 4]; /* ARRAY: as asked ("pressure", "velocity.y") */
+} render_field_spec;
+
+/* Parse mpm_render_options.field_array ("NAME", "NAME.x", "NAME.xy") into spec; -1 for an empty
+ * or too long name. */
+int mpm_render_field_parse(const char *text, render_field_spec *spec);
+
 /* What a sample of the frames to draw says (survey.c). */
 typedef struct render_survey {
   double lo[3], hi[3]; /* the particles' spheres' box over the sample */
   int uniform_speed;   /* in every sampled frame the particles move alike (or rest) */
   int max_material, max_body;
   double field_lo, field_hi; /* the field's 2nd and 98th percentiles over the sample */
+  int field_components;      /* ARRAY: the array's components */
   int sampled;               /* frames read */
   double first_time;         /* the simulated time of the first frame drawn, s */
 } render_survey;
@@ -37,6 +52,8 @@ struct mpm_renderer {
   int collider_count;
   render_survey survey;
   /* the field, map and range chosen, and the legend that shows them */
+  render_field_spec spec; /* spec.field == field */
+  char title[MPM_VTU_NAME_MAX + 32];
   mpm_render_field field;
   mpm_colormap colormap;
   double lo, hi;
@@ -44,8 +61,10 @@ struct mpm_renderer {
   mpm_legend legend;
   double fps;                  /* the scene's, 0 without one */
   double dom_lo[3], dom_hi[3]; /* the domain (the ground's checkers, the background's scale) */
-  double floor_y;              /* the ground */
-  int own_camera;              /* the scene's camera */
+  mpm_ground ground;           /* the domain's floor, a floor collider or a slope */
+  int ground_collider;         /* the scene's collider drawn as the ground, -1: none */
+  double view[3];              /* the framing's view direction: the default, or across a slope */
+  int own_camera;              /* the scene's camera or the options' eye and target */
   mpm_camera cam; /* the steady camera (all but framing follow, which makes one per picture) */
   mpm_image img, bg;
   double bg_key; /* colliders' poses of the cached background; NAN: none */
@@ -65,15 +84,16 @@ struct mpm_renderer {
 extern const char *const MPM_RENDER_FIELD_NAMES[MPM_RENDER_FIELDS];
 
 /* The field's value of every particle of fr (read from `path`), for the colour map;
- * MPM_ERR_INVALID naming the file when it lacks the field's array. */
-mpm_status mpm_render_field_values(const mpm_vtu_frame *fr, const char *path, int field, float *out,
-                                   mpm_error *err);
+ * MPM_ERR_INVALID naming the file when it lacks the field's array (and the arrays it has), or
+ * for a component the array does not have. */
+mpm_status mpm_render_field_values(const mpm_vtu_frame *fr, const char *path,
+                                   const render_field_spec *spec, float *out, mpm_error *err);
 
 /* Read a sample of the frames to draw (frames[0], frames[every], ...) of dir into sv: every one
- * of them when they are small, else 12 spread over the run. With field < 0 the speed's range is
- * taken. The status with err on a bad frame or no memory. */
-mpm_status mpm_render_survey(const char *dir, int field, int every, const int *frames, int nf,
-                             render_survey *sv, mpm_error *err);
+ * of them when they are small, else 12 spread over the run. With spec->field AUTO the speed's
+ * range is taken. The status with err on a bad frame or no memory. */
+mpm_status mpm_render_survey(const char *dir, const render_field_spec *spec, int every,
+                             const int *frames, int nf, render_survey *sv, mpm_error *err);
 
 /* The particles' box of one frame, grown by the largest sphere's radius (0.75 cbrt(volume), as
  * drawn). */
@@ -93,7 +113,8 @@ int mpm_render_on_surface(const mpm_scene *s, int b, int m);
 
 /* The camera on the box [lo, hi] of the material (renderer.c): down to the ground when the
  * material is not far above it (so its shadow shows), fitted into the picture less the margin,
- * the legend's corner and the strip of the time label that reads `label`. */
+ * the legend's corner and the strip of the time label that reads `label`, along r->view with
+ * the options' field of view. */
 mpm_camera mpm_renderer_fit_material(const mpm_renderer *r, const double box_lo[3],
                                      const double box_hi[3], const char *label);
 /* The time label's text: the frame's time with as many decimals as the frame rate needs. */

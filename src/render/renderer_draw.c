@@ -24,10 +24,11 @@ static double now(void) {
  * only when one of them moved or the view did. */
 static void background(mpm_renderer *r, const mpm_camera *cam, double t) {
   double key = 0;
-  int na = 0;
+  int na = 0, ground = -1;
   for (int k = 0; k < r->collider_count; ++k) {
     const double *w = r->colliders[k].desc.active;
     if (!(t >= w[0] && t < w[1])) continue;
+    if (k == r->ground_collider) ground = na;
     r->poses[na] = mpm_collider_pose_at(&r->colliders[k], t);
     for (int d = 0; d < 3; ++d) key += (d + 1.0) * (k + 1.0) * r->poses[na].center[d];
     for (int d = 0; d < 9; ++d) key += (d + 2.0) * (k + 3.0) * r->poses[na].R[d];
@@ -35,7 +36,7 @@ static void background(mpm_renderer *r, const mpm_camera *cam, double t) {
     ++na;
   }
   if (!(key == r->bg_key)) {
-    mpm_render_background(&r->bg, cam, r->floor_y, r->dom_lo, r->dom_hi, r->poses, na);
+    mpm_render_background(&r->bg, cam, &r->ground, r->dom_lo, r->dom_hi, r->poses, na, ground);
     r->bg_key = r->opts.framing == MPM_RENDER_FRAMING_FOLLOW && !r->own_camera ? NAN : key;
   }
   const size_t pix = (size_t)r->opts.width * (size_t)r->opts.height;
@@ -52,7 +53,7 @@ static mpm_status draw_frame(mpm_renderer *r, const mpm_vtu_frame *fr, const cha
   const size_t n = (size_t)fr->point_count;
   const mpm_vtu_array *pts = mpm_vtu_frame_array(fr, "Points");
   const mpm_vtu_array *vol = mpm_vtu_frame_array(fr, "volume");
-  mpm_status st = mpm_render_field_values(fr, path, r->field, val, err);
+  mpm_status st = mpm_render_field_values(fr, path, &r->spec, val, err);
   if (st != MPM_OK) return st;
   for (size_t i = 0; i < n; ++i) {
     memcpy(xyz + 3 * i, pts->data + 3 * i, 3 * sizeof(float));
@@ -65,7 +66,7 @@ static mpm_status draw_frame(mpm_renderer *r, const mpm_vtu_frame *fr, const cha
   background(r, cam, fr->time);
   /* the shadow of every particle, those a surface stands for too */
   if (o->shadow &&
-      (st = mpm_render_ground_shadow(&r->img, cam, r->floor_y, n, xyz, rad, 0, err)) != MPM_OK)
+      (st = mpm_render_ground_shadow(&r->img, cam, &r->ground, n, xyz, rad, 0, err)) != MPM_OK)
     return st;
   /* the particle surfaces first; the particles they stand for are then left out */
   int surfaces = 0;

@@ -1,8 +1,9 @@
 /* shadow.c - pass 1b of render.h: the ground's shadow under the material.
  *
- * Light comes from straight above, so a particle's shadow falls right below it: the shadow then
- * shows where a body is over the ground and how high, which a picture without one leaves the
- * eye to guess. Two terms on a map over the ground (a grid in x and z around the particles):
+ * Light comes along the ground's normal (straight down on a level floor), so a particle's shadow
+ * falls right below it: the shadow then shows where a body is over the ground and how high,
+ * which a picture without one leaves the eye to guess. Two terms on a map over the ground (a
+ * grid in the plane's coordinates, x and z on a level floor, around the particles):
  *   - contact: particles within a few radii of the ground, blurred by about two radii: the
  *     darkening where material rests on the floor (a cheap ambient occlusion);
  *   - soft: every particle, weighted down with its height over the ground and blurred by a
@@ -63,16 +64,30 @@ static float sample(const shadow_map *m, const float *a, double x, double z) {
 }
 
 /* Build the map; 0 with nothing to do (no particles over the ground), -1 out of memory. */
-static int build(shadow_map *m, double floor_y, size_t n, const float *xyz, const float *radius,
-                 float radius_all) {
+/* Particle p in the plane's coordinates: q[0] and q[2] along its tangents, q[1] its height
+ * over it (on a level floor x, y - floor and z, in floats as the map is built). */
+static void plane_coords(const mpm_ground *g, const float *p, float q[3]) {
+  if (g->level) {
+    q[0] = p[0], q[1] = p[1] - (float)g->point[1], q[2] = p[2];
+    return;
+  }
+  const double x[3] = {p[0], p[1], p[2]};
+  double u, w;
+  mpm_ground_coords(g, x, &u, &w);
+  q[0] = (float)u, q[1] = (float)mpm_ground_height(g, x), q[2] = (float)w;
+}
+
+static int build(shadow_map *m, const mpm_ground *gr, size_t n, const float *xyz,
+                 const float *radius, float radius_all) {
   memset(m, 0, sizeof *m);
   /* plain float compares: this pass and the next are most of the shadow's time */
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  const float ground = (float)floor_y - 1e-3f;
+  const float ground = -1e-3f;
   double rsum = 0;
   size_t above = 0, sampled = 0;
   for (size_t i = 0; i < n; ++i) {
-    const float *p = xyz + 3 * i;
+    float p[3];
+    plane_coords(gr, xyz + 3 * i, p);
     if (!(p[1] >= ground) || !isfinite(p[0]) || !isfinite(p[2])) continue;
     for (int d = 0; d < 3; ++d) {
       lo[d] = p[d] < lo[d] ? p[d] : lo[d];
@@ -104,11 +119,12 @@ static int build(shadow_map *m, double floor_y, size_t n, const float *xyz, cons
   float *gap = m->contact;
   for (size_t c = 0; c < cells; ++c) gap[c] = INFINITY;
   for (size_t i = 0; i < n; ++i) {
-    const float *p = xyz + 3 * i;
+    float p[3];
+    plane_coords(gr, xyz + 3 * i, p);
     if (!(p[1] >= ground) || !isfinite(p[0]) || !isfinite(p[2])) continue;
     const int ix = (int)((p[0] - m->x0) / m->cell), iz = (int)((p[2] - m->z0) / m->cell);
     const size_t c = (size_t)iz * (size_t)m->nx + (size_t)ix;
-    const float g = p[1] - (radius ? radius[i] : radius_all) - (float)floor_y;
+    const float g = p[1] - (radius ? radius[i] : radius_all);
     if (g < gap[c]) gap[c] = g;
   }
   const double fade = extent; /* the soft shadow of a body this high is 1/e as dark */
@@ -126,11 +142,11 @@ static int build(shadow_map *m, double floor_y, size_t n, const float *xyz, cons
   return 1;
 }
 
-mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, double floor_y, size_t n,
-                                    const float *xyz, const float *radius, float radius_all,
-                                    mpm_error *err) {
+mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, const mpm_ground *ground,
+                                    size_t n, const float *xyz, const float *radius,
+                                    float radius_all, mpm_error *err) {
   shadow_map m;
-  const int built = build(&m, floor_y, n, xyz, radius, radius_all);
+  const int built = build(&m, ground, n, xyz, radius, radius_all);
   if (built < 0) {
     free(m.soft), free(m.contact), free(m.tmp);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for the ground's shadow (%dx%d)", m.nx,
@@ -143,9 +159,9 @@ mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, doubl
   double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
   int behind = 0;
   for (int k = 0; k < 4; ++k) {
-    const double p[3] = {m.x0 + (k & 1 ? m.nx : 0) * m.cell, floor_y,
-                         m.z0 + (k & 2 ? m.nz : 0) * m.cell};
-    double q[3] = {0, 0, 0};
+    double p[3], q[3] = {0, 0, 0};
+    mpm_ground_point(ground, m.x0 + (k & 1 ? m.nx : 0) * m.cell, m.z0 + (k & 2 ? m.nz : 0) * m.cell,
+                     p);
     for (int d = 0; d < 3; ++d) {
       q[0] += (p[d] - cam->eye[d]) * cam->right[d];
       q[1] += (p[d] - cam->eye[d]) * cam->up[d];
@@ -177,14 +193,15 @@ mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, doubl
       }
       nn = 1 / sqrt(nn);
       for (int d = 0; d < 3; ++d) dir[d] *= nn;
-      if (dir[1] > -1e-9) continue;
-      const double t = (floor_y - cam->eye[1]) / dir[1];
-      if (t <= 0) continue;
+      const double t = mpm_ground_hit(ground, cam->eye, dir);
+      if (!isfinite(t)) continue;
       double z = 0;
       for (int d = 0; d < 3; ++d) z += dir[d] * cam->forward[d];
       const double plane = t * z;
       if (fabs(img->depth[i] - plane) > 1e-4 * plane) continue; /* something in front */
-      const double x = cam->eye[0] + t * dir[0], zz = cam->eye[2] + t * dir[2];
+      double hit[3], x, zz;
+      for (int d = 0; d < 3; ++d) hit[d] = cam->eye[d] + t * dir[d];
+      mpm_ground_coords(ground, hit, &x, &zz);
       const float s = 0.8f * sample(&m, m.soft, x, zz) + 0.6f * sample(&m, m.contact, x, zz);
       const float dark = DARK_MAX * (s > 1 ? 1 : s);
       for (int c = 0; c < 3; ++c) img->rgb[3 * i + (size_t)c] *= 1 - dark;

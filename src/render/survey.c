@@ -26,18 +26,69 @@ static int cmp_float(const void *a, const void *b) {
   return x < y ? -1 : x > y;
 }
 
-mpm_status mpm_render_field_values(const mpm_vtu_frame *fr, const char *path, int field, float *out,
-                                   mpm_error *err) {
-  const char *name = MPM_RENDER_FIELD_NAMES[field];
+int mpm_render_field_parse(const char *text, render_field_spec *spec) {
+  static const char *const comps[] = {"x",  "y",  "z",  "xx", "xy", "xz",
+                                      "yx", "yy", "yz", "zx", "zy", "zz"};
+  const size_t len = text ? strlen(text) : 0;
+  if (len == 0 || len >= sizeof spec->array) return -1;
+  spec->field = MPM_RENDER_FIELD_ARRAY;
+  spec->component = -1;
+  snprintf(spec->label, sizeof spec->label, "%s", text);
+  snprintf(spec->array, sizeof spec->array, "%s", text);
+  char *dot = strrchr(spec->array, '.');
+  if (dot && dot != spec->array)
+    for (int k = 0; k < 12; ++k)
+      if (!strcmp(dot + 1, comps[k])) {
+        spec->component = k < 3 ? k : k - 3;
+        *dot = '\0';
+        /* .x .. .z name a vector's components, .xx .. .zz a tensor's (9 + k - 3 >= 9) */
+        if (k >= 3) spec->component += 100;
+        break;
+      }
+  return 0;
+}
+
+/* The frame's arrays by name, for a message: "velocity, mass, J". */
+static void array_names(const mpm_vtu_frame *fr, char *buf, size_t cap) {
+  size_t at = 0;
+  buf[0] = '\0';
+  for (int k = 0; k < fr->array_count && at < cap; ++k) {
+    if (!strcmp(fr->arrays[k].name, "Points")) continue;
+    at += (size_t)snprintf(buf + at, cap - at, "%s%s", at ? ", " : "", fr->arrays[k].name);
+  }
+}
+
+mpm_status mpm_render_field_values(const mpm_vtu_frame *fr, const char *path,
+                                   const render_field_spec *spec, float *out, mpm_error *err) {
+  const int field = spec->field, array = field == MPM_RENDER_FIELD_ARRAY;
+  const char *name = array ? spec->array : MPM_RENDER_FIELD_NAMES[field];
   const mpm_vtu_array *a = mpm_vtu_frame_array(fr, name);
-  if (!a)
-    return mpm_error_set(err, MPM_ERR_INVALID, "%s: the frames have no '%s' array", path, name);
+  if (!a || !strcmp(name, "Points")) {
+    char have[1024];
+    array_names(fr, have, sizeof have);
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: the frames have no '%s' array (they have: %s%s)", path, name, have,
+                         array ? "; output.fields lists what a run writes" : "");
+  }
+  const int nc = a->components;
+  if (array && spec->component >= 0) {
+    const int tensor = spec->component >= 100, c = spec->component % 100;
+    if ((tensor && nc != 9) || (!tensor && nc != 3))
+      return mpm_error_set(err, MPM_ERR_INVALID,
+                           "%s: '%s' has %d component%s: no component '%s' (a vector's are .x .y "
+                           ".z, a tensor's .xx .. .zz)",
+                           path, name, nc, nc == 1 ? "" : "s", spec->label + strlen(name) + 1);
+    for (long i = 0; i < fr->point_count; ++i) out[i] = a->data[(size_t)nc * (size_t)i + (size_t)c];
+    return MPM_OK;
+  }
   for (long i = 0; i < fr->point_count; ++i) {
-    if (field == MPM_RENDER_FIELD_VELOCITY) {
-      const float *v = a->data + 3 * i;
-      out[i] = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    } else {
+    if (nc == 1) {
       out[i] = a->data[i];
+    } else { /* the magnitude: |v| for a vector (the speed), the Frobenius norm for a tensor */
+      const float *v = a->data + (size_t)nc * (size_t)i;
+      float m = 0;
+      for (int c = 0; c < nc; ++c) m += v[c] * v[c];
+      out[i] = sqrtf(m);
     }
   }
   return MPM_OK;
@@ -75,9 +126,11 @@ static mpm_status read_frame(const char *dir, int k, mpm_vtu_frame *fr, char *pa
   return mpm_read_vtu(path, fr, err);
 }
 
-/* One sampled frame (read from path) into sv; field < 0: the speed's range. */
-static mpm_status survey_frame(int field_asked, const mpm_vtu_frame *fr, const char *path,
-                               render_survey *sv, mpm_error *err) {
+/* One sampled frame (read from path) into sv; field AUTO: the speed's range. */
+static mpm_status survey_frame(const render_field_spec *asked, const mpm_vtu_frame *fr,
+                               const char *path, render_survey *sv, mpm_error *err) {
+  const int field_asked = asked->field;
+  const render_field_spec speed = {MPM_RENDER_FIELD_VELOCITY, "", -1, ""};
   double lo[3], hi[3];
   mpm_render_frame_box(fr, lo, hi);
   for (int d = 0; d < 3; ++d)
@@ -96,7 +149,7 @@ static mpm_status survey_frame(int field_asked, const mpm_vtu_frame *fr, const c
   mpm_status st;
   const int field = field_asked < 0 ? MPM_RENDER_FIELD_VELOCITY : field_asked;
   if (field_asked < 0 || field_asked == MPM_RENDER_FIELD_VELOCITY) {
-    if ((st = mpm_render_field_values(fr, path, MPM_RENDER_FIELD_VELOCITY, v, err)) != MPM_OK) {
+    if ((st = mpm_render_field_values(fr, path, &speed, v, err)) != MPM_OK) {
       free(v);
       return st;
     }
@@ -105,7 +158,7 @@ static mpm_status survey_frame(int field_asked, const mpm_vtu_frame *fr, const c
   }
   if (field != MPM_RENDER_FIELD_MATERIAL && field != MPM_RENDER_FIELD_BODY) {
     if (field != MPM_RENDER_FIELD_VELOCITY) {
-      if ((st = mpm_render_field_values(fr, path, field, v, err)) != MPM_OK) {
+      if ((st = mpm_render_field_values(fr, path, asked, v, err)) != MPM_OK) {
         free(v);
         return st;
       }
@@ -118,8 +171,8 @@ static mpm_status survey_frame(int field_asked, const mpm_vtu_frame *fr, const c
   return MPM_OK;
 }
 
-mpm_status mpm_render_survey(const char *dir, int field, int every, const int *frames, int nf,
-                             render_survey *sv, mpm_error *err) {
+mpm_status mpm_render_survey(const char *dir, const render_field_spec *field, int every,
+                             const int *frames, int nf, render_survey *sv, mpm_error *err) {
   memset(sv, 0, sizeof *sv);
   for (int d = 0; d < 3; ++d) sv->lo[d] = INFINITY, sv->hi[d] = -INFINITY;
   sv->uniform_speed = 1;
