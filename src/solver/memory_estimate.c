@@ -13,7 +13,7 @@
  * vol0, plastic, temperature: 4 reals; material, body, level, id: 4 x 4 bytes), the sort's
  * permutation, keys and scratch (about 16 bytes), and the sparse grid blocks the particles
  * occupy (about 20% on top for 8 particles per cell). Measured: 157 bytes per particle in the
- * float build before xc and temperature (README, `mpm bench step`). */
+ * float build before xc and temperature (docs/performance.md, `mpm bench step`). */
 #define BYTES_PER_PARTICLE (1.2 * (31.0 * (double)sizeof(mpm_real) + 16 + 16))
 
 /* The implicit step's scratch per particle: the factored stress derivative (30 reals), F at the
