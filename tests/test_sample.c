@@ -473,6 +473,83 @@ static void test_open_cube_falls_back_to_winding_number(void **state) {
   fixture_free(&open);
 }
 
+/* Boxes (centre, half side) as one OBJ, each as 12 triangles wound outwards, or inwards where
+ * reversed[k]. */
+static void write_boxes_obj(const char *path, int count, const double (*c)[4], const int *reversed) {
+  FILE *fp = fopen(path, "w");
+  assert_non_null(fp);
+  for (int k = 0; k < count; ++k)
+    for (int i = 0; i < 8; ++i)
+      fprintf(fp, "v %.17g %.17g %.17g\n", c[k][0] + (cube_v[i][0] - 0.5) * 2 * c[k][3],
+              c[k][1] + (cube_v[i][1] - 0.5) * 2 * c[k][3],
+              c[k][2] + (cube_v[i][2] - 0.5) * 2 * c[k][3]);
+  for (int k = 0; k < count; ++k)
+    for (int f = 0; f < 6; ++f) {
+      const int *q = cube_f[f], o = 8 * k + 1;
+      if (reversed[k])
+        fprintf(fp, "f %d %d %d %d\n", q[3] + o, q[2] + o, q[1] + o, q[0] + o);
+      else
+        fprintf(fp, "f %d %d %d %d\n", q[0] + o, q[1] + o, q[2] + o, q[3] + o);
+    }
+  fclose(fp);
+}
+
+/* Particles of a mesh body (file path, scale 1, centred at the origin of the file): the count,
+ * or -1 with the message in msg. */
+static long mesh_particles(const char *path, char *msg, size_t cap) {
+  fixture f;
+  fixture_init(&f);
+  f.body.shape.kind = MPM_SHAPE_MESH;
+  for (int d = 0; d < 3; ++d) f.body.shape.center[d] = 0.5;
+  snprintf(f.body.shape.mesh_path, sizeof f.body.shape.mesh_path, "%s", path);
+  const mpm_status st = mpm_sample_body(&f.scene, 0, &f.p, &f.err);
+  snprintf(msg, cap, "%s", f.err.message);
+  const long n = st == MPM_OK ? (long)f.p.count : -1;
+  fixture_free(&f);
+  return n;
+}
+
+/* Several shells in one mesh. Two boxes that overlap (or one inside another wound the same way)
+ * were sampled by parity, leaving the overlap hollow: they are refused, naming the face. A box
+ * inside another wound the other way is a hollow body: the outer box's particles less the
+ * inner's. Two boxes that touch along a face are both filled. */
+static void test_mesh_shells(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("sample-shells");
+  char path[600], msg[1024];
+  const double one[1][4] = {{0, 0, 0, 0.2}}, inner[1][4] = {{0, 0, 0, 0.1}};
+  const int fwd[2] = {0, 0}, hollow_rev[2] = {0, 1};
+  snprintf(path, sizeof path, "%s/one.obj", dir);
+  write_boxes_obj(path, 1, one, fwd);
+  const long n_outer = mesh_particles(path, msg, sizeof msg);
+  write_boxes_obj(path, 1, inner, fwd);
+  const long n_inner = mesh_particles(path, msg, sizeof msg);
+  assert_true(n_outer > 0 && n_inner > 0);
+  const double nested[2][4] = {{0, 0, 0, 0.2}, {0, 0, 0, 0.1}};
+  snprintf(path, sizeof path, "%s/hollow.obj", dir);
+  write_boxes_obj(path, 2, nested, hollow_rev);
+  const long n_hollow = mesh_particles(path, msg, sizeof msg);
+  print_message("outer %ld, inner %ld, hollow %ld particles\n", n_outer, n_inner, n_hollow);
+  assert_int_equal(n_hollow, n_outer - n_inner);
+  snprintf(path, sizeof path, "%s/nested_same.obj", dir);
+  write_boxes_obj(path, 2, nested, fwd);
+  assert_int_equal(mesh_particles(path, msg, sizeof msg), -1);
+  assert_contains(msg, "has shells that overlap");
+  const double overlap[2][4] = {{0, 0, 0, 0.2}, {0.1, 0.07, 0.05, 0.2}};
+  snprintf(path, sizeof path, "%s/overlap.obj", dir);
+  write_boxes_obj(path, 2, overlap, fwd);
+  assert_int_equal(mesh_particles(path, msg, sizeof msg), -1);
+  print_message("%s\n", msg);
+  assert_contains(msg, "overlap.obj' has shells that overlap");
+  assert_contains(msg, "is inside two of them (the face at line ");
+  const double touch[2][4] = {{-0.2, 0, 0, 0.2}, {0.2, 0, 0, 0.2}};
+  snprintf(path, sizeof path, "%s/touch.obj", dir);
+  write_boxes_obj(path, 2, touch, fwd);
+  const long n_touch = mesh_particles(path, msg, sizeof msg);
+  if (n_touch < 0) fail_msg("touching boxes refused: %s", msg);
+  assert_int_equal(n_touch, 2 * n_outer);
+}
+
 static void test_torus_inside(void **state) {
   (void)state;
   mpm_mesh mesh;
@@ -704,6 +781,7 @@ int main(void) {
       cmocka_unit_test(test_sampling_errors),
       cmocka_unit_test(test_cube_obj_and_ply),
       cmocka_unit_test(test_open_cube_falls_back_to_winding_number),
+      cmocka_unit_test(test_mesh_shells),
       cmocka_unit_test(test_torus_inside),
       cmocka_unit_test(test_bunny),
       cmocka_unit_test(test_malformed_files),

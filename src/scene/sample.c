@@ -86,13 +86,20 @@ static int orient2d_sos(const double a[2], const double b[2], const double q[2])
 
 /* ---- the mesh column caster -------------------------------------------------------------- */
 
+/* A crossing of a column's ray: where, which triangle, and which way it faces (the sign of its
+ * normal's x: the ray leaves a correctly wound shell through +1 and enters it through -1). */
+typedef struct column_hit {
+  double x;
+  int t, side;
+} column_hit;
+
 typedef struct mesh_columns {
   const mpm_mesh *mesh;
   double y0, z0, h; /* position of column (0, 0) and the spacing */
   long nj, nk;      /* columns along y and z */
   size_t *start;    /* CSR: triangles of column (j, k) are tri[start[c] .. start[c + 1]) */
   int *tri;
-  double *hits; /* scratch for one column's crossings */
+  struct column_hit *hits; /* scratch for one column's crossings */
 } mesh_columns;
 
 static void columns_free(mesh_columns *mc) {
@@ -158,19 +165,21 @@ static int columns_build(mesh_columns *mc, const mpm_mesh *m, double y0, double 
   return 0;
 }
 
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
+static int cmp_hit(const void *a, const void *b) {
+  const column_hit *p = a, *q = b;
+  return (p->x > q->x) - (p->x < q->x);
 }
 
-/* Where the +x ray through q = (y, z) crosses triangle t, or NAN when it does not. */
-static double ray_cross(const mpm_mesh *m, int t, const double q[2]) {
+/* Where the +x ray through q = (y, z) crosses triangle t, or NAN when it does not; *side is
+ * the triangle's facing seen along the ray (the exact sign of its projected orientation). */
+static double ray_cross(const mpm_mesh *m, int t, const double q[2], int *side) {
   const int *v = &m->triangles[3 * t];
   const double *A = &m->vertices[3 * v[0]], *B = &m->vertices[3 * v[1]],
                *C = &m->vertices[3 * v[2]];
   const double a[2] = {A[1], A[2]}, b[2] = {B[1], B[2]}, c[2] = {C[1], C[2]};
   int s0 = orient2d_sos(b, c, q), s1 = orient2d_sos(c, a, q), s2 = orient2d_sos(a, b, q);
   if (s0 == 0 || s0 != s1 || s1 != s2) return NAN;
+  *side = s0;
   /* barycentric weights from the (inexact) sub-areas, for the crossing's x only */
   double w0 = (b[0] - q[0]) * (c[1] - q[1]) - (b[1] - q[1]) * (c[0] - q[0]);
   double w1 = (c[0] - q[0]) * (a[1] - q[1]) - (c[1] - q[1]) * (a[0] - q[0]);
@@ -181,30 +190,46 @@ static double ray_cross(const mpm_mesh *m, int t, const double q[2]) {
   return fmin(fmax(x, lo), hi);
 }
 
-/* inside[i] for the lattice points x0 + i h, i < ni, of column (j, k). */
-static void columns_fill(mesh_columns *mc, long j, long k, double x0, long ni,
-                         unsigned char *inside) {
+/* inside[i] for the lattice points x0 + i h, i < ni, of column (j, k). Returns -1, or the
+ * crossing where the ray enters a second shell while inside one (shells that overlap, or a shell
+ * through itself: parity would leave the overlap hollow, so the caller refuses the mesh), with
+ * *at its x. Nested shells wound opposite ways (a hollow body) never do: their windings
+ * cancel. */
+static int columns_fill(mesh_columns *mc, long j, long k, double x0, long ni,
+                        unsigned char *inside, double *at) {
   const mpm_mesh *m = mc->mesh;
   const double q[2] = {mc->y0 + (double)j * mc->h, mc->z0 + (double)k * mc->h};
   const size_t c = (size_t)k * (size_t)mc->nj + (size_t)j;
   size_t nh = 0;
   for (size_t e = mc->start[c]; e < mc->start[c + 1]; ++e) {
-    double x = ray_cross(m, mc->tri[e], q);
-    if (!isnan(x)) mc->hits[nh++] = x;
+    int side = 0;
+    const double x = ray_cross(m, mc->tri[e], q, &side);
+    if (!isnan(x)) mc->hits[nh++] = (column_hit){x, mc->tri[e], side};
   }
   memset(inside, 0, (size_t)ni);
-  if (nh == 0) return;
-  qsort(mc->hits, nh, sizeof *mc->hits, cmp_double);
+  if (nh == 0) return -1;
+  qsort(mc->hits, nh, sizeof *mc->hits, cmp_hit);
+  /* the winding number after each crossing; crossings at one x (two shells that touch along a
+     face) count together, so that leaving one and entering the other is not an overlap */
+  int winding = 0;
+  for (size_t h2 = 0; h2 < nh; ++h2) {
+    winding += mc->hits[h2].side;
+    if (h2 + 1 < nh && mc->hits[h2 + 1].x == mc->hits[h2].x) continue;
+    if (winding > 1 || winding < -1) {
+      *at = mc->hits[h2].x;
+      return mc->hits[h2].t;
+    }
+  }
   if (nh % 2 == 0) {
     for (size_t h2 = 0; h2 < nh; h2 += 2) {
-      double xa = mc->hits[h2], xb = mc->hits[h2 + 1];
+      double xa = mc->hits[h2].x, xb = mc->hits[h2 + 1].x;
       long ia = (long)ceil((xa - x0) / mc->h) - 1, ib = (long)floor((xb - x0) / mc->h) + 1;
       for (long i = ia < 0 ? 0 : ia; i <= ib && i < ni; ++i) {
         double x = x0 + (double)i * mc->h;
         if (x > xa && x < xb) inside[i] = 1;
       }
     }
-    return;
+    return -1;
   }
   /* Odd count: the ray passes a hole, and parity means nothing on this column. Each point
    * gets the generalized winding number (the value jumps across a hole too, so one value per
@@ -215,9 +240,28 @@ static void columns_fill(mesh_columns *mc, long j, long k, double x0, long ni,
     const double p[3] = {x0 + (double)i * mc->h, q[0], q[1]};
     inside[i] = (unsigned char)mpm_mesh_inside(m, p);
   }
+  return -1;
 }
 
 /* ---- shapes --------------------------------------------------------------------------- */
+
+/* The refusal of a mesh whose shells overlap: where the ray found it and the face's line. */
+static mpm_status overlapping_shells(const mpm_scene *scene, int bi, const mpm_mesh *mesh, int t,
+                                     double x, double y, double z, mpm_error *err) {
+  const mpm_body_desc *body = &scene->bodies[bi];
+  char face[96] = "";
+  if (mesh->triangle_source)
+    snprintf(face, sizeof face, " (the face at %s %d)",
+             mesh->source_is_line ? "line" : "face element", mesh->triangle_source[t]);
+  return mpm_error_set(err, MPM_ERR_INVALID,
+                       "%s: bodies[%d].shape.file: mesh file '%s' has shells that overlap (or a "
+                       "shell that passes through itself): the point (%g, %g, %g) is inside two "
+                       "of them%s, and inside and outside are ambiguous there; join overlapping "
+                       "shells into one closed surface (a boolean union), and wind a shell inside "
+                       "another the other way round to leave it hollow",
+                       scene->path[0] ? scene->path : "scene", bi, body->shape.mesh_path, x, y, z,
+                       face);
+}
 
 typedef struct shape_ctx {
   const mpm_shape_desc *s;
@@ -463,7 +507,12 @@ mpm_status mpm_sample_body_kept(const mpm_scene *scene, int bi, double scale,
       x[2] = dmin[2] + ((double)(i0[2] + k) + 0.5) * h;
       const double x0 = dmin[0] + ((double)i0[0] + 0.5) * h;
       if (is_mesh) {
-        columns_fill(&sc.columns, j, k, x0, n[0], inside);
+        double at = 0;
+        const int t = columns_fill(&sc.columns, j, k, x0, n[0], inside, &at);
+        if (t >= 0) {
+          st = overlapping_shells(scene, bi, &sc.mesh, t, at, x[1], x[2], err);
+          goto done;
+        }
       } else {
         for (long i = 0; i < n[0]; ++i) {
           x[0] = dmin[0] + ((double)(i0[0] + i) + 0.5) * h;
