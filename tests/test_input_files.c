@@ -63,6 +63,57 @@ static void test_fifo_scene_and_mesh(void **state) {
   expect_output("a FIFO (named pipe)");
 }
 
+/* A mesh file is capped as a scene is (64 MiB): a 2 GiB file (sparse: no disk used) is refused
+ * by its size before it is read, naming the size, the limit and the key; the shape's
+ * max_file_mb lowers or raises the cap (a small cube refused under 0.0001 MiB, read under the
+ * default). */
+static void test_mesh_size_cap(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("mesh-cap");
+  char mesh[600], scene[600], text[1400], shape[800], args[2000];
+  snprintf(mesh, sizeof mesh, "%s/huge.obj", dir);
+  FILE *f = fopen(mesh, "w");
+  assert_non_null(f);
+  fputs("v 0 0 0\n", f);
+  fclose(f);
+  assert_int_equal(truncate(mesh, 2048L * 1024 * 1024), 0);
+  snprintf(shape, sizeof shape,
+           "{\"type\": \"mesh\", \"file\": \"%s\", \"center\": [0.5,0.5,0.5], \"scale\": 0.3}",
+           mesh);
+  snprintf(text, sizeof text, SCENE, shape);
+  snprintf(scene, sizeof scene, "%s/huge.json", dir);
+  write_file(scene, text);
+  snprintf(args, sizeof args, "check '%s'", scene);
+  assert_int_equal(mpm_timed(args), 2);
+  expect_output("bodies[0].shape.file");
+  expect_output("the file is 2048.0 MiB, more than the 64 MiB a mesh file may be");
+  expect_output("max_file_mb");
+  /* a closed cube of 12 triangles */
+  snprintf(mesh, sizeof mesh, "%s/cube.obj", dir);
+  write_file(mesh, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                   "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n");
+  const char *caps[2] = {", \"max_file_mb\": 0.0001", ""};
+  for (int k = 0; k < 2; ++k) {
+    snprintf(shape, sizeof shape,
+             "{\"type\": \"mesh\", \"file\": \"%s\", \"center\": [0.5,0.5,0.5], "
+             "\"scale\": 0.3%s}",
+             mesh, caps[k]);
+    snprintf(text, sizeof text, SCENE, shape);
+    snprintf(scene, sizeof scene, "%s/cube%d.json", dir, k);
+    write_file(scene, text);
+    snprintf(args, sizeof args, "check '%s'", scene);
+    assert_int_equal(mpm_timed(args), k ? 0 : 2);
+    if (!k) expect_output("more than the 0.0001 MiB a mesh file may be");
+  }
+  /* a box has no file to cap */
+  snprintf(shape, sizeof shape, "{\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
+                                "\"half_extent\": [0.2,0.2,0.2], \"max_file_mb\": 100}");
+  snprintf(text, sizeof text, SCENE, shape);
+  write_file(scene, text);
+  assert_int_equal(mpm_timed(args), 2);
+  expect_output("max_file_mb");
+}
+
 /* A run's folder with FIFOs where a checkpoint, a frame and stats.csv would be. */
 static void test_fifo_in_a_run_folder(void **state) {
   (void)state;
@@ -101,6 +152,7 @@ static void test_fifo_in_a_run_folder(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_fifo_scene_and_mesh),
+      cmocka_unit_test(test_mesh_size_cap),
       cmocka_unit_test(test_fifo_in_a_run_folder),
   };
   return test_cleanup(cmocka_run_group_tests_name("input_files", tests, NULL, NULL));

@@ -112,7 +112,7 @@ static mpm_scene_def full_def(void) {
   b[2].shape.axis[0] = 1, b[2].shape.axis[1] = 0, b[2].shape.axis[2] = 1;
   b[3].name = "torus", b[3].material = 3, b[3].domains = 1;
   b[3].shape = mpm_shape_def_default(MPM_DEF_MESH);
-  b[3].shape.file = "meshes/torus.obj", b[3].shape.scale = 0.03;
+  b[3].shape.file = "meshes/torus.obj", b[3].shape.scale = 0.03, b[3].shape.max_file_mb = 8;
   b[3].shape.center[0] = 0.1, b[3].shape.center[1] = 0.45, b[3].shape.center[2] = 0.2;
 
   mpm_collider_def *c = full_colliders;
@@ -176,7 +176,8 @@ static const char *const full_json =
     "  {\"shape\": {\"type\": \"cylinder\", \"center\": [0.3, 0.15, 0.2], \"radius\": 0.04,"
     "   \"half_height\": 0.03, \"axis\": [1, 0, 1]}, \"material\": \"sand\"},"
     "  {\"name\": \"torus\", \"shape\": {\"type\": \"mesh\", \"file\": \"meshes/torus.obj\","
-    "   \"center\": [0.1, 0.45, 0.2], \"scale\": 0.03}, \"material\": \"material3\","
+    "   \"center\": [0.1, 0.45, 0.2], \"scale\": 0.03, \"max_file_mb\": 8},"
+    "   \"material\": \"material3\","
     "   \"domains\": true}],"
     " \"colliders\": ["
     "  {\"name\": \"floor\", \"shape\": {\"type\": \"halfspace\", \"point\": [0, 0.12, 0],"

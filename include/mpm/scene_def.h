@@ -157,6 +157,8 @@ typedef struct mpm_shape_def {
      of 3..32 points; the caller's array; required: default NULL, 0 (refused) */
   const double (*profile)[2];
   int profile_count;
+  double max_file_mb; /* shape.max_file_mb (mesh): the largest mesh file read, MiB, (0, 2^20];
+                         default 64 */
 } mpm_shape_def;
 
 /// A material (materials[i]). The keys of one model only (friction_angle...) are written for

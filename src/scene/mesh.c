@@ -59,8 +59,9 @@ static mpm_status oom(mpm_error *err, const char *path) {
   return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory reading the mesh", path);
 }
 
-/* Whole file, NUL-terminated, allocated with mpm_alloc. */
-static mpm_status read_whole_file(const char *path, char **out, size_t *len, mpm_error *err) {
+/* Whole file, NUL-terminated, allocated with mpm_alloc; refused when over max_bytes. */
+static mpm_status read_whole_file(const char *path, double max_bytes, char **out, size_t *len,
+                                  mpm_error *err) {
   char why[128];
   FILE *f = mpm_open_input(path, NULL, why, sizeof why);
   if (!f) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open mesh: %s", path, why);
@@ -70,6 +71,14 @@ static mpm_status read_whole_file(const char *path, char **out, size_t *len, mpm
   if (size < 0 || fseek(f, 0, SEEK_SET) != 0) {
     fclose(f);
     return mpm_error_set(err, MPM_ERR_IO, "%s: cannot determine the file size", path);
+  }
+  if ((double)size > max_bytes) {
+    fclose(f);
+    return mpm_error_set(err, MPM_ERR_INVALID,
+                         "%s: the file is %.1f MiB, more than the %g MiB a mesh file may be "
+                         "(it is read whole into memory); raise the shape's max_file_mb to "
+                         "read it",
+                         path, (double)size / (1024.0 * 1024.0), max_bytes / (1024.0 * 1024.0));
   }
   buf = mpm_alloc((size_t)size + 1);
   if (!buf) {
@@ -670,6 +679,10 @@ static mpm_status parse_text(char *text, size_t len, mpm_mesh_format format, con
 }
 
 mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err) {
+  return mpm_mesh_load_max(path, INFINITY, mesh, err);
+}
+
+mpm_status mpm_mesh_load_max(const char *path, double max_bytes, mpm_mesh *mesh, mpm_error *err) {
   memset(mesh, 0, sizeof *mesh);
   int is_obj = ends_with_ci(path, ".obj"), is_ply = ends_with_ci(path, ".ply");
   if (!is_obj && !is_ply)
@@ -677,7 +690,7 @@ mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err) {
                          "%s: unknown mesh format, expected a file ending in .obj or .ply", path);
   char *text = NULL;
   size_t len = 0;
-  mpm_status st = read_whole_file(path, &text, &len, err);
+  mpm_status st = read_whole_file(path, max_bytes, &text, &len, err);
   if (st != MPM_OK) return st;
   return parse_text(text, len, is_obj ? MPM_MESH_OBJ : MPM_MESH_PLY, path, mesh, err);
 }

@@ -30,6 +30,10 @@ typedef struct mpm_mesh {
 /// names the file and the line (OBJ, PLY header and ascii data) or element, and what was
 /// expected. A mesh without triangles is an error (MPM_ERR_PARSE). mesh is owned by the caller.
 mpm_status mpm_mesh_load(const char *path, mpm_mesh *mesh, mpm_error *err);
+/// The same, refusing a file of more than max_bytes (it is read whole into memory, so a 2 GB
+/// file would be before anything else could refuse it) with MPM_ERR_INVALID naming its size,
+/// the limit and the key max_file_mb that raises it.
+mpm_status mpm_mesh_load_max(const char *path, double max_bytes, mpm_mesh *mesh, mpm_error *err);
 
 /// The file formats mpm_mesh_parse reads.
 typedef enum mpm_mesh_format {

@@ -361,7 +361,8 @@ static mpm_status shape_prepare(const mpm_scene *scene, int bi, shape_ctx *sc, d
     mpm_scene_mesh_file(scene, s->mesh_path, path, sizeof path);
     mpm_error merr;
     mpm_error_clear(&merr);
-    mpm_status st = mpm_mesh_load(path, &sc->mesh, &merr);
+    const double max_mb = s->mesh_max_mb > 0 ? s->mesh_max_mb : MPM_MESH_MAX_MB;
+    mpm_status st = mpm_mesh_load_max(path, max_mb * 1024 * 1024, &sc->mesh, &merr);
     if (st != MPM_OK)
       return mpm_error_set(err, st, "%s: bodies[%d].shape.mesh_path: %s", file, bi, merr.message);
     double mlo[3], mhi[3];

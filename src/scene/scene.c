@@ -18,6 +18,7 @@ static mpm_shape_desc shape_default(mpm_shape_kind kind) {
   s.axis[1] = 1.0; /* cylinder axis / half-space normal: +y */
   s.half_height = 0.0;
   s.mesh_scale = 1.0;
+  s.mesh_max_mb = MPM_MESH_MAX_MB;
   return s;
 }
 

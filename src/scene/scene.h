@@ -13,6 +13,8 @@
 #include <stdint.h>
 
 #define MPM_NAME_MAX 64
+/* The largest mesh file read unless a shape's max_file_mb says more, MiB: as scenes are. */
+#define MPM_MESH_MAX_MB 64
 #define MPM_PATH_MAX 1024
 
 typedef enum mpm_kernel_kind {
@@ -110,6 +112,7 @@ typedef struct mpm_shape_desc {
      that puts that centre at `center` */
   char mesh_path[MPM_PATH_MAX];
   double mesh_scale;
+  double mesh_max_mb; /* the largest mesh file read, MiB (key max_file_mb; default 64) */
   double bounds_lo[3], bounds_hi[3]; /* bodies: the shape's bounding box, set by the loader */
   /* revolve: points (radius, height along axis from center), m, from the axis back to the
      axis (first and last radius 0); the solid is the region the polyline encloses with the

@@ -32,6 +32,7 @@ mpm_shape_def mpm_shape_def_default(mpm_def_shape_type type) {
   s.axis[1] = 1.0; /* scene.c's shape default: cylinder axis +y */
   s.scale = 1.0;
   s.normal[1] = 1.0;
+  s.max_file_mb = 64; /* MPM_MESH_MAX_MB */
   return s;
 }
 

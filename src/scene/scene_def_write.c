@@ -193,13 +193,14 @@ enum {
   F_POINT = 1 << 7,
   F_NORMAL = 1 << 8,
   F_PROFILE = 1 << 9,
+  F_MAX_FILE = 1 << 10,
 };
 /* The fields of each mpm_def_shape_type: its keys in the format. */
 static const unsigned SHAPE_FIELDS[] = {
     F_CENTER | F_HALF_EXTENT,                     /* box */
     F_CENTER | F_RADIUS,                          /* sphere */
     F_CENTER | F_RADIUS | F_AXIS | F_HALF_HEIGHT, /* cylinder */
-    F_FILE | F_CENTER | F_SCALE,                  /* mesh */
+    F_FILE | F_CENTER | F_SCALE | F_MAX_FILE,     /* mesh */
     F_POINT | F_NORMAL,                           /* halfspace */
     F_CENTER | F_AXIS | F_PROFILE,                /* revolve */
 };
@@ -226,6 +227,7 @@ static int write_shape(mpm_def_writer *w, const char *path, const mpm_shape_def 
       {F_POINT, "point", !mpm_def_vec3_equal(s->point, d.point)},
       {F_NORMAL, "normal", !mpm_def_vec3_equal(s->normal, d.normal)},
       {F_PROFILE, "profile", s->profile != NULL || s->profile_count != 0},
+      {F_MAX_FILE, "max_file_mb", s->max_file_mb != d.max_file_mb},
   };
   for (size_t k = 0; k < sizeof fields / sizeof fields[0]; ++k)
     if (!(has & fields[k].bit) && fields[k].changed)
@@ -247,6 +249,8 @@ static int write_shape(mpm_def_writer *w, const char *path, const mpm_shape_def 
   if (has & F_POINT) mpm_def_add_vec3(w, o, "point", s->point);
   if (has & F_NORMAL) mpm_def_add_vec3(w, o, "normal", s->normal);
   if (has & F_PROFILE) mpm_def_add_pairs(w, o, "profile", s->profile, s->profile_count);
+  if ((has & F_MAX_FILE) && s->max_file_mb != d.max_file_mb)
+    mpm_def_add_number(w, o, "max_file_mb", s->max_file_mb);
   return 0;
 }
 

@@ -48,7 +48,7 @@ static const char *const BOX_KEYS[] = {"type", "center", "half_extent", NULL};
 static const char *const SPHERE_KEYS[] = {"type", "center", "radius", NULL};
 static const char *const CYLINDER_KEYS[] = {"type", "center",      "radius",
                                             "axis", "half_height", NULL};
-static const char *const MESH_KEYS[] = {"type", "file", "center", "scale", NULL};
+static const char *const MESH_KEYS[] = {"type", "file", "center", "scale", "max_file_mb", NULL};
 static const char *const HALFSPACE_KEYS[] = {"type", "point", "normal", NULL};
 static const char *const REVOLVE_KEYS[] = {"type", "center", "axis", "profile", NULL};
 
@@ -102,7 +102,8 @@ static int mesh_bounds(mpm_json_ctx *c, mpm_shape_desc *sh, double lo[3], double
   memset(&mesh, 0, sizeof mesh);
   mpm_error merr;
   mpm_error_clear(&merr);
-  mpm_status st = mpm_mesh_load(sh->mesh_path, &mesh, &merr);
+  const double max_mb = sh->mesh_max_mb > 0 ? sh->mesh_max_mb : MPM_MESH_MAX_MB;
+  mpm_status st = mpm_mesh_load_max(sh->mesh_path, max_mb * 1024 * 1024, &mesh, &merr);
   if (st != MPM_OK)
     return mpm_json_fail_at(c, "file", st, "cannot use mesh file '%s': %s", sh->mesh_path,
                             merr.message);
@@ -304,7 +305,10 @@ static int parse_shape(mpm_json_ctx *c, const cJSON *parent, int for_body, const
     if (mpm_json_check_keys(c, n, MESH_KEYS, "for a mesh shape") < 0 ||
         mpm_json_string(c, n, "file", 1, file, sizeof file) < 0 ||
         mpm_json_vec3(c, n, "center", 1, any_m, sh->center) < 0 ||
-        mpm_json_number(c, n, "scale", 0, mpm_json_gt(0, "factor"), &sh->mesh_scale) < 0)
+        mpm_json_number(c, n, "scale", 0, mpm_json_gt(0, "factor"), &sh->mesh_scale) < 0 ||
+        mpm_json_number(c, n, "max_file_mb", 0,
+                        mpm_json_in('(', 0, 1048576, ']', "MiB, the largest mesh file read"),
+                        &sh->mesh_max_mb) < 0)
       return -1;
     if (resolve_path(scene_path, file, sh->mesh_path, sizeof sh->mesh_path) < 0)
       return mpm_json_fail_at(c, "file", MPM_ERR_INVALID,

@@ -88,7 +88,7 @@ mkdir "$tmp/consumer"
 cat >"$tmp/consumer/CMakeLists.txt" <<CMAKE
 cmake_minimum_required(VERSION 3.20)
 project(consumer C)
-find_package(mpm 0.2 REQUIRED)
+find_package(mpm 0.3 REQUIRED)
 message(STATUS "mpm \${mpm_VERSION}, \${mpm_REAL_TYPE} reals")
 add_executable(embed_shared "$src/examples/embed.c")
 target_link_libraries(embed_shared PRIVATE mpm::mpm)
