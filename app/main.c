@@ -26,8 +26,10 @@ static const usage_section SECTIONS[] = {
      "frames;\n"
      "      --render then runs `mpm render DIR`; --quiet prints no progress;\n"
      "      Ctrl-C or SIGTERM writes a checkpoint and stops (exit 130 or 143)\n"},
-    {"check", "  mpm check SCENE.json\n"
-              "      validate a scene only: nothing is simulated or written\n"},
+    {"check", "  mpm check SCENE.json [--sample]\n"
+              "      validate a scene only: nothing is simulated or written; a scene of more\n"
+              "      than 5 million particles is answered from the bodies' volumes without\n"
+              "      sampling them (--sample: sample them too, checking their placement)\n"},
     {"bench", "  mpm bench transfer [--threads LIST] [--repeats N] [--kernel K] [--grid G]\n"
               "                     [--spacing-scale S] [--levels N]\n"
               "      Gao et al. 2017 Table 1 transfer benchmark (P2G and G2P ns per particle);\n"

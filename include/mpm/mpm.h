@@ -272,6 +272,34 @@ typedef struct mpm_sim_info {
 
 MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size);
 
+/// What a scene will need, from its description alone: its bodies are not sampled, so a scene
+/// of 10^8 particles is answered in a moment and without its memory (`mpm check` on a large
+/// scene). Filled by mpm_scene_estimate_file; members are only added at the end, as
+/// mpm_sim_info's.
+typedef struct mpm_scene_estimate {
+  double particles;    /* expected: each body's volume (a mesh's enclosed volume) over its
+                          particle spacing cubed, and on a multi-level grid the refined leaves'
+                          particles; sampling gives a count within a few percent of it */
+  double memory_bytes; /* what the run is admitted by: the estimate of mpm_sim_info */
+  double available_bytes; /* what this machine offers: MPM_MEMORY_LIMIT, else MemAvailable */
+  double first_dt; /* the first step's bound, s: the stiffest material's CFL step with the
+                      bodies' initial speeds (explicit), the particle speed's or solver.dt
+                      (implicit); solver.max_dt caps it */
+  double frame_dt, dx, finest_dx;
+  int bodies, materials, colliders, frame_count;
+  int implicit; /* solver.integrator "implicit" */
+} mpm_scene_estimate;
+
+/// Read and check the scene file at `path` as mpm_sim_create_from_file does, up to sampling
+/// its bodies: every key, the meshes (read and checked closed), the memory against what the
+/// machine has (MPM_ERR_NOMEM when it is short, as mpm_sim_create_from_file refuses it), the
+/// steps a frame takes. What sampling alone finds (a body outside the domain, overlapping
+/// bodies, a body inside a collider, shells of a mesh that overlap) is not checked. Fills
+/// `size` bytes of *out (pass sizeof *out). On failure err (of errlen bytes, may be NULL) holds
+/// the message, as mpm_sim_create_from_file's.
+MPM_API mpm_status mpm_scene_estimate_file(const char *path, mpm_scene_estimate *out, size_t size,
+                                           char *err, size_t errlen);
+
 /// The rest-state error of Zhu et al. 2017 (sec. 7, their Table 1) between two frame files of
 /// a run (frame_NNNN.vtu, with the id array; `mpm error`): particles matched by id, the rigid
 /// motion removed by shape matching (mass-weighted where the frames have masses), distances

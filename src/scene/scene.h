@@ -113,6 +113,8 @@ typedef struct mpm_shape_desc {
   char mesh_path[MPM_PATH_MAX];
   double mesh_scale;
   double mesh_max_mb; /* the largest mesh file read, MiB (key max_file_mb; default 64) */
+  double mesh_volume; /* the volume the mesh encloses once scaled, m^3 (set by the loader;
+                         0: unknown) */
   double bounds_lo[3], bounds_hi[3]; /* bodies: the shape's bounding box, set by the loader */
   /* revolve: points (radius, height along axis from center), m, from the axis back to the
      axis (first and last radius 0); the solid is the region the polyline encloses with the

@@ -168,6 +168,7 @@ static int mesh_bounds(mpm_json_ctx *c, mpm_shape_desc *sh, double lo[3], double
   for (int d = 0; d < 3; ++d) mpm_json_format_short(mhi[d] - mlo[d], ex[d], sizeof ex[d]);
   snprintf(note, note_cap, " (the mesh is %s x %s x %s in file units, times scale %s)", ex[0],
            ex[1], ex[2], mpm_json_format_short(sh->mesh_scale, sc, sizeof sc));
+  sh->mesh_volume = fabs(volume) * sh->mesh_scale * sh->mesh_scale * sh->mesh_scale;
   for (int d = 0; d < 3; ++d) {
     double half = 0.5 * sh->mesh_scale * (mhi[d] - mlo[d]);
     lo[d] = sh->center[d] - half;

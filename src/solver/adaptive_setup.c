@@ -129,7 +129,8 @@ mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
    * of the box the body fills */
   double n = 0;
   mpm_scene_memory_estimate(sc, &n);
-  const mpm_status fits = mpm_scene_check_memory_for(sc, n + refined_particles(sim), err);
+  sim->expected_particles = n + refined_particles(sim);
+  const mpm_status fits = mpm_scene_check_memory_for(sc, sim->expected_particles, err);
   if (fits != MPM_OK) return fits;
   if (mpm_adaptive_index_tree(sim, r)) return oom(err, "the refined cells");
   return MPM_OK;

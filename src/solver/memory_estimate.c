@@ -22,8 +22,9 @@
  * wall depths (34 reals). */
 #define IMPLICIT_BYTES_PER_PARTICLE ((57.0 + 0.2 * 34.0) * (double)sizeof(mpm_real))
 
-/* Expected particle count of one body: its volume over the lattice cell. Meshes count half of
- * their bounding box (the loader measured it); analytic shapes their exact volume. */
+/* Expected particle count of one body: its volume over the lattice cell. Meshes count the
+ * volume they enclose (the loader measured it; half their bounding box when it did not);
+ * analytic shapes their exact volume. */
 static double body_particles(const mpm_scene *s, int b) {
   const mpm_body_desc *body = &s->bodies[b];
   const mpm_shape_desc *sh = &body->shape;
@@ -40,8 +41,10 @@ static double body_particles(const mpm_scene *s, int b) {
     v = pi * sh->radius * sh->radius * 2 * sh->half_height;
     break;
   default:
-    v = 0.5 * (sh->bounds_hi[0] - sh->bounds_lo[0]) * (sh->bounds_hi[1] - sh->bounds_lo[1]) *
-        (sh->bounds_hi[2] - sh->bounds_lo[2]);
+    v = sh->mesh_volume > 0 ? sh->mesh_volume
+                            : 0.5 * (sh->bounds_hi[0] - sh->bounds_lo[0]) *
+                                  (sh->bounds_hi[1] - sh->bounds_lo[1]) *
+                                  (sh->bounds_hi[2] - sh->bounds_lo[2]);
     break;
   }
   return v / (s->dx * s->dx * s->dx) * body->particles_per_cell;

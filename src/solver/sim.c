@@ -62,7 +62,35 @@ static mpm_status check_steps_per_frame(const mpm_sim *sim, mpm_error *err) {
                        sc->materials[stiff].density, c, dt_cfl, steps, MAX_STEPS_PER_FRAME);
 }
 
+/* The largest initial speed of a body's points: its velocity and its spin times the distance
+ * from the centre of its box to a corner (a bound). */
+static double initial_speed_bound(const mpm_scene *sc) {
+  double vmax = 0;
+  for (int b = 0; b < sc->body_count; ++b) {
+    const mpm_body_desc *bd = &sc->bodies[b];
+    double v = 0, w = 0, r = 0;
+    for (int d = 0; d < 3; ++d) {
+      v += bd->velocity[d] * bd->velocity[d];
+      w += bd->angular_velocity[d] * bd->angular_velocity[d];
+      const double h = 0.5 * (bd->shape.bounds_hi[d] - bd->shape.bounds_lo[d]);
+      r += h * h;
+    }
+    vmax = fmax(vmax, sqrt(v) + sqrt(w) * sqrt(r));
+  }
+  return vmax;
+}
+
+static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sample);
+
 mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error *err) {
+  return create(scene, out, err, 1);
+}
+
+mpm_status mpm_sim_create_unsampled(mpm_scene *scene, mpm_sim **out, mpm_error *err) {
+  return create(scene, out, err, 0);
+}
+
+static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sample) {
   *out = NULL;
   mpm_sim *sim = calloc(1, sizeof *sim);
   if (!sim) return oom(err, "the simulation");
@@ -73,6 +101,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   /* refuse a scene the machine cannot hold before allocating anything for it */
   mpm_status st = mpm_scene_check_memory(sc, err);
   if (st != MPM_OK) goto fail;
+  mpm_scene_memory_estimate(sc, &sim->expected_particles); /* levels add theirs below */
 
   /* materials */
   sim->material_count = sc->material_count;
@@ -152,7 +181,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
   mpm_domain_set_init(&sim->domains);
   if (sc->levels > 0 && (st = mpm_adaptive_setup(sim, err)) != MPM_OK) goto fail;
   uint32_t next_id = 0;
-  for (int b = 0; b < sc->body_count; ++b) {
+  for (int b = 0; sample && b < sc->body_count; ++b) {
     const size_t first = sim->particles.count;
     st = sim->adaptive ? mpm_adaptive_sample_body(sim, b, err)
                        : mpm_sample_body(sc, b, &sim->particles, err);
@@ -202,7 +231,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
     }
   }
   sim->next_id = next_id;
-  if ((st = mpm_sim_digest_meshes(sim, err)) != MPM_OK) goto fail;
+  if (sample && (st = mpm_sim_digest_meshes(sim, err)) != MPM_OK) goto fail;
 
   /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
   double lp = sc->solver.gimp_length;
@@ -250,7 +279,7 @@ mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error 
       v2 += sim->domains.particles.v[d][i] * sim->domains.particles.v[d][i];
     if (v2 > vmax2) vmax2 = v2;
   }
-  sim->max_speed = mpm_sqrt(vmax2);
+  sim->max_speed = sample ? mpm_sqrt(vmax2) : (mpm_real)initial_speed_bound(sc);
   snprintf(sim->output_dir, sizeof sim->output_dir, "%s", sc->output.directory);
   *out = sim;
   return MPM_OK;

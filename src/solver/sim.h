@@ -142,12 +142,21 @@ struct mpm_sim {
   /* a digest of each body's mesh file as sampled (io/input_file.h), 0 for a body without one;
    * NULL when no body is a mesh (sim_checkpoint.c: a checkpoint resumes with the same meshes) */
   uint64_t *mesh_digests;
+  /* the particles the memory check expected, from the bodies' volumes (and the refined
+   * leaves'), before any was sampled */
+  double expected_particles;
   mpm_error error;
 };
 
 /* Build a simulation from a validated scene (takes ownership of the scene's arrays: the
  * caller's struct is emptied). */
 mpm_status mpm_sim_create_from_scene(mpm_scene *scene, mpm_sim **out, mpm_error *err);
+/* The same up to the sampling of the bodies, which is left out: every check of the scene but
+ * the bodies' placement, the memory check on the expected particles, no particle
+ * (mpm_scene_estimate_file: `mpm check` on a scene too large to sample quickly). The result is
+ * only for reading its figures (expected_particles, wave_speed and max_speed from the bodies'
+ * initial motion); it is not stepped. */
+mpm_status mpm_sim_create_unsampled(mpm_scene *scene, mpm_sim **out, mpm_error *err);
 
 /* mpm_sim_enable_output (per-frame writing into `dir`, frame 0 written) is public: mpm/mpm.h. */
 
