@@ -102,12 +102,15 @@ int mpm_cmd_check(int argc, char **argv) {
   int force_sample = 0;
   const char *path = NULL;
   for (int k = 0; k < argc; ++k) {
-    if (!strcmp(argv[k], "--sample"))
+    if (!strcmp(argv[k], "--sample")) {
       force_sample = 1;
-    else if (argv[k][0] == '-' || path)
-      path = "";
-    else
-      path = argv[k];
+    } else if (argv[k][0] == '-') {
+      static const char *const known[] = {"--sample", NULL};
+      mpm_cli_unknown_option("check", argv[k], known);
+      return MPM_EXIT_USAGE;
+    } else {
+      path = path ? "" : argv[k];
+    }
   }
   if (!path || !path[0]) {
     fprintf(stderr, "usage: mpm check SCENE.json [--sample]\n");
