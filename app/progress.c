@@ -26,6 +26,15 @@ void mpm_progress_begin(mpm_progress *p, mpm_progress_mode mode, int frames, siz
   p->drawn = 0;
   p->t0 = 0;
   p->t_end = 0;
+  p->marks = 0;
+}
+
+/* A completed frame (or the start: the first mark is taken at the first call, with t0). */
+static void mark(mpm_progress *p, double wall, double sim_time) {
+  const int n = MPM_PROGRESS_WINDOW + 1, k = p->marks % n;
+  p->mark_wall[k] = wall;
+  p->mark_sim[k] = sim_time;
+  p->marks++;
 }
 
 void mpm_format_duration(double s, char *buf, size_t n) {
@@ -42,9 +51,30 @@ void mpm_format_duration(double s, char *buf, size_t n) {
     snprintf(buf, n, "%ld s", t);
 }
 
-/* The time left, from the simulated time reached since the start (frames vary in cost, and a
- * frame in progress counts in part). */
+/* The time left. With frames completed: the wall time per simulated second of the last ones
+ * (up to MPM_PROGRESS_WINDOW), everything they cost included, times the simulated time left
+ * from the last one, less what the frame in progress has taken so far (but never less than the
+ * frame in progress's own pace gives for its rest). Before that, from the simulated time
+ * reached since the start. */
 static double eta_of(const mpm_progress *p, double sim_time) {
+  const double now = p->start + p->elapsed;
+  if (p->marks >= 2) {
+    const int n = MPM_PROGRESS_WINDOW + 1, last = (p->marks - 1) % n;
+    const int back = p->marks - 1 < MPM_PROGRESS_WINDOW ? p->marks - 1 : MPM_PROGRESS_WINDOW;
+    const int first = (p->marks - 1 - back) % n;
+    const double dsim = p->mark_sim[last] - p->mark_sim[first];
+    const double dwall = p->mark_wall[last] - p->mark_wall[first];
+    if (dsim > 0 && dwall >= 0) {
+      const double rate = dwall / dsim, in_frame = now - p->mark_wall[last];
+      double eta = rate * (p->t_end - p->mark_sim[last]) - in_frame;
+      const double partial = sim_time - p->mark_sim[last];
+      if (partial > 0 && in_frame > 0) { /* this frame is slower than the last ones */
+        const double own = in_frame / partial * (p->t_end - sim_time);
+        if (own > eta) eta = own;
+      }
+      return eta > 0 ? eta : 0;
+    }
+  }
   const double done = sim_time - p->t0, left = p->t_end - sim_time;
   return done > 0 && p->elapsed > 0 ? p->elapsed / done * left : -1;
 }
@@ -82,6 +112,8 @@ void mpm_progress_update(mpm_progress *p, int frame, double sim_time, int64_t st
                          size_t particles, const char *extra) {
   const double now = wall_seconds();
   p->elapsed = now - p->start;
+  if (p->marks == 0) mark(p, p->start, p->t0);
+  mark(p, now, sim_time);
   if (p->mode == MPM_PROGRESS_QUIET) return;
   draw(p, frame, sim_time, steps, particles, extra, 0);
   p->last_steps = steps;

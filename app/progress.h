@@ -1,7 +1,10 @@
 /* progress.h - progress display of `mpm run`: a redrawn bar on a terminal, one plain line per
  * frame otherwise, nothing with --quiet. Within a long frame the bar is redrawn every half second
  * and a line is printed every 10 s (mpm_progress_step). The time left is estimated from the
- * simulated time reached, and printed as a duration (`eta 3 min 05 s`). */
+ * wall time per simulated second of the last frames completed, which counts everything a frame
+ * costs (its steps, and its files, particle surfaces and checkpoints written at its end), less
+ * the time already spent on the frame in progress; before the first frame completes, from the
+ * simulated time reached. Printed as a duration (`eta 3 min 05 s`). */
 #ifndef MPM_APP_PROGRESS_H
 #define MPM_APP_PROGRESS_H
 
@@ -9,6 +12,9 @@
 #include <stdint.h>
 
 typedef enum { MPM_PROGRESS_QUIET, MPM_PROGRESS_LINES, MPM_PROGRESS_BAR } mpm_progress_mode;
+/* Completed frames the time left is estimated from (the most recent ones: a run whose frames
+ * grow dearer is followed). */
+#define MPM_PROGRESS_WINDOW 4
 
 typedef struct mpm_progress {
   mpm_progress_mode mode;
@@ -20,6 +26,10 @@ typedef struct mpm_progress {
   double last_time;
   int drawn;
   double t0, t_end; /* simulated time at the start (or resumption) and at the end, s */
+  /* the wall and simulated times of the start and of the last frames completed (a ring of
+     MPM_PROGRESS_WINDOW + 1): the rate of the recent frames, their outputs included */
+  double mark_wall[MPM_PROGRESS_WINDOW + 1], mark_sim[MPM_PROGRESS_WINDOW + 1];
+  int marks;
 } mpm_progress;
 
 void mpm_progress_begin(mpm_progress *p, mpm_progress_mode mode, int frames, size_t particles);
