@@ -86,8 +86,10 @@ static void test_insulated_bar_mode_decay_and_conservation(void **state) {
          sim->heat.figures.substeps);
   /* the bar's material boundary is resolved to about a particle spacing: 3% */
   assert_true(fabs(A / A0 - expected) < 0.03 * expected);
-  /* round-off only: float sums over 4096 particles and some 100 steps */
-  assert_true(fabs(Q - Q0) < TOL(2e-5, 1e-12) * Q0);
+  /* round-off only: float sums over 4096 particles and some 100 steps, and the affine P2G's
+     sum_i w_ip (x_i - x_p) = 0, exact in real numbers, to float rounding at x ~ 0.5 m (the
+     old quadrature's non-conserving neighbour lookups lost 6e-3) */
+  assert_true(fabs(Q - Q0) < TOL(1e-4, 1e-12) * Q0);
   assert_true(sim->heat.figures.substeps > 1); /* the explicit bound was met by substeps */
   mpm_sim_destroy(sim);
 }

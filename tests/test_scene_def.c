@@ -423,7 +423,7 @@ static void test_refused(void **state) {
     unheated.temperature = 0;
     assert_refused(&d, "heat.temperature: given with heat.enabled 0");
     d.heat.temperature = 0;
-    d.heat.pic = 0;
+    d.heat.pic = mpm_scene_def_default().heat.pic;
     /* temperature among the fields without heat: the parser's check (to_json writes it) */
     assert_int_equal(mpm_sim_create_from_def(&d, NULL, &sim, err, sizeof err), MPM_ERR_INVALID);
     assert_null(sim);

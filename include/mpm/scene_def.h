@@ -410,7 +410,8 @@ typedef struct mpm_heat_def {
   int enabled;        /* write the scene's heat object: heat transfer on; default 0 */
   double temperature; /* heat.temperature, the bodies' initial one where they give none;
                          default 0 */
-  double pic;         /* heat.pic, the PIC share of the temperature update, [0, 1]; default 0 */
+  double pic;         /* heat.pic, the rate at which the particles' temperatures relax to the
+                         grid's, in units of 4 alpha / dx^2, [0, 100]; default 1 */
 } mpm_heat_def;
 
 /// output.surface: a triangle surface per frame from the particles of some bodies or materials

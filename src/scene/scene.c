@@ -166,6 +166,7 @@ void mpm_scene_default(mpm_scene *scene) {
   scene->output.checkpoint_every = 10;
   scene->camera.set = 0;
   scene->camera.fov = 35;
+  scene->heat.pic = 1; /* heat.h: the particles follow the grid's field within a cell's time */
 }
 
 void mpm_scene_free(mpm_scene *scene) {

@@ -404,7 +404,8 @@ typedef struct mpm_scene {
   struct {
     int enabled;
     double temperature; /* the initial temperature of bodies without their own */
-    double pic;         /* the PIC fraction of the temperature's G2P, [0, 1]; default 0 */
+    double pic; /* the rate the particles' temperatures relax to the grid's (heat.h), in units of
+                   4 alpha / dx^2, [0, 100]; default 1 */
   } heat;
 } mpm_scene;
 

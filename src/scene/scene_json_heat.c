@@ -104,7 +104,9 @@ int mpm_sj_parse_heat(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_number(c, heat, "temperature", 0, mpm_json_any("the scene's unit"),
                       &s->heat.temperature) < 0 ||
       mpm_json_number(c, heat, "pic", 0,
-                      mpm_json_in('[', 0, 1, ']', "the PIC fraction of the temperature update"),
+                      mpm_json_in('[', 0, 100, ']',
+                                  "the rate of the PIC share of the temperature update, in units "
+                                  "of 4 alpha / dx^2"),
                       &s->heat.pic) < 0)
     return -1;
   if (s->levels > 0)
