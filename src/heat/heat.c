@@ -403,7 +403,8 @@ static int source_at(const mpm_heat_step_desc *s, const mpm_real x[3], mpm_real 
   return best;
 }
 
-/* Every free node's links; the largest sum_j G_ij / C_i (the operator's rate) in *rate. The
+/* Every free node's links; the largest sum_j G_ij / C_i over the links between nodes (the
+ * explicit part's rate) in *rate. The
  * conductance of the face between nodes i and j is dx min(f_i, f_j) k_ij, f the nodes' material
  * volume fraction (sum_p w_ip V_p / dx^3) and k_ij the harmonic mean of the nodes' conductivities
  * (sum w V k / sum w V): dx k in the bulk (the 7-point Laplacian), less where the material thins
@@ -471,7 +472,6 @@ static int links(mpm_heat *h, const mpm_heat_step_desc *s, mpm_real **hv, mpm_re
         const double G = dx * a * k_i / theta;
         L->source_G += (mpm_real)G;
         L->source_GT += (mpm_real)(G * s->poses[src].collider->desc.temperature);
-        sum += G;
       }
       const double r = sum / C;
       if (r > worst) worst = r;
@@ -481,17 +481,25 @@ static int links(mpm_heat *h, const mpm_heat_step_desc *s, mpm_real **hv, mpm_re
   return 0;
 }
 
-/* One explicit substep of C_i dT_i/dt = sum_j G_ij (T_j - T_i) + sum_s G_is (T_s - T_i) on the
- * free nodes, from T into Tn. */
+/* One substep of C_i dT_i/dt = sum_j G_ij (T_j - T_i) + sum_s G_is (T_s - T_i) on the free
+ * nodes, from T into Tn: explicit in the links between nodes, implicit in the links to sources
+ * (T_i on their side taken at the substep's end), so that a node close to a source's surface,
+ * whose link is up to 1 / THETA_MIN times stronger, needs no shorter substep; the result stays
+ * a convex combination of T_i, its neighbours and T_s while dts sum_j G_ij <= C_i. */
 static void conduct(const mpm_heat *h, long b0, long b1, mpm_real dts, const mpm_real *C,
                     const mpm_real *T, mpm_real *Tn) {
 #pragma omp parallel for schedule(static) if (b1 - b0 > MPM_PARALLEL_MIN)
   for (long i = b0; i < b1; ++i) {
+    if (!(C[i] > 0) || h->held[i]) {
+      Tn[i] = T[i];
+      continue;
+    }
     const mpm_heat_links *L = &h->links[i - b0];
-    mpm_real q = L->source_GT - L->source_G * T[i];
+    mpm_real q = L->source_GT;
     for (int k = 0; k < 6; ++k)
       if (L->nb[k] != UINT32_MAX) q += L->G[k] * (T[L->nb[k]] - T[i]);
-    Tn[i] = C[i] > 0 && !h->held[i] ? T[i] + dts * q / C[i] : T[i];
+    const mpm_real r = dts / C[i];
+    Tn[i] = (T[i] + r * q) / (1 + r * L->source_G);
   }
 }
 
