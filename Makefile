@@ -129,7 +129,7 @@ test-double: build-double
 # test_plasticity, test_implicit and the others. So is VTK's reading of the files
 # (vtk_reader_check, a check of the file formats, 28 s under ASan): the writers' code runs under
 # ASan in test_outputs, test_io, test_output_fields and test_cli.
-SANITIZE_SKIP = test_regression|test_sand_pile|vtk_reader_check
+SANITIZE_SKIP = test_regression|test_sand_pile|vtk_reader_check|adversary_campaign
 test-sanitize: build-sanitize
 	cd $(BUILD_SANITIZE) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -E '^($(SANITIZE_SKIP))$$'
