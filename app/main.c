@@ -46,8 +46,10 @@ static const usage_section SECTIONS[] = {
               "      where the time goes (activation and layout, P2G, grid update, G2P)\n"
               "  mpm bench implicit [--particles N] [--drop-particles N] [--threads LIST]\n"
               "                     [--repeats N] [--only action|drop]\n"
+              "                     [--case block5e6|block1e9|bunny]\n"
               "      the Hessian action against explicit P2G + G2P, CG iterations with and\n"
               "      without the preconditioner, time to simulate 1 s explicit and implicit\n"
+              "      (a dropped block of two moduli, the rubber bunny)\n"
               "  mpm bench surface [--particles N] [--threads LIST] [--smoothing PASSES]\n"
               "      seconds of one frame's particle surface (output.surface) for a 1M-particle\n"
               "      cube and ball: level set, filter, mesh, OBJ + PLY\n"},

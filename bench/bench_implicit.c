@@ -6,7 +6,9 @@
  * CG iterations of one implicit step with and without the Jacobi preconditioner.
  *
  * Part 2, time to solution: 1 s of a block dropped onto a slip floor, for E = 5e6 Pa (Zhu's
- * Table 1 material) and E = 1e9 Pa: the explicit integrator at its CFL step, and the implicit
+ * Table 1 material) and E = 1e9 Pa, and of examples/rubber_bunny_implicit.json's rubber bunny
+ * (E = 1e7 Pa, thrown spinning onto a floor with friction; its mesh is looked for beside the
+ * working folder and the program): the explicit integrator at its CFL step, and the implicit
  * one at each step of a ladder (1/60 s down), with Zhu's single linearized step (CG to 1e-4)
  * and with 2 Newton iterations (CG to 1e-2: inexact Newton), judged against the explicit run:
  * "stable" = no guard stop and no energy growth beyond the start; "accurate" = the centre of
@@ -17,6 +19,7 @@
  * backward Euler dissipates it, so it is printed for both runs and not judged. The fastest run
  * that is stable and accurate is reported with its speedup. Figures are printed, never
  * asserted. */
+#define _POSIX_C_SOURCE 200809L /* readlink */
 #include "bench.h"
 #include "bench_util.h"
 #include "cli.h"
@@ -27,6 +30,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <unistd.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -56,6 +60,69 @@ static mpm_sim *block(int n, double dx, double E, double drop, const char *solve
   const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
   mpm_scene_free(&scene);
   return st == MPM_OK ? sim : NULL;
+}
+
+/* The rubber bunny of examples/rubber_bunny_implicit.json (dx 1.5 cm, E = 1e7 Pa, nu 0.4, thrown
+ * at 0.4 m/s spinning at 2 rad/s, 5.5 cm above a floor with friction 0.5), 1 s at 60 frames per
+ * second, with the integrator's solver keys; `mesh` is bunny.obj's path. */
+static mpm_sim *bunny(const char *mesh, const char *solver, mpm_error *err) {
+  char text[4096];
+  snprintf(
+      text, sizeof text,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.015},"
+      " \"time\": {\"end\": 1.0, \"fps\": 60}, \"solver\": {%s},"
+      " \"materials\": [{\"name\": \"rubber\", \"model\": \"neo_hookean\", \"E\": 1e7,"
+      " \"nu\": 0.4, \"density\": 1100}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"mesh\", \"file\": \"%s\", \"center\": [0.5,0.55,0.5],"
+      " \"scale\": 0.04}, \"material\": \"rubber\", \"velocity\": [0.4,0,0],"
+      " \"angular_velocity\": [0,2,0]}],"
+      " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0,0.1,0],"
+      " \"normal\": [0,1,0]}, \"rule\": \"separate\", \"friction\": 0.5}]}",
+      solver, mesh);
+  mpm_scene scene;
+  if (mpm_scene_parse(text, "bench-bunny.json", &scene, err) != MPM_OK) return NULL;
+  mpm_sim *sim = NULL;
+  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
+  mpm_scene_free(&scene);
+  return st == MPM_OK ? sim : NULL;
+}
+
+/* examples/meshes/bunny.obj from the working folder or beside the program (build/mpm), or NULL. */
+static const char *find_bunny(char *buf, size_t cap) {
+  static const char *const tries[] = {"examples/meshes/bunny.obj", "../examples/meshes/bunny.obj"};
+  for (int k = 0; k < 2; ++k) {
+    FILE *f = fopen(tries[k], "r");
+    if (f) {
+      fclose(f);
+      snprintf(buf, cap, "%s", tries[k]);
+      return buf;
+    }
+  }
+  char exe[4096];
+  const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+  if (n <= 0) return NULL;
+  exe[n] = '\0';
+  char *slash = strrchr(exe, '/');
+  if (!slash) return NULL;
+  *slash = '\0';
+  snprintf(buf, cap, "%s/../examples/meshes/bunny.obj", exe);
+  FILE *f = fopen(buf, "r");
+  if (!f) return NULL;
+  fclose(f);
+  return buf;
+}
+
+/* A scene of part 2: made with the integrator's solver keys. */
+typedef struct drop_case {
+  const char *name;
+  int particles;    /* the block's */
+  double E, dx;     /* the block's modulus; the grid's cell (accuracy: half of it) */
+  const char *mesh; /* the bunny's mesh: the case is the bunny */
+} drop_case;
+
+static mpm_sim *make_case(const drop_case *c, const char *solver, mpm_error *err) {
+  return c->mesh ? bunny(c->mesh, solver, err)
+                 : block(c->particles, c->dx, c->E, 0.1, solver, 1.0, err);
 }
 
 static double com_height(const mpm_sim *sim) {
@@ -158,10 +225,10 @@ typedef struct run_figures {
   double mean_cg; /* implicit: CG iterations per step */
 } run_figures;
 
-static void simulate(int particles, double dx, double E, const char *solver, run_figures *f) {
+static void simulate(const drop_case *c, const char *solver, run_figures *f) {
   memset(f, 0, sizeof *f);
   mpm_error err;
-  mpm_sim *sim = block(particles, dx, E, 0.1, solver, 1.0, &err);
+  mpm_sim *sim = make_case(c, solver, &err);
   if (!sim) {
     fprintf(stderr, "mpm bench: %s\n", err.message);
     return;
@@ -200,19 +267,21 @@ static double rebound(const double *com, int n, int k0) {
   return hi - com[k0];
 }
 
-static int time_to_solution(int particles, double E) {
-  const double dx = 0.04;
+static int time_to_solution(const drop_case *c) {
+  const double dx = c->dx;
+  const char *name = c->name;
   enum { FRAMES = 60 };
   run_figures ref, im;
-  simulate(particles, dx, E, "", &ref);
+  simulate(c, "", &ref);
   if (!ref.ok) {
-    printf("    E = %.3g Pa: the explicit reference run failed\n", E);
+    printf("    %s: the explicit reference run failed\n", name);
     return 0;
   }
   const int impact = first_minimum(ref.com, FRAMES);
-  printf("    E = %.3g Pa, %d threads: explicit %lld steps in %.2f s (first impact at frame %d, "
+  printf("    %s, %d threads: explicit %lld steps in %.2f s (first impact at frame %d, "
          "rebound %.4f m)\n",
-         E, mpm_thread_count(), ref.steps, ref.seconds, impact, rebound(ref.com, FRAMES, impact));
+         name, mpm_thread_count(), ref.steps, ref.seconds, impact,
+         rebound(ref.com, FRAMES, impact));
   static const double ladder[] = {1.0 / 60, 1.0 / 120, 1.0 / 240, 1.0 / 480};
   /* Zhu's single linearized step needs an accurate solve; Newton iterations with a line search
    * can take inexact ones (inexact Newton) */
@@ -232,7 +301,7 @@ static int time_to_solution(int particles, double E) {
                "\"integrator\": \"implicit\", \"dt\": %.9g, \"cg_tolerance\": %g, "
                "\"newton_iterations\": %d",
                ladder[k], solves[v].tol, newton);
-      simulate(particles, dx, E, solver, &im);
+      simulate(c, solver, &im);
       /* accurate: within half a cell of the explicit run up to its first impact, and resting at
        * the end where the explicit block touches the floor; the rebound, a wave faster than
        * dt, is printed, not judged */
@@ -255,19 +324,19 @@ static int time_to_solution(int particles, double E) {
       }
     }
   if (best_seconds > 0)
-    printf(
-        "    E = %.3g Pa: fastest stable and accurate implicit run: dt = 1/%.0f s, %d Newton, CG "
-        "to %g: %.2f s against explicit %.2f s: %.1fx faster to solution\n",
-        E, 1 / best_dt, best_newton, best_tol, best_seconds, ref.seconds,
-        ref.seconds / best_seconds);
+    printf("    %s: fastest stable and accurate implicit run: dt = 1/%.0f s, %d Newton, CG to "
+           "%g: %.2f s against explicit %.2f s: %.1fx faster to solution\n",
+           name, 1 / best_dt, best_newton, best_tol, best_seconds, ref.seconds,
+           ref.seconds / best_seconds);
   else
-    printf("    E = %.3g Pa: no implicit run of the ladder was stable and accurate\n", E);
+    printf("    %s: no implicit run of the ladder was stable and accurate\n", name);
   return 0;
 }
 
 int mpm_bench_implicit(int argc, char **argv) {
   int particles = 50000, drop_particles = 1000, repeats = 5, threads[16] = {1, 2}, nthreads = 2;
-  int part = 0; /* 0 both, 1 action, 2 time to solution */
+  int part = 0;       /* 0 both, 1 action, 2 time to solution */
+  int only_case = -1; /* part 2: --case block5e6|block1e9|bunny */
   for (int i = 0; i < argc; ++i) {
     if (!strcmp(argv[i], "--particles")) {
       if (mpm_cli_parse_int("--particles", i + 1 < argc ? argv[i + 1] : NULL, 1000, 50000000,
@@ -288,6 +357,16 @@ int mpm_bench_implicit(int argc, char **argv) {
       part = !strcmp(argv[i], "action") ? 1 : !strcmp(argv[i], "drop") ? 2 : -1;
       if (part < 0) {
         fprintf(stderr, "mpm bench implicit: --only expects action or drop\n");
+        return MPM_EXIT_USAGE;
+      }
+    } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
+      ++i;
+      only_case = !strcmp(argv[i], "block5e6")   ? 0
+                  : !strcmp(argv[i], "block1e9") ? 1
+                  : !strcmp(argv[i], "bunny")    ? 2
+                                                 : -2;
+      if (only_case < -1) {
+        fprintf(stderr, "mpm bench implicit: --case expects block5e6, block1e9 or bunny\n");
         return MPM_EXIT_USAGE;
       }
     } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
@@ -318,10 +397,22 @@ int mpm_bench_implicit(int argc, char **argv) {
            "centre of mass within half a cell of the explicit run up to the first impact and at "
            "rest\n",
            drop_particles);
-    static const double moduli[] = {5e6, 1e9};
+    char mesh[4200];
+    const drop_case cases[3] = {
+        {"block, E = 5e+06 Pa", drop_particles, 5e6, 0.04, NULL},
+        {"block, E = 1e+09 Pa", drop_particles, 1e9, 0.04, NULL},
+        {"rubber bunny, E = 1e+07 Pa, dx = 1.5 cm", 0, 1e7, 0.015, find_bunny(mesh, sizeof mesh)}};
     for (int t = 0; t < nthreads; ++t) {
       mpm_set_threads(threads[t]);
-      for (int e = 0; e < 2; ++e) time_to_solution(drop_particles, moduli[e]);
+      for (int e = 0; e < 3; ++e) {
+        if (only_case >= 0 && e != only_case) continue;
+        if (e == 2 && !cases[2].mesh) {
+          printf("    rubber bunny: examples/meshes/bunny.obj not found beside the working "
+                 "folder or the program; left out\n");
+          continue;
+        }
+        time_to_solution(&cases[e]);
+      }
     }
   }
   printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());
