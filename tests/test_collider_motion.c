@@ -397,8 +397,8 @@ static void test_corner_leaves_slip(void **state) {
           const mpm_real vy = leaving ? out : -out;
           mpm_real v[3] = {R_(0.5), vy, 0}, n[4][3], vo[4][3];
           mpm_boundary_apply(bd, x, 0, corner, v);
-          const int count =
-              mpm_boundary_constraints(bd, x, 0, corner, (mpm_real[3]){R_(0.5), vy, 0}, n, vo);
+          const mpm_real vp[3] = {R_(0.5), vy, 0}; /* frictionless: vm does not matter */
+          const int count = mpm_boundary_constraints(bd, x, 0, corner, vp, vp, n, vo);
           if (rule == MPM_BOUNDARY_STICKY) {
             assert_true(v[0] == 0 && v[1] == 0 && count == -1);
             continue;
@@ -414,11 +414,59 @@ static void test_corner_leaves_slip(void **state) {
   }
 }
 
+/* Friction in the implicit solve's constraints (boundary.h): where a floor with friction 0.5
+ * stops the motion vm (v^n + dt g), the DOF is held (-2) at what Coulomb's rule makes of vm, the
+ * same velocity mpm_boundary_apply gives vm: stopped where static friction holds (a tangential
+ * 0.3 against 0.5 x 1), slowed by 0.5 x 1 where it slides (2 -> 1.5); not from v (v* with the
+ * elastic forces' explicit step, 40 m/s here); leaving the floor, no friction; frictionless,
+ * the normal constraint alone (count 1). */
+static void test_friction_constraints(void **state) {
+  (void)state;
+  mpm_collider_desc d = make_desc(MPM_SHAPE_HALFSPACE);
+  set3(d.shape.center, 0, 1, 0);
+  set3(d.shape.axis, 0, 1, 0); /* the floor y < 1 */
+  d.rule = MPM_BOUNDARY_SEPARATE;
+  d.friction = 0.5;
+  mpm_collider c;
+  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0);
+  const mpm_boundary floor = {{-9, -9, -9}, {9, 9, 9}, MPM_BOUNDARY_SLIP, 0, 1, &pose};
+  const mpm_real x[3] = {0, R_(0.999), 0}, v[3] = {40, -40, 0};
+  const mpm_real tangential[3] = {R_(0.3), 2, 0};
+  for (int k = 0; k < 3; ++k) {
+    const mpm_real vm[3] = {tangential[k], k == 2 ? 1 : -1, 0};
+    mpm_real n[4][3], vo[4][3], ref[3] = {vm[0], vm[1], vm[2]};
+    const int count = mpm_boundary_constraints(&floor, x, 0, 0, v, vm, n, vo);
+    mpm_boundary_apply(&floor, x, 0, 0, ref);
+    if (k == 2) { /* leaving: no friction, and v* moving in: the normal constraint */
+      assert_int_equal(count, 1);
+      continue;
+    }
+    assert_int_equal(count, -2);
+    for (int e = 0; e < 3; ++e) assert_true(fabs((double)(vo[0][e] - ref[e])) < 1e-6);
+    assert_true(fabs((double)vo[0][0] - (k ? 1.5 : 0)) < 1e-6 && vo[0][1] == 0);
+  }
+  d.friction = 0;
+  mpm_collider c0;
+  assert_int_equal(mpm_collider_init(&c0, &d), 0);
+  const mpm_collider_pose pose0 = mpm_collider_pose_at(&c0, 0);
+  const mpm_boundary frictionless = {{-9, -9, -9}, {9, 9, 9}, MPM_BOUNDARY_SLIP, 0, 1, &pose0};
+  mpm_real n[4][3], vo[4][3];
+  const mpm_real vm[3] = {R_(0.3), -1, 0};
+  assert_int_equal(mpm_boundary_constraints(&frictionless, x, 0, 0, v, vm, n, vo), 1);
+  mpm_collider_free(&c);
+  mpm_collider_free(&c0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_moving_phi),         cmocka_unit_test(test_constant_motion),
-      cmocka_unit_test(test_keyframes),          cmocka_unit_test(test_collider_velocity_rotation),
-      cmocka_unit_test(test_boundary_rules),     cmocka_unit_test(test_apply),
+      cmocka_unit_test(test_friction_constraints),
+      cmocka_unit_test(test_moving_phi),
+      cmocka_unit_test(test_constant_motion),
+      cmocka_unit_test(test_keyframes),
+      cmocka_unit_test(test_collider_velocity_rotation),
+      cmocka_unit_test(test_boundary_rules),
+      cmocka_unit_test(test_apply),
       cmocka_unit_test(test_corner_leaves_slip),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

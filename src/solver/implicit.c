@@ -102,28 +102,35 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
     flag[i] = 0;
     if (!(d->mass[i] > 0)) continue;
     mpm_real vi[3] = {v[0][i], v[1][i], v[2][i]}, nn[4][3], vo[4][3];
+    mpm_real vm[3]; /* the motion the step brings without the elastic forces: for friction */
+    for (int c = 0; c < 3; ++c)
+      vm[c] = d->v0[c][i] + s->dt * (s->accel[c] ? s->accel[c][i] : s->gravity[c]);
     const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
     const int corner = (size_t)i >= s->corner_begin;
-    int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], corner, vi, nn, vo);
+    int count = mpm_boundary_constraints(s->boundary, x, s->depth[i], corner, vi, vm, nn, vo);
     if (count == 0 && corner) {
       /* a corner DOF free where it is: constrained where the predicted step takes it
        * (explicit_update.c) */
       const mpm_real y[3] = {x[0] + s->dt * vi[0], x[1] + s->dt * vi[1], x[2] + s->dt * vi[2]};
-      count = mpm_boundary_constraints(s->boundary, y, s->depth[i], corner, vi, nn, vo);
+      count = mpm_boundary_constraints(s->boundary, y, s->depth[i], corner, vi, vm, nn, vo);
     }
-    flag[i] = (uint8_t)constrain_dof(count, nn, vo, vi, P[i]);
+    /* 1: constrained; 2: held by friction (its velocity is the rule's already: boundary_after
+       leaves it) */
+    flag[i] = (uint8_t)(constrain_dof(count, nn, vo, vi, P[i]) ? (count == -2 ? 2 : 1) : 0);
     for (int c = 0; c < 3; ++c) v[c][i] = vi[c];
   }
   size_t count = 0;
-  for (size_t i = 0; i < nd; ++i) count += flag[i];
+  for (size_t i = 0; i < nd; ++i) count += flag[i] != 0;
   s->constraint_dof = mpm_arena_alloc(s->arena, (count + 1) * sizeof *s->constraint_dof);
   s->constraint_P = mpm_arena_alloc(s->arena, (count + 1) * sizeof *s->constraint_P);
-  if (!s->constraint_dof || !s->constraint_P) return -1;
+  s->constraint_friction = mpm_arena_alloc(s->arena, count + 1);
+  if (!s->constraint_dof || !s->constraint_P || !s->constraint_friction) return -1;
   size_t k = 0;
   for (size_t i = 0; i < nd; ++i)
     if (flag[i]) {
       s->constraint_dof[k] = (uint32_t)i;
       memcpy(s->constraint_P[k], P[i], sizeof P[i]);
+      s->constraint_friction[k] = flag[i] == 2;
       ++k;
     }
   s->constraint_count = count;
@@ -252,6 +259,7 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
   const long nk = (long)s->constraint_count;
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < nk; ++k) {
+    if (s->constraint_friction[k]) continue; /* held at the friction rule's velocity */
     const uint32_t i = s->constraint_dof[k];
     const mpm_real *P = s->constraint_P[k];
     mpm_real w[3]; /* (I - P)(v* - v) */

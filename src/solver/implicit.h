@@ -22,9 +22,11 @@
  * Boundary conditions (collide/boundary.h) act inside the solve: a DOF in a sticky obstacle
  * has its velocity fixed to the obstacle's; in a slip obstacle, or in a separating one that the
  * predicted velocity v* moves into, the normal component is fixed and projected out of CG's
- * residual and search directions. After the solve the full boundary rule runs on every DOF
- * with the normal velocity of v* restored first: that is where separation and Coulomb friction
- * act (the friction sees the normal velocity the obstacle stopped).
+ * residual and search directions; where an obstacle with friction stops the step's motion
+ * v^n + dt g, the whole velocity is fixed to what Coulomb's rule makes of that motion (held by
+ * static friction, slowed by kinetic), so that the elastic solve sees the contact as it will
+ * be. After the solve the full boundary rule runs on every DOF with the normal velocity of v*
+ * restored first on the other constrained ones: that is where separation acts.
  *
  * On Gao et al.'s multi-level grid (solver/adaptive.h) the material points transfer in parts, one
  * per transfer grid, and every slot of a transfer grid is a real node (a DOF of the system) or a
@@ -102,10 +104,12 @@ typedef struct mpm_implicit {
   mpm_real *Fh[9]; /* per material point: F at the displacement */
   mpm_real *G[9];  /* per material point: gathered gradients, then scattered matrices */
   mpm_domain_hessian dh;
-  /* the constraints: DOF index, the projector I - sum n n^T (xx, xy, xz, yy, yz, zz) */
+  /* the constraints: DOF index, the projector I - sum n n^T (xx, xy, xz, yy, yz, zz), and
+     whether friction holds the DOF (boundary.h: its velocity is the friction rule's) */
   size_t constraint_count;
   uint32_t *constraint_dof;
   mpm_real (*constraint_P)[6];
+  uint8_t *constraint_friction;
   mpm_real apply_scale; /* dt^2 in CG's operator */
   mpm_real *px[3];      /* DOF positions (built with the constraints), m */
   size_t corner_begin;  /* the first corner DOF (DOFs from here are constrained ahead) */
