@@ -106,8 +106,9 @@ static void test_mesh_size_cap(void **state) {
     if (!k) expect_output("more than the 0.0001 MiB a mesh file may be");
   }
   /* a box has no file to cap */
-  snprintf(shape, sizeof shape, "{\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
-                                "\"half_extent\": [0.2,0.2,0.2], \"max_file_mb\": 100}");
+  snprintf(shape, sizeof shape,
+           "{\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
+           "\"half_extent\": [0.2,0.2,0.2], \"max_file_mb\": 100}");
   snprintf(text, sizeof text, SCENE, shape);
   write_file(scene, text);
   assert_int_equal(mpm_timed(args), 2);

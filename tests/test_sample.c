@@ -475,7 +475,8 @@ static void test_open_cube_falls_back_to_winding_number(void **state) {
 
 /* Boxes (centre, half side) as one OBJ, each as 12 triangles wound outwards, or inwards where
  * reversed[k]. */
-static void write_boxes_obj(const char *path, int count, const double (*c)[4], const int *reversed) {
+static void write_boxes_obj(const char *path, int count, const double (*c)[4],
+                            const int *reversed) {
   FILE *fp = fopen(path, "w");
   assert_non_null(fp);
   for (int k = 0; k < count; ++k)

@@ -277,14 +277,14 @@ MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size
 /// scene). Filled by mpm_scene_estimate_file; members are only added at the end, as
 /// mpm_sim_info's.
 typedef struct mpm_scene_estimate {
-  double particles;    /* expected: each body's volume (a mesh's enclosed volume) over its
-                          particle spacing cubed, and on a multi-level grid the refined leaves'
-                          particles; sampling gives a count within a few percent of it */
-  double memory_bytes; /* what the run is admitted by: the estimate of mpm_sim_info */
+  double particles;       /* expected: each body's volume (a mesh's enclosed volume) over its
+                             particle spacing cubed, and on a multi-level grid the refined leaves'
+                             particles; sampling gives a count within a few percent of it */
+  double memory_bytes;    /* what the run is admitted by: the estimate of mpm_sim_info */
   double available_bytes; /* what this machine offers: MPM_MEMORY_LIMIT, else MemAvailable */
-  double first_dt; /* the first step's bound, s: the stiffest material's CFL step with the
-                      bodies' initial speeds (explicit), the particle speed's or solver.dt
-                      (implicit); solver.max_dt caps it */
+  double first_dt;        /* the first step's bound, s: the stiffest material's CFL step with the
+                             bodies' initial speeds (explicit), the particle speed's or solver.dt
+                             (implicit); solver.max_dt caps it */
   double frame_dt, dx, finest_dx;
   int bodies, materials, colliders, frame_count;
   int implicit; /* solver.integrator "implicit" */

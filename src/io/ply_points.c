@@ -5,10 +5,11 @@
  * (uint), material and body (int), packed without padding. Meant for renderers and
  * point-cloud tools (Houdini, Blender, CloudCompare), hence the names: vx vy vz the velocity's
  * components (docs/houdini-blender.md says how to join them into Houdini's v) and pscale
- * Houdini's per-point radius, which it instances and renders spheres with. pscale is the radius of the sphere of the particle's current volume,
- * V0 det F (the VTU's `volume`): compressed particles get smaller, and at rest the spheres of
- * a body fill its volume. Records are interleaved from the structure-of-arrays particles a
- * chunk at a time through one fixed buffer, and the file is written atomically. */
+ * Houdini's per-point radius, which it instances and renders spheres with. pscale is the radius of
+ * the sphere of the particle's current volume, V0 det F (the VTU's `volume`): compressed particles
+ * get smaller, and at rest the spheres of a body fill its volume. Records are interleaved from the
+ * structure-of-arrays particles a chunk at a time through one fixed buffer, and the file is written
+ * atomically. */
 #include "io/io.h"
 #include "core/alloc.h"
 

@@ -195,8 +195,8 @@ static double ray_cross(const mpm_mesh *m, int t, const double q[2], int *side) 
  * through itself: parity would leave the overlap hollow, so the caller refuses the mesh), with
  * *at its x. Nested shells wound opposite ways (a hollow body) never do: their windings
  * cancel. */
-static int columns_fill(mesh_columns *mc, long j, long k, double x0, long ni,
-                        unsigned char *inside, double *at) {
+static int columns_fill(mesh_columns *mc, long j, long k, double x0, long ni, unsigned char *inside,
+                        double *at) {
   const mpm_mesh *m = mc->mesh;
   const double q[2] = {mc->y0 + (double)j * mc->h, mc->z0 + (double)k * mc->h};
   const size_t c = (size_t)k * (size_t)mc->nj + (size_t)j;

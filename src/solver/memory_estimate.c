@@ -41,10 +41,10 @@ static double body_particles(const mpm_scene *s, int b) {
     v = pi * sh->radius * sh->radius * 2 * sh->half_height;
     break;
   default:
-    v = sh->mesh_volume > 0 ? sh->mesh_volume
-                            : 0.5 * (sh->bounds_hi[0] - sh->bounds_lo[0]) *
-                                  (sh->bounds_hi[1] - sh->bounds_lo[1]) *
-                                  (sh->bounds_hi[2] - sh->bounds_lo[2]);
+    v = sh->mesh_volume > 0
+            ? sh->mesh_volume
+            : 0.5 * (sh->bounds_hi[0] - sh->bounds_lo[0]) * (sh->bounds_hi[1] - sh->bounds_lo[1]) *
+                  (sh->bounds_hi[2] - sh->bounds_lo[2]);
     break;
   }
   return v / (s->dx * s->dx * s->dx) * body->particles_per_cell;
