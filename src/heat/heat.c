@@ -549,13 +549,15 @@ int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
   }
   /* the first P2G's temperatures; nodes inside a source that particles reach are held */
   size_t held = 0;
+  int sources = 0; /* without heat sources no node's position is needed here */
+  for (int k = 0; k < s->pose_count; ++k) sources |= s->poses[k].collider->desc.heat_source;
 #pragma omp parallel for schedule(static) reduction(+ : held) if (b1 - b0 > MPM_PARALLEL_MIN)
   for (long i = b0; i < b1; ++i) {
     h->held[i] = 0;
     const mpm_real C = hv[0][i];
     const mpm_real T = C > 0 ? hv[1][i] / C : 0;
     hv[1][i] = hv[2][i] = T;
-    if (!(C > 0)) continue;
+    if (!(C > 0) || !sources) continue;
     mpm_real x[3];
     mpm_dofs_position(d, (size_t)i, x);
     const int k = source_at(s, x, NULL);
