@@ -267,6 +267,9 @@ static double rebound(const double *com, int n, int k0) {
   return hi - com[k0];
 }
 
+/* The implicit runs' preconditioner key (--preconditioner): "" for the default (Jacobi). */
+static const char *preconditioner_key = "";
+
 static int time_to_solution(const drop_case *c) {
   const double dx = c->dx;
   const char *name = c->name;
@@ -299,8 +302,8 @@ static int time_to_solution(const drop_case *c) {
       char solver[200];
       snprintf(solver, sizeof solver,
                "\"integrator\": \"implicit\", \"dt\": %.9g, \"cg_tolerance\": %g, "
-               "\"newton_iterations\": %d",
-               ladder[k], solves[v].tol, newton);
+               "\"newton_iterations\": %d%s",
+               ladder[k], solves[v].tol, newton, preconditioner_key);
       simulate(c, solver, &im);
       /* accurate: within half a cell of the explicit run up to its first impact, and resting at
        * the end where the explicit block touches the floor; the rebound, a wave faster than
@@ -369,6 +372,16 @@ int mpm_bench_implicit(int argc, char **argv) {
         fprintf(stderr, "mpm bench implicit: --case expects block5e6, block1e9 or bunny\n");
         return MPM_EXIT_USAGE;
       }
+    } else if (!strcmp(argv[i], "--preconditioner") && i + 1 < argc) {
+      ++i;
+      if (!strcmp(argv[i], "multigrid"))
+        preconditioner_key = ", \"preconditioner\": \"multigrid\"";
+      else if (!strcmp(argv[i], "jacobi"))
+        preconditioner_key = "";
+      else {
+        fprintf(stderr, "mpm bench implicit: --preconditioner expects jacobi or multigrid\n");
+        return MPM_EXIT_USAGE;
+      }
     } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
       nthreads = bench_parse_threads(argv[++i], threads, 16);
       if (nthreads < 1) {
@@ -395,8 +408,8 @@ int mpm_bench_implicit(int argc, char **argv) {
     printf("implicit benchmark, part 2: 1 s of a block (about %d particles, dx = 4 cm) dropped "
            "10 cm onto a slip floor; stable = no guard stop and no energy growth, accurate = "
            "centre of mass within half a cell of the explicit run up to the first impact and at "
-           "rest\n",
-           drop_particles);
+           "rest; implicit runs preconditioned by %s\n",
+           drop_particles, preconditioner_key[0] ? "a multigrid V-cycle" : "Jacobi");
     char mesh[4200];
     const drop_case cases[3] = {
         {"block, E = 5e+06 Pa", drop_particles, 5e6, 0.04, NULL},

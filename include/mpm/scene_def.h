@@ -107,6 +107,12 @@ typedef enum mpm_def_cg_failure {
   MPM_DEF_CG_STOP = 1, /* "stop" */
 } mpm_def_cg_failure;
 
+/// solver.preconditioner (implicit)
+typedef enum mpm_def_preconditioner {
+  MPM_DEF_PRECONDITIONER_JACOBI = 0,   /* "jacobi": the diagonal (the default) */
+  MPM_DEF_PRECONDITIONER_MULTIGRID = 1 /* "multigrid": a Galerkin multigrid V-cycle */
+} mpm_def_preconditioner;
+
 /// bodies[].enrichment_metric
 typedef enum mpm_def_enrichment_metric {
   MPM_DEF_METRIC_CONDITION = 0, /* "condition": sigma_min / sigma_max (the default) */
@@ -382,6 +388,8 @@ typedef struct mpm_solver_def {
                             key left out */
   int cg_max_iterations; /* implicit: solver.cg_max_iterations, 1..100000; default 500 */
   mpm_def_cg_failure on_cg_failure; /* implicit: solver.on_cg_failure; default MPM_DEF_CG_WARN */
+  mpm_def_preconditioner preconditioner; /* implicit: solver.preconditioner; default
+                                            MPM_DEF_PRECONDITIONER_JACOBI */
 } mpm_solver_def;
 
 /// The point arrays of frame_NNNN.vtu (output.fields, docs/scene-format.md): bit (1u << f) of

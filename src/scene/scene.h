@@ -304,6 +304,11 @@ typedef enum mpm_cg_failure_action {
   MPM_CG_FAILURE_STOP = 1, /* stop the run naming the step and the residual reached */
 } mpm_cg_failure_action;
 
+typedef enum mpm_preconditioner_kind {
+  MPM_PRECONDITIONER_JACOBI = 0,   /* the diagonal of M + dt^2 K (Zhu eqs. 17-19; default) */
+  MPM_PRECONDITIONER_MULTIGRID = 1 /* a Galerkin multigrid V-cycle (solver/multigrid.h) */
+} mpm_preconditioner_kind;
+
 typedef struct mpm_solver_desc {
   mpm_kernel_kind kernel;
   mpm_transfer_kind transfer;
@@ -324,6 +329,7 @@ typedef struct mpm_solver_desc {
                                           (mpm_solver_cg_tolerance) */
   int cg_max_iterations;               /* implicit: default 500 */
   mpm_cg_failure_action on_cg_failure; /* implicit: warn (default) or stop */
+  mpm_preconditioner_kind preconditioner; /* implicit: CG's preconditioner */
 } mpm_solver_desc;
 
 /* Most levels of the multi-level grid (MPM_LEVELS_MAX of grid/refinement.h). */

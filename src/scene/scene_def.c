@@ -183,6 +183,7 @@ mpm_scene_def mpm_scene_def_default(void) {
   d.solver.cg_tolerance = s.solver.cg_tolerance;
   d.solver.cg_max_iterations = s.solver.cg_max_iterations;
   d.solver.on_cg_failure = (mpm_def_cg_failure)s.solver.on_cg_failure;
+  d.solver.preconditioner = (mpm_def_preconditioner)s.solver.preconditioner;
   d.output.directory = "out"; /* mpm_scene_default's, as a string of static storage */
   d.output.vtu = s.output.vtu;
   d.output.ply = s.output.ply;
@@ -220,6 +221,7 @@ _Static_assert((int)MPM_DEF_SNOW == (int)MPM_MODEL_SNOW &&
                    (int)MPM_DEF_GRID_DENSE == (int)MPM_GRID_DENSE &&
                    (int)MPM_DEF_INSTABILITY_RETRY == (int)MPM_INSTABILITY_RETRY &&
                    (int)MPM_DEF_CG_STOP == (int)MPM_CG_FAILURE_STOP &&
+                   (int)MPM_DEF_PRECONDITIONER_MULTIGRID == (int)MPM_PRECONDITIONER_MULTIGRID &&
                    (int)MPM_DEF_FILTER_LAPLACIAN == (int)MPM_SURFACE_LAPLACIAN &&
                    (int)MPM_DEF_REFINE_STRAIN == (int)MPM_REFINE_STRAIN &&
                    (int)MPM_DEF_FIELD_F == (int)MPM_FIELD_F && MPM_FIELD_F + 1 == MPM_FIELD_COUNT,

@@ -202,6 +202,7 @@ int mpm_def_write_solver(mpm_def_writer *w, const mpm_solver_def *s, cJSON *root
       {"solver.on_instability", (int)s->on_instability, &mpm_def_instabilities},
       {"solver.domain_kernel", (int)s->domain_kernel, &mpm_def_kernels},
       {"solver.on_cg_failure", (int)s->on_cg_failure, &mpm_def_cg_failures},
+      {"solver.preconditioner", (int)s->preconditioner, &mpm_def_preconditioners},
   };
   const char *names[sizeof enums / sizeof enums[0]];
   for (size_t k = 0; k < sizeof enums / sizeof enums[0]; ++k)
@@ -213,6 +214,7 @@ int mpm_def_write_solver(mpm_def_writer *w, const mpm_solver_def *s, cJSON *root
                               : s->cg_tolerance != d.cg_tolerance           ? "cg_tolerance"
                               : s->cg_max_iterations != d.cg_max_iterations ? "cg_max_iterations"
                               : s->on_cg_failure != d.on_cg_failure         ? "on_cg_failure"
+                              : s->preconditioner != d.preconditioner       ? "preconditioner"
                                                                             : NULL;
   if (!implicit && implicit_only)
     return mpm_def_fail(w->c,
@@ -240,6 +242,7 @@ int mpm_def_write_solver(mpm_def_writer *w, const mpm_solver_def *s, cJSON *root
       mpm_def_add_number(w, o, "cg_tolerance", s->cg_tolerance);
     mpm_def_add_number(w, o, "cg_max_iterations", s->cg_max_iterations);
     mpm_def_add_string(w, o, "on_cg_failure", names[6]);
+    mpm_def_add_string(w, o, "preconditioner", names[7]);
   }
   return 0;
 }

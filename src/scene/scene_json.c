@@ -41,15 +41,20 @@ static const char *const DOMAIN_KEYS[] = {"min",    "max",    "dx",       "resol
                                           "levels", "refine", "resample", "refine_every", NULL};
 static const char *const WALL_KEYS[] = {"rule", "friction", "cells", NULL};
 static const char *const TIME_KEYS[] = {"end", "fps", NULL};
-static const char *const SOLVER_KEYS[] = {"kernel", "transfer", "flip_alpha", "cfl", "max_dt",
-                                          "grid", "gimp_length", "on_instability", "max_retries",
-                                          "domain_kernel",
-                                          /* implicit integration */
-                                          "integrator", "dt", "newton_iterations", "cg_tolerance",
-                                          "cg_max_iterations", "on_cg_failure", NULL};
+static const char *const SOLVER_KEYS[] = {
+    "kernel", "transfer", "flip_alpha", "cfl", "max_dt", "grid", "gimp_length", "on_instability",
+    "max_retries", "domain_kernel",
+    /* implicit integration */
+    "integrator", "dt", "newton_iterations", "cg_tolerance", "cg_max_iterations", "on_cg_failure",
+    "preconditioner", NULL};
 /* The keys that only the implicit integrator reads. */
-static const char *const IMPLICIT_KEYS[] = {
-    "dt", "newton_iterations", "cg_tolerance", "cg_max_iterations", "on_cg_failure", NULL};
+static const char *const IMPLICIT_KEYS[] = {"dt",
+                                            "newton_iterations",
+                                            "cg_tolerance",
+                                            "cg_max_iterations",
+                                            "on_cg_failure",
+                                            "preconditioner",
+                                            NULL};
 static const char *const OUTPUT_KEYS[] = {"directory",        "vtu",     "ply", "stats",
                                           "checkpoint_every", "surface", "vdb", "vdb_density",
                                           "vdb_velocity",     "fields",  NULL};
@@ -64,6 +69,7 @@ static const char *const INSTABILITY_NAMES[] = {"stop", "retry", NULL};
 static const char *const DOMAIN_KERNEL_NAMES[] = {"linear", "quadratic", "cubic", NULL};
 static const char *const INTEGRATOR_NAMES[] = {"explicit", "implicit", NULL};
 static const char *const CG_FAILURE_NAMES[] = {"warn", "stop", NULL};
+static const char *const PRECONDITIONER_NAMES[] = {"jacobi", "multigrid", NULL};
 
 const char mpm_sj_axis_name[3] = {'x', 'y', 'z'};
 
@@ -275,6 +281,7 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   long long retries = d->max_retries;
   int domain_kernel = (int)d->domain_kernel;
   int integrator = (int)d->integrator, on_cg_failure = (int)d->on_cg_failure;
+  int preconditioner = (int)d->preconditioner;
   long long newton = d->newton_iterations, cg_max = d->cg_max_iterations;
   if (mpm_json_expect_object(c, sv, "an object of solver options") < 0 ||
       mpm_json_check_keys(c, sv, SOLVER_KEYS, NULL) < 0 ||
@@ -308,10 +315,12 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
                       &d->cg_tolerance) < 0 ||
       mpm_json_integer(c, sv, "cg_max_iterations", 0, mpm_json_in('[', 1, 100000, ']', NULL),
                        &cg_max) < 0 ||
-      mpm_json_enum(c, sv, "on_cg_failure", 0, CG_FAILURE_NAMES, &on_cg_failure) < 0)
+      mpm_json_enum(c, sv, "on_cg_failure", 0, CG_FAILURE_NAMES, &on_cg_failure) < 0 ||
+      mpm_json_enum(c, sv, "preconditioner", 0, PRECONDITIONER_NAMES, &preconditioner) < 0)
     return -1;
   d->integrator = (mpm_integrator_kind)integrator;
   d->on_cg_failure = (mpm_cg_failure_action)on_cg_failure;
+  d->preconditioner = (mpm_preconditioner_kind)preconditioner;
   d->newton_iterations = (int)newton;
   d->cg_max_iterations = (int)cg_max;
   d->max_retries = (int)retries;

@@ -27,12 +27,24 @@ static void precondition(const mpm_dofs *d, mpm_real *const diag[3], mpm_real *c
   }
 }
 
+/* |r|_D = sqrt(<r, P D^-1 P r>) for a projected r; w: work. */
+static double diag_norm(const mpm_dofs *d, mpm_real *const diag[3], mpm_cg_project_fn project,
+                        void *user, mpm_real *const r[3], mpm_real *const w[3]) {
+  precondition(d, diag, r, w);
+  if (project) project(user, w);
+  const double rr = mpm_dofs_dot(d, NULL, r, w);
+  return sqrt(rr > 0 ? rr : 0);
+}
+
 int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
                  mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
                  const mpm_cg_options *options, mpm_cg_result *result) {
   mpm_real **r = mpm_dofs_vector(d, "cg.r"), **z = mpm_dofs_vector(d, "cg.z");
   mpm_real **p = mpm_dofs_vector(d, "cg.p"), **q = mpm_dofs_vector(d, "cg.Ap");
   if (!r || !z || !p || !q) return -1;
+  const int own = options->precondition != NULL; /* the caller's preconditioner */
+  mpm_real **w = own ? mpm_dofs_vector(d, "cg.w") : NULL;
+  if (own && !w) return -1;
   result->iterations = 0;
   /* the scale: |P b| in the preconditioner's norm, sqrt(<P b, P D^-1 P b>) */
   mpm_dofs_copy(d, b, p);
@@ -45,10 +57,19 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
   mpm_dofs_copy(d, b, r);
   mpm_dofs_axpy(d, -1, q, r);
   if (project) project(user, r);
-  precondition(d, diag, r, z);
-  if (project) project(user, z); /* P M^-1 P: a diagonal need not commute with a slip projection */
-  double rz = mpm_dofs_dot(d, NULL, r, z);
-  result->residual0 = result->residual = sqrt(rz);
+  double rz;
+  if (own) {
+    result->residual0 = result->residual = diag_norm(d, diag, project, user, r, w);
+    options->precondition(options->precondition_user, r, z);
+    if (project) project(user, z);
+    rz = mpm_dofs_dot(d, NULL, r, z);
+  } else {
+    precondition(d, diag, r, z);
+    if (project)
+      project(user, z); /* P M^-1 P: a diagonal need not commute with a slip projection */
+    rz = mpm_dofs_dot(d, NULL, r, z);
+    result->residual0 = result->residual = sqrt(rz);
+  }
   result->scale = options->scale > 0                ? options->scale
                   : result->rhs > result->residual0 ? result->rhs
                                                     : result->residual0;
@@ -69,10 +90,22 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
     mpm_dofs_axpy(d, alpha, p, x);
     mpm_dofs_axpy(d, -alpha, q, r);
     result->iterations = k + 1;
-    precondition(d, diag, r, z);
-    if (project) project(user, z);
-    const double rz_new = mpm_dofs_dot(d, NULL, r, z);
-    result->residual = sqrt(rz_new > 0 ? rz_new : 0);
+    double rz_new;
+    if (own) {
+      result->residual = diag_norm(d, diag, project, user, r, w);
+      if (result->residual <= target) {
+        result->converged = 1;
+        break;
+      }
+      options->precondition(options->precondition_user, r, z);
+      if (project) project(user, z);
+      rz_new = mpm_dofs_dot(d, NULL, r, z);
+    } else {
+      precondition(d, diag, r, z);
+      if (project) project(user, z);
+      rz_new = mpm_dofs_dot(d, NULL, r, z);
+      result->residual = sqrt(rz_new > 0 ? rz_new : 0);
+    }
     if (result->residual <= target) {
       result->converged = 1;
       break;

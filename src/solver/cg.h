@@ -21,7 +21,8 @@
  *
  * Every reduction is mpm_dofs_dot's (fixed chunks, fixed order), so the iterates, the
  * iteration count and the answer are bitwise the same for any number of threads. The work
- * vectors are the DOF set's named vectors "cg.r", "cg.z", "cg.p", "cg.Ap". */
+ * vectors are the DOF set's named vectors "cg.r", "cg.z", "cg.p", "cg.Ap" (and "cg.w" with a
+ * preconditioner of the caller's). */
 #ifndef MPM_SOLVER_CG_H
 #define MPM_SOLVER_CG_H
 
@@ -42,6 +43,12 @@ typedef struct mpm_cg_options {
   /* with `scale`: the least drop asked of |r0|_D, so that a scale below what the real type can
    * resolve does not run CG to max_iterations (|r|_D <= floor_drop |r0|_D also converges) */
   double floor_drop;
+  /* NULL, or a preconditioner z = B r used in place of the diagonal (B symmetric and positive
+     definite on the projected subspace, as a multigrid V-cycle is: solver/multigrid.h), its
+     output projected after; the residual is still measured in the diagonal's norm |r|_D, so
+     the stopping test means the same whatever preconditions the iterations */
+  void (*precondition)(void *user, mpm_real *const r[3], mpm_real *const z[3]);
+  void *precondition_user;
 } mpm_cg_options;
 
 typedef struct mpm_cg_result {

@@ -50,13 +50,16 @@
 #include "grid/adaptive_grid.h"
 #include "solver/cg.h"
 #include "solver/dofs.h"
+#include "solver/multigrid.h"
 #include "transfer/transfer.h"
 
 typedef struct mpm_implicit_options {
   int newton_iterations; /* >= 1; 1 = Zhu's single linearized step */
   double cg_tolerance;   /* relative residual */
   int cg_max_iterations;
-  int precondition; /* 1: Jacobi (eqs. 17-19), 0: none (benchmarks) */
+  /* 1: Jacobi (eqs. 17-19); 2: multigrid (solver/multigrid.h) where it is built
+     (mpm_implicit_multigrid_supported), else Jacobi; 0: none (benchmarks) */
+  int precondition;
 } mpm_implicit_options;
 
 typedef struct mpm_implicit_result {
@@ -117,6 +120,11 @@ typedef struct mpm_implicit {
   mpm_real *accel[3];   /* with body-force regions: each DOF's gravity plus regions, m/s^2 */
   mpm_real *drag;       /* with regions that drag: each DOF's drag rate, 1/s (else NULL) */
   mpm_real **ghosted;   /* on levels: a DOF vector with its ghosts gathered (E u) */
+  /* the multigrid preconditioner (implicit_multigrid.c): the hierarchy, each grid node's row on
+     its finest level (-1: no mass) and each row's DOF */
+  struct mpm_multigrid *mg;
+  int32_t *mg_row_of;
+  uint32_t *mg_dof;
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). 0, or -1 when out of memory. */
@@ -141,6 +149,22 @@ void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]);
 double mpm_implicit_energy(mpm_implicit *s);
 void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
                            mpm_real *const d[3]);
+/* Particle i's linear map of velocity gradients in the action of dt^2 K (apply_scale): C with
+ * M_ac = sum_bd C[9 (3 a + c) + 3 b + d] G_bd, M = apply_scale V0 (C_i : G F) F^T, the factored
+ * definite derivative (or the model's own in exact mode) after mpm_implicit_build. */
+void mpm_implicit_tangent(const mpm_implicit *s, uint32_t i, mpm_real C[81]);
+
+/* The multigrid preconditioner (implicit_multigrid.c): whether it is built for this system (one
+ * sparse grid of material points: not yet on the multi-level grid nor with particle domains);
+ * its hierarchy for the step's nodes with mass (after mpm_implicit_init); its matrices at the
+ * displacement of the last mpm_implicit_build, with the constraints of the last
+ * mpm_implicit_constraints; and z = B r, CG's preconditioner (user: the mpm_implicit). Each 0,
+ * or -1 when out of memory. */
+int mpm_implicit_multigrid_supported(const mpm_implicit *s);
+int mpm_implicit_multigrid_prepare(mpm_implicit *s);
+int mpm_implicit_multigrid_build(mpm_implicit *s);
+void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_real *const z[3]);
+
 /* Build the constraints from the predicted velocity v (over the DOF set). 0 or -1 (OOM). */
 int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);
 /* v = P v at the constrained DOFs. */

@@ -43,6 +43,9 @@ int mpm_implicit_init(mpm_implicit *s) {
     s->part_count = 1;
   }
   s->ghosted = NULL;
+  s->mg = NULL;
+  s->mg_row_of = NULL;
+  s->mg_dof = NULL;
   if (ok && s->levels) ok = (s->ghosted = mpm_dofs_vector(s->dofs, "imp.ghosted")) != NULL;
   if (ok && s->domains)
     ok = mpm_domain_hessian_init(&s->dh, s->domains, s->tc->materials, s->arena) == 0;
@@ -242,6 +245,17 @@ static void stress_op(const mpm_implicit *s, long i, const mpm_real X[9], mpm_re
   mpm_m3_mul(X, F, dF);
   m.model->dpdf_action(&m, Fh, dF, dP);
   mpm_m3_mul_bt(dP, F, M);
+}
+
+void mpm_implicit_tangent(const mpm_implicit *s, uint32_t i, mpm_real C[81]) {
+  const mpm_real v = s->apply_scale * s->p->vol0[i];
+  for (int b = 0; b < 3; ++b)
+    for (int d = 0; d < 3; ++d) {
+      mpm_real X[9] = {0}, M[9];
+      X[3 * b + d] = 1;
+      stress_op(s, (long)i, X, M);
+      for (int ac = 0; ac < 9; ++ac) C[9 * ac + 3 * b + d] = v * M[ac];
+    }
 }
 
 void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mpm_real *const x[3],

@@ -284,7 +284,8 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
   mpm_implicit s;
   implicit_system(sim, c, &s);
   const mpm_implicit_options o = {sd->newton_iterations, mpm_solver_cg_tolerance(sd),
-                                  sd->cg_max_iterations, 1};
+                                  sd->cg_max_iterations,
+                                  sd->preconditioner == MPM_PRECONDITIONER_MULTIGRID ? 2 : 1};
   if (mpm_implicit_init(&s) || mpm_implicit_solve(&s, &o, &c->solve))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the implicit solve over %zu DOFs",

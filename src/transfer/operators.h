@@ -44,6 +44,21 @@ void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
                                  mpm_real *const d[3], const mpm_real *const Q[18],
                                  const mpm_particles *p);
 
+/* The stiffness as a matrix of 3x3 node blocks (assemble.c): for every particle its linear map
+ * of velocity gradients C[(a, c), (b, d)] (81 reals, row-major: M_ac = sum_bd C_ac,bd G_bd, as the
+ * matrix scatter applies it) from `tangent`, and
+ *   K_ij[a][b] += sum_p sum_cd C_p[(a, c), (b, d)] grad w_ip^c grad w_jp^d
+ * added to the rows of the nodes the particles touch: node n of the grid (its own index, the
+ * level's dof_begin not added) is row row_of[n] (-1: not stored), and the block of row r for the
+ * node at offset o = x_j - x_i in [-radius, radius]^3 (radius >= kernel width - 1) is at
+ * val + 9 ((r S) + ((o_x + radius) span + o_y + radius) span + o_z + radius), span = 2 radius + 1,
+ * S = span^3, row-major. C must be symmetric (C_ac,bd = C_bd,ac): only pairs i <= j are formed.
+ * Sparse grid only: -1 otherwise, and 0. */
+typedef void (*mpm_tangent_fn)(void *user, uint32_t particle, mpm_real C[81]);
+int mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
+                           mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
+                           mpm_real *val);
+
 /* The sparse grid's mass and momentum P2G (p2g.c, the fused kernels without the force). */
 void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                                   const mpm_grid_values *val, const mpm_particles *p);
