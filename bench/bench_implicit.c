@@ -5,12 +5,17 @@
  * scatter; solver/implicit.h) beside ns per particle of one explicit P2G + G2P on the same body;
  * CG iterations of one implicit step with and without the Jacobi preconditioner.
  *
+ * Part 3, iterations against resolution: one implicit step of 1/120 s of a spinning rubber block
+ * hitting a floor at dx = 4, 2 and 1 cm, preconditioned by Jacobi and by the multigrid V-cycle
+ * (solver/multigrid.h): iterations per Newton iteration and the step's seconds.
+ *
  * Part 2, time to solution: 1 s of a block dropped onto a slip floor, for E = 5e6 Pa (Zhu's
  * Table 1 material) and E = 1e9 Pa, and of examples/rubber_bunny_implicit.json's rubber bunny
  * (E = 1e7 Pa, thrown spinning onto a floor with friction; its mesh is looked for beside the
  * working folder and the program): the explicit integrator at its CFL step, and the implicit
  * one at each step of a ladder (1/60 s down), with Zhu's single linearized step (CG to 1e-4)
  * and with 2 Newton iterations (CG to 1e-2: inexact Newton), judged against the explicit run:
+ * (--preconditioner multigrid: the implicit runs with the multigrid V-cycle)
  * "stable" = no guard stop and no energy growth beyond the start; "accurate" = the centre of
  * mass within half a cell of the explicit one at every frame up to the first impact, and at the
  * end within half a cell of the explicit block's lowest point after impact (resting on the
@@ -215,6 +220,83 @@ static int hessian_action(int particles, int repeats) {
   return 0;
 }
 
+/* ---- part 3: iterations against resolution ---- */
+
+/* A rubber block (E = 1e7 Pa, nu 0.4, 0.32 m wide) spinning at 2 rad/s about y and falling at
+ * 0.5 m/s onto a slip floor it touches, on a grid of spacing dx, with the solver keys (frames
+ * of 1/120 s). */
+static mpm_sim *spinning_block(double dx, double E, const char *solver, mpm_error *err) {
+  const double side = 0.32, floor_y = 4 * dx + 0.05, pad = 6 * dx;
+  char text[2048];
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
+           " \"time\": {\"end\": 1, \"fps\": 120}, \"solver\": {%s},"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": %g, "
+           "\"nu\": 0.4, \"density\": 1100}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g], "
+           "\"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"m\", \"particles_per_cell\": 8, "
+           "\"jitter\": 0, \"velocity\": [0,-0.5,0], \"angular_velocity\": [0,2,0]}],"
+           " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0, %g, 0], "
+           "\"normal\": [0, 1, 0]}, \"rule\": \"slip\"}]}",
+           side * 1.5 + 2 * pad, side + floor_y + 2 * pad, side * 1.5 + 2 * pad, dx, solver, E,
+           pad + side * 0.75, floor_y + side / 2 + 0.25 * dx, pad + side * 0.75, side / 2, side / 2,
+           side / 2, floor_y);
+  mpm_scene scene;
+  if (mpm_scene_parse(text, "bench-spin.json", &scene, err) != MPM_OK) return NULL;
+  mpm_sim *sim = NULL;
+  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
+  mpm_scene_free(&scene);
+  return st == MPM_OK ? sim : NULL;
+}
+
+/* The second implicit step of 1/120 s of the spinning block at three resolutions (the fastest
+ * particle moves 0.8 of the finest cell), Jacobi against
+ * multigrid: preconditioned iterations per Newton iteration (a multigrid's stay nearly flat
+ * as dx halves, Jacobi's grow) and the seconds of the step. */
+static int resolution(void) {
+  static const double spacing[] = {0.04, 0.02, 0.01}, moduli[] = {1e7, 1e9};
+  static const char *const pre[] = {"jacobi", "multigrid"};
+  for (int e = 0; e < 2; ++e)
+    for (int k = 0; k < 3; ++k)
+      for (int m = 0; m < 2; ++m) {
+        char solver[256];
+        snprintf(solver, sizeof solver,
+                 "\"integrator\": \"implicit\", \"dt\": %.9g, \"cg_tolerance\": 1e-3, "
+                 "\"cg_max_iterations\": 20000, \"preconditioner\": \"%s\"",
+                 1.0 / 120, pre[m]);
+        mpm_error err;
+        mpm_sim *sim = spinning_block(spacing[k], moduli[e], solver, &err);
+        if (!sim) {
+          fprintf(stderr, "mpm bench: %s\n", err.message);
+          return -1;
+        }
+        /* the second step is timed: the first one grows the step's scratch to its size */
+        double t0 = 0;
+        for (int step = 0; step < 2; ++step) {
+          t0 = mpm_wall_seconds();
+          if (mpm_sim_step(sim, 1.0 / 120) != MPM_OK) {
+            fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+            mpm_sim_destroy(sim);
+            return -1;
+          }
+        }
+        const double sec = mpm_wall_seconds() - t0;
+        const mpm_solver_figures *f = &sim->last_frame_solver; /* the step was the frame */
+        char where[160] = "";
+        if (m == 1)
+          snprintf(where, sizeof where, " (building the hierarchy %.2f s, V-cycles %.2f s)",
+                   f->mg_setup_seconds, f->mg_cycle_seconds);
+        printf("    E = %g Pa, dx = %g m, %zu particles, %s: %lld Newton iterations, %.1f CG "
+               "iterations per Newton iteration, %.2f s for the step%s%s\n",
+               moduli[e], spacing[k], sim->particles.count, pre[m], f->newton_iterations,
+               f->newton_iterations ? (double)f->cg_iterations / (double)f->newton_iterations : 0,
+               sec, where, f->cg_unconverged ? " (a solve stopped short)" : "");
+        fflush(stdout);
+        mpm_sim_destroy(sim);
+      }
+  return 0;
+}
+
 /* ---- part 2 ---- */
 
 typedef struct run_figures {
@@ -357,9 +439,12 @@ int mpm_bench_implicit(int argc, char **argv) {
       ++i;
     } else if (!strcmp(argv[i], "--only") && i + 1 < argc) {
       ++i;
-      part = !strcmp(argv[i], "action") ? 1 : !strcmp(argv[i], "drop") ? 2 : -1;
+      part = !strcmp(argv[i], "action")       ? 1
+             : !strcmp(argv[i], "drop")       ? 2
+             : !strcmp(argv[i], "resolution") ? 3
+                                              : -1;
       if (part < 0) {
-        fprintf(stderr, "mpm bench implicit: --only expects action or drop\n");
+        fprintf(stderr, "mpm bench implicit: --only expects action, drop or resolution\n");
         return MPM_EXIT_USAGE;
       }
     } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
@@ -394,7 +479,7 @@ int mpm_bench_implicit(int argc, char **argv) {
     }
   }
   bench_print_machine();
-  if (part != 2) {
+  if (part == 0 || part == 1) {
     printf("implicit benchmark, part 1: one Hessian action against one explicit P2G + G2P "
            "(neo-Hookean block, 8 particles per cell, quadratic, APIC; median of %d)\n",
            repeats);
@@ -404,7 +489,17 @@ int mpm_bench_implicit(int argc, char **argv) {
       fflush(stdout);
     }
   }
-  if (part != 1) {
+  if (part == 0 || part == 3) {
+    printf("implicit benchmark, part 3: the second step of 1/120 s of a block (0.32 "
+           "m) spinning at 2 rad/s onto a slip floor at 0.5 m/s, 2 Newton iterations, CG to 1e-3, "
+           "at three resolutions and two moduli: Jacobi against multigrid\n");
+    for (int t = 0; t < nthreads; ++t) {
+      mpm_set_threads(threads[t]);
+      printf("  %d threads:\n", threads[t]);
+      if (resolution()) return MPM_EXIT_FAILURE;
+    }
+  }
+  if (part == 0 || part == 2) {
     printf("implicit benchmark, part 2: 1 s of a block (about %d particles, dx = 4 cm) dropped "
            "10 cm onto a slip floor; stable = no guard stop and no energy growth, accurate = "
            "centre of mass within half a cell of the explicit run up to the first impact and at "

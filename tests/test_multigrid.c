@@ -9,7 +9,9 @@
  *   - the V-cycle is symmetric and positive definite on the constrained subspace (a slip floor
  *     and a sticky wall hold nodes): x . B y = y . B x, x . B x > 0, B x projected;
  *   - a step solved with Jacobi and with multigrid to a tight tolerance ends in the same state,
- *     in far fewer iterations; 1 and 2 threads give bitwise the same run. */
+ *     in far fewer iterations; 1 and 2 threads give bitwise the same run;
+ *   - the multigrid's iterations per Newton iteration do not grow when dx halves (a stiff block
+ *     spinning onto a floor), where Jacobi's grow. */
 #include "implicit_support.h"
 #include "core/parallel.h"
 
@@ -295,6 +297,50 @@ static void test_threads_bitwise(void **state) {
   mpm_sim_destroy(r[1]);
 }
 
+/* CG iterations per Newton iteration of one step of a stiff block spinning onto a slip floor
+ * at grid spacing dx, with the preconditioner. */
+static double spin_iterations(double dx, const char *pre) {
+  char text[2048];
+  const double side = 0.24, floor_y = 4 * dx + 0.05, pad = 6 * dx;
+  snprintf(text, sizeof text,
+           "{\"domain\": {\"min\": [0,0,0], \"max\": [%.6g,%.6g,%.6g], \"dx\": %g},"
+           " \"time\": {\"end\": 1, \"fps\": 120}, \"solver\": {\"integrator\": \"implicit\","
+           " \"dt\": %.9g, \"cg_tolerance\": 1e-3, \"cg_max_iterations\": 20000,"
+           " \"preconditioner\": \"%s\"},"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e9,"
+           " \"nu\": 0.4, \"density\": 1100}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [%.6g,%.6g,%.6g],"
+           " \"half_extent\": [%.6g,%.6g,%.6g]}, \"material\": \"m\", \"particles_per_cell\": 8,"
+           " \"jitter\": 0, \"velocity\": [0,-0.5,0], \"angular_velocity\": [0,2,0]}],"
+           " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0, %g, 0],"
+           " \"normal\": [0, 1, 0]}, \"rule\": \"slip\"}]}",
+           side * 1.5 + 2 * pad, side + floor_y + 2 * pad, side * 1.5 + 2 * pad, dx, 1.0 / 120, pre,
+           pad + side * 0.75, floor_y + side / 2 + 0.25 * dx, pad + side * 0.75, side / 2, side / 2,
+           side / 2, floor_y);
+  mpm_sim *sim = test_sim_from_json(text, "spin.json");
+  if (mpm_sim_step(sim, 1.0 / 120) != MPM_OK) fail_msg("%s", sim->error.message);
+  const mpm_solver_figures *f = &sim->last_frame_solver;
+  const double it = (double)f->cg_iterations / (double)f->newton_iterations;
+  mpm_sim_destroy(sim);
+  return it;
+}
+
+/* The multigrid's iterations do not grow as the grid refines (HOT's and any multigrid's point);
+ * Jacobi's do, which shows the scene can tell them apart. */
+static void test_iterations_independent_of_resolution(void **state) {
+  (void)state;
+  double it[2][2];
+  static const char *const pre[] = {"jacobi", "multigrid"};
+  for (int m = 0; m < 2; ++m)
+    for (int k = 0; k < 2; ++k) it[m][k] = spin_iterations(k == 0 ? 0.04 : 0.02, pre[m]);
+  printf("  CG iterations per Newton iteration at dx = 4 cm and 2 cm: Jacobi %.1f, %.1f; "
+         "multigrid %.1f, %.1f\n",
+         it[0][0], it[0][1], it[1][0], it[1][1]);
+  assert_true(it[1][1] <= 1.5 * it[1][0]);
+  assert_true(it[0][1] > 1.25 * it[0][0]);
+  assert_true(it[1][1] * 5 < it[0][1]);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_assembled_equals_action),
@@ -303,6 +349,7 @@ int main(void) {
       cmocka_unit_test(test_vcycle_symmetric_positive),
       cmocka_unit_test(test_jacobi_and_multigrid_agree),
       cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_iterations_independent_of_resolution),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -515,8 +515,11 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   /* the multigrid V-cycle preconditions CG where it is built; the residuals are measured in the
      Jacobi norm D either way (cg.h), so the tolerance means the same */
   const int multigrid = o->precondition == 2 && mpm_implicit_multigrid_supported(s);
-  if (multigrid && (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)))
-    return -1;
+  if (multigrid) {
+    const double t0 = mpm_implicit_clock();
+    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return -1;
+    r->mg_setup_seconds = mpm_implicit_clock() - t0;
+  }
   /* the tolerance is relative to the step's impulses, and never below what the real type
      resolves */
   const double resolved = resolution_scale(s, D, t, u) / o->cg_tolerance;
@@ -595,6 +598,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
     }
   }
   boundary_after(s, vstar);
+  r->mg_cycle_seconds = s->mg_cycle_seconds;
   return 0;
 }
 

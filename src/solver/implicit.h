@@ -68,6 +68,7 @@ typedef struct mpm_implicit_result {
   double cg_residual;    /* the largest final relative residual of the Newton iterations */
   int cg_converged;      /* every CG solve reached the tolerance */
   int line_search_failed;
+  double mg_setup_seconds, mg_cycle_seconds; /* multigrid: the hierarchy's build, the V-cycles */
 } mpm_implicit_result;
 
 /* Material points of p in begin .. begin + count (sorted into `grid` by its activation) that
@@ -125,6 +126,7 @@ typedef struct mpm_implicit {
   struct mpm_multigrid *mg;
   int32_t *mg_row_of;
   uint32_t *mg_dof;
+  double mg_cycle_seconds; /* the V-cycles' wall time in this step */
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). 0, or -1 when out of memory. */
@@ -164,6 +166,8 @@ int mpm_implicit_multigrid_supported(const mpm_implicit *s);
 int mpm_implicit_multigrid_prepare(mpm_implicit *s);
 int mpm_implicit_multigrid_build(mpm_implicit *s);
 void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_real *const z[3]);
+/* A monotonic clock, s (the multigrid's timings). */
+double mpm_implicit_clock(void);
 
 /* Build the constraints from the predicted velocity v (over the DOF set). 0 or -1 (OOM). */
 int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);

@@ -45,6 +45,7 @@ int mpm_implicit_init(mpm_implicit *s) {
   s->ghosted = NULL;
   s->mg = NULL;
   s->mg_row_of = NULL;
+  s->mg_cycle_seconds = 0;
   s->mg_dof = NULL;
   if (ok && s->levels) ok = (s->ghosted = mpm_dofs_vector(s->dofs, "imp.ghosted")) != NULL;
   if (ok && s->domains)

@@ -114,7 +114,7 @@ static int build_level(mpm_multigrid *mg, mpm_mg_level *L) {
   L->nbr = arena_zero(mg, n * L->slots * sizeof *L->nbr);
   L->val = arena_zero(mg, n * L->slots * 9 * sizeof *L->val);
   L->dinv = arena_zero(mg, n * 9 * sizeof *L->dinv);
-  L->x = arena_zero(mg, 3 * n * sizeof *L->x);
+  L->x = arena_zero(mg, 3 * (n + 1) * sizeof *L->x); /* node n: zero, for absent neighbours */
   L->b = arena_zero(mg, 3 * n * sizeof *L->b);
   L->r = arena_zero(mg, 3 * n * sizeof *L->r);
   const int m = L->radius + 1; /* colours per axis */
@@ -475,6 +475,25 @@ void mpm_multigrid_apply(const mpm_multigrid *mg, int l, const mpm_real *x, mpm_
   }
 }
 
+/* sum_j A_ij x_j over row i, x a level's own vector (its node n, past the last, is zero: an
+ * absent neighbour reads it, so the loop has no branch). */
+static inline void row_product(const mpm_mg_level *L, size_t i, const mpm_real *restrict x,
+                               mpm_real acc[3]) {
+  const int32_t *restrict nb = L->nbr + i * L->slots;
+  const mpm_real *restrict A = L->val + i * L->slots * 9;
+  const int32_t none = (int32_t)L->n;
+  mpm_real a0 = 0, a1 = 0, a2 = 0;
+  for (size_t s = 0; s < L->slots; ++s) {
+    const size_t j = 3 * (size_t)(nb[s] < 0 ? none : nb[s]);
+    const mpm_real x0 = x[j], x1 = x[j + 1], x2 = x[j + 2];
+    const mpm_real *B = A + 9 * s;
+    a0 += B[0] * x0 + B[1] * x1 + B[2] * x2;
+    a1 += B[3] * x0 + B[4] * x1 + B[5] * x2;
+    a2 += B[6] * x0 + B[7] * x1 + B[8] * x2;
+  }
+  acc[0] = a0, acc[1] = a1, acc[2] = a2;
+}
+
 /* x_i += D_i^+ (b_i - sum_j A_ij x_j) for the rows of colour c (independent of each other). */
 static void relax_colour(const mpm_multigrid *mg, int l, int c) {
   const mpm_mg_level *L = &mg->level[l];
@@ -482,11 +501,8 @@ static void relax_colour(const mpm_multigrid *mg, int l, int c) {
 #pragma omp parallel for schedule(static) if (end - begin > 256)
   for (long q = begin; q < end; ++q) {
     const uint32_t i = L->colour_row[q];
-    mpm_real r[3] = {L->b[3 * i], L->b[3 * i + 1], L->b[3 * i + 2]}, acc[3] = {0, 0, 0};
-    const int32_t *nb = L->nbr + (size_t)i * L->slots;
-    const mpm_real *A = L->val + (size_t)i * L->slots * 9;
-    for (size_t s = 0; s < L->slots; ++s)
-      if (nb[s] >= 0) block_mul_add(A + s * 9, L->x + 3 * (size_t)nb[s], acc);
+    mpm_real r[3] = {L->b[3 * i], L->b[3 * i + 1], L->b[3 * i + 2]}, acc[3];
+    row_product(L, i, L->x, acc);
     for (int e = 0; e < 3; ++e) r[e] -= acc[e];
     mpm_real dx[3] = {0, 0, 0};
     block_mul_add(L->dinv + (size_t)i * 9, r, dx);
@@ -525,9 +541,13 @@ static void cycle(mpm_multigrid *mg, int l) {
   memset(L->x, 0, 3 * L->n * sizeof *L->x);
   for (int s = 0; s < mg->sweeps; ++s) smooth(mg, l, 1);
   /* the residual, restricted: b_c = P^T (b - A x) */
-  mpm_multigrid_apply(mg, l, L->x, L->r);
   const long n = (long)L->n;
-  for (long i = 0; i < 3 * n; ++i) L->r[i] = L->b[i] - L->r[i];
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (long i = 0; i < n; ++i) {
+    mpm_real acc[3];
+    row_product(L, (size_t)i, L->x, acc);
+    for (int e = 0; e < 3; ++e) L->r[3 * i + e] = L->b[3 * i + e] - acc[e];
+  }
   mpm_mg_level *C = &mg->level[l + 1];
   const long nc = (long)C->n;
 #pragma omp parallel for schedule(static) if (nc > 256)
