@@ -5,7 +5,7 @@
  * scatter; solver/implicit.h) beside ns per particle of one explicit P2G + G2P on the same body;
  * CG iterations of one implicit step with and without the Jacobi preconditioner.
  *
- * Part 3, iterations against resolution: one implicit step of 1/120 s of a spinning rubber block
+ * Part 3, iterations against resolution: the third implicit step of 1/120 s of a spinning rubber block
  * hitting a floor at dx = 4, 2 and 1 cm, preconditioned by Jacobi and by the multigrid V-cycle
  * (solver/multigrid.h): iterations per Newton iteration and the step's seconds.
  *
@@ -249,7 +249,7 @@ static mpm_sim *spinning_block(double dx, double E, const char *solver, mpm_erro
   return st == MPM_OK ? sim : NULL;
 }
 
-/* The second implicit step of 1/120 s of the spinning block at three resolutions (the fastest
+/* The third implicit step of 1/120 s of the spinning block at three resolutions (the fastest
  * particle moves 0.8 of the finest cell), Jacobi against
  * multigrid: preconditioned iterations per Newton iteration (a multigrid's stay nearly flat
  * as dx halves, Jacobi's grow) and the seconds of the step. */
@@ -490,7 +490,7 @@ int mpm_bench_implicit(int argc, char **argv) {
     }
   }
   if (part == 0 || part == 3) {
-    printf("implicit benchmark, part 3: the second step of 1/120 s of a block (0.32 "
+    printf("implicit benchmark, part 3: the third step of 1/120 s of a block (0.32 "
            "m) spinning at 2 rad/s onto a slip floor at 0.5 m/s, 2 Newton iterations, CG to 1e-3, "
            "at three resolutions and two moduli: Jacobi against multigrid\n");
     for (int t = 0; t < nthreads; ++t) {
