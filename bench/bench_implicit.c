@@ -5,9 +5,9 @@
  * scatter; solver/implicit.h) beside ns per particle of one explicit P2G + G2P on the same body;
  * CG iterations of one implicit step with and without the Jacobi preconditioner.
  *
- * Part 3, iterations against resolution: the third implicit step of 1/120 s of a spinning rubber block
- * hitting a floor at dx = 4, 2 and 1 cm, preconditioned by Jacobi and by the multigrid V-cycle
- * (solver/multigrid.h): iterations per Newton iteration and the step's seconds.
+ * Part 3, iterations against resolution: the third implicit step of 1/120 s of a spinning rubber
+ * block hitting a floor at dx = 4, 2 and 1 cm, preconditioned by Jacobi and by the multigrid
+ * V-cycle (solver/multigrid.h): iterations per Newton iteration and the step's seconds.
  *
  * Part 2, time to solution: 1 s of a block dropped onto a slip floor, for E = 5e6 Pa (Zhu's
  * Table 1 material) and E = 1e9 Pa, and of examples/rubber_bunny_implicit.json's rubber bunny
@@ -59,12 +59,7 @@ static mpm_sim *block(int n, double dx, double E, double drop, const char *solve
            side + 12 * dx, domain, side + 12 * dx, dx, end, solver, E, 6 * dx + side / 2,
            floor_y + dx + drop + side / 2, 6 * dx + side / 2, side / 2, side / 2, side / 2,
            floor_y);
-  mpm_scene scene;
-  if (mpm_scene_parse(text, "bench-implicit.json", &scene, err) != MPM_OK) return NULL;
-  mpm_sim *sim = NULL;
-  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
-  mpm_scene_free(&scene);
-  return st == MPM_OK ? sim : NULL;
+  return bench_sim_from_text(text, "bench-implicit.json", err);
 }
 
 /* The rubber bunny of examples/rubber_bunny_implicit.json (dx 1.5 cm, E = 1e7 Pa, nu 0.4, thrown
@@ -84,12 +79,7 @@ static mpm_sim *bunny(const char *mesh, const char *solver, mpm_error *err) {
       " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0,0.1,0],"
       " \"normal\": [0,1,0]}, \"rule\": \"separate\", \"friction\": 0.5}]}",
       solver, mesh);
-  mpm_scene scene;
-  if (mpm_scene_parse(text, "bench-bunny.json", &scene, err) != MPM_OK) return NULL;
-  mpm_sim *sim = NULL;
-  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
-  mpm_scene_free(&scene);
-  return st == MPM_OK ? sim : NULL;
+  return bench_sim_from_text(text, "bench-bunny.json", err);
 }
 
 /* examples/meshes/bunny.obj from the working folder or beside the program (build/mpm), or NULL. */
@@ -241,12 +231,7 @@ static mpm_sim *spinning_block(double dx, double E, const char *solver, mpm_erro
            side * 1.5 + 2 * pad, side + floor_y + 2 * pad, side * 1.5 + 2 * pad, dx, solver, E,
            pad + side * 0.75, floor_y + side / 2 + 0.25 * dx, pad + side * 0.75, side / 2, side / 2,
            side / 2, floor_y);
-  mpm_scene scene;
-  if (mpm_scene_parse(text, "bench-spin.json", &scene, err) != MPM_OK) return NULL;
-  mpm_sim *sim = NULL;
-  const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
-  mpm_scene_free(&scene);
-  return st == MPM_OK ? sim : NULL;
+  return bench_sim_from_text(text, "bench-spin.json", err);
 }
 
 /* The third implicit step of 1/120 s of the spinning block at three resolutions (the fastest

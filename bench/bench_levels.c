@@ -39,12 +39,7 @@ static mpm_sim *block(double dx_fine, int levels, mpm_error *err) {
            "\"half_extent\": [0.375,0.375,0.375]}, \"material\": \"m\", \"jitter\": 0}],"
            " \"output\": {\"vtu\": false, \"stats\": false}}",
            dx0, grid);
-  mpm_scene s;
-  if (mpm_scene_parse(json, "bench-levels", &s, err) != MPM_OK) return NULL;
-  mpm_sim *sim = NULL;
-  const mpm_status st = mpm_sim_create_from_scene(&s, &sim, err);
-  mpm_scene_free(&s);
-  return st == MPM_OK ? sim : NULL;
+  return bench_sim_from_text(json, "bench-levels", err);
 }
 
 int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale, int levels) {

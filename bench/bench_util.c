@@ -120,8 +120,12 @@ mpm_sim *bench_block(int n, int domains, const char *on_instability, mpm_error *
       "\"domains\": %s}]}",
       domain, domain, domain, dx, on_instability, lo + side / 2, lo + side / 2 + 5 * dx,
       lo + side / 2, side / 2, side / 2, side / 2, domains ? "true" : "false");
+  return bench_sim_from_text(text, "bench-block", err);
+}
+
+struct mpm_sim *bench_sim_from_text(const char *text, const char *name, mpm_error *err) {
   mpm_scene scene;
-  if (mpm_scene_parse(text, "bench-block", &scene, err) != MPM_OK) return NULL;
+  if (mpm_scene_parse(text, name, &scene, err) != MPM_OK) return NULL;
   mpm_sim *sim = NULL;
   const mpm_status st = mpm_sim_create_from_scene(&scene, &sim, err);
   mpm_scene_free(&scene);

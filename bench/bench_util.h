@@ -38,6 +38,9 @@ int bench_transfer_stages(struct mpm_sim *sim, int repeats, double out[3]);
 /* A neo-Hookean cube of about n particles (8 per cell, no jitter, dx = 2 cm) a few cells above
  * the floor of its box, as a simulation: with particle domains when `domains`, with the solver's
  * on_instability = `on_instability`. NULL with err set on failure. */
+/* A simulation from scene text (`name` for messages); NULL with err set. */
+struct mpm_sim *bench_sim_from_text(const char *text, const char *name, mpm_error *err);
+
 struct mpm_sim *bench_block(int n, int domains, const char *on_instability, mpm_error *err);
 
 #endif

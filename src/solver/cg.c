@@ -44,7 +44,9 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
   if (!r || !z || !p || !q) return -1;
   const int own = options->precondition != NULL; /* the caller's preconditioner */
   mpm_real **w = own ? mpm_dofs_vector(d, "cg.w") : NULL;
-  if (own && !w) return -1;
+  /* flexible: the residual before the step, for Polak-Ribiere's beta */
+  mpm_real **rold = own && options->flexible ? mpm_dofs_vector(d, "cg.rold") : NULL;
+  if ((own && !w) || (own && options->flexible && !rold)) return -1;
   result->iterations = 0;
   /* the scale: |P b| in the preconditioner's norm, sqrt(<P b, P D^-1 P b>) */
   mpm_dofs_copy(d, b, p);
@@ -88,6 +90,7 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
     if (!(pq > 0)) break; /* A is not positive on the search direction: breakdown */
     const mpm_real alpha = (mpm_real)(rz / pq);
     mpm_dofs_axpy(d, alpha, p, x);
+    if (rold) mpm_dofs_copy(d, r, rold);
     mpm_dofs_axpy(d, -alpha, q, r);
     result->iterations = k + 1;
     double rz_new;
@@ -110,7 +113,10 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
       result->converged = 1;
       break;
     }
-    const mpm_real beta = (mpm_real)(rz_new / rz);
+    /* flexible (a preconditioner that is not symmetric): beta = <z, r - r_old> / <z_old, r_old>
+       (Polak-Ribiere; Notay 2000), which keeps the directions conjugate as far as it can */
+    const double num = rold ? rz_new - mpm_dofs_dot(d, NULL, rold, z) : rz_new;
+    const mpm_real beta = (mpm_real)(num / rz);
     rz = rz_new;
     mpm_dofs_xpby(d, z, beta, p); /* p = z + beta p */
   }

@@ -49,6 +49,9 @@ typedef struct mpm_cg_options {
      the stopping test means the same whatever preconditions the iterations */
   void (*precondition)(void *user, mpm_real *const r[3], mpm_real *const z[3]);
   void *precondition_user;
+  /* with `precondition`: 1 when it is not symmetric (flexible CG: Polak-Ribiere's beta, one
+     more vector "cg.rold" and one more dot product an iteration) */
+  int flexible;
 } mpm_cg_options;
 
 typedef struct mpm_cg_result {

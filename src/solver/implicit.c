@@ -421,10 +421,10 @@ static double residual_norm(mpm_implicit *s, mpm_real *const diag[3], mpm_real *
  * an implicit step's length multiplies a stiff mode's error by about (omega dt)^2 (10^4 for a
  * 1e9 Pa block at dt = 1 ms); a residual below the tolerance ends the solve at once, so from v*
  * errors of the rounding's size grew step after step up to the tolerance, and stayed there as
- * elastic energy out of nothing. g, r, w, keep: work. */
-static void initial_guess(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const b[3],
-                          mpm_real *const g[3], mpm_real *const r[3], mpm_real *const w[3],
-                          mpm_real *const keep[3]) {
+ * elastic energy out of nothing. Returns the kept guess's residual. g, r, w, keep: work. */
+static double initial_guess(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const b[3],
+                            mpm_real *const g[3], mpm_real *const r[3], mpm_real *const w[3],
+                            mpm_real *const keep[3]) {
   mpm_dofs *d = s->dofs;
   const long n = (long)d->count;
   double best = INFINITY;
@@ -455,6 +455,7 @@ static void initial_guess(mpm_implicit *s, mpm_real *const diag[3], mpm_real *co
     }
   }
   mpm_dofs_copy(d, keep, d->v);
+  return best;
 }
 
 /* -grad E at v = d->v into b, projected, and its free norm (E into *E):
@@ -478,6 +479,15 @@ static double neg_gradient(mpm_implicit *s, mpm_real *const diag[3], mpm_real *c
   }
   return free_norm(s, diag, b, w);
 }
+
+/* A step whose first residual is within this many tolerances of the scale is near balance:
+ * no line search (E is no guide there), and no multigrid hierarchy (Jacobi converges in a few
+ * iterations). */
+#define NEAR_BALANCE 10
+
+/* The smallest drop of its first residual a solve may ask for and still take the multigrid's
+ * one-pass cycle (see mpm_implicit_solve). */
+#define MG_ONE_PASS_DROP 1e-6
 
 /* The precision a solve can reach from its first residual in the real type: CG asks no more
  * of |r0| than this drop (cg.h, floor_drop). */
@@ -512,14 +522,6 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   mpm_implicit_build(s); /* at u = 0 (displaced above) */
   if (o->precondition) jacobi(s, diag);
   mpm_real *const *D = o->precondition ? diag : NULL;
-  /* the multigrid V-cycle preconditions CG where it is built; the residuals are measured in the
-     Jacobi norm D either way (cg.h), so the tolerance means the same */
-  const int multigrid = o->precondition == 2 && mpm_implicit_multigrid_supported(s);
-  if (multigrid) {
-    const double t0 = mpm_implicit_clock();
-    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return -1;
-    r->mg_setup_seconds = mpm_implicit_clock() - t0;
-  }
   /* the tolerance is relative to the step's impulses, and never below what the real type
      resolves */
   const double resolved = resolution_scale(s, D, t, u) / o->cg_tolerance;
@@ -527,19 +529,37 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   if (resolved > scale) scale = resolved;
   /* the first solve to the tolerance (or as far as the real type reaches); the Newton
      directions after it as inexact Newton does, to the tolerance of their own residual */
-  mpm_cg_options first = {o->cg_tolerance, o->cg_max_iterations, scale, REACHABLE_DROP, NULL, s};
+  mpm_cg_options first = {o->cg_tolerance, o->cg_max_iterations, scale, REACHABLE_DROP, NULL, s, 0};
   mpm_cg_options direction = {
-      o->cg_tolerance, o->cg_max_iterations, scale, o->cg_tolerance, NULL, s};
-  if (multigrid) first.precondition = direction.precondition = mpm_implicit_multigrid_precondition;
-  initial_guess(s, D, b, dv, t, u, v1);
+      o->cg_tolerance, o->cg_max_iterations, scale, o->cg_tolerance, NULL, s, 0};
+  const double guess = initial_guess(s, D, b, dv, t, u, v1);
+  /* the multigrid V-cycle preconditions CG where it is built and the step is not already near
+     balance (a body at rest or in free fall: Jacobi takes a few iterations there, fewer than
+     building the hierarchy costs); the residuals are measured in the Jacobi norm D either way
+     (cg.h), so the tolerance means the same */
+  const int multigrid = o->precondition == 2 && mpm_implicit_multigrid_supported(s) &&
+                        guess > NEAR_BALANCE * o->cg_tolerance * scale;
+  if (multigrid) {
+    const double t0 = mpm_implicit_clock();
+    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return -1;
+    r->mg_setup_seconds = mpm_implicit_clock() - t0;
+    first.precondition = direction.precondition = mpm_implicit_multigrid_precondition;
+    /* the one-pass cycle (not symmetric: flexible CG) where the solve asks a drop of 1e-6 or
+       less of its first residual; beyond it flexible CG stagnates (the double build's first
+       solves, to 1e-10: 40 iterations per Newton iteration where the symmetric cycle took 21)
+       and the symmetric cycle under plain CG goes on (solver/multigrid.h) */
+    first.flexible = first.floor_drop >= MG_ONE_PASS_DROP;
+    direction.flexible = direction.floor_drop >= MG_ONE_PASS_DROP;
+  }
   mpm_cg_result cg;
+  if (multigrid) s->mg->cheap = first.flexible;
   if (mpm_cg_solve(d, cg_apply, cg_project, s, D, b, d->v, &first, &cg)) return -1;
   cg_record(r, &cg);
   r->newton_iterations = 1;
   /* Newton iterations 2.. on E (Gast et al. 2015): the gradient in b, the step in dv; the step
      is done when the free DOFs' momentum out of balance is within the tolerance of the scale */
   int searched = 0;
-  const int near = cg.residual0 <= 10 * o->cg_tolerance * scale;
+  const int near = cg.residual0 <= NEAR_BALANCE * o->cg_tolerance * scale;
   for (int k = 1; k < o->newton_iterations;) {
     double E0;
     const double gn = neg_gradient(s, D, b, t, u, dv, &E0);
@@ -574,6 +594,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
        products) costs some 80 Jacobi-CG iterations on the rubber bunny; rebuilt each
        iteration it cost 10% more time for 13% fewer iterations */
     for (int c = 0; c < 3; ++c) memset(dv[c], 0, (size_t)n * sizeof(mpm_real));
+    if (multigrid) s->mg->cheap = direction.flexible;
     if (mpm_cg_solve(d, cg_apply, cg_project, s, D, b, dv, &direction, &cg)) return -1;
     cg_record(r, &cg);
     r->newton_iterations = ++k;

@@ -53,8 +53,9 @@ int mpm_implicit_multigrid_prepare(mpm_implicit *s) {
   const mpm_kernel *k = &s->tc->kernel;
   const mpm_mg_prolongation kind =
       k->kind == MPM_KERNEL_QUADRATIC ? MPM_MG_QUADRATIC : MPM_MG_LINEAR;
-  return mpm_multigrid_setup(s->mg, s->arena, rows, (const int32_t(*)[3])coord, k->width - 1, kind,
-                             COARSEST_NODES);
+  const int rc = mpm_multigrid_setup(s->mg, s->arena, rows, (const int32_t(*)[3])coord,
+                                     k->width - 1, kind, COARSEST_NODES);
+  return rc; /* the cycle (mg->cheap) is chosen solve by solve (implicit.c) */
 }
 
 static void tangent(void *user, uint32_t i, mpm_real C[81]) {

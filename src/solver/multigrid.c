@@ -571,9 +571,44 @@ static void cycle(mpm_multigrid *mg, int l) {
   for (int s = 0; s < mg->sweeps; ++s) smooth(mg, l, 0);
 }
 
+/* The cheap cycle: the coarse correction of b itself (x = 0, so the residual is b: no pass over
+ * the level's matrix for it), then one backward sweep; one pass over each level's matrix. */
+static void cycle_post(mpm_multigrid *mg, int l) {
+  mpm_mg_level *L = &mg->level[l];
+  if (l == mg->level_count - 1) {
+    dense_solve(mg, L->b, L->x);
+    return;
+  }
+  mpm_mg_level *C = &mg->level[l + 1];
+  const long n = (long)L->n, nc = (long)C->n;
+#pragma omp parallel for schedule(static) if (nc > 256)
+  for (long I = 0; I < nc; ++I) {
+    mpm_real acc[3] = {0, 0, 0};
+    for (uint32_t q = C->child_start[I]; q < C->child_start[I + 1]; ++q)
+      for (int e = 0; e < 3; ++e) acc[e] += C->cw[q] * L->b[3 * (size_t)C->child[q] + (size_t)e];
+    for (int e = 0; e < 3; ++e) C->b[3 * I + e] = acc[e];
+  }
+  cycle_post(mg, l + 1);
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (long i = 0; i < n; ++i) {
+    mpm_real acc[3] = {0, 0, 0};
+    for (int k = 0; k < 8; ++k) {
+      const int32_t J = L->parent[8 * (size_t)i + (size_t)k];
+      if (J < 0) break;
+      const mpm_real w = L->pw[8 * (size_t)i + (size_t)k];
+      for (int e = 0; e < 3; ++e) acc[e] += w * C->x[3 * (size_t)J + (size_t)e];
+    }
+    for (int e = 0; e < 3; ++e) L->x[3 * i + e] = acc[e];
+  }
+  if (l == 0) project_rows(mg, L->x);
+  for (int s = 0; s < mg->sweeps; ++s) smooth(mg, l, 0);
+}
+
 void mpm_multigrid_vcycle(mpm_multigrid *mg) {
   if (mg->level_count == 1) {
     dense_solve(mg, mg->level[0].b, mg->level[0].x);
+  } else if (mg->cheap) {
+    cycle_post(mg, 0);
   } else {
     cycle(mg, 0);
   }

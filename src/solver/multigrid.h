@@ -23,9 +23,16 @@
  * level does. The smoother is a symmetric block Gauss-Seidel: nodes coloured by their
  * coordinates modulo radius + 1 (a colour's nodes never share a block, so each colour runs in
  * parallel and the result does not depend on the thread count), each node's 3x3 diagonal block
- * inverted (pseudo-inverted where the projection leaves it singular): a forward sweep over the
- * colours before the coarse correction and a backward one after it, the forward sweep's
- * adjoint, which makes the V-cycle a symmetric operator, so CG stays CG. The coarsest level
+ * inverted (pseudo-inverted where the projection leaves it singular). Two cycles:
+ *   symmetric  a forward sweep over the colours before the coarse correction and a backward one
+ *              after it, the forward sweep's adjoint: a symmetric operator, for plain CG; it
+ *              reads each level's matrix three times (sweep, residual, sweep);
+ *   one-pass   (`cheap`, the implicit step's) the coarse correction of b itself, then the
+ *              backward sweep: one read of each level's matrix, not symmetric, so CG runs
+ *              flexible (cg.h). Measured on a spinning block (mpm bench implicit --only
+ *              resolution) it needed fewer iterations than the symmetric cycle, not more
+ *              (3.5-16 per Newton iteration against 12-15), in a third of the time each.
+ * The coarsest level
  * (at most `coarsest` nodes) is solved directly: a dense Cholesky factor in double, with the
  * pivots of null directions (a node held by obstacles) left out.
  *
@@ -74,6 +81,8 @@ typedef struct mpm_multigrid {
   mpm_mg_level level[MPM_MG_LEVELS_MAX];
   mpm_mg_prolongation prolongation;
   int sweeps; /* Gauss-Seidel sweeps before (forward) and after (backward) the coarse correction */
+  int cheap;  /* 1: the coarse correction of b then the backward sweeps only (not symmetric: for
+                 flexible CG), one pass over each level's matrix instead of three */
   /* the finest level's constraints: projector proj[k] (xx, xy, xz, yy, yz, zz) of row
      proj_row[k] */
   size_t constrained;
