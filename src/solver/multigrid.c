@@ -532,6 +532,39 @@ static void project_rows(const mpm_multigrid *mg, mpm_real *x) {
   }
 }
 
+/* The next coarser level's right-hand side: b_c = P^T v (v over level l's nodes). */
+static void restrict_to_coarser(mpm_multigrid *mg, int l, const mpm_real *v) {
+  mpm_mg_level *C = &mg->level[l + 1];
+  const long nc = (long)C->n;
+#pragma omp parallel for schedule(static) if (nc > 256)
+  for (long I = 0; I < nc; ++I) {
+    mpm_real acc[3] = {0, 0, 0};
+    for (uint32_t q = C->child_start[I]; q < C->child_start[I + 1]; ++q)
+      for (int e = 0; e < 3; ++e) acc[e] += C->cw[q] * v[3 * (size_t)C->child[q] + (size_t)e];
+    for (int e = 0; e < 3; ++e) C->b[3 * I + e] = acc[e];
+  }
+}
+
+/* x = P x_c, or x += P x_c with add, on level l (projected on the finest level). */
+static void prolong_from_coarser(mpm_multigrid *mg, int l, int add) {
+  mpm_mg_level *L = &mg->level[l];
+  const mpm_mg_level *C = &mg->level[l + 1];
+  const long n = (long)L->n;
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (long i = 0; i < n; ++i) {
+    mpm_real acc[3];
+    for (int e = 0; e < 3; ++e) acc[e] = add ? L->x[3 * i + e] : 0;
+    for (int k = 0; k < 8; ++k) {
+      const int32_t J = L->parent[8 * (size_t)i + (size_t)k];
+      if (J < 0) break;
+      const mpm_real w = L->pw[8 * (size_t)i + (size_t)k];
+      for (int e = 0; e < 3; ++e) acc[e] += w * C->x[3 * (size_t)J + (size_t)e];
+    }
+    for (int e = 0; e < 3; ++e) L->x[3 * i + e] = acc[e];
+  }
+  if (l == 0) project_rows(mg, L->x);
+}
+
 static void cycle(mpm_multigrid *mg, int l) {
   mpm_mg_level *L = &mg->level[l];
   if (l == mg->level_count - 1) {
@@ -548,26 +581,9 @@ static void cycle(mpm_multigrid *mg, int l) {
     row_product(L, (size_t)i, L->x, acc);
     for (int e = 0; e < 3; ++e) L->r[3 * i + e] = L->b[3 * i + e] - acc[e];
   }
-  mpm_mg_level *C = &mg->level[l + 1];
-  const long nc = (long)C->n;
-#pragma omp parallel for schedule(static) if (nc > 256)
-  for (long I = 0; I < nc; ++I) {
-    mpm_real acc[3] = {0, 0, 0};
-    for (uint32_t q = C->child_start[I]; q < C->child_start[I + 1]; ++q)
-      for (int e = 0; e < 3; ++e) acc[e] += C->cw[q] * L->r[3 * (size_t)C->child[q] + (size_t)e];
-    for (int e = 0; e < 3; ++e) C->b[3 * I + e] = acc[e];
-  }
+  restrict_to_coarser(mg, l, L->r);
   cycle(mg, l + 1);
-  /* x += P x_c (projected on the finest level) */
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (long i = 0; i < n; ++i)
-    for (int k = 0; k < 8; ++k) {
-      const int32_t J = L->parent[8 * (size_t)i + (size_t)k];
-      if (J < 0) break;
-      const mpm_real w = L->pw[8 * (size_t)i + (size_t)k];
-      for (int e = 0; e < 3; ++e) L->x[3 * i + e] += w * C->x[3 * (size_t)J + (size_t)e];
-    }
-  if (l == 0) project_rows(mg, L->x);
+  prolong_from_coarser(mg, l, 1); /* x += P x_c */
   for (int s = 0; s < mg->sweeps; ++s) smooth(mg, l, 0);
 }
 
@@ -579,28 +595,9 @@ static void cycle_post(mpm_multigrid *mg, int l) {
     dense_solve(mg, L->b, L->x);
     return;
   }
-  mpm_mg_level *C = &mg->level[l + 1];
-  const long n = (long)L->n, nc = (long)C->n;
-#pragma omp parallel for schedule(static) if (nc > 256)
-  for (long I = 0; I < nc; ++I) {
-    mpm_real acc[3] = {0, 0, 0};
-    for (uint32_t q = C->child_start[I]; q < C->child_start[I + 1]; ++q)
-      for (int e = 0; e < 3; ++e) acc[e] += C->cw[q] * L->b[3 * (size_t)C->child[q] + (size_t)e];
-    for (int e = 0; e < 3; ++e) C->b[3 * I + e] = acc[e];
-  }
+  restrict_to_coarser(mg, l, L->b);
   cycle_post(mg, l + 1);
-#pragma omp parallel for schedule(static) if (n > 256)
-  for (long i = 0; i < n; ++i) {
-    mpm_real acc[3] = {0, 0, 0};
-    for (int k = 0; k < 8; ++k) {
-      const int32_t J = L->parent[8 * (size_t)i + (size_t)k];
-      if (J < 0) break;
-      const mpm_real w = L->pw[8 * (size_t)i + (size_t)k];
-      for (int e = 0; e < 3; ++e) acc[e] += w * C->x[3 * (size_t)J + (size_t)e];
-    }
-    for (int e = 0; e < 3; ++e) L->x[3 * i + e] = acc[e];
-  }
-  if (l == 0) project_rows(mg, L->x);
+  prolong_from_coarser(mg, l, 0); /* x = P x_c */
   for (int s = 0; s < mg->sweeps; ++s) smooth(mg, l, 0);
 }
 
