@@ -269,8 +269,9 @@ static int resolution(void) {
         const mpm_solver_figures *f = &sim->last_frame_solver; /* the step was the frame */
         char where[160] = "";
         if (m == 1)
-          snprintf(where, sizeof where, " (building the hierarchy %.2f s, V-cycles %.2f s)",
-                   f->mg_setup_seconds, f->mg_cycle_seconds);
+          snprintf(where, sizeof where,
+                   " (building the hierarchy %.2f s, V-cycles %.2f s; the hierarchy %.1f MiB)",
+                   f->mg_setup_seconds, f->mg_cycle_seconds, (double)f->mg_bytes / 1048576.0);
         printf("    E = %g Pa, dx = %g m, %zu particles, %s: %lld Newton iterations, %.1f CG "
                "iterations per Newton iteration, %.2f s for the step%s%s\n",
                moduli[e], spacing[k], sim->particles.count, pre[m], f->newton_iterations,

@@ -577,6 +577,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
     const double t0 = mpm_implicit_clock();
     if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return -1;
     r->mg_setup_seconds = mpm_implicit_clock() - t0;
+    r->mg_bytes = s->mg->bytes;
     first.precondition = direction.precondition = mpm_implicit_multigrid_precondition;
     /* the one-pass cycle (not symmetric: flexible CG) where the solve asks a drop of 1e-6 or
        less of its first residual; beyond it flexible CG stagnates (the double build's first

@@ -69,6 +69,7 @@ typedef struct mpm_implicit_result {
   int cg_converged;      /* every CG solve reached the tolerance */
   int line_search_failed;
   double mg_setup_seconds, mg_cycle_seconds; /* multigrid: the hierarchy's build, the V-cycles */
+  size_t mg_bytes;                           /* multigrid: the hierarchy's memory */
 } mpm_implicit_result;
 
 /* Material points of p in begin .. begin + count (sorted into `grid` by its activation) that

@@ -325,6 +325,7 @@ static int galerkin(mpm_multigrid *mg, int l) {
   const size_t wslots = (size_t)ws * (size_t)ws * (size_t)ws;
   mpm_real *AP = mpm_arena_alloc(mg->arena, (F->n * wslots * 9 + 1) * sizeof *AP);
   if (!AP) return -1;
+  mg->bytes += F->n * wslots * 9 * sizeof *AP;
   const long nf = (long)F->n;
   /* A P, row by fine row: (A P)_{i, J} = sum_j A_ij w_jJ, J - floor(x_i / 2) in the window */
 #pragma omp parallel for schedule(static) if (nf > 256)

@@ -95,7 +95,7 @@ typedef struct mpm_multigrid {
   uint8_t *null;
   double *dense_x;
   mpm_arena *arena;
-  size_t bytes; /* what the levels took from the arena */
+  size_t bytes; /* what the levels and the Galerkin products' scratch took from the arena */
 } mpm_multigrid;
 
 /* The hierarchy over the finest level's n nodes at integer coordinates coord (distinct), for a

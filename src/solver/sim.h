@@ -35,6 +35,7 @@ typedef struct mpm_solver_figures {
   int last_cg, last_newton; /* the last step's (progress line) */
   double last_residual;
   double mg_setup_seconds, mg_cycle_seconds; /* multigrid: its build and its V-cycles */
+  size_t mg_bytes;                           /* multigrid: the largest hierarchy of a step */
 } mpm_solver_figures;
 
 /* The steps of the current frame (stats.csv's dt columns). A frame's last step or two are

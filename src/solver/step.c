@@ -308,6 +308,7 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
   f->newton_iterations += c->solve.newton_iterations;
   f->mg_setup_seconds += c->solve.mg_setup_seconds;
   f->mg_cycle_seconds += c->solve.mg_cycle_seconds;
+  if (c->solve.mg_bytes > f->mg_bytes) f->mg_bytes = c->solve.mg_bytes;
   if (c->solve.cg_iterations > f->cg_max) f->cg_max = c->solve.cg_iterations;
   if (c->solve.cg_residual > f->residual_max) f->residual_max = c->solve.cg_residual;
   f->last_cg = c->solve.cg_iterations;
