@@ -1,3 +1,4 @@
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
 /* implicit_multigrid.c - the multigrid preconditioner of the implicit step (solver/multigrid.h)
  * on its DOF set: the finest level's rows are the grid nodes with mass, its matrix
  * M + dt^2 K assembled from the particles (transfer/operators.h, mpm_assemble_stiffness) with
