@@ -3,6 +3,7 @@
  * (see implicit.h). */
 #include "solver/implicit.h"
 #include "core/parallel.h"
+#include "solver/sim.h" /* mpm_wall_seconds */
 
 #include <math.h>
 #include <string.h>
@@ -574,9 +575,9 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   const int multigrid = o->precondition == 2 && mpm_implicit_multigrid_supported(s) &&
                         guess > NEAR_BALANCE * o->cg_tolerance * scale;
   if (multigrid) {
-    const double t0 = mpm_implicit_clock();
+    const double t0 = mpm_wall_seconds();
     if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return -1;
-    r->mg_setup_seconds = mpm_implicit_clock() - t0;
+    r->mg_setup_seconds = mpm_wall_seconds() - t0;
     r->mg_bytes = s->mg->bytes;
     first.precondition = direction.precondition = mpm_implicit_multigrid_precondition;
     /* the one-pass cycle (not symmetric: flexible CG) where the solve asks a drop of 1e-6 or

@@ -167,8 +167,6 @@ int mpm_implicit_multigrid_supported(const mpm_implicit *s);
 int mpm_implicit_multigrid_prepare(mpm_implicit *s);
 int mpm_implicit_multigrid_build(mpm_implicit *s);
 void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_real *const z[3]);
-/* A monotonic clock, s (the multigrid's timings). */
-double mpm_implicit_clock(void);
 
 /* Build the constraints from the predicted velocity v (over the DOF set). 0 or -1 (OOM). */
 int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);

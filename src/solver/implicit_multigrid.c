@@ -1,4 +1,3 @@
-#define _POSIX_C_SOURCE 200809L /* clock_gettime */
 /* implicit_multigrid.c - the multigrid preconditioner of the implicit step (solver/multigrid.h)
  * on its DOF set: the finest level's rows are the grid nodes with mass, its matrix
  * M + dt^2 K assembled from the particles (transfer/operators.h, mpm_assemble_stiffness) with
@@ -6,16 +5,10 @@
  * constraints those of the step, and the V-cycle is CG's preconditioner. */
 #include "core/parallel.h"
 #include "solver/implicit.h"
+#include "solver/sim.h" /* mpm_wall_seconds */
 #include "transfer/operators.h"
 
 #include <string.h>
-#include <time.h>
-
-double mpm_implicit_clock(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* the coarsest level solved directly: at most this many nodes (a dense factor of 3 x 64
    unknowns costs less than one fine sweep) */
@@ -89,7 +82,7 @@ int mpm_implicit_multigrid_build(mpm_implicit *s) {
 
 void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_real *const z[3]) {
   mpm_implicit *s = user;
-  const double t0 = mpm_implicit_clock();
+  const double t0 = mpm_wall_seconds();
   mpm_multigrid *mg = s->mg;
   mpm_mg_level *L = &mg->level[0];
   const long n = (long)L->n;
@@ -102,5 +95,5 @@ void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_r
 #pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
   for (long i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) z[c][s->mg_dof[i]] = L->x[3 * i + c];
-  s->mg_cycle_seconds += mpm_implicit_clock() - t0;
+  s->mg_cycle_seconds += mpm_wall_seconds() - t0;
 }
