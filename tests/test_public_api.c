@@ -178,6 +178,49 @@ static void test_view_fields(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The state view (no J, no stress) shares the full view's arrays; vector components are
+ * component_stride bytes apart (one strided array each), stress components stress_stride; a
+ * held simulation keeps the arrays of an earlier view readable across steps and frees them
+ * with the last release. */
+static void test_view_state_and_strides(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  const mpm_particle_view s = mpm_sim_particle_state(sim);
+  assert_true(s.count > 0);
+  assert_null(s.J);
+  for (int c = 0; c < 9; ++c) assert_null(s.stress[c]);
+  assert_int_equal(s.stress_stride, 0);
+  assert_true(s.component_stride >= s.count * s.real_size);
+  const char *x0 = s.x[0], *v0 = s.v[0], *F0 = s.F[0];
+  for (int d = 0; d < 3; ++d) {
+    assert_ptr_equal(s.x[d], x0 + (size_t)d * s.component_stride);
+    assert_ptr_equal(s.v[d], v0 + (size_t)d * s.component_stride);
+  }
+  for (int c = 0; c < 9; ++c) assert_ptr_equal(s.F[c], F0 + (size_t)c * s.component_stride);
+  const mpm_particle_view v = mpm_sim_particles(sim);
+  assert_int_equal(v.count, s.count);
+  assert_ptr_equal(v.x[0], s.x[0]);
+  assert_ptr_equal(v.id, s.id);
+  assert_int_equal(v.component_stride, s.component_stride);
+  assert_non_null(v.J);
+  assert_true(v.stress_stride >= v.count * v.real_size);
+  for (int c = 0; c < 9; ++c)
+    assert_ptr_equal(v.stress[c], (const char *)v.stress[0] + (size_t)c * v.stress_stride);
+  /* held: the frame's reorders move the arrays within their block, the old pointers stay
+     readable; the values there are stale but finite numbers of the state */
+  mpm_sim_hold_particle_arrays(sim, 1);
+  const mpm_particle_view old = mpm_sim_particle_state(sim);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
+  double sum = 0;
+  for (size_t i = 0; i < old.count; ++i) sum += at(&old, old.x[0], i);
+  assert_true(isfinite(sum));
+  mpm_sim_hold_particle_arrays(sim, -1);
+  mpm_sim_hold_particle_arrays(sim, 0); /* no change */
+  mpm_sim_destroy(sim);
+}
+
 static void test_view_temperature(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
@@ -221,6 +264,7 @@ int main(void) {
       cmocka_unit_test(test_create_from_json),
       cmocka_unit_test(test_set_threads),
       cmocka_unit_test(test_view_fields),
+      cmocka_unit_test(test_view_state_and_strides),
       cmocka_unit_test(test_view_temperature),
       cmocka_unit_test(test_collider_pose),
   };

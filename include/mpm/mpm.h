@@ -171,9 +171,28 @@ typedef struct mpm_particle_view {
   const void *plastic;
   const void *J;         /* det F, the volume ratio (elastic part for the plastic models) */
   const void *stress[9]; /* Cauchy stress sigma = P F^T / J, row-major, Pa */
+  /* Bytes from one component to the next of x, v and F: x[d] is (const char *)x[0] + d *
+   * component_stride, F[c] is (const char *)F[0] + c * component_stride, so that a vector
+   * field is one strided array (particle i's x[d] at i * real_size + d * component_stride:
+   * numpy's strides (real_size, component_stride) for an n x 3 array, no copy) */
+  size_t component_stride;
+  size_t stress_stride; /* the same for stress[c] (0 in mpm_sim_particle_state's view) */
 } mpm_particle_view;
 
 MPM_API mpm_particle_view mpm_sim_particles(const mpm_sim *sim);
+
+/// The same view without J and stress (NULL there): no stress is evaluated, so it costs reading
+/// the pointers (with particle domains, copying the particles into one set). For a program that
+/// reads the state every step.
+MPM_API mpm_particle_view mpm_sim_particle_state(const mpm_sim *sim);
+
+/// For a binding that hands the view's arrays to garbage-collected code (the Python module's
+/// numpy arrays): delta +1 holds them, -1 releases a hold. While any hold is on, the arrays
+/// the simulation would free (when it adds particles and grows its arrays, or replaces the
+/// view's buffers) stay allocated, and are freed when the last hold is released: a pointer
+/// from an earlier view then reads stale values (the particles are reordered every step), never
+/// freed memory. mpm_sim_destroy frees everything whatever the holds.
+MPM_API void mpm_sim_hold_particle_arrays(mpm_sim *sim, int delta);
 
 /// A collider of the scene (its `colliders` list, in order) at the simulation's current time.
 typedef struct mpm_collider_state {

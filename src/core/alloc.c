@@ -9,7 +9,7 @@
  *  - their starts are staggered by a different multiple of 128 bytes each, because structure-of-
  *    arrays components allocated at the same offset within a page map element i of every array
  *    to the same cache set, and 26 streams then thrash an 8-way L1/L2. */
-#define _DEFAULT_SOURCE /* madvise flags */
+#define _GNU_SOURCE /* madvise flags, mremap */
 #include "core/alloc.h"
 #include "core/real.h"
 
@@ -105,4 +105,129 @@ int mpm_grow(void **buf, size_t *cap, size_t n, size_t size) {
   *buf = b;
   *cap = c;
   return 0;
+}
+
+/* ---- growable blocks ---------------------------------------------------------------- */
+
+static void count_bytes(size_t bytes) {
+  size_t now = atomic_fetch_add(&live_bytes, bytes) + bytes;
+  size_t peak = atomic_load(&peak_bytes);
+  while (now > peak && !atomic_compare_exchange_weak(&peak_bytes, &peak, now)) {
+  }
+}
+
+static size_t page_round(size_t bytes) {
+  const size_t page = 4096;
+  return (bytes + page - 1) / page * page;
+}
+
+/* An address range of `total` bytes (a page multiple), aligned to 2 MiB when it is large enough
+ * for huge pages (the kernel backs a range with them only where 2 MiB-aligned), reserved with
+ * `prot`. MAP_FAILED on failure. */
+static void *map_aligned(size_t total, int prot) {
+  const int flags = MAP_PRIVATE | MAP_ANONYMOUS | (prot == PROT_NONE ? MAP_NORESERVE : 0);
+  if (total < HUGE_THRESHOLD) return mmap(NULL, total, prot, flags, -1, 0);
+  unsigned char *raw = mmap(NULL, total + HUGE_ALIGN, prot, flags, -1, 0);
+  if (raw == MAP_FAILED) return MAP_FAILED;
+  unsigned char *start =
+      (unsigned char *)(((uintptr_t)raw + HUGE_ALIGN - 1) & ~(uintptr_t)(HUGE_ALIGN - 1));
+  if (start > raw) munmap(raw, (size_t)(start - raw));
+  const size_t tail = (size_t)(raw + total + HUGE_ALIGN - (start + total));
+  if (tail) munmap(start + total, tail);
+  return start;
+}
+
+void *mpm_block_alloc(size_t bytes) {
+  atomic_fetch_add(&alloc_calls, 1);
+  const size_t total = page_round(bytes ? bytes : 1);
+  void *p = map_aligned(total, PROT_READ | PROT_WRITE);
+  if (p == MAP_FAILED) return NULL;
+#ifdef MADV_HUGEPAGE
+  if (total >= HUGE_THRESHOLD) madvise(p, total, MADV_HUGEPAGE);
+#endif
+  count_bytes(bytes);
+  return p;
+}
+
+void *mpm_block_grow(void *p, size_t old_bytes, size_t new_bytes) {
+  if (!p) return mpm_block_alloc(new_bytes);
+  atomic_fetch_add(&alloc_calls, 1);
+  const size_t old_total = page_round(old_bytes ? old_bytes : 1), total = page_round(new_bytes);
+  void *q;
+  if (total >= HUGE_THRESHOLD) {
+    /* onto an aligned range reserved for it: the pages move, huge ones stay huge */
+    void *at = map_aligned(total, PROT_NONE);
+    if (at == MAP_FAILED) return NULL;
+    q = mremap(p, old_total, total, MREMAP_MAYMOVE | MREMAP_FIXED, at);
+    if (q == MAP_FAILED) {
+      munmap(at, total);
+      return NULL;
+    }
+  } else {
+    q = mremap(p, old_total, total, MREMAP_MAYMOVE);
+    if (q == MAP_FAILED) return NULL;
+  }
+#ifdef MADV_HUGEPAGE
+  if (total >= HUGE_THRESHOLD) madvise(q, total, MADV_HUGEPAGE);
+#endif
+  atomic_fetch_sub(&live_bytes, old_bytes);
+  count_bytes(new_bytes);
+  return q;
+}
+
+void mpm_block_free(void *p, size_t bytes) {
+  if (!p) return;
+  munmap(p, page_round(bytes ? bytes : 1));
+  atomic_fetch_sub(&live_bytes, bytes);
+}
+
+/* ---- frees that wait for a holder ---------------------------------------------------- */
+
+static void keep_add(mpm_keep *k, void *p, size_t block_bytes) {
+  if (!p) return;
+  if (!k || k->holds <= 0) {
+    if (block_bytes)
+      mpm_block_free(p, block_bytes);
+    else
+      mpm_free(p);
+    return;
+  }
+  if (k->count == k->cap) {
+    const size_t cap = k->cap ? 2 * k->cap : 16;
+    struct mpm_kept *q = realloc(k->kept, cap * sizeof *q);
+    /* no room to remember it: it is never freed (a leak is safe; a pointer a holder still has
+       must not dangle) */
+    if (!q) return;
+    k->kept = q;
+    k->cap = cap;
+  }
+  k->kept[k->count++] = (struct mpm_kept){p, block_bytes};
+}
+
+void mpm_keep_free(mpm_keep *k, void *p) {
+  keep_add(k, p, 0);
+}
+
+void mpm_keep_free_block(mpm_keep *k, void *p, size_t bytes) {
+  keep_add(k, p, bytes ? bytes : 1);
+}
+
+void mpm_keep_hold(mpm_keep *k, int delta) {
+  k->holds += delta;
+  if (k->holds <= 0) {
+    k->holds = 0;
+    mpm_keep_clear(k);
+  }
+}
+
+void mpm_keep_clear(mpm_keep *k) {
+  for (size_t i = 0; i < k->count; ++i) {
+    if (k->kept[i].block_bytes)
+      mpm_block_free(k->kept[i].p, k->kept[i].block_bytes);
+    else
+      mpm_free(k->kept[i].p);
+  }
+  free(k->kept);
+  k->kept = NULL;
+  k->count = k->cap = 0;
 }

@@ -5,6 +5,17 @@
 
 #include <string.h>
 
+/* Under AddressSanitizer the block's padding (each slot past the capacity) is poisoned: an
+ * array overrun is caught there as it was at the end of an array of its own. */
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/asan_interface.h>
+#define POISON(p, n) ASAN_POISON_MEMORY_REGION(p, n)
+#define UNPOISON(p, n) ASAN_UNPOISON_MEMORY_REGION(p, n)
+#else
+#define POISON(p, n) ((void)(p), (void)(n))
+#define UNPOISON(p, n) ((void)(p), (void)(n))
+#endif
+
 void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS]) {
   int k = 0;
   for (int d = 0; d < 3; ++d) arrays[k++] = &p->x[d];
@@ -21,6 +32,8 @@ void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_
 mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t count) {
   mpm_particles v = *p;
   v.count = v.capacity = count;
+  v.block = NULL; /* a range owns no storage: it is neither grown nor reordered */
+  v.keep = NULL;
   if (!p->capacity) return v; /* no arrays to offset */
   mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays(&v, arrays);
@@ -32,27 +45,76 @@ mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t c
   return v;
 }
 
-static int regrow(void **ptr, size_t old_count, size_t new_count, size_t elem) {
+/* An integer array grown to new_count, its first old_count items kept; the old one to keep. */
+static int regrow(void **ptr, size_t old_count, size_t new_count, size_t elem, mpm_keep *keep) {
   void *q = mpm_alloc(new_count * elem);
   if (!q) return -1;
   if (*ptr && old_count) memcpy(q, *ptr, old_count * elem);
-  mpm_free(*ptr);
+  mpm_keep_free(keep, *ptr);
   *ptr = q;
   return 0;
 }
 
-int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
-  if (capacity <= p->capacity) return 0;
+/* The slot stride for a capacity: whole 4 KiB pages plus 128 bytes (particles.h). */
+static size_t slot_stride(size_t capacity) {
+  const size_t page = 4096, bytes = (capacity * sizeof(mpm_real) + page - 1) / page * page;
+  return (bytes + 128) / sizeof(mpm_real);
+}
+
+/* Point the real arrays at their slots of p->block, from slot p->first. */
+static void point_arrays(mpm_particles *p) {
   mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays(p, arrays);
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
-    if (regrow((void **)arrays[k], p->count, capacity, sizeof(mpm_real))) return -1;
-  if (regrow((void **)&p->material, p->count, capacity, sizeof(int32_t)) ||
-      regrow((void **)&p->body, p->count, capacity, sizeof(int32_t)) ||
-      regrow((void **)&p->level, p->count, capacity, sizeof(int32_t)) ||
-      regrow((void **)&p->id, p->count, capacity, sizeof(uint32_t)))
+    *arrays[k] = p->block + (size_t)(p->first + k) * p->stride;
+}
+
+static size_t block_bytes(size_t stride) {
+  return (MPM_PARTICLE_REAL_ARRAYS + 1) * stride * sizeof(mpm_real);
+}
+
+static void poison_padding(const mpm_particles *p) {
+  for (size_t k = 0; k <= MPM_PARTICLE_REAL_ARRAYS; ++k)
+    POISON(p->block + k * p->stride + p->capacity, (p->stride - p->capacity) * sizeof(mpm_real));
+}
+
+int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
+  if (capacity <= p->capacity) return 0;
+  const size_t stride = slot_stride(capacity);
+  /* the integer arrays first: when the block cannot grow after them, they are merely larger */
+  if (regrow((void **)&p->material, p->count, capacity, sizeof(int32_t), p->keep) ||
+      regrow((void **)&p->body, p->count, capacity, sizeof(int32_t), p->keep) ||
+      regrow((void **)&p->level, p->count, capacity, sizeof(int32_t), p->keep) ||
+      regrow((void **)&p->id, p->count, capacity, sizeof(uint32_t), p->keep))
     return -1;
+  mpm_real *block;
+  if (p->block) UNPOISON(p->block, block_bytes(p->stride));
+  if (p->block && !(p->keep && p->keep->holds > 0)) {
+    /* in place: the mapping grows (its pages move, no copy), then the arrays move up to their
+       new slots, the top one first (each lands above every slot still to move) */
+    block = mpm_block_grow(p->block, block_bytes(p->stride), block_bytes(stride));
+    if (!block) return -1;
+    for (int k = MPM_PARTICLE_REAL_ARRAYS - 1; k >= 0; --k) {
+      const size_t slot = (size_t)(p->first + k);
+      if (p->count)
+        memmove(block + slot * stride, block + slot * p->stride, p->count * sizeof(mpm_real));
+    }
+  } else {
+    /* a new block (the first, or the old one is held by a view and must stay where it is) */
+    block = mpm_block_alloc(block_bytes(stride));
+    if (!block) return -1;
+    mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
+    mpm_particles_real_arrays(p, arrays);
+    for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
+      if (p->count)
+        memcpy(block + (size_t)(p->first + k) * stride, *arrays[k], p->count * sizeof(mpm_real));
+    if (p->block) mpm_keep_free_block(p->keep, p->block, block_bytes(p->stride));
+  }
+  p->block = block;
+  p->stride = stride;
   p->capacity = capacity;
+  point_arrays(p);
+  poison_padding(p);
   return 0;
 }
 
@@ -62,13 +124,14 @@ int mpm_particles_init(mpm_particles *p, size_t capacity) {
 }
 
 void mpm_particles_free(mpm_particles *p) {
-  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
-  mpm_particles_real_arrays(p, arrays);
-  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) mpm_free(*arrays[k]);
-  mpm_free(p->material);
-  mpm_free(p->body);
-  mpm_free(p->level);
-  mpm_free(p->id);
+  if (p->block) {
+    UNPOISON(p->block, block_bytes(p->stride));
+    mpm_keep_free_block(p->keep, p->block, block_bytes(p->stride));
+  }
+  mpm_keep_free(p->keep, p->material);
+  mpm_keep_free(p->keep, p->body);
+  mpm_keep_free(p->keep, p->level);
+  mpm_keep_free(p->keep, p->id);
   memset(p, 0, sizeof *p);
 }
 
@@ -104,21 +167,29 @@ static void int_arrays(mpm_particles *p, uint32_t *a[4]) {
   a[3] = p->id;
 }
 
-void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,
-                           uint32_t *iscratch) {
+/* The free slot: the end away from p->first. */
+static mpm_real *free_slot(const mpm_particles *p) {
+  return p->block + (size_t)(p->first ? 0 : MPM_PARTICLE_REAL_ARRAYS) * p->stride;
+}
+
+void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, uint32_t *iscratch) {
   const long n = (long)p->count;
   if (n == 0) return;
   mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays(p, arrays);
-  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) {
+  /* each array into the free slot beside it, walking away from the free slot: from the top when
+     it is the last slot (each array one slot up), from the bottom when it is the first */
+  const int up = p->first == 0;
+  for (int j = 0; j < MPM_PARTICLE_REAL_ARRAYS; ++j) {
+    const int k = up ? MPM_PARTICLE_REAL_ARRAYS - 1 - j : j;
     const mpm_real *src = *arrays[k];
-    mpm_real *dst = *scratch;
+    mpm_real *dst = p->block + (size_t)(k + (up ? 1 : 0)) * p->stride;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) dst[i] = src[perm[i]];
-    *scratch = *arrays[k];
     *arrays[k] = dst;
   }
-  /* integer arrays go through the integer scratch the same way */
+  p->first = up;
+  /* integer arrays go through the integer scratch (their pointers stay) */
   uint32_t *iarrays[4];
   int_arrays(p, iarrays);
   for (int k = 0; k < 4; ++k) {
@@ -130,8 +201,9 @@ void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **sc
 }
 
 void mpm_particles_move(mpm_particles *p, const uint32_t *dest, const uint32_t *src, size_t n,
-                        mpm_real *rscratch, uint32_t *iscratch) {
+                        uint32_t *iscratch) {
   if (n == 0) return;
+  mpm_real *rscratch = free_slot(p);
   mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays(p, arrays);
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) {

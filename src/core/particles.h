@@ -2,7 +2,17 @@
  *
  * Every component is its own aligned array so that kernels stream and vectorize across
  * particles. The order of particles changes every step (they are sorted into grid blocks);
- * `id` is the stable identity written to outputs. */
+ * `id` is the stable identity written to outputs.
+ *
+ * The 31 real arrays share one block of 32 slots of `stride` reals each, in
+ * mpm_particles_real_arrays order from slot `first` (0 or 1); the other end's slot is free. A
+ * reorder gathers each array into its free neighbour, walking away from the free slot, so the
+ * free slot moves to the other end and the arrays stay in order: a vector's components (x, v,
+ * F, ...) are always `stride` reals apart, which the public view states (a binding can show
+ * them as one strided array without a copy), and the reorder needs no scratch of its own.
+ * The slot stride is the capacity rounded up to whole 4 KiB pages plus 128 bytes, so that
+ * element i of consecutive arrays falls in different cache sets (as alloc.c staggers separate
+ * arrays). */
 #ifndef MPM_CORE_PARTICLES_H
 #define MPM_CORE_PARTICLES_H
 
@@ -34,6 +44,12 @@ typedef struct mpm_particles {
   int32_t *level; /* particle type (Gao et al. sec. 7.1): the grid level whose spacing its box
                      matches, L_p = dx_level; 0 on a uniform grid */
   uint32_t *id;
+  /* storage (see above): NULL block for a range of another set (mpm_particles_range) */
+  mpm_real *block;
+  size_t stride; /* reals from one real array to the next */
+  int first;     /* the slot of the first real array, 0 or 1 */
+  /* NULL, or where replaced arrays go instead of being freed while a view holds them */
+  struct mpm_keep *keep;
 } mpm_particles;
 
 /* All real-valued component arrays, for loops that treat them alike (permute, grow). */
@@ -56,16 +72,16 @@ void mpm_particles_real_arrays(mpm_particles *p, mpm_real **arrays[MPM_PARTICLE_
  * transfer grids); it offsets every array, so that an array added later cannot be left behind. */
 mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t count);
 
-/* Reorder all arrays so that new[i] = old[perm[i]]. scratch holds `count` reals and may be
- * swapped with an array (so its pointer changes). Parallel over particles. */
-void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, mpm_real **scratch,
-                           uint32_t *iscratch);
+/* Reorder all arrays so that new[i] = old[perm[i]]: the real arrays' pointers change (each moves
+ * one slot), the integer arrays go through iscratch (`count` integers) and keep theirs. Parallel
+ * over particles. p must own its storage (not a range). */
+void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, uint32_t *iscratch);
 
 /* Move particle src[k] to slot dest[k] in every array, k < n, where dest is a permutation of src
- * (the particles at those slots trade places; the others stay). rscratch holds n reals and
- * iscratch n integers. For reorders that touch a few particles: a full permute reads and
+ * (the particles at those slots trade places; the others stay), through the free slot and
+ * iscratch (n integers). For reorders that touch a few particles: a full permute reads and
  * writes every array whole. */
 void mpm_particles_move(mpm_particles *p, const uint32_t *dest, const uint32_t *src, size_t n,
-                        mpm_real *rscratch, uint32_t *iscratch);
+                        uint32_t *iscratch);
 
 #endif

@@ -193,7 +193,7 @@ static mpm_status group(mpm_sim *sim) {
       if (a->of[i] != t) holes[t + 1]++, moving++;
   if (2 * moving > p->count) { /* most move: one stable counting sort */
     for (size_t i = 0; i < p->count; ++i) a->perm[count[a->of[i]]++] = (uint32_t)i;
-    mpm_particles_permute(p, a->perm, &sim->scratch, sim->iscratch);
+    mpm_particles_permute(p, a->perm, sim->iscratch);
     return MPM_OK;
   }
   for (int t = 0; t < nt; ++t) holes[t + 1] += holes[t];
@@ -206,7 +206,7 @@ static mpm_status group(mpm_sim *sim) {
         dest[at_dest[t]++] = (uint32_t)i;      /* a hole of t */
         src[at_src[a->of[i]]++] = (uint32_t)i; /* a particle bound for its grid's holes */
       }
-  mpm_particles_move(p, dest, src, moving, sim->scratch, sim->iscratch);
+  mpm_particles_move(p, dest, src, moving, sim->iscratch);
   return MPM_OK;
 }
 
@@ -249,7 +249,7 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim) {
     }
     if (mpm_sim_ensure_scratch(sim))
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
-    mpm_particles_permute(p, a->perm, &sim->scratch, sim->iscratch);
+    mpm_particles_permute(p, a->perm, sim->iscratch);
     for (int t = 0; t < a->tgrid_count; ++t) {
       uint32_t *perm = mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm;
       for (size_t j = 0; j < a->range[t + 1] - a->range[t]; ++j) perm[j] = (uint32_t)j;

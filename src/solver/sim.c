@@ -410,7 +410,8 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_particles_free(&sim->backup);
   mpm_particles_free(&sim->domain_backup);
   mpm_particles_free(&sim->view);
-  mpm_free(sim->view_derived);
+  mpm_keep_free(&sim->view_keep, sim->view_derived);
+  mpm_keep_clear(&sim->view_keep); /* whatever a binding still holds: the handle is gone */
   for (int k = 0; k < 18; ++k) mpm_free(sim->corner_backup[k]);
   mpm_domain_set_free(&sim->domains);
   for (int i = 0; i < sim->surface_count; ++i) mpm_embedded_surface_free(&sim->surfaces[i]);
@@ -431,7 +432,6 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_dofs_free(&sim->dofs);
   mpm_heat_free(&sim->heat);
   mpm_arena_free(&sim->step_arena);
-  mpm_free(sim->scratch);
   mpm_free(sim->iscratch);
   free(sim->frame_times);
   free(sim->frame_files);

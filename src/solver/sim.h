@@ -8,6 +8,7 @@
 #include "collide/body_force.h"
 #include "collide/collider.h"
 #include "domain/domain.h"
+#include "core/alloc.h"
 #include "core/particles.h"
 #include "domain/embed.h"
 #include "grid/grid.h"
@@ -79,8 +80,8 @@ struct mpm_sim {
   mpm_heat heat;                 /* heat transfer's scratch and figures (scene `heat`) */
   size_t melted_domains;         /* domain particles switched off by melting so far */
   mpm_arena step_arena;          /* the step's scratch, taken back when the next step begins */
-  mpm_real *scratch;             /* per-particle buffers for the periodic reorder */
-  uint32_t *iscratch;
+  uint32_t *iscratch; /* per-particle integers for the periodic reorder (the reals reorder
+                         within their own storage: core/particles.h) */
   size_t scratch_capacity;
   int reorder_interval;     /* physically reorder particles every this many steps */
   mpm_thread_tuner threads; /* the step's thread count, measured (solver/thread_tuner.h) */
@@ -137,6 +138,8 @@ struct mpm_sim {
   mpm_particles view;     /* mpm_sim_particles' copy of every particle when there are domains */
   mpm_real *view_derived; /* the view's J and Cauchy stress: 10 arrays of view_capacity */
   size_t view_capacity;
+  mpm_keep
+      view_keep; /* arrays replaced while a binding holds views (mpm_sim_hold_particle_arrays) */
   char last_checkpoint[MPM_PATH_MAX + 32];
   /* the scene's JSON, mesh paths made absolute, for the output folder's scene.json (made when
    * created from a file or JSON text; NULL when created from a scene struct) */

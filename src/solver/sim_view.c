@@ -16,7 +16,7 @@ static mpm_real *derived_buffer(mpm_sim *sim, size_t n) {
     const size_t cap = n + n / 4 + 1; /* a split or a release adds particles: room to grow */
     mpm_real *b = mpm_alloc(10 * cap * sizeof(mpm_real));
     if (!b) return NULL;
-    mpm_free(sim->view_derived);
+    mpm_keep_free(&sim->view_keep, sim->view_derived);
     sim->view_derived = b;
     sim->view_capacity = cap;
   }
@@ -48,24 +48,24 @@ static void derive_stress(const mpm_sim *sim, const mpm_particles *p, mpm_real *
   }
 }
 
-mpm_particle_view mpm_sim_particles(const mpm_sim *sim_in) {
+/* The particle set the views show: the simulation's own, or with domains its copy of every
+ * particle (NULL when out of memory). Every set whose arrays a view hands out frees them
+ * through the simulation's keep from now on (mpm_sim_hold_particle_arrays). */
+static const mpm_particles *view_set(mpm_sim *sim) {
+  sim->particles.keep = sim->backup.keep = sim->view.keep = &sim->view_keep;
+  if (sim->domains.active_count == 0) return &sim->particles;
+  if (mpm_sim_all_particles(sim, &sim->view)) return NULL;
+  sim->view.keep = &sim->view_keep; /* (a first copy initializes the set) */
+  return &sim->view;
+}
+
+mpm_particle_view mpm_sim_particle_state(const mpm_sim *sim_in) {
   /* the view's buffers are a cache, not state: the handle is const to the caller */
   mpm_sim *sim = (mpm_sim *)sim_in;
-  const mpm_particles *p = &sim->particles;
   mpm_particle_view v;
   memset(&v, 0, sizeof v);
-  if (sim->domains.active_count > 0) {
-    if (mpm_sim_all_particles(sim, &sim->view)) return v;
-    p = &sim->view;
-  }
-  mpm_real *derived = derived_buffer(sim, p->count);
-  if (!derived) return v;
-  mpm_real *sigma[9];
-  for (int c = 0; c < 9; ++c) sigma[c] = derived + (size_t)(c + 1) * sim->view_capacity;
-  const int saved = mpm_sim_threads_enter(sim);
-  derive_stress(sim, p, derived, sigma);
-  mpm_sim_threads_leave(sim, saved);
-
+  const mpm_particles *p = view_set(sim);
+  if (!p) return v;
   v.count = p->count;
   v.real_size = sizeof(mpm_real);
   for (int d = 0; d < 3; ++d) {
@@ -80,9 +80,32 @@ mpm_particle_view mpm_sim_particles(const mpm_sim *sim_in) {
   v.id = p->id;
   v.temperature = sim->scene.heat.enabled ? p->temperature : NULL;
   v.plastic = p->plastic;
+  v.component_stride = p->stride * sizeof(mpm_real);
+  return v;
+}
+
+mpm_particle_view mpm_sim_particles(const mpm_sim *sim_in) {
+  mpm_sim *sim = (mpm_sim *)sim_in;
+  mpm_particle_view v = mpm_sim_particle_state(sim);
+  const mpm_particles *p = sim->domains.active_count > 0 ? &sim->view : &sim->particles;
+  mpm_real *derived = v.count || p->count == 0 ? derived_buffer(sim, p->count) : NULL;
+  if (!derived) {
+    memset(&v, 0, sizeof v);
+    return v;
+  }
+  mpm_real *sigma[9];
+  for (int c = 0; c < 9; ++c) sigma[c] = derived + (size_t)(c + 1) * sim->view_capacity;
+  const int saved = mpm_sim_threads_enter(sim);
+  derive_stress(sim, p, derived, sigma);
+  mpm_sim_threads_leave(sim, saved);
   v.J = derived;
   for (int c = 0; c < 9; ++c) v.stress[c] = sigma[c];
+  v.stress_stride = sim->view_capacity * sizeof(mpm_real);
   return v;
+}
+
+void mpm_sim_hold_particle_arrays(mpm_sim *sim, int delta) {
+  if (delta) mpm_keep_hold(&sim->view_keep, delta > 0 ? 1 : -1);
 }
 
 int mpm_sim_collider_count(const mpm_sim *sim) {

@@ -103,11 +103,9 @@ int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n) {
 int mpm_sim_ensure_scratch(mpm_sim *sim) {
   const size_t cap = sim->particles.capacity;
   if (sim->scratch_capacity >= cap) return 0;
-  mpm_free(sim->scratch);
   mpm_free(sim->iscratch);
-  sim->scratch = mpm_alloc(cap * sizeof(mpm_real));
   sim->iscratch = mpm_alloc(cap * sizeof(uint32_t));
-  if (!sim->scratch || !sim->iscratch) return -1;
+  if (!sim->iscratch) return -1;
   sim->scratch_capacity = cap;
   return 0;
 }
@@ -151,7 +149,7 @@ static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
     /* move particles into block order now and then, so transfers stream through memory */
     if (mpm_sim_ensure_scratch(sim))
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
-    mpm_particles_permute(p, perm, &sim->scratch, sim->iscratch);
+    mpm_particles_permute(p, perm, sim->iscratch);
     for (size_t j = 0; j < p->count; ++j) perm[j] = (uint32_t)j;
   }
   if (c->domains && mpm_domain_activate(&sim->domains, g, &c->dtc.kernel))
