@@ -15,7 +15,8 @@ DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
 
 DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng-dev zlib1g-dev \
-	libhdf5-dev gnuplot-nox python3-vtk9 valgrind libopenvdb-dev libboost-dev
+	libhdf5-dev gnuplot-nox python3-vtk9 valgrind libopenvdb-dev libboost-dev \
+	python3-dev python3-numpy python3-pytest
 # clang and its runtime (libFuzzer, sanitizers): only `make fuzz` and `make test-fuzz` need them
 FUZZ_DEB_PACKAGES = clang libclang-rt-14-dev
 # ThreadSanitizer needs clang and LLVM's OpenMP runtime with its Archer tool (libarcher.so)

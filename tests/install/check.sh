@@ -13,7 +13,9 @@
 #      against mpm::mpm and against mpm::mpm_static, and runs both;
 #   4. a CMake project that takes the source tree with add_subdirectory configures with the
 #      libraries and without the tests and the program (configured only: building the library
-#      again would double the test's time).
+#      again would double the test's time);
+#   5. the Python package (when the build made it): Debian's python3 imports it from the
+#      prefix's dist-packages, on the installed libmpm.so, and runs a step.
 # Everything is made under one temporary folder, removed at the end whatever the outcome.
 set -eu
 build=$1 src=$2 cmake=$3 cc=$4 pkgconfig=$5
@@ -112,6 +114,29 @@ if ldd "$tmp/consumer/build/embed_static" | grep -q libmpm.so; then
 fi
 (cd "$tmp" && "$tmp/consumer/build/embed_shared") || fail "embed_shared (find_package) failed"
 (cd "$tmp" && "$tmp/consumer/build/embed_static") || fail "embed_static (find_package) failed"
+
+if [ -d "$build/python/mpm" ]; then
+  echo "== the Python package"
+  ext=$(find "$prefix" -path '*dist-packages/mpm/_mpm*.so' | head -n 1)
+  [ -n "$ext" ] || fail "the Python package was not installed (no dist-packages/mpm/_mpm*.so)"
+  [ -e "$(dirname "$ext")/__init__.py" ] || fail "mpm/__init__.py was not installed"
+  loaded=$(ldd "$ext" | awk '/libmpm\.so/ {print $3}')
+  [ -n "$loaded" ] && [ "$(readlink -f "$loaded")" = "$(readlink -f "$libdir/libmpm.so")" ] ||
+    fail "$ext does not load $libdir/libmpm.so (it loads '$loaded')"
+  (cd "$tmp" && PYTHONPATH=$(dirname "$(dirname "$ext")") /usr/bin/python3 -c "
+import mpm
+sim = mpm.Simulation({'domain': {'min': [0, 0, 0], 'max': [0.2, 0.2, 0.2], 'dx': 0.02},
+                      'time': {'end': 0.1, 'fps': 10},
+                      'materials': [{'name': 'm', 'model': 'neo_hookean', 'E': 1e4, 'nu': 0.3,
+                                     'density': 1000}],
+                      'bodies': [{'shape': {'type': 'box', 'center': [0.1, 0.1, 0.1],
+                                            'half_extent': [0.03, 0.03, 0.03]},
+                                  'material': 'm'}]})
+sim.step()
+assert mpm.__file__.startswith('$prefix'), mpm.__file__
+print('import mpm from', mpm.__file__, '-', len(sim.particles), 'particles, one step')
+") || fail "the installed Python package does not import and step"
+fi
 
 echo "== add_subdirectory(mpm)"
 mkdir "$tmp/parent"
