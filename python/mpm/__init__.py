@@ -34,7 +34,7 @@ from . import _mpm
 from ._mpm import Error, SceneError, StaleViewError
 
 __all__ = ["Simulation", "Particles", "Collider", "Error", "SceneError", "StaleViewError",
-           "version", "real_type", "dtype"]
+           "render", "version", "real_type", "dtype"]
 
 _mpm._set_main_thread(_threading.main_thread().ident)
 
@@ -254,3 +254,39 @@ class Simulation(_mpm._Simulation):
     def __repr__(self):
         return (f"<mpm.Simulation: {self.particle_count} particles, frame {self.frame} of "
                 f"{self.frame_count}, t = {self.time:.6g} s>")
+
+
+def render(source, frame=-1, path=None, *, width=640, height=360, field=None, colormap=None,
+           framing=None, eye=None, target=None, fov=None, range=None, shadow=True, legend=True,
+           time_label=True, particles=False, scene=None, threads=0):
+    """A picture of a run drawn by the engine's renderer (`mpm render`), as a numpy array of
+    shape (height, width, 3), dtype uint8, sRGB: what a notebook shows with
+    matplotlib.pyplot.imshow.
+
+    source   a Simulation whose output is open (open_output; its folder is drawn) or the path
+             of a run folder
+    frame    the frame number of frame_NNNN.vtu to draw (-1: the last one written)
+    path     also write the picture there as a PNG
+    field    "velocity", "J", "stress", "plastic", "material", "body", "temperature", "melt",
+             or any point array of the frames ("pressure", "velocity.y"); None: automatic
+    colormap, framing: by their names in `mpm render --help`; eye, target (m) and fov
+             (degrees) place the camera; range = (lo, hi) fixes the colours' range
+    """
+    if isinstance(source, _mpm._Simulation):
+        info = source._info()
+        if not info["output_enabled"]:
+            raise Error("render: the simulation writes no frames; call open_output(dir) first")
+        run_dir = info["output_dir"]
+    else:
+        run_dir = _os.fspath(source)
+    options = {"width": width, "height": height, "field": field, "colormap": colormap,
+               "framing": framing, "eye": eye, "target": target, "fov": fov,
+               "shadow": int(bool(shadow)), "legend": int(bool(legend)),
+               "time_label": int(bool(time_label)), "particles": int(bool(particles)),
+               "scene": None if scene is None else _os.fspath(scene), "threads": threads,
+               "frame": frame}
+    if range is not None:
+        options["range_lo"], options["range_hi"] = float(range[0]), float(range[1])
+    rgb, h, w, _frame, _time = _mpm._render(run_dir, options,
+                                            None if path is None else _os.fspath(path))
+    return _np.frombuffer(rgb, dtype=_np.uint8).reshape(h, w, 3)

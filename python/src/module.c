@@ -50,6 +50,7 @@ static PyMethodDef module_methods[] = {
     {"real_type", mod_real_type, METH_NOARGS,
      "The engine's real type, 'float' or 'double' (the particle arrays' dtype)."},
     {"_set_main_thread", mod_set_main_thread, METH_O, "The main thread's ident."},
+    {"_render", pympm_render, METH_VARARGS, "One picture of a run folder."},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT,

@@ -3,6 +3,7 @@
  * module.c      the module, its exceptions and the status -> exception mapping
  * simulation.c  _Simulation: a handle, its calls (the long ones without the GIL, Ctrl-C
  *               stopping them between two steps) and the generation of its particle state
+ * render.c      _render: a picture of a run folder (include/mpm/render.h)
  * buffer.c      _Buffer: one engine array exported through the buffer protocol (numpy reads it
  *               without a copy), tied to a generation: it refuses to export once the simulation
  *               has moved on, and it holds the simulation (and its arrays, through
@@ -43,5 +44,8 @@ PyObject *pympm_raise(mpm_status st, const char *msg, int scene);
  * (count, 3, 3) for a row-major tensor (ncomp 9). It holds sim and its arrays. */
 PyObject *pympm_buffer_new(pympm_sim *sim, const void *ptr, Py_ssize_t count, int ncomp,
                            Py_ssize_t stride, char format, Py_ssize_t itemsize);
+
+/* _render(run_dir, options, png): render.c */
+PyObject *pympm_render(PyObject *self, PyObject *args);
 
 #endif
