@@ -221,6 +221,86 @@ static void test_view_state_and_strides(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* A jelly block of material points at rest in zero gravity, nothing around it (the domain's
+ * walls' band, three cells, far from it). */
+static const char *const points_json =
+    "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.05},"
+    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
+    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
+    "  \"density\": 1000}],"
+    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5],"
+    "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\"}]}";
+
+/* Velocities set between steps carry their momentum into the step: with nothing outside the
+ * body, the momentum after a step is what was set (APIC conserves it); positions jump where
+ * set; a refused call names the id or value and changes nothing. */
+static void test_set_velocities_and_positions(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(points_json, NULL, &sim, err, sizeof err), MPM_OK);
+  mpm_particle_view v = mpm_sim_particle_state(sim);
+  const size_t n = v.count;
+  uint32_t *ids = malloc(n * sizeof *ids);
+  double *vel = malloc(3 * n * sizeof *vel);
+  size_t chosen = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (v.id[i] % 3) continue; /* a third of the particles */
+    ids[chosen] = v.id[i];
+    const double u[3] = {1.0 + 0.001 * (double)(i % 7), 0.5, -0.25};
+    for (int d = 0; d < 3; ++d) vel[3 * chosen + d] = u[d];
+    ++chosen;
+  }
+  assert_int_equal(mpm_sim_set_velocities(sim, chosen, ids, vel), MPM_OK);
+  v = mpm_sim_particle_state(sim);
+  double P[3] = {0, 0, 0}; /* the momentum set (the others are at rest) */
+  for (size_t i = 0; i < n; ++i) {
+    assert_true(at(&v, v.v[1], i) == (v.id[i] % 3 == 0 ? 0.5 : 0));
+    for (int d = 0; d < 3; ++d) P[d] += at(&v, v.mass, i) * at(&v, v.v[d], i);
+  }
+  assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
+  v = mpm_sim_particle_state(sim);
+  double Q[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) Q[d] += at(&v, v.mass, i) * at(&v, v.v[d], i);
+  print_message("momentum set %.9g %.9g %.9g, after the step %.9g %.9g %.9g\n", P[0], P[1], P[2],
+                Q[0], Q[1], Q[2]);
+  for (int d = 0; d < 3; ++d) assert_close(Q[d], P[d], TOL(2e-6, 1e-12) * fabs(P[0]));
+  /* a position, exactly where set */
+  const double to[3] = {0.45, 0.55, 0.56};
+  assert_int_equal(mpm_sim_set_positions(sim, 1, &ids[1], to), MPM_OK);
+  v = mpm_sim_particle_state(sim);
+  for (size_t i = 0; i < n; ++i)
+    if (v.id[i] == ids[1])
+      for (int d = 0; d < 3; ++d)
+        assert_true(at(&v, v.x[d], i) == (v.real_size == 4 ? (double)(float)to[d] : to[d]));
+  /* refusals name what is wrong and change nothing */
+  const double outside[3] = {0.5, 1.5, 0.5}, nan3[3] = {0, NAN, 0};
+  assert_int_equal(mpm_sim_set_positions(sim, 1, &ids[2], outside), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "coordinate 1 is 1.5"));
+  assert_int_equal(mpm_sim_set_velocities(sim, 1, &ids[2], nan3), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "velocity component 1"));
+  const uint32_t missing = 4000000000u;
+  assert_int_equal(mpm_sim_set_velocities(sim, 1, &missing, vel), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "no particle with id 4000000000"));
+  /* a request with one bad id changes none of the good ones */
+  const uint32_t two[2] = {ids[3], missing};
+  const double zero[6] = {0, 0, 0, 0, 0, 0};
+  assert_int_equal(mpm_sim_set_velocities(sim, 2, two, zero), MPM_ERR_INVALID);
+  v = mpm_sim_particle_state(sim);
+  for (size_t i = 0; i < n; ++i)
+    if (v.id[i] == ids[3]) assert_true(at(&v, v.v[1], i) != 0);
+  mpm_sim_destroy(sim);
+  /* a particle with its domain on */
+  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  v = mpm_sim_particle_state(sim);
+  assert_int_equal(mpm_sim_set_velocities(sim, 1, v.id, vel), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "has its domain on"));
+  mpm_sim_destroy(sim);
+  free(ids);
+  free(vel);
+}
+
 static void test_view_temperature(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
@@ -265,6 +345,7 @@ int main(void) {
       cmocka_unit_test(test_set_threads),
       cmocka_unit_test(test_view_fields),
       cmocka_unit_test(test_view_state_and_strides),
+      cmocka_unit_test(test_set_velocities_and_positions),
       cmocka_unit_test(test_view_temperature),
       cmocka_unit_test(test_collider_pose),
   };

@@ -138,6 +138,19 @@ MPM_API mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, siz
 /// for mpm_sim_write_checkpoint. NULL removes the flag.
 MPM_API void mpm_sim_set_interrupt(mpm_sim *sim, const volatile int *flag);
 
+/// Set the velocity of the particles with the stable ids ids[0 .. count) (the view's `id`) to
+/// v[3 k .. 3 k + 2] (m/s), now, between two steps: the next step's P2G carries m v to the grid
+/// (the APIC affine moment is kept). Material points only: a particle whose domain is on moves
+/// with its domain's corners (release the domain first). MPM_ERR_INVALID, naming the id or the
+/// value, for an id not simulated now, a particle with its domain on, a value not finite;
+/// nothing is changed then.
+MPM_API mpm_status mpm_sim_set_velocities(mpm_sim *sim, size_t count, const uint32_t *ids,
+                                          const double *v);
+/// The same for positions x[3 k .. 3 k + 2] (m), which must lie inside the scene's domain: the
+/// particles jump there (nothing of their motion is implied: set their velocities too).
+MPM_API mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint32_t *ids,
+                                         const double *x);
+
 /// Particle domains (Zhu et al. 2017): switch off the domains of every domain particle inside
 /// the box [lo, hi] (m), now; they continue as standard material points (for topology change
 /// such as melting or cutting). The number switched off goes to *count (may be NULL).

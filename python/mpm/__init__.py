@@ -231,6 +231,31 @@ class Simulation(_mpm._Simulation):
         """The scene's colliders at the current time (a list of Collider)."""
         return [Collider(d) for d in self._colliders()]
 
+    def _set_by_id(self, which, ids, values, what):
+        ids = _np.ascontiguousarray(_np.atleast_1d(ids), dtype=_np.int64)
+        if ids.ndim != 1 or (ids.size and (ids.min() < 0 or ids.max() > 0xFFFFFFFF)):
+            raise ValueError(f"{what}: ids are particle ids (Particles.id), 0 to 2^32 - 1")
+        values = _np.asarray(values, dtype=_np.float64)
+        if values.shape == (3,):
+            values = _np.broadcast_to(values, (len(ids), 3))
+        if values.shape != (len(ids), 3):
+            raise ValueError(f"{what}: expected one 3-vector per id (shape ({len(ids)}, 3) or "
+                             f"(3,)), got shape {values.shape}")
+        self._set(which, ids.astype(_np.uint32).tobytes(),
+                  _np.ascontiguousarray(values).tobytes())
+
+    def set_velocities(self, ids, v):
+        """Set the velocity (m/s) of the particles with these ids (Particles.id), now: the next
+        step starts from it (the momentum m v it carries to the grid). v is one 3-vector per id,
+        or one for all. Material points only (a particle whose domain is on moves with its
+        domain's corners). Raises mpm.Error naming the id or value, changing nothing."""
+        self._set_by_id(0, ids, v, "set_velocities")
+
+    def set_positions(self, ids, x):
+        """Move the particles with these ids to x (m, inside the domain), now; their velocities
+        are not changed. As set_velocities otherwise."""
+        self._set_by_id(1, ids, x, "set_positions")
+
     def checkpoint(self, directory=None):
         """Write a checkpoint of the whole state (HDF5) into the output folder and return its
         path. With directory and output not yet open, open it there first (open_output)."""

@@ -210,6 +210,35 @@ static PyObject *sim_release_domains(PyObject *self, PyObject *args) {
   return PyLong_FromSize_t(count);
 }
 
+/* _set(which, ids, values): which 0 velocities, 1 positions; ids a contiguous buffer of uint32,
+ * values of 3 doubles per id (mpm/__init__.py converts). */
+static PyObject *sim_set(PyObject *self, PyObject *args) {
+  pympm_sim *s = (pympm_sim *)self;
+  int which;
+  Py_buffer ids, values;
+  if (!PyArg_ParseTuple(args, "iy*y*", &which, &ids, &values)) return NULL;
+  PyObject *out = NULL;
+  const size_t count = (size_t)ids.len / sizeof(uint32_t);
+  if (!ready(s)) {
+    /* (the exception is set) */
+  } else if ((size_t)values.len != 3 * count * sizeof(double)) {
+    PyErr_SetString(PyExc_ValueError, "expected three values for each id");
+  } else {
+    const mpm_status st = which == 0 ? mpm_sim_set_velocities(s->sim, count, ids.buf, values.buf)
+                                     : mpm_sim_set_positions(s->sim, count, ids.buf, values.buf);
+    s->generation++; /* (a refusal changed nothing, but the views are cheap to take again) */
+    if (st != MPM_OK) {
+      failed(s, st);
+    } else {
+      out = Py_None;
+      Py_INCREF(out);
+    }
+  }
+  PyBuffer_Release(&ids);
+  PyBuffer_Release(&values);
+  return out;
+}
+
 /* The state arrays as _Buffers in a dict (mpm_sim_particle_state: no stress evaluation). */
 static PyObject *sim_state(PyObject *self, PyObject *unused) {
   (void)unused;
@@ -470,6 +499,7 @@ static PyMethodDef sim_methods[] = {
      "domain particles inside the box [lo, hi]; they go on as material points. Returns how "
      "many."},
     {"_state", sim_state, METH_NOARGS, "The state arrays as buffers."},
+    {"_set", sim_set, METH_VARARGS, "Set velocities (0) or positions (1) by id."},
     {"_derived", sim_derived, METH_NOARGS, "J and the Cauchy stress as buffers."},
     {"_colliders", sim_colliders, METH_NOARGS, "The colliders' poses as dicts."},
     {"_info", sim_info, METH_NOARGS, "mpm_sim_info as a dict."},

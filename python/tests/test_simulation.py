@@ -178,3 +178,37 @@ def test_gil_released_during_a_frame(scene):
     worker.join()
     assert sim.frame == 1
     assert len(ticks) > 20  # the main thread ran while the frame did
+
+
+def test_set_velocities_carries_momentum_into_the_step():
+    # zero gravity, nothing around the body: the momentum after a step is what was set
+    scene = small_scene(gravity=[0, 0, 0], colliders=[],
+                        domain={"min": [0, 0, 0], "max": [1, 1, 1], "dx": 0.05},
+                        bodies=[{"shape": {"type": "box", "center": [0.5, 0.5, 0.5],
+                                           "half_extent": [0.1, 0.1, 0.1]},
+                                 "material": "jelly"}])
+    sim = mpm.Simulation(scene)
+    p = sim.particles
+    chosen = p.id[p.id % 3 == 0]
+    v = np.tile([1.0, 0.5, -0.25], (len(chosen), 1))
+    v[:, 0] += 0.001 * (np.arange(len(chosen)) % 7)
+    sim.set_velocities(chosen, v)
+    p = sim.particles
+    mass = p.mass.astype(np.float64)
+    expected = (mass[:, None] * p.v).sum(axis=0)
+    assert np.allclose(expected[1], 0.5 * mass[p.id % 3 == 0].sum())
+    sim.step()
+    p = sim.particles
+    after = (p.mass.astype(np.float64)[:, None] * p.v).sum(axis=0)
+    assert np.allclose(after, expected, rtol=2e-6 if mpm.dtype == np.float32 else 1e-12)
+    # positions: exactly where set, in the engine's type
+    target = np.array([0.45, 0.55, 0.56])
+    sim.set_positions(chosen[:1], target)
+    p = sim.particles
+    assert np.array_equal(p.x[p.id == chosen[0]][0], target.astype(mpm.dtype))
+    with pytest.raises(mpm.Error, match="coordinate 1 is 1.5"):
+        sim.set_positions(chosen[1:2], [0.5, 1.5, 0.5])
+    with pytest.raises(mpm.Error, match="no particle with id"):
+        sim.set_velocities([4000000000], [0, 0, 0])
+    with pytest.raises(ValueError):
+        sim.set_velocities(chosen[:2], np.zeros((3, 3)))
