@@ -301,6 +301,148 @@ static void test_set_velocities_and_positions(void **state) {
   free(vel);
 }
 
+/* A call that must succeed, its message printed when it does not. */
+#define OK(sim, call)                                                                              \
+  do {                                                                                             \
+    const mpm_status st_ = (call);                                                                 \
+    if (st_ != MPM_OK) print_error("%s: %s\n", #call, mpm_sim_last_error(sim));                    \
+    assert_int_equal(st_, MPM_OK);                                                                 \
+  } while (0)
+
+/* A jelly block in zero gravity with a sticky sphere inside it that a script moves. */
+static const char *const scripted_json =
+    "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.04},"
+    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 1, \"fps\": 20},"
+    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
+    "  \"density\": 1000}],"
+    " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5],"
+    "  \"half_extent\": [0.2, 0.2, 0.2]}, \"material\": \"m\"}],"
+    " \"colliders\": [{\"name\": \"grip\", \"shape\": {\"type\": \"sphere\", \"center\": "
+    "[0.5, 0.5, 0.5], \"radius\": 0.14}, \"rule\": \"sticky\"}]}";
+
+/* The state of every particle, sorted by id, as doubles: x, v, F. */
+static double *state_by_id(mpm_sim *sim, size_t *n) {
+  const mpm_particle_view v = mpm_sim_particle_state(sim);
+  double *out = calloc(v.count * 15 + 1, sizeof *out);
+  for (size_t i = 0; i < v.count; ++i) {
+    double *o = out + 15 * (size_t)v.id[i];
+    for (int d = 0; d < 3; ++d) o[d] = at(&v, v.x[d], i), o[3 + d] = at(&v, v.v[d], i);
+    for (int c = 0; c < 9; ++c) o[6 + c] = at(&v, v.F[c], i);
+  }
+  *n = v.count;
+  return out;
+}
+
+/* The script of test_scripted_collider: step k's pose, a slide in x and a turn about y. */
+static void script_pose(int k, double c[3], double R[9]) {
+  const double a = 0.01 * k;
+  c[0] = 0.5 + 0.001 * k, c[1] = 0.5, c[2] = 0.5;
+  const double Ry[9] = {cos(a), 0, sin(a), 0, 1, 0, -sin(a), 0, cos(a)};
+  memcpy(R, Ry, sizeof Ry);
+}
+
+/* A scripted collider's velocity is its pose change over the step: the material it holds moves
+ * with it; it stands still when not set; bad poses are refused; a resumed run that sets the same
+ * poses continues bit-identically. */
+static void test_scripted_collider(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(scripted_json, NULL, &sim, err, sizeof err), MPM_OK);
+  const double c1[3] = {0.502, 0.5, 0.5};
+  OK(sim, mpm_sim_set_collider_pose(sim, 0, c1, NULL));
+  double t0 = mpm_sim_time(sim);
+  OK(sim, mpm_sim_step(sim, 0));
+  double dt = mpm_sim_time(sim) - t0;
+  mpm_collider_state cs;
+  OK(sim, mpm_sim_collider_pose(sim, 0, &cs));
+  assert_close(cs.center[0], 0.502, 1e-6);
+  assert_close(cs.velocity[0], 0.002 / dt, 1e-9 / dt);
+  assert_close(cs.velocity[1], 0, 1e-12);
+  /* the particles deep inside the sticky sphere move with it: those whose stencil (1.5 dx on
+     each axis) lies inside it, 0.03 + 0.06 sqrt(3) < 0.14 from its centre */
+  mpm_particle_view v = mpm_sim_particle_state(sim);
+  size_t inside = 0;
+  for (size_t i = 0; i < v.count; ++i) {
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) r2 += pow(at(&v, v.x[d], i) - 0.5, 2);
+    if (r2 > 0.03 * 0.03) continue;
+    ++inside;
+    assert_close(at(&v, v.v[0], i), 0.002 / dt, TOL(1e-5, 1e-10) * 0.002 / dt);
+    assert_close(at(&v, v.v[1], i), 0, TOL(1e-6, 1e-12) * 0.002 / dt);
+  }
+  print_message("scripted grip: dt %.4g s, %zu particles inside move at %.5g m/s\n", dt, inside,
+                0.002 / dt);
+  assert_true(inside >= 8); /* (particles 0.02 m apart) */
+  /* not set again: it stands */
+  OK(sim, mpm_sim_step(sim, 0));
+  OK(sim, mpm_sim_collider_pose(sim, 0, &cs));
+  assert_close(cs.center[0], 0.502, 1e-6);
+  assert_true(cs.velocity[0] == 0 && cs.angular_velocity[1] == 0);
+  /* a turn about y by 0.03 rad over a step */
+  const double a = 0.03, Ry[9] = {cos(a), 0, sin(a), 0, 1, 0, -sin(a), 0, cos(a)};
+  t0 = mpm_sim_time(sim);
+  OK(sim, mpm_sim_set_collider_pose(sim, 0, c1, Ry));
+  OK(sim, mpm_sim_step(sim, 0));
+  dt = mpm_sim_time(sim) - t0;
+  OK(sim, mpm_sim_collider_pose(sim, 0, &cs));
+  assert_close(cs.angular_velocity[1], a / dt, 1e-9 / dt);
+  assert_close(cs.angular_velocity[0], 0, 1e-9 / dt);
+  for (int k = 0; k < 9; ++k) assert_close(cs.rotation[k], Ry[k], 1e-6);
+  /* refusals */
+  const double skew[9] = {1, 0.1, 0, 0, 1, 0, 0, 0, 1}, mirror[9] = {-1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const double nan3[3] = {0.5, NAN, 0.5};
+  assert_int_equal(mpm_sim_set_collider_pose(sim, 0, c1, skew), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "is not a rotation"));
+  assert_int_equal(mpm_sim_set_collider_pose(sim, 0, c1, mirror), MPM_ERR_INVALID);
+  assert_int_equal(mpm_sim_set_collider_pose(sim, 0, nan3, NULL), MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "center[1]"));
+  assert_int_equal(mpm_sim_set_collider_pose(sim, 1, c1, NULL), MPM_ERR_INVALID);
+  mpm_sim_destroy(sim);
+
+  /* a checkpoint between two scripted steps, resumed: the same state as straight through */
+  char dir_a[512], dir_b[512]; /* (test_temp_dir's buffer is static) */
+  snprintf(dir_a, sizeof dir_a, "%s", test_temp_dir("scripted_a"));
+  snprintf(dir_b, sizeof dir_b, "%s", test_temp_dir("scripted_b"));
+  double c[3], R[9];
+  size_t na = 0, nb = 0;
+  assert_int_equal(mpm_sim_create_from_json(scripted_json, NULL, &sim, err, sizeof err), MPM_OK);
+  OK(sim, mpm_sim_enable_output(sim, dir_a));
+  for (int k = 1; k <= 12; ++k) {
+    script_pose(k, c, R);
+    OK(sim, mpm_sim_set_collider_pose(sim, 0, c, R));
+    OK(sim, mpm_sim_step(sim, 0));
+  }
+  double *a_state = state_by_id(sim, &na);
+  mpm_sim_destroy(sim);
+  assert_int_equal(mpm_sim_create_from_json(scripted_json, NULL, &sim, err, sizeof err), MPM_OK);
+  OK(sim, mpm_sim_enable_output(sim, dir_b));
+  for (int k = 1; k <= 6; ++k) {
+    script_pose(k, c, R);
+    OK(sim, mpm_sim_set_collider_pose(sim, 0, c, R));
+    OK(sim, mpm_sim_step(sim, 0));
+  }
+  script_pose(7, c, R); /* set before the checkpoint: the pending pose is state too */
+  OK(sim, mpm_sim_set_collider_pose(sim, 0, c, R));
+  OK(sim, mpm_sim_write_checkpoint(sim, NULL, 0));
+  mpm_sim_destroy(sim);
+  assert_int_equal(mpm_sim_create_from_json(scripted_json, NULL, &sim, err, sizeof err), MPM_OK);
+  OK(sim, mpm_sim_resume(sim, dir_b, NULL, 0));
+  assert_int_equal(mpm_sim_steps(sim), 6);
+  OK(sim, mpm_sim_step(sim, 0)); /* step 7, to the pose set before */
+  for (int k = 8; k <= 12; ++k) {
+    script_pose(k, c, R);
+    OK(sim, mpm_sim_set_collider_pose(sim, 0, c, R));
+    OK(sim, mpm_sim_step(sim, 0));
+  }
+  double *b_state = state_by_id(sim, &nb);
+  assert_int_equal(na, nb);
+  assert_memory_equal(a_state, b_state, 15 * na * sizeof(double));
+  mpm_sim_destroy(sim);
+  free(a_state);
+  free(b_state);
+}
+
 static void test_view_temperature(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
@@ -346,6 +488,7 @@ int main(void) {
       cmocka_unit_test(test_view_fields),
       cmocka_unit_test(test_view_state_and_strides),
       cmocka_unit_test(test_set_velocities_and_positions),
+      cmocka_unit_test(test_scripted_collider),
       cmocka_unit_test(test_view_temperature),
       cmocka_unit_test(test_collider_pose),
   };

@@ -151,6 +151,17 @@ MPM_API mpm_status mpm_sim_set_velocities(mpm_sim *sim, size_t count, const uint
 MPM_API mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint32_t *ids,
                                          const double *x);
 
+/// Move collider `index` (the scene's `colliders`, in order) by a script: it ends the next step
+/// at this pose (centre in m; rotation row-major, local -> world; NULL keeps its rotation),
+/// moving there at a constant velocity and angular velocity over the step, its pose change over
+/// dt, which the boundary rule gives the material it touches; after that step it stands still
+/// there until set again. From the first call the collider follows the script, not its scene
+/// motion. Checkpoints carry the script's state, so a resumed run that sets the same poses
+/// continues bit-identically. MPM_ERR_INVALID, with the message, for an index out of range, a
+/// value not finite, a matrix that is not a rotation (|R R^T - I| > 1e-6 or det <= 0).
+MPM_API mpm_status mpm_sim_set_collider_pose(mpm_sim *sim, int index, const double center[3],
+                                             const double rotation[9]);
+
 /// Particle domains (Zhu et al. 2017): switch off the domains of every domain particle inside
 /// the box [lo, hi] (m), now; they continue as standard material points (for topology change
 /// such as melting or cutting). The number switched off goes to *count (may be NULL).

@@ -256,6 +256,25 @@ class Simulation(_mpm._Simulation):
         are not changed. As set_velocities otherwise."""
         self._set_by_id(1, ids, x, "set_positions")
 
+    def set_collider_pose(self, collider, center, rotation=None):
+        """Move a collider by a script: it ends the next step at this pose (center (3,) m;
+        rotation (3, 3), local to world; None keeps its rotation), moving there at a constant
+        velocity over the step (its pose change over dt is the velocity the material it touches
+        gets), and stands there after it until set again. collider is its index in the scene's
+        list or its name. From the first call it follows the script, not its scene motion;
+        checkpoints keep the script's state."""
+        if isinstance(collider, str):
+            names = [c["name"] for c in self._colliders()]
+            if collider not in names:
+                raise Error(f"set_collider_pose: no collider named {collider!r} (the scene has "
+                            f"{names})")
+            collider = names.index(collider)
+        c = tuple(float(x) for x in _np.asarray(center, dtype=_np.float64).reshape(3))
+        R = None
+        if rotation is not None:
+            R = tuple(float(x) for x in _np.asarray(rotation, dtype=_np.float64).reshape(9))
+        self._set_collider_pose(int(collider), c, R)
+
     def checkpoint(self, directory=None):
         """Write a checkpoint of the whole state (HDF5) into the output folder and return its
         path. With directory and output not yet open, open it there first (open_output)."""

@@ -239,6 +239,22 @@ static PyObject *sim_set(PyObject *self, PyObject *args) {
   return out;
 }
 
+/* _set_collider_pose(index, (cx, cy, cz), rotation: 9 numbers or None) */
+static PyObject *sim_set_collider_pose(PyObject *self, PyObject *args) {
+  pympm_sim *s = (pympm_sim *)self;
+  int index;
+  double c[3], R[9];
+  PyObject *rot;
+  if (!PyArg_ParseTuple(args, "i(ddd)O", &index, &c[0], &c[1], &c[2], &rot) || !ready(s))
+    return NULL;
+  if (rot != Py_None && !PyArg_ParseTuple(rot, "ddddddddd", &R[0], &R[1], &R[2], &R[3], &R[4],
+                                          &R[5], &R[6], &R[7], &R[8]))
+    return NULL;
+  const mpm_status st = mpm_sim_set_collider_pose(s->sim, index, c, rot == Py_None ? NULL : R);
+  if (st != MPM_OK) return failed(s, st);
+  Py_RETURN_NONE;
+}
+
 /* The state arrays as _Buffers in a dict (mpm_sim_particle_state: no stress evaluation). */
 static PyObject *sim_state(PyObject *self, PyObject *unused) {
   (void)unused;
@@ -500,6 +516,7 @@ static PyMethodDef sim_methods[] = {
      "many."},
     {"_state", sim_state, METH_NOARGS, "The state arrays as buffers."},
     {"_set", sim_set, METH_VARARGS, "Set velocities (0) or positions (1) by id."},
+    {"_set_collider_pose", sim_set_collider_pose, METH_VARARGS, "Script a collider's pose."},
     {"_derived", sim_derived, METH_NOARGS, "J and the Cauchy stress as buffers."},
     {"_colliders", sim_colliders, METH_NOARGS, "The colliders' poses as dicts."},
     {"_info", sim_info, METH_NOARGS, "mpm_sim_info as a dict."},

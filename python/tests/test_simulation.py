@@ -212,3 +212,40 @@ def test_set_velocities_carries_momentum_into_the_step():
         sim.set_velocities([4000000000], [0, 0, 0])
     with pytest.raises(ValueError):
         sim.set_velocities(chosen[:2], np.zeros((3, 3)))
+
+
+def test_scripted_collider_moves_what_it_holds():
+    scene = small_scene(gravity=[0, 0, 0],
+                        domain={"min": [0, 0, 0], "max": [1, 1, 1], "dx": 0.04},
+                        bodies=[{"shape": {"type": "box", "center": [0.5, 0.5, 0.5],
+                                           "half_extent": [0.2, 0.2, 0.2]},
+                                 "material": "jelly"}],
+                        colliders=[{"name": "grip", "shape": {"type": "sphere",
+                                                              "center": [0.5, 0.5, 0.5],
+                                                              "radius": 0.14},
+                                    "rule": "sticky"}])
+    sim = mpm.Simulation(scene)
+    t0 = sim.time
+    sim.set_collider_pose("grip", [0.502, 0.5, 0.5])
+    sim.step()
+    dt = sim.time - t0
+    grip = sim.colliders[0]
+    assert np.allclose(grip.center, [0.502, 0.5, 0.5])
+    assert grip.velocity[0] == pytest.approx(0.002 / dt, rel=1e-6)
+    p = sim.particles
+    deep = np.linalg.norm(p.x - 0.5, axis=1) < 0.03  # stencils inside the sphere
+    assert deep.sum() >= 8
+    assert np.allclose(p.v[deep, 0], 0.002 / dt, rtol=1e-5)
+    # a quarter turn over a few steps about z, held after
+    a = 0.02
+    Rz = [[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]]
+    t0 = sim.time
+    sim.set_collider_pose(0, [0.502, 0.5, 0.5], Rz)
+    sim.step()
+    assert sim.colliders[0].angular_velocity[2] == pytest.approx(a / (sim.time - t0), rel=1e-6)
+    sim.step()
+    assert np.all(sim.colliders[0].angular_velocity == 0)
+    with pytest.raises(mpm.Error, match="not a rotation"):
+        sim.set_collider_pose(0, [0.5, 0.5, 0.5], np.diag([1.0, 1.0, -1.0]))
+    with pytest.raises(mpm.Error, match="no collider named"):
+        sim.set_collider_pose("nothing", [0, 0, 0])

@@ -25,6 +25,7 @@ static void normalize3(double a[3]) {
 }
 
 int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d) {
+  memset(&c->script, 0, sizeof c->script);
   c->desc = *d;
   c->desc.motion.keyframes = NULL;
   c->desc.motion.keyframe_count = 0;

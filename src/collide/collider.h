@@ -11,8 +11,22 @@
 #include "core/real.h"
 #include "scene/scene.h"
 
+/* A collider moved by a script between steps (collider_script.c, mpm_sim_set_collider_pose):
+ * from the first pose set it follows the script, not its scene motion. */
+typedef struct mpm_collider_script {
+  int on, pending;              /* following a script; a pose set for the next step */
+  double center[3], R[9];       /* the pose now (R row-major, local -> world) */
+  double to_center[3], to_R[9]; /* the pose the next step ends at (pending) */
+  double velocity[3], omega[3]; /* over the last step: the pose change over its dt */
+} mpm_collider_script;
+
+/* The script's state as 32 doubles (on, pending, center, R, to_center, to_R, velocity, omega):
+ * checkpoints carry it. */
+#define MPM_COLLIDER_SCRIPT_DOUBLES 32
+
 typedef struct mpm_collider {
   mpm_collider_desc desc; /* copy; keyframes are owned by the collider */
+  mpm_collider_script script;
 } mpm_collider;
 
 /* The collider's pose at one time, evaluated once per step and then used for every node. */
@@ -27,7 +41,24 @@ typedef struct mpm_collider_pose {
 int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d); /* 0, or -1 on OOM */
 void mpm_collider_free(mpm_collider *c);
 
+/* The pose at time t: the scene's motion, or a scripted collider's pose now with the velocity
+ * of its last step. */
 mpm_collider_pose mpm_collider_pose_at(const mpm_collider *c, double t);
+/* The pose a step from t0 to t1 ends at, with the velocity the step gives the obstacle: the
+ * scene's motion at t1, or for a scripted collider the pose set, reached at a constant velocity
+ * and angular velocity over the step (its pose change over dt), or held still. */
+mpm_collider_pose mpm_collider_pose_over(const mpm_collider *c, double t0, double t1);
+/* Script the collider: it ends the next step at this pose (centre m, rotation row-major). The
+ * first call starts the script from the scene motion's pose at time t. */
+void mpm_collider_script_set(mpm_collider *c, double t, const double center[3], const double R[9]);
+/* After a step of dt: a scripted collider is at the pose set, its velocities those of the
+ * step (or zero when it stood). */
+void mpm_collider_script_commit(mpm_collider *c, double dt);
+/* A scripted collider's pose now, with the velocities of its last step. */
+mpm_collider_pose mpm_collider_script_pose(const mpm_collider *c);
+/* The script's state to and from MPM_COLLIDER_SCRIPT_DOUBLES doubles. */
+void mpm_collider_script_save(const mpm_collider *c, double *out);
+void mpm_collider_script_load(mpm_collider *c, const double *in);
 
 /* Signed distance (negative inside the solid; with inside_out the solid is the outside) and
  * the unit outward normal of the solid at x (pointing into the free region). */

@@ -57,6 +57,7 @@ mpm_motion_state mpm_motion_eval(const mpm_motion_desc *m, double t) {
 }
 
 mpm_collider_pose mpm_collider_pose_at(const mpm_collider *c, double t) {
+  if (c->script.on) return mpm_collider_script_pose(c);
   const mpm_collider_desc *d = &c->desc;
   const mpm_motion_state s = mpm_motion_eval(&d->motion, t);
   mpm_collider_pose p;

@@ -15,7 +15,8 @@
  *               corner_reals [21][nc] (reference position, position, velocity, position
  *               compensation, APIC affine moment); with a multi-level grid rebuilt during
  *               the run (refined_cells t > 0), refined_cells [4][t] (level, i, j, k); with
- *               colliders (attribute colliders nc) collider_forces [(r + 1) 3 nc]; with mesh
+ *               colliders (attribute colliders nc) collider_forces [(r + 1) 3 nc], and with
+ *               colliders moved by a script collider_scripts [32 nc]; with mesh
  *               bodies (attribute meshes b, the scene's body count) mesh_digests [b]
  * Datasets are chunked with Fletcher-32 checksums. The reader trusts nothing: each attribute
  * must exist with the right class and shape, each dataset must have exactly the dimensions
@@ -207,6 +208,11 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       rc = put_attr(f, "colliders", H5T_NATIVE_INT, &c->colliders) ||
            put_dataset(f, "collider_forces", H5T_NATIVE_DOUBLE, 0,
                        (r + 1) * 3 * (hsize_t)c->colliders, &forces);
+    /* only with scripted colliders, likewise */
+    const void *scripts = c->collider_scripts;
+    if (!rc && c->colliders > 0 && c->collider_scripts)
+      rc = put_dataset(f, "collider_scripts", H5T_NATIVE_DOUBLE, 0,
+                       (hsize_t)MPM_CKPT_SCRIPT_DOUBLES * (hsize_t)c->colliders, &scripts);
     /* only with mesh bodies, likewise */
     const void *digests = c->mesh_digests;
     if (!rc && c->mesh_count > 0)

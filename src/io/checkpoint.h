@@ -62,6 +62,9 @@ typedef struct mpm_checkpoint {
    * and NULL (as in checkpoints from before them) */
   int mesh_count;
   uint64_t *mesh_digests;
+  /* colliders moved by a script (collide/collider.h): MPM_COLLIDER_SCRIPT_DOUBLES per collider
+   * of the `colliders` when any is scripted, else NULL (as in checkpoints from before them) */
+  double *collider_scripts;
 } mpm_checkpoint;
 
 /* Write *c to `path` atomically (a temporary in the same directory, renamed when complete).

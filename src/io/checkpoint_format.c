@@ -138,6 +138,9 @@ uint64_t mpm_ckpt_content_checksum(const mpm_checkpoint *c) {
   if (c->colliders > 0) /* files without colliders keep the checksum they had */
     h = mpm_hash64_words(c->collider_forces,
                          (r + 1) * 3 * (size_t)c->colliders * sizeof *c->collider_forces, h);
+  if (c->colliders > 0 && c->collider_scripts) /* likewise without scripts */
+    h = mpm_hash64_words(c->collider_scripts,
+                         MPM_CKPT_SCRIPT_DOUBLES * (size_t)c->colliders * sizeof(double), h);
   return h;
 }
 
@@ -189,6 +192,7 @@ void mpm_checkpoint_free(mpm_checkpoint *c) {
   free(c->frame_files);
   free(c->stats);
   free(c->collider_forces);
+  free(c->collider_scripts);
   free(c->mesh_digests);
   memset(c, 0, sizeof *c);
 }

@@ -12,6 +12,8 @@
 
 #define MPM_CKPT_FORMAT_NAME "mpm checkpoint"
 #define MPM_CKPT_STATS_COLUMNS 25
+/* a scripted collider's state (collide/collider.h: MPM_COLLIDER_SCRIPT_DOUBLES) */
+#define MPM_CKPT_SCRIPT_DOUBLES 32
 #define MPM_CKPT_CHUNK_ELEMENTS 65536
 #define MPM_CKPT_MAX_RECORDS 10000001
 /* Rows of a domain set's per-particle tables, structure of arrays for the file: corner slot a

@@ -408,6 +408,22 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
         goto done;
       }
   }
+  if (c->colliders > 0 && H5Lexists(r->file, "collider_scripts", H5P_DEFAULT) > 0) {
+    const size_t ns = MPM_CKPT_SCRIPT_DOUBLES * (size_t)c->colliders;
+    void *scripts = c->collider_scripts = malloc(ns * sizeof(double));
+    if (!scripts) {
+      mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the collider scripts", r->path);
+      goto done;
+    }
+    if (get_dataset(r, "collider_scripts", H5T_FLOAT, 8, H5T_NATIVE_DOUBLE, 0, (hsize_t)ns,
+                    &scripts))
+      goto done;
+    for (size_t k = 0; k < ns; ++k)
+      if (!isfinite(c->collider_scripts[k])) {
+        bad(r, "%s", "a collider script's pose is not finite");
+        goto done;
+      }
+  }
   if (H5Aexists(r->file, "meshes") > 0) { /* the mesh files' digests */
     if (get_attr(r, "meshes", H5T_INTEGER, H5T_NATIVE_INT, &c->mesh_count)) goto done;
     if (c->mesh_count <= 0 || c->mesh_count > 1000000 ||

@@ -48,6 +48,8 @@ static mpm_status counted_step(mpm_sim *sim, double max_dt, int shortened) {
   f->steps++;
   f->sum += dt;
   for (int k = 0; k < 3 * sim->collider_count; ++k) sim->collider_frame[k] += sim->collider_step[k];
+  /* scripted colliders are where the step took them (collide/collider.h) */
+  for (int k = 0; k < sim->collider_count; ++k) mpm_collider_script_commit(&sim->colliders[k], dt);
   if (!shortened) {
     f->full_steps++;
     f->full_sum += dt;

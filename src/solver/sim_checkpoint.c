@@ -10,6 +10,7 @@
 #include "core/parallel.h"
 #include "domain/enrich.h"
 #include "io/checkpoint.h"
+#include "io/checkpoint_format.h"
 #include "io/run_folder.h"
 #include "io/input_file.h"
 #include "scene/sample.h"
@@ -131,6 +132,21 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     c.colliders = sim->collider_count;
     c.collider_forces = forces;
   }
+  /* the colliders a script moves, when any is (a run without scripts writes what it did) */
+  _Static_assert(MPM_CKPT_SCRIPT_DOUBLES == MPM_COLLIDER_SCRIPT_DOUBLES, "script layout");
+  double *scripts = NULL;
+  int scripted = 0;
+  for (int k = 0; k < sim->collider_count; ++k) scripted |= sim->colliders[k].script.on;
+  if (scripted) {
+    scripts = malloc((size_t)sim->collider_count * MPM_CKPT_SCRIPT_DOUBLES * sizeof *scripts);
+    if (!scripts) {
+      free(forces);
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing a checkpoint");
+    }
+    for (int k = 0; k < sim->collider_count; ++k)
+      mpm_collider_script_save(&sim->colliders[k], scripts + (size_t)k * MPM_CKPT_SCRIPT_DOUBLES);
+    c.collider_scripts = scripts;
+  }
   if (sim->mesh_digests) { /* borrowed */
     c.mesh_count = sim->scene.body_count;
     c.mesh_digests = sim->mesh_digests;
@@ -144,6 +160,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     size_t count = 0;
     if (!(cells = mpm_adaptive_tree_cells(sim, &count))) {
       free(forces);
+      free(scripts);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
     }
     c.tree_count = count;
@@ -155,12 +172,14 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     if (!c.tree[0] || !c.tree[1] || !c.tree[2] || !c.tree[3]) {
       for (int k = 0; k < 4; ++k) free(c.tree[k]);
       free(forces);
+      free(scripts);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
     }
   }
   mpm_status st = mpm_checkpoint_write(file, &c, &sim->error);
   for (int k = 0; k < 4; ++k) free(c.tree[k]);
   free(forces);
+  free(scripts);
   if (st != MPM_OK) return st;
   snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
   if (path && cap) snprintf(path, cap, "%s", file);
@@ -310,6 +329,10 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
     memcpy(sim->collider_frame, c->collider_forces, nf * sizeof *sim->collider_frame);
     memcpy(sim->stats_forces, c->collider_forces + nf, (size_t)c->records * nf * sizeof(double));
   }
+  if (c->collider_scripts && c->colliders == sim->collider_count)
+    for (int k = 0; k < sim->collider_count; ++k)
+      mpm_collider_script_load(&sim->colliders[k],
+                               c->collider_scripts + (size_t)k * MPM_CKPT_SCRIPT_DOUBLES);
   sim->output_enabled = 1;
   sim->frame_wall_start = mpm_wall_seconds();
   return MPM_OK;

@@ -101,3 +101,51 @@ mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint32_t *ids
   mpm_free(index);
   return MPM_OK;
 }
+
+mpm_status mpm_sim_set_collider_pose(mpm_sim *sim, int index, const double center[3],
+                                     const double rotation[9]) {
+  const char *what = "mpm_sim_set_collider_pose";
+  if (sim->failed != MPM_OK)
+    return mpm_error_set(&sim->error, sim->failed,
+                         "%s: the simulation failed at step %lld and cannot go on (%s)", what,
+                         (long long)sim->steps, sim->failed_message);
+  if (index < 0 || index >= sim->collider_count)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "%s: collider %d does not exist (the scene has %d)", what, index,
+                         sim->collider_count);
+  if (!center) return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%s: center is NULL", what);
+  mpm_collider *c = &sim->colliders[index];
+  for (int d = 0; d < 3; ++d)
+    if (!isfinite(center[d]) || fabs(center[d]) > 1e15)
+      return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                           "%s: collider '%s': center[%d] is %g; expected a finite number (m)",
+                           what, c->desc.name, d, center[d]);
+  double R[9];
+  if (rotation) {
+    memcpy(R, rotation, sizeof R);
+    /* a rotation: R R^T = I within 1e-6, det +1 */
+    double worst = 0;
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) {
+        const double dot =
+            R[3 * r] * R[3 * k] + R[3 * r + 1] * R[3 * k + 1] + R[3 * r + 2] * R[3 * k + 2];
+        const double e = fabs(dot - (r == k));
+        if (!isfinite(e))
+          worst = INFINITY;
+        else if (e > worst)
+          worst = e;
+      }
+    const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) +
+                       R[2] * (R[3] * R[7] - R[4] * R[6]);
+    if (!(worst <= 1e-6) || !(det > 0))
+      return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                           "%s: collider '%s': the rotation is not a rotation (|R R^T - I| = %g, "
+                           "det R = %g); expected an orthonormal matrix, row-major, det +1",
+                           what, c->desc.name, worst, det);
+  } else { /* the rotation it has now */
+    const mpm_collider_pose p = mpm_collider_pose_at(c, sim->time);
+    for (int k = 0; k < 9; ++k) R[k] = c->script.on ? c->script.R[k] : (double)p.R[k];
+  }
+  mpm_collider_script_set(c, sim->time, center, R);
+  return MPM_OK;
+}

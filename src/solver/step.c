@@ -457,7 +457,7 @@ static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
   for (int k = 0; k < sim->collider_count; ++k) {
     const mpm_collider_desc *cd = &sim->colliders[k].desc;
     if (t_end >= cd->active[0] && t_end < cd->active[1])
-      sim->poses[active++] = mpm_collider_pose_at(&sim->colliders[k], t_end);
+      sim->poses[active++] = mpm_collider_pose_over(&sim->colliders[k], sim->time, t_end);
   }
   u->boundary.collider_count = active;
   u->boundary.poses = sim->poses;
