@@ -38,6 +38,9 @@ if(MPM_BUILD_PROGRAM)
 endif()
 
 # ---- the CMake package ----
+# the Blender add-on, as a folder to copy into Blender's add-ons (docs/houdini-blender.md)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/blender/io_import_mpm_run
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mpm/blender FILES_MATCHING PATTERN "*.py")
 install(EXPORT mpmTargets NAMESPACE mpm:: DESTINATION ${MPM_CMAKE_DIR})
 if(MPM_DOUBLE)
   set(MPM_REAL_TYPE double)

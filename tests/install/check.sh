@@ -37,6 +37,7 @@ pc=$(find "$prefix" -name mpm.pc | head -n 1)
 [ -n "$pc" ] || fail "no mpm.pc under $prefix"
 libdir=$(dirname "$(dirname "$pc")")
 for f in "$libdir/libmpm.so" "$libdir/libmpm.a" "$prefix/include/mpm/mpm.h" \
+  "$prefix/share/mpm/blender/io_import_mpm_run/__init__.py" \
   "$prefix/include/mpm/scene_def.h" "$prefix/include/mpm/render.h" "$prefix/include/mpm/plot.h" \
   "$libdir/cmake/mpm/mpmConfig.cmake" "$libdir/cmake/mpm/mpmConfigVersion.cmake"; do
   [ -e "$f" ] || fail "$f was not installed"
