@@ -262,6 +262,9 @@ def import_run(context, run_dir, surfaces=True, volumes=True, axis_conversion=Tr
             vol.is_sequence = True
             vol.frame_start = first
             vol.frame_duration = max(files) - first + 1
+            # Blender numbers a sequence's files from 1 at frame_start (plus the offset); the
+            # run's start at `first`
+            vol.frame_offset = first - 1
             vol.sequence_mode = "CLIP"
             vobj = bpy.data.objects.new(f"{run} {stem}", vol)
             if axis_conversion:

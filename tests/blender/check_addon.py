@@ -10,7 +10,8 @@ Checks, each against the files read here independently of the add-on:
   - the timeline is the run's: fps from scene.json, frames 0 to the last file;
   - the objects are turned y-up to z-up (+90 degrees about X);
   - the Geometry Nodes modifier makes one point per particle with radius pscale;
-  - the embedded surface series is an animated mesh with the file's vertex count;
+  - the embedded and particle surface series are animated meshes with the files' vertex
+    counts, and the level-set series a volume sequence whose grids load;
   - a 96 x 72 Cycles render of frame 2 differs from the background where the particles project.
 """
 import math
@@ -129,14 +130,35 @@ surfaces = [o for o in scene.objects if o.get("mpm_kind") == "surface"]
 if not surfaces:
     fail("no surface object (the run writes surface_body0_NNNN.obj)")
 for s in surfaces:
-    with open(os.path.join(run_dir, f"{s['mpm_prefix'].split('_', 2)[2]}_0002.obj")) as f:
+    stem = s["mpm_prefix"][len("mpm_run_"):]
+    with open(os.path.join(run_dir, f"{stem}_0002.obj")) as f:
         nv = sum(1 for line in f if line.startswith("v "))
     if len(s.data.vertices) != nv:
         fail(f"{s.name}: {len(s.data.vertices)} vertices at frame 2, the file has {nv}")
     print(f"check_addon: {s.name}: {nv} vertices at frame 2")
 
+# the level-set series: a volume sequence over the run's frames, its grids readable
+volumes = [o for o in scene.objects if o.type == "VOLUME"]
+if len(volumes) != 1:
+    fail(f"expected one volume object (levelset_NNNN.vdb), found {[o.name for o in volumes]}")
+vol = volumes[0].data
+if not vol.is_sequence or vol.frame_start != 0 or vol.frame_duration != 3:
+    fail(f"the volume is not the sequence of frames 0..2 ({vol.is_sequence}, {vol.frame_start}, "
+         f"{vol.frame_duration})")
+deps = bpy.context.evaluated_depsgraph_get()
+grids = volumes[0].evaluated_get(deps).data.grids
+grids.load()
+names = [g.name for g in grids]
+if "surface" not in names:
+    fail(f"the level set's grids are {names}, expected 'surface' among them "
+         f"({grids.error_message!r}, frame file {grids.frame_filepath!r})")
+if not grids.frame_filepath.endswith("levelset_0002.vdb"):
+    fail(f"at frame 2 the volume reads {grids.frame_filepath!r}, expected levelset_0002.vdb")
+print(f"check_addon: volume sequence {bpy.path.basename(vol.filepath)} x {vol.frame_duration}, "
+      f"grids {names}")
+
 # a small render of frame 2 from a camera looking at the particles
-for o in surfaces:
+for o in surfaces + volumes:
     o.hide_render = True  # the particles alone, so the check below is about them
 world_co = np.array([obj.matrix_world @ __import__("mathutils").Vector(c)
                      for c in meshes[1][1]])
