@@ -443,6 +443,53 @@ static void test_scripted_collider(void **state) {
   free(b_state);
 }
 
+/* The domains' view: each active domain particle (after the material points in the particle
+ * view) sits at the mean of its hexahedron's eight corners (lattice cubes: omega = 1/8), whose
+ * reference positions span one lattice cell; a scene without domains has none. */
+static void test_domain_view(void **state) {
+  (void)state;
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_file("examples/ball_bunny.json", &sim, err, sizeof err),
+                   MPM_OK);
+  for (int round = 0; round < 2; ++round) {
+    const mpm_particle_view p = mpm_sim_particle_state(sim);
+    const mpm_domain_view d = mpm_sim_domain_view(sim);
+    mpm_sim_info info;
+    mpm_sim_get_info(sim, &info, sizeof info);
+    assert_int_equal(d.particles, info.domain_particles);
+    assert_int_equal(d.first + d.particles, p.count);
+    assert_true(d.corners > d.particles / 8);
+    if (round == 0) assert_null(d.enriched); /* no step yet: no marks */
+    double worst = 0, h = -1;
+    for (size_t j = 0; j < d.particles; ++j) {
+      const uint32_t *c = d.corner + 8 * j;
+      for (int a = 0; a < 8; ++a) assert_true(c[a] < d.corners);
+      for (int e = 0; e < 3; ++e) {
+        double mean = 0;
+        for (int a = 0; a < 8; ++a) mean += at(&p, d.x[e], c[a]) / 8;
+        worst = fmax(worst, fabs(mean - at(&p, p.x[e], d.first + j)));
+        /* corner 7 is corner 0 plus one cell on every axis, at rest */
+        const double side = at(&p, d.X[e], c[7]) - at(&p, d.X[e], c[0]);
+        if (h < 0) h = side;
+        assert_close(side, h, 1e-6);
+      }
+    }
+    print_message("domain view (round %d): %zu particles, %zu corners, cell %.4g m, particles "
+                  "off their corners' mean by <= %.3g m\n",
+                  round, d.particles, d.corners, h, worst);
+    assert_true(h > 0);
+    assert_true(worst < TOL(1e-5, 1e-12));
+    OK(sim, mpm_sim_step(sim, 0));
+  }
+  mpm_sim_destroy(sim);
+  assert_int_equal(mpm_sim_create_from_json(points_json, NULL, &sim, err, sizeof err), MPM_OK);
+  const mpm_domain_view none = mpm_sim_domain_view(sim);
+  assert_int_equal(none.particles, 0);
+  assert_int_equal(none.corners, 0);
+  mpm_sim_destroy(sim);
+}
+
 static void test_view_temperature(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
@@ -489,6 +536,7 @@ int main(void) {
       cmocka_unit_test(test_view_state_and_strides),
       cmocka_unit_test(test_set_velocities_and_positions),
       cmocka_unit_test(test_scripted_collider),
+      cmocka_unit_test(test_domain_view),
       cmocka_unit_test(test_view_temperature),
       cmocka_unit_test(test_collider_pose),
   };

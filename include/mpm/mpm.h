@@ -210,6 +210,29 @@ MPM_API mpm_particle_view mpm_sim_particles(const mpm_sim *sim);
 /// reads the state every step.
 MPM_API mpm_particle_view mpm_sim_particle_state(const mpm_sim *sim);
 
+/// The particle domains (Zhu et al. 2017) of a view: their corners, shared by neighbouring
+/// domains, and each active domain particle's eight. Valid as mpm_sim_particles' view is (until
+/// the next call that advances sim or asks for a view again: a step may number the corners
+/// anew, the hexahedra staying the same); counts 0 without domains (and when out of memory).
+typedef struct mpm_domain_view {
+  size_t corners;   /* corner count */
+  size_t real_size; /* sizeof the real type */
+  const void *x[3]; /* each corner's position, m */
+  const void *v[3]; /* velocity, m/s */
+  const void *X[3]; /* reference position (the lattice at rest), m */
+  /* per corner: 1 where the corner was a DOF of its own (enriched, Zhu sec. 5) in the step the
+     marks are of; NULL when no marks are current (before the first step, after a release) */
+  const uint8_t *enriched;
+  size_t particles; /* the active domain particles */
+  size_t first;     /* the first one's index in mpm_sim_particles' view (after the material
+                       points) */
+  /* 8 per particle, row by row: its hexahedron's corners, corner a = i + 2 j + 4 k at the
+     reference cube's (2i - 1, 2j - 1, 2k - 1) (VTK's voxel order) */
+  const uint32_t *corner;
+} mpm_domain_view;
+
+MPM_API mpm_domain_view mpm_sim_domain_view(const mpm_sim *sim);
+
 /// For a binding that hands the view's arrays to garbage-collected code (the Python module's
 /// numpy arrays): delta +1 holds them, -1 releases a hold. While any hold is on, the arrays
 /// the simulation would free (when it adds particles and grows its arrays, or replaces the

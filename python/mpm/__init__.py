@@ -33,7 +33,7 @@ import numpy as _np
 from . import _mpm
 from ._mpm import Error, SceneError, StaleViewError
 
-__all__ = ["Simulation", "Particles", "Collider", "Error", "SceneError", "StaleViewError",
+__all__ = ["Simulation", "Particles", "Domains", "Collider", "Error", "SceneError", "StaleViewError",
            "render", "version", "real_type", "dtype"]
 
 _mpm._set_main_thread(_threading.main_thread().ident)
@@ -151,6 +151,42 @@ class Particles:
         return f"<mpm.Particles: {len(self)} particles>"
 
 
+class Domains:
+    """The particle domains (Zhu et al. 2017) at the state it was taken (Simulation.domains):
+    arrays the simulation copied for this object (they stay valid after the simulation advances).
+
+      x, v, X       (corners, 3) each corner's position m, velocity m/s, reference position m
+      enriched      (corners,) bool: a DOF of its own in the last step (None before one)
+      corner        (particles, 8) uint32: each active domain particle's hexahedron, corner
+                    a = i + 2 j + 4 k at the reference cube's (2i - 1, 2j - 1, 2k - 1)
+      first         the index of the first domain particle in Simulation.particles (they come
+                    after the material points, in this order)
+    """
+
+    def __init__(self, sim):
+        d = sim._domains()
+        self.first = d["first"]
+        n, nc = d["particles"], d["corners"]
+        real = dtype
+
+        def vec(key):
+            if nc == 0:
+                return _np.zeros((0, 3), dtype=real)
+            return _np.stack([_np.array(memoryview(b)) for b in d[key]], axis=1)
+
+        self.x, self.v, self.X = vec("x"), vec("v"), vec("X")
+        self.corner = (_np.array(memoryview(d["corner"])).reshape(n, 8) if nc
+                       else _np.zeros((0, 8), dtype=_np.uint32))
+        self.enriched = (_np.array(memoryview(d["enriched"])).astype(bool)
+                         if "enriched" in d else None)
+
+    def __len__(self):
+        return len(self.corner)
+
+    def __repr__(self):
+        return f"<mpm.Domains: {len(self)} domain particles, {len(self.x)} corners>"
+
+
 class Collider:
     """A collider of the scene at the simulation's time: name, center (3,), rotation (3, 3)
     (local to world), velocity (3,) of the centre m/s, angular_velocity (3,) rad/s, and
@@ -218,6 +254,12 @@ class Simulation(_mpm._Simulation):
         """The particles now, as numpy views of the engine's arrays (a Particles object; valid
         until the simulation advances)."""
         return Particles(self)
+
+    @property
+    def domains(self):
+        """The particle domains now: their corners and each domain particle's eight (a Domains
+        object of copies)."""
+        return Domains(self)
 
     @property
     def info(self):

@@ -299,6 +299,58 @@ static PyObject *sim_state(PyObject *self, PyObject *unused) {
   return d;
 }
 
+/* The domains' view as a dict of _Buffers (mpm/__init__.py copies them). */
+static PyObject *sim_domains(PyObject *self, PyObject *unused) {
+  (void)unused;
+  pympm_sim *s = (pympm_sim *)self;
+  if (!ready(s)) return NULL;
+  const mpm_domain_view d = mpm_sim_domain_view(s->sim);
+  const char rf = d.real_size == 4 ? 'f' : 'd';
+  const Py_ssize_t rs = (Py_ssize_t)d.real_size, nc = (Py_ssize_t)d.corners;
+  PyObject *out = Py_BuildValue("{s:n,s:n,s:n}", "corners", nc, "particles",
+                                (Py_ssize_t)d.particles, "first", (Py_ssize_t)d.first);
+  if (!out || d.corners == 0) return out;
+  const struct {
+    const char *name;
+    const void *const *a;
+  } vec[] = {{"x", d.x}, {"v", d.v}, {"X", d.X}};
+  for (int k = 0; k < 3; ++k) {
+    PyObject *t = PyTuple_New(3);
+    if (!t) goto fail;
+    for (int c = 0; c < 3; ++c) {
+      PyObject *b = pympm_buffer_new(s, vec[k].a[c], nc, 1, 0, rf, rs);
+      if (!b) {
+        Py_DECREF(t);
+        goto fail;
+      }
+      PyTuple_SET_ITEM(t, c, b);
+    }
+    if (PyDict_SetItemString(out, vec[k].name, t)) {
+      Py_DECREF(t);
+      goto fail;
+    }
+    Py_DECREF(t);
+  }
+  PyObject *corner = pympm_buffer_new(s, d.corner, 8 * (Py_ssize_t)d.particles, 1, 0, 'I', 4);
+  if (!corner || PyDict_SetItemString(out, "corner", corner)) {
+    Py_XDECREF(corner);
+    goto fail;
+  }
+  Py_DECREF(corner);
+  if (d.enriched) {
+    PyObject *e = pympm_buffer_new(s, d.enriched, nc, 1, 0, 'B', 1);
+    if (!e || PyDict_SetItemString(out, "enriched", e)) {
+      Py_XDECREF(e);
+      goto fail;
+    }
+    Py_DECREF(e);
+  }
+  return out;
+fail:
+  Py_DECREF(out);
+  return NULL;
+}
+
 /* J and the Cauchy stress as _Buffers over the simulation's buffers (filled by this call: copy
  * them before the next). */
 static PyObject *sim_derived(PyObject *self, PyObject *unused) {
@@ -518,6 +570,7 @@ static PyMethodDef sim_methods[] = {
     {"_set", sim_set, METH_VARARGS, "Set velocities (0) or positions (1) by id."},
     {"_set_collider_pose", sim_set_collider_pose, METH_VARARGS, "Script a collider's pose."},
     {"_derived", sim_derived, METH_NOARGS, "J and the Cauchy stress as buffers."},
+    {"_domains", sim_domains, METH_NOARGS, "The particle domains' view as buffers."},
     {"_colliders", sim_colliders, METH_NOARGS, "The colliders' poses as dicts."},
     {"_info", sim_info, METH_NOARGS, "mpm_sim_info as a dict."},
     {"warnings", sim_warnings, METH_NOARGS,

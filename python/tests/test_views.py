@@ -138,3 +138,25 @@ def test_create_destroy_cycles_leak_nothing():
     print(f"1000 cycles: Python heap {grown_py} bytes, resident set {grown_rss} bytes")
     assert grown_py < 64 * 1024
     assert grown_rss < 8 * 1024 * 1024  # a leaked simulation would be ~1 MB each
+
+
+def test_domains_view():
+    sim = mpm.Simulation.from_file(os.path.join(os.path.dirname(__file__), "..", "..",
+                                                "examples", "ball_bunny.json"))
+    d = sim.domains
+    p = sim.particles
+    assert len(d) == sim.info["domain_particles"] and d.first + len(d) == len(p)
+    assert d.enriched is None  # no step yet
+    # every domain particle at the mean of its eight corners (lattice cubes)
+    mean = d.x[d.corner].mean(axis=1)
+    assert np.allclose(mean, p.x[d.first:], atol=1e-5)
+    h = d.X[d.corner[:, 7]] - d.X[d.corner[:, 0]]
+    assert np.allclose(h, h[0, 0], rtol=1e-5)
+    sim.step()
+    d2 = sim.domains
+    assert d2.enriched is not None and d2.enriched.shape == (len(d2.x),)
+    # the hexahedra stay the same (the step may number the corners anew)
+    assert np.array_equal(d.X[d.corner], d2.X[d2.corner])
+    assert np.allclose(d2.x[d2.corner].mean(axis=1), sim.particles.x[d2.first:], atol=1e-5)
+    none = mpm.Simulation(small_scene()).domains
+    assert len(none) == 0 and none.x.shape == (0, 3)

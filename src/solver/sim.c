@@ -411,6 +411,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_particles_free(&sim->domain_backup);
   mpm_particles_free(&sim->view);
   mpm_keep_free(&sim->view_keep, sim->view_derived);
+  mpm_keep_free(&sim->view_keep, sim->view_corner);
   mpm_keep_clear(&sim->view_keep); /* whatever a binding still holds: the handle is gone */
   for (int k = 0; k < 18; ++k) mpm_free(sim->corner_backup[k]);
   mpm_domain_set_free(&sim->domains);

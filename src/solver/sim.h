@@ -138,6 +138,8 @@ struct mpm_sim {
   mpm_particles view;     /* mpm_sim_particles' copy of every particle when there are domains */
   mpm_real *view_derived; /* the view's J and Cauchy stress: 10 arrays of view_capacity */
   size_t view_capacity;
+  uint32_t *view_corner; /* mpm_sim_domain_view's corner indices (8 per active particle) */
+  size_t view_corner_capacity;
   mpm_keep
       view_keep; /* arrays replaced while a binding holds views (mpm_sim_hold_particle_arrays) */
   char last_checkpoint[MPM_PATH_MAX + 32];

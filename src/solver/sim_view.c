@@ -104,6 +104,38 @@ mpm_particle_view mpm_sim_particles(const mpm_sim *sim_in) {
   return v;
 }
 
+mpm_domain_view mpm_sim_domain_view(const mpm_sim *sim_in) {
+  mpm_sim *sim = (mpm_sim *)sim_in;
+  const mpm_domain_set *s = &sim->domains;
+  mpm_domain_view v;
+  memset(&v, 0, sizeof v);
+  v.real_size = sizeof(mpm_real);
+  v.first = sim->particles.count;
+  if (s->corner_count == 0 || s->active_count == 0) return v;
+  /* the active particles' corners, in the particle view's order (inactive slots left out) */
+  if (s->active_count > sim->view_corner_capacity || !sim->view_corner) {
+    const size_t cap = s->active_count + s->active_count / 4 + 1;
+    uint32_t *b = mpm_alloc(8 * cap * sizeof *b);
+    if (!b) return v;
+    mpm_keep_free(&sim->view_keep, sim->view_corner);
+    sim->view_corner = b;
+    sim->view_corner_capacity = cap;
+  }
+  size_t j = 0;
+  for (size_t q = 0; q < s->particles.count; ++q)
+    if (s->active[q]) memcpy(sim->view_corner + 8 * j++, s->corner[q], 8 * sizeof(uint32_t));
+  v.particles = j;
+  v.corners = s->corner_count;
+  for (int d = 0; d < 3; ++d) {
+    v.x[d] = s->cx[d];
+    v.v[d] = s->cv[d];
+    v.X[d] = s->cX[d];
+  }
+  v.enriched = s->enrich.enriched && s->enrich.valid ? s->enrich.enriched : NULL;
+  v.corner = sim->view_corner;
+  return v;
+}
+
 void mpm_sim_hold_particle_arrays(mpm_sim *sim, int delta) {
   if (delta) mpm_keep_hold(&sim->view_keep, delta > 0 ? 1 : -1);
 }
