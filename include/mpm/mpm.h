@@ -49,6 +49,10 @@ MPM_API const char *mpm_version(void);
 /// Name of the real type this library was built with: "float" or "double".
 MPM_API const char *mpm_real_type(void);
 
+/// Bytes the library holds now for its large arrays (particles, grids, the steps' scratch), over
+/// every simulation of the process: what a leak check compares before and after.
+MPM_API size_t mpm_live_bytes(void);
+
 typedef struct mpm_sim mpm_sim;
 
 /// Load and validate a JSON scene and build the simulation (particles sampled, colliders set).

@@ -44,6 +44,12 @@ def version():
     return _mpm.version()
 
 
+def live_bytes():
+    """Bytes the engine holds now for its large arrays, over every simulation: what a leak
+    check compares before and after."""
+    return _mpm.live_bytes()
+
+
 def real_type():
     """The engine's real type, "float" or "double": the dtype of the real particle arrays."""
     return _mpm.real_type()

@@ -38,6 +38,11 @@ static PyObject *mod_real_type(PyObject *self, PyObject *unused) {
   return PyUnicode_FromString(mpm_real_type());
 }
 
+static PyObject *mod_live_bytes(PyObject *self, PyObject *unused) {
+  (void)self, (void)unused;
+  return PyLong_FromSize_t(mpm_live_bytes());
+}
+
 static PyObject *mod_set_main_thread(PyObject *self, PyObject *arg) {
   (void)self;
   pympm_main_thread = PyLong_AsUnsignedLong(arg);
@@ -50,6 +55,8 @@ static PyMethodDef module_methods[] = {
     {"real_type", mod_real_type, METH_NOARGS,
      "The engine's real type, 'float' or 'double' (the particle arrays' dtype)."},
     {"_set_main_thread", mod_set_main_thread, METH_O, "The main thread's ident."},
+    {"live_bytes", mod_live_bytes, METH_NOARGS,
+     "Bytes the engine holds now for its large arrays, over every simulation (mpm_live_bytes)."},
     {"_render", pympm_render, METH_VARARGS, "One picture of a run folder."},
     {NULL, NULL, 0, NULL}};
 

@@ -130,12 +130,15 @@ def test_create_destroy_cycles_leak_nothing():
     tracemalloc.start()
     before_py = tracemalloc.get_traced_memory()[0]
     before_rss = rss()
+    before_engine = mpm.live_bytes()
     cycle(1000)
     gc.collect()
     grown_py = tracemalloc.get_traced_memory()[0] - before_py
     tracemalloc.stop()
     grown_rss = rss() - before_rss
-    print(f"1000 cycles: Python heap {grown_py} bytes, resident set {grown_rss} bytes")
+    print(f"1000 cycles: Python heap {grown_py} bytes, engine {mpm.live_bytes() - before_engine} "
+          f"bytes, resident set {grown_rss} bytes")
+    assert mpm.live_bytes() == before_engine  # every engine array given back
     assert grown_py < 64 * 1024
     assert grown_rss < 8 * 1024 * 1024  # a leaked simulation would be ~1 MB each
 
