@@ -490,6 +490,94 @@ static void test_domain_view(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* A body added between steps: sampled with new ids and its velocity, checked with key paths
+ * (nothing changes on a refusal), and a run with it resumes from its folder's scene.json
+ * bit-identically. */
+static void test_add_body(void **state) {
+  (void)state;
+  const char *ball = "{\"name\": \"ball\", \"shape\": {\"type\": \"sphere\", \"center\": "
+                     "[0.5, 0.72, 0.5], \"radius\": 0.1}, \"material\": \"m\", "
+                     "\"velocity\": [0, -1, 0]}";
+  mpm_sim *sim = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(points_json, NULL, &sim, err, sizeof err), MPM_OK);
+  OK(sim, mpm_sim_step(sim, 0));
+  const size_t before = mpm_sim_particle_count(sim);
+  /* refusals change nothing */
+  const char *bad[][2] = {
+      {"{\"shape\": {\"type\": \"sphere\", \"center\": [0.5, 0.72, 0.5], \"radius\": 0.06}, "
+       "\"material\": \"nope\"}",
+       "bodies[1].material"},
+      {"{\"shape\": {\"type\": \"sphere\", \"center\": [0.5, 0.99, 0.5], \"radius\": 0.06}, "
+       "\"material\": \"m\"}",
+       "bodies[1].shape"},
+      {"{\"shape\": {\"type\": \"sphere\", \"center\": [0.5, 0.72, 0.5], \"radius\": 0.06}, "
+       "\"material\": {\"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3, \"density\": 1000}}",
+       "takes a material of the scene"},
+      {"{\"shape\": {\"type\": \"sphere\", \"center\": [0.5, 0.72, 0.5], \"radius\": 0.06}, "
+       "\"material\": \"m\", \"domains\": true, \"jitter\": 0}",
+       "particle domains cannot be added"},
+      {"[1, 2]", "expected the JSON object"},
+  };
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    assert_int_not_equal(mpm_sim_add_body(sim, bad[k][0], NULL, NULL), MPM_OK);
+    if (!strstr(mpm_sim_last_error(sim), bad[k][1]))
+      print_error("expected '%s' in: %s\n", bad[k][1], mpm_sim_last_error(sim));
+    assert_non_null(strstr(mpm_sim_last_error(sim), bad[k][1]));
+    assert_int_equal(mpm_sim_particle_count(sim), before);
+  }
+  size_t added = 0;
+  OK(sim, mpm_sim_add_body(sim, ball, NULL, &added));
+  assert_true(added > 100);
+  assert_int_equal(mpm_sim_particle_count(sim), before + added);
+  mpm_sim_info info;
+  mpm_sim_get_info(sim, &info, sizeof info);
+  assert_int_equal(info.bodies, 2);
+  const mpm_particle_view v = mpm_sim_particle_state(sim);
+  size_t new_ones = 0;
+  for (size_t i = 0; i < v.count; ++i) {
+    if (v.body[i] != 1) continue;
+    ++new_ones;
+    assert_true(v.id[i] >= before); /* ids never reused */
+    assert_true(at(&v, v.v[1], i) == -1);
+  }
+  assert_int_equal(new_ones, added);
+  OK(sim, mpm_sim_step(sim, 0));
+  mpm_sim_destroy(sim);
+
+  /* straight through, and with a checkpoint after the body, resumed from the folder's scene */
+  char dir_a[512], dir_b[512], scene_b[600];
+  snprintf(dir_a, sizeof dir_a, "%s", test_temp_dir("add_body_a"));
+  snprintf(dir_b, sizeof dir_b, "%s", test_temp_dir("add_body_b"));
+  snprintf(scene_b, sizeof scene_b, "%s/scene.json", dir_b);
+  size_t na = 0, nb = 0;
+  double *a_state = NULL, *b_state = NULL;
+  for (int run = 0; run < 2; ++run) {
+    assert_int_equal(mpm_sim_create_from_json(points_json, NULL, &sim, err, sizeof err), MPM_OK);
+    OK(sim, mpm_sim_enable_output(sim, run ? dir_b : dir_a));
+    for (int k = 0; k < 3; ++k) OK(sim, mpm_sim_step(sim, 0));
+    OK(sim, mpm_sim_add_body(sim, ball, NULL, NULL));
+    for (int k = 0; k < (run ? 2 : 5); ++k) OK(sim, mpm_sim_step(sim, 0));
+    if (run == 0) {
+      a_state = state_by_id(sim, &na);
+    } else {
+      OK(sim, mpm_sim_write_checkpoint(sim, NULL, 0));
+      mpm_sim_destroy(sim);
+      if (mpm_sim_create_from_file(scene_b, &sim, err, sizeof err) != MPM_OK)
+        print_error("%s\n", err);
+      assert_non_null(sim);
+      OK(sim, mpm_sim_resume(sim, dir_b, NULL, 0));
+      for (int k = 0; k < 3; ++k) OK(sim, mpm_sim_step(sim, 0));
+      b_state = state_by_id(sim, &nb);
+    }
+    mpm_sim_destroy(sim);
+  }
+  assert_int_equal(na, nb);
+  assert_memory_equal(a_state, b_state, 15 * na * sizeof(double));
+  free(a_state);
+  free(b_state);
+}
+
 static void test_view_temperature(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
@@ -537,6 +625,7 @@ int main(void) {
       cmocka_unit_test(test_set_velocities_and_positions),
       cmocka_unit_test(test_scripted_collider),
       cmocka_unit_test(test_domain_view),
+      cmocka_unit_test(test_add_body),
       cmocka_unit_test(test_view_temperature),
       cmocka_unit_test(test_collider_pose),
   };

@@ -166,6 +166,17 @@ MPM_API mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint3
 MPM_API mpm_status mpm_sim_set_collider_pose(mpm_sim *sim, int index, const double center[3],
                                              const double rotation[9]);
 
+/// Add a body now, between steps: `body_json` is one entry of a scene's `bodies` list (its
+/// shape, a material of the scene by name, velocity, particles per cell, ...; relative mesh files
+/// against `base_dir`, NULL: the working directory), checked as the scene's own bodies are
+/// (messages name its key path, bodies[N]) and sampled into material points with new ids; the
+/// number made goes to *count (may be NULL). The scene then has the body: checkpoints name that
+/// scene, and with output open the folder's scene.json is rewritten with it, which is the scene
+/// a resume takes. Not with particle domains, an inline material, nor on the multi-level grid
+/// (MPM_ERR_INVALID, saying so). Nothing changes when it fails.
+MPM_API mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *base_dir,
+                                    size_t *count);
+
 /// Particle domains (Zhu et al. 2017): switch off the domains of every domain particle inside
 /// the box [lo, hi] (m), now; they continue as standard material points (for topology change
 /// such as melting or cutting). The number switched off goes to *count (may be NULL).

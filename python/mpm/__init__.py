@@ -304,6 +304,17 @@ class Simulation(_mpm._Simulation):
         are not changed. As set_velocities otherwise."""
         self._set_by_id(1, ids, x, "set_positions")
 
+    def add_body(self, body, base_dir=None):
+        """Add a body now, between steps: body is one entry of a scene's "bodies" list (a dict:
+        shape, a material of the scene by name, velocity, ...), checked as the scene's own bodies
+        are (SceneError naming its key path, bodies[N]) and sampled into material points with new
+        ids. Returns how many particles it made. The scene then has the body: with output open,
+        the folder's scene.json is rewritten with it, and that file is the scene to resume the
+        run from (Simulation.resume(dir + "/scene.json", dir)). Not with particle domains, an
+        inline material, or on the multi-level grid."""
+        text = body if isinstance(body, str) else _scene_json(body)
+        return self._add_body(text, None if base_dir is None else _os.fspath(base_dir))
+
     def set_collider_pose(self, collider, center, rotation=None):
         """Move a collider by a script: it ends the next step at this pose (center (3,) m;
         rotation (3, 3), local to world; None keeps its rotation), moving there at a constant

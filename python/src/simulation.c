@@ -255,6 +255,21 @@ static PyObject *sim_set_collider_pose(PyObject *self, PyObject *args) {
   Py_RETURN_NONE;
 }
 
+/* _add_body(json, base_dir) -> particles made */
+static PyObject *sim_add_body(PyObject *self, PyObject *args) {
+  pympm_sim *s = (pympm_sim *)self;
+  const char *json, *base = NULL;
+  if (!PyArg_ParseTuple(args, "s|z", &json, &base) || !ready(s)) return NULL;
+  size_t count = 0;
+  mpm_status st;
+  Py_BEGIN_ALLOW_THREADS;
+  st = mpm_sim_add_body(s->sim, json, base, &count);
+  Py_END_ALLOW_THREADS;
+  s->generation++;
+  if (st != MPM_OK) return pympm_raise(st, mpm_sim_last_error(s->sim), 1);
+  return PyLong_FromSize_t(count);
+}
+
 /* The state arrays as _Buffers in a dict (mpm_sim_particle_state: no stress evaluation). */
 static PyObject *sim_state(PyObject *self, PyObject *unused) {
   (void)unused;
@@ -569,6 +584,7 @@ static PyMethodDef sim_methods[] = {
     {"_state", sim_state, METH_NOARGS, "The state arrays as buffers."},
     {"_set", sim_set, METH_VARARGS, "Set velocities (0) or positions (1) by id."},
     {"_set_collider_pose", sim_set_collider_pose, METH_VARARGS, "Script a collider's pose."},
+    {"_add_body", sim_add_body, METH_VARARGS, "Add a body (its JSON) between steps."},
     {"_derived", sim_derived, METH_NOARGS, "J and the Cauchy stress as buffers."},
     {"_domains", sim_domains, METH_NOARGS, "The particle domains' view as buffers."},
     {"_colliders", sim_colliders, METH_NOARGS, "The colliders' poses as dicts."},

@@ -249,3 +249,43 @@ def test_scripted_collider_moves_what_it_holds():
         sim.set_collider_pose(0, [0.5, 0.5, 0.5], np.diag([1.0, 1.0, -1.0]))
     with pytest.raises(mpm.Error, match="no collider named"):
         sim.set_collider_pose("nothing", [0, 0, 0])
+
+
+def test_add_body_between_steps(tmp_path):
+    scene = small_scene(gravity=[0, 0, 0], colliders=[],
+                        domain={"min": [0, 0, 0], "max": [1, 1, 1], "dx": 0.05},
+                        bodies=[{"shape": {"type": "box", "center": [0.5, 0.4, 0.5],
+                                           "half_extent": [0.1, 0.1, 0.1]},
+                                 "material": "jelly"}])
+    ball = {"name": "ball", "shape": {"type": "sphere", "center": [0.5, 0.72, 0.5],
+                                      "radius": 0.1},
+            "material": "jelly", "velocity": [0, -1, 0]}
+    sim = mpm.Simulation(scene)
+    sim.open_output(str(tmp_path / "run"))
+    sim.step()
+    before = sim.particle_count
+    with pytest.raises(mpm.SceneError, match=r"bodies\[1\]\.material"):
+        sim.add_body(dict(ball, material="nope"))
+    assert sim.particle_count == before
+    made = sim.add_body(ball)
+    assert made > 100 and sim.particle_count == before + made
+    p = sim.particles
+    new = p.body == 1
+    assert new.sum() == made and p.id[new].min() >= before
+    assert np.all(p.v[new, 1] == -1)
+    sim.step()
+    assert sim.info["bodies"] == 2
+    # the folder's scene.json has the ball: the run resumes from it
+    path = sim.checkpoint()
+    steps = sim.steps
+    sim.step()
+    after = sim.particles
+    x_straight = after.x[np.argsort(after.id)].copy()
+    del sim, p, after
+    import gc
+    gc.collect()
+    resumed = mpm.Simulation.resume(tmp_path / "run" / "scene.json", tmp_path / "run")
+    assert resumed.steps == steps and resumed.info["last_checkpoint"] == path
+    resumed.step()
+    q = resumed.particles
+    assert np.array_equal(q.x[np.argsort(q.id)], x_straight)
