@@ -16,16 +16,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* A simulation whose state a failed step lost takes no changes either (frame.c's latch). */
+static mpm_status refuse_failed(mpm_sim *sim, const char *what) {
+  return mpm_error_set(&sim->error, sim->failed,
+                       "%s: the simulation failed at step %lld and cannot go on (%s)", what,
+                       (long long)sim->steps, sim->failed_message);
+}
+
 /* The material point index of every requested id in *index (count entries), or an error naming
  * the first id that is not a material point simulated now. */
 static mpm_status find_ids(mpm_sim *sim, const char *what, size_t count, const uint32_t *ids,
                            uint32_t **index) {
   const mpm_particles *p = &sim->particles;
   *index = NULL;
-  if (sim->failed != MPM_OK)
-    return mpm_error_set(&sim->error, sim->failed,
-                         "%s: the simulation failed at step %lld and cannot go on (%s)", what,
-                         (long long)sim->steps, sim->failed_message);
+  if (sim->failed != MPM_OK) return refuse_failed(sim, what);
   if (count && !ids) return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%s: ids is NULL", what);
   uint32_t top = 0;
   for (size_t i = 0; i < p->count; ++i)
@@ -112,10 +116,7 @@ mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint32_t *ids
 mpm_status mpm_sim_set_collider_pose(mpm_sim *sim, int index, const double center[3],
                                      const double rotation[9]) {
   const char *what = "mpm_sim_set_collider_pose";
-  if (sim->failed != MPM_OK)
-    return mpm_error_set(&sim->error, sim->failed,
-                         "%s: the simulation failed at step %lld and cannot go on (%s)", what,
-                         (long long)sim->steps, sim->failed_message);
+  if (sim->failed != MPM_OK) return refuse_failed(sim, what);
   if (index < 0 || index >= sim->collider_count)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "%s: collider %d does not exist (the scene has %d)", what, index,
@@ -181,10 +182,7 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
                             size_t *count) {
   const char *what = "mpm_sim_add_body";
   if (count) *count = 0;
-  if (sim->failed != MPM_OK)
-    return mpm_error_set(&sim->error, sim->failed,
-                         "%s: the simulation failed at step %lld and cannot go on (%s)", what,
-                         (long long)sim->steps, sim->failed_message);
+  if (sim->failed != MPM_OK) return refuse_failed(sim, what);
   if (!sim->scene_copy)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "%s: the simulation keeps no scene text to add the body to", what);
