@@ -45,7 +45,10 @@ PyObject *pympm_buffer_new(pympm_sim *sim, const void *ptr, Py_ssize_t count, in
 static void buffer_dealloc(PyObject *self) {
   pympm_buffer *b = (pympm_buffer *)self;
   if (b->owner) {
-    if (b->owner->sim) mpm_sim_hold_particle_arrays(b->owner->sim, -1);
+    if (b->owner->busy)
+      b->owner->deferred++; /* released when the running call is over (pympm_relock) */
+    else if (b->owner->sim)
+      mpm_sim_hold_particle_arrays(b->owner->sim, -1);
     Py_DECREF(b->owner);
   }
   PyObject_Free(self);

@@ -23,6 +23,7 @@ typedef struct pympm_sim {
   PyObject_HEAD mpm_sim *sim;
   uint64_t generation; /* bumped by every call that may move, reorder or resize particles */
   int busy;            /* a call is running without the GIL: another thread must wait its turn */
+  int deferred;        /* buffers freed during that call: their holds are released after it */
   PyObject *weakrefs;
 } pympm_sim;
 
@@ -44,6 +45,12 @@ PyObject *pympm_raise(mpm_status st, const char *msg, int scene);
  * (count, 3, 3) for a row-major tensor (ncomp 9). It holds sim and its arrays. */
 PyObject *pympm_buffer_new(pympm_sim *sim, const void *ptr, Py_ssize_t count, int ncomp,
                            Py_ssize_t stride, char format, Py_ssize_t itemsize);
+
+/* The GIL let go for a call of the engine on s, and taken back: meanwhile s is busy (another
+ * thread's call is refused) and a buffer freed by another thread defers releasing its hold
+ * until the call is over (the engine may be growing or freeing arrays under the hold). */
+PyThreadState *pympm_unlock(pympm_sim *s);
+void pympm_relock(pympm_sim *s, PyThreadState *t);
 
 /* _render(run_dir, options, png): render.c */
 PyObject *pympm_render(PyObject *self, PyObject *args);

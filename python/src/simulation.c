@@ -24,6 +24,17 @@ typedef struct call_state {
   PyThreadState *thread;
 } call_state;
 
+PyThreadState *pympm_unlock(pympm_sim *s) {
+  s->busy = 1;
+  return PyEval_SaveThread();
+}
+
+void pympm_relock(pympm_sim *s, PyThreadState *t) {
+  PyEval_RestoreThread(t);
+  s->busy = 0;
+  for (; s->deferred > 0; --s->deferred) mpm_sim_hold_particle_arrays(s->sim, -1);
+}
+
 /* Mark sim busy, catch SIGINT (main thread), release the GIL. -1 with an exception when busy. */
 static int call_begin(pympm_sim *s, call_state *c) {
   if (s->busy) {
@@ -31,19 +42,17 @@ static int call_begin(pympm_sim *s, call_state *c) {
                     "the simulation is running a call in another thread; one call at a time");
     return -1;
   }
-  s->busy = 1;
   interrupt_flag = 0;
   c->installed = PyThread_get_thread_ident() == pympm_main_thread;
   if (c->installed) c->previous = PyOS_setsig(SIGINT, on_sigint);
-  c->thread = PyEval_SaveThread();
+  c->thread = pympm_unlock(s);
   return 0;
 }
 
 /* The GIL back, SIGINT's handler restored; 1 when Ctrl-C came during the call. */
 static int call_end(pympm_sim *s, call_state *c) {
-  PyEval_RestoreThread(c->thread);
+  pympm_relock(s, c->thread);
   if (c->installed) PyOS_setsig(SIGINT, c->previous);
-  s->busy = 0;
   const int interrupted = interrupt_flag;
   interrupt_flag = 0;
   return interrupted;
@@ -161,9 +170,9 @@ static PyObject *sim_open_output(PyObject *self, PyObject *args, PyObject *kw) {
   if (!PyArg_ParseTupleAndKeywords(args, kw, "|zp", names, &dir, &overwrite) || !ready(s))
     return NULL;
   mpm_status st;
-  Py_BEGIN_ALLOW_THREADS;
+  PyThreadState *unlocked = pympm_unlock(s);
   st = mpm_sim_open_output(s->sim, dir, overwrite ? MPM_OUTPUT_OVERWRITE : MPM_OUTPUT_NEW);
-  Py_END_ALLOW_THREADS;
+  pympm_relock(s, unlocked);
   if (st != MPM_OK) return failed(s, st);
   Py_RETURN_NONE;
 }
@@ -174,9 +183,9 @@ static PyObject *sim_checkpoint(PyObject *self, PyObject *unused) {
   if (!ready(s)) return NULL;
   char path[4096];
   mpm_status st;
-  Py_BEGIN_ALLOW_THREADS;
+  PyThreadState *unlocked = pympm_unlock(s);
   st = mpm_sim_write_checkpoint(s->sim, path, sizeof path);
-  Py_END_ALLOW_THREADS;
+  pympm_relock(s, unlocked);
   if (st != MPM_OK) return failed(s, st);
   return PyUnicode_DecodeFSDefault(path);
 }
@@ -187,9 +196,9 @@ static PyObject *sim_resume_from(PyObject *self, PyObject *args) {
   if (!PyArg_ParseTuple(args, "s", &dir) || !ready(s)) return NULL;
   char path[4096];
   mpm_status st;
-  Py_BEGIN_ALLOW_THREADS;
+  PyThreadState *unlocked = pympm_unlock(s);
   st = mpm_sim_resume(s->sim, dir, path, sizeof path);
-  Py_END_ALLOW_THREADS;
+  pympm_relock(s, unlocked);
   s->generation++;
   if (st != MPM_OK) return failed(s, st);
   return PyUnicode_DecodeFSDefault(path);
@@ -262,9 +271,9 @@ static PyObject *sim_add_body(PyObject *self, PyObject *args) {
   if (!PyArg_ParseTuple(args, "s|z", &json, &base) || !ready(s)) return NULL;
   size_t count = 0;
   mpm_status st;
-  Py_BEGIN_ALLOW_THREADS;
+  PyThreadState *unlocked = pympm_unlock(s);
   st = mpm_sim_add_body(s->sim, json, base, &count);
-  Py_END_ALLOW_THREADS;
+  pympm_relock(s, unlocked);
   s->generation++;
   if (st != MPM_OK) return pympm_raise(st, mpm_sim_last_error(s->sim), 1);
   return PyLong_FromSize_t(count);
@@ -373,9 +382,9 @@ static PyObject *sim_derived(PyObject *self, PyObject *unused) {
   pympm_sim *s = (pympm_sim *)self;
   if (!ready(s)) return NULL;
   mpm_particle_view v;
-  Py_BEGIN_ALLOW_THREADS;
+  PyThreadState *unlocked = pympm_unlock(s);
   v = mpm_sim_particles(s->sim);
-  Py_END_ALLOW_THREADS;
+  pympm_relock(s, unlocked);
   if (!v.J) return pympm_raise(MPM_ERR_NOMEM, "out of memory deriving the particles' stress", 0);
   const char rf = v.real_size == 4 ? 'f' : 'd';
   const Py_ssize_t n = (Py_ssize_t)v.count, rs = (Py_ssize_t)v.real_size;

@@ -163,3 +163,25 @@ def test_domains_view():
     assert np.allclose(d2.x[d2.corner].mean(axis=1), sim.particles.x[d2.first:], atol=1e-5)
     none = mpm.Simulation(small_scene()).domains
     assert len(none) == 0 and none.x.shape == (0, 3)
+
+
+def test_arrays_dropped_while_a_call_runs():
+    # another thread drops the last array of a view while the engine runs a frame without the
+    # GIL: the release waits for the call's end (the engine may be growing its arrays then)
+    import threading
+    import time
+    baseline = mpm.live_bytes()
+    sim = mpm.Simulation(small_scene(domain={"min": [0, 0, 0], "max": [0.5, 0.5, 0.5],
+                                             "dx": 0.0125}, time={"end": 1, "fps": 4}))
+    x = sim.particles.x
+    worker = threading.Thread(target=sim.advance_frame)
+    worker.start()
+    time.sleep(0.05)
+    assert worker.is_alive()
+    del x
+    gc.collect()
+    worker.join()
+    assert sim.frame == 1 and np.isfinite(sim.particles.x).all()
+    del sim
+    gc.collect()
+    assert mpm.live_bytes() == baseline
