@@ -34,7 +34,7 @@ from . import _mpm
 from ._mpm import Error, SceneError, StaleViewError
 
 __all__ = ["Simulation", "Particles", "Domains", "Collider", "Error", "SceneError", "StaleViewError",
-           "render", "version", "real_type", "dtype"]
+           "render", "render_frames", "version", "real_type", "dtype", "live_bytes"]
 
 _mpm._set_main_thread(_threading.main_thread().ident)
 
@@ -393,3 +393,30 @@ def render(source, frame=-1, path=None, *, width=640, height=360, field=None, co
     rgb, h, w, _frame, _time = _mpm._render(run_dir, options,
                                             None if path is None else _os.fspath(path))
     return _np.frombuffer(rgb, dtype=_np.uint8).reshape(h, w, 3)
+
+
+def render_frames(source, out_dir=None, *, width=1280, height=720, field=None, colormap=None,
+                  framing=None, eye=None, target=None, fov=None, range=None, every=1,
+                  shadow=True, legend=True, time_label=True, particles=False, scene=None,
+                  threads=0):
+    """Every frame of a run drawn to PNGs, as `mpm render` draws them: out_dir/frame_NNNN.png
+    (None: RUN_DIR/render), with one camera, field and colour range for the whole run. source is
+    a Simulation whose output is open or a run folder; the options are render()'s, and `every`
+    draws every Nth frame. Returns the paths written, in order."""
+    if isinstance(source, _mpm._Simulation):
+        info = source._info()
+        if not info["output_enabled"]:
+            raise Error("render_frames: the simulation writes no frames; call open_output(dir) "
+                        "first")
+        run_dir = info["output_dir"]
+    else:
+        run_dir = _os.fspath(source)
+    options = {"width": width, "height": height, "field": field, "colormap": colormap,
+               "framing": framing, "eye": eye, "target": target, "fov": fov,
+               "shadow": int(bool(shadow)), "legend": int(bool(legend)),
+               "time_label": int(bool(time_label)), "particles": int(bool(particles)),
+               "scene": None if scene is None else _os.fspath(scene), "threads": threads,
+               "every": every, "out_dir": None if out_dir is None else _os.fspath(out_dir)}
+    if range is not None:
+        options["range_lo"], options["range_hi"] = float(range[0]), float(range[1])
+    return _mpm._render_run(run_dir, options)

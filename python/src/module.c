@@ -58,6 +58,7 @@ static PyMethodDef module_methods[] = {
     {"live_bytes", mod_live_bytes, METH_NOARGS,
      "Bytes the engine holds now for its large arrays, over every simulation (mpm_live_bytes)."},
     {"_render", pympm_render, METH_VARARGS, "One picture of a run folder."},
+    {"_render_run", pympm_render_run, METH_VARARGS, "Every picture of a run folder."},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT,

@@ -54,5 +54,7 @@ void pympm_relock(pympm_sim *s, PyThreadState *t);
 
 /* _render(run_dir, options, png): render.c */
 PyObject *pympm_render(PyObject *self, PyObject *args);
+/* _render_run(run_dir, options): render.c */
+PyObject *pympm_render_run(PyObject *self, PyObject *args);
 
 #endif

@@ -49,6 +49,40 @@ static int opt_vec3(PyObject *options, const char *name, double out[3]) {
   return rc;
 }
 
+/* The renderer's options from the dict the Python side passes (None: the default); -1 with an
+ * exception for a wrong type or name. */
+static int parse_options(PyObject *options, mpm_render_options *o, int *frame) {
+  const char *field = NULL, *colormap = NULL, *framing = NULL;
+  if (opt_int(options, "width", &o->width) || opt_int(options, "height", &o->height) ||
+      opt_str(options, "field", &field) || opt_str(options, "colormap", &colormap) ||
+      opt_str(options, "framing", &framing) || opt_str(options, "scene", &o->scene) ||
+      opt_str(options, "out_dir", &o->out_dir) || opt_double(options, "range_lo", &o->range_lo) ||
+      opt_double(options, "range_hi", &o->range_hi) || opt_int(options, "shadow", &o->shadow) ||
+      opt_int(options, "legend", &o->legend) || opt_int(options, "time_label", &o->time_label) ||
+      opt_int(options, "particles", &o->particles) || opt_int(options, "threads", &o->threads) ||
+      opt_int(options, "every", &o->every) || opt_vec3(options, "eye", o->eye) ||
+      opt_vec3(options, "target", o->target) || opt_double(options, "fov", &o->fov) ||
+      opt_int(options, "frame", frame))
+    return -1;
+  if (field) {
+    /* a field's name, or any point array of the run ("pressure", "velocity.y") */
+    if (mpm_render_field_from_name(field, &o->field) != MPM_OK) {
+      o->field = MPM_RENDER_FIELD_ARRAY;
+      o->field_array = field;
+    }
+  }
+  if (colormap && mpm_render_colormap_from_name(colormap, &o->colormap) != MPM_OK) {
+    PyErr_Format(PyExc_ValueError, "colormap: unknown name '%s'", colormap);
+    return -1;
+  }
+  if (framing && mpm_render_framing_from_name(framing, &o->framing) != MPM_OK) {
+    PyErr_Format(PyExc_ValueError, "framing: unknown name '%s'", framing);
+    return -1;
+  }
+  if (*frame >= 0) o->first_frame = o->last_frame = *frame;
+  return 0;
+}
+
 /* _render(run_dir, options, png) -> (rgb bytes, height, width, frame, time): the picture of
  * frame options["frame"] (-1: the last) of the run folder. */
 PyObject *pympm_render(PyObject *self, PyObject *args) {
@@ -57,34 +91,8 @@ PyObject *pympm_render(PyObject *self, PyObject *args) {
   PyObject *options;
   if (!PyArg_ParseTuple(args, "sO!z", &run_dir, &PyDict_Type, &options, &png)) return NULL;
   mpm_render_options o = mpm_render_options_default();
-  const char *field = NULL, *colormap = NULL, *framing = NULL;
   int frame = -1;
-  if (opt_int(options, "width", &o.width) || opt_int(options, "height", &o.height) ||
-      opt_str(options, "field", &field) || opt_str(options, "colormap", &colormap) ||
-      opt_str(options, "framing", &framing) || opt_str(options, "scene", &o.scene) ||
-      opt_double(options, "range_lo", &o.range_lo) ||
-      opt_double(options, "range_hi", &o.range_hi) || opt_int(options, "shadow", &o.shadow) ||
-      opt_int(options, "legend", &o.legend) || opt_int(options, "time_label", &o.time_label) ||
-      opt_int(options, "particles", &o.particles) || opt_int(options, "threads", &o.threads) ||
-      opt_vec3(options, "eye", o.eye) || opt_vec3(options, "target", o.target) ||
-      opt_double(options, "fov", &o.fov) || opt_int(options, "frame", &frame))
-    return NULL;
-  if (field) {
-    /* a field's name, or any point array of the run ("pressure", "velocity.y") */
-    if (mpm_render_field_from_name(field, &o.field) != MPM_OK) {
-      o.field = MPM_RENDER_FIELD_ARRAY;
-      o.field_array = field;
-    }
-  }
-  if (colormap && mpm_render_colormap_from_name(colormap, &o.colormap) != MPM_OK) {
-    PyErr_Format(PyExc_ValueError, "colormap: unknown name '%s'", colormap);
-    return NULL;
-  }
-  if (framing && mpm_render_framing_from_name(framing, &o.framing) != MPM_OK) {
-    PyErr_Format(PyExc_ValueError, "framing: unknown name '%s'", framing);
-    return NULL;
-  }
-  if (frame >= 0) o.first_frame = o.last_frame = frame;
+  if (parse_options(options, &o, &frame)) return NULL;
   char err[2048];
   err[0] = 0;
   mpm_renderer *r = NULL;
@@ -115,4 +123,47 @@ PyObject *pympm_render(PyObject *self, PyObject *args) {
   PyObject *out = Py_BuildValue("Niiid", rgb, info.height, info.width, info.frame, info.time);
   mpm_renderer_destroy(r);
   return out;
+}
+
+typedef struct run_list {
+  PyObject *paths; /* the PNGs written, in order */
+  int failed;
+} run_list;
+
+static void on_picture(void *ctx, const mpm_renderer *r, const char *png, double seconds) {
+  (void)r, (void)seconds;
+  run_list *l = ctx;
+  PyGILState_STATE g = PyGILState_Ensure();
+  PyObject *p = PyUnicode_DecodeFSDefault(png);
+  if (!p || PyList_Append(l->paths, p)) l->failed = 1;
+  Py_XDECREF(p);
+  PyGILState_Release(g);
+}
+
+/* _render_run(run_dir, options) -> [png paths]: every picture of the run folder (mpm render). */
+PyObject *pympm_render_run(PyObject *self, PyObject *args) {
+  (void)self;
+  const char *run_dir;
+  PyObject *options;
+  if (!PyArg_ParseTuple(args, "sO!", &run_dir, &PyDict_Type, &options)) return NULL;
+  mpm_render_options o = mpm_render_options_default();
+  int frame = -1;
+  if (parse_options(options, &o, &frame)) return NULL;
+  run_list l = {PyList_New(0), 0};
+  if (!l.paths) return NULL;
+  char err[2048];
+  err[0] = 0;
+  mpm_status st;
+  Py_BEGIN_ALLOW_THREADS;
+  st = mpm_render_run(run_dir, &o, on_picture, &l, err, sizeof err);
+  Py_END_ALLOW_THREADS;
+  if (l.failed) {
+    Py_DECREF(l.paths);
+    return PyErr_Occurred() ? NULL : PyErr_NoMemory();
+  }
+  if (st != MPM_OK) {
+    Py_DECREF(l.paths);
+    return pympm_raise(st, err[0] ? err : "the pictures could not be drawn", 0);
+  }
+  return l.paths;
 }

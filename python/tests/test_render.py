@@ -24,3 +24,17 @@ def test_render_a_simulation_and_a_folder(tmp_path, scene):
         mpm.render(tmp_path / "run", frame=7)  # no such frame file
     with pytest.raises(OSError):  # a folder that is not there
         mpm.render(tmp_path / "nowhere")
+
+
+def test_render_frames(tmp_path, scene):
+    sim = mpm.Simulation(scene)
+    sim.open_output(str(tmp_path / "run"))
+    sim.run(frames=2)
+    paths = mpm.render_frames(sim, tmp_path / "pictures", width=96, height=64)
+    assert [p.rsplit("/", 1)[1] for p in paths] == ["frame_0000.png", "frame_0001.png",
+                                                      "frame_0002.png"]
+    for p in paths:
+        with open(p, "rb") as f:
+            assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert len(mpm.render_frames(tmp_path / "run", tmp_path / "every2", width=96, height=64,
+                                 every=2)) == 2
