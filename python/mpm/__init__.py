@@ -359,6 +359,27 @@ class Simulation(_mpm._Simulation):
                 f"{self.frame_count}, t = {self.time:.6g} s>")
 
 
+def _render_args(what, source, width, height, field, colormap, framing, eye, target, fov,
+                 range, shadow, legend, time_label, particles, scene, threads):
+    """The run folder of source (a Simulation whose output is open, or a folder) and the
+    renderer's options as the extension takes them (render.c)."""
+    if isinstance(source, _mpm._Simulation):
+        info = source._info()
+        if not info["output_enabled"]:
+            raise Error(f"{what}: the simulation writes no frames; call open_output(dir) first")
+        run_dir = info["output_dir"]
+    else:
+        run_dir = _os.fspath(source)
+    options = {"width": width, "height": height, "field": field, "colormap": colormap,
+               "framing": framing, "eye": eye, "target": target, "fov": fov,
+               "shadow": int(bool(shadow)), "legend": int(bool(legend)),
+               "time_label": int(bool(time_label)), "particles": int(bool(particles)),
+               "scene": None if scene is None else _os.fspath(scene), "threads": threads}
+    if range is not None:
+        options["range_lo"], options["range_hi"] = float(range[0]), float(range[1])
+    return run_dir, options
+
+
 def render(source, frame=-1, path=None, *, width=640, height=360, field=None, colormap=None,
            framing=None, eye=None, target=None, fov=None, range=None, shadow=True, legend=True,
            time_label=True, particles=False, scene=None, threads=0):
@@ -375,21 +396,10 @@ def render(source, frame=-1, path=None, *, width=640, height=360, field=None, co
     colormap, framing: by their names in `mpm render --help`; eye, target (m) and fov
              (degrees) place the camera; range = (lo, hi) fixes the colours' range
     """
-    if isinstance(source, _mpm._Simulation):
-        info = source._info()
-        if not info["output_enabled"]:
-            raise Error("render: the simulation writes no frames; call open_output(dir) first")
-        run_dir = info["output_dir"]
-    else:
-        run_dir = _os.fspath(source)
-    options = {"width": width, "height": height, "field": field, "colormap": colormap,
-               "framing": framing, "eye": eye, "target": target, "fov": fov,
-               "shadow": int(bool(shadow)), "legend": int(bool(legend)),
-               "time_label": int(bool(time_label)), "particles": int(bool(particles)),
-               "scene": None if scene is None else _os.fspath(scene), "threads": threads,
-               "frame": frame}
-    if range is not None:
-        options["range_lo"], options["range_hi"] = float(range[0]), float(range[1])
+    run_dir, options = _render_args("render", source, width, height, field, colormap, framing,
+                                    eye, target, fov, range, shadow, legend, time_label,
+                                    particles, scene, threads)
+    options["frame"] = frame
     rgb, h, w, _frame, _time = _mpm._render(run_dir, options,
                                             None if path is None else _os.fspath(path))
     return _np.frombuffer(rgb, dtype=_np.uint8).reshape(h, w, 3)
@@ -403,20 +413,9 @@ def render_frames(source, out_dir=None, *, width=1280, height=720, field=None, c
     (None: RUN_DIR/render), with one camera, field and colour range for the whole run. source is
     a Simulation whose output is open or a run folder; the options are render()'s, and `every`
     draws every Nth frame. Returns the paths written, in order."""
-    if isinstance(source, _mpm._Simulation):
-        info = source._info()
-        if not info["output_enabled"]:
-            raise Error("render_frames: the simulation writes no frames; call open_output(dir) "
-                        "first")
-        run_dir = info["output_dir"]
-    else:
-        run_dir = _os.fspath(source)
-    options = {"width": width, "height": height, "field": field, "colormap": colormap,
-               "framing": framing, "eye": eye, "target": target, "fov": fov,
-               "shadow": int(bool(shadow)), "legend": int(bool(legend)),
-               "time_label": int(bool(time_label)), "particles": int(bool(particles)),
-               "scene": None if scene is None else _os.fspath(scene), "threads": threads,
-               "every": every, "out_dir": None if out_dir is None else _os.fspath(out_dir)}
-    if range is not None:
-        options["range_lo"], options["range_hi"] = float(range[0]), float(range[1])
+    run_dir, options = _render_args("render_frames", source, width, height, field, colormap,
+                                    framing, eye, target, fov, range, shadow, legend,
+                                    time_label, particles, scene, threads)
+    options["every"] = every
+    options["out_dir"] = None if out_dir is None else _os.fspath(out_dir)
     return _mpm._render_run(run_dir, options)

@@ -24,6 +24,12 @@ static void angular_velocity(const double R0[9], const double R1[9], double dt, 
   for (int d = 0; d < 3; ++d) w[d] = s > 0 && dt > 0 ? q[1 + d] / s * angle / dt : 0;
 }
 
+/* The velocity and angular velocity of a step of dt to the pose set. */
+static void step_motion(const mpm_collider_script *s, double dt, double v[3], double w[3]) {
+  for (int d = 0; d < 3; ++d) v[d] = dt > 0 ? (s->to_center[d] - s->center[d]) / dt : 0;
+  angular_velocity(s->R, s->to_R, dt, w);
+}
+
 static mpm_collider_pose make_pose(const mpm_collider *c, const double center[3], const double R[9],
                                    const double v[3], const double w[3]) {
   mpm_collider_pose p;
@@ -47,10 +53,8 @@ mpm_collider_pose mpm_collider_pose_over(const mpm_collider *c, double t0, doubl
   if (!s->on) return mpm_collider_pose_at(c, t1);
   const double zero[3] = {0, 0, 0};
   if (!s->pending) return make_pose(c, s->center, s->R, zero, zero);
-  const double dt = t1 - t0;
   double v[3], w[3];
-  for (int d = 0; d < 3; ++d) v[d] = dt > 0 ? (s->to_center[d] - s->center[d]) / dt : 0;
-  angular_velocity(s->R, s->to_R, dt, w);
+  step_motion(s, t1 - t0, v, w);
   return make_pose(c, s->to_center, s->to_R, v, w);
 }
 
@@ -77,8 +81,7 @@ void mpm_collider_script_commit(mpm_collider *c, double dt) {
     memset(s->omega, 0, sizeof s->omega);
     return;
   }
-  for (int d = 0; d < 3; ++d) s->velocity[d] = dt > 0 ? (s->to_center[d] - s->center[d]) / dt : 0;
-  angular_velocity(s->R, s->to_R, dt, s->omega);
+  step_motion(s, dt, s->velocity, s->omega);
   memcpy(s->center, s->to_center, sizeof s->center);
   memcpy(s->R, s->to_R, sizeof s->R);
   s->pending = 0;

@@ -34,6 +34,14 @@ typedef struct header {
   size_t bytes;
 } header;
 
+/* Count bytes as allocated, and the peak with them. */
+static void count_bytes(size_t bytes) {
+  size_t now = atomic_fetch_add(&live_bytes, bytes) + bytes;
+  size_t peak = atomic_load(&peak_bytes);
+  while (now > peak && !atomic_compare_exchange_weak(&peak_bytes, &peak, now)) {
+  }
+}
+
 void *mpm_alloc(size_t bytes) {
   atomic_fetch_add(&alloc_calls, 1);
   const int large = bytes >= HUGE_THRESHOLD;
@@ -50,10 +58,7 @@ void *mpm_alloc(size_t bytes) {
   unsigned char *p = raw + offset;
   header h = {raw, bytes};
   memcpy(p - sizeof h, &h, sizeof h);
-  size_t now = atomic_fetch_add(&live_bytes, bytes) + bytes;
-  size_t peak = atomic_load(&peak_bytes);
-  while (now > peak && !atomic_compare_exchange_weak(&peak_bytes, &peak, now)) {
-  }
+  count_bytes(bytes);
   return p;
 }
 
@@ -108,13 +113,6 @@ int mpm_grow(void **buf, size_t *cap, size_t n, size_t size) {
 }
 
 /* ---- growable blocks ---------------------------------------------------------------- */
-
-static void count_bytes(size_t bytes) {
-  size_t now = atomic_fetch_add(&live_bytes, bytes) + bytes;
-  size_t peak = atomic_load(&peak_bytes);
-  while (now > peak && !atomic_compare_exchange_weak(&peak_bytes, &peak, now)) {
-  }
-}
 
 static size_t page_round(size_t bytes) {
   const size_t page = 4096;

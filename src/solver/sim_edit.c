@@ -65,52 +65,54 @@ static mpm_status find_ids(mpm_sim *sim, const char *what, size_t count, const u
   return MPM_OK;
 }
 
-mpm_status mpm_sim_set_velocities(mpm_sim *sim, size_t count, const uint32_t *ids,
-                                  const double *v) {
+/* Velocities (positions 0) or positions (1) of the particles with the given ids: every value
+ * checked before any is written. */
+static mpm_status set_vectors(mpm_sim *sim, const char *what, size_t count, const uint32_t *ids,
+                              const double *values, int positions) {
   uint32_t *index;
-  mpm_status st = find_ids(sim, "mpm_sim_set_velocities", count, ids, &index);
-  if (st != MPM_OK) return st;
-  for (size_t k = 0; k < count; ++k)
-    for (int d = 0; d < 3; ++d)
-      if (!isfinite(v[3 * k + d]) || fabs(v[3 * k + d]) > 1e30) {
-        mpm_free(index);
-        return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                             "mpm_sim_set_velocities: particle id %u: velocity component %d is "
-                             "%g; expected a finite number (m/s)",
-                             ids[k], d, v[3 * k + d]);
-      }
-  mpm_particles *p = &sim->particles;
-  for (size_t k = 0; k < count; ++k)
-    for (int d = 0; d < 3; ++d) p->v[d][index[k]] = (mpm_real)v[3 * k + d];
-  mpm_free(index);
-  return MPM_OK;
-}
-
-mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint32_t *ids, const double *x) {
-  uint32_t *index;
-  mpm_status st = find_ids(sim, "mpm_sim_set_positions", count, ids, &index);
+  mpm_status st = find_ids(sim, what, count, ids, &index);
   if (st != MPM_OK) return st;
   const mpm_scene *sc = &sim->scene;
   for (size_t k = 0; k < count; ++k)
     for (int d = 0; d < 3; ++d) {
-      const double c = x[3 * k + d];
-      /* inside the domain, away from its walls' band as sampling keeps bodies */
-      if (!(c > sc->domain_min[d] && c < sc->domain_max[d])) {
-        mpm_free(index);
+      const double c = values[3 * k + d];
+      /* a position inside the domain (the step's wall band takes particles near the walls);
+         a velocity finite */
+      const int ok = positions ? c > sc->domain_min[d] && c < sc->domain_max[d]
+                               : isfinite(c) && fabs(c) <= 1e30;
+      if (ok) continue;
+      mpm_free(index);
+      if (positions)
         return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                             "mpm_sim_set_positions: particle id %u: coordinate %d is %g; "
-                             "expected a number inside the domain, %g to %g (m)",
-                             ids[k], d, c, sc->domain_min[d], sc->domain_max[d]);
-      }
+                             "%s: particle id %u: coordinate %d is %g; expected a number inside "
+                             "the domain, %g to %g (m)",
+                             what, ids[k], d, c, sc->domain_min[d], sc->domain_max[d]);
+      return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                           "%s: particle id %u: velocity component %d is %g; expected a finite "
+                           "number (m/s)",
+                           what, ids[k], d, c);
     }
   mpm_particles *p = &sim->particles;
   for (size_t k = 0; k < count; ++k)
     for (int d = 0; d < 3; ++d) {
-      p->x[d][index[k]] = (mpm_real)x[3 * k + d];
-      p->xc[d][index[k]] = 0; /* a jump: nothing left of the old position's rounding */
+      if (positions) {
+        p->x[d][index[k]] = (mpm_real)values[3 * k + d];
+        p->xc[d][index[k]] = 0; /* a jump: nothing left of the old position's rounding */
+      } else {
+        p->v[d][index[k]] = (mpm_real)values[3 * k + d];
+      }
     }
   mpm_free(index);
   return MPM_OK;
+}
+
+mpm_status mpm_sim_set_velocities(mpm_sim *sim, size_t count, const uint32_t *ids,
+                                  const double *v) {
+  return set_vectors(sim, "mpm_sim_set_velocities", count, ids, v, 0);
+}
+
+mpm_status mpm_sim_set_positions(mpm_sim *sim, size_t count, const uint32_t *ids, const double *x) {
+  return set_vectors(sim, "mpm_sim_set_positions", count, ids, x, 1);
 }
 
 mpm_status mpm_sim_set_collider_pose(mpm_sim *sim, int index, const double center[3],
