@@ -35,27 +35,22 @@ void pympm_relock(pympm_sim *s, PyThreadState *t) {
   for (; s->deferred > 0; --s->deferred) mpm_sim_hold_particle_arrays(s->sim, -1);
 }
 
-/* Mark sim busy, catch SIGINT (main thread), release the GIL. -1 with an exception when busy. */
-static int call_begin(pympm_sim *s, call_state *c) {
-  if (s->busy) {
-    PyErr_SetString(PyExc_RuntimeError,
-                    "the simulation is running a call in another thread; one call at a time");
-    return -1;
-  }
+/* Catch SIGINT (main thread) and release the GIL, s busy (the caller checked ready()). */
+static void call_begin(pympm_sim *s, call_state *c) {
   interrupt_flag = 0;
   c->installed = PyThread_get_thread_ident() == pympm_main_thread;
   if (c->installed) c->previous = PyOS_setsig(SIGINT, on_sigint);
   c->thread = pympm_unlock(s);
-  return 0;
 }
 
-/* The GIL back, SIGINT's handler restored; 1 when Ctrl-C came during the call. */
-static int call_end(pympm_sim *s, call_state *c) {
+/* The GIL back, SIGINT's handler restored. A Ctrl-C the engine did not stop for (it came
+ * during a call's last step, or a single step) goes to Python, which raises KeyboardInterrupt
+ * at its next instruction, as it would have without our handler. */
+static void call_end(pympm_sim *s, call_state *c, mpm_status st) {
   pympm_relock(s, c->thread);
   if (c->installed) PyOS_setsig(SIGINT, c->previous);
-  const int interrupted = interrupt_flag;
+  if (interrupt_flag && st != MPM_ERR_INTERRUPTED) PyErr_SetInterrupt();
   interrupt_flag = 0;
-  return interrupted;
 }
 
 /* The exception for a failed call of the engine (KeyboardInterrupt for an interrupt). */
@@ -128,12 +123,11 @@ static PyObject *sim_step(PyObject *self, PyObject *args) {
   if (!PyArg_ParseTuple(args, "|d", &max_dt) || !ready(s)) return NULL;
   const double t0 = mpm_sim_time(s->sim);
   call_state c;
-  if (call_begin(s, &c)) return NULL;
+  call_begin(s, &c);
   const mpm_status st = mpm_sim_step(s->sim, max_dt);
-  const int interrupted = call_end(s, &c);
+  call_end(s, &c, st);
   s->generation++;
   if (st != MPM_OK) return failed(s, st);
-  (void)interrupted; /* one step is not stopped: Python's own handler reports the signal */
   return PyFloat_FromDouble(mpm_sim_time(s->sim) - t0);
 }
 
@@ -142,9 +136,9 @@ static PyObject *sim_advance_frame(PyObject *self, PyObject *unused) {
   pympm_sim *s = (pympm_sim *)self;
   if (!ready(s)) return NULL;
   call_state c;
-  if (call_begin(s, &c)) return NULL;
+  call_begin(s, &c);
   const mpm_status st = mpm_sim_advance_frame(s->sim);
-  call_end(s, &c);
+  call_end(s, &c, st);
   s->generation++;
   if (st != MPM_OK) return failed(s, st);
   return PyLong_FromLong(mpm_sim_frame(s->sim));

@@ -289,3 +289,24 @@ def test_add_body_between_steps(tmp_path):
     resumed.step()
     q = resumed.particles
     assert np.array_equal(q.x[np.argsort(q.id)], x_straight)
+
+
+def test_ctrl_c_during_single_steps_is_not_lost():
+    # a loop of step() calls: a SIGINT that lands inside a step still raises KeyboardInterrupt
+    heavy = small_scene(domain={"min": [0, 0, 0], "max": [0.5, 0.5, 0.5], "dx": 0.0125},
+                        time={"end": 5, "fps": 1})
+    sim = mpm.Simulation(heavy)
+    sim.threads = 1
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    start = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            while time.monotonic() - start < 20:
+                sim.step()
+    finally:
+        timer.cancel()
+    assert time.monotonic() - start < 20
+    steps = sim.steps
+    sim.step()  # still usable
+    assert sim.steps == steps + 1
