@@ -614,6 +614,124 @@ static void test_collider_pose(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The bytes of a file (the caller frees), NULL when it cannot be read. */
+static char *file_bytes(const char *path, long *size) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  *size = ftell(f);
+  rewind(f);
+  char *b = malloc((size_t)*size + 1);
+  if (b && fread(b, 1, (size_t)*size, f) != (size_t)*size) {
+    free(b);
+    b = NULL;
+  }
+  fclose(f);
+  return b;
+}
+
+static void assert_same_file(const char *dir_a, const char *dir_b, const char *name) {
+  char a[700], b[700];
+  snprintf(a, sizeof a, "%s/%s", dir_a, name);
+  snprintf(b, sizeof b, "%s/%s", dir_b, name);
+  long na = -1, nb = -2;
+  char *ba = file_bytes(a, &na), *bb = file_bytes(b, &nb);
+  if (!ba || !bb || na != nb || memcmp(ba, bb, (size_t)na) != 0)
+    print_error("%s and %s differ\n", a, b);
+  assert_true(ba && bb && na == nb && memcmp(ba, bb, (size_t)na) == 0);
+  free(ba);
+  free(bb);
+}
+
+/* The entries of a folder but "." and "..", sorted, one per line. */
+static void folder_listing(const char *dir, char *out, size_t cap) {
+  char cmd[700];
+  snprintf(cmd, sizeof cmd, "ls -A '%s' | sort", dir);
+  FILE *p = popen(cmd, "r");
+  assert_non_null(p);
+  const size_t n = fread(out, 1, cap - 1, p);
+  out[n] = 0;
+  pclose(p);
+}
+
+/* A one-off frame (mpm_sim_write_frame_to): the run's own files for the same state, byte for
+ * byte, with nothing of the run's records, nothing counted; a name already there refuses the
+ * whole unless overwriting, and a user's file beside it is never touched; the run's own folder
+ * and a folder another simulation holds are refused. */
+static void test_write_frame_to(void **state) {
+  (void)state;
+  char text[2048];
+  snprintf(text, sizeof text, "%.*s, \"output\": {\"ply\": true}}", (int)strlen(block_json) - 1,
+           block_json);
+  char run[512], snap[512], held[512], written[512], listing[2048], path[700];
+  snprintf(run, sizeof run, "%s", test_temp_dir("one_off_run"));
+  snprintf(snap, sizeof snap, "%s/snapshots/a", test_temp_dir("one_off_snap"));
+  snprintf(held, sizeof held, "%s", test_temp_dir("one_off_held"));
+  mpm_sim *sim = NULL, *other = NULL;
+  char err[1024];
+  assert_int_equal(mpm_sim_create_from_json(text, NULL, &sim, err, sizeof err), MPM_OK);
+  OK(sim, mpm_sim_open_output(sim, run, MPM_OUTPUT_NEW));
+  OK(sim, mpm_sim_advance_frame(sim));
+  mpm_sim_info before, after;
+  mpm_sim_get_info(sim, &before, sizeof before);
+  OK(sim, mpm_sim_write_frame_to(sim, snap, MPM_OUTPUT_NEW, written, sizeof written));
+  print_message("one-off frame wrote:\n%s", written);
+  assert_string_equal(written, "domains_0001.vtu\nframe_0001.ply\nframe_0001.vtu\n");
+  folder_listing(snap, listing, sizeof listing); /* no index, no stats, nothing staged left */
+  assert_string_equal(listing, ".mpm.lock\ndomains_0001.vtu\nframe_0001.ply\nframe_0001.vtu\n");
+  assert_same_file(run, snap, "frame_0001.vtu");
+  assert_same_file(run, snap, "frame_0001.ply");
+  assert_same_file(run, snap, "domains_0001.vtu");
+  mpm_sim_get_info(sim, &after, sizeof after);
+  assert_int_equal(after.written_frames, before.written_frames);
+  assert_int_equal(mpm_sim_frame(sim), 1);
+
+  /* a name already there: refused whole, naming it; the user's file beside them untouched */
+  snprintf(path, sizeof path, "%s/notes.txt", snap);
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs("mine", f);
+  fclose(f);
+  OK(sim, mpm_sim_step(sim, 0)); /* mid-frame: a state the run never writes */
+  assert_int_equal(mpm_sim_write_frame_to(sim, snap, MPM_OUTPUT_NEW, NULL, 0), MPM_ERR_INVALID);
+  print_message("refused: %s\n", mpm_sim_last_error(sim));
+  assert_non_null(strstr(mpm_sim_last_error(sim), "frame_0001.vtu"));
+  assert_same_file(run, snap, "frame_0001.vtu");
+  folder_listing(snap, listing, sizeof listing);
+  assert_string_equal(listing,
+                      ".mpm.lock\ndomains_0001.vtu\nframe_0001.ply\nframe_0001.vtu\nnotes.txt\n");
+  /* overwriting replaces the frame's files only */
+  OK(sim, mpm_sim_write_frame_to(sim, snap, MPM_OUTPUT_OVERWRITE, NULL, 0));
+  folder_listing(snap, listing, sizeof listing);
+  assert_string_equal(listing,
+                      ".mpm.lock\ndomains_0001.vtu\nframe_0001.ply\nframe_0001.vtu\nnotes.txt\n");
+  long n = 0, m = 0;
+  char *mine = file_bytes(path, &n);
+  assert_true(mine && n == 4 && memcmp(mine, "mine", 4) == 0);
+  free(mine);
+  snprintf(path, sizeof path, "%s/frame_0001.vtu", run);
+  char *ran = file_bytes(path, &n);
+  snprintf(path, sizeof path, "%s/frame_0001.vtu", snap);
+  char *mid = file_bytes(path, &m);
+  assert_true(ran && mid && (n != m || memcmp(ran, mid, (size_t)n) != 0)); /* a later state */
+  free(ran);
+  free(mid);
+
+  /* the run's own folder, and a folder another simulation holds */
+  assert_int_equal(mpm_sim_write_frame_to(sim, run, MPM_OUTPUT_OVERWRITE, NULL, 0),
+                   MPM_ERR_INVALID);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "output folder"));
+  assert_int_equal(mpm_sim_create_from_json(points_json, NULL, &other, err, sizeof err), MPM_OK);
+  OK(other, mpm_sim_open_output(other, held, MPM_OUTPUT_NEW));
+  assert_int_equal(mpm_sim_write_frame_to(sim, held, MPM_OUTPUT_OVERWRITE, NULL, 0), MPM_ERR_IO);
+  print_message("held: %s\n", mpm_sim_last_error(sim));
+  mpm_sim_destroy(other);
+  /* the run goes on as if nothing had been written */
+  OK(sim, mpm_sim_advance_frame(sim));
+  assert_int_equal(mpm_sim_frame(sim), 2);
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_view_holds_domain_particles),
@@ -628,6 +746,7 @@ int main(void) {
       cmocka_unit_test(test_add_body),
       cmocka_unit_test(test_view_temperature),
       cmocka_unit_test(test_collider_pose),
+      cmocka_unit_test(test_write_frame_to),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -125,6 +125,20 @@ typedef enum mpm_output_mode {
 MPM_API mpm_status mpm_sim_open_output(mpm_sim *sim, const char *dir, mpm_output_mode mode);
 /// mpm_sim_open_output with MPM_OUTPUT_NEW.
 MPM_API mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir);
+/// Write the current state, once, as a frame's files into `dir` (created if missing), apart from
+/// any run's records: the files the scene's `output` keys choose for a frame (frame_NNNN.vtu and
+/// .ply, domains_NNNN.vtu, the embedded and particle surfaces, the level sets), numbered with
+/// mpm_sim_frame (the frames completed; the files carry the time), without the PVD indexes,
+/// stats.csv or a checkpoint, and without counting a frame. Works with output on or off, between
+/// any two steps. The files are written into a private folder inside `dir` and moved in together
+/// once all are written: with MPM_OUTPUT_NEW a name that already exists there refuses the whole
+/// (MPM_ERR_INVALID naming it; nothing is written), with MPM_OUTPUT_OVERWRITE the same-named
+/// regular files are replaced (nothing else is touched; a folder or link of such a name refuses).
+/// `dir` is locked for the call as a run's folder is (a folder a running simulation holds is
+/// refused, MPM_ERR_IO), and this simulation's own output folder is refused (its frames are the
+/// run's record). The names written go to `written` (cap bytes, may be NULL), one per line.
+MPM_API mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode mode,
+                                          char *written, size_t cap);
 
 /// Checkpoints (HDF5, see docs/scene-format.md "Checkpoints"). Write the complete state into
 /// the output directory as checkpoint_<steps>.h5, atomically, keeping the two newest; the

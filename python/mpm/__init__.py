@@ -221,8 +221,8 @@ class Simulation(_mpm._Simulation):
     SceneError whose message names the key path, as `mpm check` does.
 
     Advance with step(), advance_frame() or run(); read the state with particles, time, frame,
-    info and colliders; write frames with open_output() and checkpoints with checkpoint(), and
-    continue a run with Simulation.resume().
+    info and colliders; write every frame with open_output(), one with write_frame(), checkpoints
+    with checkpoint(), and continue a run with Simulation.resume().
     """
 
     def __init__(self, scene=None, base_dir=None, *, path=None):
@@ -333,6 +333,18 @@ class Simulation(_mpm._Simulation):
         if rotation is not None:
             R = tuple(float(x) for x in _np.asarray(rotation, dtype=_np.float64).reshape(9))
         self._set_collider_pose(int(collider), c, R)
+
+    def write_frame(self, directory, overwrite=False):
+        """Write the state now, once, as a frame's files into directory (made if missing) and
+        return their paths: the files the scene's output keys choose for a frame (frame_NNNN.vtu
+        and .ply, domains_NNNN.vtu, the surfaces), numbered with sim.frame, apart from any run's
+        records (no PVD index, no stats.csv, no frame counted); any time, output open or not.
+        All are written before any is moved into the folder: a name already there refuses the
+        whole (Error) unless overwrite, which replaces those files and nothing else. The
+        simulation's own output folder is refused (its frames are the run's)."""
+        directory = _os.fspath(directory)
+        names = self._write_frame_to(directory, bool(overwrite)).splitlines()
+        return [_os.path.join(directory, n) for n in names]
 
     def checkpoint(self, directory=None):
         """Write a checkpoint of the whole state (HDF5) into the output folder and return its

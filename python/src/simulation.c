@@ -171,6 +171,21 @@ static PyObject *sim_open_output(PyObject *self, PyObject *args, PyObject *kw) {
   Py_RETURN_NONE;
 }
 
+static PyObject *sim_write_frame_to(PyObject *self, PyObject *args) {
+  pympm_sim *s = (pympm_sim *)self;
+  const char *dir;
+  int overwrite = 0;
+  if (!PyArg_ParseTuple(args, "sp", &dir, &overwrite) || !ready(s)) return NULL;
+  char names[4096];
+  mpm_status st;
+  PyThreadState *unlocked = pympm_unlock(s);
+  st = mpm_sim_write_frame_to(s->sim, dir, overwrite ? MPM_OUTPUT_OVERWRITE : MPM_OUTPUT_NEW, names,
+                              sizeof names);
+  pympm_relock(s, unlocked);
+  if (st != MPM_OK) return failed(s, st);
+  return PyUnicode_DecodeFSDefault(names);
+}
+
 static PyObject *sim_checkpoint(PyObject *self, PyObject *unused) {
   (void)unused;
   pympm_sim *s = (pympm_sim *)self;
@@ -579,6 +594,7 @@ static PyMethodDef sim_methods[] = {
      "locked for this simulation. overwrite removes an earlier run's files there (only "
      "those)."},
     {"_checkpoint", sim_checkpoint, METH_NOARGS, "Write a checkpoint into the output folder."},
+    {"_write_frame_to", sim_write_frame_to, METH_VARARGS, "A one-off frame; the names written."},
     {"_resume_from", sim_resume_from, METH_VARARGS, "Resume a fresh simulation from a folder."},
     {"release_domains", sim_release_domains, METH_VARARGS,
      "release_domains(lo, hi) -> int\n\nSwitch off the particle domains (Zhu et al.) of the "

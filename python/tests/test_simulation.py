@@ -97,6 +97,28 @@ def test_checkpoint_resume_bitwise(tmp_path, scene):
     same_frames(tmp_path / "straight", tmp_path / "resumed", 5)
 
 
+def test_write_frame(tmp_path, scene):
+    """A one-off frame is the run's own frame of the same state, byte for byte, from a
+    simulation that writes no run; a name already there is refused unless overwrite."""
+    ran = mpm.Simulation(scene)
+    ran.open_output(str(tmp_path / "run"))
+    ran.run(frames=2)
+    sim = mpm.Simulation(scene)
+    sim.run(frames=2)
+    paths = sim.write_frame(tmp_path / "snap")
+    assert [os.path.basename(p) for p in paths] == ["frame_0002.vtu"]
+    assert sorted(os.listdir(tmp_path / "snap")) == [".mpm.lock", "frame_0002.vtu"]
+    assert filecmp.cmp(paths[0], tmp_path / "run" / "frame_0002.vtu", shallow=False)
+    assert sim.info["written_frames"] == 0 and sim.frame == 2
+    sim.step()
+    with pytest.raises(mpm.Error, match="frame_0002.vtu"):
+        sim.write_frame(tmp_path / "snap")
+    assert filecmp.cmp(paths[0], tmp_path / "run" / "frame_0002.vtu", shallow=False)
+    assert sim.write_frame(tmp_path / "snap", overwrite=True) == paths
+    assert not filecmp.cmp(paths[0], tmp_path / "run" / "frame_0002.vtu", shallow=False)
+    with pytest.raises(mpm.Error, match="output folder"):
+        ran.write_frame(tmp_path / "run", overwrite=True)
+
 def test_threads_do_not_change_results(scene):
     runs = []
     for threads in (1, 2):

@@ -8,6 +8,7 @@
 #include "core/mat3.h"
 #include "domain/enrich.h"
 #include "io/run_folder.h"
+#include "io/staging.h"
 #include "scene/sample.h"
 
 #include <math.h>
@@ -206,7 +207,11 @@ static mpm_status scan_frame_fields(mpm_sim *sim, const mpm_particles *p, const 
                        sim->scene.materials[m].name, what, value, mpm_real_type(), m);
 }
 
-mpm_status mpm_sim_write_frame(mpm_sim *sim) {
+/* The files of one frame, numbered `frame`, into `dir`: the particles (VTU, PLY), the domains,
+ * the embedded and the particle surfaces, as the scene's output keys choose. With `records`
+ * (the run's own folder) also the run's indexes and stats.csv, and the frame is counted;
+ * without, nothing of the run's bookkeeping is touched (a one-off, mpm_sim_write_frame_to). */
+static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int records) {
   mpm_particles combined;
   memset(&combined, 0, sizeof combined);
   const int has_domains = sim->domains.particles.count > 0;
@@ -223,10 +228,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   }
   const mpm_particles *p = has_domains ? &combined : &sim->particles;
   const mpm_output_desc *o = &sim->scene.output;
-  const int frame = sim->written_frames;
-  if (frame > sim->frame_count)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "more frames than the scene has");
-  char path[MPM_PATH_MAX + 64];
+  char vtu_name[32], path[MPM_PATH_MAX + 64];
   mpm_status st = MPM_OK;
   mpm_real *J = NULL, *stress = NULL, *melt = NULL, *cauchy = NULL, *pressure = NULL;
   int32_t *category = NULL;
@@ -275,29 +277,32 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
   }
   mpm_frame_fields ff = {p, J, stress, sim->time, category, heat, melt, fields, cauchy, pressure};
   if (o->vtu) {
-    snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "frame_%04d.vtu", frame);
-    snprintf(path, sizeof path, "%s/%s", sim->output_dir, sim->frame_files[frame]);
-    sim->frame_times[frame] = sim->time;
+    snprintf(vtu_name, sizeof vtu_name, "frame_%04d.vtu", frame);
+    snprintf(path, sizeof path, "%s/%s", dir, vtu_name);
     st = mpm_write_vtu(path, &ff, &sim->error);
     if (st != MPM_OK) goto done;
+  }
+  if (o->vtu && records) {
+    snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "%s", vtu_name);
+    sim->frame_times[frame] = sim->time;
     const char *files[frame + 1];
     for (int f = 0; f <= frame; ++f) files[f] = sim->frame_files[f];
     snprintf(path, sizeof path, "%s/frames.pvd", sim->output_dir);
     st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
     if (st != MPM_OK) goto done;
   }
-  if (o->vtu && sim->adaptive && frame == 0) { /* the refinement at the start */
+  if (o->vtu && records && sim->adaptive && frame == 0) { /* the refinement at the start */
     snprintf(path, sizeof path, "%s/grid_cells.vtu", sim->output_dir);
     st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
     if (st != MPM_OK) goto done;
   }
-  if (o->vtu && sim->adaptive && sim->scene.refine_every > 0) { /* and as it moves */
+  if (o->vtu && records && sim->adaptive && sim->scene.refine_every > 0) { /* and as it moves */
     snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", sim->output_dir, frame);
     st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
     if (st != MPM_OK) goto done;
   }
   if (o->vtu && has_domains) {
-    snprintf(path, sizeof path, "%s/domains_%04d.vtu", sim->output_dir, frame);
+    snprintf(path, sizeof path, "%s/domains_%04d.vtu", dir, frame);
     /* the domain particles' part of the frame's arrays (after the material points, in the
        set's order of its active domains, as the domain file's cells are) for output.fields */
     const size_t first = sim->particles.count;
@@ -340,33 +345,34 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
       goto done;
     }
     mpm_embedded_positions(e, &sim->domains, x);
-    snprintf(path, sizeof path, "%s/surface_body%d_%04d.obj", sim->output_dir, e->body, frame);
+    snprintf(path, sizeof path, "%s/surface_body%d_%04d.obj", dir, e->body, frame);
     st = mpm_write_surface_obj(path, e, x, &sim->error);
     if (st == MPM_OK) {
-      snprintf(path, sizeof path, "%s/surface_body%d_%04d.ply", sim->output_dir, e->body, frame);
+      snprintf(path, sizeof path, "%s/surface_body%d_%04d.ply", dir, e->body, frame);
       st = mpm_write_surface_ply(path, e, x, &sim->error);
     }
     if (st == MPM_OK && o->vtu) { /* for ParaView, with the VTU files */
-      snprintf(path, sizeof path, "%s/surface_body%d_%04d.vtp", sim->output_dir, e->body, frame);
+      snprintf(path, sizeof path, "%s/surface_body%d_%04d.vtp", dir, e->body, frame);
       st = mpm_write_surface_vtp(path, e, x, sim->time, &sim->error);
     }
     free(x);
     if (st != MPM_OK) goto done;
   }
   if (o->surface.enabled) { /* particle surfaces (issue 14) */
-    st = mpm_sim_write_surfaces(sim, p, frame);
+    st = mpm_sim_write_surfaces(sim, p, dir, frame);
     if (st != MPM_OK) goto done;
   }
   /* after every file it names exists */
-  if (o->vtu) {
+  if (o->vtu && records) {
     st = write_run_pvd(sim, frame + 1, has_domains);
     if (st != MPM_OK) goto done;
   }
   if (o->ply) {
-    snprintf(path, sizeof path, "%s/frame_%04d.ply", sim->output_dir, frame);
+    snprintf(path, sizeof path, "%s/frame_%04d.ply", dir, frame);
     st = mpm_write_ply_points(path, &ff, &sim->error);
     if (st != MPM_OK) goto done;
   }
+  if (!records) goto done;
   if (o->stats) {
     mpm_diagnostics d = mpm_sim_diagnostics(sim);
     mpm_stats_row *row = &sim->stats[frame];
@@ -420,5 +426,57 @@ done:
   mpm_free(melt);
   mpm_free(cauchy);
   mpm_free(pressure);
+  return st;
+}
+
+mpm_status mpm_sim_write_frame(mpm_sim *sim) {
+  if (sim->written_frames > sim->frame_count)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "more frames than the scene has");
+  return write_frame(sim, sim->output_dir, sim->written_frames, 1);
+}
+
+mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode mode,
+                                  char *written, size_t cap) {
+  if (written && cap) written[0] = 0;
+  if (mode != MPM_OUTPUT_NEW && mode != MPM_OUTPUT_OVERWRITE)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "mpm_sim_write_frame_to: mode %d is neither MPM_OUTPUT_NEW nor "
+                         "MPM_OUTPUT_OVERWRITE",
+                         (int)mode);
+  if (!dir || !dir[0])
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "mpm_sim_write_frame_to: no folder");
+  if (strlen(dir) >= MPM_PATH_MAX)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
+  mpm_status st = mpm_make_dirs(dir, &sim->error);
+  if (st != MPM_OK) return st;
+  /* the run's own folder holds the run's record of its frames, which a one-off would break */
+  if (sim->output_enabled && mpm_same_file(dir, sim->output_dir))
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "%s is this simulation's output folder: its frames there are the run's "
+                         "own; write the one-off frame into another folder",
+                         dir);
+  int lock = -1; /* no run writes there meanwhile */
+  st = mpm_run_folder_lock(dir, &lock, &sim->error);
+  if (st != MPM_OK) return st;
+  char staging[MPM_PATH_MAX + 32];
+  st = mpm_staging_open(dir, staging, sizeof staging, &sim->error);
+  if (st == MPM_OK) {
+    /* the surfaces' figures are the run's last frame's: a one-off leaves them */
+    const double seconds = sim->surface_seconds, total = sim->surface_seconds_total;
+    const size_t triangles = sim->surface_triangles;
+    const int surface_frames = sim->surface_frames;
+    const int saved = mpm_sim_threads_enter(sim);
+    st = write_frame(sim, staging, sim->frame, 0);
+    mpm_sim_threads_leave(sim, saved);
+    sim->surface_seconds = seconds;
+    sim->surface_seconds_total = total;
+    sim->surface_triangles = triangles;
+    sim->surface_frames = surface_frames;
+    if (st == MPM_OK)
+      st = mpm_staging_publish(staging, dir, mode == MPM_OUTPUT_OVERWRITE, written, cap,
+                               &sim->error);
+    mpm_staging_discard(staging);
+  }
+  mpm_run_folder_unlock(lock);
   return st;
 }

@@ -52,9 +52,9 @@ static mpm_status velocity_grid(mpm_sim *sim, const surface_buffers *b, size_t n
 }
 
 /* One surface of the particles of p with body == only (or any selected body when only < 0). */
-static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsigned char *body,
-                              const unsigned char *material, int only, int frame,
-                              const surface_buffers *buf) {
+static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const char *dir,
+                              const unsigned char *body, const unsigned char *material, int only,
+                              int frame, const surface_buffers *buf) {
   double *xyz = buf->xyz, *vol = buf->vol;
   const mpm_output_desc *o = &sim->scene.output;
   const double dx = sim->scene.dx;
@@ -86,17 +86,17 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsign
   if (st != MPM_OK) return mpm_error_set(&sim->error, st, "frame %d: %s", frame, err.message);
   char tag[32] = "", path[MPM_PATH_MAX + 64];
   if (only >= 0) snprintf(tag, sizeof tag, "b%d_", only);
-  snprintf(path, sizeof path, "%s/surface_%s%04d.obj", sim->output_dir, tag, frame);
+  snprintf(path, sizeof path, "%s/surface_%s%04d.obj", dir, tag, frame);
   st = mpm_surface_write_obj(path, &mesh, &sim->error);
   if (st == MPM_OK) {
-    snprintf(path, sizeof path, "%s/surface_%s%04d.ply", sim->output_dir, tag, frame);
+    snprintf(path, sizeof path, "%s/surface_%s%04d.ply", dir, tag, frame);
     st = mpm_surface_write_ply(path, &mesh, &sim->error);
   }
   mpm_vdb_vector_grid *velocity = NULL;
   if (st == MPM_OK && grid && buf->vel)
     st = velocity_grid(sim, buf, n, fig.voxel, frame, &velocity);
   if (st == MPM_OK && grid) {
-    snprintf(path, sizeof path, "%s/levelset_%s%04d.vdb", sim->output_dir, tag, frame);
+    snprintf(path, sizeof path, "%s/levelset_%s%04d.vdb", dir, tag, frame);
     st = mpm_surface_write_vdb(path, grid, o->vdb_density, velocity, &sim->error);
   }
   mpm_vdb_vector_grid_destroy(velocity);
@@ -106,7 +106,8 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const unsign
   return st;
 }
 
-mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int frame) {
+mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const char *dir,
+                                  int frame) {
   const double t0 = mpm_wall_seconds();
   sim->surface_triangles = 0;
   const int nb = sim->scene.body_count;
@@ -125,9 +126,9 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, int fram
     selection(sim, body, material);
     if (sim->scene.output.surface.per_body) {
       for (int b = 0; b < nb && st == MPM_OK; ++b)
-        if (body[b]) st = one_surface(sim, p, body, material, b, frame, &buf);
+        if (body[b]) st = one_surface(sim, p, dir, body, material, b, frame, &buf);
     } else {
-      st = one_surface(sim, p, body, material, -1, frame, &buf);
+      st = one_surface(sim, p, dir, body, material, -1, frame, &buf);
     }
   }
   free(body);
