@@ -26,8 +26,9 @@ def no_duplicates(pairs):
 
 def cases():
     """(file, expected pieces) of the corpus cases a dict can carry: valid JSON (no NaN
-    literals, no duplicate keys: a dict cannot hold those), exit 2, not heavy, and a message
-    that does not point into the text (line and column refer to the file's own layout)."""
+    literals, no duplicate keys: a dict cannot hold those), exit 2, not heavy, a message that
+    does not point into the text (line and column refer to the file's own layout), and in the
+    double build none of the float build's range refusals."""
     out = []
     with open(os.path.join(CORPUS, "manifest.txt")) as f:
         for line in f:
@@ -40,6 +41,8 @@ def cases():
                 continue
             if "line " in expected or "column" in expected:
                 continue
+            if "float build" in expected and mpm.real_type() != "float":
+                continue  # what only the float build's range refuses
             path = name if os.path.isabs(name) else os.path.join(CORPUS, name)
             if not path.endswith(".json"):
                 continue
