@@ -148,8 +148,14 @@ static int bench_transfer(int argc, char **argv) {
 }
 
 static int bench_step(int argc, char **argv) {
-  int threads[16] = {1, 2}, nthreads = 2, steps = 10, repeats = 5, particles = 1000000;
+  int threads[16] = {1, 2}, nthreads = 2, steps = 10, repeats = 5, particles = 1000000, levels = 0;
   for (int i = 0; i < argc; ++i) {
+    if (!strcmp(argv[i], "--levels")) {
+      if (mpm_cli_parse_int("--levels", i + 1 < argc ? argv[i + 1] : NULL, 2, 6, &levels))
+        return MPM_EXIT_USAGE;
+      ++i;
+      continue;
+    }
     if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
       nthreads = bench_parse_threads(argv[++i], threads, 16);
       if (nthreads <= 0) {
@@ -174,6 +180,7 @@ static int bench_step(int argc, char **argv) {
       return MPM_EXIT_USAGE;
     }
   }
+  if (levels) return mpm_bench_step_levels(threads, nthreads, steps, repeats, particles, levels);
   bench_print_machine();
   /* a cube of side L with spacing h = dx/2 (8 per cell) holding ~`particles` points */
   const double per_side = cbrt((double)particles);

@@ -23,6 +23,12 @@ int mpm_bench_implicit(int argc, char **argv);
  * the uniform grid at the finest dx (bench_levels.c). */
 int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale, int levels);
 
+/* `mpm bench step --levels N`: a falling block on N levels, fine near its surface, beside the
+ * uniform sparse grid at the finest dx: ns per particle-step, by stage, and the ratio
+ * (bench_levels.c). */
+int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repeats,
+                          int particles, int levels);
+
 /* `mpm bench surface`: the seconds of one frame's particle surface (level set, filter, mesh,
  * writers) for about 1M particles, per thread count (bench_surface.c). */
 int mpm_bench_surface(int argc, char **argv);

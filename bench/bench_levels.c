@@ -18,7 +18,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-static mpm_sim *block(double dx_fine, int levels, mpm_error *err) {
+/* The block [1/8, 7/8]^3 at finest spacing dx_fine, on `levels` levels (0: the uniform sparse
+ * grid), uGIMP, APIC, 8 particles per cell of each level, at rest; with `gravity`, falling. */
+static mpm_sim *block(double dx_fine, int levels, int gravity, mpm_error *err) {
   char json[4096], rules[2048] = "";
   const double dx0 = dx_fine * (double)(1 << (levels > 0 ? levels - 1 : 0));
   for (int L = 1; L < levels; ++L) {
@@ -31,14 +33,14 @@ static mpm_sim *block(double dx_fine, int levels, mpm_error *err) {
   if (levels > 0) snprintf(grid, sizeof grid, ", \"levels\": %d, \"refine\": [%s]", levels, rules);
   snprintf(json, sizeof json,
            "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": %.17g%s},"
-           " \"gravity\": [0,0,0], \"time\": {\"end\": 1, \"fps\": 24},"
+           " \"gravity\": [0,%d,0], \"time\": {\"end\": 1, \"fps\": 24},"
            " \"solver\": {\"kernel\": \"ugimp\", \"transfer\": \"apic\"},"
            " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3,"
            " \"density\": 1000}],"
            " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
            "\"half_extent\": [0.375,0.375,0.375]}, \"material\": \"m\", \"jitter\": 0}],"
            " \"output\": {\"vtu\": false, \"stats\": false}}",
-           dx0, grid);
+           dx0, grid, gravity ? -10 : 0);
   return bench_sim_from_text(json, "bench-levels", err);
 }
 
@@ -54,7 +56,7 @@ int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale
   for (int k = 0; k < 2; ++k) {
     mpm_error err;
     const size_t live0 = mpm_alloc_live_bytes();
-    mpm_sim *sim = block(dx, configs[k], &err);
+    mpm_sim *sim = block(dx, configs[k], 0, &err);
     if (!sim) {
       fprintf(stderr, "mpm bench: %s\n", err.message);
       return MPM_EXIT_FAILURE;
@@ -86,6 +88,100 @@ int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale
     }
     printf(")\n");
     mpm_sim_destroy(sim);
+  }
+  printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());
+  return MPM_EXIT_OK;
+}
+
+/* Per particle-step over `repeats` runs of `steps` steps: the stages and the guarded step's
+ * median, and the guarded runs' range. */
+typedef struct step_figures {
+  double total, sort, p2g, grid, g2p, guarded, lo, hi, bytes;
+  size_t particles;
+} step_figures;
+
+static int time_steps(mpm_sim *sim, int steps, int repeats, size_t live0, step_figures *f) {
+  const double n = (double)sim->particles.count;
+  for (int w = 0; w < 3; ++w)
+    if (mpm_sim_step(sim, 1e-3) != MPM_OK) goto failed;
+  double total[100], sort[100], p2g[100], grid[100], g2p[100], guarded[100];
+  for (int r = 0; r < repeats; ++r) {
+    const mpm_stage_times before = sim->times;
+    const double w0 = mpm_wall_seconds();
+    for (int k = 0; k < steps; ++k)
+      if (mpm_sim_step(sim, 1e-3) != MPM_OK) goto failed;
+    const double c = 1e9 / (n * steps);
+    guarded[r] = (mpm_wall_seconds() - w0) * c;
+    total[r] = (sim->times.total - before.total) * c;
+    sort[r] = (sim->times.sort - before.sort) * c;
+    p2g[r] = (sim->times.p2g - before.p2g) * c;
+    grid[r] = (sim->times.grid - before.grid) * c;
+    g2p[r] = (sim->times.g2p - before.g2p) * c;
+  }
+  f->lo = f->hi = guarded[0];
+  for (int r = 1; r < repeats; ++r) {
+    if (guarded[r] < f->lo) f->lo = guarded[r];
+    if (guarded[r] > f->hi) f->hi = guarded[r];
+  }
+  f->total = bench_median(total, repeats);
+  f->sort = bench_median(sort, repeats);
+  f->p2g = bench_median(p2g, repeats);
+  f->grid = bench_median(grid, repeats);
+  f->g2p = bench_median(g2p, repeats);
+  f->guarded = bench_median(guarded, repeats);
+  f->bytes = (double)(mpm_alloc_peak_bytes() - live0) / n;
+  f->particles = sim->particles.count;
+  return 0;
+failed:
+  fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
+  return -1;
+}
+
+int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repeats,
+                          int particles, int levels) {
+  bench_print_machine();
+  /* the finest spacing that puts about `particles` in the uniform block (8 per cell) */
+  const double dx = 0.75 / cbrt(particles / 8.0);
+  printf("multi-level step benchmark: a falling neo-Hookean block [1/8, 7/8]^3, finest dx = %.4g "
+         "m, uGIMP, APIC, 8 particles per cell of each level, level L within 4 of its cells of "
+         "the surface (static refinement), against the uniform sparse grid at the finest dx; "
+         "median of %d runs of %d steps\n",
+         dx, repeats, steps);
+  for (int t = 0; t < nthreads; ++t) {
+    mpm_set_threads(threads[t]);
+    step_figures f[2];
+    const int configs[2] = {levels, 0};
+    for (int k = 0; k < 2; ++k) {
+      mpm_error err;
+      mpm_alloc_reset_peak();
+      const size_t live0 = mpm_alloc_live_bytes();
+      mpm_sim *sim = block(dx, configs[k], 1, &err);
+      if (!sim) {
+        fprintf(stderr, "mpm bench: %s\n", err.message);
+        return MPM_EXIT_FAILURE;
+      }
+      const int failed = time_steps(sim, steps, repeats, live0, &f[k]);
+      char where[160] = "";
+      if (sim->adaptive)
+        snprintf(where, sizeof where, "; %zu ghosts, %zu APIC boundary particles",
+                 sim->adaptive->grid.ghost_count, sim->adaptive->boundary_count);
+      mpm_sim_destroy(sim);
+      if (failed) return MPM_EXIT_FAILURE;
+      char name[32];
+      snprintf(name, sizeof name, configs[k] ? "%d levels" : "uniform", configs[k]);
+      printf("%-9s %d threads: %zu particles%s\n", name, threads[t], f[k].particles, where);
+      printf("  ns per particle-step: total %.1f = sort %.1f + P2G %.1f + grid %.1f + G2P %.1f; "
+             "guarded step %.1f (runs %.1f-%.1f); memory %.1f bytes per particle\n",
+             f[k].total, f[k].sort, f[k].p2g, f[k].grid, f[k].g2p, f[k].guarded, f[k].lo,
+             f[k].hi, f[k].bytes);
+      fflush(stdout);
+    }
+    printf("ratio %d levels / uniform, per particle-step, %d threads: guarded step %.2f (total "
+           "%.2f: sort %.2f, P2G %.2f, grid %.2f, G2P %.2f)\n",
+           levels, threads[t], f[0].guarded / f[1].guarded, f[0].total / f[1].total,
+           f[0].sort / f[1].sort, f[0].p2g / f[1].p2g, f[0].grid / f[1].grid,
+           f[0].g2p / f[1].g2p);
+    fflush(stdout);
   }
   printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());
   return MPM_EXIT_OK;
