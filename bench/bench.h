@@ -26,8 +26,8 @@ int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale
 /* `mpm bench step --levels N`: a falling block on N levels, fine near its surface, beside the
  * uniform sparse grid at the finest dx: ns per particle-step, by stage, and the ratio
  * (bench_levels.c). */
-int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repeats,
-                          int particles, int levels);
+int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repeats, int particles,
+                          int levels);
 
 /* `mpm bench surface`: the seconds of one frame's particle surface (level set, filter, mesh,
  * writers) for about 1M particles, per thread count (bench_surface.c). */

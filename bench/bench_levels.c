@@ -137,8 +137,8 @@ failed:
   return -1;
 }
 
-int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repeats,
-                          int particles, int levels) {
+int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repeats, int particles,
+                          int levels) {
   bench_print_machine();
   /* the finest spacing that puts about `particles` in the uniform block (8 per cell) */
   const double dx = 0.75 / cbrt(particles / 8.0);
@@ -172,15 +172,14 @@ int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repea
       printf("%-9s %d threads: %zu particles%s\n", name, threads[t], f[k].particles, where);
       printf("  ns per particle-step: total %.1f = sort %.1f + P2G %.1f + grid %.1f + G2P %.1f; "
              "guarded step %.1f (runs %.1f-%.1f); memory %.1f bytes per particle\n",
-             f[k].total, f[k].sort, f[k].p2g, f[k].grid, f[k].g2p, f[k].guarded, f[k].lo,
-             f[k].hi, f[k].bytes);
+             f[k].total, f[k].sort, f[k].p2g, f[k].grid, f[k].g2p, f[k].guarded, f[k].lo, f[k].hi,
+             f[k].bytes);
       fflush(stdout);
     }
     printf("ratio %d levels / uniform, per particle-step, %d threads: guarded step %.2f (total "
            "%.2f: sort %.2f, P2G %.2f, grid %.2f, G2P %.2f)\n",
            levels, threads[t], f[0].guarded / f[1].guarded, f[0].total / f[1].total,
-           f[0].sort / f[1].sort, f[0].p2g / f[1].p2g, f[0].grid / f[1].grid,
-           f[0].g2p / f[1].g2p);
+           f[0].sort / f[1].sort, f[0].p2g / f[1].p2g, f[0].grid / f[1].grid, f[0].g2p / f[1].g2p);
     fflush(stdout);
   }
   printf("peak memory: %.1f MiB (resident set)\n", bench_peak_rss_mib());

@@ -343,6 +343,33 @@ static void test_key_errors(void **state) {
   mpm_scene_free(&s);
 }
 
+/* A particle moved by mpm_sim_set_positions is classified again: deep in the coarse half its
+ * block was uniform (its transfer grid kept from step to step without a query); moved into the
+ * fine half it must transfer on the fine level. The kept grid put it on the coarse one. */
+static void test_moved_particle_is_classified_again(void **state) {
+  (void)state;
+  mpm_sim *sim = sim_from_json(flying_box(FINE_HALF, "apic", 0.45));
+  run_steps(sim, 2);
+  const mpm_particles *p = &sim->particles;
+  const mpm_adaptive *a = sim->adaptive;
+  size_t pick = p->count;
+  for (size_t i = 0; i < p->count && pick == p->count; ++i)
+    if (p->level[i] == 0 && p->x[0][i] < 0.38f && a->stable[i]) pick = i;
+  assert_true(pick < p->count); /* a coarse particle whose grid is kept */
+  const uint32_t id = p->id[pick];
+  const double to[3] = {0.75, 0.5, 0.5};
+  assert_int_equal(mpm_sim_set_positions(sim, 1, &id, to), MPM_OK);
+  run_steps(sim, 1);
+  size_t at = p->count;
+  for (size_t i = 0; i < p->count; ++i)
+    if (p->id[i] == id) at = i;
+  assert_true(at < p->count);
+  int t = 0;
+  while (t < a->tgrid_count && a->range[t + 1] <= at) ++t;
+  assert_int_equal(a->tgrid[t].level, 1);
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_single_level_is_uniform_bitwise),
@@ -353,6 +380,7 @@ int main(void) {
       cmocka_unit_test(test_steep_refinement_is_refused),
       cmocka_unit_test(test_refined_memory_is_checked),
       cmocka_unit_test(test_key_errors),
+      cmocka_unit_test(test_moved_particle_is_classified_again),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

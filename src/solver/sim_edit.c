@@ -4,6 +4,7 @@
  * Every request is checked before anything changes (ids simulated now, on material points,
  * finite values, positions inside the domain), so a refused call leaves the state as it was. */
 #define _DEFAULT_SOURCE /* realpath */
+#include "solver/adaptive.h"
 #include "solver/sim.h"
 #include "core/alloc.h"
 #include "core/hash.h"
@@ -103,6 +104,9 @@ static mpm_status set_vectors(mpm_sim *sim, const char *what, size_t count, cons
       }
     }
   mpm_free(index);
+  /* the multi-level grid keeps a particle's transfer grid while its block stays inside one
+     level's region, which a step's motion cannot leave unseen but a jump can: ask again */
+  if (positions && sim->adaptive) sim->adaptive->stable_step = -1;
   return MPM_OK;
 }
 
