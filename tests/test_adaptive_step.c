@@ -370,6 +370,63 @@ static void test_moved_particle_is_classified_again(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* Every particle's transfer grid is the one a full query of the tree gives at the positions
+ * the step started from, kept grids included (a particle whose cell's neighbourhood is one
+ * level's leaves keeps its grid without a query: mpm_adaptive_grid_block_stable_cells), while
+ * bodies fly across one and two changes of level. */
+static void check_classified(const char *grid, double cx, int steps) {
+  mpm_sim *sim = sim_from_json(flying_box(grid, "apic", cx));
+  const mpm_particles *p = &sim->particles;
+  const mpm_adaptive *a = sim->adaptive;
+  const mpm_refinement *r = &a->grid.tree;
+  const int levels = r->levels;
+  size_t kept = 0, checked = 0;
+  for (int k = 0; k < steps; ++k) {
+    /* the positions the next step starts from, by id */
+    const size_t n = p->count;
+    uint32_t top = 0;
+    for (size_t i = 0; i < n; ++i) top = p->id[i] > top ? p->id[i] : top;
+    double *x0 = malloc(3 * ((size_t)top + 1) * sizeof *x0);
+    assert_non_null(x0);
+    for (size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) x0[3 * p->id[i] + (size_t)d] = (double)p->x[d][i];
+    const int stable_valid = a->stable && a->stable_step == sim->steps;
+    for (size_t i = 0; i < n && stable_valid; ++i) kept += a->stable[i];
+    run_steps(sim, 1);
+    int t = 0;
+    for (size_t i = 0; i < p->count; ++i) {
+      while (a->range[t + 1] <= i) ++t;
+      const int q = p->level[i], b = p->body[i];
+      const mpm_real half = a->box_half[b * levels + q];
+      double lo[3], hi[3];
+      for (int d = 0; d < 3; ++d) { /* as classify computes the box */
+        const mpm_real xd = (mpm_real)x0[3 * p->id[i] + (size_t)d];
+        lo[d] = ((double)(xd - half) - (double)r->origin[d]) / (double)r->dx0;
+        hi[d] = ((double)(xd + half) - (double)r->origin[d]) / (double)r->dx0;
+      }
+      const int L = mpm_refinement_finest_level_overlapping(r, lo, hi);
+      const int expect = a->box_tgrid[(b * levels + q) * levels + L];
+      if (expect != t)
+        fail_msg("step %d: particle id %u has transfer grid %d, the tree says %d", k, p->id[i], t,
+                 expect);
+      ++checked;
+    }
+    free(x0);
+  }
+  print_message("%zu classifications checked, %zu of them kept without a query\n", checked, kept);
+  assert_true(kept > checked / 10);
+  mpm_sim_destroy(sim);
+}
+
+static void test_kept_transfer_grids_are_exact(void **state) {
+  (void)state;
+  check_classified(FINE_HALF, 0.45, 30);
+  check_classified(", \"levels\": 3, \"refine\": [{\"level\": 1, \"box\": {\"min\": [0.45,0,0], "
+                   "\"max\": [1,1,1]}}, {\"level\": 2, \"box\": {\"min\": [0.55,0,0], \"max\": "
+                   "[1,1,1]}}]",
+                   0.4, 30);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_single_level_is_uniform_bitwise),
@@ -381,6 +438,7 @@ int main(void) {
       cmocka_unit_test(test_refined_memory_is_checked),
       cmocka_unit_test(test_key_errors),
       cmocka_unit_test(test_moved_particle_is_classified_again),
+      cmocka_unit_test(test_kept_transfer_grids_are_exact),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

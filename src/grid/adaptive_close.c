@@ -50,10 +50,14 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
     uint64_t *keys = mpm_alloc(size * sizeof *keys);
     uint8_t *uniform = mpm_alloc(size);
     uint32_t *ids_at = mpm_alloc(size * sizeof *ids_at);
-    if (!keys || !uniform || !ids_at) {
+    uint64_t *cells = mpm_alloc(size * sizeof *cells);
+    uint8_t *cells_known = mpm_alloc(size);
+    if (!keys || !uniform || !ids_at || !cells || !cells_known) {
       mpm_free(keys);
       mpm_free(uniform);
       mpm_free(ids_at);
+      mpm_free(cells);
+      mpm_free(cells_known);
       return -1;
     }
     memset(keys, 0xff, size * sizeof *keys);
@@ -64,13 +68,19 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
         keys[t] = f->keys[s];
         uniform[t] = f->uniform[s];
         ids_at[t] = f->ids_at[s];
+        cells[t] = f->cells[s];
+        cells_known[t] = f->cells_known[s];
       }
     mpm_free(f->keys);
     mpm_free(f->uniform);
     mpm_free(f->ids_at);
+    mpm_free(f->cells);
+    mpm_free(f->cells_known);
     f->keys = keys;
     f->uniform = uniform;
     f->ids_at = ids_at;
+    f->cells = cells;
+    f->cells_known = cells_known;
     f->size = size;
   }
   size_t s = block_flags_hash(key, f->size);
@@ -88,6 +98,7 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
                 mpm_refinement_coarsest_level_in(r, lo, hi) == level;
   f->keys[s] = key;
   f->uniform[s] = (uint8_t)u;
+  f->cells_known[s] = 0;
   f->ids_at[s] = UINT32_MAX;
   f->count++;
   return (int64_t)s;
@@ -96,6 +107,74 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
 int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
   const int64_t s = block_slot(g, level, bc);
   return s < 0 ? -1 : g->blocks.uniform[s];
+}
+
+/* Whether cell c of `level` is a leaf: not refined, and its parent refined (or level 0). */
+static int is_leaf(const mpm_refinement *r, int level, const int32_t c[3]) {
+  if (mpm_refinement_is_refined(r, level, c)) return 0;
+  if (level == 0) return 1;
+  const int32_t parent[3] = {c[0] >> 1, c[1] >> 1, c[2] >> 1}; /* floor: arithmetic shift */
+  return mpm_refinement_is_refined(r, level - 1, parent);
+}
+
+/* The block's stable cells: every cell from LO below to HI above a leaf of `level` (the leaves
+ * tested once each over the block's pad, then a running AND along each axis). The reach: a
+ * particle's stencil base is floor(x / dx - shift), so x lies at least 1/2 cell above its base
+ * cell's low face (a whole cell for the 2-cell box) and less than 2.5 cells above it (the paired
+ * base, the even node below); its box reaches half a cell (a cell for the 2-cell box) either
+ * side, and a step moves it at most one cell (the guard refuses more, guard.c). So its box stays
+ * inside cells base - 1 .. base + 3: every classification until it leaves the cell says `level`. */
+enum { STABLE_LO = 1, STABLE_HI = 3, STABLE_PAD = MPM_BLOCK + STABLE_LO + STABLE_HI };
+static uint64_t stable_cells(const mpm_refinement *r, int level, const int32_t bc[3]) {
+  enum { P = STABLE_PAD, W = STABLE_LO + STABLE_HI };
+  uint8_t leaf[P][P][P], ax[MPM_BLOCK][P][P], ay[MPM_BLOCK][MPM_BLOCK][P];
+  for (int i = 0; i < P; ++i)
+    for (int j = 0; j < P; ++j)
+      for (int k = 0; k < P; ++k) {
+        const int32_t c[3] = {bc[0] * MPM_BLOCK - STABLE_LO + i, bc[1] * MPM_BLOCK - STABLE_LO + j,
+                              bc[2] * MPM_BLOCK - STABLE_LO + k};
+        leaf[i][j][k] = (uint8_t)is_leaf(r, level, c);
+      }
+  for (int i = 0; i < MPM_BLOCK; ++i)
+    for (int j = 0; j < P; ++j)
+      for (int k = 0; k < P; ++k) {
+        uint8_t all = 1;
+        for (int o = 0; o <= W; ++o) all &= leaf[i + o][j][k];
+        ax[i][j][k] = all;
+      }
+  for (int i = 0; i < MPM_BLOCK; ++i)
+    for (int j = 0; j < MPM_BLOCK; ++j)
+      for (int k = 0; k < P; ++k) {
+        uint8_t all = 1;
+        for (int o = 0; o <= W; ++o) all &= ax[i][j + o][k];
+        ay[i][j][k] = all;
+      }
+  uint64_t mask = 0;
+  for (int i = 0; i < MPM_BLOCK; ++i)
+    for (int j = 0; j < MPM_BLOCK; ++j)
+      for (int k = 0; k < MPM_BLOCK; ++k) {
+        uint8_t all = 1;
+        for (int o = 0; o <= W; ++o) all &= ay[i][j][k + o];
+        if (all) mask |= (uint64_t)1 << (i << 4 | j << 2 | k);
+      }
+  return mask;
+}
+
+int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const int32_t bc[3],
+                                         uint64_t *mask) {
+  const int64_t s = block_slot(g, level, bc);
+  if (s < 0) return -1;
+  struct mpm_block_flags *f = &g->blocks;
+  if (f->uniform[s]) {
+    *mask = ~(uint64_t)0;
+    return 0;
+  }
+  if (!f->cells_known[s]) {
+    f->cells[s] = stable_cells(&g->tree, level, bc);
+    f->cells_known[s] = 1;
+  }
+  *mask = f->cells[s];
+  return 0;
 }
 
 /* The row-cache ids of the nodes of (level, block bc): valid until the next call (the pool may

@@ -40,6 +40,8 @@ void mpm_adaptive_grid_free(mpm_adaptive_grid *g) {
   mpm_free(g->blocks.keys);
   mpm_free(g->blocks.uniform);
   mpm_free(g->blocks.ids_at);
+  mpm_free(g->blocks.cells);
+  mpm_free(g->blocks.cells_known);
   mpm_free(g->blocks.ids);
   mpm_free(g->blocks.owned);
   mpm_free(g->schedule.key);

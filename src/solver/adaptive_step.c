@@ -26,7 +26,7 @@ static int reserve(mpm_adaptive *a, size_t n) {
 }
 
 /* After the sorts and the reorder, in the particles' order now: whether each particle stays on
- * its transfer grid next step (its owner block's region is uniform). */
+ * its transfer grid next step (the region around its cell is uniform). */
 static mpm_status mark_stable(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   if (a->grid.tree.levels == 1) return MPM_OK;
@@ -36,12 +36,16 @@ static mpm_status mark_stable(mpm_sim *sim) {
     const size_t nmat = (size_t)sg->material_count;
     if (a->range[t + 1] == a->range[t]) continue;
     for (size_t b = 0; b < sg->owner_count; ++b) {
-      const int u = mpm_adaptive_grid_block_uniform(&a->grid, tg->level, sg->coord[b]);
-      if (u < 0)
+      uint64_t cells;
+      if (mpm_adaptive_grid_block_stable_cells(&a->grid, tg->level, sg->coord[b], &cells))
         return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
-      const uint32_t j0 = sg->cell_start[b * nmat * MPM_BLOCK_NODES],
-                     j1 = sg->cell_start[(b + 1) * nmat * MPM_BLOCK_NODES];
-      for (uint32_t j = j0; j < j1; ++j) a->stable[a->range[t] + sg->perm[j]] = (uint8_t)u;
+      for (size_t m = 0; m < nmat; ++m)
+        for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
+          const size_t q = (b * nmat + m) * MPM_BLOCK_NODES + (size_t)c;
+          const uint8_t u = (uint8_t)(cells >> c & 1);
+          for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j)
+            a->stable[a->range[t] + sg->perm[j]] = u;
+        }
     }
   }
   /* each range's transfer grid, in the order now (the arrays were permuted since classify) */
