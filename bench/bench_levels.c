@@ -97,6 +97,7 @@ int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale
  * median, and the guarded runs' range. */
 typedef struct step_figures {
   double total, sort, p2g, grid, g2p, guarded, lo, hi, bytes;
+  double state, grids, values; /* after the steps: particles, grids and their caches, DOF values */
   size_t particles;
 } step_figures;
 
@@ -131,6 +132,14 @@ static int time_steps(mpm_sim *sim, int steps, int repeats, size_t live0, step_f
   f->guarded = bench_median(guarded, repeats);
   f->bytes = (double)(mpm_alloc_peak_bytes() - live0) / n;
   f->particles = sim->particles.count;
+  /* where the memory lies: the particles' block (32 real slots) and its 4 int arrays, the grids
+     (the tree, the ghosts, the blocks' caches, every level's sparse grid), the DOF values */
+  const mpm_particles *p = &sim->particles;
+  f->state = (32.0 * (double)p->stride * sizeof(mpm_real) + 16.0 * (double)p->capacity) / n;
+  f->grids = (double)(sim->adaptive ? mpm_adaptive_grid_bytes(&sim->adaptive->grid)
+                                    : sim->grid.ops->bytes(&sim->grid)) /
+             n;
+  f->values = 10.0 * (double)sim->dofs.capacity * sizeof(mpm_real) / n;
   return 0;
 failed:
   fprintf(stderr, "mpm bench: %s\n", mpm_sim_last_error(sim));
@@ -174,6 +183,10 @@ int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repea
              "guarded step %.1f (runs %.1f-%.1f); memory %.1f bytes per particle\n",
              f[k].total, f[k].sort, f[k].p2g, f[k].grid, f[k].g2p, f[k].guarded, f[k].lo, f[k].hi,
              f[k].bytes);
+      printf("  memory per particle: particles %.1f, grids %.1f, grid values %.1f, the rest "
+             "(scratch, lists, transients at the peak) %.1f bytes\n",
+             f[k].state, f[k].grids, f[k].values,
+             f[k].bytes - f[k].state - f[k].grids - f[k].values);
       fflush(stdout);
     }
     printf("ratio %d levels / uniform, per particle-step, %d threads: guarded step %.2f (total "

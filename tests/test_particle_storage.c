@@ -123,10 +123,47 @@ static void test_held_blocks_stay(void **state) {
   assert_int_equal(mpm_alloc_live_bytes(), live0);
 }
 
+/* Fitting gives back the pages past count + count/16, keeps every value in its slot layout,
+ * and does nothing while the arrays are held or when no whole page is spare; the set grows
+ * again after it. */
+static void test_fit_gives_back_spare_capacity(void **state) {
+  (void)state;
+  const size_t live0 = mpm_alloc_live_bytes();
+  enum { N = 140000 }; /* pushes from 16 double past it, to 262144 */
+  mpm_particles p;
+  assert_int_equal(mpm_particles_init(&p, 16), 0);
+  fill(&p, N);
+  static uint32_t orig[N + 1000];
+  for (uint32_t i = 0; i < N + 1000; ++i) orig[i] = i;
+  assert_true(p.capacity >= 2 * 131072);
+  mpm_keep keep = {0};
+  p.keep = &keep;
+  mpm_keep_hold(&keep, 1); /* held: nothing moves */
+  const size_t capacity = p.capacity;
+  assert_int_equal(mpm_particles_fit(&p), 0);
+  assert_int_equal(p.capacity, capacity);
+  mpm_keep_hold(&keep, -1);
+  const size_t before = mpm_alloc_live_bytes();
+  assert_int_equal(mpm_particles_fit(&p), 0);
+  assert_true(p.capacity < capacity && p.capacity >= N + N / 16);
+  assert_true(mpm_alloc_live_bytes() < before - 31 * (capacity - p.capacity) * sizeof(mpm_real));
+  check(&p, orig);
+  const size_t fitted = p.capacity;
+  assert_int_equal(mpm_particles_fit(&p), 0); /* nothing spare now */
+  assert_int_equal(p.capacity, fitted);
+  const mpm_real zero[3] = {0, 0, 0}; /* and it grows again */
+  for (int i = 0; i < 20000; ++i) assert_true(mpm_particles_push(&p, zero, zero, 1, 1, 0, 0) >= 0);
+  p.count = N;
+  check(&p, orig);
+  mpm_particles_free(&p);
+  assert_int_equal(mpm_alloc_live_bytes(), live0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_reorders_keep_the_layout),
       cmocka_unit_test(test_held_blocks_stay),
+      cmocka_unit_test(test_fit_gives_back_spare_capacity),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

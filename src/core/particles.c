@@ -118,6 +118,42 @@ int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
   return 0;
 }
 
+int mpm_particles_fit(mpm_particles *p) {
+  const size_t want = p->count + p->count / 16 + 16;
+  if (!p->block || want >= p->capacity || (p->keep && p->keep->holds > 0)) return 0;
+  const size_t stride = slot_stride(want), old = p->stride;
+  if (stride >= old) return 0; /* within the pages it has */
+  mpm_real *block = p->block;
+  UNPOISON(block, block_bytes(old));
+  /* the arrays down to their new slots, the lowest first (each lands below every slot still to
+     move), then the mapping shrinks; moved back up should it fail */
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) {
+    const size_t slot = (size_t)(p->first + k);
+    if (p->count) memmove(block + slot * stride, block + slot * old, p->count * sizeof(mpm_real));
+  }
+  mpm_real *fitted = mpm_block_grow(block, block_bytes(old), block_bytes(stride));
+  if (!fitted) {
+    for (int k = MPM_PARTICLE_REAL_ARRAYS - 1; k >= 0; --k) {
+      const size_t slot = (size_t)(p->first + k);
+      if (p->count) memmove(block + slot * old, block + slot * stride, p->count * sizeof(mpm_real));
+    }
+    poison_padding(p);
+    return -1;
+  }
+  p->block = fitted;
+  p->stride = stride;
+  p->capacity = want;
+  point_arrays(p);
+  poison_padding(p);
+  /* the integer arrays likewise (a failure leaves them larger than needed, which is fine) */
+  if (regrow((void **)&p->material, p->count, want, sizeof(int32_t), p->keep) ||
+      regrow((void **)&p->body, p->count, want, sizeof(int32_t), p->keep) ||
+      regrow((void **)&p->level, p->count, want, sizeof(int32_t), p->keep) ||
+      regrow((void **)&p->id, p->count, want, sizeof(uint32_t), p->keep))
+    return -1;
+  return 0;
+}
+
 int mpm_particles_init(mpm_particles *p, size_t capacity) {
   memset(p, 0, sizeof *p);
   return mpm_particles_reserve(p, capacity < 16 ? 16 : capacity);

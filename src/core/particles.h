@@ -58,6 +58,11 @@ typedef struct mpm_particles {
 int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
 void mpm_particles_free(mpm_particles *p);
 int mpm_particles_reserve(mpm_particles *p, size_t capacity);
+/* Give back the capacity past count + count / 16 (+ 16) when whole pages of every array are
+ * spare: a set sampled by appending grows by doubling, and up to half of it can lie unused.
+ * Nothing while a view holds the arrays. 0, or -1 (out of memory: the set as it was, or with
+ * larger integer arrays than needed). */
+int mpm_particles_fit(mpm_particles *p);
 
 /* Append one particle at rest state (F = I, B = 0, xc = 0, level 0, temperature 0); returns its
  * index or -1 on OOM. */

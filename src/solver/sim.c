@@ -231,6 +231,11 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
     }
   }
   sim->next_id = next_id;
+  /* sampling appended particle by particle: the arrays' doublings may have left half unused */
+  if (mpm_particles_fit(&sim->particles) || mpm_particles_fit(&sim->domains.particles)) {
+    st = oom(err, "particles");
+    goto fail;
+  }
   if (sample && (st = mpm_sim_digest_meshes(sim, err)) != MPM_OK) goto fail;
 
   /* kernel: uGIMP's particle box defaults to the particle spacing of the first body */
