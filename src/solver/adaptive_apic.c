@@ -267,6 +267,35 @@ static int invert3(const double A[9], double R[9]) {
   return 1;
 }
 
+/* The real-node D_p of up to 8 particles of one boundary cell at once, one per lane: the ghost
+ * level's D~ plus sum_e w_ep S_e over the cell's entries, which the lanes share. Lane by lane the
+ * products and sums are those of one particle in scalar code, in the same order (no contraction:
+ * ISO C), so each D is the scalar one bit for bit; a term whose weight is 0 adds a zero. */
+typedef double lane8d __attribute__((vector_size(8 * sizeof(double))));
+
+static void cell_D(const mpm_adaptive *a, const mpm_real *S, uint32_t c0, uint32_t c1,
+                   const boundary_stencil *bs, int lanes, double D[][9]) {
+  lane8d w1d[3][MPM_STENCIL_MAX], Dv[6];
+  for (int d = 0; d < 3; ++d)
+    for (int q = 0; q < MPM_STENCIL_MAX; ++q)
+      for (int l = 0; l < 8; ++l) w1d[d][q][l] = l < lanes ? (double)bs[l].w[d][q] : 0;
+  for (int u = 0; u < 6; ++u)
+    for (int l = 0; l < 8; ++l) Dv[u][l] = u < 3 && l < lanes ? bs[l].d[u] : 0;
+  for (uint32_t e = c0; e < c1; ++e) {
+    const uint32_t n = a->cell_ghost[e].node;
+    const lane8d w = w1d[0][n & 15] * w1d[1][n >> 4 & 15] * w1d[2][n >> 8 & 15];
+    const mpm_real *Sg = S + 6 * (size_t)a->cell_ghost[e].ghost;
+    /* xx, yy, zz, xy, xz, yz */
+    for (int u = 0; u < 6; ++u) Dv[u] += w * (double)Sg[u];
+  }
+  for (int l = 0; l < lanes; ++l) {
+    const double xx = Dv[0][l], yy = Dv[1][l], zz = Dv[2][l], xy = Dv[3][l], xz = Dv[4][l],
+                 yz = Dv[5][l];
+    const double M[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
+    memcpy(D[l], M, sizeof M);
+  }
+}
+
 void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   const mpm_adaptive_grid *ag = &a->grid;
@@ -274,45 +303,45 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   const size_t ng = ag->ghost_count;
   const mpm_real *S = ag->spread; /* 6 per ghost */
   mpm_real *Cw = a->work;         /* per boundary particle: m C (9), then its 1D weights (12) */
-  const long nb = (long)a->boundary_count;
-  /* C_p and the lanes' B' = C D~ per particle, in parallel */
-#pragma omp parallel for schedule(static)
-  for (long k = 0; k < nb; ++k) {
-    boundary_stencil bs;
-    boundary_stencil_of(a, sim, (size_t)k, &bs);
-    const size_t i = a->boundary[k].particle;
-    const double m = (double)p->mass[i];
-    double B[9], D[9] = {bs.d[0], 0, 0, 0, bs.d[1], 0, 0, 0, bs.d[2]}, Dinv[9], C[9];
-    for (int c = 0; c < 9; ++c) {
-      B[c] = (double)p->B[c][i];
-      a->dB[9 * (size_t)k + (size_t)c] = p->B[c][i]; /* kept over the P2G */
+  const long nb = (long)a->boundary_count, nc = (long)a->cell_count;
+  /* C_p and the lanes' B' = C D~ per particle, cell by cell in parallel (a cell's boundary
+     particles are contiguous and share its entries), 8 particles at a time */
+#pragma omp parallel for schedule(dynamic, 16)
+  for (long c = 0; c < nc; ++c) {
+    const uint32_t e0 = a->cell[c], e1 = a->cell[c + 1];
+    for (uint32_t k0 = a->cell_particle[c]; k0 < a->cell_particle[c + 1]; k0 += 8) {
+      const int lanes = (int)(a->cell_particle[c + 1] - k0 < 8 ? a->cell_particle[c + 1] - k0 : 8);
+      boundary_stencil bs[8];
+      double D[8][9];
+      for (int l = 0; l < lanes; ++l) boundary_stencil_of(a, sim, (size_t)(k0 + l), &bs[l]);
+      cell_D(a, S, e0, e1, bs, lanes, D);
+      for (int l = 0; l < lanes; ++l) {
+        const size_t k = k0 + (size_t)l, i = a->boundary[k].particle;
+        const double m = (double)p->mass[i];
+        double B[9], Dinv[9], C[9];
+        for (int q = 0; q < 9; ++q) {
+          B[q] = (double)p->B[q][i];
+          a->dB[9 * k + (size_t)q] = p->B[q][i]; /* kept over the P2G */
+        }
+        mpm_real *out = Cw + 21 * k;
+        for (int d = 0; d < 3; ++d) /* its 1D weights, for the ghosts' sums and for G2P */
+          for (int q = 0; q < MPM_STENCIL_MAX; ++q)
+            out[9 + MPM_STENCIL_MAX * d + q] = q < bs[l].W ? bs[l].w[d][q] : 0;
+        if (!invert3(D[l], Dinv)) { /* no affine part from it (cannot happen for uGIMP) */
+          memset(out, 0, 9 * sizeof *out);
+          continue;
+        }
+        for (int u = 0; u < 3; ++u)
+          for (int v = 0; v < 3; ++v)
+            C[3 * u + v] =
+                B[3 * u] * Dinv[v] + B[3 * u + 1] * Dinv[3 + v] + B[3 * u + 2] * Dinv[6 + v];
+        /* the lanes divide by D~: B' = C D~ makes them add m C (x_g - x_p) w */
+        for (int u = 0; u < 3; ++u)
+          for (int v = 0; v < 3; ++v)
+            p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs[l].d[v]);
+        for (int q = 0; q < 9; ++q) out[q] = (mpm_real)(m * C[q]);
+      }
     }
-    /* the real-node D_p: the ghost level's plus the ghosts' spreads */
-    const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
-    for (uint32_t e = c0; e < c1; ++e) {
-      const double w = node_weight(&bs, a->cell_ghost[e].node);
-      if (w == 0) continue; /* outside a paired stencil's particle (mpm_kernel_paired) */
-      const mpm_real *Sg = S + 6 * (size_t)a->cell_ghost[e].ghost;
-      const double xx = Sg[0], yy = Sg[1], zz = Sg[2], xy = Sg[3], xz = Sg[4], yz = Sg[5];
-      D[0] += w * xx, D[1] += w * xy, D[2] += w * xz;
-      D[3] += w * xy, D[4] += w * yy, D[5] += w * yz;
-      D[6] += w * xz, D[7] += w * yz, D[8] += w * zz;
-    }
-    mpm_real *out = Cw + 21 * (size_t)k;
-    for (int d = 0; d < 3; ++d) /* its 1D weights, for the ghosts' sums and for G2P */
-      for (int q = 0; q < MPM_STENCIL_MAX; ++q)
-        out[9 + MPM_STENCIL_MAX * d + q] = q < bs.W ? bs.w[d][q] : 0;
-    if (!invert3(D, Dinv)) { /* no affine part from this particle (cannot happen for uGIMP) */
-      memset(out, 0, 9 * sizeof *out);
-      continue;
-    }
-    for (int u = 0; u < 3; ++u)
-      for (int v = 0; v < 3; ++v)
-        C[3 * u + v] = B[3 * u] * Dinv[v] + B[3 * u + 1] * Dinv[3 + v] + B[3 * u + 2] * Dinv[6 + v];
-    /* the lanes divide by D~: B' = C D~ makes them add m C (x_g - x_p) w */
-    for (int u = 0; u < 3; ++u)
-      for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs.d[v]);
-    for (int c = 0; c < 9; ++c) out[c] = (mpm_real)(m * C[c]);
   }
   /* the ghosts' affine moments A_g = sum_p w_gp m_p C_p (stencils overlap): each ghost summed
    * by one thread, over its boundary particles in their order (a ghost is once in a cell's
