@@ -67,6 +67,8 @@ typedef struct mpm_adaptive {
   size_t block_multi_capacity;
   uint32_t *block_count; /* per owner block of a transfer grid: its boundary cells' counts */
   size_t block_count_capacity;
+  uint64_t *stable_cells; /* per owner block of a transfer grid: its stable cells (the sort) */
+  size_t stable_cells_capacity;
   struct mpm_boundary_particle {
     uint32_t particle, cell; /* its index, and its cell (below) */
     uint16_t tgrid;

@@ -337,8 +337,7 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
                 B[3 * u] * Dinv[v] + B[3 * u + 1] * Dinv[3 + v] + B[3 * u + 2] * Dinv[6 + v];
         /* the lanes divide by D~: B' = C D~ makes them add m C (x_g - x_p) w */
         for (int u = 0; u < 3; ++u)
-          for (int v = 0; v < 3; ++v)
-            p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs[l].d[v]);
+          for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs[l].d[v]);
         for (int q = 0; q < 9; ++q) out[q] = (mpm_real)(m * C[q]);
       }
     }

@@ -147,6 +147,7 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->box_tgrid);
   mpm_free(a->ghost_of);
   mpm_free(a->block_multi);
+  mpm_free(a->stable_cells);
   mpm_free(a->block_count);
   mpm_free(a->boundary);
   mpm_free(a->cell);

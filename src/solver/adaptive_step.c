@@ -2,6 +2,7 @@
 #include "solver/adaptive.h"
 
 #include "core/alloc.h"
+#include "core/parallel.h"
 #include "solver/sim.h"
 #include "transfer/operators.h"
 
@@ -35,18 +36,26 @@ static mpm_status mark_stable(mpm_sim *sim) {
     const mpm_sparse_grid *sg = &mpm_adaptive_grid_at(&a->grid, tg->G)->impl.sparse;
     const size_t nmat = (size_t)sg->material_count;
     if (a->range[t + 1] == a->range[t]) continue;
-    for (size_t b = 0; b < sg->owner_count; ++b) {
-      uint64_t cells;
-      if (mpm_adaptive_grid_block_stable_cells(&a->grid, tg->level, sg->coord[b], &cells))
+    /* the blocks' masks from the cache (which a lookup may fill: one thread), then the
+       particles' flags block by block in parallel */
+    const long nb = (long)sg->owner_count;
+    if (mpm_grow((void **)&a->stable_cells, &a->stable_cells_capacity, (size_t)nb + 1,
+                 sizeof *a->stable_cells))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
+    uint64_t *cells = a->stable_cells;
+    for (long b = 0; b < nb; ++b)
+      if (mpm_adaptive_grid_block_stable_cells(&a->grid, tg->level, sg->coord[b], &cells[b]))
         return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
+    uint8_t *stable = a->stable + a->range[t];
+#pragma omp parallel for schedule(static) if (nb > 64)
+    for (long b = 0; b < nb; ++b)
       for (size_t m = 0; m < nmat; ++m)
         for (int c = 0; c < MPM_BLOCK_NODES; ++c) {
-          const size_t q = (b * nmat + m) * MPM_BLOCK_NODES + (size_t)c;
-          const uint8_t u = (uint8_t)(cells >> c & 1);
+          const size_t q = ((size_t)b * nmat + m) * MPM_BLOCK_NODES + (size_t)c;
+          const uint8_t u = (uint8_t)(cells[b] >> c & 1);
           for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j)
-            a->stable[a->range[t] + sg->perm[j]] = u;
+            stable[sg->perm[j]] = u;
         }
-    }
   }
   /* each range's transfer grid, in the order now (the arrays were permuted since classify) */
   for (int t = 0; t < a->tgrid_count; ++t)
@@ -181,9 +190,22 @@ static mpm_status group(mpm_sim *sim) {
   const int nt = a->tgrid_count;
   size_t count[MPM_TRANSFER_GRIDS_MAX + 1] = {0};
   int grouped = 1;
-  for (size_t i = 0; i < p->count; ++i) {
-    count[a->of[i] + 1]++;
-    grouped &= i == 0 || a->of[i] >= a->of[i - 1];
+  const long n = (long)p->count;
+  const uint8_t *of = a->of;
+#pragma omp parallel if (n > MPM_PARALLEL_MIN)
+  {
+    size_t mine[MPM_TRANSFER_GRIDS_MAX + 1] = {0};
+    int in_order = 1;
+#pragma omp for schedule(static) nowait
+    for (long i = 0; i < n; ++i) {
+      mine[of[i] + 1]++;
+      in_order &= i == 0 || of[i] >= of[i - 1];
+    }
+#pragma omp critical(mpm_group_counts)
+    { /* integer sums: the same in any order */
+      for (int t = 0; t <= nt; ++t) count[t] += mine[t];
+      grouped &= in_order;
+    }
   }
   for (int t = 0; t < nt; ++t) count[t + 1] += count[t];
   for (int t = 0; t <= nt; ++t) a->range[t] = count[t];
