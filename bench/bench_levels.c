@@ -19,8 +19,9 @@
 #include <string.h>
 
 /* The block [1/8, 7/8]^3 at finest spacing dx_fine, on `levels` levels (0: the uniform sparse
- * grid), uGIMP, APIC, 8 particles per cell of each level, at rest; with `gravity`, falling. */
-static mpm_sim *block(double dx_fine, int levels, int gravity, mpm_error *err) {
+ * grid), uGIMP, APIC, 8 particles per cell of each level, at rest; with `gravity`, falling. The
+ * domain is [0, 1]^3 widened by `pad` on every side (room for the wall band of coarse levels). */
+static mpm_sim *block(double dx_fine, int levels, int gravity, double pad, mpm_error *err) {
   char json[4096], rules[2048] = "";
   const double dx0 = dx_fine * (double)(1 << (levels > 0 ? levels - 1 : 0));
   for (int L = 1; L < levels; ++L) {
@@ -32,7 +33,8 @@ static mpm_sim *block(double dx_fine, int levels, int gravity, mpm_error *err) {
   char grid[2200] = "";
   if (levels > 0) snprintf(grid, sizeof grid, ", \"levels\": %d, \"refine\": [%s]", levels, rules);
   snprintf(json, sizeof json,
-           "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": %.17g%s},"
+           "{\"domain\": {\"min\": [%.17g,%.17g,%.17g], \"max\": [%.17g,%.17g,%.17g], "
+           "\"dx\": %.17g%s},"
            " \"gravity\": [0,%d,0], \"time\": {\"end\": 1, \"fps\": 24},"
            " \"solver\": {\"kernel\": \"ugimp\", \"transfer\": \"apic\"},"
            " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5, \"nu\": 0.3,"
@@ -40,7 +42,7 @@ static mpm_sim *block(double dx_fine, int levels, int gravity, mpm_error *err) {
            " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5], "
            "\"half_extent\": [0.375,0.375,0.375]}, \"material\": \"m\", \"jitter\": 0}],"
            " \"output\": {\"vtu\": false, \"stats\": false}}",
-           dx0, grid, gravity ? -10 : 0);
+           -pad, -pad, -pad, 1 + pad, 1 + pad, 1 + pad, dx0, grid, gravity ? -10 : 0);
   return bench_sim_from_text(json, "bench-levels", err);
 }
 
@@ -56,7 +58,7 @@ int mpm_bench_levels(const int *threads, int nthreads, int repeats, double scale
   for (int k = 0; k < 2; ++k) {
     mpm_error err;
     const size_t live0 = mpm_alloc_live_bytes();
-    mpm_sim *sim = block(dx, configs[k], 0, &err);
+    mpm_sim *sim = block(dx, configs[k], 0, 0, &err);
     if (!sim) {
       fprintf(stderr, "mpm bench: %s\n", err.message);
       return MPM_EXIT_FAILURE;
@@ -164,18 +166,34 @@ int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repea
       mpm_error err;
       mpm_alloc_reset_peak();
       const size_t live0 = mpm_alloc_live_bytes();
-      mpm_sim *sim = block(dx, configs[k], 1, &err);
+      /* the same domain for both: the coarsest level's wall band (3 cells) and one more */
+      mpm_sim *sim = block(dx, configs[k], 1, 4 * dx * (double)(1 << (levels - 1)), &err);
       if (!sim) {
         fprintf(stderr, "mpm bench: %s\n", err.message);
         return MPM_EXIT_FAILURE;
       }
       const int failed = time_steps(sim, steps, repeats, live0, &f[k]);
-      char where[160] = "";
-      if (sim->adaptive)
+      char where[160] = "", grids[1024] = "";
+      if (sim->adaptive) {
+        const mpm_adaptive *a = sim->adaptive;
         snprintf(where, sizeof where, "; %zu ghosts, %zu APIC boundary particles",
-                 sim->adaptive->grid.ghost_count, sim->adaptive->boundary_count);
+                 a->grid.ghost_count, a->boundary_count);
+        /* the transfer grids: how full their blocks are (a block's P2G and G2P cost depends
+           on its nodes as well as its particles) */
+        for (int q = 0; q < a->tgrid_count; ++q) {
+          const mpm_grid *g = mpm_adaptive_grid_at((mpm_adaptive_grid *)&a->grid, a->tgrid[q].G);
+          const size_t np = a->range[q + 1] - a->range[q], blocks = g->impl.sparse.owner_count;
+          const size_t used = strlen(grids);
+          snprintf(grids + used, sizeof grids - used,
+                   "%s level %d, box %.2g cells: %zu particles in %zu blocks (%.0f per block)",
+                   q ? ";" : "  transfer grids:", a->tgrid[q].level,
+                   a->tgrid[q].box / (double)g->dx, np, blocks,
+                   blocks ? (double)np / (double)blocks : 0.0);
+        }
+      }
       mpm_sim_destroy(sim);
       if (failed) return MPM_EXIT_FAILURE;
+      if (grids[0]) printf("%s\n", grids);
       char name[32];
       snprintf(name, sizeof name, configs[k] ? "%d levels" : "uniform", configs[k]);
       printf("%-9s %d threads: %zu particles%s\n", name, threads[t], f[k].particles, where);
