@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
 #include <sys/stat.h>
 
 /* one entry of a view array, whatever the real type */
@@ -643,15 +644,26 @@ static void assert_same_file(const char *dir_a, const char *dir_b, const char *n
   free(bb);
 }
 
+static int by_name(const void *a, const void *b) {
+  return strcmp((const char *)a, (const char *)b);
+}
+
 /* The entries of a folder but "." and "..", sorted, one per line. */
 static void folder_listing(const char *dir, char *out, size_t cap) {
-  char cmd[700];
-  snprintf(cmd, sizeof cmd, "ls -A '%s' | sort", dir);
-  FILE *p = popen(cmd, "r");
-  assert_non_null(p);
-  const size_t n = fread(out, 1, cap - 1, p);
-  out[n] = 0;
-  pclose(p);
+  char names[32][256];
+  int n = 0;
+  DIR *d = opendir(dir);
+  assert_non_null(d);
+  for (struct dirent *e; (e = readdir(d)) && n < 32;)
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+      snprintf(names[n++], sizeof names[0], "%s", e->d_name);
+  closedir(d);
+  qsort(names, (size_t)n, sizeof names[0], by_name);
+  out[0] = 0;
+  for (int k = 0; k < n; ++k) {
+    const size_t used = strlen(out);
+    snprintf(out + used, cap - used, "%s\n", names[k]);
+  }
 }
 
 /* A one-off frame (mpm_sim_write_frame_to): the run's own files for the same state, byte for
