@@ -50,7 +50,7 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
     uint64_t *keys = mpm_alloc(size * sizeof *keys);
     uint8_t *uniform = mpm_alloc(size);
     uint32_t *ids_at = mpm_alloc(size * sizeof *ids_at);
-    uint64_t *cells = mpm_alloc(size * sizeof *cells);
+    uint64_t *cells = mpm_alloc(2 * size * sizeof *cells);
     uint8_t *cells_known = mpm_alloc(size);
     if (!keys || !uniform || !ids_at || !cells || !cells_known) {
       mpm_free(keys);
@@ -68,7 +68,8 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
         keys[t] = f->keys[s];
         uniform[t] = f->uniform[s];
         ids_at[t] = f->ids_at[s];
-        cells[t] = f->cells[s];
+        cells[2 * t] = f->cells[2 * s];
+        cells[2 * t + 1] = f->cells[2 * s + 1];
         cells_known[t] = f->cells_known[s];
       }
     mpm_free(f->keys);
@@ -117,36 +118,33 @@ static int is_leaf(const mpm_refinement *r, int level, const int32_t c[3]) {
   return mpm_refinement_is_refined(r, level - 1, parent);
 }
 
-/* The block's stable cells: every cell from LO below to HI above a leaf of `level` (the leaves
- * tested once each over the block's pad, then a running AND along each axis). The reach: a
- * particle's stencil base is floor(x / dx - shift), so x lies at least 1/2 cell above its base
- * cell's low face (a whole cell for the 2-cell box) and less than 2.5 cells above it (the paired
- * base, the even node below); its box reaches half a cell (a cell for the 2-cell box) either
- * side, and a step moves it at most one cell (the guard refuses more, guard.c). So its box stays
- * inside cells base - 1 .. base + 3: every classification until it leaves the cell says `level`. */
-enum { STABLE_LO = 1, STABLE_HI = 3, STABLE_PAD = MPM_BLOCK + STABLE_LO + STABLE_HI };
-static uint64_t stable_cells(const mpm_refinement *r, int level, const int32_t bc[3]) {
-  enum { P = STABLE_PAD, W = STABLE_LO + STABLE_HI };
-  uint8_t leaf[P][P][P], ax[MPM_BLOCK][P][P], ay[MPM_BLOCK][MPM_BLOCK][P];
+/* The block's stable cells for a reach of `reach` cells above (and one below) a particle's base
+ * cell: every cell from one below to `reach` above a leaf of `level` (the leaves tested once
+ * each over the block's pad, then a running AND along each axis). */
+enum { STABLE_REACH_MAX = 3, STABLE_PAD = MPM_BLOCK + 1 + STABLE_REACH_MAX };
+static uint64_t stable_cells(const mpm_refinement *r, int level, const int32_t bc[3], int reach) {
+  const int P = MPM_BLOCK + 1 + reach, W = reach + 2; /* W: one below, the cell, reach above */
+  uint8_t leaf[STABLE_PAD][STABLE_PAD][STABLE_PAD], ax[MPM_BLOCK][STABLE_PAD][STABLE_PAD],
+      ay[MPM_BLOCK][MPM_BLOCK][STABLE_PAD];
   for (int i = 0; i < P; ++i)
     for (int j = 0; j < P; ++j)
       for (int k = 0; k < P; ++k) {
-        const int32_t c[3] = {bc[0] * MPM_BLOCK - STABLE_LO + i, bc[1] * MPM_BLOCK - STABLE_LO + j,
-                              bc[2] * MPM_BLOCK - STABLE_LO + k};
+        const int32_t c[3] = {bc[0] * MPM_BLOCK - 1 + i, bc[1] * MPM_BLOCK - 1 + j,
+                              bc[2] * MPM_BLOCK - 1 + k};
         leaf[i][j][k] = (uint8_t)is_leaf(r, level, c);
       }
   for (int i = 0; i < MPM_BLOCK; ++i)
     for (int j = 0; j < P; ++j)
       for (int k = 0; k < P; ++k) {
         uint8_t all = 1;
-        for (int o = 0; o <= W; ++o) all &= leaf[i + o][j][k];
+        for (int o = 0; o < W; ++o) all &= leaf[i + o][j][k];
         ax[i][j][k] = all;
       }
   for (int i = 0; i < MPM_BLOCK; ++i)
     for (int j = 0; j < MPM_BLOCK; ++j)
       for (int k = 0; k < P; ++k) {
         uint8_t all = 1;
-        for (int o = 0; o <= W; ++o) all &= ax[i][j + o][k];
+        for (int o = 0; o < W; ++o) all &= ax[i][j + o][k];
         ay[i][j][k] = all;
       }
   uint64_t mask = 0;
@@ -154,14 +152,18 @@ static uint64_t stable_cells(const mpm_refinement *r, int level, const int32_t b
     for (int j = 0; j < MPM_BLOCK; ++j)
       for (int k = 0; k < MPM_BLOCK; ++k) {
         uint8_t all = 1;
-        for (int o = 0; o <= W; ++o) all &= ay[i][j][k + o];
+        for (int o = 0; o < W; ++o) all &= ay[i][j][k + o];
         if (all) mask |= (uint64_t)1 << (i << 4 | j << 2 | k);
       }
   return mask;
 }
 
 int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const int32_t bc[3],
-                                         uint64_t *mask) {
+                                         int reach, uint64_t *mask) {
+  if (reach < 2 || reach > STABLE_REACH_MAX) {
+    *mask = 0; /* not a reach the cache keeps: no cell is stable */
+    return 0;
+  }
   const int64_t s = block_slot(g, level, bc);
   if (s < 0) return -1;
   struct mpm_block_flags *f = &g->blocks;
@@ -169,11 +171,12 @@ int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const 
     *mask = ~(uint64_t)0;
     return 0;
   }
-  if (!f->cells_known[s]) {
-    f->cells[s] = stable_cells(&g->tree, level, bc);
-    f->cells_known[s] = 1;
+  const int which = reach - 2;
+  if (!(f->cells_known[s] >> which & 1)) {
+    f->cells[2 * s + (size_t)which] = stable_cells(&g->tree, level, bc, reach);
+    f->cells_known[s] |= (uint8_t)(1 << which);
   }
-  *mask = f->cells[s];
+  *mask = f->cells[2 * s + (size_t)which];
   return 0;
 }
 

@@ -409,7 +409,7 @@ size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g) {
       3 * g->offset_capacity * sizeof(mpm_real) + g->build.len_cap * sizeof(uint32_t) +
       g->build.terms_cap * sizeof(mpm_row_term) + g->build.where_cap * sizeof *g->build.where +
       g->blocks.id_capacity * sizeof(uint32_t) + g->blocks.owned_capacity * sizeof(uint64_t) +
-      g->blocks.size * (2 * sizeof(uint64_t) + sizeof(uint32_t) + 2);
+      g->blocks.size * (3 * sizeof(uint64_t) + sizeof(uint32_t) + 2);
   FOR_GRIDS(g, G)
   b += grid_of((mpm_adaptive_grid *)g, G)->ops->bytes(grid_of((mpm_adaptive_grid *)g, G));
   return b;

@@ -106,8 +106,8 @@ typedef struct mpm_adaptive_grid {
     uint64_t version;
     uint64_t *keys;
     uint8_t *uniform;
-    uint64_t *cells;      /* per block: its stable cells (mpm_adaptive_grid_block_stable_cells) */
-    uint8_t *cells_known; /* whether cells[] was computed since the block's flags were made */
+    uint64_t *cells;      /* per block, two: its stable cells for reaches 2 and 3 (below) */
+    uint8_t *cells_known; /* which of the two were computed since the block's flags were made */
     uint32_t *ids_at;
     size_t size, count;
     uint32_t *ids;
@@ -198,13 +198,14 @@ void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real
 int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]);
 
 /* The cells of block bc of `level` (bit (x << 4 | y << 2 | z) for the cell at (x, y, z) in the
- * block) whose neighbours from one below to three above on every axis are leaves of that level:
- * a particle whose stencil's base node is such a cell meets leaves of that level only, and still
- * after a step (adaptive_close.c says why), so its transfer grid stays. Cell by cell, since near
- * a change of level most of a block's cells are still far enough from it. All of them for a
+ * block) whose neighbours from one below to `reach` above on every axis (reach 2 or 3; none
+ * else) are leaves of that level. A particle's box meets, over a step, cells from one below its
+ * base cell to a reach above that its kernel sets (adaptive_step.c, mark_stable, says how): then
+ * it meets leaves of that level only, and its transfer grid stays. Cell by cell, since near a
+ * change of level most of a block's cells are still far enough from it. All of them for a
  * uniform block. Cached while the tree stands. 0, or -1 when out of memory. */
 int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const int32_t bc[3],
-                                         uint64_t *mask);
+                                         int reach, uint64_t *mask);
 
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g);
 

@@ -26,8 +26,21 @@ static int reserve(mpm_adaptive *a, size_t n) {
   return 0;
 }
 
+/* How far above its base cell a particle's box can reach over one step, on grid kernel k (and
+ * one below, always): x lies in [base + shift, base + shift + span) cells (span 2 when bases are
+ * paired: the even node below), its box reaches half_len either side, and a step moves it at
+ * most one cell of the finest level (the guard refuses more, guard.c). So the box stays in cells
+ * base + floor(shift - half_len - 1) .. base + ceil(shift + span + half_len + 1) - 1: one below
+ * for every kernel here, 2 above for the standard uGIMP box (3 paired or wide). */
+static int step_reach(const mpm_kernel *k) {
+  const double span = mpm_kernel_base_mask(k) == ~0 ? 1 : 2, s = (double)k->shift,
+               h = (double)k->half_len;
+  if (floor(s - h - 1) < -1) return 0; /* more than one below: not kept (not reached here) */
+  return (int)ceil(s + span + h + 1) - 1;
+}
+
 /* After the sorts and the reorder, in the particles' order now: whether each particle stays on
- * its transfer grid next step (the region around its cell is uniform). */
+ * its transfer grid next step (the cells its box can reach are leaves of its grid's level). */
 static mpm_status mark_stable(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   if (a->grid.tree.levels == 1) return MPM_OK;
@@ -43,8 +56,9 @@ static mpm_status mark_stable(mpm_sim *sim) {
                  sizeof *a->stable_cells))
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
     uint64_t *cells = a->stable_cells;
+    const int reach = step_reach(&tg->kernel);
     for (long b = 0; b < nb; ++b)
-      if (mpm_adaptive_grid_block_stable_cells(&a->grid, tg->level, sg->coord[b], &cells[b]))
+      if (mpm_adaptive_grid_block_stable_cells(&a->grid, tg->level, sg->coord[b], reach, &cells[b]))
         return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
     uint8_t *stable = a->stable + a->range[t];
 #pragma omp parallel for schedule(static) if (nb > 64)
