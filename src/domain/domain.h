@@ -5,8 +5,8 @@
  * The domain particles are kept apart from the standard material points (their own
  * mpm_particles, never reordered, so that corner connectivity stays put) and carry the same
  * state: position, velocity, F, plastic state, mass, V0, material, body, id. Corners are
- * first-class data with their own positions and velocities: a corner is the unknown the
- * enrichment and the implicit solve of a later issue will add to the DOF set.
+ * first-class data with their own positions and velocities: an enriched corner is a DOF of its
+ * own in the DOF set (enrich.h), which the implicit solve takes like a grid node.
  *
  * Per particle, precomputed in the reference configuration by Gauss quadrature:
  *   w[p][a] = omega_ap = (1/V_p^0) int N_a dOmega                        (Zhu eq. 6)

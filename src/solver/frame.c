@@ -1,10 +1,10 @@
 /* frame.c - the frame loop: steps of the guarded step until the frame's time, the work that
  * runs between steps, and the frame's outputs.
  *
- * Between steps (between_steps below) is where the state may change shape: domains switched off
- * today, and with later issues enrichment marks (Zhu sec. 5), refinement and particle split and
- * merge (Gao sec. 7). These stages run before the guarded step (guard.c) saves its state for a
- * retry, so a retry never undoes them and never repeats them. */
+ * Between steps (between_steps below) is where the state may change shape: domains switched
+ * off, the multi-level grid's refinement, and particle split and merge (Gao sec. 7). These stages
+ * run before the guarded step (guard.c) saves its state for a retry, so a retry never undoes them
+ * and never repeats them. */
 #include "solver/sim.h"
 
 #include "solver/adaptive.h"
