@@ -34,8 +34,8 @@ const mpm_model *mpm_model_of(mpm_model_kind kind) {
 
 void mpm_material_init(mpm_material *m, const mpm_material_desc *d) {
   /* in double, then rounded once to the real type */
-  const double mu = d->E / (2.0 * (1.0 + d->nu));
-  const double lambda = d->E * d->nu / ((1.0 + d->nu) * (1.0 - 2.0 * d->nu));
+  double mu, lambda;
+  mpm_lame(d->E, d->nu, &mu, &lambda);
   m->model = mpm_model_of(d->model);
   m->kind = d->model;
   m->mu = (mpm_real)mu;
