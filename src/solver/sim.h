@@ -272,8 +272,10 @@ mpm_status mpm_sim_apply_domain_releases(mpm_sim *sim);
 mpm_status mpm_sim_write_frame(mpm_sim *sim);
 /* output.surface of one frame: surface_NNNN.obj and .ply (or surface_bB_NNNN per body), and
  * with output.vdb levelset_NNNN.vdb, into dir, from the particles p (all of them, domains
- * included), in order of p's bodies (sim_surface.c). */
-mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const char *dir, int frame);
+ * included), in order of p's bodies (sim_surface.c). With `records` the run's surface figures
+ * (time, triangles) count the frame. */
+mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const char *dir, int frame,
+                                  int records);
 
 /* The output folder's copy of the scene (sim_scene_copy.c): the JSON text (or the scene file's)
  * with the mesh bodies' files made absolute, NULL when it cannot be read or is out of memory;

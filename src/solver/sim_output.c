@@ -66,12 +66,16 @@ mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
   return MPM_OK;
 }
 
+/* MPM_ERR_INVALID naming the call when mode is not an mpm_output_mode. */
+static mpm_status check_mode(mpm_sim *sim, const char *what, mpm_output_mode mode) {
+  if (mode == MPM_OUTPUT_NEW || mode == MPM_OUTPUT_OVERWRITE) return MPM_OK;
+  return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                       "%s: mode %d is neither MPM_OUTPUT_NEW nor MPM_OUTPUT_OVERWRITE", what,
+                       (int)mode);
+}
+
 mpm_status mpm_sim_open_output(mpm_sim *sim, const char *dir, mpm_output_mode mode) {
-  if (mode != MPM_OUTPUT_NEW && mode != MPM_OUTPUT_OVERWRITE)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                         "mpm_sim_open_output: mode %d is neither MPM_OUTPUT_NEW nor "
-                         "MPM_OUTPUT_OVERWRITE",
-                         (int)mode);
+  if (check_mode(sim, "mpm_sim_open_output", mode) != MPM_OK) return MPM_ERR_INVALID;
   if (dir && strlen(dir) >= sizeof sim->output_dir)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
   char target[MPM_PATH_MAX];
@@ -359,7 +363,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     if (st != MPM_OK) goto done;
   }
   if (o->surface.enabled) { /* particle surfaces (issue 14) */
-    st = mpm_sim_write_surfaces(sim, p, dir, frame);
+    st = mpm_sim_write_surfaces(sim, p, dir, frame, records);
     if (st != MPM_OK) goto done;
   }
   /* after every file it names exists */
@@ -438,11 +442,7 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim) {
 mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode mode,
                                   char *written, size_t cap) {
   if (written && cap) written[0] = 0;
-  if (mode != MPM_OUTPUT_NEW && mode != MPM_OUTPUT_OVERWRITE)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
-                         "mpm_sim_write_frame_to: mode %d is neither MPM_OUTPUT_NEW nor "
-                         "MPM_OUTPUT_OVERWRITE",
-                         (int)mode);
+  if (check_mode(sim, "mpm_sim_write_frame_to", mode) != MPM_OK) return MPM_ERR_INVALID;
   if (!dir || !dir[0])
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "mpm_sim_write_frame_to: no folder");
   if (strlen(dir) >= MPM_PATH_MAX)
@@ -461,17 +461,9 @@ mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode
   char staging[MPM_PATH_MAX + 32];
   st = mpm_staging_open(dir, staging, sizeof staging, &sim->error);
   if (st == MPM_OK) {
-    /* the surfaces' figures are the run's last frame's: a one-off leaves them */
-    const double seconds = sim->surface_seconds, total = sim->surface_seconds_total;
-    const size_t triangles = sim->surface_triangles;
-    const int surface_frames = sim->surface_frames;
     const int saved = mpm_sim_threads_enter(sim);
     st = write_frame(sim, staging, sim->frame, 0);
     mpm_sim_threads_leave(sim, saved);
-    sim->surface_seconds = seconds;
-    sim->surface_seconds_total = total;
-    sim->surface_triangles = triangles;
-    sim->surface_frames = surface_frames;
     if (st == MPM_OK)
       st = mpm_staging_publish(staging, dir, mode == MPM_OUTPUT_OVERWRITE, written, cap,
                                &sim->error);

@@ -51,10 +51,11 @@ static mpm_status velocity_grid(mpm_sim *sim, const surface_buffers *b, size_t n
   return MPM_OK;
 }
 
-/* One surface of the particles of p with body == only (or any selected body when only < 0). */
+/* One surface of the particles of p with body == only (or any selected body when only < 0); its
+ * triangles added to *triangles. */
 static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const char *dir,
                               const unsigned char *body, const unsigned char *material, int only,
-                              int frame, const surface_buffers *buf) {
+                              int frame, const surface_buffers *buf, size_t *triangles) {
   double *xyz = buf->xyz, *vol = buf->vol;
   const mpm_output_desc *o = &sim->scene.output;
   const double dx = sim->scene.dx;
@@ -100,16 +101,16 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const char *
     st = mpm_surface_write_vdb(path, grid, o->vdb_density, velocity, &sim->error);
   }
   mpm_vdb_vector_grid_destroy(velocity);
-  sim->surface_triangles += mesh.triangle_count;
+  *triangles += mesh.triangle_count;
   mpm_surface_mesh_free(&mesh);
   mpm_vdb_grid_destroy(grid);
   return st;
 }
 
-mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const char *dir,
-                                  int frame) {
+mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const char *dir, int frame,
+                                  int records) {
   const double t0 = mpm_wall_seconds();
-  sim->surface_triangles = 0;
+  size_t triangles = 0;
   const int nb = sim->scene.body_count;
   unsigned char *body = malloc((size_t)nb + 1);
   unsigned char *material = malloc((size_t)sim->scene.material_count + 1);
@@ -126,9 +127,9 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
     selection(sim, body, material);
     if (sim->scene.output.surface.per_body) {
       for (int b = 0; b < nb && st == MPM_OK; ++b)
-        if (body[b]) st = one_surface(sim, p, dir, body, material, b, frame, &buf);
+        if (body[b]) st = one_surface(sim, p, dir, body, material, b, frame, &buf, &triangles);
     } else {
-      st = one_surface(sim, p, dir, body, material, -1, frame, &buf);
+      st = one_surface(sim, p, dir, body, material, -1, frame, &buf, &triangles);
     }
   }
   free(body);
@@ -137,8 +138,11 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
   free(buf.vol);
   free(buf.vel);
   free(buf.mass);
-  sim->surface_seconds = mpm_wall_seconds() - t0;
-  sim->surface_seconds_total += sim->surface_seconds;
-  sim->surface_frames++;
+  if (records) { /* the run's figures (mpm_sim_info); a one-off frame leaves them */
+    sim->surface_triangles = triangles;
+    sim->surface_seconds = mpm_wall_seconds() - t0;
+    sim->surface_seconds_total += sim->surface_seconds;
+    sim->surface_frames++;
+  }
   return st;
 }
