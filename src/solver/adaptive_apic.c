@@ -233,12 +233,7 @@ static void boundary_stencil_of(const mpm_adaptive *a, const mpm_sim *sim, size_
   }
 }
 
-/* Stencil node (i, j, k) packed 4 bits each: its weight. */
-static inline double node_weight(const boundary_stencil *bs, uint32_t n) {
-  return (double)bs->w[0][n & 15] * (double)bs->w[1][n >> 4 & 15] * (double)bs->w[2][n >> 8 & 15];
-}
-
-/* Its weight alone, from 1D weights w[3][MPM_STENCIL_MAX]. */
+/* Stencil node (i, j, k) packed 4 bits each: its weight, from 1D weights w[3][MPM_STENCIL_MAX]. */
 static inline mpm_real packed_weight(const mpm_real *w, uint32_t n) {
   return w[n & 15] * w[MPM_STENCIL_MAX + (n >> 4 & 15)] * w[2 * MPM_STENCIL_MAX + (n >> 8 & 15)];
 }
