@@ -8,15 +8,15 @@
  *   P2G  the real nodes need C_p = B_p D_p^-1 with D_p = D~_p + sum_g w_gp S_g (D~_p the ghost
  *        level's, diagonal, which the lanes divide by), and at each ghost the affine moment
  *        A_g = sum_p w_gp m_p C_p, which mpm_adaptive_grid_scatter_apic carries to the real nodes
- *        as m_p C_p (x_i - x_g). The lanes add m B D~^-1 (x_g - x_p) w_gp, so for the P2G the
- *        particle's B is replaced by C_p D~_p (restored after): the lanes then add exactly
- *        m C_p (x_g - x_p) w_gp, and only the ghost nodes of the stencil need scalar work;
+ *        as m_p C_p (x_i - x_g);
  *   G2P  the lanes give sum_g w_gp v_g (x_g - x_p)^T, and B_p needs sum_g w_gp M_g besides, the
  *        ghosts' velocity moments (mpm_adaptive_grid_gather_moments).
- * Boundary particles are found per occupied cell of a transfer grid (its particles share the
- * stencil), with the cell's list of (stencil node, ghost). Each A_g is summed by one thread over
- * its contributions in boundary-particle order (the entries transposed by ghost), so results do
- * not depend on the thread count. */
+ * The particles' part runs inside the P2G and G2P lanes, from the weights they compute anyway
+ * (transfer/ghost_apic_lanes.h). Here: the boundary cells (occupied cells of a transfer grid
+ * whose stencils reach such ghosts: their particles share the stencil) with their lists of
+ * (stencil node, ghost), the lanes' view of them, and the ghosts' sums. Each A_g is summed by one
+ * thread over its contributions in boundary-particle order (the entries transposed by ghost), so
+ * results do not depend on the thread count. */
 #include "solver/adaptive.h"
 
 #include "core/alloc.h"
@@ -26,14 +26,11 @@
 #include <assert.h>
 #include <string.h>
 
-/* The cells' entries by ghost (a counting sort, stable: cell order within a ghost) and each
- * cell's range of boundary particles (pushed cell by cell, so contiguous and in cell order). */
+/* The cells' entries by ghost (a counting sort, stable: cell order within a ghost). */
 static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
-  const size_t nc = a->cell_count, ne = a->cell_ghost_count, nb = a->boundary_count;
+  const size_t nc = a->cell_count, ne = a->cell_ghost_count;
   if (mpm_grow((void **)&a->ghost_start, &a->ghost_start_capacity, ng + 2,
                sizeof *a->ghost_start) ||
-      mpm_grow((void **)&a->cell_particle, &a->cell_particle_capacity, nc + 2,
-               sizeof *a->cell_particle) ||
       mpm_grow((void **)&a->ghost_entry, &a->ghost_entry_capacity, ne + 1, sizeof *a->ghost_entry))
     return -1;
   uint32_t *start = a->ghost_start;
@@ -48,16 +45,15 @@ static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
     }
   for (size_t g = ng; g > 0; --g) start[g] = start[g - 1];
   start[0] = 0;
-  for (size_t k = nb; k-- > 0;) a->cell_particle[a->boundary[k].cell] = (uint32_t)k;
-  a->cell_particle[nc] = (uint32_t)nb;
   return 0;
 }
 
 /* The boundary cells of owner block b of transfer grid t (its occupied cells whose stencils
  * reach a ghost of several real nodes), in cell order: with count, only their numbers (cells,
  * entries, particles) in count[0..2]; with first, written from those indices on (cell c's
- * entries run from cell[c] to the next cell's first, cell[c + 1], which the caller sets after
- * the last cell). */
+ * entries run from cell[c] to the next cell's first, cell[c + 1], its particles' numbers from
+ * cell_particle[c] to cell_particle[c + 1]: the caller sets both after the last cell), and the
+ * block's cells in the lanes' map (cell_first, cell_of). */
 static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOCK_NODES][8],
                            size_t b, uint32_t count[3], uint32_t first[3]) {
   const mpm_transfer_grid *tg = &a->tgrid[t];
@@ -68,6 +64,11 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
   const uint64_t *multi_at = a->block_multi + g->dof_begin / MPM_BLOCK_NODES;
   uint32_t cells = 0, entries = 0, particles = 0;
   if (count) count[0] = count[1] = count[2] = 0;
+  uint32_t *cell_first = a->cell_first + a->cell_map_begin[t];
+  uint32_t *cell_of = a->cell_of + a->cell_map_begin[t];
+  if (!count)
+    for (size_t q = b * nmat * MPM_BLOCK_NODES; q < (b + 1) * nmat * MPM_BLOCK_NODES; ++q)
+      cell_first[q] = MPM_NOT_BOUNDARY;
   /* a stencil of the block reaches only its pad: the block and 7 neighbours */
   uint64_t pad[8], near = 0;
   for (int o = 0; o < 8; ++o) near |= pad[o] = multi_at[sg->neighbor[b][o]];
@@ -93,6 +94,7 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
     }
     const uint32_t cell = first[0] + cells++;
     a->cell[cell] = first[1] + entries;
+    a->cell_particle[cell] = first[2] + particles;
     /* the stencil's nodes in (i, j, k) order, through the pad: a node holds such a ghost when
      * its bit is set in its pad block's mask; only those are looked up */
     const int cx = (c >> 4) & 3, cy = (c >> 2) & 3, cz = c & 3;
@@ -105,18 +107,15 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
           if (!(pad[o] >> local & 1)) continue;
           const size_t slot =
               g->dof_begin + (size_t)sg->neighbor[b][o] * MPM_BLOCK_NODES + (size_t)local;
-          struct mpm_cell_ghost *e = &a->cell_ghost[first[1] + entries++];
+          mpm_stencil_ghost *e = &a->cell_ghost[first[1] + entries++];
           e->node = (uint32_t)(i | j << 4 | k << 8); /* (i, j, k), 4 bits each */
           e->ghost = (uint32_t)a->ghost_of[slot];
         }
-    for (size_t m = 0; m < nmat; ++m) {
+    for (size_t m = 0; m < nmat; ++m) { /* its particles material by material, in perm order */
       const size_t q = q0 + m * MPM_BLOCK_NODES;
-      for (uint32_t j = sg->cell_start[q]; j < sg->cell_start[q + 1]; ++j) {
-        struct mpm_boundary_particle *bp = &a->boundary[first[2] + particles++];
-        bp->particle = (uint32_t)a->range[t] + sg->perm[j];
-        bp->tgrid = (uint16_t)t;
-        bp->cell = cell;
-      }
+      cell_first[q] = first[2] + particles;
+      cell_of[q] = cell;
+      particles += sg->cell_start[q + 1] - sg->cell_start[q];
     }
   }
   if (count) count[0] = cells, count[1] = entries, count[2] = particles;
@@ -151,6 +150,16 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     goto nomem;
   memset(a->moment, 0, 18 * ag->ghost_count * sizeof *a->moment);
   if (!multi) return MPM_OK;
+  /* the lanes' map: a place per cell of every transfer grid */
+  size_t map = 0;
+  for (int t = 0; t < a->tgrid_count; ++t) {
+    const mpm_sparse_grid *sg = &mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse;
+    a->cell_map_begin[t] = map;
+    map += sg->owner_count * (size_t)sg->material_count * MPM_BLOCK_NODES;
+  }
+  if (mpm_grow((void **)&a->cell_first, &a->cell_first_capacity, map + 1, sizeof *a->cell_first) ||
+      mpm_grow((void **)&a->cell_of, &a->cell_of_capacity, map + 1, sizeof *a->cell_of))
+    goto nomem;
   for (int t = 0; t < a->tgrid_count; ++t) {
     const mpm_transfer_grid *tg = &a->tgrid[t];
     const mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
@@ -177,7 +186,8 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     if (mpm_grow((void **)&a->cell, &a->cell_capacity, at[0] + 2, sizeof *a->cell) ||
         mpm_grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, at[1] + 1,
                  sizeof *a->cell_ghost) ||
-        mpm_grow((void **)&a->boundary, &a->boundary_capacity, at[2] + 1, sizeof *a->boundary))
+        mpm_grow((void **)&a->cell_particle, &a->cell_particle_capacity, at[0] + 2,
+                 sizeof *a->cell_particle))
       goto nomem;
 #pragma omp parallel for schedule(dynamic, 16) if (nblocks > 64)
     for (long b = 0; b < nblocks; ++b) {
@@ -188,49 +198,17 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     a->cell_ghost_count = at[1];
     a->boundary_count = at[2];
     a->cell[a->cell_count] = (uint32_t)a->cell_ghost_count; /* the last cell's end */
+    a->cell_particle[a->cell_count] = (uint32_t)a->boundary_count;
   }
   if (transpose_by_ghost(a, ag->ghost_count)) goto nomem;
-  /* per boundary particle its B (kept over the P2G) and its B correction (G2P), and the P2G's
-   * work (m C and the 1D weights) */
-  if (mpm_grow((void **)&a->dB, &a->dB_capacity, 9 * a->boundary_count + 1, sizeof *a->dB) ||
-      mpm_grow((void **)&a->work, &a->work_capacity, 21 * a->boundary_count + 1, sizeof *a->work))
+  /* per boundary particle the P2G lanes' m C and 1D weights */
+  if (mpm_grow((void **)&a->work, &a->work_capacity, 21 * a->boundary_count + 1, sizeof *a->work))
     goto nomem;
   return MPM_OK;
 nomem:
   return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                        "step %lld: out of memory for the APIC moments of the ghost nodes",
                        (long long)sim->steps);
-}
-
-/* A boundary particle's 1D weights and base node, the distances f from its base node (cells),
- * and the ghost level's diagonal D~ (m^2) as the lanes compute it. */
-typedef struct boundary_stencil {
-  int W;
-  double dx;
-  int base[3];
-  mpm_real w[3][MPM_STENCIL_MAX];
-  double f[3], d[3];
-} boundary_stencil;
-
-static void boundary_stencil_of(const mpm_adaptive *a, const mpm_sim *sim, size_t k,
-                                boundary_stencil *bs) {
-  const mpm_particles *p = &sim->particles;
-  const mpm_transfer_grid *tg = &a->tgrid[a->boundary[k].tgrid];
-  const size_t i = a->boundary[k].particle;
-  mpm_real x[3];
-  for (int d = 0; d < 3; ++d) x[d] = p->x[d][i] - sim->origin[d];
-  bs->W = tg->kernel.width;
-  bs->dx = (double)tg->kernel.dx;
-  for (int d = 0; d < 3; ++d) {
-    /* the weights as mpm_kernel_stencil gives them; the gradients and APIC factors, unused
-     * here, are left to the compiler to drop */
-    mpm_real dw[MPM_STENCIL_MAX], af[MPM_STENCIL_MAX];
-    bs->base[d] = mpm_kernel_1d(&tg->kernel, x[d] * tg->kernel.inv_dx, bs->w[d], dw, af);
-    bs->f[d] = (double)(x[d] * tg->kernel.inv_dx) - bs->base[d];
-    double sum = 0;
-    for (int q = 0; q < bs->W; ++q) sum += (double)bs->w[d][q] * (q - bs->f[d]) * (q - bs->f[d]);
-    bs->d[d] = sum * bs->dx * bs->dx;
-  }
 }
 
 /* Stencil node (i, j, k) packed 4 bits each: its weight, from 1D weights w[3][MPM_STENCIL_MAX]. */
@@ -243,100 +221,23 @@ static inline mpm_real packed_weight(const mpm_real *w, uint32_t n) {
  * ones, in a fraction of the instructions. */
 typedef mpm_real sum8r __attribute__((vector_size(8 * sizeof(mpm_real))));
 
-/* 3x3 inverse (row-major, double); 0 when singular. */
-static int invert3(const double A[9], double R[9]) {
-  const double c0 = A[4] * A[8] - A[5] * A[7], c1 = A[5] * A[6] - A[3] * A[8],
-               c2 = A[3] * A[7] - A[4] * A[6];
-  const double det = A[0] * c0 + A[1] * c1 + A[2] * c2;
-  if (!(det != 0)) return 0;
-  const double s = 1 / det;
-  R[0] = c0 * s;
-  R[1] = (A[2] * A[7] - A[1] * A[8]) * s;
-  R[2] = (A[1] * A[5] - A[2] * A[4]) * s;
-  R[3] = c1 * s;
-  R[4] = (A[0] * A[8] - A[2] * A[6]) * s;
-  R[5] = (A[2] * A[3] - A[0] * A[5]) * s;
-  R[6] = c2 * s;
-  R[7] = (A[1] * A[6] - A[0] * A[7]) * s;
-  R[8] = (A[0] * A[4] - A[1] * A[3]) * s;
-  return 1;
-}
-
-/* The real-node D_p of up to 8 particles of one boundary cell at once, one per lane: the ghost
- * level's D~ plus sum_e w_ep S_e over the cell's entries, which the lanes share. Lane by lane the
- * products and sums are those of one particle in scalar code, in the same order (no contraction:
- * ISO C), so each D is the scalar one bit for bit; a term whose weight is 0 adds a zero. */
-typedef double lane8d __attribute__((vector_size(8 * sizeof(double))));
-
-static void cell_D(const mpm_adaptive *a, const mpm_real *S, uint32_t c0, uint32_t c1,
-                   const boundary_stencil *bs, int lanes, double D[][9]) {
-  lane8d w1d[3][MPM_STENCIL_MAX], Dv[6];
-  for (int d = 0; d < 3; ++d)
-    for (int q = 0; q < MPM_STENCIL_MAX; ++q)
-      for (int l = 0; l < 8; ++l) w1d[d][q][l] = l < lanes ? (double)bs[l].w[d][q] : 0;
-  for (int u = 0; u < 6; ++u)
-    for (int l = 0; l < 8; ++l) Dv[u][l] = u < 3 && l < lanes ? bs[l].d[u] : 0;
-  for (uint32_t e = c0; e < c1; ++e) {
-    const uint32_t n = a->cell_ghost[e].node;
-    const lane8d w = w1d[0][n & 15] * w1d[1][n >> 4 & 15] * w1d[2][n >> 8 & 15];
-    const mpm_real *Sg = S + 6 * (size_t)a->cell_ghost[e].ghost;
-    /* xx, yy, zz, xy, xz, yz */
-    for (int u = 0; u < 6; ++u) Dv[u] += w * (double)Sg[u];
-  }
-  for (int l = 0; l < lanes; ++l) {
-    const double xx = Dv[0][l], yy = Dv[1][l], zz = Dv[2][l], xy = Dv[3][l], xz = Dv[4][l],
-                 yz = Dv[5][l];
-    const double M[9] = {xx, xy, xz, xy, yy, yz, xz, yz, zz};
-    memcpy(D[l], M, sizeof M);
-  }
-}
-
-void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
+mpm_ghost_apic mpm_adaptive_apic_view(mpm_sim *sim, int t) {
   mpm_adaptive *a = sim->adaptive;
-  const mpm_adaptive_grid *ag = &a->grid;
-  mpm_particles *p = &sim->particles;
-  const size_t ng = ag->ghost_count;
-  const mpm_real *S = ag->spread; /* 6 per ghost */
-  mpm_real *Cw = a->work;         /* per boundary particle: m C (9), then its 1D weights (12) */
-  const long nb = (long)a->boundary_count, nc = (long)a->cell_count;
-  /* C_p and the lanes' B' = C D~ per particle, cell by cell in parallel (a cell's boundary
-     particles are contiguous and share its entries), 8 particles at a time */
-#pragma omp parallel for schedule(dynamic, 16)
-  for (long c = 0; c < nc; ++c) {
-    const uint32_t e0 = a->cell[c], e1 = a->cell[c + 1];
-    for (uint32_t k0 = a->cell_particle[c]; k0 < a->cell_particle[c + 1]; k0 += 8) {
-      const int lanes = (int)(a->cell_particle[c + 1] - k0 < 8 ? a->cell_particle[c + 1] - k0 : 8);
-      boundary_stencil bs[8];
-      double D[8][9];
-      for (int l = 0; l < lanes; ++l) boundary_stencil_of(a, sim, (size_t)(k0 + l), &bs[l]);
-      cell_D(a, S, e0, e1, bs, lanes, D);
-      for (int l = 0; l < lanes; ++l) {
-        const size_t k = k0 + (size_t)l, i = a->boundary[k].particle;
-        const double m = (double)p->mass[i];
-        double B[9], Dinv[9], C[9];
-        for (int q = 0; q < 9; ++q) {
-          B[q] = (double)p->B[q][i];
-          a->dB[9 * k + (size_t)q] = p->B[q][i]; /* kept over the P2G */
-        }
-        mpm_real *out = Cw + 21 * k;
-        for (int d = 0; d < 3; ++d) /* its 1D weights, for the ghosts' sums and for G2P */
-          for (int q = 0; q < MPM_STENCIL_MAX; ++q)
-            out[9 + MPM_STENCIL_MAX * d + q] = q < bs[l].W ? bs[l].w[d][q] : 0;
-        if (!invert3(D[l], Dinv)) { /* no affine part from it (cannot happen for uGIMP) */
-          memset(out, 0, 9 * sizeof *out);
-          continue;
-        }
-        for (int u = 0; u < 3; ++u)
-          for (int v = 0; v < 3; ++v)
-            C[3 * u + v] =
-                B[3 * u] * Dinv[v] + B[3 * u + 1] * Dinv[3 + v] + B[3 * u + 2] * Dinv[6 + v];
-        /* the lanes divide by D~: B' = C D~ makes them add m C (x_g - x_p) w */
-        for (int u = 0; u < 3; ++u)
-          for (int v = 0; v < 3; ++v) p->B[3 * u + v][i] = (mpm_real)(C[3 * u + v] * bs[l].d[v]);
-        for (int q = 0; q < 9; ++q) out[q] = (mpm_real)(m * C[q]);
-      }
-    }
-  }
+  const mpm_ghost_apic v = {a->cell_first + a->cell_map_begin[t],
+                            a->cell_of + a->cell_map_begin[t],
+                            a->cell,
+                            a->cell_ghost,
+                            a->grid.spread,
+                            a->work,
+                            a->moment};
+  return v;
+}
+
+void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
+  mpm_adaptive *a = sim->adaptive;
+  const size_t ng = a->grid.ghost_count;
+  const mpm_real *Cw = a->work; /* per boundary particle: m C (9), then its 1D weights (12) */
+  const long nb = (long)a->boundary_count;
   /* the ghosts' affine moments A_g = sum_p w_gp m_p C_p (stencils overlap): each ghost summed
    * by one thread, over its boundary particles in their order (a ghost is once in a cell's
    * entries), into one plane per component for the scatter */
@@ -364,15 +265,6 @@ void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   }
 }
 
-void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
-  mpm_particles *p = &sim->particles;
-  const long nb = (long)a->boundary_count; /* a particle is once in the list */
-#pragma omp parallel for schedule(static) if (nb > MPM_PARALLEL_MIN)
-  for (long k = 0; k < nb; ++k)
-    for (int c = 0; c < 9; ++c) p->B[c][a->boundary[k].particle] = a->dB[9 * (size_t)k + (size_t)c];
-}
-
 void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse) {
   mpm_adaptive *a = sim->adaptive;
   mpm_adaptive_grid *ag = &a->grid;
@@ -392,36 +284,8 @@ void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
   for (int c = 0; c < 9; ++c) M[c] = a->moment + (size_t)(9 + c) * n; /* P2G's are spent */
   const mpm_real *const v[3] = {sim->dofs.v[0], sim->dofs.v[1], sim->dofs.v[2]};
   mpm_adaptive_grid_gather_moments(ag, v, M);
-  mpm_real *Mi = a->moment; /* interleaved, for the particles' reads */
+  mpm_real *Mi = a->moment; /* interleaved, for the G2P lanes' reads */
 #pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
   for (long g = 0; g < (long)n; ++g)
     for (int c = 0; c < 9; ++c) Mi[9 * (size_t)g + (size_t)c] = M[c][g];
-  const long nb = (long)a->boundary_count;
-#pragma omp parallel for schedule(static)
-  for (long k = 0; k < nb; ++k) {
-    /* the particle has not moved since P2G: its 1D weights are those kept then */
-    const mpm_real *wk = a->work + 21 * (size_t)k + 9;
-    double dB[9] = {0};
-    const uint32_t c0 = a->cell[a->boundary[k].cell], c1 = a->cell[a->boundary[k].cell + 1];
-    for (uint32_t e = c0; e < c1; ++e) {
-      const uint32_t node = a->cell_ghost[e].node;
-      const double w = (double)wk[node & 15] * (double)wk[MPM_STENCIL_MAX + (node >> 4 & 15)] *
-                       (double)wk[2 * MPM_STENCIL_MAX + (node >> 8 & 15)];
-      if (w == 0) continue;
-      const mpm_real *Mg = Mi + 9 * (size_t)a->cell_ghost[e].ghost;
-      for (int c = 0; c < 9; ++c) dB[c] += w * (double)Mg[c];
-    }
-    for (int c = 0; c < 9; ++c) a->dB[9 * (size_t)k + (size_t)c] = (mpm_real)dB[c];
-  }
-}
-
-void mpm_adaptive_apic_g2p_after(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
-  mpm_particles *p = &sim->particles;
-  const long nb = (long)a->boundary_count;
-#pragma omp parallel for schedule(static) if (nb > MPM_PARALLEL_MIN)
-  for (long k = 0; k < nb; ++k) {
-    const size_t i = a->boundary[k].particle;
-    for (int c = 0; c < 9; ++c) p->B[c][i] += a->dB[9 * (size_t)k + (size_t)c];
-  }
 }

@@ -149,14 +149,14 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->block_multi);
   mpm_free(a->stable_cells);
   mpm_free(a->block_count);
-  mpm_free(a->boundary);
   mpm_free(a->cell);
   mpm_free(a->cell_ghost);
   mpm_free(a->ghost_start);
   mpm_free(a->cell_particle);
   mpm_free(a->ghost_entry);
   mpm_free(a->moment);
-  mpm_free(a->dB);
+  mpm_free(a->cell_first);
+  mpm_free(a->cell_of);
   mpm_free(a->work);
   free(a);
 }

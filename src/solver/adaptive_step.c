@@ -338,7 +338,6 @@ mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
 void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
   mpm_adaptive *a = sim->adaptive;
   const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
-  if (apic) mpm_adaptive_apic_before_p2g(sim);
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
@@ -347,6 +346,10 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
         mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
     const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
+    /* the boundary particles' part of APIC across levels runs in the lanes */
+    const mpm_ghost_apic ga =
+        apic && a->boundary_count ? mpm_adaptive_apic_view(sim, k) : (mpm_ghost_apic){0};
+    t.ghost_apic = apic && a->boundary_count ? &ga : NULL;
     t.kernel = tg->kernel;
     if (!impulse && mpm_p2g_fuses_force(&t, g)) {
       /* the implicit solve needs the momentum and the force apart (step.c, stage_p2g) */
@@ -383,12 +386,14 @@ mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
         mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
     const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
+    const mpm_ghost_apic ga =
+        apic && a->boundary_count ? mpm_adaptive_apic_view(sim, k) : (mpm_ghost_apic){0};
+    t.ghost_apic = apic && a->boundary_count ? &ga : NULL;
     t.kernel = tg->kernel;
     const mpm_g2p_result rk = mpm_g2p(&t, g, &val, &v);
     if (rk.max_speed > r.max_speed || rk.max_speed != rk.max_speed) r.max_speed = rk.max_speed;
     if (rk.bad_particle >= 0 && r.bad_particle < 0)
       r.bad_particle = rk.bad_particle + (long)a->range[k];
   }
-  if (apic) mpm_adaptive_apic_g2p_after(sim);
   return r;
 }

@@ -9,6 +9,7 @@
 #include "transfer/transfer.h"
 #include "core/compensated.h"
 #include "transfer/batches.h"
+#include "transfer/ghost_apic_lanes.h"
 #include "transfer/transfer_lanes.h"
 #include "core/parallel.h"
 
@@ -173,6 +174,8 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
   const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
   for (size_t q = q0; q < q1; ++q) {
     const uint32_t end = g->cell_start[q + 1];
+    const mpm_ghost_apic *ga = ctx->ghost_apic; /* APIC across levels */
+    const int boundary = apic && ga && ga->cell_first[q] != MPM_NOT_BOUNDARY;
     for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
       const int n = mpm_batch_size(j, end);
       const uint32_t *idx = g->perm + j;
@@ -184,6 +187,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       mpm_g2p_lanes_out o;
       mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
                     MPM_PAD, &o);
+      if (boundary) mpm_ghost_apic_g2p(W, ga, ga->cell_of[q], &s, o.B);
       batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
     }
     const int m = mpm_cell_material(q, q0);
