@@ -50,9 +50,10 @@
  * particles' types and the clock the refined cells.
  * APIC across levels in the lanes (issue 42, 2026-12-06): the boundary particles' D_p, C_p and
  * B corrections are computed inside the P2G and G2P lanes from the lanes' own weights (float,
- * where a scalar pass recomputed them in double) and from the divisor the lanes use: the three
- * multi-level scenes were rewritten with it (level_crossing's kinetic energy and angular
- * momentum over 4 frames agree with the old results to 2e-7 relative; the others unchanged).
+ * where a scalar pass recomputed them in double) and from the divisor the lanes use, and the
+ * ghosts' affine moments are summed per cell entry, then per ghost: the three multi-level scenes
+ * were rewritten with it (level_crossing's kinetic energy and angular momentum over 4 frames
+ * agree with the old results to 2e-7 relative; the others unchanged).
  * A mismatch names the scene and the quantity (x, v, F, B, plastic, ...) that differs.
  * Regenerate the files only for an intended change of results, and say so in the commit:
  *   MPM_REGRESSION_WRITE=tests/regression/state_float.txt build/test_regression

@@ -69,33 +69,29 @@ typedef struct mpm_adaptive {
   size_t block_count_capacity;
   uint64_t *stable_cells; /* per owner block of a transfer grid: its stable cells (the sort) */
   size_t stable_cells_capacity;
-  /* the boundary particles (those whose stencils reach such ghosts), numbered cell by cell in
-   * the transfer grids' order: boundary_count of them. Per occupied cell c of a transfer grid
-   * whose stencil reaches such ghosts (a boundary cell), its entries cell_ghost[cell[c] ..
-   * cell[c + 1]) (the stencil node and the ghost) and its particles' numbers cell_particle[c] ..
-   * cell_particle[c + 1] */
+  /* the boundary particles (those whose stencils reach such ghosts): boundary_count of them.
+   * Per occupied cell c of a transfer grid whose stencil reaches such ghosts (a boundary cell),
+   * its entries cell_ghost[cell[c] .. cell[c + 1]) (the stencil node and the ghost), and per
+   * entry the affine moment its particles bring (9, added by the P2G lanes) */
   size_t boundary_count;
   uint32_t *cell;
   size_t cell_count, cell_capacity;
   mpm_stencil_ghost *cell_ghost;
   size_t cell_ghost_count, cell_ghost_capacity;
+  mpm_real *affine;
+  size_t affine_capacity;
   /* the lanes' view (transfer.h, mpm_ghost_apic): per cell q of transfer grid t, from
-   * cell_map_begin[t] on, its first particle's number (or MPM_NOT_BOUNDARY) and its cell c */
-  uint32_t *cell_first, *cell_of;
-  size_t cell_first_capacity, cell_of_capacity;
+   * cell_map_begin[t] on, its boundary cell c or MPM_NOT_BOUNDARY */
+  uint32_t *cell_of;
+  size_t cell_of_capacity;
   size_t cell_map_begin[MPM_TRANSFER_GRIDS_MAX];
   /* the same entries by ghost, for the ghosts' sums in parallel: ghost g's are
-   * ghost_entry[ghost_start[g] .. ghost_start[g + 1]) in cell order, each with its cell */
-  uint32_t *ghost_start, *cell_particle;
-  size_t ghost_start_capacity, cell_particle_capacity;
-  struct mpm_ghost_entry {
-    uint32_t cell, entry;
-  } * ghost_entry;
-  size_t ghost_entry_capacity;
-  /* the ghosts' moments (9 per ghost interleaved, then 9 planes of ghost_count); per boundary
-   * particle, written by the P2G lanes, m C (9) and its 1D weights (12) */
-  mpm_real *moment, *work;
-  size_t moment_capacity, work_capacity;
+   * ghost_entry[ghost_start[g] .. ghost_start[g + 1]) in cell order */
+  uint32_t *ghost_start, *ghost_entry;
+  size_t ghost_start_capacity, ghost_entry_capacity;
+  /* the ghosts' moments: 9 per ghost interleaved (G2P), then 9 planes of ghost_count (P2G) */
+  mpm_real *moment;
+  size_t moment_capacity;
   long long rebuilds;           /* trees made by domain.refine_every since creation */
   long long unchanged_rebuilds; /* of those, the ones equal to the tree in use (kept) */
   double rebuild_seconds;       /* their wall time */
@@ -114,13 +110,14 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse);
 mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc);
 
 /* APIC across levels (adaptive_apic.c), for steps with solver.transfer = apic: after the
- * layout, the boundary cells and particles; the lanes' view of transfer grid t (for its P2G and
- * G2P, which do the particles' part: transfer/ghost_apic_lanes.h); after the lanes' P2G, the
- * ghosts' affine moments, then the ghost scatter with them (in place of
- * mpm_adaptive_grid_scatter); before the lanes' G2P (the ghosts' velocities gathered), the
+ * layout, the boundary cells; the lanes' view of transfer grid t (for its P2G and G2P, which do
+ * the particles' part: transfer/ghost_apic_lanes.h); before the lanes' P2G, the entries' affine
+ * moments cleared; after it, the ghosts' affine moments, then the ghost scatter with them (in place
+ * of mpm_adaptive_grid_scatter); before the lanes' G2P (the ghosts' velocities gathered), the
  * ghosts' velocity moments. */
 mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim);
 mpm_ghost_apic mpm_adaptive_apic_view(mpm_sim *sim, int t);
+void mpm_adaptive_apic_before_p2g(mpm_sim *sim);
 void mpm_adaptive_apic_after_p2g(mpm_sim *sim);
 void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse);
 void mpm_adaptive_apic_g2p_before(mpm_sim *sim);

@@ -28,7 +28,7 @@
 
 /* The cells' entries by ghost (a counting sort, stable: cell order within a ghost). */
 static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
-  const size_t nc = a->cell_count, ne = a->cell_ghost_count;
+  const size_t ne = a->cell_ghost_count;
   if (mpm_grow((void **)&a->ghost_start, &a->ghost_start_capacity, ng + 2,
                sizeof *a->ghost_start) ||
       mpm_grow((void **)&a->ghost_entry, &a->ghost_entry_capacity, ne + 1, sizeof *a->ghost_entry))
@@ -37,12 +37,8 @@ static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
   memset(start, 0, (ng + 1) * sizeof *start);
   for (size_t e = 0; e < ne; ++e) ++start[a->cell_ghost[e].ghost + 1];
   for (size_t g = 0; g < ng; ++g) start[g + 1] += start[g];
-  for (size_t c = 0; c < nc; ++c) /* start[g] runs on to g's end */
-    for (uint32_t e = a->cell[c]; e < a->cell[c + 1]; ++e) {
-      const uint32_t at = start[a->cell_ghost[e].ghost]++;
-      a->ghost_entry[at].cell = (uint32_t)c;
-      a->ghost_entry[at].entry = e;
-    }
+  for (size_t e = 0; e < ne; ++e) /* start[g] runs on to g's end */
+    a->ghost_entry[start[a->cell_ghost[e].ghost]++] = (uint32_t)e;
   for (size_t g = ng; g > 0; --g) start[g] = start[g - 1];
   start[0] = 0;
   return 0;
@@ -51,9 +47,8 @@ static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
 /* The boundary cells of owner block b of transfer grid t (its occupied cells whose stencils
  * reach a ghost of several real nodes), in cell order: with count, only their numbers (cells,
  * entries, particles) in count[0..2]; with first, written from those indices on (cell c's
- * entries run from cell[c] to the next cell's first, cell[c + 1], its particles' numbers from
- * cell_particle[c] to cell_particle[c + 1]: the caller sets both after the last cell), and the
- * block's cells in the lanes' map (cell_first, cell_of). */
+ * entries run from cell[c] to the next cell's first, cell[c + 1], which the caller sets after
+ * the last cell), and the block's cells in the lanes' map (cell_of). */
 static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOCK_NODES][8],
                            size_t b, uint32_t count[3], uint32_t first[3]) {
   const mpm_transfer_grid *tg = &a->tgrid[t];
@@ -64,11 +59,10 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
   const uint64_t *multi_at = a->block_multi + g->dof_begin / MPM_BLOCK_NODES;
   uint32_t cells = 0, entries = 0, particles = 0;
   if (count) count[0] = count[1] = count[2] = 0;
-  uint32_t *cell_first = a->cell_first + a->cell_map_begin[t];
   uint32_t *cell_of = a->cell_of + a->cell_map_begin[t];
   if (!count)
     for (size_t q = b * nmat * MPM_BLOCK_NODES; q < (b + 1) * nmat * MPM_BLOCK_NODES; ++q)
-      cell_first[q] = MPM_NOT_BOUNDARY;
+      cell_of[q] = MPM_NOT_BOUNDARY;
   /* a stencil of the block reaches only its pad: the block and 7 neighbours */
   uint64_t pad[8], near = 0;
   for (int o = 0; o < 8; ++o) near |= pad[o] = multi_at[sg->neighbor[b][o]];
@@ -94,7 +88,6 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
     }
     const uint32_t cell = first[0] + cells++;
     a->cell[cell] = first[1] + entries;
-    a->cell_particle[cell] = first[2] + particles;
     /* the stencil's nodes in (i, j, k) order, through the pad: a node holds such a ghost when
      * its bit is set in its pad block's mask; only those are looked up */
     const int cx = (c >> 4) & 3, cy = (c >> 2) & 3, cz = c & 3;
@@ -111,12 +104,7 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
           e->node = (uint32_t)(i | j << 4 | k << 8); /* (i, j, k), 4 bits each */
           e->ghost = (uint32_t)a->ghost_of[slot];
         }
-    for (size_t m = 0; m < nmat; ++m) { /* its particles material by material, in perm order */
-      const size_t q = q0 + m * MPM_BLOCK_NODES;
-      cell_first[q] = first[2] + particles;
-      cell_of[q] = cell;
-      particles += sg->cell_start[q + 1] - sg->cell_start[q];
-    }
+    for (size_t m = 0; m < nmat; ++m) cell_of[q0 + m * MPM_BLOCK_NODES] = cell;
   }
   if (count) count[0] = cells, count[1] = entries, count[2] = particles;
 }
@@ -157,9 +145,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     a->cell_map_begin[t] = map;
     map += sg->owner_count * (size_t)sg->material_count * MPM_BLOCK_NODES;
   }
-  if (mpm_grow((void **)&a->cell_first, &a->cell_first_capacity, map + 1, sizeof *a->cell_first) ||
-      mpm_grow((void **)&a->cell_of, &a->cell_of_capacity, map + 1, sizeof *a->cell_of))
-    goto nomem;
+  if (mpm_grow((void **)&a->cell_of, &a->cell_of_capacity, map + 1, sizeof *a->cell_of)) goto nomem;
   for (int t = 0; t < a->tgrid_count; ++t) {
     const mpm_transfer_grid *tg = &a->tgrid[t];
     const mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
@@ -186,8 +172,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     if (mpm_grow((void **)&a->cell, &a->cell_capacity, at[0] + 2, sizeof *a->cell) ||
         mpm_grow((void **)&a->cell_ghost, &a->cell_ghost_capacity, at[1] + 1,
                  sizeof *a->cell_ghost) ||
-        mpm_grow((void **)&a->cell_particle, &a->cell_particle_capacity, at[0] + 2,
-                 sizeof *a->cell_particle))
+        mpm_grow((void **)&a->affine, &a->affine_capacity, 9 * at[1] + 1, sizeof *a->affine))
       goto nomem;
 #pragma omp parallel for schedule(dynamic, 16) if (nblocks > 64)
     for (long b = 0; b < nblocks; ++b) {
@@ -198,12 +183,8 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     a->cell_ghost_count = at[1];
     a->boundary_count = at[2];
     a->cell[a->cell_count] = (uint32_t)a->cell_ghost_count; /* the last cell's end */
-    a->cell_particle[a->cell_count] = (uint32_t)a->boundary_count;
   }
   if (transpose_by_ghost(a, ag->ghost_count)) goto nomem;
-  /* per boundary particle the P2G lanes' m C and 1D weights */
-  if (mpm_grow((void **)&a->work, &a->work_capacity, 21 * a->boundary_count + 1, sizeof *a->work))
-    goto nomem;
   return MPM_OK;
 nomem:
   return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
@@ -211,57 +192,38 @@ nomem:
                        (long long)sim->steps);
 }
 
-/* Stencil node (i, j, k) packed 4 bits each: its weight, from 1D weights w[3][MPM_STENCIL_MAX]. */
-static inline mpm_real packed_weight(const mpm_real *w, uint32_t n) {
-  return w[n & 15] * w[MPM_STENCIL_MAX + (n >> 4 & 15)] * w[2 * MPM_STENCIL_MAX + (n >> 8 & 15)];
-}
-
-/* Nine sums at once, as 8 lanes and one more: lane-wise products and sums are those of the
- * scalar code (no contraction: the build is ISO C), so the sums are bit for bit the scalar
- * ones, in a fraction of the instructions. */
-typedef mpm_real sum8r __attribute__((vector_size(8 * sizeof(mpm_real))));
-
 mpm_ghost_apic mpm_adaptive_apic_view(mpm_sim *sim, int t) {
   mpm_adaptive *a = sim->adaptive;
-  const mpm_ghost_apic v = {a->cell_first + a->cell_map_begin[t],
-                            a->cell_of + a->cell_map_begin[t],
+  const mpm_ghost_apic v = {a->cell_of + a->cell_map_begin[t],
                             a->cell,
                             a->cell_ghost,
                             a->grid.spread,
-                            a->work,
+                            a->affine,
                             a->moment};
   return v;
+}
+
+void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
+  mpm_adaptive *a = sim->adaptive;
+  memset(a->affine, 0, 9 * a->cell_ghost_count * sizeof *a->affine);
 }
 
 void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
   const size_t ng = a->grid.ghost_count;
-  const mpm_real *Cw = a->work; /* per boundary particle: m C (9), then its 1D weights (12) */
-  const long nb = (long)a->boundary_count;
   /* the ghosts' affine moments A_g = sum_p w_gp m_p C_p (stencils overlap): each ghost summed
-   * by one thread, over its boundary particles in their order (a ghost is once in a cell's
-   * entries), into one plane per component for the scatter */
-  if (!nb) return; /* the planes are zero (mpm_adaptive_apic_prepare) */
+   * by one thread over its entries in cell order (a ghost is once in a cell's entries), into one
+   * plane per component for the scatter */
+  if (!a->boundary_count) return; /* the planes are zero (mpm_adaptive_apic_prepare) */
   mpm_real *planes = a->moment + 9 * ng;
-  const uint32_t *start = a->ghost_start, *first = a->cell_particle;
-  const struct mpm_ghost_entry *ge = a->ghost_entry;
+  const uint32_t *start = a->ghost_start, *ge = a->ghost_entry;
+  const mpm_real *affine = a->affine;
 #pragma omp parallel for schedule(static)
   for (long g = 0; g < (long)ng; ++g) {
-    sum8r A8 = {0, 0, 0, 0, 0, 0, 0, 0};
-    mpm_real A_8 = 0;
-    for (uint32_t j = start[g]; j < start[g + 1]; ++j) {
-      const uint32_t cell = ge[j].cell, node = a->cell_ghost[ge[j].entry].node;
-      for (uint32_t k = first[cell]; k < first[cell + 1]; ++k) {
-        const mpm_real *mC = Cw + 21 * (size_t)k, *w = mC + 9;
-        const mpm_real we = packed_weight(w, node);
-        sum8r m8;
-        memcpy(&m8, mC, sizeof m8);
-        A8 += we * m8;
-        A_8 += we * mC[8];
-      }
-    }
-    for (int c = 0; c < 8; ++c) planes[(size_t)c * ng + (size_t)g] = A8[c];
-    planes[(size_t)8 * ng + (size_t)g] = A_8;
+    mpm_real A[9] = {0};
+    for (uint32_t j = start[g]; j < start[g + 1]; ++j)
+      for (int c = 0; c < 9; ++c) A[c] += affine[9 * (size_t)ge[j] + (size_t)c];
+    for (int c = 0; c < 9; ++c) planes[(size_t)c * ng + (size_t)g] = A[c];
   }
 }
 

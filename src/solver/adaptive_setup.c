@@ -152,12 +152,10 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->cell);
   mpm_free(a->cell_ghost);
   mpm_free(a->ghost_start);
-  mpm_free(a->cell_particle);
   mpm_free(a->ghost_entry);
   mpm_free(a->moment);
-  mpm_free(a->cell_first);
   mpm_free(a->cell_of);
-  mpm_free(a->work);
+  mpm_free(a->affine);
   free(a);
 }
 

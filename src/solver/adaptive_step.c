@@ -338,6 +338,7 @@ mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
 void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
   mpm_adaptive *a = sim->adaptive;
   const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
+  if (apic) mpm_adaptive_apic_before_p2g(sim);
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];

@@ -175,7 +175,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
   for (size_t q = q0; q < q1; ++q) {
     const uint32_t end = g->cell_start[q + 1];
     const mpm_ghost_apic *ga = ctx->ghost_apic; /* APIC across levels */
-    const int boundary = apic && ga && ga->cell_first[q] != MPM_NOT_BOUNDARY;
+    const uint32_t bc = apic && ga ? ga->cell_of[q] : MPM_NOT_BOUNDARY;
     for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
       const int n = mpm_batch_size(j, end);
       const uint32_t *idx = g->perm + j;
@@ -187,7 +187,7 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       mpm_g2p_lanes_out o;
       mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
                     MPM_PAD, &o);
-      if (boundary) mpm_ghost_apic_g2p(W, ga, ga->cell_of[q], &s, o.B);
+      if (bc != MPM_NOT_BOUNDARY) mpm_ghost_apic_g2p(W, ga, bc, &s, o.B);
       batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
     }
     const int m = mpm_cell_material(q, q0);

@@ -5,8 +5,8 @@
  *   P2G  the real nodes need C_p = B_p D_p^-1 with D_p = D~_p + sum_g w_gp S_g (D~_p the ghost
  *        level's diagonal, which the lanes divide by; S_g the ghost's spread). The lanes add
  *        m B D~^-1 (x_g - x_p) w_gp, so the batch's m B is replaced by m C D~: the lanes then add
- *        exactly m C (x_g - x_p) w_gp, and m C with the 1D weights goes to the ghosts' affine
- *        moments after the P2G;
+ *        exactly m C (x_g - x_p) w_gp; each entry (a ghost of the cell's stencil) sums
+ *        w_gp m_p C_p over the cell's particles, the ghosts' affine moments' terms;
  *   G2P  the lanes give sum_g w_gp v_g (x_g - x_p)^T, and B_p needs sum_g w_gp M_g besides (the
  *        ghosts' velocity moments).
  * The particles of one cell share its entries (stencil node, ghost), so both are lane-wise sums
@@ -25,13 +25,13 @@ MPM_ALWAYS_INLINE mpm_vd mpm_ghost_apic_weight(const mpm_vd w[3][MPM_STENCIL_MAX
   return w[0][n & 15] * w[1][n >> 4 & 15] * w[2][n >> 8 & 15];
 }
 
-/* P2G of boundary particles k0 .. k0 + n of cell c (a batch with lane stencil s and lane inputs
- * mB = m B): mB becomes m C D~, and m C with the 1D weights is written to ga->work. The ghost
+/* P2G of a batch of n boundary particles of cell c (lane stencil s, lane inputs mB = m B): mB
+ * becomes m C D~, and sum_p w_ep m_p C_p is added to each entry's affine moment. The ghost
  * level's D~ per axis is the divisor of the lanes' APIC factors (transfer_lanes.h): dx^2 / 4 for
  * the quadratic B-spline, dx^2 / 3 for the cubic, sum_q w_q (q - f)^2 dx^2 for the others. A lane
  * whose D is singular (not met with uGIMP) brings no affine part. */
 MPM_ALWAYS_INLINE void mpm_ghost_apic_p2g(const int W, const mpm_ghost_apic *ga,
-                                          const mpm_kernel *k, uint32_t c, uint32_t k0, int n,
+                                          const mpm_kernel *k, uint32_t c, int n,
                                           const mpm_lane_stencil *s, mpm_vl mB[9]) {
   mpm_vd w[3][MPM_STENCIL_MAX], Dt[3];
   const double dx2 = (double)k->dx * (double)k->dx;
@@ -65,21 +65,39 @@ MPM_ALWAYS_INLINE void mpm_ghost_apic_p2g(const int W, const mpm_ghost_apic *ga,
   for (int l = 0; l < MPM_LANES; ++l) inv_det[l] = det[l] != 0 ? 1 / det[l] : 0;
   const mpm_vd Di[9] = {c00 * inv_det, c01 * inv_det, c02 * inv_det, c01 * inv_det, c11 * inv_det,
                         c12 * inv_det, c02 * inv_det, c12 * inv_det, c22 * inv_det};
-  mpm_vd mb[9], mC[9];
+  mpm_vd mb[9], mC[9], live = {0}; /* lanes >= n (padding) bring nothing, whatever their D */
+  for (int l = 0; l < n; ++l) live[l] = 1;
   for (int q = 0; q < 9; ++q)
     for (int l = 0; l < MPM_LANES; ++l) mb[q][l] = (double)mB[q][l];
   for (int u = 0; u < 3; ++u)
     for (int v = 0; v < 3; ++v) {
-      mC[3 * u + v] = mb[3 * u] * Di[v] + mb[3 * u + 1] * Di[3 + v] + mb[3 * u + 2] * Di[6 + v];
+      mC[3 * u + v] =
+          (mb[3 * u] * Di[v] + mb[3 * u + 1] * Di[3 + v] + mb[3 * u + 2] * Di[6 + v]) * live;
       const mpm_vd scaled = mC[3 * u + v] * Dt[v]; /* the lanes divide by D~ */
       for (int l = 0; l < MPM_LANES; ++l) mB[3 * u + v][l] = (mpm_real)scaled[l];
     }
+  /* the ghosts' affine moments: per entry the batch's sum_p w_ep m_p C_p, particle by particle
+   * (9 components as 8 lanes and one) */
+  typedef mpm_real sum8 __attribute__((vector_size(8 * sizeof(mpm_real))));
+  sum8 c8[MPM_LANES];
+  mpm_real c9[MPM_LANES];
   for (int l = 0; l < n; ++l) {
-    mpm_real *out = ga->work + 21 * (size_t)(k0 + (uint32_t)l);
-    for (int q = 0; q < 9; ++q) out[q] = (mpm_real)mC[q][l];
-    for (int d = 0; d < 3; ++d)
-      for (int q = 0; q < MPM_STENCIL_MAX; ++q)
-        out[9 + MPM_STENCIL_MAX * d + q] = (mpm_real)w[d][q][l];
+    for (int q = 0; q < 8; ++q) c8[l][q] = (mpm_real)mC[q][l];
+    c9[l] = (mpm_real)mC[8][l];
+  }
+  for (uint32_t e = ga->entry_start[c]; e < ga->entry_start[c + 1]; ++e) {
+    const mpm_vd we = mpm_ghost_apic_weight(w, ga->entry[e].node);
+    mpm_real *A = ga->affine + 9 * (size_t)e;
+    sum8 A8;
+    __builtin_memcpy(&A8, A, sizeof A8);
+    mpm_real A_8 = A[8];
+    for (int l = 0; l < n; ++l) {
+      const mpm_real wl = (mpm_real)we[l];
+      A8 += wl * c8[l];
+      A_8 += wl * c9[l];
+    }
+    __builtin_memcpy(A, &A8, sizeof A8);
+    A[8] = A_8;
   }
 }
 

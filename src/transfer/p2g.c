@@ -169,16 +169,14 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const int force, const mpm_transf
     const uint32_t end = g->cell_start[q + 1];
     /* a cell whose stencil reaches ghosts of several real nodes (APIC across levels) */
     const mpm_ghost_apic *ga = ctx->ghost_apic;
-    const uint32_t k0 = ga ? ga->cell_first[q] - g->cell_start[q] : 0;
-    const int boundary = ga && ga->cell_first[q] != MPM_NOT_BOUNDARY;
+    const uint32_t bc = ga ? ga->cell_of[q] : MPM_NOT_BOUNDARY;
     for (uint32_t j = g->cell_start[q]; j < end; j += MPM_LANES) {
       int base[3];
       mpm_lane_stencil s;
       mpm_vl mass, mv[3], mB[9], K[9];
       batch_prepare(W, 1, force, ctx, g, p, &w, m, range_end, j, end, base, &s, &mass, mv, mB, K);
-      if (boundary)
-        mpm_ghost_apic_p2g(W, ga, &ctx->kernel, ga->cell_of[q], k0 + j, mpm_batch_size(j, end), &s,
-                           mB);
+      if (bc != MPM_NOT_BOUNDARY)
+        mpm_ghost_apic_p2g(W, ga, &ctx->kernel, bc, mpm_batch_size(j, end), &s, mB);
       const long off = ((long)(base[0] - org[0]) * S + (base[1] - org[1])) * S + (base[2] - org[2]);
       mpm_p2g_lanes_acc(W, &s, mass, mv, mB, K, acc, off, (long)S * S, S);
     }

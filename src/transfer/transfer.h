@@ -16,9 +16,7 @@
 
 /* APIC across the levels of the multi-level grid (solver/adaptive_apic.c), for one transfer grid:
  * its cells whose stencils reach ghost nodes of several real nodes (boundary cells) and what their
- * particles need beyond the lanes' transfer (transfer/ghost_apic_lanes.h). Particle k of the
- * boundary numbering is the particle at perm position j of cell q with k = cell_first[q] + j -
- * cell_start[q]. */
+ * particles need beyond the lanes' transfer (transfer/ghost_apic_lanes.h). */
 typedef struct mpm_stencil_ghost {
   uint32_t node;  /* the stencil node (i, j, k), 4 bits each */
   uint32_t ghost; /* its ghost */
@@ -27,15 +25,13 @@ typedef struct mpm_stencil_ghost {
 #define MPM_NOT_BOUNDARY UINT32_MAX
 
 typedef struct mpm_ghost_apic {
-  const uint32_t *cell_first;  /* per cell q of the grid (cell_start's numbering): the boundary
-                                  index of its first particle, or MPM_NOT_BOUNDARY */
-  const uint32_t *cell_of;     /* per boundary cell q: its entries' cell c */
+  const uint32_t *cell_of;     /* per cell q of the grid (cell_start's numbering): its boundary
+                                  cell c, or MPM_NOT_BOUNDARY */
   const uint32_t *entry_start; /* cell c's entries: entry[entry_start[c] .. entry_start[c + 1]) */
   const mpm_stencil_ghost *entry;
   const mpm_real *spread; /* P2G: per ghost sum_i r_gi (x_i - x_g)(x_i - x_g)^T, 6 (xx yy zz xy
                              xz yz), m^2 */
-  mpm_real *work;         /* P2G writes per boundary particle m C (9) and its 1D weights (3 x
-                             MPM_STENCIL_MAX) */
+  mpm_real *affine;       /* P2G adds per entry e sum_p w_ep m_p C_p (9, row-major), kg/s */
   const mpm_real *moment; /* G2P: per ghost sum_i r_gi v_i (x_i - x_g)^T, 9 interleaved */
 } mpm_ghost_apic;
 
