@@ -9,6 +9,7 @@
 #include "bench_util.h"
 #include "cli.h"
 #include "core/alloc.h"
+#include "core/lanes.h"
 #include "core/parallel.h"
 #include "solver/adaptive.h"
 #include "solver/sim.h"
@@ -173,22 +174,32 @@ int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repea
         return MPM_EXIT_FAILURE;
       }
       const int failed = time_steps(sim, steps, repeats, live0, &f[k]);
-      char where[160] = "", grids[1024] = "";
+      char where[256] = "", grids[1024] = "";
       if (sim->adaptive) {
         const mpm_adaptive *a = sim->adaptive;
-        snprintf(where, sizeof where, "; %zu ghosts, %zu APIC boundary particles",
-                 a->grid.ghost_count, a->boundary_count);
+        snprintf(where, sizeof where,
+                 "; %zu ghosts, %zu APIC boundary particles in %zu cells (%.1f ghosts of several "
+                 "real nodes in a cell's stencil)",
+                 a->grid.ghost_count, a->boundary_count, a->cell_count,
+                 a->cell_count ? (double)a->cell_ghost_count / (double)a->cell_count : 0.0);
         /* the transfer grids: how full their blocks are (a block's P2G and G2P cost depends
            on its nodes as well as its particles) */
         for (int q = 0; q < a->tgrid_count; ++q) {
           const mpm_grid *g = mpm_adaptive_grid_at((mpm_adaptive_grid *)&a->grid, a->tgrid[q].G);
-          const size_t np = a->range[q + 1] - a->range[q], blocks = g->impl.sparse.owner_count;
+          const mpm_sparse_grid *sg = &g->impl.sparse;
+          const size_t np = a->range[q + 1] - a->range[q], blocks = sg->owner_count;
+          /* the lanes' batches: a cell's particles 8 at a time */
+          size_t batches = 0;
+          for (size_t c = 0; c < blocks * (size_t)sg->material_count * MPM_BLOCK_NODES; ++c)
+            batches += (sg->cell_start[c + 1] - sg->cell_start[c] + MPM_LANES - 1) / MPM_LANES;
           const size_t used = strlen(grids);
           snprintf(grids + used, sizeof grids - used,
-                   "%s level %d, box %.2g cells: %zu particles in %zu blocks (%.0f per block)",
+                   "%s level %d, box %.2g cells: %zu particles in %zu blocks (%.0f per block, "
+                   "%.0f%% of the lanes used)",
                    q ? ";" : "  transfer grids:", a->tgrid[q].level,
                    a->tgrid[q].box / (double)g->dx, np, blocks,
-                   blocks ? (double)np / (double)blocks : 0.0);
+                   blocks ? (double)np / (double)blocks : 0.0,
+                   batches ? 100.0 * (double)np / (double)(batches * MPM_LANES) : 0.0);
         }
       }
       mpm_sim_destroy(sim);
