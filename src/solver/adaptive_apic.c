@@ -26,21 +26,44 @@
 #include <assert.h>
 #include <string.h>
 
-/* The cells' entries by ghost (a counting sort, stable: cell order within a ghost). */
-static int transpose_by_ghost(mpm_adaptive *a, size_t ng) {
+/* The cells' entries by ghost: a counting sort, stable (cell order within a ghost), with the
+ * entries in one chunk per thread and a histogram per chunk, so the result is the serial one for
+ * any thread count. */
+#define TRANSPOSE_CHUNKS_MAX 64
+static int transpose_by_ghost(mpm_adaptive *a, size_t ng, mpm_arena *scratch) {
   const size_t ne = a->cell_ghost_count;
   if (mpm_grow((void **)&a->ghost_start, &a->ghost_start_capacity, ng + 2,
                sizeof *a->ghost_start) ||
       mpm_grow((void **)&a->ghost_entry, &a->ghost_entry_capacity, ne + 1, sizeof *a->ghost_entry))
     return -1;
-  uint32_t *start = a->ghost_start;
-  memset(start, 0, (ng + 1) * sizeof *start);
-  for (size_t e = 0; e < ne; ++e) ++start[a->cell_ghost[e].ghost + 1];
-  for (size_t g = 0; g < ng; ++g) start[g + 1] += start[g];
-  for (size_t e = 0; e < ne; ++e) /* start[g] runs on to g's end */
-    a->ghost_entry[start[a->cell_ghost[e].ghost]++] = (uint32_t)e;
-  for (size_t g = ng; g > 0; --g) start[g] = start[g - 1];
-  start[0] = 0;
+  const int threads = mpm_thread_count();
+  const int nch = ne < 4096 ? 1 : threads < TRANSPOSE_CHUNKS_MAX ? threads : TRANSPOSE_CHUNKS_MAX;
+  uint32_t *hist = mpm_arena_alloc(scratch, ((size_t)nch * ng + 1) * sizeof *hist);
+  if (!hist) return -1;
+  const mpm_stencil_ghost *cg = a->cell_ghost;
+#pragma omp parallel for schedule(static, 1) if (nch > 1)
+  for (int t = 0; t < nch; ++t) {
+    uint32_t *h = hist + (size_t)t * ng;
+    memset(h, 0, ng * sizeof *h);
+    for (size_t e = ne * (size_t)t / (size_t)nch; e < ne * (size_t)(t + 1) / (size_t)nch; ++e)
+      ++h[cg[e].ghost];
+  }
+  uint32_t at = 0; /* ghost by ghost, chunk by chunk: where each chunk's entries of g go */
+  for (size_t g = 0; g < ng; ++g) {
+    a->ghost_start[g] = at;
+    for (int t = 0; t < nch; ++t) {
+      const uint32_t c = hist[(size_t)t * ng + g];
+      hist[(size_t)t * ng + g] = at;
+      at += c;
+    }
+  }
+  a->ghost_start[ng] = at;
+#pragma omp parallel for schedule(static, 1) if (nch > 1)
+  for (int t = 0; t < nch; ++t) {
+    uint32_t *h = hist + (size_t)t * ng;
+    for (size_t e = ne * (size_t)t / (size_t)nch; e < ne * (size_t)(t + 1) / (size_t)nch; ++e)
+      a->ghost_entry[h[cg[e].ghost]++] = (uint32_t)e;
+  }
   return 0;
 }
 
@@ -131,12 +154,11 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
           (uint64_t)1 << (ag->ghost_slot[g] % MPM_BLOCK_NODES);
       ++multi;
     }
-  /* the ghosts' affine moments (P2G) and velocity moments (G2P), zero at ghosts no boundary
-   * particle reaches */
+  /* the ghosts' velocity moments (G2P) and affine moments (P2G), written for every ghost when
+   * there are boundary particles (mpm_adaptive_apic_after_p2g, _g2p_before) */
   if (mpm_grow((void **)&a->moment, &a->moment_capacity, 18 * ag->ghost_count + 1,
                sizeof *a->moment))
     goto nomem;
-  memset(a->moment, 0, 18 * ag->ghost_count * sizeof *a->moment);
   if (!multi) return MPM_OK;
   /* the lanes' map: a place per cell of every transfer grid */
   size_t map = 0;
@@ -184,7 +206,7 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     a->boundary_count = at[2];
     a->cell[a->cell_count] = (uint32_t)a->cell_ghost_count; /* the last cell's end */
   }
-  if (transpose_by_ghost(a, ag->ghost_count)) goto nomem;
+  if (transpose_by_ghost(a, ag->ghost_count, &sim->step_arena)) goto nomem;
   return MPM_OK;
 nomem:
   return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
@@ -205,7 +227,9 @@ mpm_ghost_apic mpm_adaptive_apic_view(mpm_sim *sim, int t) {
 
 void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
   mpm_adaptive *a = sim->adaptive;
-  memset(a->affine, 0, 9 * a->cell_ghost_count * sizeof *a->affine);
+  const long n = (long)(9 * a->cell_ghost_count);
+#pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
+  for (long i = 0; i < n; ++i) a->affine[i] = 0;
 }
 
 void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
@@ -214,11 +238,15 @@ void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
   /* the ghosts' affine moments A_g = sum_p w_gp m_p C_p (stencils overlap): each ghost summed
    * by one thread over its entries in cell order (a ghost is once in a cell's entries), into one
    * plane per component for the scatter */
-  if (!a->boundary_count) return; /* the planes are zero (mpm_adaptive_apic_prepare) */
   mpm_real *planes = a->moment + 9 * ng;
+  if (!a->boundary_count) {
+    memset(planes, 0, 9 * ng * sizeof *planes);
+    return;
+  }
   const uint32_t *start = a->ghost_start, *ge = a->ghost_entry;
   const mpm_real *affine = a->affine;
-#pragma omp parallel for schedule(static)
+  /* the ghosts with entries lie together in the numbering: chunks, not halves */
+#pragma omp parallel for schedule(dynamic, 512)
   for (long g = 0; g < (long)ng; ++g) {
     mpm_real A[9] = {0};
     for (uint32_t j = start[g]; j < start[g + 1]; ++j)
