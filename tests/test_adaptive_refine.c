@@ -55,7 +55,7 @@ static size_t refined_cells(const mpm_sim *sim) {
   size_t n = 0;
   int32_t(*cells)[4] = mpm_adaptive_tree_cells(sim, &n);
   assert_non_null(cells);
-  free(cells);
+  mpm_free(cells);
   return n;
 }
 
@@ -201,7 +201,7 @@ static void test_strain_rule(void **state) {
   assert_true(all < p->count / 2); /* selective: most of the box is not that strained */
   print_message("strain: %zu refined cells around %zu of %zu particles\n", ng, all, p->count);
   free(want);
-  free(got);
+  mpm_free(got);
   mpm_sim_destroy(sim);
 }
 
@@ -218,8 +218,8 @@ static void assert_same(const mpm_sim *a, const mpm_sim *b) {
   int32_t(*ca)[4] = mpm_adaptive_tree_cells(a, &na), (*cb)[4] = mpm_adaptive_tree_cells(b, &nb);
   assert_int_equal(na, nb);
   assert_memory_equal(ca, cb, na * sizeof *ca);
-  free(ca);
-  free(cb);
+  mpm_free(ca);
+  mpm_free(cb);
 }
 
 static void test_threads_bitwise(void **state) {

@@ -144,7 +144,7 @@ static state_digest digest_sim(const mpm_sim *sim) {
     assert_non_null(tree);
     qsort(tree, cells, sizeof *tree, by_cell); /* the order of a hash table's slots: not ours */
     s.h[0] = mpm_hash64_words(tree, cells * sizeof *tree, s.h[0]);
-    free(tree);
+    mpm_free(tree);
   }
   free(slot);
   free(order);

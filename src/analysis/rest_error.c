@@ -1,5 +1,6 @@
 /* rest_error.c - shape matching and the rest-state error (see rest_error.h). */
 #include "analysis/rest_error.h"
+#include "core/alloc.h"
 
 #include "core/sym_eigen.h"
 
@@ -87,7 +88,7 @@ static int by_id(const void *a, const void *b) {
 }
 
 static id_index *id_order(const mpm_point_cloud *c) {
-  id_index *o = malloc((c->n + 1) * sizeof *o);
+  id_index *o = mpm_alloc((c->n + 1) * sizeof *o);
   if (!o) return NULL;
   for (size_t i = 0; i < c->n; ++i) o[i] = (id_index){c->id[i], i};
   qsort(o, c->n, sizeof *o, by_id);
@@ -98,9 +99,9 @@ int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *f
                            mpm_rest_error *out) {
   memset(out, 0, sizeof *out);
   id_index *ro = id_order(rest), *fo = id_order(final);
-  size_t(*pair)[2] = malloc((rest->n + 1) * sizeof *pair);
+  size_t(*pair)[2] = mpm_alloc((rest->n + 1) * sizeof *pair);
   if (!ro || !fo || !pair) {
-    free(ro), free(fo), free(pair);
+    mpm_free(ro), mpm_free(fo), mpm_free(pair);
     return -2;
   }
   /* matched pairs (rest index, final index), by merging the id orders */
@@ -117,8 +118,8 @@ int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *f
       ++j;
     }
   }
-  free(ro);
-  free(fo);
+  mpm_free(ro);
+  mpm_free(fo);
   int rc = -1;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   double m = 0, qc[3] = {0, 0, 0}, pc[3] = {0, 0, 0};
@@ -167,6 +168,6 @@ int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *f
           pc[r] - (out->R[3 * r] * qc[0] + out->R[3 * r + 1] * qc[1] + out->R[3 * r + 2] * qc[2]);
     rc = 0;
   }
-  free(pair);
+  mpm_free(pair);
   return rc;
 }

@@ -3,6 +3,7 @@
  * (io/vtu_read.c), optionally kept to one body, and handed to mpm_rest_error_compute
  * (rest_error.c: matched by id, rigid motion removed by shape matching). */
 #include "analysis/rest_error.h"
+#include "core/alloc.h"
 #include "io/io.h"
 #include "mpm/mpm.h"
 
@@ -22,9 +23,9 @@ typedef struct cloud_data {
 } cloud_data;
 
 static void cloud_free(cloud_data *c) {
-  free(c->x);
-  free(c->id);
-  free(c->mass);
+  mpm_free(c->x);
+  mpm_free(c->id);
+  mpm_free(c->mass);
   memset(c, 0, sizeof *c);
 }
 
@@ -46,9 +47,9 @@ static mpm_status load(const char *path, int body, cloud_data *c, mpm_error *err
   const size_t n = f.point_count > 0 ? (size_t)f.point_count : 0;
   const int masses = mass && mass->components == 1;
   if (st == MPM_OK) {
-    c->x = malloc((n + 1) * sizeof *c->x);
-    c->id = malloc((n + 1) * sizeof *c->id);
-    c->mass = masses ? malloc((n + 1) * sizeof *c->mass) : NULL;
+    c->x = mpm_alloc((n + 1) * sizeof *c->x);
+    c->id = mpm_alloc((n + 1) * sizeof *c->id);
+    c->mass = masses ? mpm_alloc((n + 1) * sizeof *c->mass) : NULL;
     if (!c->x || !c->id || (masses && !c->mass))
       st = mpm_error_set(err, MPM_ERR_NOMEM, "out of memory reading %s", path);
   }

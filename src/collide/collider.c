@@ -9,6 +9,7 @@
  * axis, where it is not, a fixed choice is returned (the first of the tied faces, +x, or a
  * fixed direction perpendicular to a cylinder's axis). */
 #include "collide/collider.h"
+#include "core/alloc.h"
 #include "core/mat3.h"
 
 #include <assert.h>
@@ -35,7 +36,7 @@ int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d) {
   const int n = d->motion.keyframe_count;
   if (n > 0) {
     assert(d->motion.keyframes);
-    mpm_keyframe *k = malloc((size_t)n * sizeof *k);
+    mpm_keyframe *k = mpm_alloc((size_t)n * sizeof *k);
     if (!k) return -1;
     memcpy(k, d->motion.keyframes, (size_t)n * sizeof *k);
     c->desc.motion.keyframes = k;
@@ -45,7 +46,7 @@ int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d) {
 }
 
 void mpm_collider_free(mpm_collider *c) {
-  free(c->desc.motion.keyframes);
+  mpm_free(c->desc.motion.keyframes);
   c->desc.motion.keyframes = NULL;
   c->desc.motion.keyframe_count = 0;
 }

@@ -77,6 +77,24 @@ void mpm_free(void *p) {
   free(h.raw);
 }
 
+void *mpm_realloc(void *p, size_t bytes) {
+  if (!p) return mpm_alloc(bytes);
+  header h;
+  memcpy(&h, (unsigned char *)p - sizeof h, sizeof h);
+  void *q = mpm_alloc(bytes);
+  if (!q) return NULL;
+  memcpy(q, p, h.bytes < bytes ? h.bytes : bytes);
+  mpm_free(p);
+  return q;
+}
+
+char *mpm_strdup(const char *s) {
+  const size_t n = strlen(s) + 1;
+  char *d = mpm_alloc(n);
+  if (d) memcpy(d, s, n);
+  return d;
+}
+
 size_t mpm_alloc_live_bytes(void) {
   return atomic_load(&live_bytes);
 }

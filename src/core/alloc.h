@@ -1,7 +1,8 @@
 /* alloc.h - aligned allocation through one hook with a live-byte counter.
  *
- * Every large array (particles, grid blocks) goes through here so that tests can check for
- * leaks and benchmarks can report memory per particle. */
+ * Every allocation of the library goes through here (none calls malloc, calloc, realloc or
+ * strdup directly), so that tests can check for leaks and benchmarks can report memory per
+ * particle. What is allocated here is freed with mpm_free, never with free(). */
 #ifndef MPM_CORE_ALLOC_H
 #define MPM_CORE_ALLOC_H
 
@@ -10,6 +11,10 @@
 void *mpm_alloc(size_t bytes); /* aligned to MPM_ALIGN, NULL on failure */
 void *mpm_calloc(size_t count, size_t size);
 void mpm_free(void *p); /* NULL is fine */
+/* p's first min(old, bytes) bytes in a new block, p freed; p NULL: mpm_alloc(bytes). NULL on
+ * failure, p then untouched. */
+void *mpm_realloc(void *p, size_t bytes);
+char *mpm_strdup(const char *s); /* a copy of s, NULL on failure */
 /* Room for n items of `size` bytes in *buf, whose capacity is *cap items: doubled from 1024 as
  * needed, the contents kept. 0, or -1 when out of memory (*buf untouched). */
 int mpm_grow(void **buf, size_t *cap, size_t n, size_t size);

@@ -25,6 +25,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "io/checkpoint_format.h"
+#include "core/alloc.h"
 #include "scene/scene.h"
 
 #include <hdf5.h>
@@ -105,9 +106,9 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
   for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) rows[k] = *da[k];
   const void *material = s->particles.material, *body = s->particles.body, *id = s->particles.id,
              *active = s->active;
-  uint32_t *corner = malloc(nd * MPM_HEX_CORNERS * sizeof *corner);
-  mpm_real *weights = malloc(nd * MPM_CKPT_DOMAIN_WEIGHT_ROWS * sizeof *weights);
-  uint8_t *flag = calloc(nd + 1, 1); /* the enrichment flags (state: their hysteresis) */
+  uint32_t *corner = mpm_alloc(nd * MPM_HEX_CORNERS * sizeof *corner);
+  mpm_real *weights = mpm_alloc(nd * MPM_CKPT_DOMAIN_WEIGHT_ROWS * sizeof *weights);
+  uint8_t *flag = mpm_calloc(nd + 1, 1); /* the enrichment flags (state: their hysteresis) */
   int rc = -1;
   if (corner && weights && flag) {
     if (s->enrich.flag && s->enrich.particle_capacity >= nd) memcpy(flag, s->enrich.flag, nd);
@@ -139,9 +140,9 @@ static int write_domains(hid_t f, const mpm_domain_set *s) {
              ? -1
              : 0;
   }
-  free(corner);
-  free(weights);
-  free(flag);
+  mpm_free(corner);
+  mpm_free(weights);
+  mpm_free(flag);
   return rc;
 }
 
@@ -187,9 +188,9 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       (c->tree_count && put_dataset(f, "refined_cells", H5T_NATIVE_INT32, 4, c->tree_count, tree)))
     return -1;
   const hsize_t r = (hsize_t)c->records;
-  double *stats = malloc((r ? r : 1) * MPM_CKPT_STATS_COLUMNS * sizeof *stats);
-  const void **srows = malloc((r ? r : 1) * sizeof *srows);
-  const void **frows = malloc((r ? r : 1) * sizeof *frows);
+  double *stats = mpm_alloc((r ? r : 1) * MPM_CKPT_STATS_COLUMNS * sizeof *stats);
+  const void **srows = mpm_alloc((r ? r : 1) * sizeof *srows);
+  const void **frows = mpm_alloc((r ? r : 1) * sizeof *frows);
   int rc = -1;
   if (stats && srows && frows) {
     for (hsize_t i = 0; i < r; ++i) {
@@ -219,9 +220,9 @@ static int write_contents(hid_t f, const mpm_checkpoint *c) {
       rc = put_attr(f, "meshes", H5T_NATIVE_INT, &c->mesh_count) ||
            put_dataset(f, "mesh_digests", H5T_NATIVE_UINT64, 0, (hsize_t)c->mesh_count, &digests);
   }
-  free(stats);
-  free(srows);
-  free(frows);
+  mpm_free(stats);
+  mpm_free(srows);
+  mpm_free(frows);
   return rc;
 }
 
@@ -254,12 +255,12 @@ mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_e
   /* the image HDF5 hands out leaves the user block out: it goes in front of it */
   const ssize_t hdf5_size = failed ? -1 : H5Fget_file_image(f, NULL, 0);
   const ssize_t size = hdf5_size > 0 ? hdf5_size + MPM_CKPT_HEADER_BYTES : -1;
-  unsigned char *image = size > 0 ? malloc((size_t)size) : NULL;
+  unsigned char *image = size > 0 ? mpm_alloc((size_t)size) : NULL;
   if (!image || H5Fget_file_image(f, image + MPM_CKPT_HEADER_BYTES, (size_t)hdf5_size) != hdf5_size)
     failed = 1;
   H5Fclose(f);
   if (failed) {
-    free(image);
+    mpm_free(image);
     return mpm_error_set(err, MPM_ERR_NOMEM,
                          "cannot write checkpoint '%s': out of memory building it; the previous "
                          "checkpoint is kept",
@@ -274,7 +275,7 @@ mpm_status mpm_checkpoint_write(const char *path, const mpm_checkpoint *c, mpm_e
     (void)wrote;
     st = mpm_atomic_commit(&af, err);
   }
-  free(image);
+  mpm_free(image);
   if (st != MPM_OK && err) {
     char msg[sizeof err->message];
     snprintf(msg, sizeof msg, "%s", err->message);

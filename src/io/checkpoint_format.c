@@ -1,6 +1,7 @@
 /* checkpoint_format.c - the parts of the checkpoint format that the writer and the reader
  * share (see checkpoint_format.h and, for the layout, checkpoint.c). */
 #include "io/checkpoint_format.h"
+#include "core/alloc.h"
 #include "core/hash.h"
 
 #include <stdlib.h>
@@ -187,12 +188,12 @@ void mpm_checkpoint_seal(void *image, size_t size) {
 void mpm_checkpoint_free(mpm_checkpoint *c) {
   mpm_particles_free(&c->particles);
   mpm_domain_set_free(&c->domains);
-  for (int k = 0; k < 4; ++k) free(c->tree[k]);
-  free(c->frame_times);
-  free(c->frame_files);
-  free(c->stats);
-  free(c->collider_forces);
-  free(c->collider_scripts);
-  free(c->mesh_digests);
+  for (int k = 0; k < 4; ++k) mpm_free(c->tree[k]);
+  mpm_free(c->frame_times);
+  mpm_free(c->frame_files);
+  mpm_free(c->stats);
+  mpm_free(c->collider_forces);
+  mpm_free(c->collider_scripts);
+  mpm_free(c->mesh_digests);
   memset(c, 0, sizeof *c);
 }

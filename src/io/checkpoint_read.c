@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "domain/enrich.h"
+#include "core/alloc.h"
 #include "io/input_file.h"
 #include "io/checkpoint_format.h"
 #include "scene/scene.h"
@@ -153,8 +154,8 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
       nc * MPM_CKPT_CORNER_REAL_ROWS * sizeof(mpm_real) > r->file_bytes)
     return bad(r, "%s", "'domain_particles' or 'domain_corners' is larger than the file can hold");
   mpm_domain_set *s = &c->domains;
-  uint32_t *corner = malloc(nd * MPM_HEX_CORNERS * sizeof *corner);
-  mpm_real *weights = malloc(nd * MPM_CKPT_DOMAIN_WEIGHT_ROWS * sizeof *weights);
+  uint32_t *corner = mpm_alloc(nd * MPM_HEX_CORNERS * sizeof *corner);
+  mpm_real *weights = mpm_alloc(nd * MPM_CKPT_DOMAIN_WEIGHT_ROWS * sizeof *weights);
   int rc = -1;
   if (!corner || !weights || mpm_domain_set_alloc(s, (size_t)nd, (size_t)nc)) {
     mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %llu particle domains", r->path,
@@ -234,8 +235,8 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
   }
   rc = 0;
 done:
-  free(corner);
-  free(weights);
+  mpm_free(corner);
+  mpm_free(weights);
   return rc;
 }
 
@@ -329,7 +330,7 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       return bad(r, "%s", "'refined_cells' is larger than the file can hold");
     void *tree_rows[4];
     for (int k = 0; k < 4; ++k)
-      if (!(tree_rows[k] = c->tree[k] = malloc(c->tree_count * sizeof(int32_t)))) {
+      if (!(tree_rows[k] = c->tree[k] = mpm_alloc(c->tree_count * sizeof(int32_t)))) {
         mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %llu refined cells", r->path,
                       (unsigned long long)c->tree_count);
         return -1;
@@ -343,11 +344,11 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
     memset(c->domains.particles.level, 0, c->domains.particles.count * sizeof(int32_t));
 
   const size_t rc = (size_t)(c->records ? c->records : 1);
-  c->frame_times = calloc(rc, sizeof *c->frame_times);
-  c->frame_files = calloc(rc, sizeof *c->frame_files);
-  c->stats = calloc(rc, sizeof *c->stats);
-  double *stats = malloc(rc * MPM_CKPT_STATS_COLUMNS * sizeof *stats);
-  void **srows = malloc(rc * sizeof *srows), **frows = malloc(rc * sizeof *frows);
+  c->frame_times = mpm_calloc(rc, sizeof *c->frame_times);
+  c->frame_files = mpm_calloc(rc, sizeof *c->frame_files);
+  c->stats = mpm_calloc(rc, sizeof *c->stats);
+  double *stats = mpm_alloc(rc * MPM_CKPT_STATS_COLUMNS * sizeof *stats);
+  void **srows = mpm_alloc(rc * sizeof *srows), **frows = mpm_alloc(rc * sizeof *frows);
   int status = -1;
   if (!c->frame_times || !c->frame_files || !c->stats || !stats || !srows || !frows) {
     mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for %d frame records", r->path,
@@ -395,7 +396,7 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       bad(r, "%s", "the 'colliders' attribute is out of range");
       goto done;
     }
-    void *forces = c->collider_forces = malloc(nf * sizeof *c->collider_forces);
+    void *forces = c->collider_forces = mpm_alloc(nf * sizeof *c->collider_forces);
     if (!forces) {
       mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the collider forces", r->path);
       goto done;
@@ -410,7 +411,7 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
   }
   if (c->colliders > 0 && H5Lexists(r->file, "collider_scripts", H5P_DEFAULT) > 0) {
     const size_t ns = MPM_CKPT_SCRIPT_DOUBLES * (size_t)c->colliders;
-    void *scripts = c->collider_scripts = malloc(ns * sizeof(double));
+    void *scripts = c->collider_scripts = mpm_alloc(ns * sizeof(double));
     if (!scripts) {
       mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the collider scripts", r->path);
       goto done;
@@ -432,7 +433,7 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
       bad(r, "%s", "the 'meshes' attribute is out of range");
       goto done;
     }
-    void *digests = c->mesh_digests = malloc((size_t)c->mesh_count * sizeof *c->mesh_digests);
+    void *digests = c->mesh_digests = mpm_alloc((size_t)c->mesh_count * sizeof *c->mesh_digests);
     if (!digests) {
       mpm_error_set(r->err, MPM_ERR_NOMEM, "%s: out of memory for the mesh digests", r->path);
       goto done;
@@ -447,9 +448,9 @@ static int read_contents(reader *r, mpm_checkpoint *c) {
   }
   status = 0;
 done:
-  free(stats);
-  free(srows);
-  free(frows);
+  mpm_free(stats);
+  mpm_free(srows);
+  mpm_free(frows);
   return status;
 }
 
@@ -466,11 +467,11 @@ static unsigned char *read_file(const char *path, size_t *size, mpm_error *err) 
   unsigned char *image = NULL;
   if (end < 0 || fseek(f, 0, SEEK_SET) != 0) {
     mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the checkpoint (not a regular file?)", path);
-  } else if (!(image = malloc(end > 0 ? (size_t)end : 1))) {
+  } else if (!(image = mpm_alloc(end > 0 ? (size_t)end : 1))) {
     mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory reading %ld bytes", path, end);
   } else if (fread(image, 1, (size_t)end, f) != (size_t)end) {
     mpm_error_set(err, MPM_ERR_IO, "%s: read error", path);
-    free(image);
+    mpm_free(image);
     image = NULL;
   }
   fclose(f);
@@ -545,6 +546,6 @@ mpm_status mpm_checkpoint_read(const char *path, mpm_checkpoint *c, mpm_error *e
   unsigned char *image = read_file(path, &size, err);
   if (!image) return err->status;
   const mpm_status st = mpm_checkpoint_parse(image, size, path, c, err);
-  free(image);
+  mpm_free(image);
   return st;
 }

@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "io/input_file.h"
+#include "core/alloc.h"
 #include "core/hash.h"
 
 #include <errno.h>
@@ -55,7 +56,7 @@ int mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap) 
   FILE *f = mpm_open_input(path, NULL, why, cap);
   if (!f) return -1;
   enum { PIECE = 1 << 16 };
-  unsigned char *buf = malloc(PIECE);
+  unsigned char *buf = mpm_alloc(PIECE);
   if (!buf) {
     fclose(f);
     snprintf(why, cap, "out of memory");
@@ -67,7 +68,7 @@ int mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap) 
   size_t n;
   while ((n = fread(buf, 1, PIECE, f)) > 0) h = mpm_hash64_words(buf, n, h);
   const int failed = ferror(f);
-  free(buf);
+  mpm_free(buf);
   fclose(f);
   if (failed) {
     snprintf(why, cap, "read error");

@@ -7,6 +7,7 @@
 #define _GNU_SOURCE /* O_DIRECTORY, O_NOFOLLOW, O_CLOEXEC, fdopendir, flock */
 
 #include "io/run_folder.h"
+#include "core/alloc.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -148,19 +149,19 @@ typedef struct found_list {
 static int found_push(found_list *l, const char *name) {
   if (l->count == l->cap) {
     const int cap = l->cap ? 2 * l->cap : 16;
-    char **bigger = realloc(l->names, (size_t)cap * sizeof *bigger);
+    char **bigger = mpm_realloc(l->names, (size_t)cap * sizeof *bigger);
     if (!bigger) return -1;
     l->names = bigger;
     l->cap = cap;
   }
-  if (!(l->names[l->count] = strdup(name))) return -1;
+  if (!(l->names[l->count] = mpm_strdup(name))) return -1;
   ++l->count;
   return 0;
 }
 
 static void found_free(found_list *l) {
-  for (int i = 0; i < l->count; ++i) free(l->names[i]);
-  free(l->names);
+  for (int i = 0; i < l->count; ++i) mpm_free(l->names[i]);
+  mpm_free(l->names);
 }
 
 /* Whether the entry (by its own stat, links not followed) is one of the kept inputs: the same

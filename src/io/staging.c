@@ -4,6 +4,7 @@
 #define _GNU_SOURCE /* O_DIRECTORY, O_CLOEXEC, mkdtemp */
 
 #include "io/staging.h"
+#include "core/alloc.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -37,7 +38,7 @@ static char **list_files(int fd, size_t *count) {
     return NULL;
   }
   size_t n = 0, cap = 16;
-  char **names = malloc(cap * sizeof *names);
+  char **names = mpm_alloc(cap * sizeof *names);
   struct dirent *e;
   while (names && (e = readdir(d))) {
     struct stat st;
@@ -45,19 +46,19 @@ static char **list_files(int fd, size_t *count) {
         !S_ISREG(st.st_mode))
       continue;
     if (n == cap) {
-      char **more = realloc(names, 2 * cap * sizeof *names);
+      char **more = mpm_realloc(names, 2 * cap * sizeof *names);
       if (!more) break;
       names = more;
       cap *= 2;
     }
-    if (!(names[n] = strdup(e->d_name))) break;
+    if (!(names[n] = mpm_strdup(e->d_name))) break;
     ++n;
   }
   const int failed = !names || e != NULL;
   closedir(d);
   if (failed) {
-    for (size_t i = 0; names && i < n; ++i) free(names[i]);
-    free(names);
+    for (size_t i = 0; names && i < n; ++i) mpm_free(names[i]);
+    mpm_free(names);
     return NULL;
   }
   qsort(names, n, sizeof *names, by_name);
@@ -122,8 +123,8 @@ mpm_status mpm_staging_publish(const char *staging, const char *dir, int replace
   if (rmdir(staging) != 0)
     st = mpm_error_set(err, MPM_ERR_IO, "%s: cannot remove it: %s", staging, strerror(errno));
 done:
-  for (size_t i = 0; files && i < n; ++i) free(files[i]);
-  free(files);
+  for (size_t i = 0; files && i < n; ++i) mpm_free(files[i]);
+  mpm_free(files);
   if (from >= 0) close(from);
   if (to >= 0) close(to);
   return st;

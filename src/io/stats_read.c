@@ -2,8 +2,9 @@
  * the header must be one that mpm_write_stats_csv (stats_csv.c) wrote (today's, or an earlier
  * version's, with three force columns per collider after total_energy), every row must have its
  * fields, and every field must be a finite number. */
-#define _XOPEN_SOURCE 700 /* getline, strdup */
+#define _XOPEN_SOURCE 700 /* getline */
 #include "core/error.h"
+#include "core/alloc.h"
 #include "io/input_file.h"
 
 #include <errno.h>
@@ -53,9 +54,9 @@ const char *mpm_stats_column_name(mpm_stats_column column) {
 
 void mpm_stats_free(mpm_stats_table *t) {
   if (!t) return;
-  free(t->values);
-  free(t->forces);
-  free(t->path);
+  mpm_free(t->values);
+  mpm_free(t->forces);
+  mpm_free(t->path);
   memset(t, 0, sizeof *t);
 }
 
@@ -159,7 +160,7 @@ static mpm_status parse_row(const char *path, long line_no, char *line, int colu
 /* Read and check the whole file; blank lines are skipped. */
 static mpm_status read_table(const char *path, mpm_stats_table *t, mpm_error *err) {
   t->stride = COL_COUNT;
-  if (!(t->path = strdup(path)))
+  if (!(t->path = mpm_strdup(path)))
     return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory", path);
   char why[128];
   FILE *f = mpm_open_input(path, NULL, why, sizeof why);
@@ -185,10 +186,10 @@ static mpm_status read_table(const char *path, mpm_stats_table *t, mpm_error *er
     if (is_blank(line)) continue;
     if (t->rows == capacity) {
       const size_t want = capacity ? 2 * capacity : 256;
-      double *grown = realloc(t->values, want * COL_COUNT * sizeof *t->values);
+      double *grown = mpm_realloc(t->values, want * COL_COUNT * sizeof *t->values);
       if (grown) t->values = grown;
       double *grown_forces =
-          grown ? realloc(t->forces, want * (size_t)(extra + 1) * sizeof *t->forces) : NULL;
+          grown ? mpm_realloc(t->forces, want * (size_t)(extra + 1) * sizeof *t->forces) : NULL;
       if (!grown_forces) {
         st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory at line %ld", path, line_no);
         break;
@@ -205,7 +206,7 @@ static mpm_status read_table(const char *path, mpm_stats_table *t, mpm_error *er
   t->colliders = extra / 3;
   const int read_error = ferror(f);
   const int read_errno = errno;
-  free(line);
+  free(line); /* getline's, from malloc */
   fclose(f);
   if (st == MPM_OK && read_error)
     st = mpm_error_set(err, MPM_ERR_IO, "cannot read '%s': %s", path,

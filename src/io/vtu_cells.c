@@ -6,6 +6,7 @@
  *
  * Same layout as vtu.c (XML header, UInt64 byte counts, one raw appended block). */
 #include "io/io.h"
+#include "core/alloc.h"
 
 #include <errno.h>
 #include <stdint.h>
@@ -34,10 +35,10 @@ static void collect(void *ctx, int level, const int32_t cell[3]) {
 mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double time,
                                mpm_error *err) {
   const size_t n = mpm_refinement_fine_leaves(r, NULL, NULL);
-  leaves l = {r, malloc((24 * n + 1) * sizeof(float)), malloc((n + 1) * sizeof(int32_t)), 0};
+  leaves l = {r, mpm_alloc((24 * n + 1) * sizeof(float)), mpm_alloc((n + 1) * sizeof(int32_t)), 0};
   if (!l.xyz || !l.lvl) {
-    free(l.xyz);
-    free(l.lvl);
+    mpm_free(l.xyz);
+    mpm_free(l.lvl);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory writing '%s'", path);
   }
   mpm_refinement_fine_leaves(r, collect, &l);
@@ -50,8 +51,8 @@ mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double
   mpm_atomic_file f;
   mpm_status st = mpm_atomic_open(&f, path, err);
   if (st != MPM_OK) {
-    free(l.xyz);
-    free(l.lvl);
+    mpm_free(l.xyz);
+    mpm_free(l.lvl);
     return st;
   }
   char head[2048];
@@ -114,8 +115,8 @@ mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double
   const char *tail = "\n  </AppendedData>\n</VTKFile>\n";
   PUT(tail, strlen(tail));
 #undef PUT
-  free(l.xyz);
-  free(l.lvl);
+  mpm_free(l.xyz);
+  mpm_free(l.lvl);
   if (e) {
     mpm_atomic_abort(&f);
     return mpm_error_set(err, MPM_ERR_IO, "cannot write '%s': %s", path, strerror(e));

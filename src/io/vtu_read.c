@@ -9,6 +9,7 @@
  * Anything else - another writer's encoding, a truncated file, counts that disagree - is a
  * clear error naming the file and the array. */
 #include "io/io.h"
+#include "core/alloc.h"
 #include "io/input_file.h"
 
 #include <errno.h>
@@ -75,7 +76,7 @@ static float to_float(const char *t, const unsigned char *p) {
 }
 
 void mpm_vtu_frame_free(mpm_vtu_frame *f) {
-  for (int k = 0; k < f->array_count; ++k) free(f->arrays[k].data);
+  for (int k = 0; k < f->array_count; ++k) mpm_free(f->arrays[k].data);
   memset(f, 0, sizeof *f);
 }
 
@@ -90,7 +91,7 @@ mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err) {
   char why[128];
   FILE *fp = mpm_open_input(path, NULL, why, sizeof why);
   if (!fp) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open: %s", path, why);
-  char *head = malloc(VTU_HEADER_MAX + 1);
+  char *head = mpm_alloc(VTU_HEADER_MAX + 1);
   unsigned char *buf = NULL;
   mpm_status st = MPM_OK;
   if (!head) {
@@ -152,16 +153,16 @@ mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err) {
           path, name, (unsigned long long)nbytes, is_field ? 1L : out->point_count, nc, type);
       goto done;
     }
-    free(buf);
-    buf = malloc(nbytes ? nbytes : 1);
-    float *data = malloc((size_t)(tuples * (uint64_t)nc) * sizeof(float) + 1);
+    mpm_free(buf);
+    buf = mpm_alloc(nbytes ? nbytes : 1);
+    float *data = mpm_alloc((size_t)(tuples * (uint64_t)nc) * sizeof(float) + 1);
     if (!buf || !data) {
-      free(data);
+      mpm_free(data);
       st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for array '%s'", path, name);
       goto done;
     }
     if (fread(buf, 1, nbytes, fp) != nbytes) {
-      free(data);
+      mpm_free(data);
       st = mpm_error_set(err, MPM_ERR_PARSE, "%s: array '%s': truncated file", path, name);
       goto done;
     }
@@ -173,7 +174,7 @@ mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err) {
       else
         t = data[0];
       out->time = t;
-      free(data);
+      mpm_free(data);
       continue;
     }
     mpm_vtu_array *a = &out->arrays[out->array_count++];
@@ -184,8 +185,8 @@ mpm_status mpm_read_vtu(const char *path, mpm_vtu_frame *out, mpm_error *err) {
   if (!mpm_vtu_frame_array(out, "Points"))
     st = mpm_error_set(err, MPM_ERR_PARSE, "%s: no Points array", path);
 done:
-  free(buf);
-  free(head);
+  mpm_free(buf);
+  mpm_free(head);
   fclose(fp);
   if (st != MPM_OK) mpm_vtu_frame_free(out);
   return st;

@@ -3,6 +3,7 @@
 #define _XOPEN_SOURCE 700 /* fork, execv, realpath */
 
 #include "plot/gnuplot.h"
+#include "core/alloc.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -45,7 +46,7 @@ int mpm_gnuplot_find(const char *name, char *out, size_t size) {
 mpm_status mpm_gnuplot_run(const char *gnuplot, const char *dir, const char *script, char *what,
                            size_t cap, char **messages) {
   *messages = NULL;
-  char *kept_text = malloc(GP_MESSAGES_MAX + 64);
+  char *kept_text = mpm_alloc(GP_MESSAGES_MAX + 64);
   if (!kept_text) {
     snprintf(what, cap, "cannot start %s: out of memory", gnuplot);
     return MPM_ERR_EXTERNAL;
@@ -53,7 +54,7 @@ mpm_status mpm_gnuplot_run(const char *gnuplot, const char *dir, const char *scr
   int fds[2];
   if (pipe(fds) != 0) {
     snprintf(what, cap, "cannot start %s: pipe: %s", gnuplot, strerror(errno));
-    free(kept_text);
+    mpm_free(kept_text);
     return MPM_ERR_EXTERNAL;
   }
   /* what the caller's buffers hold goes out before gnuplot's, not twice */
@@ -64,7 +65,7 @@ mpm_status mpm_gnuplot_run(const char *gnuplot, const char *dir, const char *scr
     snprintf(what, cap, "cannot start %s: %s", gnuplot, strerror(errno));
     close(fds[0]);
     close(fds[1]);
-    free(kept_text);
+    mpm_free(kept_text);
     return MPM_ERR_EXTERNAL;
   }
   if (pid == 0) {
@@ -111,7 +112,7 @@ mpm_status mpm_gnuplot_run(const char *gnuplot, const char *dir, const char *scr
     }
   }
   if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
-    free(kept_text);
+    mpm_free(kept_text);
     return MPM_OK;
   }
   if (WIFEXITED(status))

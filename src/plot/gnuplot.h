@@ -12,8 +12,9 @@ int mpm_gnuplot_find(const char *name, char *out, size_t size);
 
 /* Run `GNUPLOT SCRIPT` in `dir`, stdin from /dev/null, stdout and stderr collected. MPM_OK when
  * it exits with 0; else MPM_ERR_EXTERNAL with what happened in `what` (of cap bytes: "gnuplot
- * failed (exit status 3)") and its messages in *messages (malloc'ed, NUL-terminated, the first
- * 64 KiB and a note when there were more; NULL when none were collected). */
+ * failed (exit status 3)") and its messages in *messages (from mpm_alloc: mpm_free them;
+ * NUL-terminated, the first 64 KiB and a note when there were more; NULL when none were
+ * collected). */
 mpm_status mpm_gnuplot_run(const char *gnuplot, const char *dir, const char *script, char *what,
                            size_t cap, char **messages);
 

@@ -31,6 +31,7 @@
 #define _XOPEN_SOURCE 700 /* POSIX 2008 with realpath */
 
 #include "io/io.h"
+#include "core/alloc.h"
 #include "plot/gnuplot.h"
 
 #include <errno.h>
@@ -391,7 +392,7 @@ static mpm_status write_plots(const mpm_stats_table *t, const char *run_name, co
     if (out && outlen)
       snprintf(out, outlen, "%s; nothing was written to %s/%s%.*s", what, dir, n ? "\n" : "",
                (int)n, n ? messages : "");
-    free(messages);
+    mpm_free(messages);
     plot_files_abort(&pf);
     return mpm_error_set(err, st, "%s; nothing was written to %s/", what, dir);
   }
@@ -443,7 +444,7 @@ static mpm_status find_gnuplot(const char *name, char *out, size_t cap, mpm_erro
   if (strchr(name, '/')) {
     char *abs = realpath(name, NULL);
     const int n = abs ? snprintf(out, cap, "%s", abs) : -1;
-    free(abs);
+    free(abs); /* realpath's, from malloc */
     if (n > 0 && (size_t)n < cap && access(out, X_OK) == 0) return MPM_OK;
     return mpm_error_set(err, MPM_ERR_EXTERNAL, "gnuplot '%s' is not a program that can run", name);
   }
@@ -487,7 +488,7 @@ static mpm_status plot_table(const mpm_stats_table *t, const mpm_plot_options *i
     char *abs = realpath(folder, NULL);
     const char *name = base_name(abs ? abs : folder);
     snprintf(run_name, sizeof run_name, "%.255s", name[0] ? name : folder);
-    free(abs);
+    free(abs); /* realpath's, from malloc */
   }
   return write_plots(t, run_name, gnuplot, dir, callback, ctx, err, out, outlen);
 }

@@ -1,5 +1,6 @@
 /* draw.c - the background (sky, ground, colliders) and the particle splats. */
 #include "render/render.h"
+#include "core/alloc.h"
 #include "core/parallel.h"
 
 #include <math.h>
@@ -176,7 +177,7 @@ mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n,
                                 mpm_error *err) {
   const int w = img->width, h = img->height, T = mpm_thread_count();
   const size_t pixels = (size_t)w * (size_t)h;
-  float *bufs = malloc((size_t)T * pixels * 4 * sizeof(float));
+  float *bufs = mpm_alloc((size_t)T * pixels * 4 * sizeof(float));
   if (!bufs) return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for %d render buffers", T);
 #pragma omp parallel num_threads(T)
   {
@@ -206,7 +207,7 @@ mpm_status mpm_render_particles(mpm_image *img, const mpm_camera *cam, size_t n,
       }
     }
   }
-  free(bufs);
+  mpm_free(bufs);
   return MPM_OK;
 }
 

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "render/renderer.h"
+#include "core/alloc.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -43,7 +44,7 @@ mpm_status mpm_render_grid_edges(const char *dir, int frame, float **ab, float *
     for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], (double)p[d]);
   }
   /* an edge: its start on the finest lattice (18 bits per axis), axis and length exponent */
-  uint64_t *key = malloc((12 * cells + 1) * sizeof *key);
+  uint64_t *key = mpm_alloc((12 * cells + 1) * sizeof *key);
   if (!key) {
     mpm_vtu_frame_free(&fr);
     return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the grid's edges", path);
@@ -72,10 +73,10 @@ mpm_status mpm_render_grid_edges(const char *dir, int frame, float **ab, float *
     if (j - k < 4) key[u++] = key[k];
     k = j;
   }
-  *ab = malloc((6 * u + 1) * sizeof **ab);
-  *rgb = malloc((3 * u + 1) * sizeof **rgb);
+  *ab = mpm_alloc((6 * u + 1) * sizeof **ab);
+  *rgb = mpm_alloc((3 * u + 1) * sizeof **rgb);
   if (!*ab || !*rgb) {
-    free(key);
+    mpm_free(key);
     mpm_vtu_frame_free(&fr);
     return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the grid's edges", path);
   }
@@ -92,7 +93,7 @@ mpm_status mpm_render_grid_edges(const char *dir, int frame, float **ab, float *
     mpm_colormap_eval(MPM_CMAP_VIRIDIS, 1 - 0.3 * e, *rgb + 3 * k);
   }
   *n = u;
-  free(key);
+  mpm_free(key);
   mpm_vtu_frame_free(&fr);
   return MPM_OK;
 }

@@ -1,6 +1,7 @@
 /* image.c - the float framebuffer, its 8-bit sRGB pixels and their PNG encoding (libpng),
  * written atomically. */
 #include "render/render.h"
+#include "core/alloc.h"
 #include "io/io.h"
 
 #include <math.h>
@@ -14,8 +15,8 @@ mpm_status mpm_image_init(mpm_image *img, int width, int height, mpm_error *err)
     return mpm_error_set(err, MPM_ERR_INVALID, "image size %dx%d out of range (1..16384)", width,
                          height);
   const size_t n = (size_t)width * (size_t)height;
-  img->rgb = calloc(3 * n, sizeof(float));
-  img->depth = malloc(n * sizeof(float));
+  img->rgb = mpm_calloc(3 * n, sizeof(float));
+  img->depth = mpm_alloc(n * sizeof(float));
   if (!img->rgb || !img->depth) {
     mpm_image_free(img);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for a %dx%d image", width, height);
@@ -27,8 +28,8 @@ mpm_status mpm_image_init(mpm_image *img, int width, int height, mpm_error *err)
 }
 
 void mpm_image_free(mpm_image *img) {
-  free(img->rgb);
-  free(img->depth);
+  mpm_free(img->rgb);
+  mpm_free(img->depth);
   memset(img, 0, sizeof *img);
 }
 
@@ -49,18 +50,18 @@ mpm_status mpm_image_write_png(const mpm_image *img, const char *path, mpm_error
   mpm_status st = mpm_atomic_open(&af, path, err);
   if (st != MPM_OK) return st;
   const int w = img->width, h = img->height;
-  unsigned char *row = malloc((size_t)w * 3);
+  unsigned char *row = mpm_alloc((size_t)w * 3);
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
   png_infop info = png ? png_create_info_struct(png) : NULL;
   if (!row || !png || !info) {
     if (png) png_destroy_write_struct(&png, info ? &info : NULL);
-    free(row);
+    mpm_free(row);
     mpm_atomic_abort(&af);
     return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the PNG encoder", path);
   }
   if (setjmp(png_jmpbuf(png))) { /* libpng reports its errors by longjmp */
     png_destroy_write_struct(&png, &info);
-    free(row);
+    mpm_free(row);
     mpm_atomic_abort(&af);
     return mpm_error_set(err, MPM_ERR_IO, "%s: PNG encoding failed", path);
   }
@@ -76,6 +77,6 @@ mpm_status mpm_image_write_png(const mpm_image *img, const char *path, mpm_error
   }
   png_write_end(png, info);
   png_destroy_write_struct(&png, &info);
-  free(row);
+  mpm_free(row);
   return mpm_atomic_commit(&af, err);
 }

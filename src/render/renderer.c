@@ -7,9 +7,10 @@
  * itself when none is asked for (speed, or material where the velocity is uniform), and the
  * camera, which is the scene's (key `camera`) or frames the box the material moves in over the
  * whole sequence, clear of the legend and the time label. */
-#define _POSIX_C_SOURCE 200809L /* strdup, opendir */
+#define _POSIX_C_SOURCE 200809L /* opendir */
 
 #include "core/parallel.h"
+#include "core/alloc.h"
 #include "render/renderer.h"
 
 #include <dirent.h>
@@ -192,16 +193,16 @@ static mpm_status list_frames(mpm_renderer *r) {
   r->frame_count = 0;
   DIR *d = opendir(r->run_dir);
   if (!d) return mpm_error_set(&r->error, MPM_ERR_IO, "%s: no such folder", r->run_dir);
-  int cap = 64, n = 0, *f = malloc((size_t)cap * sizeof *f);
+  int cap = 64, n = 0, *f = mpm_alloc((size_t)cap * sizeof *f);
   for (struct dirent *e; f && (e = readdir(d));) {
     int k;
     char tail[8];
     if (sscanf(e->d_name, "frame_%d.%7s", &k, tail) == 2 && !strcmp(tail, "vtu") && k >= 0 &&
         k >= r->opts.first_frame && (r->opts.last_frame < 0 || k <= r->opts.last_frame)) {
       if (n == cap) {
-        int *g = realloc(f, (size_t)(cap *= 2) * sizeof *f);
+        int *g = mpm_realloc(f, (size_t)(cap *= 2) * sizeof *f);
         if (!g) {
-          free(f);
+          mpm_free(f);
           f = NULL;
           break;
         }
@@ -243,8 +244,8 @@ static mpm_status load_scene(mpm_renderer *r, const char *scene) {
   if (st != MPM_OK) return st;
   r->have_scene = 1;
   const int n = r->scene.collider_count;
-  r->colliders = n ? calloc((size_t)n, sizeof *r->colliders) : NULL;
-  r->poses = n ? calloc((size_t)n, sizeof *r->poses) : NULL;
+  r->colliders = n ? mpm_calloc((size_t)n, sizeof *r->colliders) : NULL;
+  r->poses = n ? mpm_calloc((size_t)n, sizeof *r->poses) : NULL;
   if (n && (!r->colliders || !r->poses))
     return mpm_error_set(&r->error, MPM_ERR_NOMEM, "%s: out of memory for %d colliders", path, n);
   for (int k = 0; k < n; ++k)
@@ -457,8 +458,8 @@ static mpm_status setup(mpm_renderer *r, const mpm_render_options *opts, const c
     snprintf(out, sizeof out, "%s", r->opts.out_dir);
   else
     snprintf(out, sizeof out, "%s/render", run_dir);
-  r->run_dir = strdup(run_dir);
-  r->out_dir = strdup(out);
+  r->run_dir = mpm_strdup(run_dir);
+  r->out_dir = mpm_strdup(out);
   if (!r->run_dir || !r->out_dir) return mpm_error_set(&r->error, MPM_ERR_NOMEM, "out of memory");
   r->opts.scene = r->opts.out_dir = NULL; /* the caller's strings are not kept */
   struct stat sb;
@@ -514,7 +515,7 @@ mpm_status mpm_renderer_create(const char *run_dir, const mpm_render_options *op
   if (err && errlen) err[0] = '\0';
   if (!out) return MPM_ERR_INVALID;
   *out = NULL;
-  mpm_renderer *r = calloc(1, sizeof *r);
+  mpm_renderer *r = mpm_calloc(1, sizeof *r);
   if (!r) {
     if (err && errlen) snprintf(err, errlen, "out of memory for a renderer");
     return MPM_ERR_NOMEM;
@@ -539,16 +540,16 @@ void mpm_renderer_destroy(mpm_renderer *r) {
   if (!r) return;
   mpm_image_free(&r->img);
   mpm_image_free(&r->bg);
-  free(r->edges);
-  free(r->edge_rgb);
+  mpm_free(r->edges);
+  mpm_free(r->edge_rgb);
   for (int k = 0; k < r->collider_count; ++k) mpm_collider_free(&r->colliders[k]);
-  free(r->colliders);
-  free(r->poses);
+  mpm_free(r->colliders);
+  mpm_free(r->poses);
   if (r->have_scene) mpm_scene_free(&r->scene);
-  free(r->frames);
-  free(r->run_dir);
-  free(r->out_dir);
-  free(r);
+  mpm_free(r->frames);
+  mpm_free(r->run_dir);
+  mpm_free(r->out_dir);
+  mpm_free(r);
 }
 
 const char *mpm_renderer_last_error(const mpm_renderer *r) {

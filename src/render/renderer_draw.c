@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 
 #include "render/renderer.h"
+#include "core/alloc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -102,7 +103,7 @@ static mpm_status draw(mpm_renderer *r, int index) {
   const int frame = r->frames[index * o->every];
   mpm_status st;
   if (o->grid && frame != r->edges_frame) { /* a grid rebuilt during the run: a file per frame */
-    free(r->edges), free(r->edge_rgb);
+    mpm_free(r->edges), mpm_free(r->edge_rgb);
     r->edges = r->edge_rgb = NULL;
     r->edge_count = 0;
     r->edges_frame = -1;
@@ -124,13 +125,13 @@ static mpm_status draw(mpm_renderer *r, int index) {
     r->bg_key = NAN; /* the view moves */
   }
   const size_t n = (size_t)fr.point_count;
-  float *xyz = malloc((3 * n + 1) * sizeof *xyz), *rad = malloc((n + 1) * sizeof *rad);
-  float *rgb = malloc((3 * n + 1) * sizeof *rgb), *val = malloc((n + 1) * sizeof *val);
+  float *xyz = mpm_alloc((3 * n + 1) * sizeof *xyz), *rad = mpm_alloc((n + 1) * sizeof *rad);
+  float *rgb = mpm_alloc((3 * n + 1) * sizeof *rgb), *val = mpm_alloc((n + 1) * sizeof *val);
   if (!xyz || !rad || !rgb || !val)
     st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for %zu particles", path, n);
   else
     st = draw_frame(r, &fr, path, frame, &cam, xyz, rad, rgb, val);
-  free(xyz), free(rad), free(rgb), free(val);
+  mpm_free(xyz), mpm_free(rad), mpm_free(rgb), mpm_free(val);
   if (st == MPM_OK) {
     if (o->time_label) mpm_render_label(&r->img, label);
     r->drawn_frame = frame;

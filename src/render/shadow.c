@@ -13,6 +13,7 @@
  * plane's: nothing in front) are darkened by the map, bilinearly sampled. About 10 ms for 1M
  * particles and a 1280x720 picture. */
 #include "render/render.h"
+#include "core/alloc.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -110,9 +111,9 @@ static int build(shadow_map *m, const mpm_ground *gr, size_t n, const float *xyz
   m->nx = (int)ceil((hi[0] - lo[0]) / m->cell) + 2 * margin + 1;
   m->nz = (int)ceil((hi[2] - lo[2]) / m->cell) + 2 * margin + 1;
   const size_t cells = (size_t)m->nx * (size_t)m->nz;
-  m->soft = calloc(cells, sizeof(float));
-  m->contact = calloc(cells, sizeof(float));
-  m->tmp = malloc((size_t)(m->nx > m->nz ? m->nx : m->nz) * sizeof(float));
+  m->soft = mpm_calloc(cells, sizeof(float));
+  m->contact = mpm_calloc(cells, sizeof(float));
+  m->tmp = mpm_alloc((size_t)(m->nx > m->nz ? m->nx : m->nz) * sizeof(float));
   if (!m->soft || !m->contact || !m->tmp) return -1;
   /* the lowest gap under each cell first (both weights fall with the gap), then one pair of
      exponentials per cell rather than per particle */
@@ -148,7 +149,7 @@ mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, const
   shadow_map m;
   const int built = build(&m, ground, n, xyz, radius, radius_all);
   if (built < 0) {
-    free(m.soft), free(m.contact), free(m.tmp);
+    mpm_free(m.soft), mpm_free(m.contact), mpm_free(m.tmp);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for the ground's shadow (%dx%d)", m.nx,
                          m.nz);
   }
@@ -206,6 +207,6 @@ mpm_status mpm_render_ground_shadow(mpm_image *img, const mpm_camera *cam, const
       const float dark = DARK_MAX * (s > 1 ? 1 : s);
       for (int c = 0; c < 3; ++c) img->rgb[3 * i + (size_t)c] *= 1 - dark;
     }
-  free(m.soft), free(m.contact), free(m.tmp);
+  mpm_free(m.soft), mpm_free(m.contact), mpm_free(m.tmp);
   return MPM_OK;
 }

@@ -1,6 +1,7 @@
 /* surfaces.c - the particle surfaces of output.surface in a renderer's pictures: the per-frame
  * PLY meshes drawn as shaded triangles, and which particles they stand for. */
 #include "render/renderer.h"
+#include "core/alloc.h"
 #include "scene/mesh.h"
 
 #include <stdint.h>
@@ -30,8 +31,8 @@ mpm_status mpm_render_draw_surfaces(const char *dir, int k, int bodies, mpm_imag
       if (strstr(load_err.message, "no faces")) continue; /* an empty surface */
       return mpm_error_set(err, load_err.status, "%s", load_err.message);
     }
-    float *xyz = malloc((3 * (size_t)m.vertex_count + 1) * sizeof *xyz);
-    uint32_t *tri = malloc((3 * (size_t)m.triangle_count + 1) * sizeof *tri);
+    float *xyz = mpm_alloc((3 * (size_t)m.vertex_count + 1) * sizeof *xyz);
+    uint32_t *tri = mpm_alloc((3 * (size_t)m.triangle_count + 1) * sizeof *tri);
     mpm_status st = MPM_OK;
     if (!xyz || !tri) {
       st = mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the surface", path);
@@ -44,8 +45,8 @@ mpm_status mpm_render_draw_surfaces(const char *dir, int k, int bodies, mpm_imag
                                 tri, rgb, err);
       ++*drawn;
     }
-    free(xyz);
-    free(tri);
+    mpm_free(xyz);
+    mpm_free(tri);
     mpm_mesh_free(&m);
     if (st != MPM_OK) return st;
   }

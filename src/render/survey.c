@@ -4,6 +4,7 @@
  * default colours by material instead), the labels present and the field's colour range
  * (2nd to 98th percentile, so that a few outliers do not wash out the picture). */
 #include "render/renderer.h"
+#include "core/alloc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -143,14 +144,14 @@ static mpm_status survey_frame(const render_field_spec *asked, const mpm_vtu_fra
     if (body && body->data[i] > sv->max_body) sv->max_body = (int)body->data[i];
   }
   if (n == 0) return MPM_OK;
-  float *v = malloc(n * sizeof *v);
+  float *v = mpm_alloc(n * sizeof *v);
   if (!v) return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for %zu particles", path, n);
   double p2, p98;
   mpm_status st;
   const int field = field_asked < 0 ? MPM_RENDER_FIELD_VELOCITY : field_asked;
   if (field_asked < 0 || field_asked == MPM_RENDER_FIELD_VELOCITY) {
     if ((st = mpm_render_field_values(fr, path, &speed, v, err)) != MPM_OK) {
-      free(v);
+      mpm_free(v);
       return st;
     }
     percentiles(v, n, &p2, &p98);
@@ -159,7 +160,7 @@ static mpm_status survey_frame(const render_field_spec *asked, const mpm_vtu_fra
   if (field != MPM_RENDER_FIELD_MATERIAL && field != MPM_RENDER_FIELD_BODY) {
     if (field != MPM_RENDER_FIELD_VELOCITY) {
       if ((st = mpm_render_field_values(fr, path, asked, v, err)) != MPM_OK) {
-        free(v);
+        mpm_free(v);
         return st;
       }
       percentiles(v, n, &p2, &p98);
@@ -167,7 +168,7 @@ static mpm_status survey_frame(const render_field_spec *asked, const mpm_vtu_fra
     sv->field_lo = fmin(sv->field_lo, p2);
     sv->field_hi = fmax(sv->field_hi, p98);
   }
-  free(v);
+  mpm_free(v);
   return MPM_OK;
 }
 

@@ -7,6 +7,7 @@
  * the image are split among threads: each thread draws every triangle into its own rows only,
  * so the picture does not depend on the thread count. */
 #include "render/render.h"
+#include "core/alloc.h"
 #include "core/parallel.h"
 
 #include <math.h>
@@ -30,7 +31,7 @@ mpm_status mpm_render_triangles(mpm_image *img, const mpm_camera *cam, size_t ve
                                 const float rgb[3], mpm_error *err) {
   const int w = img->width, h = img->height;
   /* per vertex: screen x, y, camera z, and the camera-space normal */
-  double *sv = malloc((6 * vertex_count + 1) * sizeof *sv);
+  double *sv = mpm_alloc((6 * vertex_count + 1) * sizeof *sv);
   if (!sv)
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for %zu surface vertices",
                          vertex_count);
@@ -102,6 +103,6 @@ mpm_status mpm_render_triangles(mpm_image *img, const mpm_camera *cam, size_t ve
         }
     }
   }
-  free(sv);
+  mpm_free(sv);
   return MPM_OK;
 }

@@ -4,6 +4,7 @@
  * The defaults here are the ones docs/scene-format.md promises for keys a scene file leaves
  * out; the JSON loader (scene_json.c) starts from them and overwrites what the file gives. */
 #include "scene/scene.h"
+#include "core/alloc.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -173,17 +174,17 @@ void mpm_scene_free(mpm_scene *scene) {
   if (!scene) return;
   if (scene->colliders)
     for (int c = 0; c < scene->collider_count; ++c) {
-      free(scene->colliders[c].motion.keyframes);
+      mpm_free(scene->colliders[c].motion.keyframes);
       scene->colliders[c].motion.keyframes = NULL;
       scene->colliders[c].motion.keyframe_count = 0;
     }
   if (scene->forces)
-    for (int f = 0; f < scene->force_count; ++f) free(scene->forces[f].region.motion.keyframes);
-  free(scene->materials);
-  free(scene->bodies);
-  free(scene->colliders);
-  free(scene->forces);
-  free(scene->refine);
+    for (int f = 0; f < scene->force_count; ++f) mpm_free(scene->forces[f].region.motion.keyframes);
+  mpm_free(scene->materials);
+  mpm_free(scene->bodies);
+  mpm_free(scene->colliders);
+  mpm_free(scene->forces);
+  mpm_free(scene->refine);
   scene->refine = NULL;
   scene->refine_count = 0;
   scene->materials = NULL;

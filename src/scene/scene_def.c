@@ -15,6 +15,7 @@
  * its JSON make bit-identical simulations. A non-finite number is written as null, which the
  * format's check then names by its path. */
 #include "mpm/mpm.h"
+#include "core/alloc.h"
 #include "scene/scene.h"
 #include "scene/scene_def_parts.h"
 
@@ -243,10 +244,10 @@ static cJSON *build(mpm_def_ctx *c, const mpm_scene_def *def) {
       mpm_def_check_array(c, "forces", "force_count", def->forces, def->force_count) < 0 ||
       mpm_def_check_name(c, "name", def->name) < 0)
     return NULL;
-  char(*names)[MPM_NAME_MAX] = calloc((size_t)def->material_count + 1, sizeof *names);
+  char(*names)[MPM_NAME_MAX] = mpm_calloc((size_t)def->material_count + 1, sizeof *names);
   cJSON *root = cJSON_CreateObject();
   if (!names || !root) {
-    free(names);
+    mpm_free(names);
     cJSON_Delete(root);
     c->status = MPM_ERR_NOMEM;
     return NULL;
@@ -289,7 +290,7 @@ static cJSON *build(mpm_def_ctx *c, const mpm_scene_def *def) {
   bad = bad || mpm_def_write_output(&w, &def->output, root) < 0 ||
         mpm_def_write_heat(&w, &def->heat, root) < 0 ||
         mpm_def_write_camera(&w, &def->camera, root) < 0;
-  free(names);
+  mpm_free(names);
   if (!bad && w.nomem) {
     c->status = MPM_ERR_NOMEM;
     if (c->err && c->errlen)

@@ -14,6 +14,7 @@
  * materials are checked in scene_json_material.c, shapes, bodies and colliders in
  * scene_json_shape.c (shared declarations: scene_json_parts.h). */
 #include "core/hash.h"
+#include "core/alloc.h"
 #include "core/real.h"
 #include "io/input_file.h"
 #include "scene/json_check.h"
@@ -467,13 +468,13 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
   FILE *f = mpm_open_input(path, NULL, why, sizeof why);
   if (!f) return mpm_error_set(err, MPM_ERR_IO, "%s: cannot open the scene file: %s", path, why);
   size_t cap = 1 << 16, len = 0;
-  char *buf = malloc(cap);
+  char *buf = mpm_alloc(cap);
   int read_errno = 0;
   while (buf) {
     if (len + 1 >= cap) {
-      char *bigger = realloc(buf, cap * 2);
+      char *bigger = mpm_realloc(buf, cap * 2);
       if (!bigger) {
-        free(buf);
+        mpm_free(buf);
         buf = NULL;
         break;
       }
@@ -490,7 +491,7 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
     }
     if (has_nul) break; /* binary data (or /dev/zero): reported below, with its position */
     if (len > SCENE_MAX_BYTES) {
-      free(buf);
+      mpm_free(buf);
       fclose(f);
       return mpm_error_set(err, MPM_ERR_INVALID,
                            "%s: the scene file is larger than %d MiB; expected a JSON scene (mesh "
@@ -502,7 +503,7 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
   if (!buf)
     return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory reading the scene file", path);
   if (read_errno) {
-    free(buf);
+    mpm_free(buf);
     return mpm_error_set(err, MPM_ERR_IO, "%s: cannot read the scene file: %s", path,
                          strerror(read_errno));
   }
@@ -518,13 +519,13 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
         ++col;
       }
     }
-    free(buf);
+    mpm_free(buf);
     return mpm_error_set(err, MPM_ERR_PARSE,
                          "%s: line %d, column %d: expected JSON text, got a NUL byte (is this a "
                          "binary file?)",
                          path, line, col);
   }
   mpm_status st = mpm_scene_parse(buf, path, scene, err);
-  free(buf);
+  mpm_free(buf);
   return st;
 }

@@ -6,6 +6,7 @@
  * effect while the user believes it acts. Part of the scene parser of scene_json.c (shared
  * declarations: scene_json_parts.h). */
 #include "scene/json_check.h"
+#include "core/alloc.h"
 #include "scene/scene.h"
 #include "scene/scene_json_parts.h"
 
@@ -137,7 +138,7 @@ int mpm_sj_parse_materials(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   const cJSON *bodies = mpm_json_get(root, "bodies");
   int n = cJSON_GetArraySize(arr);
   int extra = cJSON_IsArray(bodies) ? cJSON_GetArraySize(bodies) : 0; /* inline materials */
-  s->materials = malloc((size_t)(n + extra + 1) * sizeof *s->materials);
+  s->materials = mpm_alloc((size_t)(n + extra + 1) * sizeof *s->materials);
   if (!s->materials) return mpm_sj_fail_nomem(c, "materials");
   size_t old = mpm_json_push_key(c, "materials");
   int i = 0;

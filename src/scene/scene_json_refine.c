@@ -15,6 +15,7 @@
  * integrator, and bodies without particle domains: what is not built on the multi-level grid is
  * refused here, naming the key. */
 #include "scene/scene_json_parts.h"
+#include "core/alloc.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -256,7 +257,7 @@ int mpm_sj_parse_refinement(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   s->levels = (int)levels;
   if (has_refine && cJSON_GetArraySize(arr) > 0) {
     const int n = cJSON_GetArraySize(arr);
-    s->refine = calloc((size_t)n, sizeof *s->refine);
+    s->refine = mpm_calloc((size_t)n, sizeof *s->refine);
     if (!s->refine) return mpm_sj_fail_nomem(c, "refinement rules");
     size_t o = mpm_json_push_key(c, "refine");
     int i = 0;

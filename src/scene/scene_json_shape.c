@@ -6,6 +6,7 @@
  * (body-force regions: a collider's shape, motion and window with an acceleration).
  * Part of the scene parser of scene_json.c (shared declarations: scene_json_parts.h). */
 #include "scene/json_check.h"
+#include "core/alloc.h"
 #include "io/input_file.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
@@ -510,7 +511,7 @@ int mpm_sj_parse_bodies(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (n == 0)
     return mpm_json_fail_at(c, "bodies", MPM_ERR_INVALID,
                             "expected at least one body, got an empty array");
-  s->bodies = malloc((size_t)n * sizeof *s->bodies);
+  s->bodies = mpm_alloc((size_t)n * sizeof *s->bodies);
   if (!s->bodies) return mpm_sj_fail_nomem(c, "bodies");
   const int named = s->material_count;
   size_t old = mpm_json_push_key(c, "bodies");
@@ -531,7 +532,7 @@ int mpm_sj_parse_bodies(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
 static int parse_keyframes(mpm_json_ctx *c, const cJSON *arr, mpm_motion_desc *m) {
   int n = cJSON_GetArraySize(arr);
   if (n == 0) return 0;
-  m->keyframes = malloc((size_t)n * sizeof *m->keyframes);
+  m->keyframes = mpm_alloc((size_t)n * sizeof *m->keyframes);
   if (!m->keyframes) return mpm_sj_fail_nomem(c, "keyframes");
   size_t old = mpm_json_push_key(c, "keyframes");
   int i = 0;
@@ -603,7 +604,7 @@ int mpm_sj_parse_colliders(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (has <= 0) return has;
   int n = cJSON_GetArraySize(arr);
   if (n == 0) return 0;
-  s->colliders = malloc((size_t)n * sizeof *s->colliders);
+  s->colliders = mpm_alloc((size_t)n * sizeof *s->colliders);
   if (!s->colliders) return mpm_sj_fail_nomem(c, "colliders");
   size_t old = mpm_json_push_key(c, "colliders");
   int i = 0;
@@ -640,7 +641,7 @@ int mpm_sj_parse_forces(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (has <= 0) return has;
   int n = cJSON_GetArraySize(arr);
   if (n == 0) return 0;
-  s->forces = malloc((size_t)n * sizeof *s->forces);
+  s->forces = mpm_alloc((size_t)n * sizeof *s->forces);
   if (!s->forces) return mpm_sj_fail_nomem(c, "forces");
   size_t old = mpm_json_push_key(c, "forces");
   int i = 0;

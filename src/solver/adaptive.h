@@ -130,7 +130,7 @@ mpm_status mpm_adaptive_apply_rules(mpm_sim *sim, mpm_refinement *r, int rebuild
 int mpm_adaptive_index_tree(mpm_sim *sim, mpm_refinement *r);
 /* Between steps, every domain.refine_every steps: a new tree from the rules. */
 mpm_status mpm_adaptive_refine(mpm_sim *sim);
-/* The refined cells (level, i, j, k), for checkpoints: a new array (free it), NULL when out of
+/* The refined cells (level, i, j, k), for checkpoints: a new array (mpm_free it), NULL when out of
  * memory or on a uniform grid; and a tree from them in place of the current one. */
 int32_t (*mpm_adaptive_tree_cells(const mpm_sim *sim, size_t *count))[4];
 mpm_status mpm_adaptive_set_tree(mpm_sim *sim, const int32_t (*cells)[4], size_t count,

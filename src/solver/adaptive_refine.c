@@ -59,7 +59,7 @@ static int refine_box_cells(const mpm_scene *sc, mpm_refinement *r, int level, c
 static int refine_collider(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule, double t) {
   const mpm_collider_pose pose = mpm_collider_pose_at(&sim->colliders[rule->collider], t);
   size_t n = (size_t)sim->cells[0] * (size_t)sim->cells[1] * (size_t)sim->cells[2], cap = n;
-  int32_t(*cur)[3] = malloc(cap * sizeof *cur);
+  int32_t(*cur)[3] = mpm_alloc(cap * sizeof *cur);
   if (!cur) return -1;
   size_t k = 0;
   for (int32_t a = 0; a < sim->cells[0]; ++a)
@@ -89,7 +89,7 @@ static int refine_collider(mpm_sim *sim, mpm_refinement *r, const mpm_refine_des
     if (L + 1 < rule->level) {
       if (kept * 8 > cap) {
         cap = kept * 8;
-        int32_t(*grown)[3] = realloc(cur, cap * sizeof *cur);
+        int32_t(*grown)[3] = mpm_realloc(cur, cap * sizeof *cur);
         if (!grown) {
           status = -1;
           goto done;
@@ -106,7 +106,7 @@ static int refine_collider(mpm_sim *sim, mpm_refinement *r, const mpm_refine_des
     }
   }
 done:
-  free(cur);
+  mpm_free(cur);
   return status;
 }
 
@@ -188,7 +188,7 @@ static int lattice_make(const mpm_scene *sc, const box_source *s, double h, doub
     l->n[d] = hi[d] + l->k + 1 - l->lo[d] + 1;
     cells *= (size_t)l->n[d];
   }
-  l->in = calloc(cells, 1);
+  l->in = mpm_calloc(cells, 1);
   if (!l->in) return -1;
   for (size_t i = 0; i < s->p->count; ++i) {
     if (s->keep && !s->keep[i]) continue;
@@ -217,9 +217,9 @@ static int lattice_refine(const mpm_scene *sc, mpm_refinement *r, int level, lat
   long *left = NULL;
   int status = 0;
   if (l->k > 0 || l->close) {
-    out = malloc(cells);
-    line = malloc((size_t)longest);
-    left = malloc((size_t)longest * sizeof *left);
+    out = mpm_alloc(cells);
+    line = mpm_alloc((size_t)longest);
+    left = mpm_alloc((size_t)longest * sizeof *left);
     if (!out || !line || !left) {
       status = -1;
       goto done;
@@ -261,9 +261,9 @@ static int lattice_refine(const mpm_scene *sc, mpm_refinement *r, int level, lat
         }
       }
 done:
-  free(out);
-  free(line);
-  free(left);
+  mpm_free(out);
+  mpm_free(line);
+  mpm_free(left);
   return status;
 }
 
@@ -284,7 +284,7 @@ static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_
       l.within_max = rule->max;
     }
     if (failed || (l.in && lattice_refine(sc, r, rule->level - 1, &l))) st = MPM_ERR_NOMEM;
-    free(l.in);
+    mpm_free(l.in);
   }
   mpm_particles_free(&p);
   return st;
@@ -293,7 +293,7 @@ static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_
 /* The particles' box sides (their type's particle spacing), in a new array. */
 static double *particle_boxes(const mpm_sim *sim) {
   const mpm_particles *p = &sim->particles;
-  double *L = malloc((p->count + 1) * sizeof *L);
+  double *L = mpm_alloc((p->count + 1) * sizeof *L);
   if (!L) return NULL;
   for (size_t i = 0; i < p->count; ++i)
     L[i] = ldexp(sim->adaptive->body_box[p->body[i]], -p->level[i]);
@@ -306,7 +306,7 @@ static int refine_surface(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc
   const mpm_particles *p = &sim->particles;
   uint8_t *keep = NULL;
   if (rule->body >= 0) {
-    keep = malloc(p->count + 1);
+    keep = mpm_alloc(p->count + 1);
     if (!keep) return -1;
     for (size_t i = 0; i < p->count; ++i) keep[i] = p->body[i] == rule->body;
   }
@@ -320,8 +320,8 @@ static int refine_surface(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc
     l.k = (long)ceil(rule->distance / l.h - 1e-9); /* the room above has the closing's point */
     failed = lattice_refine(&sim->scene, r, rule->level - 1, &l);
   }
-  free(l.in);
-  free(keep);
+  mpm_free(l.in);
+  mpm_free(keep);
   return failed ? -1 : 0;
 }
 
@@ -354,7 +354,7 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
     if (!marks[Lc]) {
       size_t bytes = 1;
       for (int d = 0; d < 3; ++d) bytes *= (size_t)(n[Lc][d] = (long)sim->cells[d] << Lc);
-      if (bytes > ((size_t)64 << 20) || !(marks[Lc] = calloc(bytes, 1))) {
+      if (bytes > ((size_t)64 << 20) || !(marks[Lc] = mpm_calloc(bytes, 1))) {
         status = -1; /* a grid this fine marks through the tree itself: not built */
         break;
       }
@@ -393,7 +393,7 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
           }
         }
   }
-  for (int Lc = 0; Lc < MPM_LEVELS_MAX; ++Lc) free(marks[Lc]);
+  for (int Lc = 0; Lc < MPM_LEVELS_MAX; ++Lc) mpm_free(marks[Lc]);
   return status;
 }
 
@@ -427,17 +427,17 @@ mpm_status mpm_adaptive_apply_rules(mpm_sim *sim, mpm_refinement *r, int rebuild
       break;
     }
     if (failed) {
-      free(L);
+      mpm_free(L);
       return mpm_error_set(err, MPM_ERR_NOMEM,
                            "%s: domain.refine[%d]: out of memory for the refined cells (or a "
                            "cell outside the %d-level grid's coordinate range)",
                            sc->path, k, sc->levels);
     }
   }
-  free(L);
+  mpm_free(L);
   return MPM_OK;
 nomem:
-  free(L);
+  mpm_free(L);
   return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the refined cells", sc->path);
 }
 
@@ -497,7 +497,7 @@ static void collect_refined(void *ctx, int level, const int32_t cell[3]) {
   if (l->failed) return;
   if (l->count == l->capacity) {
     const size_t cap = l->capacity ? 2 * l->capacity : 256;
-    int32_t(*grown)[4] = realloc(l->cells, cap * sizeof *grown);
+    int32_t(*grown)[4] = mpm_realloc(l->cells, cap * sizeof *grown);
     if (!grown) {
       l->failed = 1;
       return;
@@ -518,11 +518,11 @@ int32_t (*mpm_adaptive_tree_cells(const mpm_sim *sim, size_t *count))[4] {
   if (!sim->adaptive) return NULL;
   mpm_refinement_refined_cells(&sim->adaptive->grid.tree, collect_refined, &l);
   if (l.failed) {
-    free(l.cells);
+    mpm_free(l.cells);
     return NULL;
   }
   *count = l.count;
-  if (!l.cells) l.cells = malloc(sizeof *l.cells); /* an empty tree: not a failure */
+  if (!l.cells) l.cells = mpm_alloc(sizeof *l.cells); /* an empty tree: not a failure */
   return l.cells;
 }
 

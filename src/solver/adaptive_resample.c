@@ -245,8 +245,8 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
   double dL[3] = {0};
   size_t made_merges = 0, made_splits = 0;
   if (merges) {
-    cand = malloc((size_t)merges * sizeof *cand);
-    gone = calloc(n + 1, 1);
+    cand = mpm_alloc((size_t)merges * sizeof *cand);
+    gone = mpm_calloc(n + 1, 1);
     if (!cand || !gone) goto nomem;
     size_t k = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -269,9 +269,9 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
     /* the particles in each split candidate's leaf cell, all bodies and types */
     t.size = 16;
     while (t.size < 2 * (size_t)splits) t.size *= 2;
-    t.keys = malloc(t.size * sizeof *t.keys);
-    t.count = calloc(t.size, sizeof *t.count);
-    t.used = calloc(t.size, 1);
+    t.keys = mpm_alloc(t.size * sizeof *t.keys);
+    t.count = mpm_calloc(t.size, sizeof *t.count);
+    t.used = mpm_calloc(t.size, 1);
     if (!t.keys || !t.count || !t.used) goto nomem;
     for (size_t i = 0; i < n; ++i)
       if (action[i] == SPLIT) table_find(&t, &leaf[i], 1);
@@ -319,7 +319,7 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
     }
   }
   if (gone) { /* the appended children are past gone's end: never gone */
-    uint8_t *g = realloc(gone, p->count + 1);
+    uint8_t *g = mpm_realloc(gone, p->count + 1);
     if (!g) goto nomem;
     memset(g + n, 0, p->count + 1 - n);
     gone = g;
@@ -337,10 +337,10 @@ nomem:
                      "step %lld: out of memory resampling %zu particles (domain.resample)",
                      (long long)sim->steps, n);
 done:
-  free(cand);
-  free(gone);
-  free(t.keys);
-  free(t.count);
-  free(t.used);
+  mpm_free(cand);
+  mpm_free(gone);
+  mpm_free(t.keys);
+  mpm_free(t.count);
+  mpm_free(t.used);
   return st;
 }

@@ -112,11 +112,11 @@ static double refined_particles(mpm_sim *sim) {
 
 mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
   const mpm_scene *sc = &sim->scene;
-  mpm_adaptive *a = calloc(1, sizeof *a);
+  mpm_adaptive *a = mpm_calloc(1, sizeof *a);
   if (!a) return oom(err, "the multi-level grid");
   sim->adaptive = a;
   mpm_adaptive_grid_init(&a->grid, sc->levels, sim->origin, (mpm_real)sc->dx);
-  a->body_box = calloc((size_t)sc->body_count + 1, sizeof *a->body_box);
+  a->body_box = mpm_calloc((size_t)sc->body_count + 1, sizeof *a->body_box);
   if (!a->body_box) return oom(err, "the multi-level grid");
   for (int b = 0; b < sc->body_count; ++b) a->body_box[b] = mpm_sample_spacing(sc, b);
   mpm_refinement *r = &a->grid.tree;
@@ -139,7 +139,7 @@ mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
 void mpm_adaptive_free(mpm_adaptive *a) {
   if (!a) return;
   mpm_adaptive_grid_free(&a->grid);
-  free(a->body_box);
+  mpm_free(a->body_box);
   mpm_free(a->of);
   mpm_free(a->perm);
   mpm_free(a->stable);
@@ -156,7 +156,7 @@ void mpm_adaptive_free(mpm_adaptive *a) {
   mpm_free(a->moment);
   mpm_free(a->cell_of);
   mpm_free(a->affine);
-  free(a);
+  mpm_free(a);
 }
 
 typedef struct keep_level {

@@ -22,7 +22,7 @@ static size_t body_points(const mpm_sim *sim, int b, float **xyz, size_t *cap, d
       if (p->body[i] != b || (pass && !sim->domains.active[i])) continue;
       if (n == *cap) {
         const size_t c = *cap ? 2 * *cap : 4096;
-        float *g = realloc(*xyz, 3 * c * sizeof *g);
+        float *g = mpm_realloc(*xyz, 3 * c * sizeof *g);
         if (!g) return n;
         *xyz = g;
         *cap = c;
@@ -89,7 +89,7 @@ int mpm_sim_placement_report(const mpm_sim *sim, char *out, size_t cap) {
       if (!nb) continue;
       const double h = ha; /* body i's particle spacing; its lattice is offset by half of it */
       const double o[3] = {sc->domain_min[0], sc->domain_min[1], sc->domain_min[2]};
-      uint64_t *grown = realloc(keys, na * sizeof *keys);
+      uint64_t *grown = mpm_realloc(keys, na * sizeof *keys);
       if (!grown) break;
       keys = grown;
       for (size_t k = 0; k < na; ++k) keys[k] = cell_key(a + 3 * k, o, h);
@@ -106,8 +106,8 @@ int mpm_sim_placement_report(const mpm_sim *sim, char *out, size_t cap) {
     }
   }
 #undef SAY
-  free(a);
-  free(b);
-  free(keys);
+  mpm_free(a);
+  mpm_free(b);
+  mpm_free(keys);
   return found;
 }

@@ -92,7 +92,7 @@ mpm_status mpm_sim_create_unsampled(mpm_scene *scene, mpm_sim **out, mpm_error *
 
 static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sample) {
   *out = NULL;
-  mpm_sim *sim = calloc(1, sizeof *sim);
+  mpm_sim *sim = mpm_calloc(1, sizeof *sim);
   if (!sim) return oom(err, "the simulation");
   sim->scene = *scene;
   memset(scene, 0, sizeof *scene); /* the simulation owns the arrays now */
@@ -106,13 +106,13 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
   /* materials */
   sim->material_count = sc->material_count;
   sim->materials =
-      calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof *sim->materials);
+      mpm_calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof *sim->materials);
   if (!sim->materials) {
     st = oom(err, "materials");
     goto fail;
   }
   sim->base_materials =
-      calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof *sim->materials);
+      mpm_calloc((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof *sim->materials);
   if (!sim->base_materials) {
     st = oom(err, "materials");
     goto fail;
@@ -142,9 +142,9 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
 
   /* colliders */
   sim->collider_count = sc->collider_count;
-  sim->colliders = calloc((size_t)(sc->collider_count + 1), sizeof *sim->colliders);
-  sim->poses = calloc((size_t)(sc->collider_count + 1), sizeof *sim->poses);
-  sim->collider_step = calloc(6 * (size_t)sc->collider_count + 1, sizeof(double));
+  sim->colliders = mpm_calloc((size_t)(sc->collider_count + 1), sizeof *sim->colliders);
+  sim->poses = mpm_calloc((size_t)(sc->collider_count + 1), sizeof *sim->poses);
+  sim->collider_step = mpm_calloc(6 * (size_t)sc->collider_count + 1, sizeof(double));
   sim->collider_frame = sim->collider_step + 3 * sc->collider_count;
   if (!sim->colliders || !sim->poses || !sim->collider_step) {
     st = oom(err, "colliders");
@@ -156,8 +156,8 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
       goto fail;
     }
   /* body-force regions (their count set as each is built, so that destroy frees what is) */
-  sim->force_colliders = calloc((size_t)(sc->force_count + 1), sizeof *sim->force_colliders);
-  sim->force_regions = calloc((size_t)(sc->force_count + 1), sizeof *sim->force_regions);
+  sim->force_colliders = mpm_calloc((size_t)(sc->force_count + 1), sizeof *sim->force_colliders);
+  sim->force_regions = mpm_calloc((size_t)(sc->force_count + 1), sizeof *sim->force_regions);
   if (!sim->force_colliders || !sim->force_regions) {
     st = oom(err, "body-force regions");
     goto fail;
@@ -213,7 +213,7 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
 
       if (sc->bodies[b].shape.kind == MPM_SHAPE_MESH) { /* keep the mesh, embedded */
         mpm_embedded_surface *grown =
-            realloc(sim->surfaces, (size_t)(sim->surface_count + 1) * sizeof *grown);
+            mpm_realloc(sim->surfaces, (size_t)(sim->surface_count + 1) * sizeof *grown);
         if (!grown) {
           st = oom(err, "embedded surfaces");
           goto fail;
@@ -376,7 +376,7 @@ mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char 
     if (st == MPM_OK)
       (*out)->scene_copy = copy;
     else
-      free(copy);
+      mpm_free(copy);
   }
   if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
   return st;
@@ -403,7 +403,7 @@ mpm_status mpm_sim_create_from_json(const char *json_text, const char *base_dir,
     if (st == MPM_OK)
       (*out)->scene_copy = copy;
     else
-      free(copy);
+      mpm_free(copy);
   }
   if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
   return st;
@@ -421,33 +421,33 @@ void mpm_sim_destroy(mpm_sim *sim) {
   for (int k = 0; k < 18; ++k) mpm_free(sim->corner_backup[k]);
   mpm_domain_set_free(&sim->domains);
   for (int i = 0; i < sim->surface_count; ++i) mpm_embedded_surface_free(&sim->surfaces[i]);
-  free(sim->surfaces);
-  free(sim->materials);
+  mpm_free(sim->surfaces);
+  mpm_free(sim->materials);
   if (sim->colliders)
     for (int c = 0; c < sim->collider_count; ++c) mpm_collider_free(&sim->colliders[c]);
-  free(sim->colliders);
-  free(sim->poses);
-  free(sim->collider_step);
+  mpm_free(sim->colliders);
+  mpm_free(sim->poses);
+  mpm_free(sim->collider_step);
   if (sim->force_colliders)
     for (int f = 0; f < sim->force_count; ++f) mpm_collider_free(&sim->force_colliders[f]);
-  free(sim->force_colliders);
-  free(sim->force_regions);
-  free(sim->base_materials);
+  mpm_free(sim->force_colliders);
+  mpm_free(sim->force_regions);
+  mpm_free(sim->base_materials);
   mpm_grid_free(&sim->grid);
   mpm_adaptive_free(sim->adaptive);
   mpm_dofs_free(&sim->dofs);
   mpm_heat_free(&sim->heat);
   mpm_arena_free(&sim->step_arena);
   mpm_free(sim->iscratch);
-  free(sim->frame_times);
-  free(sim->frame_files);
-  free(sim->stats);
-  free(sim->stats_forces);
+  mpm_free(sim->frame_times);
+  mpm_free(sim->frame_files);
+  mpm_free(sim->stats);
+  mpm_free(sim->stats_forces);
   mpm_scene_free(&sim->scene);
-  free(sim->scene_copy);
-  free(sim->mesh_digests);
+  mpm_free(sim->scene_copy);
+  mpm_free(sim->mesh_digests);
   mpm_run_folder_unlock(sim->output_lock); /* after the last file is written */
-  free(sim);
+  mpm_free(sim);
 }
 
 const char *mpm_sim_last_error(const mpm_sim *sim) {

@@ -60,11 +60,11 @@ static int list_checkpoints(const char *dir, char ***out) {
       continue;
     if (n == cap) {
       cap = cap ? 2 * cap : 8;
-      char **bigger = realloc(names, (size_t)cap * sizeof *names);
+      char **bigger = mpm_realloc(names, (size_t)cap * sizeof *names);
       if (!bigger) break;
       names = bigger;
     }
-    if (!(names[n] = strdup(e->d_name))) break;
+    if (!(names[n] = mpm_strdup(e->d_name))) break;
     ++n;
   }
   closedir(d);
@@ -74,8 +74,8 @@ static int list_checkpoints(const char *dir, char ***out) {
 }
 
 static void free_names(char **names, int n) {
-  for (int i = 0; i < n; ++i) free(names[i]);
-  free(names);
+  for (int i = 0; i < n; ++i) mpm_free(names[i]);
+  mpm_free(names);
 }
 
 mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
@@ -124,7 +124,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   const size_t nf = 3 * (size_t)sim->collider_count;
   double *forces = NULL;
   if (nf) {
-    forces = malloc(((size_t)c.records + 1) * nf * sizeof *forces);
+    forces = mpm_alloc(((size_t)c.records + 1) * nf * sizeof *forces);
     if (!forces)
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing a checkpoint");
     memcpy(forces, sim->collider_frame, nf * sizeof *forces);
@@ -138,9 +138,9 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   int scripted = 0;
   for (int k = 0; k < sim->collider_count; ++k) scripted |= sim->colliders[k].script.on;
   if (scripted) {
-    scripts = malloc((size_t)sim->collider_count * MPM_CKPT_SCRIPT_DOUBLES * sizeof *scripts);
+    scripts = mpm_alloc((size_t)sim->collider_count * MPM_CKPT_SCRIPT_DOUBLES * sizeof *scripts);
     if (!scripts) {
-      free(forces);
+      mpm_free(forces);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing a checkpoint");
     }
     for (int k = 0; k < sim->collider_count; ++k)
@@ -159,27 +159,27 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   if (sim->adaptive && sim->scene.refine_every > 0) {
     size_t count = 0;
     if (!(cells = mpm_adaptive_tree_cells(sim, &count))) {
-      free(forces);
-      free(scripts);
+      mpm_free(forces);
+      mpm_free(scripts);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
     }
     c.tree_count = count;
     for (int k = 0; k < 4; ++k) {
-      c.tree[k] = malloc((count + 1) * sizeof(int32_t));
+      c.tree[k] = mpm_alloc((count + 1) * sizeof(int32_t));
       for (size_t i = 0; c.tree[k] && i < count; ++i) c.tree[k][i] = cells[i][k];
     }
-    free(cells);
+    mpm_free(cells);
     if (!c.tree[0] || !c.tree[1] || !c.tree[2] || !c.tree[3]) {
-      for (int k = 0; k < 4; ++k) free(c.tree[k]);
-      free(forces);
-      free(scripts);
+      for (int k = 0; k < 4; ++k) mpm_free(c.tree[k]);
+      mpm_free(forces);
+      mpm_free(scripts);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
     }
   }
   mpm_status st = mpm_checkpoint_write(file, &c, &sim->error);
-  for (int k = 0; k < 4; ++k) free(c.tree[k]);
-  free(forces);
-  free(scripts);
+  for (int k = 0; k < 4; ++k) mpm_free(c.tree[k]);
+  mpm_free(forces);
+  mpm_free(scripts);
   if (st != MPM_OK) return st;
   snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
   if (path && cap) snprintf(path, cap, "%s", file);
@@ -200,7 +200,7 @@ mpm_status mpm_sim_digest_meshes(mpm_sim *sim, mpm_error *err) {
   for (int b = 0; b < sc->body_count; ++b) {
     if (sc->bodies[b].shape.kind != MPM_SHAPE_MESH) continue;
     if (!sim->mesh_digests &&
-        !(sim->mesh_digests = calloc((size_t)sc->body_count, sizeof(uint64_t))))
+        !(sim->mesh_digests = mpm_calloc((size_t)sc->body_count, sizeof(uint64_t))))
       return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for the mesh digests");
     char file[2 * MPM_PATH_MAX], why[128];
     mpm_scene_mesh_file(sc, sc->bodies[b].shape.mesh_path, file, sizeof file);
@@ -274,12 +274,12 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   mpm_status st = mpm_sim_alloc_output(sim, c->records);
   if (st != MPM_OK) return st;
   if (sim->adaptive && sim->scene.refine_every > 0) {
-    int32_t(*cells)[4] = malloc((c->tree_count + 1) * sizeof *cells);
+    int32_t(*cells)[4] = mpm_alloc((c->tree_count + 1) * sizeof *cells);
     if (!cells) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the tree");
     for (size_t i = 0; i < c->tree_count; ++i)
       for (int k = 0; k < 4; ++k) cells[i][k] = c->tree[k][i];
     st = mpm_adaptive_set_tree(sim, (const int32_t(*)[4])cells, (size_t)c->tree_count, &sim->error);
-    free(cells);
+    mpm_free(cells);
     if (st != MPM_OK) return st;
   }
   mpm_particles_free(&sim->particles);
@@ -368,7 +368,7 @@ mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap)
 static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n, char *path,
                               size_t cap) {
   if (n == 0) {
-    free(names);
+    mpm_free(names);
     return mpm_error_set(&sim->error, MPM_ERR_IO,
                          "%s: no checkpoint to resume from (checkpoint_*.h5); runs write one every "
                          "output.checkpoint_every frames and when stopped by Ctrl-C or SIGTERM",

@@ -239,10 +239,10 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
   mpm_body_desc *grown = NULL;
   uint64_t *digests = NULL;
   if (st == MPM_OK) {
-    grown = realloc(sim->scene.bodies, (size_t)next.body_count * sizeof *grown);
+    grown = mpm_realloc(sim->scene.bodies, (size_t)next.body_count * sizeof *grown);
     if (grown) sim->scene.bodies = grown;
     if (sim->mesh_digests || bd->shape.kind == MPM_SHAPE_MESH) {
-      digests = calloc((size_t)next.body_count, sizeof *digests);
+      digests = mpm_calloc((size_t)next.body_count, sizeof *digests);
       if (digests && sim->mesh_digests)
         memcpy(digests, sim->mesh_digests, (size_t)sim->scene.body_count * sizeof *digests);
     }
@@ -259,7 +259,7 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
   /* the scene's text from now on, and its hash as a resume will read it: the folder's
      scene.json holds the text and a newline */
   char *copy = st == MPM_OK ? mpm_scene_copy_text(text, &next) : NULL;
-  char *file_text = copy ? malloc(strlen(copy) + 2) : NULL;
+  char *file_text = copy ? mpm_alloc(strlen(copy) + 2) : NULL;
   const int hashed = file_text != NULL;
   uint64_t hash = 0;
   if (hashed) {
@@ -267,7 +267,7 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
     memcpy(file_text, copy, len);
     file_text[len] = '\n', file_text[len + 1] = 0;
     hash = mpm_fnv1a64(file_text, len + 1);
-    free(file_text);
+    mpm_free(file_text);
   }
   if (st == MPM_OK && !hashed)
     st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "%s: out of memory", what);
@@ -283,8 +283,8 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
     st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "%s: out of memory", what);
   if (st != MPM_OK) {
     sim->particles.count = first;
-    free(digests);
-    free(copy);
+    mpm_free(digests);
+    mpm_free(copy);
     cJSON_free(text);
     mpm_scene_free(&next);
     return st;
@@ -298,10 +298,10 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
   sim->scene.bodies[b] = *bd;
   sim->scene.body_count = next.body_count;
   sim->scene.source_hash = hash;
-  free(sim->scene_copy);
+  mpm_free(sim->scene_copy);
   sim->scene_copy = copy;
   if (digests) {
-    free(sim->mesh_digests);
+    mpm_free(sim->mesh_digests);
     sim->mesh_digests = digests;
   }
   cJSON_free(text);

@@ -17,15 +17,16 @@
 #include <string.h>
 
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
-  free(sim->frame_times);
-  free(sim->frame_files);
-  free(sim->stats);
-  free(sim->stats_forces);
+  mpm_free(sim->frame_times);
+  mpm_free(sim->frame_files);
+  mpm_free(sim->stats);
+  mpm_free(sim->stats_forces);
   const size_t n = (size_t)(records > sim->frame_count + 1 ? records : sim->frame_count + 1);
-  sim->frame_times = calloc(n, sizeof *sim->frame_times);
-  sim->frame_files = calloc(n, sizeof *sim->frame_files);
-  sim->stats = calloc(n, sizeof *sim->stats);
-  sim->stats_forces = calloc(n * 3 * (size_t)sim->collider_count + 1, sizeof *sim->stats_forces);
+  sim->frame_times = mpm_calloc(n, sizeof *sim->frame_times);
+  sim->frame_files = mpm_calloc(n, sizeof *sim->frame_files);
+  sim->stats = mpm_calloc(n, sizeof *sim->stats);
+  sim->stats_forces =
+      mpm_calloc(n * 3 * (size_t)sim->collider_count + 1, sizeof *sim->stats_forces);
   if (!sim->frame_times || !sim->frame_files || !sim->stats || !sim->stats_forces)
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for output bookkeeping");
   return MPM_OK;
@@ -34,11 +35,11 @@ mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
 mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
   /* the run's inputs: never removed, whatever their names (a scene kept as out/scene.json) */
   const mpm_scene *sc = &sim->scene;
-  char(*meshes)[MPM_PATH_MAX] = calloc((size_t)sc->body_count + 1, sizeof *meshes);
-  const char **keep = calloc((size_t)sc->body_count + 2, sizeof *keep);
+  char(*meshes)[MPM_PATH_MAX] = mpm_calloc((size_t)sc->body_count + 1, sizeof *meshes);
+  const char **keep = mpm_calloc((size_t)sc->body_count + 2, sizeof *keep);
   if (!meshes || !keep) {
-    free(meshes);
-    free(keep);
+    mpm_free(meshes);
+    mpm_free(keep);
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory claiming %s", dir);
   }
   int n = 0;
@@ -53,8 +54,8 @@ mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
   const int same = sim->output_lock >= 0 && mpm_same_file(dir, sim->output_dir);
   if (!same) st = mpm_run_folder_lock(dir, &lock, &sim->error);
   if (st == MPM_OK) st = mpm_run_folder_claim(dir, (mpm_run_claim)how, keep, n, &sim->error);
-  free(meshes);
-  free(keep);
+  mpm_free(meshes);
+  mpm_free(keep);
   if (st != MPM_OK) {
     mpm_run_folder_unlock(lock);
     return st;
@@ -134,10 +135,10 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
   const int grid = sim->adaptive && sim->scene.refine_every > 0; /* a tree per frame */
   const int parts = 1 + has_domains + sim->surface_count + grid;
   enum { NAME = 64 };
-  char(*names)[NAME] = malloc((size_t)parts * NAME);
-  char(*text)[NAME] = malloc((size_t)frames * (size_t)parts * NAME);
-  const char **name_of = malloc((size_t)parts * sizeof *name_of);
-  const char **files = malloc((size_t)frames * (size_t)parts * sizeof *files);
+  char(*names)[NAME] = mpm_alloc((size_t)parts * NAME);
+  char(*text)[NAME] = mpm_alloc((size_t)frames * (size_t)parts * NAME);
+  const char **name_of = mpm_alloc((size_t)parts * sizeof *name_of);
+  const char **files = mpm_alloc((size_t)frames * (size_t)parts * sizeof *files);
   mpm_status st = MPM_OK;
   if (!names || !text || !name_of || !files) {
     st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing run.pvd");
@@ -164,10 +165,10 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
   snprintf(path, sizeof path, "%s/run.pvd", sim->output_dir);
   st = mpm_write_pvd_parts(path, frames, parts, sim->frame_times, name_of, files, &sim->error);
 done:
-  free(names);
-  free(text);
-  free(name_of);
-  free(files);
+  mpm_free(names);
+  mpm_free(text);
+  mpm_free(name_of);
+  mpm_free(files);
   return st;
 }
 
@@ -343,7 +344,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
   }
   for (int k = 0; k < sim->surface_count; ++k) { /* embedded surfaces (Zhu sec. 4.1) */
     const mpm_embedded_surface *e = &sim->surfaces[k];
-    double *x = malloc(3 * (size_t)(e->vertex_count + 1) * sizeof *x);
+    double *x = mpm_alloc(3 * (size_t)(e->vertex_count + 1) * sizeof *x);
     if (!x) {
       st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
       goto done;
@@ -359,7 +360,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
       snprintf(path, sizeof path, "%s/surface_body%d_%04d.vtp", dir, e->body, frame);
       st = mpm_write_surface_vtp(path, e, x, sim->time, &sim->error);
     }
-    free(x);
+    mpm_free(x);
     if (st != MPM_OK) goto done;
   }
   if (o->surface.enabled) { /* particle surfaces (issue 14) */

@@ -5,6 +5,7 @@
  * change its working directory), and written by mpm_sim_enable_output. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "solver/sim.h"
+#include "core/alloc.h"
 #include "io/input_file.h"
 #include "io/run_folder.h"
 
@@ -21,9 +22,9 @@ static char *read_text(const char *path) {
   char *text = NULL;
   if (fseek(fp, 0, SEEK_END) == 0) {
     const long n = ftell(fp);
-    if (n >= 0 && fseek(fp, 0, SEEK_SET) == 0 && (text = malloc((size_t)n + 1))) {
+    if (n >= 0 && fseek(fp, 0, SEEK_SET) == 0 && (text = mpm_alloc((size_t)n + 1))) {
       if (fread(text, 1, (size_t)n, fp) != (size_t)n) {
-        free(text);
+        mpm_free(text);
         text = NULL;
       } else {
         text[n] = 0;
@@ -50,7 +51,7 @@ char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
   }
   char *printed = cJSON_Print(root);
   cJSON_Delete(root);
-  char *out = printed ? strdup(printed) : NULL; /* the simulation frees it with free() */
+  char *out = printed ? mpm_strdup(printed) : NULL; /* the simulation frees it with mpm_free() */
   cJSON_free(printed);
   return out;
 }
@@ -58,7 +59,7 @@ char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
 char *mpm_scene_copy_of_file(const char *scene_path, const mpm_scene *scene) {
   char *text = read_text(scene_path);
   char *copy = mpm_scene_copy_text(text, scene);
-  free(text);
+  mpm_free(text);
   return copy;
 }
 

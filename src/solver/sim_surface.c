@@ -6,6 +6,7 @@
  * particle domains keeps its embedded mesh (Zhu sec. 4.1, surface_bodyB_NNNN.*): "all bodies"
  * leaves it out. */
 #include "solver/sim.h"
+#include "core/alloc.h"
 #include "core/mat3.h"
 #include "core/parallel.h"
 #include "surface/surface.h"
@@ -112,13 +113,13 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
   const double t0 = mpm_wall_seconds();
   size_t triangles = 0;
   const int nb = sim->scene.body_count;
-  unsigned char *body = malloc((size_t)nb + 1);
-  unsigned char *material = malloc((size_t)sim->scene.material_count + 1);
+  unsigned char *body = mpm_alloc((size_t)nb + 1);
+  unsigned char *material = mpm_alloc((size_t)sim->scene.material_count + 1);
   const int with_velocity = sim->scene.output.vdb_velocity;
-  surface_buffers buf = {malloc((3 * p->count + 3) * sizeof(double)),
-                         malloc((p->count + 1) * sizeof(double)),
-                         with_velocity ? malloc((3 * p->count + 3) * sizeof(double)) : NULL,
-                         with_velocity ? malloc((p->count + 1) * sizeof(double)) : NULL};
+  surface_buffers buf = {mpm_alloc((3 * p->count + 3) * sizeof(double)),
+                         mpm_alloc((p->count + 1) * sizeof(double)),
+                         with_velocity ? mpm_alloc((3 * p->count + 3) * sizeof(double)) : NULL,
+                         with_velocity ? mpm_alloc((p->count + 1) * sizeof(double)) : NULL};
   mpm_status st = MPM_OK;
   if (!body || !material || !buf.xyz || !buf.vol || (with_velocity && (!buf.vel || !buf.mass))) {
     st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the surfaces of frame %d",
@@ -132,12 +133,12 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
       st = one_surface(sim, p, dir, body, material, -1, frame, &buf, &triangles);
     }
   }
-  free(body);
-  free(material);
-  free(buf.xyz);
-  free(buf.vol);
-  free(buf.vel);
-  free(buf.mass);
+  mpm_free(body);
+  mpm_free(material);
+  mpm_free(buf.xyz);
+  mpm_free(buf.vol);
+  mpm_free(buf.vel);
+  mpm_free(buf.mass);
   if (records) { /* the run's figures (mpm_sim_info); a one-off frame leaves them */
     sim->surface_triangles = triangles;
     sim->surface_seconds = mpm_wall_seconds() - t0;

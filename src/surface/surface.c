@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "surface/surface.h"
+#include "core/alloc.h"
 #include "io/io.h"
 
 #include <math.h>
@@ -34,6 +35,7 @@ mpm_surface_params mpm_surface_params_default(void) {
 }
 
 void mpm_surface_mesh_free(mpm_surface_mesh *m) {
+  /* the OpenVDB module (vdb_shim.h) allocated them with malloc */
   free(m->vertices);
   free(m->triangles);
   memset(m, 0, sizeof *m);
@@ -90,7 +92,7 @@ mpm_status mpm_surface_build(const double *xyz, const double *volume, size_t n,
   if (!(voxel > 0) || !isfinite(voxel))
     return mpm_error_set(err, MPM_ERR_INVALID,
                          "surface: the particles have no volume (median spacing %g m)", spacing);
-  double *radius = malloc(n * sizeof *radius);
+  double *radius = mpm_alloc(n * sizeof *radius);
   if (!radius) return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for %zu radii", n);
   double rsum = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -127,7 +129,7 @@ mpm_status mpm_surface_build(const double *xyz, const double *volume, size_t n,
   }
   fig.mesh_seconds = seconds() - t;
 done:
-  free(radius);
+  mpm_free(radius);
   if (st == MPM_OK && grid_out)
     *grid_out = grid;
   else
