@@ -53,6 +53,24 @@ MPM_API const char *mpm_real_type(void);
 /// every simulation of the process: what a leak check compares before and after.
 MPM_API size_t mpm_live_bytes(void);
 
+/// An embedding program's allocator for the library's memory (a pool, a tracking allocator):
+/// alloc returns `bytes` aligned to `alignment` (a power of two, at least 64) or NULL when out
+/// of memory; free takes back what alloc gave. `user` is passed to both.
+typedef struct mpm_allocator {
+  void *(*alloc)(size_t bytes, size_t alignment, void *user);
+  void (*free)(void *p, void *user);
+  void *user;
+} mpm_allocator;
+
+/// Every later allocation of the library goes through `a` (NULL: back to the C library's
+/// aligned_alloc and free, and anonymous mappings for the particle storage), the particle
+/// storage included (it then grows by a copy instead of moving its pages). Set it while the
+/// library holds no memory (mpm_live_bytes() == 0: before the first simulation, or after the
+/// last is destroyed), from one thread; MPM_ERR_INVALID otherwise, or when a has only one of its
+/// two functions. What the scene parser (cJSON) and the OpenVDB module allocate for their own
+/// use does not go through it.
+MPM_API mpm_status mpm_set_allocator(const mpm_allocator *a);
+
 typedef struct mpm_sim mpm_sim;
 
 /// Load and validate a JSON scene and build the simulation (particles sampled, colliders set).

@@ -29,6 +29,33 @@ static atomic_size_t alloc_calls;
 static atomic_size_t peak_bytes;
 static atomic_uint stagger_counter;
 
+/* The embedding program's allocator, or (alloc NULL) the C library's and anonymous mappings.
+ * Set only while nothing is allocated (mpm_set_allocator), so every live block came from the
+ * one in place. */
+static struct {
+  void *(*alloc)(size_t bytes, size_t alignment, void *user);
+  void (*release)(void *p, void *user);
+  void *user;
+} hook;
+
+void mpm_alloc_set_hook(void *(*alloc)(size_t bytes, size_t alignment, void *user),
+                        void (*release)(void *p, void *user), void *user) {
+  hook.alloc = alloc;
+  hook.release = release;
+  hook.user = user;
+}
+
+static void *raw_alloc(size_t total, size_t align) {
+  return hook.alloc ? hook.alloc(total, align, hook.user) : aligned_alloc(align, total);
+}
+
+static void raw_free(void *p) {
+  if (hook.alloc)
+    hook.release(p, hook.user);
+  else
+    free(p);
+}
+
 typedef struct header {
   void *raw;
   size_t bytes;
@@ -50,10 +77,10 @@ void *mpm_alloc(size_t bytes) {
   if (large) offset += STAGGER_STEP * (atomic_fetch_add(&stagger_counter, 1) % STAGGER_SLOTS);
   size_t total = bytes + offset;
   total = (total + align - 1) / align * align;
-  unsigned char *raw = aligned_alloc(align, total);
+  unsigned char *raw = raw_alloc(total, align);
   if (!raw) return NULL;
 #ifdef MADV_HUGEPAGE
-  if (large) madvise(raw, total, MADV_HUGEPAGE); /* a hint; failure is harmless */
+  if (large && !hook.alloc) madvise(raw, total, MADV_HUGEPAGE); /* a hint; failure is harmless */
 #endif
   unsigned char *p = raw + offset;
   header h = {raw, bytes};
@@ -74,7 +101,7 @@ void mpm_free(void *p) {
   header h;
   memcpy(&h, (unsigned char *)p - sizeof h, sizeof h);
   atomic_fetch_sub(&live_bytes, h.bytes);
-  free(h.raw);
+  raw_free(h.raw);
 }
 
 void *mpm_realloc(void *p, size_t bytes) {
@@ -156,6 +183,11 @@ static void *map_aligned(size_t total, int prot) {
 void *mpm_block_alloc(size_t bytes) {
   atomic_fetch_add(&alloc_calls, 1);
   const size_t total = page_round(bytes ? bytes : 1);
+  if (hook.alloc) { /* the program's allocator: page-aligned pages of its own */
+    void *p = hook.alloc(total, total >= HUGE_THRESHOLD ? HUGE_ALIGN : 4096, hook.user);
+    if (p) count_bytes(bytes);
+    return p;
+  }
   void *p = map_aligned(total, PROT_READ | PROT_WRITE);
   if (p == MAP_FAILED) return NULL;
 #ifdef MADV_HUGEPAGE
@@ -167,6 +199,13 @@ void *mpm_block_alloc(size_t bytes) {
 
 void *mpm_block_grow(void *p, size_t old_bytes, size_t new_bytes) {
   if (!p) return mpm_block_alloc(new_bytes);
+  if (hook.alloc) { /* no pages to move: a new block and a copy */
+    void *q = mpm_block_alloc(new_bytes);
+    if (!q) return NULL;
+    memcpy(q, p, old_bytes < new_bytes ? old_bytes : new_bytes);
+    mpm_block_free(p, old_bytes);
+    return q;
+  }
   atomic_fetch_add(&alloc_calls, 1);
   const size_t old_total = page_round(old_bytes ? old_bytes : 1), total = page_round(new_bytes);
   void *q;
@@ -193,7 +232,10 @@ void *mpm_block_grow(void *p, size_t old_bytes, size_t new_bytes) {
 
 void mpm_block_free(void *p, size_t bytes) {
   if (!p) return;
-  munmap(p, page_round(bytes ? bytes : 1));
+  if (hook.alloc)
+    hook.release(p, hook.user);
+  else
+    munmap(p, page_round(bytes ? bytes : 1));
   atomic_fetch_sub(&live_bytes, bytes);
 }
 

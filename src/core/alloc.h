@@ -49,6 +49,9 @@ void mpm_keep_clear(mpm_keep *k);
 void *mpm_block_alloc(size_t bytes);                               /* NULL on failure */
 void *mpm_block_grow(void *p, size_t old_bytes, size_t new_bytes); /* NULL: failed, p kept */
 void mpm_block_free(void *p, size_t bytes);                        /* NULL is fine */
+/* The embedding program's allocator (mpm_set_allocator in mpm.h); alloc NULL: the default. */
+void mpm_alloc_set_hook(void *(*alloc)(size_t bytes, size_t alignment, void *user),
+                        void (*release)(void *p, void *user), void *user);
 size_t mpm_alloc_live_bytes(void); /* bytes currently allocated through mpm_alloc */
 size_t mpm_alloc_calls(void);      /* mpm_alloc calls since start (tests: a warm step makes none) */
 size_t mpm_alloc_peak_bytes(void); /* high-water mark since start or last reset */
