@@ -3,9 +3,8 @@
 
 Rules (docs/architecture.md, "Memory"):
   allocation  the library (src/) allocates only through core/alloc.h: no malloc, calloc,
-              realloc or strdup outside src/core/alloc.c, and free() only for what libc or the
-              OpenVDB module allocated, on a line whose comment says so ("from malloc") or in
-              the function that frees the mesher's arrays.
+              realloc or strdup outside src/core/alloc.c, and free() only for what libc
+              allocated, on a line whose comment says so ("from malloc").
 
 Usage: tools/check_shape.py [--root DIR]   exit 0 when every rule holds, 1 with the violations
        tools/check_shape.py --self-test    plants a violation of each rule in a copy and checks
@@ -20,10 +19,6 @@ import tempfile
 
 ALLOC = re.compile(r'(?<![\w.>])(malloc|calloc|realloc|strdup|strndup)\s*\(')
 FREE = re.compile(r'(?<![\w.>])free\s*\(')
-# free() of memory that is not the library's own, each with its reason
-FREE_ALLOWED = [
-    ('src/surface/surface.c', 'mpm_surface_mesh_free'),  # the OpenVDB module's arrays
-]
 
 
 def strip_comments_and_strings(line):
@@ -44,13 +39,9 @@ def check_allocation(root):
             rel = os.path.relpath(path, root)
             if rel == os.path.join('src', 'core', 'alloc.c'):
                 continue
-            function = None
             in_comment = False
             with open(path, encoding='utf-8', errors='replace') as f:
                 for no, raw in enumerate(f, 1):
-                    m = re.match(r'^[A-Za-z_][\w \*]*?\b(\w+)\(', raw)
-                    if m and not raw.startswith((' ', '\t', '#')):
-                        function = m.group(1)
                     line = raw
                     if in_comment:
                         if '*/' not in line:
@@ -65,8 +56,7 @@ def check_allocation(root):
                         problems.append('%s:%d: allocation outside core/alloc.h: %s'
                                         % (rel, no, raw.strip()))
                     if FREE.search(code):
-                        allowed = 'from malloc' in raw or (rel, function) in FREE_ALLOWED
-                        if not allowed:
+                        if 'from malloc' not in raw:
                             problems.append('%s:%d: free() of the library\'s memory (mpm_free; '
                                             'or say "from malloc" when libc allocated it): %s'
                                             % (rel, no, raw.strip()))

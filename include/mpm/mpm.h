@@ -67,8 +67,8 @@ typedef struct mpm_allocator {
 /// storage included (it then grows by a copy instead of moving its pages). Set it while the
 /// library holds no memory (mpm_live_bytes() == 0: before the first simulation, or after the
 /// last is destroyed), from one thread; MPM_ERR_INVALID otherwise, or when a has only one of its
-/// two functions. What the scene parser (cJSON) and the OpenVDB module allocate for their own
-/// use does not go through it.
+/// two functions. What the scene parser (cJSON) and OpenVDB allocate for their own work does
+/// not go through it.
 MPM_API mpm_status mpm_set_allocator(const mpm_allocator *a);
 
 typedef struct mpm_sim mpm_sim;

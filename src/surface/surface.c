@@ -35,9 +35,8 @@ mpm_surface_params mpm_surface_params_default(void) {
 }
 
 void mpm_surface_mesh_free(mpm_surface_mesh *m) {
-  /* the OpenVDB module (vdb_shim.h) allocated them with malloc */
-  free(m->vertices);
-  free(m->triangles);
+  mpm_free(m->vertices);
+  mpm_free(m->triangles);
   memset(m, 0, sizeof *m);
 }
 

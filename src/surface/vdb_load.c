@@ -13,6 +13,7 @@
 #ifdef MPM_HAVE_OPENVDB
 #define _GNU_SOURCE /* dladdr */
 #include "surface/vdb_shim.h"
+#include "core/alloc.h"
 
 #include <dlfcn.h>
 #include <pthread.h>
@@ -55,7 +56,8 @@ static int try_open(const char *path) {
     dlclose(h);
     return 0;
   }
-  table = t; /* the module stays loaded for the process's life */
+  t->set_allocator(mpm_alloc, mpm_free); /* the arrays it gives us are ours to mpm_free */
+  table = t;                             /* the module stays loaded for the process's life */
   return 1;
 }
 

@@ -131,6 +131,15 @@ int mpm_vdb_smooth(mpm_vdb_grid *g, int passes, mpm_vdb_filter filter, double of
   return MPM_VDB_FAIL;
 }
 
+/* The engine's allocator for the arrays handed to it (the loader sets it: mpm_alloc). */
+static void *(*engine_alloc)(size_t) = std::malloc;
+static void (*engine_release)(void *) = std::free;
+
+static void set_allocator(void *(*alloc)(size_t), void (*release)(void *)) {
+  engine_alloc = alloc;
+  engine_release = release;
+}
+
 int mpm_vdb_mesh(const mpm_vdb_grid *g, int threads, float **points, size_t *point_count,
                  uint32_t **triangles, size_t *triangle_count, char *msg, size_t cap) {
   *points = nullptr;
@@ -143,11 +152,11 @@ int mpm_vdb_mesh(const mpm_vdb_grid *g, int threads, float **points, size_t *poi
     std::vector<openvdb::Vec4I> quads;
     openvdb::tools::volumeToMesh(*g->grid, pts, tris, quads, 0.0, 0.0, true);
     const size_t nt = tris.size() + 2 * quads.size();
-    float *p = (float *)std::malloc((3 * pts.size() + 1) * sizeof(float));
-    uint32_t *t = (uint32_t *)std::malloc((3 * nt + 1) * sizeof(uint32_t));
+    float *p = (float *)engine_alloc((3 * pts.size() + 1) * sizeof(float));
+    uint32_t *t = (uint32_t *)engine_alloc((3 * nt + 1) * sizeof(uint32_t));
     if (!p || !t) {
-      std::free(p);
-      std::free(t);
+      if (p) engine_release(p);
+      if (t) engine_release(t);
       say(msg, cap, "out of memory for the surface mesh", nullptr);
       return MPM_VDB_FAIL;
     }
@@ -383,7 +392,8 @@ const mpm_vdb_table *mpm_vdb_module_table(void) {
                                       mpm_vdb_grid_info,     mpm_vdb_sample,
                                       mpm_vdb_grid_destroy,  mpm_vdb_read_vector,
                                       mpm_vdb_vector_sample, mpm_vdb_vector_active_voxels,
-                                      mpm_vdb_vector_name,   mpm_vdb_vector_grid_destroy};
+                                      mpm_vdb_vector_name,   mpm_vdb_vector_grid_destroy,
+                                      set_allocator};
   return &table;
 }
 

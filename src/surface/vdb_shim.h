@@ -59,8 +59,9 @@ int mpm_vdb_smooth(mpm_vdb_grid *grid, int passes, mpm_vdb_filter filter, double
 
 /// The zero isosurface as triangles (openvdb::tools::volumeToMesh, adaptivity 0, its quads
 /// split along a diagonal): *points gets 3 floats per vertex (m), *triangles 3 vertex indices
-/// per triangle, counter-clockwise seen from outside (outward normals). Both arrays are
-/// malloc'd and freed by the caller with free(); zero triangles is not a failure.
+/// per triangle, counter-clockwise seen from outside (outward normals). Both arrays come from
+/// the engine's allocator (the table's set_allocator: mpm_alloc) and are freed by the caller
+/// with mpm_free; zero triangles is not a failure.
 int mpm_vdb_mesh(const mpm_vdb_grid *grid, int threads, float **points, size_t *point_count,
                  uint32_t **triangles, size_t *triangle_count, char *msg, size_t cap);
 
@@ -118,7 +119,7 @@ void mpm_vdb_vector_grid_destroy(mpm_vdb_vector_grid *grid);
  * run without surfaces does not load OpenVDB and its libraries (42 of the program's 55 ms of
  * start-up: the relocations of libopenvdb and its dependencies). The version changes whenever
  * the table does. */
-#define MPM_VDB_TABLE_VERSION 1
+#define MPM_VDB_TABLE_VERSION 2
 typedef struct mpm_vdb_table {
   int version;
   int (*levelset_from_spheres)(const double *, const double *, size_t, double, double, int,
@@ -139,6 +140,8 @@ typedef struct mpm_vdb_table {
   uint64_t (*vector_active_voxels)(const mpm_vdb_vector_grid *);
   void (*vector_name)(const mpm_vdb_vector_grid *, char *, size_t);
   void (*vector_grid_destroy)(mpm_vdb_vector_grid *);
+  /* the allocator of the arrays the module gives the engine (mesh's), set once at load */
+  void (*set_allocator)(void *(*alloc)(size_t), void (*release)(void *));
 } mpm_vdb_table;
 
 #ifdef __cplusplus
