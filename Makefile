@@ -13,10 +13,14 @@ MPM_INSTALL_ARCH ?= x86-64-v2
 FUZZ_SECONDS ?= 60
 DEMO_SCENE ?= examples/jello_cubes.json
 CMAKE_FLAGS ?=
+# CI builds (CI set, as .ci/run's environment has it) treat every compiler warning as an error
+ifneq ($(CI),)
+CMAKE_FLAGS += -DMPM_WERROR=ON
+endif
 
 DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng-dev zlib1g-dev \
 	libhdf5-dev gnuplot-nox python3-vtk9 valgrind libopenvdb-dev libboost-dev \
-	python3-dev python3-numpy python3-pytest
+	python3-dev python3-numpy python3-pytest clang-format
 # clang and its runtime (libFuzzer, sanitizers): only `make fuzz` and `make test-fuzz` need them
 FUZZ_DEB_PACKAGES = clang libclang-rt-14-dev
 # Blender (3.4, headless) for the add-on's test: `make test` installs it, `make demo` does not
@@ -126,8 +130,9 @@ test-float: build deps-blender
 # The malformed-input corpus is left to the float and sanitizer builds (DOUBLE_SKIP): its 400
 # runs of the program are input checks that the real type does not reach, and each run's start
 # costs about 55 ms (42 ms of it loading OpenVDB's libraries), 22 s in all. The Blender add-on
-# reads the files, not the engine: the float build's run checks it.
-DOUBLE_SKIP = test_corpus|blender_addon
+# reads the files, not the engine: the float build's run checks it. The tree's own checks
+# (shape_check, format_check) run once, in the float build.
+DOUBLE_SKIP = test_corpus|blender_addon|shape_check|format_check
 test-double: build-double
 	cd $(BUILD_DOUBLE) && ctest --output-on-failure -j $(JOBS) -E '^($(DOUBLE_SKIP))$$'
 
@@ -137,8 +142,8 @@ test-double: build-double
 # test_plasticity, test_implicit and the others. So is VTK's reading of the files
 # (vtk_reader_check, a check of the file formats, 28 s under ASan): the writers' code runs under
 # ASan in test_outputs, test_io, test_output_fields and test_cli. The Blender add-on likewise
-# (the float build checks it).
-SANITIZE_SKIP = test_regression|test_sand_pile|vtk_reader_check|adversary_campaign|blender_addon
+# (the float build checks it), and the tree's own checks.
+SANITIZE_SKIP = test_regression|test_sand_pile|vtk_reader_check|adversary_campaign|blender_addon|shape_check|format_check
 test-sanitize: build-sanitize
 	cd $(BUILD_SANITIZE) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -E '^($(SANITIZE_SKIP))$$'
@@ -180,7 +185,7 @@ bench: build
 	./$(BUILD)/mpm bench transfer
 
 format:
-	clang-format -i $$(git ls-files '*.c' '*.h')
+	clang-format -i $$(git ls-files '*.c' '*.h' '*.cpp')
 
 clean:
 	rm -rf $(BUILD) $(BUILD_DOUBLE) $(BUILD_SANITIZE) $(BUILD_FUZZ) $(BUILD_TSAN) $(BUILD_INSTALL) out
