@@ -125,9 +125,10 @@ int mpm_bench_surface(int argc, char **argv) {
         char path[128];
         const double w0 = now();
         snprintf(path, sizeof path, "%s/surface.obj", dir);
-        mpm_surface_write_obj(path, &mesh, &err);
+        const mpm_triangle_mesh view = mpm_surface_mesh_view(&mesh);
+        mpm_write_mesh_obj(path, &view, &err);
         snprintf(path, sizeof path, "%s/surface.ply", dir);
-        mpm_surface_write_ply(path, &mesh, &err);
+        mpm_write_mesh_ply(path, &view, &err);
         write = now() - w0;
         unlink(path);
         snprintf(path, sizeof path, "%s/surface.obj", dir);

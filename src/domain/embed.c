@@ -2,7 +2,6 @@
 #include "domain/embed.h"
 #include "domain/lattice_map.h"
 #include "core/alloc.h"
-#include "io/io.h"
 
 #include <errno.h>
 #include <math.h>
@@ -110,80 +109,4 @@ void mpm_embedded_surface_free(mpm_embedded_surface *e) {
   mpm_free(e->xi);
   mpm_free(e->rest);
   memset(e, 0, sizeof *e);
-}
-
-mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e, const double *x,
-                                 mpm_error *err) {
-  mpm_atomic_file f;
-  mpm_status st = mpm_atomic_open(&f, path, err);
-  if (st != MPM_OK) return st;
-  fprintf(f.fp, "# mpm embedded surface (Zhu et al. 2017 sec. 4.1), body %d\n", e->body);
-  for (int v = 0; v < e->vertex_count; ++v)
-    fprintf(f.fp, "v %.9g %.9g %.9g\n", x[3 * v], x[3 * v + 1], x[3 * v + 2]);
-  for (int t = 0; t < e->triangle_count; ++t)
-    fprintf(f.fp, "f %d %d %d\n", e->triangles[3 * t] + 1, e->triangles[3 * t + 1] + 1,
-            e->triangles[3 * t + 2] + 1);
-  return mpm_atomic_commit(&f, err);
-}
-
-mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e, const double *x,
-                                 mpm_error *err) {
-  mpm_atomic_file f;
-  mpm_status st = mpm_atomic_open(&f, path, err);
-  if (st != MPM_OK) return st;
-  fprintf(f.fp,
-          "ply\nformat binary_little_endian 1.0\ncomment mpm embedded surface, body %d\n"
-          "element vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
-          "element face %d\nproperty list uchar int vertex_indices\nend_header\n",
-          e->body, e->vertex_count, e->triangle_count);
-  for (int v = 0; v < e->vertex_count; ++v) {
-    const float p[3] = {(float)x[3 * v], (float)x[3 * v + 1], (float)x[3 * v + 2]};
-    fwrite(p, sizeof p, 1, f.fp);
-  }
-  for (int t = 0; t < e->triangle_count; ++t) {
-    const unsigned char three = 3;
-    const int32_t idx[3] = {e->triangles[3 * t], e->triangles[3 * t + 1], e->triangles[3 * t + 2]};
-    fwrite(&three, 1, 1, f.fp);
-    fwrite(idx, sizeof idx, 1, f.fp);
-  }
-  return mpm_atomic_commit(&f, err); /* a short write shows up as the stream's error here */
-}
-
-/* VTK XML PolyData, ASCII: a surface has a few thousand vertices, small enough as text, and
- * ASCII needs none of the VTU writer's appended-data bookkeeping. Float32 points, as the PLY. */
-mpm_status mpm_write_surface_vtp(const char *path, const mpm_embedded_surface *e, const double *x,
-                                 double time, mpm_error *err) {
-  mpm_atomic_file f;
-  mpm_status st = mpm_atomic_open(&f, path, err);
-  if (st != MPM_OK) return st;
-  fprintf(f.fp,
-          "<?xml version=\"1.0\"?>\n"
-          "<!-- mpm embedded surface (Zhu et al. 2017 sec. 4.1), body %d -->\n"
-          "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-          "header_type=\"UInt64\">\n"
-          "  <PolyData>\n"
-          "    <FieldData>\n"
-          "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" "
-          "format=\"ascii\">%.17g</DataArray>\n"
-          "    </FieldData>\n"
-          "    <Piece NumberOfPoints=\"%d\" NumberOfVerts=\"0\" NumberOfLines=\"0\" "
-          "NumberOfStrips=\"0\" NumberOfPolys=\"%d\">\n"
-          "      <Points>\n"
-          "        <DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n",
-          e->body, time, e->vertex_count, e->triangle_count);
-  for (int v = 0; v < e->vertex_count; ++v)
-    fprintf(f.fp, "%.9g %.9g %.9g\n", (double)(float)x[3 * v], (double)(float)x[3 * v + 1],
-            (double)(float)x[3 * v + 2]);
-  fputs("        </DataArray>\n      </Points>\n      <Polys>\n"
-        "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n",
-        f.fp);
-  for (int t = 0; t < e->triangle_count; ++t)
-    fprintf(f.fp, "%d %d %d\n", e->triangles[3 * t], e->triangles[3 * t + 1],
-            e->triangles[3 * t + 2]);
-  fputs("        </DataArray>\n"
-        "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n",
-        f.fp);
-  for (int t = 0; t < e->triangle_count; ++t) fprintf(f.fp, "%d\n", 3 * (t + 1));
-  fputs("        </DataArray>\n      </Polys>\n    </Piece>\n  </PolyData>\n</VTKFile>\n", f.fp);
-  return mpm_atomic_commit(&f, err); /* a short write shows up as the stream's error here */
 }

@@ -1,8 +1,8 @@
 /* embed.h - triangle meshes embedded in particle domains (Zhu et al. 2017, sec. 4.1): a body
  * made from a mesh keeps it, every vertex is tied to one domain by its trilinear coordinates
  * in the domain's reference hexahedron, and the deformed surface is interpolated from the
- * domain's corners each frame, x = sum_a N_a(xi) x_a, for rendering (OBJ, PLY and VTP per
- * frame).
+ * domain's corners each frame, x = sum_a N_a(xi) x_a, for rendering (the frame writer writes
+ * it as OBJ, PLY and VTP: io/triangle_mesh.h).
  *
  * A vertex inside a domain gets xi in [-1, 1]^3. Surface vertices often lie in lattice cells
  * whose centre (hence particle) is outside the mesh; they are tied to the nearest domain of
@@ -34,15 +34,5 @@ mpm_status mpm_embed_surface(mpm_embedded_surface *e, int body, mpm_mesh *mesh,
 void mpm_embedded_positions(const mpm_embedded_surface *e, const mpm_domain_set *s, double *x);
 
 void mpm_embedded_surface_free(mpm_embedded_surface *e);
-
-/* Write the deformed surface as Wavefront OBJ and as binary PLY, atomically. */
-mpm_status mpm_write_surface_obj(const char *path, const mpm_embedded_surface *e, const double *x,
-                                 mpm_error *err);
-mpm_status mpm_write_surface_ply(const char *path, const mpm_embedded_surface *e, const double *x,
-                                 mpm_error *err);
-/* ... and as VTK XML PolyData (.vtp, with the frame's time as TIME), for ParaView: run.pvd
- * lists it with the frame's particles. */
-mpm_status mpm_write_surface_vtp(const char *path, const mpm_embedded_surface *e, const double *x,
-                                 double time, mpm_error *err);
 
 #endif

@@ -9,6 +9,7 @@
 #include "domain/enrich.h"
 #include "io/run_folder.h"
 #include "io/staging.h"
+#include "io/triangle_mesh.h"
 #include "scene/sample.h"
 
 #include <math.h>
@@ -350,15 +351,23 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
       goto done;
     }
     mpm_embedded_positions(e, &sim->domains, x);
+    mpm_triangle_mesh m = {(size_t)e->vertex_count,
+                           (size_t)e->triangle_count,
+                           x,
+                           NULL,
+                           (const uint32_t *)e->triangles,
+                           ""}; /* the indices are >= 0 */
+    snprintf(m.title, sizeof m.title, "mpm embedded surface (Zhu et al. 2017 sec. 4.1), body %d",
+             e->body);
     snprintf(path, sizeof path, "%s/surface_body%d_%04d.obj", dir, e->body, frame);
-    st = mpm_write_surface_obj(path, e, x, &sim->error);
+    st = mpm_write_mesh_obj(path, &m, &sim->error);
     if (st == MPM_OK) {
       snprintf(path, sizeof path, "%s/surface_body%d_%04d.ply", dir, e->body, frame);
-      st = mpm_write_surface_ply(path, e, x, &sim->error);
+      st = mpm_write_mesh_ply(path, &m, &sim->error);
     }
     if (st == MPM_OK && o->vtu) { /* for ParaView, with the VTU files */
       snprintf(path, sizeof path, "%s/surface_body%d_%04d.vtp", dir, e->body, frame);
-      st = mpm_write_surface_vtp(path, e, x, sim->time, &sim->error);
+      st = mpm_write_mesh_vtp(path, &m, sim->time, &sim->error);
     }
     mpm_free(x);
     if (st != MPM_OK) goto done;

@@ -89,10 +89,11 @@ static mpm_status one_surface(mpm_sim *sim, const mpm_particles *p, const char *
   char tag[32] = "", path[MPM_PATH_MAX + 64];
   if (only >= 0) snprintf(tag, sizeof tag, "b%d_", only);
   snprintf(path, sizeof path, "%s/surface_%s%04d.obj", dir, tag, frame);
-  st = mpm_surface_write_obj(path, &mesh, &sim->error);
+  const mpm_triangle_mesh view = mpm_surface_mesh_view(&mesh);
+  st = mpm_write_mesh_obj(path, &view, &sim->error);
   if (st == MPM_OK) {
     snprintf(path, sizeof path, "%s/surface_%s%04d.ply", dir, tag, frame);
-    st = mpm_surface_write_ply(path, &mesh, &sim->error);
+    st = mpm_write_mesh_ply(path, &view, &sim->error);
   }
   mpm_vdb_vector_grid *velocity = NULL;
   if (st == MPM_OK && grid && buf->vel)

@@ -138,42 +138,10 @@ done:
   return st;
 }
 
-mpm_status mpm_surface_write_obj(const char *path, const mpm_surface_mesh *m, mpm_error *err) {
-  mpm_atomic_file f;
-  mpm_status st = mpm_atomic_open(&f, path, err);
-  if (st != MPM_OK) return st;
-  fprintf(f.fp, "# mpm particle surface: %zu vertices, %zu triangles\n", m->vertex_count,
-          m->triangle_count);
-  for (size_t i = 0; i < m->vertex_count; ++i)
-    fprintf(f.fp, "v %.7g %.7g %.7g\n", (double)m->vertices[3 * i], (double)m->vertices[3 * i + 1],
-            (double)m->vertices[3 * i + 2]);
-  for (size_t t = 0; t < m->triangle_count; ++t)
-    fprintf(f.fp, "f %u %u %u\n", m->triangles[3 * t] + 1, m->triangles[3 * t + 1] + 1,
-            m->triangles[3 * t + 2] + 1);
-  return mpm_atomic_commit(&f, err);
-}
-
-mpm_status mpm_surface_write_ply(const char *path, const mpm_surface_mesh *m, mpm_error *err) {
-  mpm_atomic_file f;
-  mpm_status st = mpm_atomic_open(&f, path, err);
-  if (st != MPM_OK) return st;
-  fprintf(f.fp,
-          "ply\nformat binary_little_endian 1.0\ncomment mpm particle surface\n"
-          "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
-          "element face %zu\nproperty list uchar int vertex_indices\nend_header\n",
-          m->vertex_count, m->triangle_count);
-  /* x86 and the other targets are little endian; the record layout is written byte by byte */
-  fwrite(m->vertices, sizeof(float), 3 * m->vertex_count, f.fp);
-  unsigned char rec[13];
-  rec[0] = 3;
-  for (size_t t = 0; t < m->triangle_count; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = m->triangles[3 * t + (size_t)k];
-      for (int b = 0; b < 4; ++b) rec[1 + 4 * k + b] = (unsigned char)(v >> (8 * b));
-    }
-    fwrite(rec, 1, sizeof rec, f.fp);
-  }
-  return mpm_atomic_commit(&f, err);
+mpm_triangle_mesh mpm_surface_mesh_view(const mpm_surface_mesh *m) {
+  mpm_triangle_mesh v = {m->vertex_count, m->triangle_count, NULL,
+                         m->vertices,     m->triangles,      "mpm particle surface"};
+  return v;
 }
 
 mpm_status mpm_surface_write_vdb(const char *path, const mpm_vdb_grid *grid, int density,

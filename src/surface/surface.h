@@ -12,6 +12,7 @@
 #define MPM_SURFACE_SURFACE_H
 
 #include "core/error.h"
+#include "io/triangle_mesh.h"
 #include "surface/vdb_shim.h"
 
 #include <stddef.h>
@@ -63,11 +64,10 @@ mpm_status mpm_surface_build(const double *xyz, const double *volume, size_t n,
 /// beyond its outermost particles, where the sampled body's boundary was.
 double mpm_surface_face_height(double r, double s);
 
-/// Writers, each atomic. OBJ: v and f records, 1-based. PLY: binary little endian, float x y z
-/// and a uchar-counted int list vertex_indices. VDB: the level set "surface" (and with density
-/// a fog volume "density", with velocity that vector grid "vel").
-mpm_status mpm_surface_write_obj(const char *path, const mpm_surface_mesh *m, mpm_error *err);
-mpm_status mpm_surface_write_ply(const char *path, const mpm_surface_mesh *m, mpm_error *err);
+/// The mesh as the triangle writers take it (io/triangle_mesh.h: OBJ, PLY).
+mpm_triangle_mesh mpm_surface_mesh_view(const mpm_surface_mesh *m);
+/// The level set "surface" as a VDB file, atomically (and with density a fog volume "density",
+/// with velocity that vector grid "vel").
 mpm_status mpm_surface_write_vdb(const char *path, const mpm_vdb_grid *grid, int density,
                                  const mpm_vdb_vector_grid *velocity, mpm_error *err);
 
