@@ -76,12 +76,14 @@ mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double
 
 /* The per-particle arrays of frame_NNNN.vtu that `fields` selects (bits of mpm_output_field),
  * of f's particles, for the CellData of another file (vtu.c): their appended bytes (byte counts
- * included); their header lines, offsets from `base`, each line led by `indent`; and their
- * appended data. The two writers return 0 or the errno of the first failed write. */
+ * included); their header lines, offsets from `base`; and their appended data. A failed write
+ * (or no memory) is kept in o's err (io/vtu_stream.h). */
+struct mpm_vtu_stream;
 uint64_t mpm_vtu_particle_arrays_bytes(const mpm_frame_fields *f, unsigned fields);
-int mpm_vtu_particle_arrays_header(FILE *fp, const mpm_frame_fields *f, unsigned fields,
-                                   uint64_t base, const char *indent);
-int mpm_vtu_particle_arrays_data(FILE *fp, const mpm_frame_fields *f, unsigned fields);
+void mpm_vtu_particle_arrays_header(struct mpm_vtu_stream *o, const mpm_frame_fields *f,
+                                    unsigned fields, uint64_t base);
+void mpm_vtu_particle_arrays_data(struct mpm_vtu_stream *o, const mpm_frame_fields *f,
+                                  unsigned fields);
 
 /* The particle domains of a frame as hexahedral cells over their corners (vtu_domains.c).
  * `cells` (may be NULL): the active domain particles in the set's order, whose arrays that

@@ -19,6 +19,7 @@
  * Float64 as the build's mpm_real. When fields->J is NULL, J is det F of each particle; when
  * fields->stress (cauchy, pressure) is NULL, that array is written as zero. */
 #include "io/io.h"
+#include "io/vtu_stream.h"
 #include "core/alloc.h"
 #include "scene/scene.h"
 
@@ -208,87 +209,53 @@ static int written(const vtu_array *a, unsigned fields) {
   return a->field < 0 || (fields >> a->field & 1u);
 }
 
-/* Output stream that remembers the first failure, so that a full disk stops the writer at
- * once and the message carries the real errno rather than one from a later call. */
-typedef struct vtu_out {
-  FILE *fp;
-  int err; /* errno of the first failed write, 0 while fine */
-} vtu_out;
-
-static void out_bytes(vtu_out *o, const void *p, size_t n) {
-  if (o->err || n == 0) return;
-  errno = 0;
-  if (fwrite(p, 1, n, o->fp) != n) o->err = errno ? errno : EIO;
-}
-
-static void out_text(vtu_out *o, const char *s) {
-  out_bytes(o, s, strlen(s));
-}
-
 static uint64_t array_bytes(const vtu_array *a, size_t count) {
   return (uint64_t)(a->per_particle ? count : 1) * (uint64_t)a->comps * a->comp_bytes;
 }
 
 /* Header lines of every array of one section. */
-static void header_section(vtu_out *o, const char *section, const uint64_t *offsets,
-                           const char *indent, unsigned fields) {
-  char line[320];
+static void header_section(mpm_vtu_stream *o, const char *section, const uint64_t *offsets,
+                           unsigned fields) {
   for (int k = 0; k < VTU_ARRAYS; ++k) {
     const vtu_array *a = &vtu_arrays[k];
     if (strcmp(a->section, section) != 0 || !written(a, fields)) continue;
-    const char *type = a->type ? a->type : VTU_REAL_TYPE;
-    char comps[48] = "";
-    if (a->comps > 1) snprintf(comps, sizeof comps, " NumberOfComponents=\"%d\"", a->comps);
-    if (!a->per_particle) snprintf(comps, sizeof comps, " NumberOfTuples=\"1\"");
-    snprintf(line, sizeof line,
-             "%s<DataArray type=\"%s\" Name=\"%s\"%s format=\"appended\" offset=\"%llu\"/>\n",
-             indent, type, a->name, comps, (unsigned long long)offsets[k]);
-    out_text(o, line);
+    mpm_vtu_data_array(o, !strcmp(section, "field"), a->type ? a->type : VTU_REAL_TYPE, a->name,
+                       a->comps, !a->per_particle, offsets[k]);
   }
 }
 
-static void write_header(vtu_out *o, size_t count, const uint64_t *offsets, unsigned fields) {
-  char line[256];
-  out_text(o, "<?xml version=\"1.0\"?>\n"
-              "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-              "header_type=\"UInt64\">\n"
-              "  <UnstructuredGrid>\n"
-              "    <FieldData>\n");
-  header_section(o, "field", offsets, "      ", fields);
-  out_text(o, "    </FieldData>\n");
-  snprintf(line, sizeof line, "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n", count,
-           count);
-  out_text(o, line);
+static void write_header(mpm_vtu_stream *o, size_t count, const uint64_t *offsets,
+                         unsigned fields) {
+  mpm_vtu_begin(o);
+  header_section(o, "field", offsets, fields);
+  mpm_vtu_piece(o, count, count);
   /* the active attributes ParaView colours and glyphs by, where they are written */
-  snprintf(line, sizeof line, "      <PointData%s%s%s>\n",
+  char attrs[128];
+  snprintf(attrs, sizeof attrs, "%s%s%s",
            fields >> MPM_FIELD_STRESS & 1u ? " Scalars=\"stress\"" : "",
            fields >> MPM_FIELD_VELOCITY & 1u ? " Vectors=\"velocity\"" : "",
            fields >> MPM_FIELD_CAUCHY_STRESS & 1u ? " Tensors=\"cauchy_stress\"" : "");
-  out_text(o, line);
-  header_section(o, "point", offsets, "        ", fields);
-  out_text(o, "      </PointData>\n      <Points>\n");
-  header_section(o, "points", offsets, "        ", fields);
-  out_text(o, "      </Points>\n      <Cells>\n");
-  header_section(o, "cells", offsets, "        ", fields);
-  out_text(o, "      </Cells>\n"
-              "    </Piece>\n"
-              "  </UnstructuredGrid>\n"
-              "  <AppendedData encoding=\"raw\">\n"
-              "   _");
+  const char *const sections[3][2] = {
+      {"PointData", "point"}, {"Points", "points"}, {"Cells", "cells"}};
+  for (int k = 0; k < 3; ++k) {
+    mpm_vtu_section(o, sections[k][0], 1, k == 0 ? attrs : NULL);
+    header_section(o, sections[k][1], offsets, fields);
+    mpm_vtu_section(o, sections[k][0], 0, NULL);
+  }
+  mpm_vtu_end_head(o);
 }
 
 /* Byte count, then the values a chunk of tuples at a time through buf (VTU_CHUNK_BYTES). */
-static void write_array(vtu_out *o, const vtu_array *a, const mpm_frame_fields *f, size_t count,
-                        void *buf) {
-  const uint64_t bytes = array_bytes(a, count);
-  out_bytes(o, &bytes, sizeof bytes);
+static void write_array(mpm_vtu_stream *o, const vtu_array *a, const mpm_frame_fields *f,
+                        size_t count, void *buf) {
+  mpm_vtu_put_count(o, array_bytes(a, count));
   const size_t tuples = a->per_particle ? count : 1;
   const size_t tuple_bytes = (size_t)a->comps * a->comp_bytes;
   const size_t chunk = VTU_CHUNK_BYTES / tuple_bytes;
   for (size_t first = 0; first < tuples && !o->err; first += chunk) {
     const size_t n = tuples - first < chunk ? tuples - first : chunk;
     a->fill(f, first, n, buf);
-    out_bytes(o, buf, n * tuple_bytes);
+    mpm_vtu_put(o, buf, n * tuple_bytes);
   }
 }
 
@@ -311,11 +278,11 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
     mpm_free(buf);
     return st;
   }
-  vtu_out o = {af.fp, 0};
+  mpm_vtu_stream o = {af.fp, 0};
   write_header(&o, count, offsets, fields);
   for (int k = 0; k < VTU_ARRAYS && !o.err; ++k)
     if (written(&vtu_arrays[k], fields)) write_array(&o, &vtu_arrays[k], f, count, buf);
-  out_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
+  mpm_vtu_finish(&o);
   mpm_free(buf);
   if (o.err) {
     mpm_atomic_abort(&af);
@@ -339,27 +306,26 @@ uint64_t mpm_vtu_particle_arrays_bytes(const mpm_frame_fields *f, unsigned field
   return at;
 }
 
-int mpm_vtu_particle_arrays_header(FILE *fp, const mpm_frame_fields *f, unsigned fields,
-                                   uint64_t base, const char *indent) {
+void mpm_vtu_particle_arrays_header(mpm_vtu_stream *o, const mpm_frame_fields *f, unsigned fields,
+                                    uint64_t base) {
   uint64_t offsets[VTU_ARRAYS] = {0}, at = base;
   for (int k = 0; k < VTU_ARRAYS; ++k)
     if (particle_array(&vtu_arrays[k], fields)) {
       offsets[k] = at;
       at += sizeof(uint64_t) + array_bytes(&vtu_arrays[k], f->particles->count);
     }
-  vtu_out o = {fp, 0};
   /* header_section writes the always-written ones too; there are none among "point" */
-  header_section(&o, "point", offsets, indent, fields);
-  return o.err;
+  header_section(o, "point", offsets, fields);
 }
 
-int mpm_vtu_particle_arrays_data(FILE *fp, const mpm_frame_fields *f, unsigned fields) {
+void mpm_vtu_particle_arrays_data(mpm_vtu_stream *o, const mpm_frame_fields *f, unsigned fields) {
   void *buf = mpm_alloc(VTU_CHUNK_BYTES);
-  if (!buf) return ENOMEM;
-  vtu_out o = {fp, 0};
-  for (int k = 0; k < VTU_ARRAYS && !o.err; ++k)
+  if (!buf) {
+    if (!o->err) o->err = ENOMEM;
+    return;
+  }
+  for (int k = 0; k < VTU_ARRAYS && !o->err; ++k)
     if (particle_array(&vtu_arrays[k], fields))
-      write_array(&o, &vtu_arrays[k], f, f->particles->count, buf);
+      write_array(o, &vtu_arrays[k], f, f->particles->count, buf);
   mpm_free(buf);
-  return o.err;
 }

@@ -6,6 +6,7 @@
  *
  * Same layout as vtu.c (XML header, UInt64 byte counts, one raw appended block). */
 #include "io/io.h"
+#include "io/vtu_stream.h"
 #include "core/alloc.h"
 
 #include <errno.h>
@@ -55,71 +56,47 @@ mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double
     mpm_free(l.lvl);
     return st;
   }
-  char head[2048];
-  snprintf(
-      head, sizeof head,
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-      "header_type=\"UInt64\">\n"
-      "  <UnstructuredGrid>\n"
-      "    <FieldData>\n"
-      "      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" "
-      "format=\"appended\" offset=\"%llu\"/>\n"
-      "    </FieldData>\n"
-      "    <Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n"
-      "      <Points>\n"
-      "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" "
-      "format=\"appended\" offset=\"%llu\"/>\n"
-      "      </Points>\n"
-      "      <CellData>\n"
-      "        <DataArray type=\"Int32\" Name=\"level\" format=\"appended\" offset=\"%llu\"/>\n"
-      "      </CellData>\n"
-      "      <Cells>\n"
-      "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" "
-      "offset=\"%llu\"/>\n"
-      "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" "
-      "offset=\"%llu\"/>\n"
-      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"%llu\"/>\n"
-      "      </Cells>\n"
-      "    </Piece>\n"
-      "  </UnstructuredGrid>\n"
-      "  <AppendedData encoding=\"raw\">\n_",
-      (unsigned long long)off[0], 8 * n, n, (unsigned long long)off[1], (unsigned long long)off[2],
-      (unsigned long long)off[3], (unsigned long long)off[4], (unsigned long long)off[5]);
-  int e = 0;
-#define PUT(p, bytes)                                                                              \
-  do {                                                                                             \
-    errno = 0;                                                                                     \
-    if (!e && (bytes) && fwrite((p), 1, (bytes), f.fp) != (bytes)) e = errno ? errno : EIO;        \
-  } while (0)
-  PUT(head, strlen(head));
-  PUT(&sizes[0], 8);
-  PUT(&time, sizeof time);
-  PUT(&sizes[1], 8);
-  PUT(l.xyz, sizes[1]);
-  PUT(&sizes[2], 8);
-  PUT(l.lvl, sizes[2]);
-  PUT(&sizes[3], 8);
+  mpm_vtu_stream o = {f.fp, 0};
+  mpm_vtu_begin(&o);
+  mpm_vtu_data_array(&o, 1, "Float64", "TIME", 1, 1, off[0]);
+  mpm_vtu_piece(&o, 8 * n, n);
+  mpm_vtu_section(&o, "Points", 1, NULL);
+  mpm_vtu_data_array(&o, 0, "Float32", "Points", 3, 0, off[1]);
+  mpm_vtu_section(&o, "Points", 0, NULL);
+  mpm_vtu_section(&o, "CellData", 1, NULL);
+  mpm_vtu_data_array(&o, 0, "Int32", "level", 1, 0, off[2]);
+  mpm_vtu_section(&o, "CellData", 0, NULL);
+  mpm_vtu_section(&o, "Cells", 1, NULL);
+  mpm_vtu_data_array(&o, 0, "Int64", "connectivity", 1, 0, off[3]);
+  mpm_vtu_data_array(&o, 0, "Int64", "offsets", 1, 0, off[4]);
+  mpm_vtu_data_array(&o, 0, "UInt8", "types", 1, 0, off[5]);
+  mpm_vtu_section(&o, "Cells", 0, NULL);
+  mpm_vtu_end_head(&o);
+  mpm_vtu_put_count(&o, sizes[0]);
+  mpm_vtu_put(&o, &time, sizeof time);
+  mpm_vtu_put_count(&o, sizes[1]);
+  mpm_vtu_put(&o, l.xyz, sizes[1]);
+  mpm_vtu_put_count(&o, sizes[2]);
+  mpm_vtu_put(&o, l.lvl, sizes[2]);
+  mpm_vtu_put_count(&o, sizes[3]);
   for (size_t c = 0; c < 8 * n; ++c) {
     const int64_t v = (int64_t)c;
-    PUT(&v, sizeof v);
+    mpm_vtu_put(&o, &v, sizeof v);
   }
-  PUT(&sizes[4], 8);
+  mpm_vtu_put_count(&o, sizes[4]);
   for (size_t c = 1; c <= n; ++c) {
     const int64_t v = (int64_t)(8 * c);
-    PUT(&v, sizeof v);
+    mpm_vtu_put(&o, &v, sizeof v);
   }
-  PUT(&sizes[5], 8);
+  mpm_vtu_put_count(&o, sizes[5]);
   const uint8_t voxel = 11; /* VTK_VOXEL */
-  for (size_t c = 0; c < n; ++c) PUT(&voxel, 1);
-  const char *tail = "\n  </AppendedData>\n</VTKFile>\n";
-  PUT(tail, strlen(tail));
-#undef PUT
+  for (size_t c = 0; c < n; ++c) mpm_vtu_put(&o, &voxel, 1);
+  mpm_vtu_finish(&o);
   mpm_free(l.xyz);
   mpm_free(l.lvl);
-  if (e) {
+  if (o.err) {
     mpm_atomic_abort(&f);
-    return mpm_error_set(err, MPM_ERR_IO, "cannot write '%s': %s", path, strerror(e));
+    return mpm_error_set(err, MPM_ERR_IO, "cannot write '%s': %s", path, strerror(o.err));
   }
   return mpm_atomic_commit(&f, err);
 }
