@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
 """check_shape.py - rules of the source tree's shape that a compiler does not check.
 
-Rules (docs/architecture.md, "Memory"):
+Rules (docs/architecture.md, "Memory" and "Layers"):
   allocation  the library (src/) allocates only through core/alloc.h: no malloc, calloc,
               realloc or strdup outside src/core/alloc.c, and free() only for what libc
               allocated, on a line whose comment says so ("from malloc").
+  layers      a folder of src/ includes headers of its own layer or lower ones (LAYERS, low
+              to high), and the public headers (mpm/); the known exceptions (KNOWN_UPWARD)
+              are listed with what removes them, and a new one fails.
 
 Usage: tools/check_shape.py [--root DIR]   exit 0 when every rule holds, 1 with the violations
        tools/check_shape.py --self-test    plants a violation of each rule in a copy and checks
@@ -19,6 +22,77 @@ import tempfile
 
 ALLOC = re.compile(r'(?<![\w.>])(malloc|calloc|realloc|strdup|strndup)\s*\(')
 FREE = re.compile(r'(?<![\w.>])free\s*\(')
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/([\w.]+)"')
+
+# src/'s folders from low to high; a folder includes its own layer and the ones below
+LAYERS = [
+    ['core'],
+    ['interp', 'grid'],
+    ['material', 'collide'],
+    ['transfer'],
+    ['domain'],
+    ['heat', 'adapt'],
+    ['io'],
+    ['scene'],
+    ['surface'],
+    ['solver'],
+    ['analysis', 'plot', 'render'],
+]
+# upward includes that stand today, each to go: the numerical folders take the enums of the
+# scene description (one scene description, with the enums beside their modules); the heat
+# solver's values live in the DOF set; the writers read scene enums
+KNOWN_UPWARD = {
+    ('src/collide/collider.h', 'scene/scene.h'),
+    ('src/collide/motion.h', 'scene/scene.h'),
+    ('src/domain/embed.h', 'scene/mesh.h'),
+    ('src/heat/heat.h', 'solver/dofs.h'),
+    ('src/interp/kernel.h', 'scene/scene.h'),
+    ('src/io/checkpoint.c', 'scene/scene.h'),
+    ('src/io/checkpoint_read.c', 'scene/scene.h'),
+    ('src/io/vtu.c', 'scene/scene.h'),
+    ('src/io/vtu_domains.c', 'scene/scene.h'),
+    ('src/material/material.h', 'scene/scene.h'),
+}
+
+
+def layer_of(folder):
+    for k, names in enumerate(LAYERS):
+        if folder in names:
+            return k
+    return None
+
+
+def check_layers(root):
+    problems = []
+    seen = set()
+    src = os.path.join(root, 'src')
+    for folder, _, files in sorted(os.walk(src)):
+        for name in sorted(files):
+            if not name.endswith(('.c', '.h', '.cpp')):
+                continue
+            path = os.path.join(folder, name)
+            rel = os.path.relpath(path, root).replace(os.sep, '/')
+            own = rel.split('/')[1]
+            own_layer = layer_of(own)
+            with open(path, encoding='utf-8', errors='replace') as f:
+                for no, line in enumerate(f, 1):
+                    m = INCLUDE.match(line)
+                    if not m or m.group(1) == 'mpm':
+                        continue
+                    target = m.group(1)
+                    if own_layer is None or layer_of(target) is None:
+                        problems.append('%s:%d: a folder the layers do not list (%s or %s): '
+                                        'add it to LAYERS' % (rel, no, own, target))
+                        continue
+                    header = '%s/%s' % (target, m.group(2))
+                    if (rel, header) in KNOWN_UPWARD:
+                        seen.add((rel, header))
+                    elif layer_of(target) > own_layer:
+                        problems.append('%s:%d: %s includes %s, a higher layer (%s over %s)'
+                                        % (rel, no, own, header, target, own))
+    for rel, header in sorted(KNOWN_UPWARD - seen):  # the list stays true
+        problems.append('%s: no longer includes %s: take it off KNOWN_UPWARD' % (rel, header))
+    return problems
 
 
 def strip_comments_and_strings(line):
@@ -64,7 +138,7 @@ def check_allocation(root):
 
 
 def run(root):
-    return check_allocation(root)
+    return check_allocation(root) + check_layers(root)
 
 
 def self_test(root):
@@ -72,6 +146,7 @@ def self_test(root):
     plants = {
         'malloc': 'void *planted(void) { return malloc(8); }\n',
         'free': 'void planted_free(void *p) { free(p); }\n',
+        'upward include': '#include "solver/sim.h"\n',
     }
     ok = True
     for rule, code in plants.items():
