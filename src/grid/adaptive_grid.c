@@ -6,6 +6,7 @@
 #include "grid/adaptive_grid_parts.h"
 
 #include "core/alloc.h"
+#include "core/parallel.h"
 
 #include <string.h>
 
@@ -325,6 +326,25 @@ done:
   return status;
 }
 
+/* The ghosts' values of field u into c, their slots in u zeroed; and back, c into the ghosts'
+ * slots. In parallel: every ghost has a slot of its own. */
+static void ghosts_take(const mpm_adaptive_grid *g, mpm_real *u, mpm_real *c) {
+  const long n = (long)g->ghost_count;
+  const uint32_t *slot = g->ghost_slot;
+#pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
+  for (long a = 0; a < n; ++a) {
+    c[a] = u[slot[a]];
+    u[slot[a]] = 0;
+  }
+}
+
+static void ghosts_put(const mpm_adaptive_grid *g, const mpm_real *c, mpm_real *u) {
+  const long n = (long)g->ghost_count;
+  const uint32_t *slot = g->ghost_slot;
+#pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
+  for (long a = 0; a < n; ++a) u[slot[a]] = c[a];
+}
+
 void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const *u) {
   const size_t n = g->ghost_count;
   if (!n) return;
@@ -333,10 +353,7 @@ void mpm_adaptive_grid_scatter(mpm_adaptive_grid *g, int fields, mpm_real *const
     const mpm_real *c[3];
     for (int j = 0; j < k; ++j) {
       mpm_real *cj = g->scratch + (size_t)j * g->ghost_capacity;
-      for (size_t a = 0; a < n; ++a) {
-        cj[a] = u[f0 + j][g->ghost_slot[a]];
-        u[f0 + j][g->ghost_slot[a]] = 0;
-      }
+      ghosts_take(g, u[f0 + j], cj);
       c[j] = cj;
     }
     mpm_embedding_scatter(&g->ghosts, k, c, u + f0);
@@ -368,8 +385,7 @@ void mpm_adaptive_grid_gather(mpm_adaptive_grid *g, int fields, mpm_real *const 
       uu[j] = u[f0 + j];
     }
     mpm_embedding_gather(&g->ghosts, k, uu, c);
-    for (int j = 0; j < k; ++j)
-      for (size_t a = 0; a < n; ++a) u[f0 + j][g->ghost_slot[a]] = c[j][a];
+    for (int j = 0; j < k; ++j) ghosts_put(g, c[j], u[f0 + j]);
   }
 }
 
@@ -383,10 +399,7 @@ void mpm_adaptive_grid_scatter_apic(mpm_adaptive_grid *g, int fields, mpm_real *
   const mpm_real *c[4];
   for (int j = 0; j < k; ++j) {
     mpm_real *cj = g->scratch + (size_t)j * g->ghost_capacity;
-    for (size_t a = 0; a < n; ++a) {
-      cj[a] = u[j][g->ghost_slot[a]];
-      u[j][g->ghost_slot[a]] = 0;
-    }
+    ghosts_take(g, u[j], cj);
     c[j] = cj;
   }
   const mpm_real *const off[3] = {g->offset[0], g->offset[1], g->offset[2]};
