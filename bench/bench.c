@@ -21,7 +21,7 @@
 #include "cli.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -277,7 +277,7 @@ static int bench_step(int argc, char **argv) {
 }
 
 int mpm_cmd_bench(int argc, char **argv) {
-  /* benchmarks measure the thread counts they are given: no tuning (solver/thread_tuner.h) */
+  /* benchmarks measure the thread counts they are given: no tuning (sim/thread_tuner.h) */
   setenv("MPM_THREADS_TUNE", "0", 1);
   if (argc >= 1 && !strcmp(argv[0], "transfer")) return bench_transfer(argc - 1, argv + 1);
   if (argc >= 1 && !strcmp(argv[0], "step")) return bench_step(argc - 1, argv + 1);

@@ -9,7 +9,7 @@
 #include "cli.h"
 #include "core/parallel.h"
 #include "io/checkpoint.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -6,7 +6,7 @@
 #include "bench_util.h"
 #include "cli.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <stdio.h>
 #include <string.h>

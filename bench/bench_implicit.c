@@ -30,7 +30,7 @@
 #include "cli.h"
 #include "core/parallel.h"
 #include "solver/implicit.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "transfer/transfer.h"
 
 #include <math.h>

@@ -18,7 +18,7 @@
 #include "core/parallel.h"
 #include "core/svd3.h"
 #include "material/material.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdint.h>

@@ -4,7 +4,7 @@
 
 #include "core/parallel.h"
 #include "mpm/mpm.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 

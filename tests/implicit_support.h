@@ -5,7 +5,7 @@
 
 #include "support.h"
 #include "solver/implicit.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

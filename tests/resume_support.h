@@ -4,7 +4,7 @@
 #define MPM_TEST_RESUME_SUPPORT_H
 
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

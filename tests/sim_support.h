@@ -3,7 +3,7 @@
 #define MPM_TEST_SIM_SUPPORT_H
 
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 /* The scene parsed and built; any error fails the test with its message. */
 static inline mpm_sim *sim_from_json(const char *json) {

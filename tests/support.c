@@ -4,7 +4,7 @@
 #include "core/svd3.h"
 #include "domain/domain.h"
 #include "scene/scene.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -17,7 +17,7 @@
 
 #include "core/parallel.h"
 #include "solver/adaptive.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

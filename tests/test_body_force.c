@@ -8,7 +8,7 @@
  * DOFs of their own). A region's drag slows the first block by 1 / (1 + drag dt) per step and
  * leaves the second's velocity alone. Bad keys are refused with their key paths. */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

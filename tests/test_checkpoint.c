@@ -9,7 +9,7 @@
 #include "cli_support.h"
 #include "io/checkpoint.h"
 #include "io/io.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <dirent.h>
 #include <math.h>

@@ -4,7 +4,7 @@
  * of mass follows the free fall started at `end`. A scene key with a bad window is refused
  * with its key path. */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -12,7 +12,7 @@
  * writes the columns it always wrote. */
 #include "support.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,4 +1,4 @@
-/* test_dofs.c - the DOF set (solver/dofs.h) and the explicit update over it
+/* test_dofs.c - the DOF set (grid/dofs.h) and the explicit update over it
  * (solver/explicit_update.h), against independent truth:
  *   - layout: segments of a sparse level, a dense level and corners in order; every DOF's
  *     position and segment found by search equals the one enumerated box by box;

@@ -10,7 +10,7 @@
  * one and two threads agree bitwise here. */
 #include "support.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

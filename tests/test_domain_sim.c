@@ -6,7 +6,7 @@
 #include "support.h"
 #include "core/parallel.h"
 #include "scene/mesh.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -384,7 +384,7 @@ static void test_corner_lanes_match_one_by_one(void **state) {
     for (int e = 0; e < 9; ++e)
       assert_memory_equal(a->particles.F[e], b->particles.F[e], np * sizeof(mpm_real));
     for (size_t c = 0; c < nc; ++c) lowest = fmin(lowest, a->cx[1][c]);
-    /* its lowest corners went into the floor's wall band (solver/step.c: wall_cells cells) */
+    /* its lowest corners went into the floor's wall band (sim/step.c: wall_cells cells) */
     const double floor = run[0]->grid.origin[1] + run[0]->scene.wall_cells * run[0]->grid.dx;
     assert_true(lowest < floor && floor > 0.1);
     mpm_sim_destroy(run[0]);

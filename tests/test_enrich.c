@@ -17,7 +17,7 @@
 #include "core/parallel.h"
 #include "domain/enrich.h"
 #include "solver/implicit.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -5,7 +5,7 @@
  * test_bend_enrichment. */
 #include "support.h"
 #include "domain/enrich.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -9,7 +9,7 @@
  *  - the key's errors. */
 #include "support.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -4,7 +4,7 @@
  * case is undone and redone with halved steps until it is stable, and gives up after
  * solver.max_retries halvings; the scene keys are checked. */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

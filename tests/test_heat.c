@@ -12,7 +12,7 @@
 #include "heat/heat.h"
 #include "material/material.h"
 #include "scene/scene.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -12,7 +12,7 @@
  *     energy never above the start (it was held in the air for 0.1 s, then strained by the
  *     explicit step hidden in the initial guess, which grew rounding errors 3000-fold a step). */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

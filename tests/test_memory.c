@@ -9,7 +9,7 @@
 #include "sim_support.h"
 #include "core/alloc.h"
 #include "core/arena.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <stdint.h>
 #include <stdio.h>

@@ -14,7 +14,7 @@
 #include "support.h"
 #include "io/io.h"
 #include "scene/scene.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

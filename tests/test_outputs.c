@@ -7,7 +7,7 @@
 
 #include "support.h"
 #include "io_support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

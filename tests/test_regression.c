@@ -63,7 +63,7 @@
 #include "support.h"
 #include "core/hash.h"
 #include "solver/adaptive.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -2,7 +2,7 @@
  * with the friction angle (Klar et al. 2016; Gao et al. 2017 sec. 4.2.1): the angle of repose
  * of a granular material grows with its internal friction. Three friction angles, same column. */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

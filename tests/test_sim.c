@@ -6,7 +6,7 @@
 #include "support.h"
 #include "sim_support.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

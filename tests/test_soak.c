@@ -7,7 +7,7 @@
  * sideways or sink, and the mass is kept exactly. The test runs 1,500 steps; the soak of the
  * robustness issue is the same run with SOAK_STEPS=100000 (figures printed). */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

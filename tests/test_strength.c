@@ -3,7 +3,7 @@
  * 0 and the full force at strength 1; a block on a floor collapses while its strength is low and
  * stands up again when it comes back; bad schedules are refused with their key path. */
 #include "support.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -7,7 +7,7 @@
 #include "support.h"
 #include "scene_json_support.h"
 #include "scene/mesh.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "surface/surface.h"
 
 #include <dirent.h>

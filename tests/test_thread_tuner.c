@@ -1,5 +1,5 @@
 #define _POSIX_C_SOURCE 200809L /* setenv, unsetenv */
-/* test_thread_tuner.c - the step's thread count chosen by measuring (solver/thread_tuner.h), fed
+/* test_thread_tuner.c - the step's thread count chosen by measuring (sim/thread_tuner.h), fed
  * with made-up step times: it starts on the caller's count, probes one thread after two steps,
  * switches when the probe is faster by the margin and stays when it is not (probing half as
  * often each time it stays), restores the caller's count after every step, starts over when the
@@ -8,7 +8,7 @@
 #include "support.h"
 
 #include "core/parallel.h"
-#include "solver/thread_tuner.h"
+#include "sim/thread_tuner.h"
 
 #include <stdlib.h>
 

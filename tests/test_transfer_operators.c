@@ -9,7 +9,7 @@
  *   - sparse equals dense node by node, and 1 and 2 threads give bitwise the same results. */
 #include "support.h"
 #include "core/parallel.h"
-#include "solver/dofs.h"
+#include "grid/dofs.h"
 #include "transfer/operators.h"
 
 #include <math.h>

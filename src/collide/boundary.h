@@ -9,7 +9,7 @@
 
 /* Colliders and the domain walls. The walls are the planes wall_lo[d] and wall_hi[d] (m); a
  * point more than `depth` beyond one (half a cell for grid nodes, which sit on the lattice; 0
- * for corners: solver/dofs.h, boundary_depth) is in the wall band and gets the wall
+ * for corners: grid/dofs.h, boundary_depth) is in the wall band and gets the wall
  * rule with the inward normal (one axis after the other, after the colliders). `corner`: the
  * point is a domain corner, which meets slip obstacles as separating ones
  * (mpm_boundary_rule_for, collider.h). */

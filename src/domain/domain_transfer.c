@@ -223,7 +223,7 @@ int mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_ker
   const mpm_corner_pads *P = &s->pads;
   /* the pads read and write the corners' values in the order of their positions, lane by lane
    * where the corner numbers of a batch are not consecutive: renumbered once a tenth of the
-   * positions break the run (the material points' rule, solver/step.c), so that batches move
+   * positions break the run (the material points' rule, sim/step.c), so that batches move
    * with vector loads and stores */
   if (!P->on || (double)P->breaks <= 0.1 * (double)P->grid_positions) return 0;
   const size_t nc = s->corner_count;

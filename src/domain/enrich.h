@@ -8,7 +8,7 @@
  *   transitional   some are,
  *   unenriched     none is (sec. 5.2, Fig. 3).
  *
- * An enriched corner is a DOF of the DOF set (solver/dofs.h, a corner segment after the grid
+ * An enriched corner is a DOF of the DOF set (grid/dofs.h, a corner segment after the grid
  * levels: eq. 12's set {i, alpha-hat}) and its row of the corner embedding is the identity: the
  * two-step rasterization stops there (the corner's mass, momentum and force, rasterized from
  * its particles with omega_ap and the reference-gradient averages, go to its own DOF), the DOF

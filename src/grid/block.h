@@ -1,6 +1,6 @@
 /* block.h - the shape of a grid's nodes: sparse grids are made of 4x4x4-node blocks (SPGrid-like
  * pages of 64 nodes), and every grid presents its nodes as boxes (mpm_node_box) that the DOF
- * set (solver/dofs.h) and the explicit update iterate without knowing the grid's variant. */
+ * set (grid/dofs.h) and the explicit update iterate without knowing the grid's variant. */
 #ifndef MPM_GRID_BLOCK_H
 #define MPM_GRID_BLOCK_H
 

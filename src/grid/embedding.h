@@ -16,7 +16,7 @@
  * Storage is CSR with room reserved per row: row a's entries are
  *   col[row_start[a] .. row_start[a] + row_len[a]), with weights w[...],
  * row_len[a] <= row_start[a + 1] - row_start[a], so that rows can be filled in parallel without
- * a counting pass. Columns are DOF indices of the DOF set (solver/dofs.h).
+ * a counting pass. Columns are DOF indices of the DOF set (grid/dofs.h).
  *
  * The scatter is parallel and deterministic: rows are grouped and the groups coloured so that
  * rows of two groups of one colour never share a column (mpm_embedding_schedule); colours run

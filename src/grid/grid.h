@@ -2,7 +2,7 @@
  *
  * A grid level is topology and geometry: which nodes exist this step, their integer
  * coordinates, the level's origin and spacing dx. The values at its nodes (mass, velocities,
- * force) are not stored here but in the DOF set (solver/dofs.h), where the level's nodes are
+ * force) are not stored here but in the DOF set (grid/dofs.h), where the level's nodes are
  * DOFs dof_begin .. dof_begin + node_count. So one step, one explicit update and one solver
  * work on every level alike, and Gao et al.'s multi-level grid (sec. 5-6) will be a stack of
  * levels, each with its own origin and dx (dx_L = dx_0 / 2^L).

@@ -44,7 +44,7 @@
 #include "grid/embedding.h"
 #include "interp/kernel.h"
 #include "material/material.h"
-#include "solver/dofs.h"
+#include "grid/dofs.h"
 
 #include <stddef.h>
 #include <stdint.h>

@@ -21,7 +21,7 @@
 
 #include "core/alloc.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <assert.h>
 #include <string.h>

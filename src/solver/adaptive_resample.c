@@ -20,7 +20,7 @@
 #include "adapt/resample.h"
 #include "core/alloc.h"
 #include "core/quat.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -4,7 +4,7 @@
 
 #include "core/alloc.h"
 #include "scene/sample.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <limits.h>
 #include <math.h>

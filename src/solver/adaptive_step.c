@@ -3,7 +3,7 @@
 
 #include "core/alloc.h"
 #include "core/parallel.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "transfer/operators.h"
 
 #include <math.h>

@@ -26,7 +26,7 @@
 #ifndef MPM_SOLVER_CG_H
 #define MPM_SOLVER_CG_H
 
-#include "solver/dofs.h"
+#include "grid/dofs.h"
 
 /* y = A x, for vectors over the DOFs of the set. */
 typedef void (*mpm_cg_apply_fn)(void *user, mpm_real *const x[3], mpm_real *const y[3]);

@@ -12,7 +12,7 @@
 #include "collide/body_force.h"
 #include "collide/boundary.h"
 #include "core/arena.h"
-#include "solver/dofs.h"
+#include "grid/dofs.h"
 
 /* What P2G left in the DOF set. */
 typedef enum mpm_p2g_output {

@@ -3,7 +3,7 @@
  * (see implicit.h). */
 #include "solver/implicit.h"
 #include "core/parallel.h"
-#include "solver/sim.h" /* mpm_wall_seconds */
+#include "core/clock.h"
 
 #include <math.h>
 #include <string.h>

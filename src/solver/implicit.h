@@ -49,7 +49,7 @@
 #include "domain/domain_hessian.h"
 #include "grid/adaptive_grid.h"
 #include "solver/cg.h"
-#include "solver/dofs.h"
+#include "grid/dofs.h"
 #include "solver/multigrid.h"
 #include "transfer/transfer.h"
 
@@ -118,7 +118,7 @@ typedef struct mpm_implicit {
   mpm_real apply_scale; /* dt^2 in CG's operator */
   mpm_real *px[3];      /* DOF positions (built with the constraints), m */
   size_t corner_begin;  /* the first corner DOF (DOFs from here are constrained ahead) */
-  mpm_real *depth;      /* DOF wall-band depths (solver/dofs.h) */
+  mpm_real *depth;      /* DOF wall-band depths (grid/dofs.h) */
   mpm_real *accel[3];   /* with body-force regions: each DOF's gravity plus regions, m/s^2 */
   mpm_real *drag;       /* with regions that drag: each DOF's drag rate, 1/s (else NULL) */
   mpm_real **ghosted;   /* on levels: a DOF vector with its ghosts gathered (E u) */

@@ -5,7 +5,7 @@
  * constraints those of the step, and the V-cycle is CG's preconditioner. */
 #include "core/parallel.h"
 #include "solver/implicit.h"
-#include "solver/sim.h" /* mpm_wall_seconds */
+#include "core/clock.h"
 #include "transfer/operators.h"
 
 #include <string.h>

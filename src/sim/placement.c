@@ -2,7 +2,7 @@
  * overlap (their particle lattices interpenetrate: the material there is twice as dense) and
  * bodies that start inside a slip or separating collider (their particles are thrown out in the
  * first steps; material inside a sticky collider is held by it, as a grip holds a bar). */
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include "core/alloc.h"
 #include "core/hash.h"

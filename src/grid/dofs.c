@@ -1,6 +1,6 @@
 /* dofs.c - the DOF set: layout, fields, solver vectors and deterministic reductions (see
  * dofs.h). */
-#include "solver/dofs.h"
+#include "grid/dofs.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
 

@@ -5,7 +5,7 @@
  * same particles' velocity beside it as the vector grid "vel"). A mesh body with
  * particle domains keeps its embedded mesh (Zhu sec. 4.1, surface_bodyB_NNNN.*): "all bodies"
  * leaves it out. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "core/parallel.h"

@@ -26,8 +26,8 @@
  *
  * Reductions (dot products, norms) sum fixed chunks of MPM_DOF_CHUNK DOFs in double, then the
  * chunk sums in chunk order: the result does not depend on the number of threads. */
-#ifndef MPM_SOLVER_DOFS_H
-#define MPM_SOLVER_DOFS_H
+#ifndef MPM_GRID_DOFS_H
+#define MPM_GRID_DOFS_H
 
 #include "grid/grid.h"
 

@@ -1,7 +1,5 @@
 /* sim.c - building and destroying a simulation, and the public handle's accessors. */
-#define _POSIX_C_SOURCE 200809L /* clock_gettime */
-
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "io/run_folder.h"
 #include "solver/adaptive.h"
 #include "domain/enrich.h"
@@ -13,13 +11,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-double mpm_wall_seconds(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static mpm_status oom(mpm_error *err, const char *what) {
   return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory allocating %s", what);

@@ -21,8 +21,8 @@
  * 1, and at 5,500 still 8% longer; at 6,900, 8% less). MPM_THREADS_TUNE=0 turns this off too
  * (the tests' thread-count comparisons). */
 #define MPM_SMALL_STEP_PARTICLES 4096
-#ifndef MPM_SOLVER_THREAD_TUNER_H
-#define MPM_SOLVER_THREAD_TUNER_H
+#ifndef MPM_SIM_THREAD_TUNER_H
+#define MPM_SIM_THREAD_TUNER_H
 
 #include <stddef.h>
 

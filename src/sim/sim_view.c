@@ -4,7 +4,7 @@
  * The view points at the simulation's own arrays when there are no particle domains. With
  * domains, the standard and the active domain particles are copied into one set first (the
  * order of the frame files), so that a caller sees one list of every particle. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 

@@ -5,7 +5,7 @@
  * finite values, positions inside the domain), so a refused call leaves the state as it was. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "solver/adaptive.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/alloc.h"
 #include "core/hash.h"
 #include "io/input_file.h"

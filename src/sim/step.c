@@ -20,7 +20,7 @@
  *
  * Time step: dt = cfl dx / (c + max |v_p|) with c the largest elastic wave speed, bounded by
  * the scene's max_dt and clipped so that frames end exactly on their times. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/alloc.h"
 #include "domain/domain_transfer.h"
 #include "domain/enrich.h"

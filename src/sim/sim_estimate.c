@@ -2,7 +2,7 @@
  * bodies (mpm/mpm.h: mpm_scene_estimate_file; `mpm check` on a scene too large to sample in a
  * moment): the simulation is built as mpm_sim_create_from_file builds it, every check of the
  * scene made, but no particle placed, and its figures read off. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <stdio.h>
 #include <string.h>

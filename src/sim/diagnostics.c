@@ -6,7 +6,7 @@
  * With APIC a particle carries angular momentum in its affine field too (Jiang et al. 2015):
  * L_p = x_p x m_p v_p + m_p eps : B_p^T with the particle's affine moment B_p = C_p D_p. Domain
  * particles (Zhu et al.) count with their position and velocity. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/mat3.h"
 
 #include <string.h>

@@ -16,7 +16,7 @@
  * the particles, time and step count saved before the step are restored and the step is
  * redone with half the dt, up to solver.max_retries halvings; the following steps keep the
  * smaller dt, and one halving is given back per frame (frame.c). */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/alloc.h"
 
 #include <math.h>

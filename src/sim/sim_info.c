@@ -2,7 +2,7 @@
  * figures of a simulation (mpm_sim_get_info), a frame limit, a per-step callback, the scene's
  * warnings and the next step's dt. `mpm run` and `mpm check` are written on these alone. */
 #include "solver/adaptive.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "heat/heat.h"
 #include "core/parallel.h"
 

@@ -1,6 +1,6 @@
 /* thread_tuner.c - measuring the step's thread count (see thread_tuner.h). */
 #define _POSIX_C_SOURCE 200809L /* strcasecmp */
-#include "solver/thread_tuner.h"
+#include "sim/thread_tuner.h"
 
 #include "core/parallel.h"
 

@@ -2,7 +2,7 @@
  * particle domains domains_NNNN.vtu, the embedded surfaces (OBJ, PLY and VTP), the particle
  * surfaces of output.surface (sim_surface.c), run.pvd (every VTK file of every frame),
  * frame_NNNN.ply, stats.csv, each written atomically by the io module. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "solver/adaptive.h"
 #include "core/alloc.h"
 #include "core/mat3.h"

@@ -1,7 +1,7 @@
 /* memory_estimate.c - how much memory a scene will need, and whether the machine has it, so
  * that a scene too large for the machine is refused before anything is allocated. */
-#include "solver/sim.h"
-#include "solver/dofs.h"
+#include "sim/sim.h"
+#include "grid/dofs.h"
 
 #include <math.h>
 #include <stdio.h>

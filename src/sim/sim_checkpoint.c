@@ -16,7 +16,7 @@
 #include "scene/sample.h"
 #include "core/alloc.h"
 #include "solver/adaptive.h"
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include <dirent.h>
 #include <fcntl.h>

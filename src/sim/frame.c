@@ -5,7 +5,7 @@
  * off, the multi-level grid's refinement, and particle split and merge (Gao sec. 7). These stages
  * run before the guarded step (guard.c) saves its state for a retry, so a retry never undoes them
  * and never repeats them. */
-#include "solver/sim.h"
+#include "sim/sim.h"
 
 #include "solver/adaptive.h"
 

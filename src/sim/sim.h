@@ -1,14 +1,15 @@
 /* sim.h - the simulation object behind the public mpm_sim handle: it owns the scene, the
  * particles, materials, colliders, the grid and every per-step buffer. One object, no global
  * mutable state. */
-#ifndef MPM_SOLVER_SIM_H
-#define MPM_SOLVER_SIM_H
+#ifndef MPM_SIM_SIM_H
+#define MPM_SIM_SIM_H
 
 #include "heat/heat.h"
 #include "collide/body_force.h"
 #include "collide/collider.h"
 #include "domain/domain.h"
 #include "core/alloc.h"
+#include "core/clock.h"
 #include "core/particles.h"
 #include "domain/embed.h"
 #include "grid/grid.h"
@@ -16,8 +17,8 @@
 #include "io/io.h"
 #include "material/material.h"
 #include "scene/scene.h"
-#include "solver/dofs.h"
-#include "solver/thread_tuner.h"
+#include "grid/dofs.h"
+#include "sim/thread_tuner.h"
 #include "transfer/transfer.h"
 
 #include <stdint.h>
@@ -84,7 +85,7 @@ struct mpm_sim {
                          within their own storage: core/particles.h) */
   size_t scratch_capacity;
   int reorder_interval;     /* physically reorder particles every this many steps */
-  mpm_thread_tuner threads; /* the step's thread count, measured (solver/thread_tuner.h) */
+  mpm_thread_tuner threads; /* the step's thread count, measured (sim/thread_tuner.h) */
   int thread_request;       /* mpm_sim_set_threads' count for the public calls; 0: the caller's */
   /* time */
   double time, frame_dt, last_dt;
@@ -283,8 +284,5 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
 char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene);
 char *mpm_scene_copy_of_file(const char *scene_path, const mpm_scene *scene);
 mpm_status mpm_sim_write_scene_copy(mpm_sim *sim);
-
-/* Seconds since an arbitrary start, monotonic. */
-double mpm_wall_seconds(void);
 
 #endif

@@ -4,7 +4,7 @@
  * with mesh files referred to by absolute path (the copy lives elsewhere, and the caller may
  * change its working directory), and written by mpm_sim_enable_output. */
 #define _DEFAULT_SOURCE /* realpath */
-#include "solver/sim.h"
+#include "sim/sim.h"
 #include "core/alloc.h"
 #include "io/input_file.h"
 #include "io/run_folder.h"
