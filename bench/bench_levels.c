@@ -11,7 +11,7 @@
 #include "core/alloc.h"
 #include "core/lanes.h"
 #include "core/parallel.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 
 #include <math.h>

@@ -3,7 +3,7 @@
 #define MPM_TEST_REFINEMENT_SUPPORT_H
 
 #include "support.h"
-#include "grid/refinement.h"
+#include "adaptive/refinement.h"
 
 /* Refines cell c of level L with probability p, then its children likewise, down to the finest
  * level: trees where a coarse leaf may border leaves several levels finer. */

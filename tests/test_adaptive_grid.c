@@ -1,6 +1,6 @@
-/* test_adaptive_grid.c - the multi-level sparse grid's ghost slots (grid/adaptive_grid.h): a
+/* test_adaptive_grid.c - the multi-level sparse grid's ghost slots (adaptive/grid.h): a
  * P2G and G2P through them against the direct evaluation of w_ip over real nodes
- * (interp/adaptive_weights.h), on a random non-graded tree of 3 levels:
+ * (adaptive/weights.h), on a random non-graded tree of 3 levels:
  *   - every particle transfers on the finest level its box meets (uGIMP, any box width); after
  *     the ghost scatter no ghost holds mass, every real node holds exactly the mass of the
  *     direct w_ip, none is negative, and mass and momentum are conserved;
@@ -15,8 +15,8 @@
  *     real-node B_p and D_p exactly. */
 #include "refinement_support.h"
 #include "support.h"
-#include "grid/adaptive_grid.h"
-#include "interp/adaptive_weights.h"
+#include "adaptive/grid.h"
+#include "adaptive/weights.h"
 #include "interp/gimp.h"
 
 #include <math.h>

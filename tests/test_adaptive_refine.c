@@ -1,5 +1,5 @@
 /* test_adaptive_refine.c - the multi-level grid rebuilt during the run (domain.refine_every;
- * solver/adaptive_refine.c, Gao et al. sec. 7.1):
+ * adaptive/rules.c, Gao et al. sec. 7.1):
  *   - types: a box born with a fine band (a body rule) flies across the domain; the tree follows
  *     its fine particles: every fine particle's box lies in fine leaves after each rebuild, the
  *     cells it left are coarse again, the refined region keeps its size, and mass, momentum and
@@ -17,7 +17,7 @@
 #include "sim_support.h"
 
 #include "core/parallel.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 
 #include <math.h>
@@ -53,7 +53,7 @@ static void run_until(mpm_sim *sim, double t) {
 
 static size_t refined_cells(const mpm_sim *sim) {
   size_t n = 0;
-  int32_t(*cells)[4] = mpm_adaptive_tree_cells(sim, &n);
+  int32_t(*cells)[4] = mpm_adaptive_tree_cells(sim->adaptive, &n);
   assert_non_null(cells);
   mpm_free(cells);
   return n;
@@ -135,11 +135,11 @@ static void test_surface_band_with_resampling(void **state) {
      the frames' times, 12 of 52 since steps land on them) */
   if (!(deep > 0 && deep_coarse > 0.75 * (double)deep))
     fail_msg("%zu of the %zu particles deep inside are coarse", deep_coarse, deep);
-  assert_true(sim->resample_figures.splits + sim->resample_figures.merges > 0);
+  assert_true(sim->adaptive->resample_figures.splits + sim->adaptive->resample_figures.merges > 0);
   print_message("surface: %zu particles (%zu of %zu deep inside coarse), %lld splits, %lld "
                 "merges, %lld rebuilds\n",
-                p->count, deep_coarse, deep, sim->resample_figures.splits,
-                sim->resample_figures.merges, sim->adaptive->rebuilds);
+                p->count, deep_coarse, deep, sim->adaptive->resample_figures.splits,
+                sim->adaptive->resample_figures.merges, sim->adaptive->rebuilds);
   mpm_sim_destroy(sim);
 }
 
@@ -193,7 +193,7 @@ static void test_strain_rule(void **state) {
   for (size_t k = 0; k < nw; ++k)
     if (!u || by_cell(want[k], want[u - 1])) memcpy(want[u++], want[k], sizeof *want);
   size_t ng = 0;
-  int32_t(*got)[4] = mpm_adaptive_tree_cells(sim, &ng);
+  int32_t(*got)[4] = mpm_adaptive_tree_cells(sim->adaptive, &ng);
   qsort(got, ng, sizeof *got, by_cell);
   assert_true(u > 0);
   assert_int_equal(ng, u);
@@ -215,7 +215,8 @@ static void assert_same(const mpm_sim *a, const mpm_sim *b) {
     if (memcmp(*ra[k], *rb[k], pa->count * sizeof(mpm_real))) fail_msg("array %d differs", k);
   assert_memory_equal(pa->id, pb->id, pa->count * sizeof(uint32_t));
   size_t na = 0, nb = 0;
-  int32_t(*ca)[4] = mpm_adaptive_tree_cells(a, &na), (*cb)[4] = mpm_adaptive_tree_cells(b, &nb);
+  int32_t(*ca)[4] = mpm_adaptive_tree_cells(a->adaptive, &na),
+  (*cb)[4] = mpm_adaptive_tree_cells(b->adaptive, &nb);
   assert_int_equal(na, nb);
   assert_memory_equal(ca, cb, na * sizeof *ca);
   mpm_free(ca);

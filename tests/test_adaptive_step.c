@@ -1,12 +1,12 @@
 #define _POSIX_C_SOURCE 200809L /* setenv, unsetenv */
-/* test_adaptive_step.c - the step on the multi-level grid (solver/adaptive.h) and its scene keys
+/* test_adaptive_step.c - the step on the multi-level grid (adaptive/adaptive.h) and its scene keys
  * (domain.levels, domain.refine):
  *   - one level through the multi-level path gives bitwise the uniform grid's particles (APIC
  *     and FLIP), for 1 and 2 threads;
  *   - two levels: particles are sampled per leaf at their level's spacing, a body flying from
  *     the coarse into the fine half keeps its mass exactly and its linear momentum to round-off
  *     while it crosses (ghost nodes carry every P2G sum to real nodes, Gao eq. 15), with APIC
- *     its angular momentum too (the ghosts' moments, adaptive_apic.c), and the step is the same
+ *     its angular momentum too (the ghosts' moments, adaptive/apic.c), and the step is the same
  *     for 1 and 2 threads;
  *   - the refinement rules (box, collider distance, body) refine where they say;
  *   - a particle meeting a leaf two levels finer than its type is refused, naming it;
@@ -16,7 +16,7 @@
 #include "sim_support.h"
 
 #include "core/parallel.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 
 #include <math.h>

@@ -16,7 +16,7 @@
 #include "implicit_support.h"
 #include "resume_support.h"
 #include "core/parallel.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 
 #include <stdlib.h>
 
@@ -283,7 +283,7 @@ static void test_stiff_block_on_floor(void **state) {
       " \"normal\": [0, 1, 0]}, \"rule\": \"slip\"}]}";
   mpm_sim *sim = test_sim_from_json(text, "stiff_levels.json");
   assert_non_null(sim->adaptive);
-  const double dx = mpm_adaptive_finest_dx(sim);
+  const double dx = mpm_adaptive_finest_dx(sim->adaptive);
   const implicit_drop r = implicit_drop_run(sim, dx);
   print_message("2 levels, stiff block: dt = %.3g s = %.0fx the explicit CFL step at the finest "
                 "dx, %lld steps, energy %.6g -> %.6g J, lowest particle %.4f m (floor 0.32)\n",

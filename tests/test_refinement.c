@@ -1,5 +1,5 @@
 /* test_refinement.c - the non-graded multi-level grid's cells, constrained T-junctions and
- * basis (grid/refinement.h) and a particle's GIMP weights on it (interp/adaptive_weights.h),
+ * basis (adaptive/refinement.h) and a particle's GIMP weights on it (adaptive/weights.h),
  * against independent truth:
  *   - one level: every node is real, N_i is the trilinear hat;
  *   - hand-made T-junctions: the rows of Gao eqs. 11-14 (an edge midpoint takes 1/2 + 1/2, a
@@ -17,8 +17,8 @@
  *     GIMP weight and a negative nodal mass; ours on the same grid gives none. */
 #include "refinement_support.h"
 #include "support.h"
-#include "grid/refinement.h"
-#include "interp/adaptive_weights.h"
+#include "adaptive/refinement.h"
+#include "adaptive/weights.h"
 #include "interp/gimp.h"
 #include "interp/kernel.h"
 

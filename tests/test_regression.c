@@ -62,7 +62,7 @@
  * build is ISO C: no FMA contraction), on the x86-64 machines this project runs on. */
 #include "support.h"
 #include "core/hash.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 
 #include <stdio.h>
@@ -140,7 +140,7 @@ static state_digest digest_sim(const mpm_sim *sim) {
   if (sim->adaptive) { /* the multi-level grid: the particles' types and the tree */
     s.h[7] = digest_gather(s.h[7], p->level, sizeof *p->level, p->count, order);
     size_t cells = 0;
-    int32_t(*tree)[4] = mpm_adaptive_tree_cells(sim, &cells);
+    int32_t(*tree)[4] = mpm_adaptive_tree_cells(sim->adaptive, &cells);
     assert_non_null(tree);
     qsort(tree, cells, sizeof *tree, by_cell); /* the order of a hash table's slots: not ours */
     s.h[0] = mpm_hash64_words(tree, cells * sizeof *tree, s.h[0]);

@@ -1,4 +1,4 @@
-/* test_resample.c - particle split and merge (src/adapt/resample.c, Gao et al. sec. 7.2):
+/* test_resample.c - particle split and merge (src/adaptive/split_merge.c, Gao et al. sec. 7.2):
  *   split  mass and volume shared exactly, momentum kept (exactly without APIC), the children
  *          on the cube's corners around the parent, F copied, the velocity gradient C kept, and
  *          the angular momentum change equal to its closed form m (h^2/3 + D_c - D_p) axial(C)
@@ -7,7 +7,7 @@
  *          signs aligned, the quaternion averages of U and V) where the singular values are
  *          apart, and landing within the inputs' spread where two are nearly equal */
 #include "support.h"
-#include "adapt/resample.h"
+#include "adaptive/split_merge.h"
 #include "core/quat.h"
 
 #include <math.h>

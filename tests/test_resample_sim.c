@@ -1,5 +1,5 @@
 /* test_resample_sim.c - particle split and merge in the step on the multi-level grid
- * (domain.resample; solver/adaptive_resample.c, Gao et al. sec. 7.2):
+ * (domain.resample; adaptive/resample.c, Gao et al. sec. 7.2):
  *   - a spinning box flying from the coarse half into the fine half splits as it enters: every
  *     particle in a fine leaf becomes of the fine type, the total mass stays exactly, the linear
  *     momentum to round-off, and the APIC angular momentum changes by what the splits report
@@ -17,7 +17,7 @@
 #include "sim_support.h"
 
 #include "core/parallel.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 
 #include <math.h>
@@ -101,7 +101,7 @@ static void check_conservation(mpm_sim *sim, const sums *s0, const mpm_diagnosti
   const double L0 = fabs(d0->angular_momentum[2]);
   for (int d = 0; d < 3; ++d) {
     const double change = d1.angular_momentum[d] - d0->angular_momentum[d];
-    const double reported = sim->resample_figures.angular_momentum_change[d];
+    const double reported = sim->adaptive->resample_figures.angular_momentum_change[d];
     if (fabs(change - reported) > TOL(2e-5, 1e-9) * L0)
       fail_msg("angular momentum[%d] changed by %.6g, the resampling reported %.6g (L %.6g)", d,
                change, reported, L0);
@@ -116,9 +116,9 @@ static void test_split_entering_the_fine_half(void **state) {
   const mpm_diagnostics d0 = mpm_sim_diagnostics(sim);
   run_until(sim, 0.15); /* the front has moved 0.12 m into the fine half */
   const mpm_particles *p = &sim->particles;
-  assert_true(sim->resample_figures.splits > 0);
-  assert_int_equal(sim->resample_figures.merges, 0);
-  assert_int_equal(p->count, n0 + 7 * (size_t)sim->resample_figures.splits);
+  assert_true(sim->adaptive->resample_figures.splits > 0);
+  assert_int_equal(sim->adaptive->resample_figures.merges, 0);
+  assert_int_equal(p->count, n0 + 7 * (size_t)sim->adaptive->resample_figures.splits);
   /* after the last resampling, every particle inside a fine leaf is fine */
   mpm_sim_between_steps(sim);
   const mpm_refinement *r = &sim->adaptive->grid.tree;
@@ -154,8 +154,8 @@ static void test_split_entering_the_fine_half(void **state) {
   assert_ids_unique(sim);
   check_conservation(sim, &s0, &d0);
   print_message("split: %zu -> %zu particles, %lld splits, angular momentum change %.3g of %.3g\n",
-                n0, p->count, sim->resample_figures.splits,
-                sim->resample_figures.angular_momentum_change[2], d0.angular_momentum[2]);
+                n0, p->count, sim->adaptive->resample_figures.splits,
+                sim->adaptive->resample_figures.angular_momentum_change[2], d0.angular_momentum[2]);
   mpm_sim_destroy(sim);
 }
 
@@ -166,7 +166,7 @@ static void test_split_limit(void **state) {
   mpm_sim *sim =
       sim_from_json(flying_box(0.36, 0.8, "{\"merge\": false, \"max_per_cell\": 4}", ""));
   run_until(sim, 0.1);
-  assert_int_equal(sim->resample_figures.splits, 0);
+  assert_int_equal(sim->adaptive->resample_figures.splits, 0);
   for (size_t i = 0; i < sim->particles.count; ++i) assert_int_equal(sim->particles.level[i], 0);
   mpm_sim_destroy(sim);
 }
@@ -180,20 +180,20 @@ static void test_merge_leaving_the_fine_half(void **state) {
   const mpm_diagnostics d0 = mpm_sim_diagnostics(sim);
   run_until(sim, 0.25); /* the back has moved 0.2 m, past 0.5 and a margin */
   const mpm_particles *p = &sim->particles;
-  assert_true(sim->resample_figures.merges > 0);
-  assert_int_equal(sim->resample_figures.splits, 0);
-  assert_int_equal(p->count, n0 - 7 * (size_t)sim->resample_figures.merges);
+  assert_true(sim->adaptive->resample_figures.merges > 0);
+  assert_int_equal(sim->adaptive->resample_figures.splits, 0);
+  assert_int_equal(p->count, n0 - 7 * (size_t)sim->adaptive->resample_figures.merges);
   size_t coarse = 0;
   for (size_t i = 0; i < p->count; ++i) coarse += p->level[i] == 0;
-  assert_int_equal(coarse, sim->resample_figures.merges);
+  assert_int_equal(coarse, sim->adaptive->resample_figures.merges);
   /* merges keep the APIC angular momentum exactly: what it changed is the step's round-off */
   for (int d = 0; d < 3; ++d)
-    assert_true(fabs(sim->resample_figures.angular_momentum_change[d]) <
+    assert_true(fabs(sim->adaptive->resample_figures.angular_momentum_change[d]) <
                 TOL(1e-5, 1e-12) * fabs(d0.angular_momentum[2]));
   assert_ids_unique(sim);
   check_conservation(sim, &s0, &d0);
   print_message("merge: %zu -> %zu particles, %lld merges\n", n0, p->count,
-                sim->resample_figures.merges);
+                sim->adaptive->resample_figures.merges);
   mpm_sim_destroy(sim);
 }
 
@@ -222,7 +222,7 @@ static void test_threads_bitwise(void **state) {
     run_until(a[t], 0.2);
   }
   mpm_set_threads(1);
-  assert_true(a[0]->resample_figures.splits > 0);
+  assert_true(a[0]->adaptive->resample_figures.splits > 0);
   assert_same_particles(&a[0]->particles, &a[1]->particles);
   assert_int_equal(a[0]->next_id, a[1]->next_id);
   mpm_sim_destroy(a[0]);
@@ -235,7 +235,7 @@ static void test_resume_bit_identical(void **state) {
   resume_pair("resample_resume",
               flying_box_until(0.45, 0.8, "{}", ", \"output\": {\"checkpoint_every\": 1}", 0.15), 1,
               3, NULL, &a, &c);
-  assert_true(a->resample_figures.splits > 0);
+  assert_true(a->adaptive->resample_figures.splits > 0);
   assert_int_equal(c->next_id, a->next_id);
   assert_same_particles(&a->particles, &c->particles);
   mpm_sim_destroy(a);

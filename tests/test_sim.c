@@ -321,7 +321,7 @@ static void test_slow_drift_keeps_shape(void **state) {
   assert_true(mp_drift_shape_error("flip", "quadratic", 6.5e-7, 4000, "") < TOL(2e-7, 1e-14));
   assert_true(mp_drift_shape_error("apic", "ugimp", 6.5e-7, 4000, "") < TOL(2e-7, 1e-14));
   /* on two levels, with the bar's right half fine: the particles transfer in several ranges
-   * (solver/adaptive.h), each of which must carry its own compensation (mpm_particles_range) */
+   * (adaptive/adaptive.h), each of which must carry its own compensation (mpm_particles_range) */
   assert_true(mp_drift_shape_error("apic", "ugimp", 6.5e-7, 4000,
                                    ", \"levels\": 2, \"refine\": [{\"level\": 1, \"box\": "
                                    "{\"min\": [0.52, 0.3, 0.3], \"max\": [1, 0.7, 0.7]}}]") <

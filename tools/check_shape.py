@@ -31,9 +31,10 @@ LAYERS = [
     ['material', 'collide'],
     ['transfer'],
     ['domain'],
-    ['heat', 'adapt'],
+    ['heat'],
     ['io'],
     ['scene'],
+    ['adaptive'],
     ['surface'],
     ['solver'],
     ['sim'],
@@ -43,11 +44,6 @@ LAYERS = [
 # scene description (one scene description, with the enums beside their modules); the writers
 # read scene enums
 KNOWN_UPWARD = {
-    ('src/solver/adaptive_apic.c', 'sim/sim.h'),
-    ('src/solver/adaptive_refine.c', 'sim/sim.h'),
-    ('src/solver/adaptive_resample.c', 'sim/sim.h'),
-    ('src/solver/adaptive_setup.c', 'sim/sim.h'),
-    ('src/solver/adaptive_step.c', 'sim/sim.h'),
     ('src/collide/collider.h', 'scene/scene.h'),
     ('src/collide/motion.h', 'scene/scene.h'),
     ('src/domain/embed.h', 'scene/mesh.h'),

@@ -82,6 +82,16 @@ mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t c
  * over particles. p must own its storage (not a range). */
 void mpm_particles_permute(mpm_particles *p, const uint32_t *perm, uint32_t *iscratch);
 
+/* The breaks of a sort's visiting order perm[0 .. n): the j with perm[j] != perm[j - 1] + 1. */
+size_t mpm_order_breaks(const uint32_t *perm, size_t n);
+/* Whether a sort moves its n particles into their sorted order at step `steps`: every
+ * `interval` steps, and between them when the order has come apart (`breaks` of it,
+ * mpm_order_breaks). */
+int mpm_reorder_due(int64_t steps, int interval, size_t breaks, size_t n);
+/* Room in *scratch for the permute's per-particle integers, p's capacity of them (*capacity:
+ * what it holds, grown when smaller). 0, or -1 when out of memory. */
+int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *capacity);
+
 /* Move particle src[k] to slot dest[k] in every array, k < n, where dest is a permutation of src
  * (the particles at those slots trade places; the others stay), through the free slot and
  * iscratch (n integers). For reorders that touch a few particles: a full permute reads and

@@ -8,7 +8,6 @@
 #include "core/error.h"
 #include "core/real.h"
 #include "core/particles.h"
-#include "grid/refinement.h"
 
 #include <stdio.h>
 
@@ -68,11 +67,6 @@ mpm_status mpm_write_pvd_parts(const char *path, int count, int parts, const dou
 /* Binary little-endian PLY point cloud: x y z, vx vy vz, pscale (the radius of the sphere of
  * the particle's current volume), id, material and body. */
 mpm_status mpm_write_ply_points(const char *path, const mpm_frame_fields *f, mpm_error *err);
-
-/* The leaves of a multi-level grid finer than level 0, as voxels with CellData `level`
- * (vtu_cells.c). */
-mpm_status mpm_write_cells_vtu(const char *path, const mpm_refinement *r, double time,
-                               mpm_error *err);
 
 /* The per-particle arrays of frame_NNNN.vtu that `fields` selects (bits of mpm_output_field),
  * of f's particles, for the CellData of another file (vtu.c): their appended bytes (byte counts

@@ -1,6 +1,6 @@
 /* vtu_stream.h - what the VTU writers share (vtu.c: the particles; vtu_domains.c: the particle
- * domains; vtu_cells.c: the multi-level grid's leaves): an output stream that keeps its first
- * failure, and the XML around the arrays of a VTK XML UnstructuredGrid with one raw appended
+ * domains; adaptive/cells_vtu.c: the multi-level grid's leaves): an output stream that keeps its
+ * first failure, and the XML around the arrays of a VTK XML UnstructuredGrid with one raw appended
  * block (version 1.0, header_type UInt64: each array there is its UInt64 byte count, then its
  * values).
  *

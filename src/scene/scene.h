@@ -332,7 +332,7 @@ typedef struct mpm_solver_desc {
   mpm_preconditioner_kind preconditioner; /* implicit: CG's preconditioner */
 } mpm_solver_desc;
 
-/* Most levels of the multi-level grid (MPM_LEVELS_MAX of grid/refinement.h). */
+/* Most levels of the multi-level grid (MPM_LEVELS_MAX of adaptive/refinement.h). */
 #define MPM_SCENE_LEVELS_MAX 6
 
 /* A static refinement rule of the multi-level grid (Gao et al. sec. 7.1; docs/adaptive-grid.md):

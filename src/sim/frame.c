@@ -7,7 +7,7 @@
  * and never repeats them. */
 #include "sim/sim.h"
 
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -18,10 +18,18 @@ typedef struct between_stage {
   mpm_status (*run)(mpm_sim *sim);
 } between_stage;
 
+static mpm_status refinement(mpm_sim *sim) {
+  return sim->adaptive ? mpm_adaptive_refine(sim->adaptive) : MPM_OK;
+}
+
+static mpm_status particle_resampling(mpm_sim *sim) {
+  return sim->adaptive ? mpm_adaptive_resample(sim->adaptive) : MPM_OK;
+}
+
 static const between_stage between_steps[] = {
     {"domain releases", mpm_sim_apply_domain_releases},
-    {"refinement", mpm_adaptive_refine},
-    {"particle resampling", mpm_adaptive_resample},
+    {"refinement", refinement},
+    {"particle resampling", particle_resampling},
 };
 
 mpm_status mpm_sim_between_steps(mpm_sim *sim) {

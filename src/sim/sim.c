@@ -1,7 +1,7 @@
 /* sim.c - building and destroying a simulation, and the public handle's accessors. */
 #include "sim/sim.h"
 #include "io/run_folder.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "domain/enrich.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
@@ -170,11 +170,29 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
     goto fail;
   }
   mpm_domain_set_init(&sim->domains);
-  if (sc->levels > 0 && (st = mpm_adaptive_setup(sim, err)) != MPM_OK) goto fail;
+  if (sc->levels > 0) {
+    const mpm_adaptive_host host = {.scene = &sim->scene,
+                                    .particles = &sim->particles,
+                                    .dofs = &sim->dofs,
+                                    .arena = &sim->step_arena,
+                                    .steps = &sim->steps,
+                                    .time = &sim->time,
+                                    .origin = sim->origin,
+                                    .cells = sim->cells,
+                                    .colliders = &sim->colliders,
+                                    .material_count = &sim->material_count,
+                                    .reorder_interval = &sim->reorder_interval,
+                                    .iscratch = &sim->iscratch,
+                                    .scratch_capacity = &sim->scratch_capacity,
+                                    .next_id = &sim->next_id,
+                                    .error = &sim->error};
+    if ((st = mpm_adaptive_setup(&host, &sim->adaptive, err)) != MPM_OK) goto fail;
+    sim->expected_particles = sim->adaptive->expected_particles;
+  }
   uint32_t next_id = 0;
   for (int b = 0; sample && b < sc->body_count; ++b) {
     const size_t first = sim->particles.count;
-    st = sim->adaptive ? mpm_adaptive_sample_body(sim, b, err)
+    st = sim->adaptive ? mpm_adaptive_sample_body(sim->adaptive, b, err)
                        : mpm_sample_body(sc, b, &sim->particles, err);
     if (st != MPM_OK) goto fail;
     for (size_t i = first; i < sim->particles.count; ++i) {

@@ -16,6 +16,7 @@
 #include "interp/kernel.h"
 #include "io/io.h"
 #include "material/material.h"
+#include "scene/memory_estimate.h"
 #include "scene/scene.h"
 #include "grid/dofs.h"
 #include "sim/thread_tuner.h"
@@ -75,7 +76,7 @@ struct mpm_sim {
   mpm_real origin[3];
   int cells[3];                  /* grid cells per axis over the domain */
   mpm_grid grid;                 /* the uniform grid level (sparse or dense) */
-  struct mpm_adaptive *adaptive; /* Gao's multi-level grid (scene.levels > 0; solver/adaptive.h)
+  struct mpm_adaptive *adaptive; /* Gao's multi-level grid (scene.levels > 0; adaptive/adaptive.h)
                                     in place of `grid`, else NULL */
   mpm_dofs dofs;                 /* the unknowns of the step: the values at the grid's nodes */
   mpm_heat heat;                 /* heat transfer's scratch and figures (scene `heat`) */
@@ -91,10 +92,6 @@ struct mpm_sim {
   double time, frame_dt, last_dt;
   int64_t steps;
   uint32_t next_id; /* the id of the next particle a split makes (ids are never reused) */
-  struct mpm_resample_figures { /* since creation (not checkpointed: reporting only) */
-    long long splits, merges;
-    double angular_momentum_change[3]; /* what the resampling changed, kg m^2/s */
-  } resample_figures;
   int frame, frame_count;
   mpm_real max_speed, wave_speed;
   mpm_stage_times times;
@@ -183,22 +180,8 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
  * melting), for the frame files and the view; returns J = det F. */
 mpm_real mpm_sim_kirchhoff(const mpm_sim *sim, const mpm_particles *p, size_t i, mpm_real tau[9]);
 
-/* Memory (memory_estimate.c): the bytes a scene will need (its expected particle count in
- * *particles when not NULL), the memory this process may use (MPM_MEMORY_LIMIT, else the
- * machine's available memory), and the check mpm_sim_create_from_scene makes before it
- * allocates anything: MPM_ERR_INVALID with the estimate when the scene does not fit. */
-double mpm_scene_memory_estimate(const mpm_scene *scene, double *particles);
-double mpm_available_memory(void);
-mpm_status mpm_scene_check_memory(const mpm_scene *scene, mpm_error *err);
-/* The bytes for `particles` particles of the scene, and the check for that many (the
- * multi-level grid's count from its tree). */
-double mpm_scene_memory_for(const mpm_scene *scene, double particles);
-mpm_status mpm_scene_check_memory_for(const mpm_scene *scene, double particles, mpm_error *err);
-
-/* The breaks of a sort's visiting order perm[0 .. n): the j with perm[j] != perm[j - 1] + 1. */
-size_t mpm_order_breaks(const uint32_t *perm, size_t n);
-/* Whether the step moves its n particles into their sorted order: every reorder_interval
- * steps, and between them when the order has come apart (`breaks` of it, mpm_order_breaks). */
+/* Whether the step moves its n particles into their sorted order (mpm_reorder_due with the
+ * simulation's steps and reorder_interval). */
 int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n);
 
 /* Room for the periodic reorder's per-particle buffers. 0, or -1 when out of memory. */

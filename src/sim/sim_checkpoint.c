@@ -15,7 +15,7 @@
 #include "io/input_file.h"
 #include "scene/sample.h"
 #include "core/alloc.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 
 #include <dirent.h>
@@ -158,7 +158,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   int32_t(*cells)[4] = NULL;
   if (sim->adaptive && sim->scene.refine_every > 0) {
     size_t count = 0;
-    if (!(cells = mpm_adaptive_tree_cells(sim, &count))) {
+    if (!(cells = mpm_adaptive_tree_cells(sim->adaptive, &count))) {
       mpm_free(forces);
       mpm_free(scripts);
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
@@ -278,7 +278,8 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
     if (!cells) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the tree");
     for (size_t i = 0; i < c->tree_count; ++i)
       for (int k = 0; k < 4; ++k) cells[i][k] = c->tree[k][i];
-    st = mpm_adaptive_set_tree(sim, (const int32_t(*)[4])cells, (size_t)c->tree_count, &sim->error);
+    st = mpm_adaptive_set_tree(sim->adaptive, (const int32_t(*)[4])cells, (size_t)c->tree_count,
+                               &sim->error);
     mpm_free(cells);
     if (st != MPM_OK) return st;
   }

@@ -4,7 +4,7 @@
  * Every request is checked before anything changes (ids simulated now, on material points,
  * finite values, positions inside the domain), so a refused call leaves the state as it was. */
 #define _DEFAULT_SOURCE /* realpath */
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "sim/sim.h"
 #include "core/alloc.h"
 #include "core/hash.h"

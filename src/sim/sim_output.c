@@ -3,7 +3,8 @@
  * surfaces of output.surface (sim_surface.c), run.pvd (every VTK file of every frame),
  * frame_NNNN.ply, stats.csv, each written atomically by the io module. */
 #include "sim/sim.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
+#include "adaptive/cells_vtu.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "domain/enrich.h"

@@ -25,7 +25,7 @@
 #include "domain/domain_transfer.h"
 #include "domain/enrich.h"
 #include "domain/enrich_contact.h"
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 #include "solver/explicit_update.h"
 #include "solver/implicit.h"
 #include "core/parallel.h"
@@ -37,7 +37,7 @@
 #include <string.h>
 
 double mpm_sim_finest_dx(const mpm_sim *sim) {
-  return sim->adaptive ? mpm_adaptive_finest_dx(sim) : sim->scene.dx;
+  return sim->adaptive ? mpm_adaptive_finest_dx(sim->adaptive) : sim->scene.dx;
 }
 
 double mpm_sim_cfl_dt(const mpm_sim *sim) {
@@ -80,34 +80,12 @@ typedef struct stage {
   size_t timer; /* offset of its seconds in mpm_stage_times */
 } stage;
 
-size_t mpm_order_breaks(const uint32_t *perm, size_t n) {
-  const long m = (long)n;
-  long breaks = 0;
-#pragma omp parallel for schedule(static) reduction(+ : breaks) if (m > MPM_PARALLEL_MIN)
-  for (long j = 1; j < m; ++j) breaks += perm[j] != perm[j - 1] + 1;
-  return (size_t)breaks;
-}
-
 int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n) {
-  if (sim->steps % sim->reorder_interval == 0) return 1;
-  /* the order's breaks: the transfers read the particles in perm's order, so they stream while
-   * it runs through memory and gather once particles have moved to other cells. Reordering
-   * costs about a fifth of a step; a moving body breaks a tenth of the order within a few steps
-   * and then costs more than that in gathers (bench step, 100 steps of a falling block, 1 thread:
-   * 101.5 ns per particle-step reordering every 16 steps, 88.8-89.1 reordering also when a
-   * twentieth to a seventh of the order is broken, 99.3 at three tenths). The decision follows
-   * from the state alone, so a resumed run takes the same ones. */
-  return (double)breaks > 0.1 * (double)n;
+  return mpm_reorder_due(sim->steps, sim->reorder_interval, breaks, n);
 }
 
 int mpm_sim_ensure_scratch(mpm_sim *sim) {
-  const size_t cap = sim->particles.capacity;
-  if (sim->scratch_capacity >= cap) return 0;
-  mpm_free(sim->iscratch);
-  sim->iscratch = mpm_alloc(cap * sizeof(uint32_t));
-  if (!sim->iscratch) return -1;
-  sim->scratch_capacity = cap;
-  return 0;
+  return mpm_particles_scratch(&sim->particles, &sim->iscratch, &sim->scratch_capacity);
 }
 
 /* The domain corners' transfer plan (domain_transfer.h), their renumbering into its order when
@@ -137,7 +115,7 @@ static mpm_status plan_corners(mpm_sim *sim, step_ctx *c) {
 }
 
 static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
-  if (sim->adaptive) return mpm_adaptive_sort(sim);
+  if (sim->adaptive) return mpm_adaptive_sort(sim->adaptive);
   mpm_grid *g = &sim->grid;
   mpm_particles *p = &sim->particles;
   if (g->ops->activate(g, &c->tc.kernel, sim->material_count, p, &sim->step_arena))
@@ -173,7 +151,7 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
   const int impulse = c->p2g_output == MPM_P2G_IMPULSE;
   const unsigned fields = impulse ? MPM_DOF_MASS | MPM_DOF_V0 | MPM_DOF_V : MPM_DOF_ALL;
   if (sim->adaptive) {
-    const mpm_status st = mpm_adaptive_layout(sim, fields);
+    const mpm_status st = mpm_adaptive_layout(sim->adaptive, fields);
     c->all = mpm_dofs_values(d);
     return st;
   }
@@ -196,7 +174,7 @@ static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
 
 static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
   if (sim->adaptive) {
-    mpm_adaptive_p2g(sim, &c->tc, c->p2g_output == MPM_P2G_IMPULSE);
+    mpm_adaptive_p2g(sim->adaptive, &c->tc, c->p2g_output == MPM_P2G_IMPULSE);
     return MPM_OK;
   }
   if (sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT &&
@@ -343,7 +321,7 @@ static mpm_status stage_contact(mpm_sim *sim, step_ctx *c) {
 
 static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
   if (sim->adaptive) {
-    c->r = mpm_adaptive_g2p(sim, &c->tc);
+    c->r = mpm_adaptive_g2p(sim->adaptive, &c->tc);
     c->bad_set = &sim->particles;
     return MPM_OK;
   }

@@ -28,9 +28,9 @@
  * be. After the solve the full boundary rule runs on every DOF with the normal velocity of v*
  * restored first on the other constrained ones: that is where separation acts.
  *
- * On Gao et al.'s multi-level grid (solver/adaptive.h) the material points transfer in parts, one
+ * On Gao et al.'s multi-level grid (adaptive/adaptive.h) the material points transfer in parts, one
  * per transfer grid, and every slot of a transfer grid is a real node (a DOF of the system) or a
- * ghost whose row E_g ties it to real nodes (grid/adaptive_grid.h). The unknowns are the real
+ * ghost whose row E_g ties it to real nodes (adaptive/grid.h). The unknowns are the real
  * nodes of every level; the system is the slots' one pulled back through the rows,
  *   K = E^T K_slots E,  f = E^T f_slots,
  * so that displacements are gathered to the ghosts before the gradients and the scattered forces
@@ -47,7 +47,7 @@
 #include "collide/boundary.h"
 #include "core/arena.h"
 #include "domain/domain_hessian.h"
-#include "grid/adaptive_grid.h"
+#include "adaptive/grid.h"
 #include "solver/cg.h"
 #include "grid/dofs.h"
 #include "solver/multigrid.h"

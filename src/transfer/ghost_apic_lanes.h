@@ -1,5 +1,5 @@
 /* ghost_apic_lanes.h - the lane kernels' share of APIC across the levels of the multi-level grid
- * (solver/adaptive_apic.c has the method; transfer.h, mpm_ghost_apic, the data).
+ * (adaptive/apic.c has the method; transfer.h, mpm_ghost_apic, the data).
  *
  * A boundary particle's stencil reaches ghosts whose rows have several real nodes. For it:
  *   P2G  the real nodes need C_p = B_p D_p^-1 with D_p = D~_p + sum_g w_gp S_g (D~_p the ghost

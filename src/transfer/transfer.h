@@ -14,7 +14,7 @@
 #include "interp/kernel.h"
 #include "material/material.h"
 
-/* APIC across the levels of the multi-level grid (solver/adaptive_apic.c), for one transfer grid:
+/* APIC across the levels of the multi-level grid (adaptive/apic.c), for one transfer grid:
  * its cells whose stencils reach ghost nodes of several real nodes (boundary cells) and what their
  * particles need beyond the lanes' transfer (transfer/ghost_apic_lanes.h). */
 typedef struct mpm_stencil_ghost {

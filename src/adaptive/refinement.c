@@ -1,6 +1,6 @@
 /* refinement.c - the leaf cells of the multi-level grid and the constrained T-junction basis
  * (Gao et al. 2017, sec. 5.2 and 6.1); see refinement.h. */
-#include "grid/refinement.h"
+#include "adaptive/refinement.h"
 
 #include "core/alloc.h"
 

@@ -22,8 +22,8 @@
  *
  * Positions inside the structure are integers of the finest level's lattice, so every weight
  * is a dyadic rational and computed exactly. */
-#ifndef MPM_GRID_REFINEMENT_H
-#define MPM_GRID_REFINEMENT_H
+#ifndef MPM_ADAPTIVE_REFINEMENT_H
+#define MPM_ADAPTIVE_REFINEMENT_H
 
 #include "core/real.h"
 
@@ -94,7 +94,7 @@ int mpm_refinement_finest_level_in(const mpm_refinement *r, const mpm_real lo[3]
 
 /* The finest level of the leaves that overlap the open box (a, b), given in level-0 cell units
  * (a = (lo - origin) / dx0 in double), with some volume: a leaf touching the box at a face, edge or
- * corner does not count. The particles' transfer level (solver/adaptive_step.c): the box's weights
+ * corner does not count. The particles' transfer level (adaptive/step.c): the box's weights
  * are the basis's averages over the box, which leaves meeting it in a set of no volume do not
  * change. */
 int mpm_refinement_finest_level_overlapping(const mpm_refinement *r, const double a[3],

@@ -1,4 +1,4 @@
-/* adaptive_weights.h - a particle's GIMP weights over the real nodes of the multi-level grid,
+/* adaptive/weights.h - a particle's GIMP weights over the real nodes of the multi-level grid,
  * w_ip = sum_g w_gp E_gi (Gao et al. eq. 15), evaluated directly, one particle at a time.
  *
  * The step's transfers never form this list: they transfer on one uniform level and let the
@@ -6,11 +6,11 @@
  * plain statement of what they compute, for tests and for the few callers that need one
  * particle's weights (a probe, a diagnostic): the finest level whose leaves meet the particle's
  * box, the box-averaged hats there (interp/gimp.h), and each node's embedding row
- * (grid/refinement.h) summed per real node. */
-#ifndef MPM_INTERP_ADAPTIVE_WEIGHTS_H
-#define MPM_INTERP_ADAPTIVE_WEIGHTS_H
+ * (adaptive/refinement.h) summed per real node. */
+#ifndef MPM_ADAPTIVE_WEIGHTS_H
+#define MPM_ADAPTIVE_WEIGHTS_H
 
-#include "grid/refinement.h"
+#include "adaptive/refinement.h"
 
 /* One real node's weight and gradient for a particle. */
 typedef struct mpm_adaptive_weight {

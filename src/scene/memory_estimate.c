@@ -1,6 +1,7 @@
 /* memory_estimate.c - how much memory a scene will need, and whether the machine has it, so
  * that a scene too large for the machine is refused before anything is allocated. */
-#include "sim/sim.h"
+#include "scene/memory_estimate.h"
+
 #include "grid/dofs.h"
 
 #include <math.h>

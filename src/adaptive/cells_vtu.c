@@ -1,10 +1,12 @@
-/* vtu_cells.c - the leaves of the multi-level grid as a VTK UnstructuredGrid of voxels
+/* cells_vtu.c - the leaves of the multi-level grid as a VTK UnstructuredGrid of voxels
  * (grid_cells.vtu), so that ParaView shows where the grid is fine: every leaf of level 1 and
  * finer is one VTK_VOXEL cell with CellData `level`; the level-0 leaves (the rest of the domain)
  * are left out. Points are not shared between cells (8 per cell), which keeps the writer one
  * pass over the leaves.
  *
  * Same layout as vtu.c (XML header, UInt64 byte counts, one raw appended block). */
+#include "adaptive/cells_vtu.h"
+
 #include "io/io.h"
 #include "io/vtu_stream.h"
 #include "core/alloc.h"

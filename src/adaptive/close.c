@@ -1,10 +1,10 @@
-/* adaptive_close.c - the closure of the multi-level grid's used slots (Gao et al. 2017,
- * sec. 6.1, adaptive_grid.h: mpm_adaptive_grid_close): which used slots are ghosts, their rows
+/* close.c - the closure of the multi-level grid's used slots (Gao et al. 2017,
+ * sec. 6.1, adaptive/grid.h: mpm_adaptive_grid_close): which used slots are ghosts, their rows
  * (T-junctions and duplicates), and their parents marked in turn; with the two caches that make
  * it cheap between changes of the tree: the rows of nodes by finest-lattice position, and per
  * block its uniform flag and its nodes' row ids. */
-#include "grid/adaptive_grid.h"
-#include "grid/adaptive_grid_parts.h"
+#include "adaptive/grid.h"
+#include "adaptive/grid_parts.h"
 
 #include "core/alloc.h"
 

@@ -1,5 +1,5 @@
-/* adaptive_resample.c - particle split and merge on the multi-level grid (Gao et al. sec. 7.2;
- * adapt/resample.h for the operations, scene.h's mpm_resample_desc for the rule).
+/* resample.c - particle split and merge on the multi-level grid (Gao et al. sec. 7.2;
+ * adaptive/split_merge.h for the operations, scene.h's mpm_resample_desc for the rule).
  *
  * Between steps (frame.c; every domain.resample.every steps) each particle of a resampled body is
  * compared with the leaves around it:
@@ -14,13 +14,12 @@
  *
  * Everything is decided from the state alone, in the particles' order, with the split cubes'
  * orientations drawn from a hash of (seed, particle id, step): 1 and 2 threads, and a run
- * resumed from a checkpoint (which keeps sim->next_id), take the same decisions bit for bit. */
-#include "solver/adaptive.h"
+ * resumed from a checkpoint (which keeps *a->host.next_id), take the same decisions bit for bit. */
+#include "adaptive/adaptive.h"
 
-#include "adapt/resample.h"
+#include "adaptive/split_merge.h"
 #include "core/alloc.h"
 #include "core/quat.h"
-#include "sim/sim.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -116,14 +115,14 @@ static int min_per_cell(const mpm_scene *sc, int b) {
 }
 
 /* Merge the groups of candidates c[0..n) (sorted); marks the merged-away particles in gone. */
-static size_t merge_groups(mpm_sim *sim, candidate *c, size_t n, uint8_t *gone, int apic,
+static size_t merge_groups(mpm_adaptive *a, candidate *c, size_t n, uint8_t *gone, int apic,
                            double dL[3]) {
-  mpm_particles *p = &sim->particles;
+  mpm_particles *p = a->host.particles;
   size_t merges = 0;
   for (size_t g0 = 0, g1; g0 < n; g0 = g1) {
     for (g1 = g0 + 1; g1 < n && same_group(&c[g0], &c[g1]);) ++g1;
     const size_t size = g1 - g0;
-    if (size < (size_t)min_per_cell(&sim->scene, c[g0].body)) continue;
+    if (size < (size_t)min_per_cell(a->host.scene, c[g0].body)) continue;
     uint8_t used[1024];
     if (size > sizeof used) continue; /* a crowded cell (beyond any limit a scene sets) */
     memset(used, 0, size);
@@ -196,19 +195,18 @@ static void compact(mpm_particles *p, const uint8_t *gone) {
   p->count = w;
 }
 
-mpm_status mpm_adaptive_resample(mpm_sim *sim) {
-  const mpm_scene *sc = &sim->scene;
+mpm_status mpm_adaptive_resample(mpm_adaptive *a) {
+  const mpm_scene *sc = a->host.scene;
   const mpm_resample_desc *rd = &sc->resample;
-  mpm_adaptive *a = sim->adaptive;
-  if (!a || !rd->enabled || sim->steps % rd->every) return MPM_OK;
+  if (!rd->enabled || *a->host.steps % rd->every) return MPM_OK;
   const mpm_refinement *r = &a->grid.tree;
-  mpm_particles *p = &sim->particles;
+  mpm_particles *p = a->host.particles;
   const size_t n = p->count;
   const int apic = sc->solver.transfer == MPM_TRANSFER_APIC;
   /* what each particle does, and its leaf cell: step scratch (core/arena.h; the next step's
    * reset takes it back), so that resampling every step allocates nothing once warm */
-  uint8_t *action = mpm_arena_alloc(&sim->step_arena, n + 1), *gone = NULL;
-  cell_key *leaf = mpm_arena_alloc(&sim->step_arena, (n + 1) * sizeof *leaf);
+  uint8_t *action = mpm_arena_alloc(a->host.arena, n + 1), *gone = NULL;
+  cell_key *leaf = mpm_arena_alloc(a->host.arena, (n + 1) * sizeof *leaf);
   candidate *cand = NULL;
   cell_table t = {0};
   mpm_status st = MPM_OK;
@@ -263,7 +261,7 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
         c->cell.c[d] = (int32_t)floor((double)(p->x[d][i] - r->origin[d]) / (double)dx);
     }
     qsort(cand, k, sizeof *cand, by_group_and_id);
-    made_merges = merge_groups(sim, cand, k, gone, apic, dL);
+    made_merges = merge_groups(a, cand, k, gone, apic, dL);
   }
   if (splits) {
     /* the particles in each split candidate's leaf cell, all bodies and types */
@@ -296,12 +294,12 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
         sd.D_parent = mpm_ugimp_mean_D((double)mpm_refinement_dx(r, leaf[i].level), L);
         sd.D_child = mpm_ugimp_mean_D((double)mpm_refinement_dx(r, leaf[i].level), L / 2);
       }
-      split_rotation(rd->seed, p->id[i], sim->steps, sd.rotation);
+      split_rotation(rd->seed, p->id[i], *a->host.steps, sd.rotation);
       const size_t first = p->count;
       double L0[3], L1[3];
       const uint32_t one = (uint32_t)i;
       mpm_particles_angular_momentum(p, &one, 1, L0);
-      if (mpm_split_particle(p, i, &sd, &sim->next_id)) goto nomem;
+      if (mpm_split_particle(p, i, &sd, a->host.next_id)) goto nomem;
       /* the children stay inside the domain's stencil clamp */
       for (size_t j = first; j < p->count; ++j)
         for (int d = 0; d < 3; ++d) {
@@ -327,15 +325,15 @@ mpm_status mpm_adaptive_resample(mpm_sim *sim) {
   }
   if (made_splits || made_merges) {
     a->stable_step = -1; /* the particles moved in the arrays */
-    sim->resample_figures.splits += (long long)made_splits;
-    sim->resample_figures.merges += (long long)made_merges;
-    for (int d = 0; d < 3; ++d) sim->resample_figures.angular_momentum_change[d] += dL[d];
+    a->resample_figures.splits += (long long)made_splits;
+    a->resample_figures.merges += (long long)made_merges;
+    for (int d = 0; d < 3; ++d) a->resample_figures.angular_momentum_change[d] += dL[d];
   }
   goto done;
 nomem:
-  st = mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+  st = mpm_error_set(a->host.error, MPM_ERR_NOMEM,
                      "step %lld: out of memory resampling %zu particles (domain.resample)",
-                     (long long)sim->steps, n);
+                     (long long)*a->host.steps, n);
 done:
   mpm_free(cand);
   mpm_free(gone);

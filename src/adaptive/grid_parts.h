@@ -1,10 +1,10 @@
-/* adaptive_grid_parts.h - what adaptive_grid.c and adaptive_close.c share of the multi-level
- * grid's inside (not for other modules: adaptive_grid.h is the interface): the transfer grids'
+/* grid_parts.h - what adaptive/grid.c and adaptive/close.c share of the multi-level
+ * grid's inside (not for other modules: adaptive/grid.h is the interface): the transfer grids'
  * numbering, node and block coordinates, and the used-slot marks. */
-#ifndef MPM_GRID_ADAPTIVE_GRID_PARTS_H
-#define MPM_GRID_ADAPTIVE_GRID_PARTS_H
+#ifndef MPM_ADAPTIVE_GRID_PARTS_H
+#define MPM_ADAPTIVE_GRID_PARTS_H
 
-#include "grid/adaptive_grid.h"
+#include "adaptive/grid.h"
 
 /* Finest-lattice units per index of `level`, as a shift. */
 static inline int fine_shift(const mpm_refinement *r, int level) {
@@ -49,7 +49,7 @@ int mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G);
 /* Activate node idx of transfer grid G and mark it used; 1 when the mark is new, 0, or -1. */
 int mpm_adaptive_mark(mpm_adaptive_grid *g, int G, const int32_t idx[3]);
 
-/* Free the row cache (adaptive_close.c). */
+/* Free the row cache (adaptive/close.c). */
 void mpm_adaptive_rows_free(struct mpm_row_cache *c);
 
 #endif

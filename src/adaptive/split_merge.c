@@ -1,5 +1,5 @@
-/* resample.c - particle split and merge (Gao et al. sec. 7.2; see resample.h). */
-#include "adapt/resample.h"
+/* split_merge.c - particle split and merge (Gao et al. sec. 7.2; see split_merge.h). */
+#include "adaptive/split_merge.h"
 
 #include "core/quat.h"
 #include "core/svd3.h"

@@ -1,8 +1,8 @@
-/* adaptive_grid.h - Gao et al.'s multi-level sparse grid (sec. 6.1, Fig. 10): one sparse level
+/* grid.h - Gao et al.'s multi-level sparse grid (sec. 6.1, Fig. 10): one sparse level
  * per refinement level, and the ghost slots that carry values between them.
  *
  * Every active node of every level is a slot of the DOF set (level L's slots are DOFs
- * level[L].dof_begin + node). A slot that is a real node owned by its level (grid/refinement.h)
+ * level[L].dof_begin + node). A slot that is a real node owned by its level (adaptive/refinement.h)
  * is an unknown of the step. Every other slot is a *ghost*: a T-junction, a refined node inside
  * a coarser leaf, or a duplicate of a real node owned by another level. A ghost has an embedding
  * row over real slots, its node's row E_gi (Gao eq. 15), fully resolved, so one pass carries
@@ -21,12 +21,12 @@
  * (mpm_adaptive_grid_activate_box for boxes of nodes does both), mpm_adaptive_grid_close
  * activates and marks every used ghost's parents, the caller lays out the DOF set with the
  * levels, and mpm_adaptive_grid_build_rows fills the ghost rows with DOF indices. */
-#ifndef MPM_GRID_ADAPTIVE_GRID_H
-#define MPM_GRID_ADAPTIVE_GRID_H
+#ifndef MPM_ADAPTIVE_GRID_H
+#define MPM_ADAPTIVE_GRID_H
 
 #include "grid/embedding.h"
 #include "grid/grid.h"
-#include "grid/refinement.h"
+#include "adaptive/refinement.h"
 
 /* Transfer grids beside the levels' own: a sparse grid runs one kernel (so the lane kernels
  * serve as they are), and particles whose box differs from the one of their level's grid
@@ -200,7 +200,7 @@ int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32
 /* The cells of block bc of `level` (bit (x << 4 | y << 2 | z) for the cell at (x, y, z) in the
  * block) whose neighbours from one below to `reach` above on every axis (reach 2 or 3; none
  * else) are leaves of that level. A particle's box meets, over a step, cells from one below its
- * base cell to a reach above that its kernel sets (adaptive_step.c, mark_stable, says how): then
+ * base cell to a reach above that its kernel sets (adaptive/step.c, mark_stable, says how): then
  * it meets leaves of that level only, and its transfer grid stays. Cell by cell, since near a
  * change of level most of a block's cells are still far enough from it. All of them for a
  * uniform block. Cached while the tree stands. 0, or -1 when out of memory. */

@@ -1,5 +1,5 @@
-/* adaptive_weights.c - one particle's weights on the multi-level grid; see adaptive_weights.h. */
-#include "interp/adaptive_weights.h"
+/* weights.c - one particle's weights on the multi-level grid; see adaptive/weights.h. */
+#include "adaptive/weights.h"
 
 #include "interp/gimp.h"
 

@@ -1,4 +1,4 @@
-/* adaptive_refine.c - the refinement rules of the multi-level grid (domain.refine; Gao et al.
+/* rules.c - the refinement rules of the multi-level grid (domain.refine; Gao et al.
  * sec. 7.1; docs/adaptive-grid.md), at setup and, with domain.refine_every, again every so many
  * steps from the material as it is then:
  *   box       the cells overlapping a box (setup and rebuilds)
@@ -14,13 +14,13 @@
  *   strain    the cells that particles with ||F - I||_F above a threshold overlap (rebuilds;
  *             beyond Gao, who leave strain-driven refinement out of their scope)
  * A rebuild makes a new tree from the rules, swaps it in (caches keyed by the tree's version
- * drop what they held), and indexes it densely; particle resampling (adaptive_resample.c) then
+ * drop what they held), and indexes it densely; particle resampling (adaptive/resample.c) then
  * makes the particle types follow it where the scene asks. The tree is kept in checkpoints. */
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 
 #include "core/alloc.h"
+#include "core/clock.h"
 #include "scene/sample.h"
-#include "sim/sim.h"
 
 #include <limits.h>
 #include <math.h>
@@ -56,18 +56,20 @@ static int refine_box_cells(const mpm_scene *sc, mpm_refinement *r, int level, c
 /* Cells within rule->distance of the collider's surface at time t: from level 0 down, a cell
  * whose centre is within the distance plus its half diagonal is refined and its children
  * tested. */
-static int refine_collider(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule, double t) {
-  const mpm_collider_pose pose = mpm_collider_pose_at(&sim->colliders[rule->collider], t);
-  size_t n = (size_t)sim->cells[0] * (size_t)sim->cells[1] * (size_t)sim->cells[2], cap = n;
+static int refine_collider(mpm_adaptive *a, mpm_refinement *r, const mpm_refine_desc *rule,
+                           double t) {
+  const mpm_collider_pose pose = mpm_collider_pose_at(&(*a->host.colliders)[rule->collider], t);
+  const int *cells = a->host.cells;
+  size_t n = (size_t)cells[0] * (size_t)cells[1] * (size_t)cells[2], cap = n;
   int32_t(*cur)[3] = mpm_alloc(cap * sizeof *cur);
   if (!cur) return -1;
   size_t k = 0;
-  for (int32_t a = 0; a < sim->cells[0]; ++a)
-    for (int32_t b = 0; b < sim->cells[1]; ++b)
-      for (int32_t c = 0; c < sim->cells[2]; ++c) {
-        cur[k][0] = a;
-        cur[k][1] = b;
-        cur[k][2] = c;
+  for (int32_t ci = 0; ci < cells[0]; ++ci)
+    for (int32_t cj = 0; cj < cells[1]; ++cj)
+      for (int32_t ck = 0; ck < cells[2]; ++ck) {
+        cur[k][0] = ci;
+        cur[k][1] = cj;
+        cur[k][2] = ck;
         ++k;
       }
   int status = 0;
@@ -268,9 +270,9 @@ done:
 }
 
 /* A body rule at setup: the body sampled at the rule's level. */
-static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
+static mpm_status refine_body(mpm_adaptive *a, mpm_refinement *r, const mpm_refine_desc *rule,
                               mpm_error *err) {
-  const mpm_scene *sc = &sim->scene;
+  const mpm_scene *sc = a->host.scene;
   const double scale = ldexp(1, -rule->level), h = mpm_sample_spacing(sc, rule->body) * scale;
   mpm_particles p;
   if (mpm_particles_init(&p, 1024)) return MPM_ERR_NOMEM;
@@ -291,19 +293,18 @@ static mpm_status refine_body(mpm_sim *sim, mpm_refinement *r, const mpm_refine_
 }
 
 /* The particles' box sides (their type's particle spacing), in a new array. */
-static double *particle_boxes(const mpm_sim *sim) {
-  const mpm_particles *p = &sim->particles;
+static double *particle_boxes(const mpm_adaptive *a) {
+  const mpm_particles *p = a->host.particles;
   double *L = mpm_alloc((p->count + 1) * sizeof *L);
   if (!L) return NULL;
-  for (size_t i = 0; i < p->count; ++i)
-    L[i] = ldexp(sim->adaptive->body_box[p->body[i]], -p->level[i]);
+  for (size_t i = 0; i < p->count; ++i) L[i] = ldexp(a->body_box[p->body[i]], -p->level[i]);
   return L;
 }
 
 /* A surface rule: the band around the current material (of one body, or all). */
-static int refine_surface(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
+static int refine_surface(mpm_adaptive *a, mpm_refinement *r, const mpm_refine_desc *rule,
                           const double *L) {
-  const mpm_particles *p = &sim->particles;
+  const mpm_particles *p = a->host.particles;
   uint8_t *keep = NULL;
   if (rule->body >= 0) {
     keep = mpm_alloc(p->count + 1);
@@ -313,12 +314,12 @@ static int refine_surface(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc
   const box_source s = {p, L, keep};
   lattice l;
   /* the lattice of the rule's level's cells: a particle's box covers about one */
-  int failed = lattice_make(&sim->scene, &s, (double)mpm_refinement_dx(r, rule->level),
+  int failed = lattice_make(a->host.scene, &s, (double)mpm_refinement_dx(r, rule->level),
                             rule->distance + (double)mpm_refinement_dx(r, rule->level), &l);
   if (!failed && l.in) {
     l.close = 1;
     l.k = (long)ceil(rule->distance / l.h - 1e-9); /* the room above has the closing's point */
-    failed = lattice_refine(&sim->scene, r, rule->level - 1, &l);
+    failed = lattice_refine(a->host.scene, r, rule->level - 1, &l);
   }
   mpm_free(l.in);
   mpm_free(keep);
@@ -329,10 +330,10 @@ static int refine_surface(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc
  * at most the rule's) that the selected particles' boxes overlap. Each particle marks its cells
  * in a bitmap of the level's cells over the domain (many particles share a cell), and the
  * marked cells are refined once each. */
-static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_desc *rule,
+static int refine_particles(mpm_adaptive *a, mpm_refinement *r, const mpm_refine_desc *rule,
                             const double *L) {
-  const mpm_particles *p = &sim->particles;
-  const mpm_scene *sc = &sim->scene;
+  const mpm_particles *p = a->host.particles;
+  const mpm_scene *sc = a->host.scene;
   uint8_t *marks[MPM_LEVELS_MAX] = {0};
   long n[MPM_LEVELS_MAX][3];
   int status = 0;
@@ -353,7 +354,7 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
     const double dx = (double)mpm_refinement_dx(r, Lc);
     if (!marks[Lc]) {
       size_t bytes = 1;
-      for (int d = 0; d < 3; ++d) bytes *= (size_t)(n[Lc][d] = (long)sim->cells[d] << Lc);
+      for (int d = 0; d < 3; ++d) bytes *= (size_t)(n[Lc][d] = (long)a->host.cells[d] << Lc);
       if (bytes > ((size_t)64 << 20) || !(marks[Lc] = mpm_calloc(bytes, 1))) {
         status = -1; /* a grid this fine marks through the tree itself: not built */
         break;
@@ -367,10 +368,11 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
       lo[d] = lo[d] < 0 ? 0 : lo[d];
       hi[d] = hi[d] >= n[Lc][d] ? n[Lc][d] - 1 : hi[d];
     }
-    for (long a = lo[0]; a <= hi[0]; ++a)
-      for (long b = lo[1]; b <= hi[1]; ++b)
-        for (long c = lo[2]; c <= hi[2]; ++c)
-          marks[Lc][((size_t)a * (size_t)n[Lc][1] + (size_t)b) * (size_t)n[Lc][2] + (size_t)c] = 1;
+    for (long ci = lo[0]; ci <= hi[0]; ++ci)
+      for (long cj = lo[1]; cj <= hi[1]; ++cj)
+        for (long ck = lo[2]; ck <= hi[2]; ++ck)
+          marks[Lc][((size_t)ci * (size_t)n[Lc][1] + (size_t)cj) * (size_t)n[Lc][2] + (size_t)ck] =
+              1;
   }
   for (int Lc = 0; Lc < MPM_LEVELS_MAX && !status; ++Lc) {
     if (!marks[Lc]) continue;
@@ -381,12 +383,12 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
                                (int32_t)lround((sc->domain_min[2] - (double)r->origin[2]) /
                                                (double)mpm_refinement_dx(r, Lc))};
     size_t q = 0;
-    for (long a = 0; a < n[Lc][0] && !status; ++a)
-      for (long b = 0; b < n[Lc][1] && !status; ++b)
-        for (long c = 0; c < n[Lc][2]; ++c, ++q) {
+    for (long ci = 0; ci < n[Lc][0] && !status; ++ci)
+      for (long cj = 0; cj < n[Lc][1] && !status; ++cj)
+        for (long ck = 0; ck < n[Lc][2]; ++ck, ++q) {
           if (!marks[Lc][q]) continue;
-          const int32_t cell[3] = {(int32_t)a + offset[0], (int32_t)b + offset[1],
-                                   (int32_t)c + offset[2]};
+          const int32_t cell[3] = {(int32_t)ci + offset[0], (int32_t)cj + offset[1],
+                                   (int32_t)ck + offset[2]};
           if (mpm_refinement_refine(r, Lc, cell)) {
             status = -1;
             break;
@@ -397,10 +399,11 @@ static int refine_particles(mpm_sim *sim, mpm_refinement *r, const mpm_refine_de
   return status;
 }
 
-mpm_status mpm_adaptive_apply_rules(mpm_sim *sim, mpm_refinement *r, int rebuild, mpm_error *err) {
-  const mpm_scene *sc = &sim->scene;
+mpm_status mpm_adaptive_apply_rules(mpm_adaptive *a, mpm_refinement *r, int rebuild,
+                                    mpm_error *err) {
+  const mpm_scene *sc = a->host.scene;
   double *L = NULL;
-  if (rebuild && !(L = particle_boxes(sim))) goto nomem;
+  if (rebuild && !(L = particle_boxes(a))) goto nomem;
   for (int k = 0; k < sc->refine_count; ++k) {
     const mpm_refine_desc *rule = &sc->refine[k];
     int failed = 0;
@@ -409,21 +412,21 @@ mpm_status mpm_adaptive_apply_rules(mpm_sim *sim, mpm_refinement *r, int rebuild
       failed = refine_box_cells(sc, r, rule->level - 1, rule->min, rule->max);
       break;
     case MPM_REFINE_COLLIDER:
-      failed = refine_collider(sim, r, rule, rebuild ? sim->time : 0);
+      failed = refine_collider(a, r, rule, rebuild ? *a->host.time : 0);
       break;
     case MPM_REFINE_BODY:
       if (!rebuild) {
-        const mpm_status st = refine_body(sim, r, rule, err);
+        const mpm_status st = refine_body(a, r, rule, err);
         if (st == MPM_ERR_NOMEM) goto nomem;
         if (st != MPM_OK) return st;
       }
       break;
     case MPM_REFINE_SURFACE:
-      failed = rebuild && refine_surface(sim, r, rule, L);
+      failed = rebuild && refine_surface(a, r, rule, L);
       break;
     case MPM_REFINE_TYPES:
     case MPM_REFINE_STRAIN:
-      failed = rebuild && refine_particles(sim, r, rule, L);
+      failed = rebuild && refine_particles(a, r, rule, L);
       break;
     }
     if (failed) {
@@ -441,11 +444,11 @@ nomem:
   return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the refined cells", sc->path);
 }
 
-int mpm_adaptive_index_tree(mpm_sim *sim, mpm_refinement *r) {
+int mpm_adaptive_index_tree(mpm_adaptive *a, mpm_refinement *r) {
   /* the refined cells over the domain densely (a bit per cell, up to 64 MiB for all levels):
    * the step asks the tree for every particle */
   const int32_t lo0[3] = {-1, -1, -1},
-                n0[3] = {sim->cells[0] + 2, sim->cells[1] + 2, sim->cells[2] + 2};
+                n0[3] = {a->host.cells[0] + 2, a->host.cells[1] + 2, a->host.cells[2] + 2};
   return mpm_refinement_index_dense(r, lo0, n0, (size_t)64 << 20);
 }
 
@@ -458,17 +461,16 @@ static void swap_tree(mpm_adaptive *a, mpm_refinement *t) {
   a->stable_step = -1;
 }
 
-mpm_status mpm_adaptive_refine(mpm_sim *sim) {
-  const mpm_scene *sc = &sim->scene;
-  mpm_adaptive *a = sim->adaptive;
-  if (!a || sc->refine_every <= 0 || sim->steps % sc->refine_every) return MPM_OK;
+mpm_status mpm_adaptive_refine(mpm_adaptive *a) {
+  const mpm_scene *sc = a->host.scene;
+  if (sc->refine_every <= 0 || *a->host.steps % sc->refine_every) return MPM_OK;
   mpm_refinement t;
   mpm_refinement_init(&t, sc->levels, a->grid.tree.origin, a->grid.tree.dx0);
   const double t0 = mpm_wall_seconds();
-  mpm_status st = mpm_adaptive_apply_rules(sim, &t, 1, &sim->error);
-  if (st == MPM_OK && mpm_adaptive_index_tree(sim, &t))
-    st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for the refined cells",
-                       (long long)sim->steps);
+  mpm_status st = mpm_adaptive_apply_rules(a, &t, 1, a->host.error);
+  if (st == MPM_OK && mpm_adaptive_index_tree(a, &t))
+    st = mpm_error_set(a->host.error, MPM_ERR_NOMEM,
+                       "step %lld: out of memory for the refined cells", (long long)*a->host.steps);
   if (st != MPM_OK) {
     mpm_refinement_free(&t);
     return st;
@@ -512,11 +514,11 @@ static void collect_refined(void *ctx, int level, const int32_t cell[3]) {
   c[3] = cell[2];
 }
 
-int32_t (*mpm_adaptive_tree_cells(const mpm_sim *sim, size_t *count))[4] {
+int32_t (*mpm_adaptive_tree_cells(const mpm_adaptive *a, size_t *count))[4] {
   cell_list l = {0};
   *count = 0;
-  if (!sim->adaptive) return NULL;
-  mpm_refinement_refined_cells(&sim->adaptive->grid.tree, collect_refined, &l);
+  if (!a) return NULL;
+  mpm_refinement_refined_cells(&a->grid.tree, collect_refined, &l);
   if (l.failed) {
     mpm_free(l.cells);
     return NULL;
@@ -526,21 +528,20 @@ int32_t (*mpm_adaptive_tree_cells(const mpm_sim *sim, size_t *count))[4] {
   return l.cells;
 }
 
-mpm_status mpm_adaptive_set_tree(mpm_sim *sim, const int32_t (*cells)[4], size_t count,
+mpm_status mpm_adaptive_set_tree(mpm_adaptive *a, const int32_t (*cells)[4], size_t count,
                                  mpm_error *err) {
-  mpm_adaptive *a = sim->adaptive;
   mpm_refinement t;
-  mpm_refinement_init(&t, sim->scene.levels, a->grid.tree.origin, a->grid.tree.dx0);
+  mpm_refinement_init(&t, a->host.scene->levels, a->grid.tree.origin, a->grid.tree.dx0);
   for (size_t i = 0; i < count; ++i) {
-    if (cells[i][0] < 0 || cells[i][0] >= sim->scene.levels - 1 ||
+    if (cells[i][0] < 0 || cells[i][0] >= a->host.scene->levels - 1 ||
         mpm_refinement_refine(&t, cells[i][0], cells[i] + 1)) {
       mpm_refinement_free(&t);
       return mpm_error_set(err, MPM_ERR_INVALID,
                            "refined cell %zu (level %d) is outside the %d-level grid", i,
-                           cells[i][0], sim->scene.levels);
+                           cells[i][0], a->host.scene->levels);
     }
   }
-  if (mpm_adaptive_index_tree(sim, &t)) {
+  if (mpm_adaptive_index_tree(a, &t)) {
     mpm_refinement_free(&t);
     return mpm_error_set(err, MPM_ERR_NOMEM, "out of memory for the refined cells");
   }

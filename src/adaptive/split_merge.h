@@ -1,4 +1,4 @@
-/* resample.h - particle split and merge (Gao et al. sec. 7.2, after Yue et al. 2015).
+/* split_merge.h - particle split and merge (Gao et al. sec. 7.2, after Yue et al. 2015).
  *
  * Split: a particle of type q becomes 8 of type q + 1 at the corners of a randomly rotated cube
  * around it; mass and volume are shared equally, F and the plastic state are copied. Merge:
@@ -16,8 +16,8 @@
  *          linear and angular momentum are both exact.
  * Without APIC the velocity is copied by a split and B stays zero. D here is the isotropic
  * mean of the transfer's D_p (for uGIMP on spacing dx with box L: dx^2/6 + L^2/12 per axis). */
-#ifndef MPM_ADAPT_RESAMPLE_H
-#define MPM_ADAPT_RESAMPLE_H
+#ifndef MPM_ADAPTIVE_SPLIT_MERGE_H
+#define MPM_ADAPTIVE_SPLIT_MERGE_H
 
 #include "core/particles.h"
 

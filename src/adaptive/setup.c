@@ -1,10 +1,10 @@
-/* adaptive_setup.c - the multi-level grid of a scene: the tree its refinement rules make, and
+/* setup.c - the multi-level grid of a scene: the tree its refinement rules make, and
  * its bodies sampled leaf by leaf (see adaptive.h). */
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 
 #include "core/alloc.h"
+#include "scene/memory_estimate.h"
 #include "scene/sample.h"
-#include "sim/sim.h"
 
 #include <limits.h>
 #include <math.h>
@@ -29,9 +29,8 @@ static int by_level_and_box(const void *x, const void *y) {
  * (finer levels: the particle's box meets finer leaves; coarser: it moved into coarser ones). A
  * level's own grid goes to its smallest box (the finest body's particles of the level's type); the
  * others get extra grids. */
-static mpm_status make_transfer_grids(mpm_sim *sim, mpm_error *err) {
-  mpm_adaptive *a = sim->adaptive;
-  const mpm_scene *sc = &sim->scene;
+static mpm_status make_transfer_grids(mpm_adaptive *a, mpm_error *err) {
+  const mpm_scene *sc = a->host.scene;
   const mpm_refinement *r = &a->grid.tree;
   int n = 0;
   for (int b = 0; b < sc->body_count; ++b)
@@ -104,35 +103,36 @@ static void count_leaf(void *ctx, int level, const int32_t cell[3]) {
 }
 
 /* The particles the refined leaves add, estimated from the bodies' boxes. */
-static double refined_particles(mpm_sim *sim) {
-  leaf_count c = {&sim->scene, &sim->adaptive->grid.tree, 0};
+static double refined_particles(mpm_adaptive *a) {
+  leaf_count c = {a->host.scene, &a->grid.tree, 0};
   mpm_refinement_fine_leaves(c.r, count_leaf, &c);
   return c.extra;
 }
 
-mpm_status mpm_adaptive_setup(mpm_sim *sim, mpm_error *err) {
-  const mpm_scene *sc = &sim->scene;
+mpm_status mpm_adaptive_setup(const mpm_adaptive_host *host, mpm_adaptive **out, mpm_error *err) {
+  const mpm_scene *sc = host->scene;
   mpm_adaptive *a = mpm_calloc(1, sizeof *a);
+  *out = a;
   if (!a) return oom(err, "the multi-level grid");
-  sim->adaptive = a;
-  mpm_adaptive_grid_init(&a->grid, sc->levels, sim->origin, (mpm_real)sc->dx);
+  a->host = *host;
+  mpm_adaptive_grid_init(&a->grid, sc->levels, a->host.origin, (mpm_real)sc->dx);
   a->body_box = mpm_calloc((size_t)sc->body_count + 1, sizeof *a->body_box);
   if (!a->body_box) return oom(err, "the multi-level grid");
   for (int b = 0; b < sc->body_count; ++b) a->body_box[b] = mpm_sample_spacing(sc, b);
   mpm_refinement *r = &a->grid.tree;
-  const mpm_status made = make_transfer_grids(sim, err);
+  const mpm_status made = make_transfer_grids(a, err);
   if (made != MPM_OK) return made;
-  const mpm_status ruled = mpm_adaptive_apply_rules(sim, r, 0, err);
+  const mpm_status ruled = mpm_adaptive_apply_rules(a, r, 0, err);
   if (ruled != MPM_OK) return ruled;
   /* the particles the levels will hold, before any is sampled: each body's level-0 count, and
    * for every finer leaf inside its bounding box the extra particles of that level, in the share
    * of the box the body fills */
   double n = 0;
   mpm_scene_memory_estimate(sc, &n);
-  sim->expected_particles = n + refined_particles(sim);
-  const mpm_status fits = mpm_scene_check_memory_for(sc, sim->expected_particles, err);
+  a->expected_particles = n + refined_particles(a);
+  const mpm_status fits = mpm_scene_check_memory_for(sc, a->expected_particles, err);
   if (fits != MPM_OK) return fits;
-  if (mpm_adaptive_index_tree(sim, r)) return oom(err, "the refined cells");
+  if (mpm_adaptive_index_tree(a, r)) return oom(err, "the refined cells");
   return MPM_OK;
 }
 
@@ -171,13 +171,13 @@ static int in_leaf_of_level(const void *ctx, const double x[3]) {
   return mpm_refinement_leaf_at(k->tree, xr, cell) == k->level;
 }
 
-mpm_status mpm_adaptive_sample_body(mpm_sim *sim, int b, mpm_error *err) {
-  const mpm_scene *sc = &sim->scene;
-  mpm_particles *p = &sim->particles;
+mpm_status mpm_adaptive_sample_body(mpm_adaptive *a, int b, mpm_error *err) {
+  const mpm_scene *sc = a->host.scene;
+  mpm_particles *p = a->host.particles;
   const size_t start = p->count;
   for (int q = 0; q < sc->levels; ++q) {
     const size_t first = p->count;
-    const keep_level k = {&sim->adaptive->grid.tree, q};
+    const keep_level k = {&a->grid.tree, q};
     const mpm_status st = mpm_sample_body_kept(sc, b, ldexp(1, -q), in_leaf_of_level, &k, p, err);
     if (st != MPM_OK) {
       p->count = start;
@@ -194,6 +194,6 @@ mpm_status mpm_adaptive_sample_body(mpm_sim *sim, int b, mpm_error *err) {
   return MPM_OK;
 }
 
-double mpm_adaptive_finest_dx(const mpm_sim *sim) {
-  return sim->scene.dx / (double)(1 << (sim->scene.levels - 1));
+double mpm_adaptive_finest_dx(const mpm_adaptive *a) {
+  return a->host.scene->dx / (double)(1 << (a->host.scene->levels - 1));
 }

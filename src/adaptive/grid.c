@@ -1,9 +1,9 @@
-/* adaptive_grid.c - the level stack of the multi-level grid and its ghost slots (Gao et al.
+/* grid.c - the level stack of the multi-level grid and its ghost slots (Gao et al.
  * 2017, sec. 6.1): the levels and extra grids, the used-slot marks, the ghosts' rows, their
- * scatter schedule and the scatter and gather through them; see adaptive_grid.h. Which used
- * slots are ghosts, and their rows, come from the closure (adaptive_close.c). */
-#include "grid/adaptive_grid.h"
-#include "grid/adaptive_grid_parts.h"
+ * scatter schedule and the scatter and gather through them; see adaptive/grid.h. Which used
+ * slots are ghosts, and their rows, come from the closure (adaptive/close.c). */
+#include "adaptive/grid.h"
+#include "adaptive/grid_parts.h"
 
 #include "core/alloc.h"
 #include "core/parallel.h"

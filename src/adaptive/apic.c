@@ -1,4 +1,4 @@
-/* adaptive_apic.c - APIC with exact angular momentum across the levels of the multi-level grid
+/* apic.c - APIC with exact angular momentum across the levels of the multi-level grid
  * (docs/adaptive-grid.md, "APIC with exact angular momentum across levels"; Gao et al. list it
  * as future work).
  *
@@ -17,11 +17,10 @@
  * (stencil node, ghost), the lanes' view of them, and the ghosts' sums. Each A_g is summed by one
  * thread over its contributions in boundary-particle order (the entries transposed by ghost), so
  * results do not depend on the thread count. */
-#include "solver/adaptive.h"
+#include "adaptive/adaptive.h"
 
 #include "core/alloc.h"
 #include "core/parallel.h"
-#include "sim/sim.h"
 
 #include <assert.h>
 #include <string.h>
@@ -132,11 +131,10 @@ static void boundary_block(mpm_adaptive *a, int t, const uint64_t reach[MPM_BLOC
   if (count) count[0] = cells, count[1] = entries, count[2] = particles;
 }
 
-mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
+mpm_status mpm_adaptive_apic_prepare(mpm_adaptive *a) {
   mpm_adaptive_grid *ag = &a->grid;
   a->boundary_count = a->cell_count = a->cell_ghost_count = 0;
-  const size_t dofs = sim->dofs.count;
+  const size_t dofs = a->host.dofs->count;
   if (mpm_grow((void **)&a->ghost_of, &a->ghost_of_capacity, dofs + 1, sizeof *a->ghost_of))
     goto nomem;
   /* the transfer grids' segments are whole blocks of 64 slots from slot 0 on (adaptive_layout),
@@ -206,16 +204,15 @@ mpm_status mpm_adaptive_apic_prepare(mpm_sim *sim) {
     a->boundary_count = at[2];
     a->cell[a->cell_count] = (uint32_t)a->cell_ghost_count; /* the last cell's end */
   }
-  if (transpose_by_ghost(a, ag->ghost_count, &sim->step_arena)) goto nomem;
+  if (transpose_by_ghost(a, ag->ghost_count, a->host.arena)) goto nomem;
   return MPM_OK;
 nomem:
-  return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+  return mpm_error_set(a->host.error, MPM_ERR_NOMEM,
                        "step %lld: out of memory for the APIC moments of the ghost nodes",
-                       (long long)sim->steps);
+                       (long long)*a->host.steps);
 }
 
-mpm_ghost_apic mpm_adaptive_apic_view(mpm_sim *sim, int t) {
-  mpm_adaptive *a = sim->adaptive;
+mpm_ghost_apic mpm_adaptive_apic_view(mpm_adaptive *a, int t) {
   const mpm_ghost_apic v = {a->cell_of + a->cell_map_begin[t],
                             a->cell,
                             a->cell_ghost,
@@ -225,15 +222,13 @@ mpm_ghost_apic mpm_adaptive_apic_view(mpm_sim *sim, int t) {
   return v;
 }
 
-void mpm_adaptive_apic_before_p2g(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
+void mpm_adaptive_apic_before_p2g(mpm_adaptive *a) {
   const long n = (long)(9 * a->cell_ghost_count);
 #pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)
   for (long i = 0; i < n; ++i) a->affine[i] = 0;
 }
 
-void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
+void mpm_adaptive_apic_after_p2g(mpm_adaptive *a) {
   const size_t ng = a->grid.ghost_count;
   /* the ghosts' affine moments A_g = sum_p w_gp m_p C_p (stencils overlap): each ghost summed
    * by one thread over its entries in cell order (a ghost is once in a cell's entries), into one
@@ -255,24 +250,22 @@ void mpm_adaptive_apic_after_p2g(mpm_sim *sim) {
   }
 }
 
-void mpm_adaptive_apic_scatter(mpm_sim *sim, int impulse) {
-  mpm_adaptive *a = sim->adaptive;
+void mpm_adaptive_apic_scatter(mpm_adaptive *a, int impulse) {
   mpm_adaptive_grid *ag = &a->grid;
-  mpm_dofs *d = &sim->dofs;
+  mpm_dofs *d = a->host.dofs;
   mpm_real *u[7] = {d->mass, d->v0[0], d->v0[1], d->v0[2], d->f[0], d->f[1], d->f[2]};
   const mpm_real *A[9]; /* the ghosts' affine moments, one plane per component */
   for (int c = 0; c < 9; ++c) A[c] = a->moment + (size_t)(9 + c) * ag->ghost_count;
   mpm_adaptive_grid_scatter_apic(ag, impulse ? 4 : 7, u, A);
 }
 
-void mpm_adaptive_apic_g2p_before(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
+void mpm_adaptive_apic_g2p_before(mpm_adaptive *a) {
   const mpm_adaptive_grid *ag = &a->grid;
   if (!a->boundary_count) return;
   const size_t n = ag->ghost_count;
   mpm_real *M[9];
   for (int c = 0; c < 9; ++c) M[c] = a->moment + (size_t)(9 + c) * n; /* P2G's are spent */
-  const mpm_real *const v[3] = {sim->dofs.v[0], sim->dofs.v[1], sim->dofs.v[2]};
+  const mpm_real *const v[3] = {a->host.dofs->v[0], a->host.dofs->v[1], a->host.dofs->v[2]};
   mpm_adaptive_grid_gather_moments(ag, v, M);
   mpm_real *Mi = a->moment; /* interleaved, for the G2P lanes' reads */
 #pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN)

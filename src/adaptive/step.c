@@ -1,9 +1,8 @@
-/* adaptive_step.c - the stages of a step on the multi-level grid (see adaptive.h). */
-#include "solver/adaptive.h"
+/* step.c - the stages of a step on the multi-level grid (see adaptive.h). */
+#include "adaptive/adaptive.h"
 
 #include "core/alloc.h"
 #include "core/parallel.h"
-#include "sim/sim.h"
 #include "transfer/operators.h"
 
 #include <math.h>
@@ -41,8 +40,7 @@ static int step_reach(const mpm_kernel *k) {
 
 /* After the sorts and the reorder, in the particles' order now: whether each particle stays on
  * its transfer grid next step (the cells its box can reach are leaves of its grid's level). */
-static mpm_status mark_stable(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
+static mpm_status mark_stable(mpm_adaptive *a) {
   if (a->grid.tree.levels == 1) return MPM_OK;
   for (int t = 0; t < a->tgrid_count; ++t) {
     const mpm_transfer_grid *tg = &a->tgrid[t];
@@ -54,12 +52,12 @@ static mpm_status mark_stable(mpm_sim *sim) {
     const long nb = (long)sg->owner_count;
     if (mpm_grow((void **)&a->stable_cells, &a->stable_cells_capacity, (size_t)nb + 1,
                  sizeof *a->stable_cells))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
+      return mpm_error_set(a->host.error, MPM_ERR_NOMEM, "out of memory classifying particles");
     uint64_t *cells = a->stable_cells;
     const int reach = step_reach(&tg->kernel);
     for (long b = 0; b < nb; ++b)
       if (mpm_adaptive_grid_block_stable_cells(&a->grid, tg->level, sg->coord[b], reach, &cells[b]))
-        return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
+        return mpm_error_set(a->host.error, MPM_ERR_NOMEM, "out of memory classifying particles");
     uint8_t *stable = a->stable + a->range[t];
 #pragma omp parallel for schedule(static) if (nb > 64)
     for (long b = 0; b < nb; ++b)
@@ -74,7 +72,7 @@ static mpm_status mark_stable(mpm_sim *sim) {
   /* each range's transfer grid, in the order now (the arrays were permuted since classify) */
   for (int t = 0; t < a->tgrid_count; ++t)
     memset(a->of + a->range[t], t, a->range[t + 1] - a->range[t]);
-  a->stable_step = sim->steps + 1;
+  a->stable_step = *a->host.steps + 1;
   return MPM_OK;
 }
 
@@ -121,16 +119,15 @@ static inline double in_units(mpm_real v, double origin, double dx0) {
   return ((double)v - origin) / dx0;
 }
 
-static mpm_status classify(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
-  const mpm_particles *p = &sim->particles;
+static mpm_status classify(mpm_adaptive *a) {
+  const mpm_particles *p = a->host.particles;
   const mpm_refinement *r = &a->grid.tree;
   const long n = (long)p->count;
   long bad = n;
-  const uint8_t *stable = a->stable_step == sim->steps ? a->stable : NULL;
-  const int bodies = sim->scene.body_count, levels = r->levels;
+  const uint8_t *stable = a->stable_step == *a->host.steps ? a->stable : NULL;
+  const int bodies = a->host.scene->body_count, levels = r->levels;
   if (make_box_table(a, bodies))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory classifying particles");
+    return mpm_error_set(a->host.error, MPM_ERR_NOMEM, "out of memory classifying particles");
   const mpm_real *box_half = a->box_half;
   const int8_t *box_tgrid = a->box_tgrid;
   const double o[3] = {(double)r->origin[0], (double)r->origin[1], (double)r->origin[2]};
@@ -170,10 +167,10 @@ static mpm_status classify(mpm_sim *sim) {
   const size_t i = (size_t)bad;
   const int q = p->level[i];
   if (q < 0 || q >= r->levels)
-    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+    return mpm_error_set(a->host.error, MPM_ERR_INVALID,
                          "step %lld: particle id %u has type %d, expected 0 .. %d (the grid's "
                          "levels)",
-                         (long long)sim->steps, p->id[i], q, r->levels - 1);
+                         (long long)*a->host.steps, p->id[i], q, r->levels - 1);
   const double box = ldexp(a->body_box[p->body[i]], -q);
   double blo[3], bhi[3]; /* as classified */
   for (int d = 0; d < 3; ++d) {
@@ -182,13 +179,13 @@ static mpm_status classify(mpm_sim *sim) {
   }
   const int level = r->levels > 1 ? mpm_refinement_finest_level_overlapping(r, blo, bhi) : 0;
   return mpm_error_set(
-      &sim->error, MPM_ERR_INVALID,
+      a->host.error, MPM_ERR_INVALID,
       "step %lld: particle id %u (body %d) of type %d (box %g m) at (%g, %g, %g) meets a leaf of "
       "level %d, whose spacing %g m is less than half its box: the multi-level grid transfers "
       "boxes of at most 2 cells; let the refinement change by one level at a time near the "
       "material (domain.refine)",
-      (long long)sim->steps, p->id[i], p->body[i], q, box, (double)p->x[0][i], (double)p->x[1][i],
-      (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
+      (long long)*a->host.steps, p->id[i], p->body[i], q, box, (double)p->x[0][i],
+      (double)p->x[1][i], (double)p->x[2][i], level, (double)mpm_refinement_dx(r, level));
 }
 
 /* Keep the particles grouped by transfer grid, the ranges in a.range. When some particles
@@ -198,9 +195,8 @@ static mpm_status classify(mpm_sim *sim) {
  * tree moves a few percent of the particles, not all of them. When more than half would move,
  * a stable counting sort permutes the arrays whole instead. Either way the order depends only
  * on the particles, not on the threads. */
-static mpm_status group(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
-  mpm_particles *p = &sim->particles;
+static mpm_status group(mpm_adaptive *a) {
+  mpm_particles *p = a->host.particles;
   const int nt = a->tgrid_count;
   size_t count[MPM_TRANSFER_GRIDS_MAX + 1] = {0};
   int grouped = 1;
@@ -224,8 +220,8 @@ static mpm_status group(mpm_sim *sim) {
   for (int t = 0; t < nt; ++t) count[t + 1] += count[t];
   for (int t = 0; t <= nt; ++t) a->range[t] = count[t];
   if (grouped) return MPM_OK;
-  if (mpm_sim_ensure_scratch(sim))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
+  if (mpm_particles_scratch(a->host.particles, a->host.iscratch, a->host.scratch_capacity))
+    return mpm_error_set(a->host.error, MPM_ERR_NOMEM, "out of memory reordering particles");
   /* the slots of each new range that hold another grid's particle */
   size_t holes[MPM_TRANSFER_GRIDS_MAX + 1] = {0}, moving = 0;
   for (int t = 0; t < nt; ++t)
@@ -233,7 +229,7 @@ static mpm_status group(mpm_sim *sim) {
       if (a->of[i] != t) holes[t + 1]++, moving++;
   if (2 * moving > p->count) { /* most move: one stable counting sort */
     for (size_t i = 0; i < p->count; ++i) a->perm[count[a->of[i]]++] = (uint32_t)i;
-    mpm_particles_permute(p, a->perm, sim->iscratch);
+    mpm_particles_permute(p, a->perm, *a->host.iscratch);
     return MPM_OK;
   }
   for (int t = 0; t < nt; ++t) holes[t + 1] += holes[t];
@@ -246,18 +242,17 @@ static mpm_status group(mpm_sim *sim) {
         dest[at_dest[t]++] = (uint32_t)i;      /* a hole of t */
         src[at_src[a->of[i]]++] = (uint32_t)i; /* a particle bound for its grid's holes */
       }
-  mpm_particles_move(p, dest, src, moving, sim->iscratch);
+  mpm_particles_move(p, dest, src, moving, *a->host.iscratch);
   return MPM_OK;
 }
 
-mpm_status mpm_adaptive_sort(mpm_sim *sim) {
-  mpm_adaptive *a = sim->adaptive;
+mpm_status mpm_adaptive_sort(mpm_adaptive *a) {
   mpm_adaptive_grid *ag = &a->grid;
-  mpm_particles *p = &sim->particles;
+  mpm_particles *p = a->host.particles;
   if (reserve(a, p->count + 1))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory sorting particles");
-  mpm_status st = classify(sim);
-  if (st == MPM_OK) st = group(sim);
+    return mpm_error_set(a->host.error, MPM_ERR_NOMEM, "out of memory sorting particles");
+  mpm_status st = classify(a);
+  if (st == MPM_OK) st = group(a);
   if (st != MPM_OK) return st;
   /* every grid is sorted (an empty one that held blocks too: that resets them), then marked */
   int sorted[MPM_TRANSFER_GRIDS_MAX] = {0};
@@ -267,54 +262,54 @@ mpm_status mpm_adaptive_sort(mpm_sim *sim) {
     mpm_grid *g = mpm_adaptive_grid_at(ag, tg->G);
     sorted[tg->G] = 1;
     if (!v.count && !g->impl.sparse.block_count) continue; /* empty, and already clear */
-    if (g->ops->activate(g, &tg->kernel, sim->material_count, &v, &sim->step_arena)) goto nomem;
+    if (g->ops->activate(g, &tg->kernel, *a->host.material_count, &v, a->host.arena)) goto nomem;
   }
   for (int G = 0; G >= 0; G = mpm_adaptive_grid_next(ag, G)) {
     if (sorted[G] || !mpm_adaptive_grid_at(ag, G)->impl.sparse.block_count) continue;
     const mpm_particles none = mpm_particles_range(p, 0, 0);
     mpm_grid *g = mpm_adaptive_grid_at(ag, G);
     const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_UGIMP, g->dx, 0);
-    if (g->ops->activate(g, &k, sim->material_count, &none, &sim->step_arena)) goto nomem;
+    if (g->ops->activate(g, &k, *a->host.material_count, &none, a->host.arena)) goto nomem;
   }
   size_t breaks = 0; /* the ranges' orders come apart as the material moves */
   for (int t = 0; t < a->tgrid_count; ++t)
     breaks += mpm_order_breaks(mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm,
                                a->range[t + 1] - a->range[t]);
-  if (p->count && mpm_sim_wants_reorder(sim, breaks, p->count)) {
+  if (p->count && mpm_reorder_due(*a->host.steps, *a->host.reorder_interval, breaks, p->count)) {
     /* into block order now and then, every range in its grid's order */
     for (int t = 0; t < a->tgrid_count; ++t) {
       uint32_t *perm = mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm;
       for (size_t j = a->range[t]; j < a->range[t + 1]; ++j)
         a->perm[j] = (uint32_t)a->range[t] + perm[j - a->range[t]];
     }
-    if (mpm_sim_ensure_scratch(sim))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
-    mpm_particles_permute(p, a->perm, sim->iscratch);
+    if (mpm_particles_scratch(a->host.particles, a->host.iscratch, a->host.scratch_capacity))
+      return mpm_error_set(a->host.error, MPM_ERR_NOMEM, "out of memory reordering particles");
+    mpm_particles_permute(p, a->perm, *a->host.iscratch);
     for (int t = 0; t < a->tgrid_count; ++t) {
       uint32_t *perm = mpm_adaptive_grid_at(ag, a->tgrid[t].G)->impl.sparse.perm;
       for (size_t j = 0; j < a->range[t + 1] - a->range[t]; ++j) perm[j] = (uint32_t)j;
     }
   }
   if (ag->tree.levels == 1) return MPM_OK; /* one level: no ghosts */
-  if ((st = mark_stable(sim)) != MPM_OK) return st;
+  if ((st = mark_stable(a)) != MPM_OK) return st;
   mpm_adaptive_grid_clear_marks(ag);
   for (int t = 0; t < a->tgrid_count; ++t)
     if (mpm_adaptive_grid_mark_sorted(ag, a->tgrid[t].G, a->tgrid[t].kernel.width)) goto nomem;
   if (mpm_adaptive_grid_close(ag))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+    return mpm_error_set(a->host.error, MPM_ERR_NOMEM,
                          "step %lld: out of memory activating the parents of the ghost nodes (or "
                          "a node constrained through more than %d real nodes)",
-                         (long long)sim->steps, MPM_ROW_MAX);
+                         (long long)*a->host.steps, MPM_ROW_MAX);
   return MPM_OK;
 nomem:
-  return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+  return mpm_error_set(a->host.error, MPM_ERR_NOMEM,
                        "step %lld: out of memory sorting %zu particles into grid blocks",
-                       (long long)sim->steps, p->count);
+                       (long long)*a->host.steps, p->count);
 }
 
-mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
-  mpm_adaptive_grid *ag = &sim->adaptive->grid;
-  mpm_dofs *d = &sim->dofs;
+mpm_status mpm_adaptive_layout(mpm_adaptive *a, unsigned fields) {
+  mpm_adaptive_grid *ag = &a->grid;
+  mpm_dofs *d = a->host.dofs;
   mpm_dofs_begin_layout(d);
   int failed = 0;
   for (int G = 0; G >= 0 && !failed; G = mpm_adaptive_grid_next(ag, G)) {
@@ -326,30 +321,29 @@ mpm_status mpm_adaptive_layout(mpm_sim *sim, unsigned fields) {
   }
   if (failed || mpm_dofs_end_layout(d, fields) ||
       (ag->tree.levels > 1 && mpm_adaptive_grid_build_rows(ag)))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+    return mpm_error_set(a->host.error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the values of %zu grid nodes",
-                         (long long)sim->steps, d->count);
+                         (long long)*a->host.steps, d->count);
   mpm_dofs_clear(d, fields & ~(unsigned)MPM_DOF_V);
-  if (ag->tree.levels > 1 && sim->scene.solver.transfer == MPM_TRANSFER_APIC)
-    return mpm_adaptive_apic_prepare(sim);
+  if (ag->tree.levels > 1 && a->host.scene->solver.transfer == MPM_TRANSFER_APIC)
+    return mpm_adaptive_apic_prepare(a);
   return MPM_OK;
 }
 
-void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
-  mpm_adaptive *a = sim->adaptive;
+void mpm_adaptive_p2g(mpm_adaptive *a, const mpm_transfer_ctx *tc, int impulse) {
   const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
-  if (apic) mpm_adaptive_apic_before_p2g(sim);
+  if (apic) mpm_adaptive_apic_before_p2g(a);
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
     if (a->range[k + 1] == a->range[k]) continue; /* an empty grid: nothing to add */
     const mpm_particles v =
-        mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
+        mpm_particles_range(a->host.particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
-    const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
+    const mpm_grid_values val = mpm_dofs_grid_values(a->host.dofs, g);
     /* the boundary particles' part of APIC across levels runs in the lanes */
     const mpm_ghost_apic ga =
-        apic && a->boundary_count ? mpm_adaptive_apic_view(sim, k) : (mpm_ghost_apic){0};
+        apic && a->boundary_count ? mpm_adaptive_apic_view(a, k) : (mpm_ghost_apic){0};
     t.ghost_apic = apic && a->boundary_count ? &ga : NULL;
     t.kernel = tg->kernel;
     if (!impulse && mpm_p2g_fuses_force(&t, g)) {
@@ -362,33 +356,32 @@ void mpm_adaptive_p2g(mpm_sim *sim, const mpm_transfer_ctx *tc, int impulse) {
   }
   /* the ghosts' sums go to their real parents (Gao eq. 15) */
   if (apic) {
-    mpm_adaptive_apic_after_p2g(sim);
-    mpm_adaptive_apic_scatter(sim, impulse);
+    mpm_adaptive_apic_after_p2g(a);
+    mpm_adaptive_apic_scatter(a, impulse);
     return;
   }
-  mpm_dofs *d = &sim->dofs;
+  mpm_dofs *d = a->host.dofs;
   mpm_real *u[7] = {d->mass, d->v0[0], d->v0[1], d->v0[2], d->f[0], d->f[1], d->f[2]};
   mpm_adaptive_grid_scatter(&a->grid, impulse ? 4 : 7, u);
 }
 
-mpm_g2p_result mpm_adaptive_g2p(mpm_sim *sim, const mpm_transfer_ctx *tc) {
-  mpm_adaptive *a = sim->adaptive;
-  mpm_dofs *d = &sim->dofs;
+mpm_g2p_result mpm_adaptive_g2p(mpm_adaptive *a, const mpm_transfer_ctx *tc) {
+  mpm_dofs *d = a->host.dofs;
   mpm_real *u[6] = {d->v[0], d->v[1], d->v[2], d->v0[0], d->v0[1], d->v0[2]};
   const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
   mpm_adaptive_grid_gather(&a->grid, apic ? 3 : 6, u);
-  if (apic) mpm_adaptive_apic_g2p_before(sim);
+  if (apic) mpm_adaptive_apic_g2p_before(a);
   mpm_g2p_result r = {0, -1};
   mpm_transfer_ctx t = *tc;
   for (int k = 0; k < a->tgrid_count; ++k) {
     const mpm_transfer_grid *tg = &a->tgrid[k];
     if (a->range[k + 1] == a->range[k]) continue; /* no particle to update */
     mpm_particles v =
-        mpm_particles_range(&sim->particles, a->range[k], a->range[k + 1] - a->range[k]);
+        mpm_particles_range(a->host.particles, a->range[k], a->range[k + 1] - a->range[k]);
     const mpm_grid *g = mpm_adaptive_grid_at(&a->grid, tg->G);
-    const mpm_grid_values val = mpm_dofs_grid_values(&sim->dofs, g);
+    const mpm_grid_values val = mpm_dofs_grid_values(a->host.dofs, g);
     const mpm_ghost_apic ga =
-        apic && a->boundary_count ? mpm_adaptive_apic_view(sim, k) : (mpm_ghost_apic){0};
+        apic && a->boundary_count ? mpm_adaptive_apic_view(a, k) : (mpm_ghost_apic){0};
     t.ghost_apic = apic && a->boundary_count ? &ga : NULL;
     t.kernel = tg->kernel;
     const mpm_g2p_result rk = mpm_g2p(&t, g, &val, &v);
