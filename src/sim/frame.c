@@ -7,7 +7,7 @@
  * and never repeats them. */
 #include "sim/sim.h"
 
-#include "adaptive/adaptive.h"
+#include "sim/grid_stack.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -18,12 +18,13 @@ typedef struct between_stage {
   mpm_status (*run)(mpm_sim *sim);
 } between_stage;
 
+/* the grid stack's work between steps (grid_stack.h) */
 static mpm_status refinement(mpm_sim *sim) {
-  return sim->adaptive ? mpm_adaptive_refine(sim->adaptive) : MPM_OK;
+  return sim->stack->refine(sim);
 }
 
 static mpm_status particle_resampling(mpm_sim *sim) {
-  return sim->adaptive ? mpm_adaptive_resample(sim->adaptive) : MPM_OK;
+  return sim->stack->resample(sim);
 }
 
 static const between_stage between_steps[] = {

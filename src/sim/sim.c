@@ -1,7 +1,7 @@
 /* sim.c - building and destroying a simulation, and the public handle's accessors. */
 #include "sim/sim.h"
 #include "io/run_folder.h"
-#include "adaptive/adaptive.h"
+#include "sim/grid_stack.h"
 #include "domain/enrich.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
@@ -170,30 +170,12 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
     goto fail;
   }
   mpm_domain_set_init(&sim->domains);
-  if (sc->levels > 0) {
-    const mpm_adaptive_host host = {.scene = &sim->scene,
-                                    .particles = &sim->particles,
-                                    .dofs = &sim->dofs,
-                                    .arena = &sim->step_arena,
-                                    .steps = &sim->steps,
-                                    .time = &sim->time,
-                                    .origin = sim->origin,
-                                    .cells = sim->cells,
-                                    .colliders = &sim->colliders,
-                                    .material_count = &sim->material_count,
-                                    .reorder_interval = &sim->reorder_interval,
-                                    .iscratch = &sim->iscratch,
-                                    .scratch_capacity = &sim->scratch_capacity,
-                                    .next_id = &sim->next_id,
-                                    .error = &sim->error};
-    if ((st = mpm_adaptive_setup(&host, &sim->adaptive, err)) != MPM_OK) goto fail;
-    sim->expected_particles = sim->adaptive->expected_particles;
-  }
+  sim->stack = mpm_grid_stack_for(sc);
+  if ((st = sim->stack->make(sim, err)) != MPM_OK) goto fail;
   uint32_t next_id = 0;
   for (int b = 0; sample && b < sc->body_count; ++b) {
     const size_t first = sim->particles.count;
-    st = sim->adaptive ? mpm_adaptive_sample_body(sim->adaptive, b, err)
-                       : mpm_sample_body(sc, b, &sim->particles, err);
+    st = sim->stack->sample_body(sim, b, err);
     if (st != MPM_OK) goto fail;
     for (size_t i = first; i < sim->particles.count; ++i) {
       sim->particles.id[i] = next_id++;
@@ -443,7 +425,7 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_free(sim->force_regions);
   mpm_free(sim->base_materials);
   mpm_grid_free(&sim->grid);
-  mpm_adaptive_free(sim->adaptive);
+  if (sim->stack) sim->stack->destroy(sim);
   mpm_dofs_free(&sim->dofs);
   mpm_heat_free(&sim->heat);
   mpm_arena_free(&sim->step_arena);

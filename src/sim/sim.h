@@ -74,16 +74,18 @@ struct mpm_sim {
   mpm_embedded_surface *surfaces; /* meshes of mesh bodies with domains (Zhu sec. 4.1) */
   int surface_count;
   mpm_real origin[3];
-  int cells[3];                  /* grid cells per axis over the domain */
-  mpm_grid grid;                 /* the uniform grid level (sparse or dense) */
-  struct mpm_adaptive *adaptive; /* Gao's multi-level grid (scene.levels > 0; adaptive/adaptive.h)
-                                    in place of `grid`, else NULL */
-  mpm_dofs dofs;                 /* the unknowns of the step: the values at the grid's nodes */
-  mpm_heat heat;                 /* heat transfer's scratch and figures (scene `heat`) */
-  size_t melted_domains;         /* domain particles switched off by melting so far */
-  mpm_arena step_arena;          /* the step's scratch, taken back when the next step begins */
-  uint32_t *iscratch; /* per-particle integers for the periodic reorder (the reals reorder
-                         within their own storage: core/particles.h) */
+  int cells[3];  /* grid cells per axis over the domain */
+  mpm_grid grid; /* the uniform grid level (sparse or dense) */
+  /* the grids the step transfers on (grid_stack.h): the uniform level, or Gao's multi-level
+   * grid (scene.levels > 0) in place of `grid`, whose state is `adaptive` (else NULL) */
+  const struct mpm_grid_stack_ops *stack;
+  struct mpm_adaptive *adaptive;
+  mpm_dofs dofs;         /* the unknowns of the step: the values at the grid's nodes */
+  mpm_heat heat;         /* heat transfer's scratch and figures (scene `heat`) */
+  size_t melted_domains; /* domain particles switched off by melting so far */
+  mpm_arena step_arena;  /* the step's scratch, taken back when the next step begins */
+  uint32_t *iscratch;    /* per-particle integers for the periodic reorder (the reals reorder
+                            within their own storage: core/particles.h) */
   size_t scratch_capacity;
   int reorder_interval;     /* physically reorder particles every this many steps */
   mpm_thread_tuner threads; /* the step's thread count, measured (sim/thread_tuner.h) */

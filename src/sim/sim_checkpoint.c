@@ -15,7 +15,7 @@
 #include "io/input_file.h"
 #include "scene/sample.h"
 #include "core/alloc.h"
-#include "adaptive/adaptive.h"
+#include "sim/grid_stack.h"
 #include "sim/sim.h"
 
 #include <dirent.h>
@@ -154,29 +154,9 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   char file[MPM_PATH_MAX + 32];
   snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->output_dir, NAME_DIGITS,
            (long long)sim->steps);
-  /* a tree rebuilt during the run is state: the rules made it from an earlier step's material */
-  int32_t(*cells)[4] = NULL;
-  if (sim->adaptive && sim->scene.refine_every > 0) {
-    size_t count = 0;
-    if (!(cells = mpm_adaptive_tree_cells(sim->adaptive, &count))) {
-      mpm_free(forces);
-      mpm_free(scripts);
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
-    }
-    c.tree_count = count;
-    for (int k = 0; k < 4; ++k) {
-      c.tree[k] = mpm_alloc((count + 1) * sizeof(int32_t));
-      for (size_t i = 0; c.tree[k] && i < count; ++i) c.tree[k][i] = cells[i][k];
-    }
-    mpm_free(cells);
-    if (!c.tree[0] || !c.tree[1] || !c.tree[2] || !c.tree[3]) {
-      for (int k = 0; k < 4; ++k) mpm_free(c.tree[k]);
-      mpm_free(forces);
-      mpm_free(scripts);
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the refined cells");
-    }
-  }
-  mpm_status st = mpm_checkpoint_write(file, &c, &sim->error);
+  /* the grid's own state (a tree the run rebuilt) */
+  mpm_status st = sim->stack->save(sim, &c);
+  if (st == MPM_OK) st = mpm_checkpoint_write(file, &c, &sim->error);
   for (int k = 0; k < 4; ++k) mpm_free(c.tree[k]);
   mpm_free(forces);
   mpm_free(scripts);
@@ -273,16 +253,7 @@ static mpm_status check_fits(const mpm_sim *sim, const mpm_checkpoint *c, const 
 static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   mpm_status st = mpm_sim_alloc_output(sim, c->records);
   if (st != MPM_OK) return st;
-  if (sim->adaptive && sim->scene.refine_every > 0) {
-    int32_t(*cells)[4] = mpm_alloc((c->tree_count + 1) * sizeof *cells);
-    if (!cells) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for the tree");
-    for (size_t i = 0; i < c->tree_count; ++i)
-      for (int k = 0; k < 4; ++k) cells[i][k] = c->tree[k][i];
-    st = mpm_adaptive_set_tree(sim->adaptive, (const int32_t(*)[4])cells, (size_t)c->tree_count,
-                               &sim->error);
-    mpm_free(cells);
-    if (st != MPM_OK) return st;
-  }
+  if ((st = sim->stack->load(sim, c)) != MPM_OK) return st;
   mpm_particles_free(&sim->particles);
   sim->particles = c->particles;
   memset(&c->particles, 0, sizeof c->particles);

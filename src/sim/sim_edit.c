@@ -4,7 +4,7 @@
  * Every request is checked before anything changes (ids simulated now, on material points,
  * finite values, positions inside the domain), so a refused call leaves the state as it was. */
 #define _DEFAULT_SOURCE /* realpath */
-#include "adaptive/adaptive.h"
+#include "sim/grid_stack.h"
 #include "sim/sim.h"
 #include "core/alloc.h"
 #include "core/hash.h"
@@ -104,9 +104,7 @@ static mpm_status set_vectors(mpm_sim *sim, const char *what, size_t count, cons
       }
     }
   mpm_free(index);
-  /* the multi-level grid keeps a particle's transfer grid while its block stays inside one
-     level's region, which a step's motion cannot leave unseen but a jump can: ask again */
-  if (positions && sim->adaptive) sim->adaptive->stable_step = -1;
+  if (positions) sim->stack->particles_moved(sim); /* what the sort kept may not hold */
   return MPM_OK;
 }
 
@@ -192,7 +190,7 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
   if (!sim->scene_copy)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "%s: the simulation keeps no scene text to add the body to", what);
-  if (sim->adaptive)
+  if (!sim->stack->adds_bodies)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "%s: bodies are added on the uniform grid only (this scene has "
                          "domain.levels; a body's refinement rules are the scene's)",

@@ -1,7 +1,7 @@
 /* sim_info.c - the public calls a program needs around a run (mpm/mpm.h): the size and the
  * figures of a simulation (mpm_sim_get_info), a frame limit, a per-step callback, the scene's
  * warnings and the next step's dt. `mpm run` and `mpm check` are written on these alone. */
-#include "adaptive/adaptive.h"
+#include "sim/grid_stack.h"
 #include "sim/sim.h"
 #include "heat/heat.h"
 #include "core/parallel.h"
@@ -126,19 +126,8 @@ mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size)
   in.surface_triangles = sim->surface_triangles;
   in.surface_seconds_total = sim->surface_seconds_total;
   in.surface_frames = sim->surface_frames;
-  in.refining = sim->adaptive && sc->refine_every > 0;
-  if (in.refining) {
-    in.refinements = sim->adaptive->rebuilds;
-    in.refinement_seconds = sim->adaptive->rebuild_seconds;
-    in.refinements_unchanged = sim->adaptive->unchanged_rebuilds;
-  }
   in.resampling = sc->resample.enabled;
-  if (sim->adaptive) {
-    const mpm_resample_figures *rf = &sim->adaptive->resample_figures;
-    in.splits = rf->splits;
-    in.merges = rf->merges;
-    for (int d = 0; d < 3; ++d) in.angular_momentum_change[d] = rf->angular_momentum_change[d];
-  }
+  sim->stack->info(sim, &in); /* refinement and resampling */
   in.heat = sc->heat.enabled;
   in.melted_domains = sim->melted_domains;
   in.conduction_substeps = sim->heat.figures.substeps;

@@ -3,8 +3,7 @@
  * surfaces of output.surface (sim_surface.c), run.pvd (every VTK file of every frame),
  * frame_NNNN.ply, stats.csv, each written atomically by the io module. */
 #include "sim/sim.h"
-#include "adaptive/adaptive.h"
-#include "adaptive/cells_vtu.h"
+#include "sim/grid_stack.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "domain/enrich.h"
@@ -134,8 +133,8 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
  * that ParaView opens every file of the run from one index. The names follow from the frame
  * number (as the writers below make them), so a resumed run lists its earlier frames too. */
 static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
-  const int grid = sim->adaptive && sim->scene.refine_every > 0; /* a tree per frame */
-  const int parts = 1 + has_domains + sim->surface_count + grid;
+  const char *grid = sim->stack->frame_part(sim); /* the grid's file per frame, if any */
+  const int parts = 1 + has_domains + sim->surface_count + (grid != NULL);
   enum { NAME = 64 };
   char(*names)[NAME] = mpm_alloc((size_t)parts * NAME);
   char(*text)[NAME] = mpm_alloc((size_t)frames * (size_t)parts * NAME);
@@ -151,7 +150,7 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
   if (has_domains) snprintf(names[k++], NAME, "domains");
   for (int s = 0; s < sim->surface_count; ++s)
     snprintf(names[k++], NAME, "surface_body%d", sim->surfaces[s].body);
-  if (grid) snprintf(names[k++], NAME, "grid_cells");
+  if (grid) snprintf(names[k++], NAME, "%s", grid);
   for (k = 0; k < parts; ++k) name_of[k] = names[k];
   for (int f = 0; f < frames; ++f) {
     char(*row)[NAME] = text + (size_t)f * (size_t)parts;
@@ -160,7 +159,7 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
     if (has_domains) snprintf(row[k++], NAME, "domains_%04d.vtu", f);
     for (int s = 0; s < sim->surface_count; ++s)
       snprintf(row[k++], NAME, "surface_body%d_%04d.vtp", sim->surfaces[s].body, f);
-    if (grid) snprintf(row[k++], NAME, "grid_cells_%04d.vtu", f);
+    if (grid) snprintf(row[k++], NAME, "%s_%04d.vtu", grid, f);
     for (k = 0; k < parts; ++k) files[(size_t)f * (size_t)parts + (size_t)k] = row[k];
   }
   char path[MPM_PATH_MAX + 64];
@@ -298,16 +297,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
     if (st != MPM_OK) goto done;
   }
-  if (o->vtu && records && sim->adaptive && frame == 0) { /* the refinement at the start */
-    snprintf(path, sizeof path, "%s/grid_cells.vtu", sim->output_dir);
-    st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
-    if (st != MPM_OK) goto done;
-  }
-  if (o->vtu && records && sim->adaptive && sim->scene.refine_every > 0) { /* and as it moves */
-    snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", sim->output_dir, frame);
-    st = mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
-    if (st != MPM_OK) goto done;
-  }
+  if (o->vtu && records && (st = sim->stack->write_frame(sim, frame)) != MPM_OK) goto done;
   if (o->vtu && has_domains) {
     snprintf(path, sizeof path, "%s/domains_%04d.vtu", dir, frame);
     /* the domain particles' part of the frame's arrays (after the material points, in the

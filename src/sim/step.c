@@ -2,11 +2,13 @@
  * without enrichment for particle domains) as an ordered list of stages.
  *
  * Stages (explicit_stages below), each a function of the simulation and the step's context,
- * timed into sim->times:
- *   sort     activate the grid level from the particles' stencils (sparse: sort them into
- *            owner blocks; every 16 steps the particle arrays are permuted into that order) and
- *            around the domain corners
- *   layout   lay the DOF set out over the level's nodes and clear what P2G accumulates
+ * timed into sim->times; sort, layout, p2g and g2p are the grid stack's (grid_stack.h: one
+ * uniform level with the particle domains, or Gao's multi-level grid), so the step never asks
+ * which grids it runs on:
+ *   sort     activate the grid from the particles' stencils (sparse: sort them into owner
+ *            blocks; every 16 steps, or when the order has come apart, the particle arrays are
+ *            permuted into that order) and around the domain corners
+ *   layout   lay the DOF set out over the grids' nodes and clear what P2G accumulates
  *   p2g      particles -> grid (mass, momentum, force from the Kirchhoff stress; the sparse
  *            grid's APIC kernel folds dt f into the momentum); domain particles -> corners ->
  *            grid (Zhu eqs. 5, 6, 8)
@@ -15,21 +17,19 @@
  *   g2p      grid -> particles, fused with what follows it in an explicit step: velocity (APIC
  *            or PIC/FLIP), affine moment, F <- (I + dt grad v) F, the plasticity return map, and
  *            advection; for domains grid -> corners -> particles (Zhu eqs. 7, 9)
- * Work between steps (domain releases today) runs in frame.c before the guarded step, never
- * inside it.
+ * Work between steps (domain releases, the grid stack's refinement and resampling) runs in
+ * frame.c before the guarded step, never inside it.
  *
  * Time step: dt = cfl dx / (c + max |v_p|) with c the largest elastic wave speed, bounded by
  * the scene's max_dt and clipped so that frames end exactly on their times. */
 #include "sim/sim.h"
 #include "core/alloc.h"
-#include "domain/domain_transfer.h"
 #include "domain/enrich.h"
 #include "domain/enrich_contact.h"
-#include "adaptive/adaptive.h"
+#include "sim/grid_stack.h"
 #include "solver/explicit_update.h"
 #include "solver/implicit.h"
 #include "core/parallel.h"
-#include "transfer/operators.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -37,7 +37,7 @@
 #include <string.h>
 
 double mpm_sim_finest_dx(const mpm_sim *sim) {
-  return sim->adaptive ? mpm_adaptive_finest_dx(sim->adaptive) : sim->scene.dx;
+  return sim->stack->finest_dx(sim);
 }
 
 double mpm_sim_cfl_dt(const mpm_sim *sim) {
@@ -57,22 +57,7 @@ double mpm_sim_cfl_dt(const mpm_sim *sim) {
   return dt;
 }
 
-/* What the stages of one step share. */
-typedef struct step_ctx {
-  double dt;
-  mpm_transfer_ctx tc;  /* standard particles */
-  mpm_transfer_ctx dtc; /* domain corners: the corner kernel */
-  mpm_explicit_update update;
-  mpm_p2g_output p2g_output;
-  int domains;         /* the step has active domain particles */
-  mpm_grid_values val; /* the grid level's values */
-  mpm_grid_values all; /* the values of every DOF */
-  mpm_g2p_result r;
-  const mpm_particles *bad_set; /* the set r.bad_particle indexes */
-  mpm_implicit_result solve;    /* implicit steps */
-} step_ctx;
-
-typedef mpm_status (*stage_fn)(mpm_sim *sim, step_ctx *c);
+typedef mpm_status (*stage_fn)(mpm_sim *sim, mpm_step_ctx *c);
 
 typedef struct stage {
   const char *name;
@@ -88,121 +73,30 @@ int mpm_sim_ensure_scratch(mpm_sim *sim) {
   return mpm_particles_scratch(&sim->particles, &sim->iscratch, &sim->scratch_capacity);
 }
 
-/* The domain corners' transfer plan (domain_transfer.h), their renumbering into its order when
- * it has come apart, and then the guard's copies of the corners' state (guard.c, a retry
- * restores them) renumbered alike. */
-static mpm_status plan_corners(mpm_sim *sim, step_ctx *c) {
-  mpm_domain_set *s = &sim->domains;
-  /* the implicit Hessian and the enriched corners' contact (enrich_contact.h) apply the
-   * embedding's rows */
-  s->corner_rows =
-      sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT || mpm_enrich_contact_on(s);
-  uint32_t *order = NULL;
-  if (mpm_domain_plan(s, &sim->grid, &c->dtc.kernel, &sim->step_arena) ||
-      mpm_domain_order_corners(s, &sim->grid, &c->dtc.kernel, &sim->step_arena, &order))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory planning the transfers of %zu domain corners",
-                         (long long)sim->steps, s->corner_count);
-  if (!order || sim->corner_backup_capacity < s->corner_count) return MPM_OK;
-  mpm_real *tmp = mpm_arena_alloc(&sim->step_arena, (s->corner_count + 1) * sizeof *tmp);
-  if (!tmp)
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory renumbering %zu domain corners",
-                         (long long)sim->steps, s->corner_count);
-  for (size_t k = 0; k < sizeof sim->corner_backup / sizeof *sim->corner_backup; ++k)
-    mpm_domain_permute_values(sim->corner_backup[k], tmp, sizeof(mpm_real), order, s->corner_count);
-  return MPM_OK;
+static mpm_status stage_sort(mpm_sim *sim, mpm_step_ctx *c) {
+  return sim->stack->sort(sim, c);
 }
 
-static mpm_status stage_sort(mpm_sim *sim, step_ctx *c) {
-  if (sim->adaptive) return mpm_adaptive_sort(sim->adaptive);
-  mpm_grid *g = &sim->grid;
-  mpm_particles *p = &sim->particles;
-  if (g->ops->activate(g, &c->tc.kernel, sim->material_count, p, &sim->step_arena))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory sorting %zu particles into grid blocks",
-                         (long long)sim->steps, p->count);
-  uint32_t *perm = g->ops->particle_order(g);
-  if (perm && mpm_sim_wants_reorder(sim, mpm_order_breaks(perm, p->count), p->count)) {
-    /* move particles into block order now and then, so transfers stream through memory */
-    if (mpm_sim_ensure_scratch(sim))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory reordering particles");
-    mpm_particles_permute(p, perm, sim->iscratch);
-    for (size_t j = 0; j < p->count; ++j) perm[j] = (uint32_t)j;
-  }
-  if (c->domains && mpm_domain_activate(&sim->domains, g, &c->dtc.kernel))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory activating the grid around domain corners",
-                         (long long)sim->steps);
-  if (c->domains && sim->scene.heat.enabled) { /* heat reaches the grid from the particles */
-    const mpm_particles *dp = &sim->domains.particles;
-    const mpm_real *const x[3] = {dp->x[0], dp->x[1], dp->x[2]};
-    if (g->ops->activate_points(g, &c->tc.kernel, dp->count, x, sim->domains.active))
-      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                           "step %lld: out of memory activating the grid around domain particles",
-                           (long long)sim->steps);
-  }
-  return c->domains ? plan_corners(sim, c) : MPM_OK;
-}
-
-static mpm_status stage_layout(mpm_sim *sim, step_ctx *c) {
-  mpm_dofs *d = &sim->dofs;
-  mpm_dofs_begin_layout(d);
+static mpm_status stage_layout(mpm_sim *sim, mpm_step_ctx *c) {
+  mpm_dofs_begin_layout(&sim->dofs);
   const int impulse = c->p2g_output == MPM_P2G_IMPULSE;
   const unsigned fields = impulse ? MPM_DOF_MASS | MPM_DOF_V0 | MPM_DOF_V : MPM_DOF_ALL;
-  if (sim->adaptive) {
-    const mpm_status st = mpm_adaptive_layout(sim->adaptive, fields);
-    c->all = mpm_dofs_values(d);
-    return st;
-  }
-  mpm_domain_enrichment *en = &sim->domains.enrich;
-  int failed = mpm_dofs_add_grid(d, &sim->grid);
-  if (c->domains && en->count) { /* enriched corners: DOFs of their own (Zhu eq. 12) */
-    en->dof_begin = d->count;
-    const mpm_real *const x[3] = {en->x[0], en->x[1], en->x[2]};
-    failed = failed || mpm_dofs_add_corners(d, en->count, x);
-  }
-  if (failed || mpm_dofs_end_layout(d, fields))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory for the values of %zu grid nodes",
-                         (long long)sim->steps, d->count);
-  mpm_dofs_clear(d, fields & ~(unsigned)MPM_DOF_V); /* the update writes every v */
-  c->val = mpm_dofs_grid_values(d, &sim->grid);
-  c->all = mpm_dofs_values(d);
-  return MPM_OK;
+  return sim->stack->layout(sim, c, fields);
 }
 
-static mpm_status stage_p2g(mpm_sim *sim, step_ctx *c) {
-  if (sim->adaptive) {
-    mpm_adaptive_p2g(sim->adaptive, &c->tc, c->p2g_output == MPM_P2G_IMPULSE);
-    return MPM_OK;
-  }
-  if (sim->scene.solver.integrator == MPM_INTEGRATOR_IMPLICIT &&
-      mpm_p2g_fuses_force(&c->tc, &sim->grid)) {
-    /* the implicit solve needs v^n and f^n apart (the Newton gradient), not the fused impulse */
-    mpm_p2g_mass_momentum(&c->tc, &sim->grid, &c->val, &sim->particles);
-    mpm_p2g_stress_force(&c->tc, &sim->grid, c->val.f, &sim->particles);
-  } else {
-    mpm_p2g(&c->tc, &sim->grid, &c->val, &sim->particles);
-  }
-  /* the implicit step applies the corners' embedding as a matrix (its Hessian): it needs the
-   * rows, which the explicit step does without (domain/corner_pads.h) */
-  if (c->domains && mpm_domain_p2g(&c->dtc, &sim->domains, &sim->grid, &c->all, &sim->step_arena))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory for the stresses of %zu domain particles",
-                         (long long)sim->steps, sim->domains.particles.count);
-  return MPM_OK;
+static mpm_status stage_p2g(mpm_sim *sim, mpm_step_ctx *c) {
+  return sim->stack->p2g(sim, c);
 }
 
 /* Whether the step measures what the colliders take (only for stats.csv: a step without
  * colliders, or whose figures nobody writes, does no more work than before). */
-static int measures_colliders(const mpm_sim *sim, const step_ctx *c) {
+static int measures_colliders(const mpm_sim *sim, const mpm_step_ctx *c) {
   return c->update.boundary.collider_count > 0 && sim->output_enabled && sim->scene.output.stats;
 }
 
 /* Pose c's taken momentum to its collider's sum of the step (the poses are the active
  * colliders only). */
-static void collect_taken(mpm_sim *sim, const step_ctx *c, const double *taken) {
+static void collect_taken(mpm_sim *sim, const mpm_step_ctx *c, const double *taken) {
   const mpm_boundary *b = &c->update.boundary;
   for (int k = 0; k < b->collider_count; ++k) {
     const size_t at = (size_t)(b->poses[k].collider - sim->colliders);
@@ -210,7 +104,7 @@ static void collect_taken(mpm_sim *sim, const step_ctx *c, const double *taken) 
   }
 }
 
-static mpm_status stage_update(mpm_sim *sim, step_ctx *c) {
+static mpm_status stage_update(mpm_sim *sim, mpm_step_ctx *c) {
   if (!measures_colliders(sim, c)) {
     mpm_dofs_explicit_update(&c->update, c->p2g_output, &sim->dofs);
     return MPM_OK;
@@ -229,7 +123,7 @@ static mpm_status stage_update(mpm_sim *sim, step_ctx *c) {
 }
 
 /* The step's implicit system over the DOF set laid out by P2G. */
-static void implicit_system(mpm_sim *sim, step_ctx *c, mpm_implicit *s) {
+static void implicit_system(mpm_sim *sim, mpm_step_ctx *c, mpm_implicit *s) {
   memset(s, 0, sizeof *s);
   s->dt = c->update.dt;
   for (int d = 0; d < 3; ++d) s->gravity[d] = c->update.gravity[d];
@@ -237,25 +131,15 @@ static void implicit_system(mpm_sim *sim, step_ctx *c, mpm_implicit *s) {
   s->regions = c->update.regions;
   s->dofs = &sim->dofs;
   s->tc = &c->tc;
-  s->grid = &sim->grid;
   s->p = &sim->particles;
-  if (sim->adaptive) { /* the material points by transfer grid, the ghosts' rows (implicit.h) */
-    mpm_adaptive *a = sim->adaptive;
-    s->grid = NULL;
-    for (int t = 0; t < a->tgrid_count; ++t)
-      s->part[t] =
-          (mpm_implicit_part){mpm_adaptive_grid_at(&a->grid, a->tgrid[t].G), a->tgrid[t].kernel,
-                              a->range[t], a->range[t + 1] - a->range[t]};
-    s->part_count = a->tgrid_count;
-    s->levels = a->grid.tree.levels > 1 ? &a->grid : NULL;
-  }
+  sim->stack->implicit_parts(sim, s);
   s->domains = c->domains ? &sim->domains : NULL;
   s->boundary = &c->update.boundary;
   s->arena = &sim->step_arena;
 }
 
 /* The implicit update (solver/implicit.h) in place of the explicit one. */
-static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
+static mpm_status stage_solve(mpm_sim *sim, mpm_step_ctx *c) {
   const mpm_solver_desc *sd = &sim->scene.solver;
   mpm_implicit s;
   implicit_system(sim, c, &s);
@@ -307,8 +191,8 @@ static mpm_status stage_solve(mpm_sim *sim, step_ctx *c) {
 
 /* Enriched corners meet other material on the grid (enrich_contact.h), after the velocity
  * update and before G2P reads it. */
-static mpm_status stage_contact(mpm_sim *sim, step_ctx *c) {
-  if (!c->domains || sim->adaptive || !mpm_enrich_contact_on(&sim->domains)) return MPM_OK;
+static mpm_status stage_contact(mpm_sim *sim, mpm_step_ctx *c) {
+  if (!c->domains || !mpm_enrich_contact_on(&sim->domains)) return MPM_OK;
   size_t contacts = 0;
   if (mpm_enrich_contact(&sim->domains, &sim->grid, &c->dtc.kernel, &c->all, sim->dofs.count,
                          &sim->step_arena, &contacts))
@@ -319,28 +203,13 @@ static mpm_status stage_contact(mpm_sim *sim, step_ctx *c) {
   return MPM_OK;
 }
 
-static mpm_status stage_g2p(mpm_sim *sim, step_ctx *c) {
-  if (sim->adaptive) {
-    c->r = mpm_adaptive_g2p(sim->adaptive, &c->tc);
-    c->bad_set = &sim->particles;
-    return MPM_OK;
-  }
-  c->r = mpm_g2p(&c->tc, &sim->grid, &c->val, &sim->particles);
-  c->bad_set = &sim->particles;
-  if (c->domains) {
-    const mpm_g2p_result rd = mpm_domain_g2p(&c->dtc, &sim->domains, &c->all, &c->update.boundary);
-    if (rd.max_speed > c->r.max_speed) c->r.max_speed = rd.max_speed;
-    if (rd.bad_particle >= 0 && c->r.bad_particle < 0) {
-      c->bad_set = &sim->domains.particles;
-      c->r.bad_particle = rd.bad_particle;
-    }
-  }
-  return MPM_OK;
+static mpm_status stage_g2p(mpm_sim *sim, mpm_step_ctx *c) {
+  return sim->stack->g2p(sim, c);
 }
 
 /* Heat (heat/heat.h), after the velocity update and before G2P moves the particles: their
  * stencils are still those the grid was activated for. */
-static mpm_status stage_heat(mpm_sim *sim, step_ctx *c) {
+static mpm_status stage_heat(mpm_sim *sim, mpm_step_ctx *c) {
   if (!sim->scene.heat.enabled) return MPM_OK;
   mpm_heat_step_desc h;
   memset(&h, 0, sizeof h);
@@ -393,7 +262,7 @@ static const stage implicit_stages[] = {
 };
 
 /* The step's context for a step of dt. */
-static void step_setup(mpm_sim *sim, double dt, step_ctx *c) {
+static void step_setup(mpm_sim *sim, double dt, mpm_step_ctx *c) {
   const mpm_scene *sc = &sim->scene;
   memset(c, 0, sizeof *c);
   c->dt = dt;
@@ -513,7 +382,7 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   if (mpm_arena_reset(&sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for step scratch",
                          (long long)sim->steps);
-  step_ctx c;
+  mpm_step_ctx c;
   step_setup(sim, dt, &c);
   /* a retried step starts over: only the accepted attempt's reactions count (frame.c) */
   memset(sim->collider_step, 0, 3 * (size_t)sim->collider_count * sizeof *sim->collider_step);
@@ -552,7 +421,7 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
 mpm_status mpm_sim_implicit_system(mpm_sim *sim, double dt, mpm_implicit *s) {
   if (mpm_arena_reset(&sim->step_arena))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
-  step_ctx *c = mpm_arena_alloc(&sim->step_arena, sizeof *c);
+  mpm_step_ctx *c = mpm_arena_alloc(&sim->step_arena, sizeof *c);
   if (!c) return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for step scratch");
   const mpm_status marked = mpm_sim_mark_enrichment(sim);
   if (marked != MPM_OK) return marked;
