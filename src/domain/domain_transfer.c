@@ -210,7 +210,7 @@ static void domain_stresses(const mpm_transfer_ctx *ctx, const mpm_domain_set *s
 
 int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k, mpm_arena *scratch) {
   s->pads.on = 0;
-  if (g->kind != MPM_GRID_SPARSE || s->corner_rows) return 0;
+  if (!mpm_grid_paged(g) || s->corner_rows) return 0;
   for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
   s->corner_grid.rows = 0; /* not this step's */
   s->corner_grid.schedule.built = 0;

@@ -91,6 +91,12 @@ void mpm_grid_init_sparse(mpm_grid *g, int level, const mpm_real origin[3], mpm_
 int mpm_grid_init_dense(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx,
                         const int n[3]);
 
+/* The paged blocks of a sparse level, or NULL for the dense reference: what the fast paths that
+ * walk blocks ask for (the corners' transfer plan, the multigrid's assembly). */
+static inline const mpm_sparse_grid *mpm_grid_paged(const mpm_grid *g) {
+  return g->kind == MPM_GRID_SPARSE ? &g->impl.sparse : NULL;
+}
+
 static inline void mpm_grid_free(mpm_grid *g) {
   if (g->ops) g->ops->free(g);
   g->ops = NULL;

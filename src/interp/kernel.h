@@ -32,7 +32,7 @@
 
 typedef struct mpm_kernel {
   mpm_kernel_kind kind;
-  int width;      /* nodes per axis: 2, 3 or 4 */
+  int width;      /* nodes per axis: 2, 3 or 4 (mpm_width_index) */
   mpm_real shift; /* base = floor(x/dx - shift) */
   mpm_real dx, inv_dx;
   mpm_real half_len; /* uGIMP: L_p / (2 dx), in (0, 1]; above 1/2 the stencil is 4 wide */
@@ -223,6 +223,12 @@ static inline __attribute__((always_inline)) void
 mpm_kernel_stencil(const mpm_kernel *k, const mpm_real x[3], mpm_stencil *s) {
   for (int d = 0; d < 3; ++d)
     s->base[d] = mpm_kernel_1d(k, x[d] * k->inv_dx, s->w[d], s->dw[d], s->a[d]);
+}
+
+/* Where a stencil of `width` nodes per axis sits in the transfers' tables of specialized
+ * variants (one entry per width 2, 3, 4). */
+static inline int mpm_width_index(int width) {
+  return width == 2 ? 0 : width == 3 ? 1 : 2;
 }
 
 #endif

@@ -16,7 +16,7 @@
 
 int mpm_implicit_multigrid_supported(const mpm_implicit *s) {
   return s->p && s->p->count > 0 && !s->levels && !s->domains && s->part_count <= 1 && s->grid &&
-         s->grid->kind == MPM_GRID_SPARSE && s->dofs->segment_count == 1;
+         mpm_grid_paged(s->grid) && s->dofs->segment_count == 1;
 }
 
 int mpm_implicit_multigrid_prepare(mpm_implicit *s) {

@@ -150,10 +150,10 @@ static void assemble_block(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g
   if (filled) flush_pairs(W, g, b, org, base, row_of, radius, val, cell);
 }
 
-int mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
-                           mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
-                           mpm_real *val) {
-  if (g->kind != MPM_GRID_SPARSE || radius < ctx->kernel.width - 1) return -1;
+int mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                  const int32_t *row_of, int radius, mpm_real *val) {
+  if (radius < ctx->kernel.width - 1) return -1;
   const mpm_sparse_grid *sg = &g->impl.sparse;
   for (int colour = 0; colour < 8; ++colour) {
     const long begin = (long)sg->color_start[colour], end = (long)sg->color_start[colour + 1];

@@ -199,9 +199,35 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
   }
 }
 
+/* One owner block's G2P specialized by stencil width and APIC: a table, chosen once per call. */
+typedef void (*g2p_block_fn)(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                             const mpm_grid_values *val, mpm_particles *p, int32_t b,
+                             mpm_real *max_v2, long *bad);
+#define G2P_BLOCK(W, A)                                                                            \
+  static void g2p_block_w##W##_a##A(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,         \
+                                    const mpm_grid_values *val, mpm_particles *p, int32_t b,       \
+                                    mpm_real *max_v2, long *bad) {                                 \
+    g2p_block(W, A, ctx, g, val, p, b, max_v2, bad);                                               \
+  }
+G2P_BLOCK(2, 0)
+G2P_BLOCK(2, 1)
+G2P_BLOCK(3, 0)
+G2P_BLOCK(3, 1)
+G2P_BLOCK(4, 0)
+G2P_BLOCK(4, 1)
+#undef G2P_BLOCK
+
+/* [width: 2, 3, 4][apic] */
+static const g2p_block_fn g2p_block_variants[3][2] = {
+    {g2p_block_w2_a0, g2p_block_w2_a1},
+    {g2p_block_w3_a0, g2p_block_w3_a1},
+    {g2p_block_w4_a0, g2p_block_w4_a1},
+};
+
 mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                               const mpm_grid_values *val, mpm_particles *p) {
-  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const g2p_block_fn block = g2p_block_variants[mpm_width_index(ctx->kernel.width)][apic];
   const long nb = (long)g->owner_count;
   mpm_real max_v2 = 0;
   long bad = -1;
@@ -211,26 +237,7 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
     long my_bad = -1;
 #pragma omp for schedule(dynamic, 8)
     for (long b = 0; b < nb; ++b) {
-      switch (W * 2 + apic) {
-      case 4:
-        g2p_block(2, 0, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
-        break;
-      case 5:
-        g2p_block(2, 1, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
-        break;
-      case 6:
-        g2p_block(3, 0, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
-        break;
-      case 7:
-        g2p_block(3, 1, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
-        break;
-      case 8:
-        g2p_block(4, 0, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
-        break;
-      default:
-        g2p_block(4, 1, ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
-        break;
-      }
+      block(ctx, g, val, p, (int32_t)b, &my_v2, &my_bad);
     }
 #pragma omp critical(mpm_g2p_reduce)
     {
@@ -242,9 +249,29 @@ mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid
   return r;
 }
 
+/* One particle's G2P on the dense grid specialized by stencil width (the reference grid: a
+ * call per particle). */
+typedef mpm_real (*update_particle_fn)(int apic, const mpm_transfer_ctx *ctx, mpm_particles *p,
+                                       uint32_t i, const mpm_grid_values *val, const int org[3],
+                                       long sx, long sy);
+#define UPDATE_PARTICLE(W)                                                                         \
+  static mpm_real update_particle_w##W(int apic, const mpm_transfer_ctx *ctx, mpm_particles *p,    \
+                                       uint32_t i, const mpm_grid_values *val, const int org[3],   \
+                                       long sx, long sy) {                                         \
+    return update_particle(W, apic, ctx, p, i, val, org, sx, sy);                                  \
+  }
+UPDATE_PARTICLE(2)
+UPDATE_PARTICLE(3)
+UPDATE_PARTICLE(4)
+#undef UPDATE_PARTICLE
+
+static const update_particle_fn update_particle_variants[3] = {
+    update_particle_w2, update_particle_w3, update_particle_w4};
+
 mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
                              const mpm_grid_values *val, mpm_particles *p) {
-  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const update_particle_fn update = update_particle_variants[mpm_width_index(ctx->kernel.width)];
   const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
   const int org[3] = {0, 0, 0};
   const long n = (long)p->count;
@@ -256,18 +283,7 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
     long my_bad = -1;
 #pragma omp for schedule(static)
     for (long i = 0; i < n; ++i) {
-      mpm_real v2;
-      switch (W) {
-      case 2:
-        v2 = update_particle(2, apic, ctx, p, (uint32_t)i, val, org, sx, sy);
-        break;
-      case 3:
-        v2 = update_particle(3, apic, ctx, p, (uint32_t)i, val, org, sx, sy);
-        break;
-      default:
-        v2 = update_particle(4, apic, ctx, p, (uint32_t)i, val, org, sx, sy);
-        break;
-      }
+      const mpm_real v2 = update(apic, ctx, p, (uint32_t)i, val, org, sx, sy);
       if (v2 < 0) {
         if (my_bad < 0 || i < my_bad) my_bad = i;
       } else if (v2 > my_v2) {
@@ -302,6 +318,5 @@ mpm_g2p_result mpm_g2p_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *
 
 mpm_g2p_result mpm_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
                        mpm_particles *p) {
-  if (g->kind == MPM_GRID_SPARSE) return mpm_g2p_sparse(ctx, &g->impl.sparse, val, p);
-  return mpm_g2p_dense(ctx, &g->impl.dense, val, p);
+  return mpm_transfer_variant_of(g)->g2p(ctx, g, val, p);
 }

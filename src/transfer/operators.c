@@ -70,35 +70,43 @@ ALWAYS_INLINE void scatter_block(const int W, const int stress, const mpm_transf
   mpm_pad_add(W, g, b, 3, pad, STRIDE, f);
 }
 
+/* One owner block's scatter specialized by stencil width and source (matrices or stresses): a
+ * table, chosen once per call. */
+typedef void (*scatter_block_fn)(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                                 mpm_real *const f[3], const mpm_real *const M[9],
+                                 const mpm_particles *p, int32_t b);
+#define SCATTER_BLOCK(W, S)                                                                        \
+  static void scatter_block_w##W##_s##S(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,     \
+                                        mpm_real *const f[3], const mpm_real *const M[9],          \
+                                        const mpm_particles *p, int32_t b) {                       \
+    scatter_block(W, S, ctx, g, f, M, p, b);                                                       \
+  }
+SCATTER_BLOCK(2, 0)
+SCATTER_BLOCK(2, 1)
+SCATTER_BLOCK(3, 0)
+SCATTER_BLOCK(3, 1)
+SCATTER_BLOCK(4, 0)
+SCATTER_BLOCK(4, 1)
+#undef SCATTER_BLOCK
+
+/* [width: 2, 3, 4][stress] */
+static const scatter_block_fn scatter_block_variants[3][2] = {
+    {scatter_block_w2_s0, scatter_block_w2_s1},
+    {scatter_block_w3_s0, scatter_block_w3_s1},
+    {scatter_block_w4_s0, scatter_block_w4_s1},
+};
+
 static void scatter_sparse(const int stress, const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                            mpm_real *const f[3], const mpm_real *const M[9],
                            const mpm_particles *p) {
-  const int W = ctx->kernel.width;
+  const scatter_block_fn block =
+      scatter_block_variants[mpm_width_index(ctx->kernel.width)][stress != 0];
   for (int colour = 0; colour < 8; ++colour) {
     const long begin = (long)g->color_start[colour], end = (long)g->color_start[colour + 1];
 #pragma omp parallel for schedule(dynamic, 4) if (end - begin > 1)
     for (long q = begin; q < end; ++q) {
       const int32_t b = g->color_blocks[q];
-      switch (W * 2 + stress) {
-      case 4:
-        scatter_block(2, 0, ctx, g, f, M, p, b);
-        break;
-      case 5:
-        scatter_block(2, 1, ctx, g, f, M, p, b);
-        break;
-      case 6:
-        scatter_block(3, 0, ctx, g, f, M, p, b);
-        break;
-      case 7:
-        scatter_block(3, 1, ctx, g, f, M, p, b);
-        break;
-      case 8:
-        scatter_block(4, 0, ctx, g, f, M, p, b);
-        break;
-      default:
-        scatter_block(4, 1, ctx, g, f, M, p, b);
-        break;
-      }
+      block(ctx, g, f, M, p, b);
     }
   }
 }
@@ -141,24 +149,32 @@ ALWAYS_INLINE void gather_block(const int W, const mpm_transfer_ctx *ctx, const 
     }
 }
 
+/* One owner block's gradients specialized by stencil width: a table, chosen once per call. */
+typedef void (*gather_block_fn)(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                                const mpm_real *const u[3], const mpm_particles *p,
+                                mpm_real *const G[9], int32_t b);
+#define GATHER_BLOCK(W)                                                                            \
+  static void gather_block_w##W(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,             \
+                                const mpm_real *const u[3], const mpm_particles *p,                \
+                                mpm_real *const G[9], int32_t b) {                                 \
+    gather_block(W, ctx, g, u, p, G, b);                                                           \
+  }
+GATHER_BLOCK(2)
+GATHER_BLOCK(3)
+GATHER_BLOCK(4)
+#undef GATHER_BLOCK
+
+static const gather_block_fn gather_block_variants[3] = {gather_block_w2, gather_block_w3,
+                                                         gather_block_w4};
+
 static void gather_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                           const mpm_real *const u[3], const mpm_particles *p,
                           mpm_real *const G[9]) {
-  const int W = ctx->kernel.width;
+  const gather_block_fn block = gather_block_variants[mpm_width_index(ctx->kernel.width)];
   const long nb = (long)g->owner_count;
 #pragma omp parallel for schedule(dynamic, 8) if (nb > 1)
   for (long b = 0; b < nb; ++b) {
-    switch (W) {
-    case 2:
-      gather_block(2, ctx, g, u, p, G, (int32_t)b);
-      break;
-    case 3:
-      gather_block(3, ctx, g, u, p, G, (int32_t)b);
-      break;
-    default:
-      gather_block(4, ctx, g, u, p, G, (int32_t)b);
-      break;
-    }
+    block(ctx, g, u, p, G, (int32_t)b);
   }
 }
 
@@ -319,30 +335,57 @@ static void dense_gather(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g,
   }
 }
 
-/* ---- the operators ---- */
+/* ---- the operators of each grid variant ---- */
 
-void mpm_p2g_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_grid *g,
-                           const mpm_grid_values *val, const mpm_particles *p) {
-  if (g->kind == MPM_GRID_SPARSE)
-    mpm_p2g_mass_momentum_sparse(ctx, &g->impl.sparse, val, p);
-  else
-    dense_mass_momentum(ctx, &g->impl.dense, val, p);
+static void sparse_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                 const mpm_grid_values *val, const mpm_particles *p) {
+  mpm_p2g_mass_momentum_sparse(ctx, &g->impl.sparse, val, p);
 }
 
-void mpm_p2g_stress_force(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
-                          const mpm_particles *p) {
-  if (g->kind == MPM_GRID_SPARSE)
-    scatter_sparse(1, ctx, &g->impl.sparse, f, NULL, p);
-  else
-    dense_stress_force(ctx, &g->impl.dense, f, p);
+static void sparse_stress_force(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                mpm_real *const f[3], const mpm_particles *p) {
+  scatter_sparse(1, ctx, &g->impl.sparse, f, NULL, p);
 }
 
-void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
-                          const mpm_real *const M[9], const mpm_particles *p) {
-  if (g->kind == MPM_GRID_SPARSE) {
-    scatter_sparse(0, ctx, &g->impl.sparse, f, M, p);
-    return;
-  }
+static void sparse_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                            const mpm_real *const M[9], const mpm_particles *p) {
+  scatter_sparse(0, ctx, &g->impl.sparse, f, M, p);
+}
+
+static void sparse_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                   mpm_real *const d[3], const mpm_real *const Q[18],
+                                   const mpm_particles *p) {
+  quadratic_sparse(ctx, &g->impl.sparse, d, Q, p);
+}
+
+static void sparse_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                             const mpm_real *const u[3], const mpm_particles *p,
+                             mpm_real *const G[9]) {
+  gather_sparse(ctx, &g->impl.sparse, u, p, G);
+}
+
+static void sparse_p2g(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+                       const mpm_particles *p) {
+  mpm_p2g_sparse(ctx, &g->impl.sparse, val, p);
+}
+
+static mpm_g2p_result sparse_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                 const mpm_grid_values *val, mpm_particles *p) {
+  return mpm_g2p_sparse(ctx, &g->impl.sparse, val, p);
+}
+
+static void dense_mass_momentum_of(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                   const mpm_grid_values *val, const mpm_particles *p) {
+  dense_mass_momentum(ctx, &g->impl.dense, val, p);
+}
+
+static void dense_stress_force_of(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  mpm_real *const f[3], const mpm_particles *p) {
+  dense_stress_force(ctx, &g->impl.dense, f, p);
+}
+
+static void dense_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                           const mpm_real *const M[9], const mpm_particles *p) {
   for (size_t i = 0; i < p->count; ++i) {
     mpm_real Mi[9];
     for (int c = 0; c < 9; ++c) Mi[c] = M[c][i];
@@ -350,13 +393,9 @@ void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_re
   }
 }
 
-void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
-                                 mpm_real *const d[3], const mpm_real *const Q[18],
-                                 const mpm_particles *p) {
-  if (g->kind == MPM_GRID_SPARSE) {
-    quadratic_sparse(ctx, &g->impl.sparse, d, Q, p);
-    return;
-  }
+static void dense_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  mpm_real *const d[3], const mpm_real *const Q[18],
+                                  const mpm_particles *p) {
   const mpm_dense_grid *dg = &g->impl.dense;
   const long sy = dg->n[2], sx = (long)dg->n[1] * dg->n[2];
   for (size_t i = 0; i < p->count; ++i) {
@@ -375,11 +414,88 @@ void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
   }
 }
 
+static void dense_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                            const mpm_real *const u[3], const mpm_particles *p,
+                            mpm_real *const G[9]) {
+  dense_gather(ctx, &g->impl.dense, u, p, G);
+}
+
+static void dense_p2g(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+                      const mpm_particles *p) {
+  mpm_p2g_dense(ctx, &g->impl.dense, val, p);
+}
+
+static mpm_g2p_result dense_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                const mpm_grid_values *val, mpm_particles *p) {
+  return mpm_g2p_dense(ctx, &g->impl.dense, val, p);
+}
+
+/* The dense reference assembles nothing (the multigrid runs on the sparse grid). */
+static int dense_assemble(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
+                          mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
+                          mpm_real *val) {
+  (void)ctx, (void)g, (void)p, (void)tangent, (void)user, (void)row_of, (void)radius, (void)val;
+  return -1;
+}
+
+/* Indexed by the grid's kind: the one place the transfers ask which grid they run on. */
+static const mpm_transfer_variant variants[] = {
+    [MPM_GRID_SPARSE] = {.fuses_force = 1,
+                         .p2g = sparse_p2g,
+                         .g2p = sparse_g2p,
+                         .mass_momentum = sparse_mass_momentum,
+                         .stress_force = sparse_stress_force,
+                         .scatter_matrices = sparse_matrices,
+                         .scatter_quadratic_forms = sparse_quadratic_forms,
+                         .gather_gradients = sparse_gradients,
+                         .assemble_stiffness = mpm_assemble_stiffness_sparse},
+    [MPM_GRID_DENSE] = {.fuses_force = 0,
+                        .p2g = dense_p2g,
+                        .g2p = dense_g2p,
+                        .mass_momentum = dense_mass_momentum_of,
+                        .stress_force = dense_stress_force_of,
+                        .scatter_matrices = dense_matrices,
+                        .scatter_quadratic_forms = dense_quadratic_forms,
+                        .gather_gradients = dense_gradients,
+                        .assemble_stiffness = dense_assemble},
+};
+
+const mpm_transfer_variant *mpm_transfer_variant_of(const mpm_grid *g) {
+  return &variants[g->kind];
+}
+
+/* ---- the operators ---- */
+
+void mpm_p2g_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                           const mpm_grid_values *val, const mpm_particles *p) {
+  mpm_transfer_variant_of(g)->mass_momentum(ctx, g, val, p);
+}
+
+void mpm_p2g_stress_force(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                          const mpm_particles *p) {
+  mpm_transfer_variant_of(g)->stress_force(ctx, g, f, p);
+}
+
+void mpm_scatter_matrices(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                          const mpm_real *const M[9], const mpm_particles *p) {
+  mpm_transfer_variant_of(g)->scatter_matrices(ctx, g, f, M, p);
+}
+
+void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                 mpm_real *const d[3], const mpm_real *const Q[18],
+                                 const mpm_particles *p) {
+  mpm_transfer_variant_of(g)->scatter_quadratic_forms(ctx, g, d, Q, p);
+}
+
 void mpm_gather_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
                           const mpm_real *const u[3], const mpm_particles *p,
                           mpm_real *const G[9]) {
-  if (g->kind == MPM_GRID_SPARSE)
-    gather_sparse(ctx, &g->impl.sparse, u, p, G);
-  else
-    dense_gather(ctx, &g->impl.dense, u, p, G);
+  mpm_transfer_variant_of(g)->gather_gradients(ctx, g, u, p, G);
+}
+
+int mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
+                           mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
+                           mpm_real *val) {
+  return mpm_transfer_variant_of(g)->assemble_stiffness(ctx, g, p, tangent, user, row_of, radius,
+                                                        val);
 }

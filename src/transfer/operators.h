@@ -54,12 +54,16 @@ void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
  * val + 9 ((r S) + ((o_x + radius) span + o_y + radius) span + o_z + radius), span = 2 radius + 1,
  * S = span^3, row-major. C must be symmetric (C_ac,bd = C_bd,ac): only pairs i <= j are formed.
  * Sparse grid only: -1 otherwise, and 0. */
-typedef void (*mpm_tangent_fn)(void *user, uint32_t particle, mpm_real C[81]);
 int mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
                            mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
                            mpm_real *val);
 
-/* The sparse grid's mass and momentum P2G (p2g.c, the fused kernels without the force). */
+/* The grid variants' own (operators.c holds the table, mpm_transfer_variant_of): the sparse
+ * grid's mass and momentum P2G (p2g.c, the fused kernels without the force) and its assembly
+ * (assemble.c). */
+int mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                  const int32_t *row_of, int radius, mpm_real *val);
 void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                                   const mpm_grid_values *val, const mpm_particles *p);
 

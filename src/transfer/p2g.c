@@ -193,54 +193,50 @@ ALWAYS_INLINE void p2g_block_apic(const int W, const int force, const mpm_transf
       }
 }
 
+/* One owner block's P2G specialized by stencil width, APIC and force (the lanes' loops are
+ * unrolled for each): a table of the twelve, chosen once per call. */
+typedef void (*p2g_block_fn)(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                             mpm_real *const ch[MPM_P2G_CHANNELS], const mpm_particles *p,
+                             int32_t b);
+#define P2G_BLOCK(W, F)                                                                            \
+  static void p2g_block_w##W##_f##F(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,         \
+                                    mpm_real *const ch[MPM_P2G_CHANNELS], const mpm_particles *p,  \
+                                    int32_t b) {                                                   \
+    p2g_block(W, 0, F, ctx, g, ch, p, b);                                                          \
+  }                                                                                                \
+  static void p2g_block_apic_w##W##_f##F(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,    \
+                                         mpm_real *const ch[MPM_P2G_CHANNELS],                     \
+                                         const mpm_particles *p, int32_t b) {                      \
+    p2g_block_apic(W, F, ctx, g, ch, p, b);                                                        \
+  }
+P2G_BLOCK(2, 0)
+P2G_BLOCK(2, 1)
+P2G_BLOCK(3, 0)
+P2G_BLOCK(3, 1)
+P2G_BLOCK(4, 0)
+P2G_BLOCK(4, 1)
+#undef P2G_BLOCK
+
+/* [width: 2, 3, 4][apic][force] */
+static const p2g_block_fn p2g_block_variants[3][2][2] = {
+    {{p2g_block_w2_f0, p2g_block_w2_f1}, {p2g_block_apic_w2_f0, p2g_block_apic_w2_f1}},
+    {{p2g_block_w3_f0, p2g_block_w3_f1}, {p2g_block_apic_w3_f0, p2g_block_apic_w3_f1}},
+    {{p2g_block_w4_f0, p2g_block_w4_f1}, {p2g_block_apic_w4_f0, p2g_block_apic_w4_f1}},
+};
+
 /* The P2G of every owner block, colour by colour (blocks of one colour in parallel). */
 static void p2g_blocks(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                        mpm_real *const ch[MPM_P2G_CHANNELS], const mpm_particles *p,
                        const int force) {
-  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const p2g_block_fn block =
+      p2g_block_variants[mpm_width_index(ctx->kernel.width)][apic][force != 0];
   for (int color = 0; color < 8; ++color) {
     const long begin = (long)g->color_start[color], end = (long)g->color_start[color + 1];
 #pragma omp parallel for schedule(dynamic, 4)
     for (long q = begin; q < end; ++q) {
       const int32_t b = g->color_blocks[q];
-      switch ((W * 2 + apic) * 2 + force) {
-      case 9:
-        p2g_block(2, 0, 1, ctx, g, ch, p, b);
-        break;
-      case 11:
-        p2g_block_apic(2, 1, ctx, g, ch, p, b);
-        break;
-      case 13:
-        p2g_block(3, 0, 1, ctx, g, ch, p, b);
-        break;
-      case 15:
-        p2g_block_apic(3, 1, ctx, g, ch, p, b);
-        break;
-      case 17:
-        p2g_block(4, 0, 1, ctx, g, ch, p, b);
-        break;
-      case 19:
-        p2g_block_apic(4, 1, ctx, g, ch, p, b);
-        break;
-      case 8:
-        p2g_block(2, 0, 0, ctx, g, ch, p, b);
-        break;
-      case 10:
-        p2g_block_apic(2, 0, ctx, g, ch, p, b);
-        break;
-      case 12:
-        p2g_block(3, 0, 0, ctx, g, ch, p, b);
-        break;
-      case 14:
-        p2g_block_apic(3, 0, ctx, g, ch, p, b);
-        break;
-      case 16:
-        p2g_block(4, 0, 0, ctx, g, ch, p, b);
-        break;
-      default:
-        p2g_block_apic(4, 0, ctx, g, ch, p, b);
-        break;
-      }
+      block(ctx, g, ch, p, b);
     }
   }
 }
@@ -259,9 +255,37 @@ void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_
   p2g_blocks(ctx, g, ch, p, 0);
 }
 
+/* A chunk's scatter on the dense grid specialized by stencil width and APIC. */
+typedef void (*scatter_chunk_fn)(const mpm_transfer_ctx *ctx, const mpm_particles *p,
+                                 const uint32_t *idx, int n, mpm_real tau[9][MPM_STRESS_CHUNK],
+                                 mpm_real *const ch[MPM_P2G_CHANNELS], const int org[3], long sx,
+                                 long sy);
+#define SCATTER_CHUNK(W, A)                                                                        \
+  static void scatter_chunk_w##W##_a##A(                                                           \
+      const mpm_transfer_ctx *ctx, const mpm_particles *p, const uint32_t *idx, int n,             \
+      mpm_real tau[9][MPM_STRESS_CHUNK], mpm_real *const ch[MPM_P2G_CHANNELS], const int org[3],   \
+      long sx, long sy) {                                                                          \
+    scatter_chunk(W, A, ctx, p, idx, n, tau, ch, org, sx, sy);                                     \
+  }
+SCATTER_CHUNK(2, 0)
+SCATTER_CHUNK(2, 1)
+SCATTER_CHUNK(3, 0)
+SCATTER_CHUNK(3, 1)
+SCATTER_CHUNK(4, 0)
+SCATTER_CHUNK(4, 1)
+#undef SCATTER_CHUNK
+
+/* [width: 2, 3, 4][apic] */
+static const scatter_chunk_fn scatter_chunk_variants[3][2] = {
+    {scatter_chunk_w2_a0, scatter_chunk_w2_a1},
+    {scatter_chunk_w3_a0, scatter_chunk_w3_a1},
+    {scatter_chunk_w4_a0, scatter_chunk_w4_a1},
+};
+
 void mpm_p2g_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g, const mpm_grid_values *val,
                    const mpm_particles *p) {
-  const int W = ctx->kernel.width, apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const int apic = ctx->transfer == MPM_TRANSFER_APIC;
+  const scatter_chunk_fn scatter = scatter_chunk_variants[mpm_width_index(ctx->kernel.width)][apic];
   mpm_real *ch[MPM_P2G_CHANNELS];
   p2g_channels(val, ch);
   const long sy = g->n[2], sx = (long)g->n[1] * g->n[2];
@@ -278,29 +302,16 @@ void mpm_p2g_dense(const mpm_transfer_ctx *ctx, const mpm_dense_grid *g, const m
       ++n;
     }
     chunk_stress(&ctx->materials[m], p, idx, n, tau);
-    switch (W) {
-    case 2:
-      scatter_chunk(2, apic, ctx, p, idx, n, tau, ch, org, sx, sy);
-      break;
-    case 3:
-      scatter_chunk(3, apic, ctx, p, idx, n, tau, ch, org, sx, sy);
-      break;
-    default:
-      scatter_chunk(4, apic, ctx, p, idx, n, tau, ch, org, sx, sy);
-      break;
-    }
+    scatter(ctx, p, idx, n, tau, ch, org, sx, sy);
     i += (size_t)n;
   }
 }
 
 int mpm_p2g_fuses_force(const mpm_transfer_ctx *ctx, const mpm_grid *g) {
-  return g->kind == MPM_GRID_SPARSE && ctx->transfer == MPM_TRANSFER_APIC;
+  return mpm_transfer_variant_of(g)->fuses_force && ctx->transfer == MPM_TRANSFER_APIC;
 }
 
 void mpm_p2g(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
              const mpm_particles *p) {
-  if (g->kind == MPM_GRID_SPARSE)
-    mpm_p2g_sparse(ctx, &g->impl.sparse, val, p);
-  else
-    mpm_p2g_dense(ctx, &g->impl.dense, val, p);
+  mpm_transfer_variant_of(g)->p2g(ctx, g, val, p);
 }

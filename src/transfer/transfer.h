@@ -67,6 +67,34 @@ mpm_g2p_result mpm_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm
 /* 1 when P2G on grid g with ctx folds the force into the momentum (sparse grid, APIC). */
 int mpm_p2g_fuses_force(const mpm_transfer_ctx *ctx, const mpm_grid *g);
 
+/* The transfers of one grid variant (the sparse paged grid, the dense reference), one table
+ * each, chosen by mpm_transfer_variant_of (operators.c) once per call: P2G and G2P here, the
+ * operators of operators.h, the assembly. */
+typedef void (*mpm_tangent_fn)(void *user, uint32_t particle, mpm_real C[81]);
+typedef struct mpm_transfer_variant {
+  int fuses_force; /* its APIC P2G folds dt f into the momentum */
+  void (*p2g)(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+              const mpm_particles *p);
+  mpm_g2p_result (*g2p)(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+                        mpm_particles *p);
+  void (*mass_momentum)(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
+                        const mpm_particles *p);
+  void (*stress_force)(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                       const mpm_particles *p);
+  void (*scatter_matrices)(const mpm_transfer_ctx *ctx, const mpm_grid *g, mpm_real *const f[3],
+                           const mpm_real *const M[9], const mpm_particles *p);
+  void (*scatter_quadratic_forms)(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  mpm_real *const d[3], const mpm_real *const Q[18],
+                                  const mpm_particles *p);
+  void (*gather_gradients)(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                           const mpm_real *const u[3], const mpm_particles *p,
+                           mpm_real *const G[9]);
+  int (*assemble_stiffness)(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
+                            mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
+                            mpm_real *val);
+} mpm_transfer_variant;
+const mpm_transfer_variant *mpm_transfer_variant_of(const mpm_grid *g);
+
 void mpm_p2g_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                     const mpm_grid_values *val, const mpm_particles *p);
 mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
