@@ -43,10 +43,9 @@ MPM_ALWAYS_INLINE void mpm_ghost_apic_p2g(const int W, const mpm_ghost_apic *ga,
     }
     if (k->kind == MPM_KERNEL_QUADRATIC) sum = mpm_vl_splat(R_(0.25));
     if (k->kind == MPM_KERNEL_CUBIC) sum = mpm_vl_splat(R_(1.0) / 3);
-    for (int l = 0; l < MPM_LANES; ++l) {
-      Dt[d][l] = (double)sum[l] * dx2;
+    Dt[d] = __builtin_convertvector(sum, mpm_vd) * dx2;
+    for (int l = 0; l < MPM_LANES; ++l)
       for (int q = 0; q < MPM_STENCIL_MAX; ++q) w[d][q][l] = q < W ? (double)s->w[d][q][l] : 0;
-    }
   }
   /* D = D~ + sum_e w_e S_e (xx yy zz xy xz yz) */
   const mpm_vd zero = {0};
