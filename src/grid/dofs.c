@@ -227,7 +227,9 @@ double mpm_dofs_dot(const mpm_dofs *d, const mpm_real *w, mpm_real *const a[3],
     }
     partial[q] = s;
   }
-  return sum_partials(d, chunks);
+  double sum = sum_partials(d, chunks);
+  mpm_reduce_all(d->reduction, MPM_REDUCE_SUM, &sum, 1);
+  return sum;
 }
 
 double mpm_dofs_max_abs(const mpm_dofs *d, mpm_real *const a[3]) {
@@ -247,6 +249,7 @@ double mpm_dofs_max_abs(const mpm_dofs *d, mpm_real *const a[3]) {
   }
   double m = 0;
   for (long q = 0; q < chunks; ++q) m = partial[q] > m || partial[q] != partial[q] ? partial[q] : m;
+  mpm_reduce_all(d->reduction, MPM_REDUCE_MAX, &m, 1);
   return m;
 }
 

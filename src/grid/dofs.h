@@ -29,6 +29,7 @@
 #ifndef MPM_GRID_DOFS_H
 #define MPM_GRID_DOFS_H
 
+#include "core/reduce.h"
 #include "grid/grid.h"
 
 #include <stddef.h>
@@ -71,6 +72,8 @@ typedef struct mpm_dofs {
   int vector_count;
   mpm_dof_vector vector[MPM_DOF_MAX_VECTORS];
   double *partial; /* chunk sums of the reductions, capacity / MPM_DOF_CHUNK + 1 */
+  /* the reductions over every process of the run (core/reduce.h); NULL: this process alone */
+  const mpm_reduction *reduction;
 } mpm_dofs;
 
 void mpm_dofs_init(mpm_dofs *d);
@@ -105,8 +108,8 @@ void mpm_dofs_position(const mpm_dofs *d, size_t i, mpm_real x[3]);
  * are valid until the next mpm_dofs_end_layout. */
 mpm_real **mpm_dofs_vector(mpm_dofs *d, const char *name);
 
-/* Deterministic reductions over all DOFs (see the file comment). w: per-DOF weights (such as
- * the mass) or NULL for 1. */
+/* Deterministic reductions over all DOFs (see the file comment), then over every process of
+ * the run (d->reduction). w: per-DOF weights (such as the mass) or NULL for 1. */
 double mpm_dofs_dot(const mpm_dofs *d, const mpm_real *w, mpm_real *const a[3],
                     mpm_real *const b[3]);
 double mpm_dofs_max_abs(const mpm_dofs *d, mpm_real *const a[3]);

@@ -477,6 +477,8 @@ static int links(mpm_heat *h, const mpm_heat_step_desc *s, mpm_real **hv, mpm_re
       if (r > worst) worst = r;
     }
   }
+  /* the substeps follow from the fastest node of every process of the run */
+  mpm_reduce_all(d->reduction, MPM_REDUCE_MAX, &worst, 1);
   *rate = worst;
   return 0;
 }

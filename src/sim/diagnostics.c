@@ -51,5 +51,20 @@ mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim) {
   accumulate(sim, &sim->particles, NULL, sim->scene.solver.transfer == MPM_TRANSFER_APIC, &out);
   /* domain particles carry no affine moment: their velocity field lives on the corners */
   accumulate(sim, &sim->domains.particles, sim->domains.active, 0, &out);
+  /* over every process of the run */
+  double all[10] = {out.mass, out.kinetic, out.elastic, out.gravitational};
+  for (int d = 0; d < 3; ++d) {
+    all[4 + d] = out.momentum[d];
+    all[7 + d] = out.angular_momentum[d];
+  }
+  mpm_reduce_all(sim->reduction, MPM_REDUCE_SUM, all, 10);
+  out.mass = all[0];
+  out.kinetic = all[1];
+  out.elastic = all[2];
+  out.gravitational = all[3];
+  for (int d = 0; d < 3; ++d) {
+    out.momentum[d] = all[4 + d];
+    out.angular_momentum[d] = all[7 + d];
+  }
   return out;
 }

@@ -130,11 +130,22 @@ static mpm_status report(mpm_sim *sim, const mpm_particles *p, const guard_hit *
 }
 
 mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
-  guard_hit h = scan(sim, &sim->particles, NULL, dt);
-  if (h.kind != GUARD_NONE) return report(sim, &sim->particles, &h, dt);
-  if (!sim->domains.active_count) return MPM_OK;
-  h = scan(sim, &sim->domains.particles, sim->domains.active, dt);
-  return h.kind == GUARD_NONE ? MPM_OK : report(sim, &sim->domains.particles, &h, dt);
+  const mpm_particles *at = &sim->particles;
+  guard_hit h = scan(sim, at, NULL, dt);
+  if (h.kind == GUARD_NONE && sim->domains.active_count) {
+    at = &sim->domains.particles;
+    h = scan(sim, at, sim->domains.active, dt);
+  }
+  /* every process of the run takes the same decision (a retry is redone by all of them) */
+  double hit = h.kind != GUARD_NONE;
+  mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, &hit, 1);
+  if (h.kind != GUARD_NONE) return report(sim, at, &h, dt);
+  if (hit > 0)
+    return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
+                         "simulation unstable at step %lld (t = %.6g s, dt = %.3g s): a particle "
+                         "of another process of the run (its message names it)",
+                         (long long)sim->steps, sim->time, dt);
+  return MPM_OK;
 }
 
 /* Copy the particles of src into dst (grown as needed). */

@@ -476,3 +476,8 @@ int mpm_sim_threads_enter(const mpm_sim *sim) {
 void mpm_sim_threads_leave(const mpm_sim *sim, int saved) {
   if (sim->thread_request > 0 && mpm_thread_count() != saved) mpm_set_threads(saved);
 }
+
+void mpm_sim_set_reduction(mpm_sim *sim, const mpm_reduction *reduction) {
+  sim->reduction = reduction;
+  sim->dofs.reduction = reduction;
+}

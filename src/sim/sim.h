@@ -80,7 +80,10 @@ struct mpm_sim {
    * grid (scene.levels > 0) in place of `grid`, whose state is `adaptive` (else NULL) */
   const struct mpm_grid_stack_ops *stack;
   struct mpm_adaptive *adaptive;
-  mpm_dofs dofs;         /* the unknowns of the step: the values at the grid's nodes */
+  mpm_dofs dofs; /* the unknowns of the step: the values at the grid's nodes */
+  /* the step's global reductions over the processes of a run (core/reduce.h), NULL for one
+   * process; the DOF set's reductions use the same (mpm_sim_set_reduction) */
+  const mpm_reduction *reduction;
   mpm_heat heat;         /* heat transfer's scratch and figures (scene `heat`) */
   size_t melted_domains; /* domain particles switched off by melting so far */
   mpm_arena step_arena;  /* the step's scratch, taken back when the next step begins */
@@ -206,6 +209,11 @@ typedef struct mpm_diagnostics {
   double momentum[3], angular_momentum[3]; /* about the origin; APIC affine part included */
 } mpm_diagnostics;
 mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim);
+
+/* The global reductions of the simulation's steps (core/reduce.h: every process of a
+ * distributed run fills one; NULL, the default, for a single process), for the step and its
+ * DOF set alike. */
+void mpm_sim_set_reduction(mpm_sim *sim, const mpm_reduction *reduction);
 
 /* One step, three layers: mpm_sim_step (frame.c, public) runs the work between steps, then the
  * guarded step; mpm_sim_guarded_step (guard.c) runs the raw step, then a scan for non-finite

@@ -403,7 +403,15 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   sim->time += dt;
   sim->steps++;
   sim->last_dt = dt;
-  sim->max_speed = c.r.max_speed;
+  /* the step's largest speed and whether a value blew up, over every process of the run */
+  double speed_bad[2] = {(double)c.r.max_speed, c.r.bad_particle >= 0};
+  mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, speed_bad, 2);
+  sim->max_speed = (mpm_real)speed_bad[0];
+  if (c.r.bad_particle < 0 && speed_bad[1] > 0)
+    return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
+                         "simulation blew up at step %lld (t = %.6g s, dt = %.3g s) on another "
+                         "process of the run (its message names the particle)",
+                         (long long)sim->steps, sim->time, dt);
   if (c.r.bad_particle >= 0) {
     const long i = c.r.bad_particle;
     const mpm_particles *q = c.bad_set;

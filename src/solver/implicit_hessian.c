@@ -351,6 +351,7 @@ double mpm_implicit_energy(mpm_implicit *s) {
   /* in ordered chunks: the same sum for any thread count (the line search compares them) */
   double e = s->p ? mpm_ordered_sum(s->p->count, point_energy, s) : 0;
   if (s->domains) e += mpm_domain_hessian_energy(&s->dh);
+  mpm_reduce_all(s->dofs->reduction, MPM_REDUCE_SUM, &e, 1); /* over every process */
   return e;
 }
 
