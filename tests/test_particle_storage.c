@@ -6,7 +6,9 @@
  *   - growing keeps every value (the block grows in place) and, while a holder holds the keep,
  *     leaves the old block readable with its values; releasing the hold gives it back (the
  *     live-byte counter returns);
- *   - move through the free slot, a range owns no storage. */
+ *   - move through the free slot, a range owns no storage;
+ *   - the moves that keep a particle whole (copy, append, assign, remove, and the migration's
+ *     pack and unpack) carry every array: each value lands where the move says. */
 #include "support.h"
 #include "core/alloc.h"
 #include "core/particles.h"
@@ -159,11 +161,64 @@ static void test_fit_gives_back_spare_capacity(void **state) {
   assert_int_equal(mpm_alloc_live_bytes(), live0);
 }
 
+/* Particles q of `got` are original particles orig[q] of a set filled by fill(). */
+static void check_values(mpm_particles *got, const uint32_t *orig) {
+  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays(got, a);
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
+    for (size_t i = 0; i < got->count; ++i)
+      assert_true((*a[k])[i] == (mpm_real)(k * 1000 + (int)orig[i]));
+  for (size_t i = 0; i < got->count; ++i) {
+    assert_int_equal(got->material[i], (int32_t)orig[i]);
+    assert_int_equal(got->body[i], (int32_t)(2 * orig[i]));
+    assert_int_equal(got->level[i], (int32_t)(3 * orig[i]));
+    assert_int_equal(got->id[i], 4 * orig[i]);
+  }
+}
+
+static void test_moves_keep_particles_whole(void **state) {
+  (void)state;
+  mpm_particles p = {0}, q = {0}, r = {0};
+  assert_int_equal(mpm_particles_init(&p, 8), 0);
+  assert_int_equal(mpm_particles_init(&q, 4), 0);
+  assert_int_equal(mpm_particles_init(&r, 4), 0);
+  fill(&p, 40);
+  /* pack particles 3, 17, 39, 0 and unpack them after two appended ones */
+  const uint32_t idx[4] = {3, 17, 39, 0};
+  unsigned char *buf = mpm_alloc(4 * mpm_particles_packed_bytes());
+  assert_non_null(buf);
+  mpm_particles_pack(&p, idx, 4, buf);
+  assert_int_equal(mpm_particles_append(&q, &p, 5), 0);
+  assert_int_equal(mpm_particles_append(&q, &p, 6), 1);
+  assert_int_equal(mpm_particles_unpack(&q, buf, 4), 0);
+  const uint32_t want_q[6] = {5, 6, 3, 17, 39, 0};
+  assert_int_equal(q.count, 6);
+  check_values(&q, want_q);
+  /* copy one over another, then remove every third */
+  mpm_particles_copy(&q, 1, &p, 22);
+  uint8_t gone[6] = {0, 0, 1, 0, 0, 1};
+  mpm_particles_remove(&q, gone);
+  const uint32_t want_removed[4] = {5, 22, 17, 39};
+  assert_int_equal(q.count, 4);
+  check_values(&q, want_removed);
+  /* a whole copy */
+  assert_int_equal(mpm_particles_assign(&r, &p), 0);
+  uint32_t all[40];
+  for (uint32_t i = 0; i < 40; ++i) all[i] = i;
+  assert_int_equal(r.count, 40);
+  check_values(&r, all);
+  mpm_free(buf);
+  mpm_particles_free(&p);
+  mpm_particles_free(&q);
+  mpm_particles_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_reorders_keep_the_layout),
       cmocka_unit_test(test_held_blocks_stay),
       cmocka_unit_test(test_fit_gives_back_spare_capacity),
+      cmocka_unit_test(test_moves_keep_particles_whole),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -176,25 +176,6 @@ static size_t merge_groups(mpm_adaptive *a, candidate *c, size_t n, uint8_t *gon
   return merges;
 }
 
-/* Remove the particles marked gone, keeping the others' order. */
-static void compact(mpm_particles *p, const uint8_t *gone) {
-  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
-  mpm_particles_real_arrays(p, arrays);
-  size_t w = 0;
-  for (size_t i = 0; i < p->count; ++i) {
-    if (gone[i]) continue;
-    if (w != i) {
-      for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) (*arrays[k])[w] = (*arrays[k])[i];
-      p->material[w] = p->material[i];
-      p->body[w] = p->body[i];
-      p->level[w] = p->level[i];
-      p->id[w] = p->id[i];
-    }
-    ++w;
-  }
-  p->count = w;
-}
-
 mpm_status mpm_adaptive_resample(mpm_adaptive *a) {
   const mpm_scene *sc = a->host.scene;
   const mpm_resample_desc *rd = &sc->resample;
@@ -321,7 +302,7 @@ mpm_status mpm_adaptive_resample(mpm_adaptive *a) {
     if (!g) goto nomem;
     memset(g + n, 0, p->count + 1 - n);
     gone = g;
-    compact(p, gone);
+    mpm_particles_remove(p, gone);
   }
   if (made_splits || made_merges) {
     a->stable_step = -1; /* the particles moved in the arrays */

@@ -7,17 +7,6 @@
 #include <math.h>
 #include <string.h>
 
-/* Copy every component of particle src to dst (both < p->count). */
-static void copy_particle(mpm_particles *p, size_t dst, size_t src) {
-  mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
-  mpm_particles_real_arrays(p, arrays);
-  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) (*arrays[k])[dst] = (*arrays[k])[src];
-  p->material[dst] = p->material[src];
-  p->body[dst] = p->body[src];
-  p->level[dst] = p->level[src];
-  p->id[dst] = p->id[src];
-}
-
 int mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s, uint32_t *next_id) {
   if (p->count + 7 > p->capacity &&
       mpm_particles_reserve(p, p->count + 7 > 2 * p->capacity ? p->count + 7 : 2 * p->capacity))
@@ -36,7 +25,7 @@ int mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s, uint
   for (int k = 0; k < 8; ++k) {
     const size_t j = k == 0 ? i : p->count++;
     if (k) {
-      copy_particle(p, j, i);
+      mpm_particles_copy(p, j, p, i);
       p->id[j] = (*next_id)++;
     }
     const double c[3] = {k & 1 ? a : -a, k & 2 ? a : -a, k & 4 ? a : -a};

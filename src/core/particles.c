@@ -288,3 +288,87 @@ int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *ca
   *capacity = cap;
   return 0;
 }
+
+void mpm_particles_copy(mpm_particles *dst, size_t j, const mpm_particles *src, size_t i) {
+  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays((mpm_particles *)src, a);
+  mpm_particles_real_arrays(dst, b);
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) (*b[k])[j] = (*a[k])[i];
+  uint32_t *ia[4], *ib[4];
+  int_arrays((mpm_particles *)src, ia);
+  int_arrays(dst, ib);
+  for (int k = 0; k < 4; ++k) ib[k][j] = ia[k][i];
+}
+
+long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i) {
+  if (dst->count == dst->capacity &&
+      mpm_particles_reserve(dst, dst->capacity > 8 ? 2 * dst->capacity : 16))
+    return -1;
+  const size_t j = dst->count++;
+  mpm_particles_copy(dst, j, src, i);
+  return (long)j;
+}
+
+int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src) {
+  /* a copy may become the particles (the guard's restore swaps them): it always has arrays */
+  const size_t want = src->capacity > 16 ? src->capacity : 16;
+  if ((dst->capacity < src->count || !dst->capacity) && mpm_particles_reserve(dst, want)) return -1;
+  dst->count = 0;
+  const size_t n = src->count;
+  if (!n) return 0;
+  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays((mpm_particles *)src, a);
+  mpm_particles_real_arrays(dst, b);
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) memcpy(*b[k], *a[k], n * sizeof(mpm_real));
+  uint32_t *ia[4], *ib[4];
+  int_arrays((mpm_particles *)src, ia);
+  int_arrays(dst, ib);
+  for (int k = 0; k < 4; ++k) memcpy(ib[k], ia[k], n * sizeof(uint32_t));
+  dst->count = n;
+  return 0;
+}
+
+void mpm_particles_remove(mpm_particles *p, const uint8_t *gone) {
+  size_t w = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    if (gone[i]) continue;
+    if (w != i) mpm_particles_copy(p, w, p, i);
+    ++w;
+  }
+  p->count = w;
+}
+
+size_t mpm_particles_packed_bytes(void) {
+  return MPM_PARTICLE_REAL_ARRAYS * sizeof(mpm_real) + 4 * sizeof(uint32_t);
+}
+
+void mpm_particles_pack(const mpm_particles *p, const uint32_t *idx, size_t n, void *buf) {
+  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS];
+  uint32_t *ia[4];
+  mpm_particles_real_arrays((mpm_particles *)p, a);
+  int_arrays((mpm_particles *)p, ia);
+  unsigned char *out = buf;
+  for (size_t q = 0; q < n; ++q) {
+    const size_t i = idx[q];
+    for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k, out += sizeof(mpm_real))
+      memcpy(out, &(*a[k])[i], sizeof(mpm_real));
+    for (int k = 0; k < 4; ++k, out += sizeof(uint32_t)) memcpy(out, &ia[k][i], sizeof(uint32_t));
+  }
+}
+
+int mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n) {
+  if (p->count + n > p->capacity && mpm_particles_reserve(p, p->count + n)) return -1;
+  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS];
+  uint32_t *ia[4];
+  mpm_particles_real_arrays(p, a);
+  int_arrays(p, ia);
+  const unsigned char *in = buf;
+  for (size_t q = 0; q < n; ++q) {
+    const size_t j = p->count + q;
+    for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k, in += sizeof(mpm_real))
+      memcpy(&(*a[k])[j], in, sizeof(mpm_real));
+    for (int k = 0; k < 4; ++k, in += sizeof(uint32_t)) memcpy(&ia[k][j], in, sizeof(uint32_t));
+  }
+  p->count += n;
+  return 0;
+}

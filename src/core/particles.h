@@ -92,6 +92,23 @@ int mpm_reorder_due(int64_t steps, int interval, size_t breaks, size_t n);
  * what it holds, grown when smaller). 0, or -1 when out of memory. */
 int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *capacity);
 
+/* Particle moves that keep every array together (a particle's state never stays behind: its
+ * reals, material, body, type and id move as one). Copy particle i of src over slot j of dst
+ * (dst may be src); append particle i of src to dst (grown as needed: its index, or -1 when out
+ * of memory); make dst a copy of the whole of src (grown as needed: 0, or -1); remove the
+ * particles with gone[i] set, the others keeping their order. */
+void mpm_particles_copy(mpm_particles *dst, size_t j, const mpm_particles *src, size_t i);
+long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i);
+int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src);
+void mpm_particles_remove(mpm_particles *p, const uint8_t *gone);
+
+/* Migration between processes: particles idx[0 .. n) of p packed into buf
+ * (n mpm_particles_packed_bytes() bytes: every array of each), and n packed particles appended
+ * to p as they were (0, or -1 when out of memory: p as it was). */
+size_t mpm_particles_packed_bytes(void);
+void mpm_particles_pack(const mpm_particles *p, const uint32_t *idx, size_t n, void *buf);
+int mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n);
+
 /* Move particle src[k] to slot dest[k] in every array, k < n, where dest is a permutation of src
  * (the particles at those slots trade places; the others stay), through the free slot and
  * iscratch (n integers). For reorders that touch a few particles: a full permute reads and

@@ -148,28 +148,6 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
   return MPM_OK;
 }
 
-/* Copy the particles of src into dst (grown as needed). */
-static int copy_particles(mpm_particles *dst, const mpm_particles *src) {
-  /* the backup may become the particles (restore swaps them): it always has arrays */
-  const size_t want = src->capacity > 16 ? src->capacity : 16;
-  if (dst->capacity < src->count || !dst->capacity) {
-    if (mpm_particles_reserve(dst, want)) return -1;
-  }
-  dst->count = 0;
-  if (!src->count) return 0;
-  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
-  mpm_particles_real_arrays((mpm_particles *)src, a);
-  mpm_particles_real_arrays(dst, b);
-  const size_t n = src->count;
-  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) memcpy(*b[k], *a[k], n * sizeof(mpm_real));
-  memcpy(dst->material, src->material, n * sizeof *src->material);
-  memcpy(dst->body, src->body, n * sizeof *src->body);
-  memcpy(dst->level, src->level, n * sizeof *src->level);
-  memcpy(dst->id, src->id, n * sizeof *src->id);
-  dst->count = n;
-  return 0;
-}
-
 /* The corner arrays a step changes: positions (with their compensation), velocities and APIC
  * affine moments. */
 #define CORNER_STATE 18
@@ -185,10 +163,10 @@ static void corner_state(mpm_domain_set *s, mpm_real *out[CORNER_STATE]) {
 /* Save what a step changes: the particles, the domain particles and their corners (the clock
  * is saved by the caller). */
 static int save_state(mpm_sim *sim) {
-  if (copy_particles(&sim->backup, &sim->particles)) return -1;
+  if (mpm_particles_assign(&sim->backup, &sim->particles)) return -1;
   mpm_domain_set *s = &sim->domains;
   if (!s->active_count) return 0;
-  if (copy_particles(&sim->domain_backup, &s->particles)) return -1;
+  if (mpm_particles_assign(&sim->domain_backup, &s->particles)) return -1;
   if (sim->corner_backup_capacity < s->corner_count) {
     for (int k = 0; k < CORNER_STATE; ++k) {
       mpm_free(sim->corner_backup[k]);
@@ -214,7 +192,7 @@ static void restore_state(mpm_sim *sim) {
   sim->backup = t;
   mpm_domain_set *s = &sim->domains;
   if (!s->active_count) return;
-  copy_particles(&s->particles, &sim->domain_backup); /* same size: cannot fail */
+  mpm_particles_assign(&s->particles, &sim->domain_backup); /* same size: cannot fail */
   mpm_real *c[CORNER_STATE];
   corner_state(s, c);
   for (int k = 0; k < CORNER_STATE; ++k)

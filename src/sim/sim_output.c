@@ -112,18 +112,7 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
     const mpm_particles *p = pass ? d : a;
     for (size_t i = 0; i < p->count; ++i) {
       if (pass && !sim->domains.active[i]) continue;
-      const mpm_real x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
-      const mpm_real v[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
-      const long j =
-          mpm_particles_push(all, x, v, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
-      for (int c = 0; c < 9; ++c) {
-        all->F[c][j] = p->F[c][i];
-        all->B[c][j] = p->B[c][i];
-      }
-      all->plastic[j] = p->plastic[i];
-      all->temperature[j] = p->temperature[i];
-      all->level[j] = p->level[i];
-      all->id[j] = p->id[i];
+      if (mpm_particles_append(all, p, i) < 0) return -1;
     }
   }
   return 0;
