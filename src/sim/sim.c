@@ -1,6 +1,7 @@
 /* sim.c - building and destroying a simulation, and the public handle's accessors. */
 #include "sim/sim.h"
 #include "io/run_folder.h"
+#include "sim/frame_writer.h"
 #include "sim/grid_stack.h"
 #include "domain/enrich.h"
 #include "core/alloc.h"
@@ -171,6 +172,7 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
   }
   mpm_domain_set_init(&sim->domains);
   sim->stack = mpm_grid_stack_for(sc);
+  sim->writer = &mpm_frame_files;
   if ((st = sim->stack->make(sim, err)) != MPM_OK) goto fail;
   uint32_t next_id = 0;
   for (int b = 0; sample && b < sc->body_count; ++b) {
@@ -480,4 +482,8 @@ void mpm_sim_threads_leave(const mpm_sim *sim, int saved) {
 void mpm_sim_set_reduction(mpm_sim *sim, const mpm_reduction *reduction) {
   sim->reduction = reduction;
   sim->dofs.reduction = reduction;
+}
+
+void mpm_sim_set_writer(mpm_sim *sim, const mpm_frame_writer *writer) {
+  sim->writer = writer ? writer : &mpm_frame_files;
 }

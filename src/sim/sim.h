@@ -108,6 +108,7 @@ struct mpm_sim {
   long long enriched_contacts; /* enriched corners' contacts with the grid's material since
                                   creation (domain/enrich_contact.h) */
   /* outputs */
+  const struct mpm_frame_writer *writer; /* where frames and checkpoints go (frame_writer.h) */
   int output_enabled;
   char output_dir[MPM_PATH_MAX];
   int output_lock; /* the descriptor holding output_dir's lock (io/run_folder.h), -1: none */
@@ -214,6 +215,9 @@ mpm_diagnostics mpm_sim_diagnostics(const mpm_sim *sim);
  * distributed run fills one; NULL, the default, for a single process), for the step and its
  * DOF set alike. */
 void mpm_sim_set_reduction(mpm_sim *sim, const mpm_reduction *reduction);
+/* Where the simulation's frames and checkpoints go (frame_writer.h; mpm_frame_files, the
+ * default, when NULL). */
+void mpm_sim_set_writer(mpm_sim *sim, const struct mpm_frame_writer *writer);
 
 /* One step, three layers: mpm_sim_step (frame.c, public) runs the work between steps, then the
  * guarded step; mpm_sim_guarded_step (guard.c) runs the raw step, then a scan for non-finite

@@ -15,6 +15,7 @@
 #include "io/input_file.h"
 #include "scene/sample.h"
 #include "core/alloc.h"
+#include "sim/frame_writer.h"
 #include "sim/grid_stack.h"
 #include "sim/sim.h"
 
@@ -156,7 +157,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
            (long long)sim->steps);
   /* the grid's own state (a tree the run rebuilt) */
   mpm_status st = sim->stack->save(sim, &c);
-  if (st == MPM_OK) st = mpm_checkpoint_write(file, &c, &sim->error);
+  if (st == MPM_OK) st = sim->writer->checkpoint(sim, file, &c);
   for (int k = 0; k < 4; ++k) mpm_free(c.tree[k]);
   mpm_free(forces);
   mpm_free(scripts);

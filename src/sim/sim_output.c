@@ -1,15 +1,14 @@
-/* sim_output.c - per-frame outputs of a simulation: frame_NNNN.vtu (+ frames.pvd), with
- * particle domains domains_NNNN.vtu, the embedded surfaces (OBJ, PLY and VTP), the particle
- * surfaces of output.surface (sim_surface.c), run.pvd (every VTK file of every frame),
- * frame_NNNN.ply, stats.csv, each written atomically by the io module. */
+/* sim_output.c - a simulation's output folder (claimed, locked, its bookkeeping) and what each
+ * frame holds: the particles as written with their derived fields (stresses, J, melt, the
+ * enrichment categories), checked finite, and the stats row with the run's figures, handed to
+ * the simulation's frame writer (frame_writer.h; the files themselves: frame_files.c). */
 #include "sim/sim.h"
-#include "sim/grid_stack.h"
+#include "sim/frame_writer.h"
 #include "core/alloc.h"
 #include "core/mat3.h"
 #include "domain/enrich.h"
 #include "io/run_folder.h"
 #include "io/staging.h"
-#include "io/triangle_mesh.h"
 #include "scene/sample.h"
 
 #include <math.h>
@@ -118,50 +117,6 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
   return 0;
 }
 
-/* run.pvd: per frame its particles, its domains and its embedded surfaces, one part each, so
- * that ParaView opens every file of the run from one index. The names follow from the frame
- * number (as the writers below make them), so a resumed run lists its earlier frames too. */
-static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
-  const char *grid = sim->stack->frame_part(sim); /* the grid's file per frame, if any */
-  const int parts = 1 + has_domains + sim->surface_count + (grid != NULL);
-  enum { NAME = 64 };
-  char(*names)[NAME] = mpm_alloc((size_t)parts * NAME);
-  char(*text)[NAME] = mpm_alloc((size_t)frames * (size_t)parts * NAME);
-  const char **name_of = mpm_alloc((size_t)parts * sizeof *name_of);
-  const char **files = mpm_alloc((size_t)frames * (size_t)parts * sizeof *files);
-  mpm_status st = MPM_OK;
-  if (!names || !text || !name_of || !files) {
-    st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing run.pvd");
-    goto done;
-  }
-  int k = 0;
-  snprintf(names[k++], NAME, "particles");
-  if (has_domains) snprintf(names[k++], NAME, "domains");
-  for (int s = 0; s < sim->surface_count; ++s)
-    snprintf(names[k++], NAME, "surface_body%d", sim->surfaces[s].body);
-  if (grid) snprintf(names[k++], NAME, "%s", grid);
-  for (k = 0; k < parts; ++k) name_of[k] = names[k];
-  for (int f = 0; f < frames; ++f) {
-    char(*row)[NAME] = text + (size_t)f * (size_t)parts;
-    k = 0;
-    snprintf(row[k++], NAME, "%s", sim->frame_files[f]);
-    if (has_domains) snprintf(row[k++], NAME, "domains_%04d.vtu", f);
-    for (int s = 0; s < sim->surface_count; ++s)
-      snprintf(row[k++], NAME, "surface_body%d_%04d.vtp", sim->surfaces[s].body, f);
-    if (grid) snprintf(row[k++], NAME, "%s_%04d.vtu", grid, f);
-    for (k = 0; k < parts; ++k) files[(size_t)f * (size_t)parts + (size_t)k] = row[k];
-  }
-  char path[MPM_PATH_MAX + 64];
-  snprintf(path, sizeof path, "%s/run.pvd", sim->output_dir);
-  st = mpm_write_pvd_parts(path, frames, parts, sim->frame_times, name_of, files, &sim->error);
-done:
-  mpm_free(names);
-  mpm_free(text);
-  mpm_free(name_of);
-  mpm_free(files);
-  return st;
-}
-
 /* The first particle (in p's order) with a non-finite quantity of those a frame writes, as an
  * MPM_ERR_UNSTABLE naming the frame, the particle, its body and material, and the quantity. J
  * and stress may be NULL (not computed). */
@@ -202,10 +157,11 @@ static mpm_status scan_frame_fields(mpm_sim *sim, const mpm_particles *p, const 
                        sim->scene.materials[m].name, what, value, mpm_real_type(), m);
 }
 
-/* The files of one frame, numbered `frame`, into `dir`: the particles (VTU, PLY), the domains,
- * the embedded and the particle surfaces, as the scene's output keys choose. With `records`
- * (the run's own folder) also the run's indexes and stats.csv, and the frame is counted;
- * without, nothing of the run's bookkeeping is touched (a one-off, mpm_sim_write_frame_to). */
+/* One frame, numbered `frame`, into `dir`, through the frame writer: the particles (VTU, PLY),
+ * the domains, the embedded and the particle surfaces, as the scene's output keys choose. With
+ * `records` (the run's own folder) also the run's indexes and stats.csv, and the frame is
+ * counted; without, nothing of the run's bookkeeping is touched (a one-off,
+ * mpm_sim_write_frame_to). */
 static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int records) {
   mpm_particles combined;
   memset(&combined, 0, sizeof combined);
@@ -223,7 +179,6 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
   }
   const mpm_particles *p = has_domains ? &combined : &sim->particles;
   const mpm_output_desc *o = &sim->scene.output;
-  char vtu_name[32], path[MPM_PATH_MAX + 64];
   mpm_status st = MPM_OK;
   mpm_real *J = NULL, *stress = NULL, *melt = NULL, *cauchy = NULL, *pressure = NULL;
   int32_t *category = NULL;
@@ -270,104 +225,10 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     for (size_t q = 0; q < sim->domains.particles.count; ++q)
       if (sim->domains.active[q]) category[j++] = sim->domains.enrich.category[q];
   }
-  mpm_frame_fields ff = {p, J, stress, sim->time, category, heat, melt, fields, cauchy, pressure};
-  if (o->vtu) {
-    snprintf(vtu_name, sizeof vtu_name, "frame_%04d.vtu", frame);
-    snprintf(path, sizeof path, "%s/%s", dir, vtu_name);
-    st = mpm_write_vtu(path, &ff, &sim->error);
-    if (st != MPM_OK) goto done;
-  }
-  if (o->vtu && records) {
-    snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "%s", vtu_name);
-    sim->frame_times[frame] = sim->time;
-    const char *files[frame + 1];
-    for (int f = 0; f <= frame; ++f) files[f] = sim->frame_files[f];
-    snprintf(path, sizeof path, "%s/frames.pvd", sim->output_dir);
-    st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
-    if (st != MPM_OK) goto done;
-  }
-  if (o->vtu && records && (st = sim->stack->write_frame(sim, frame)) != MPM_OK) goto done;
-  if (o->vtu && has_domains) {
-    snprintf(path, sizeof path, "%s/domains_%04d.vtu", dir, frame);
-    /* the domain particles' part of the frame's arrays (after the material points, in the
-       set's order of its active domains, as the domain file's cells are) for output.fields */
-    const size_t first = sim->particles.count;
-    mpm_particles dp = *p;
-    dp.count = p->count - first;
-    for (int d = 0; d < 3; ++d) {
-      dp.x[d] += first;
-      dp.v[d] += first;
-    }
-    for (int c = 0; c < 9; ++c) {
-      dp.F[c] += first;
-      dp.B[c] += first;
-    }
-    dp.plastic += first;
-    dp.mass += first;
-    dp.vol0 += first;
-    dp.temperature += first;
-    dp.material += first;
-    dp.body += first;
-    dp.level += first;
-    dp.id += first;
-    const mpm_frame_fields cells = {&dp,
-                                    J ? J + first : NULL,
-                                    stress ? stress + first : NULL,
-                                    sim->time,
-                                    category ? category + first : NULL,
-                                    heat,
-                                    melt ? melt + first : NULL,
-                                    o->fields, /* 0 without output.fields: the file's own only */
-                                    cauchy ? cauchy + 9 * first : NULL,
-                                    pressure ? pressure + first : NULL};
-    st = mpm_write_domain_vtu(path, &sim->domains, sim->time, &cells, &sim->error);
-    if (st != MPM_OK) goto done;
-  }
-  for (int k = 0; k < sim->surface_count; ++k) { /* embedded surfaces (Zhu sec. 4.1) */
-    const mpm_embedded_surface *e = &sim->surfaces[k];
-    double *x = mpm_alloc(3 * (size_t)(e->vertex_count + 1) * sizeof *x);
-    if (!x) {
-      st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
-      goto done;
-    }
-    mpm_embedded_positions(e, &sim->domains, x);
-    mpm_triangle_mesh m = {(size_t)e->vertex_count,
-                           (size_t)e->triangle_count,
-                           x,
-                           NULL,
-                           (const uint32_t *)e->triangles,
-                           ""}; /* the indices are >= 0 */
-    snprintf(m.title, sizeof m.title, "mpm embedded surface (Zhu et al. 2017 sec. 4.1), body %d",
-             e->body);
-    snprintf(path, sizeof path, "%s/surface_body%d_%04d.obj", dir, e->body, frame);
-    st = mpm_write_mesh_obj(path, &m, &sim->error);
-    if (st == MPM_OK) {
-      snprintf(path, sizeof path, "%s/surface_body%d_%04d.ply", dir, e->body, frame);
-      st = mpm_write_mesh_ply(path, &m, &sim->error);
-    }
-    if (st == MPM_OK && o->vtu) { /* for ParaView, with the VTU files */
-      snprintf(path, sizeof path, "%s/surface_body%d_%04d.vtp", dir, e->body, frame);
-      st = mpm_write_mesh_vtp(path, &m, sim->time, &sim->error);
-    }
-    mpm_free(x);
-    if (st != MPM_OK) goto done;
-  }
-  if (o->surface.enabled) { /* particle surfaces (issue 14) */
-    st = mpm_sim_write_surfaces(sim, p, dir, frame, records);
-    if (st != MPM_OK) goto done;
-  }
-  /* after every file it names exists */
-  if (o->vtu && records) {
-    st = write_run_pvd(sim, frame + 1, has_domains);
-    if (st != MPM_OK) goto done;
-  }
-  if (o->ply) {
-    snprintf(path, sizeof path, "%s/frame_%04d.ply", dir, frame);
-    st = mpm_write_ply_points(path, &ff, &sim->error);
-    if (st != MPM_OK) goto done;
-  }
-  if (!records) goto done;
-  if (o->stats) {
+  mpm_frame_record r = {frame, dir, records, has_domains, {0}, 0};
+  r.ff =
+      (mpm_frame_fields){p, J, stress, sim->time, category, heat, melt, fields, cauchy, pressure};
+  if (records && o->stats) { /* the run's figures (over every process) for stats.csv */
     mpm_diagnostics d = mpm_sim_diagnostics(sim);
     mpm_stats_row *row = &sim->stats[frame];
     row->frame = frame;
@@ -406,12 +267,11 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     const int nc = sim->collider_count;
     double *force = sim->stats_forces + 3 * (size_t)frame * (size_t)nc;
     for (int k = 0; k < 3 * nc; ++k) force[k] = sp->sum > 0 ? sim->collider_frame[k] / sp->sum : 0;
-    snprintf(path, sizeof path, "%s/stats.csv", sim->output_dir);
-    st =
-        mpm_write_stats_csv_forces(path, frame + 1, sim->stats, nc, sim->stats_forces, &sim->error);
-    if (st != MPM_OK) goto done;
+    r.stats_rows = frame + 1;
   }
-  sim->written_frames++;
+  st = sim->writer->frame(sim, &r);
+  if (st != MPM_OK) goto done;
+  if (records) sim->written_frames++;
 done:
   mpm_particles_free(&combined);
   mpm_free(J);
