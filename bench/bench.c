@@ -34,8 +34,8 @@ static void block_scene(mpm_scene *s, double dx, double lo, double hi, double do
   mpm_scene_default(s);
   snprintf(s->name, sizeof s->name, "bench");
   for (int d = 0; d < 3; ++d) {
-    s->domain_min[d] = 0;
-    s->domain_max[d] = domain;
+    s->box_min[d] = 0;
+    s->box_max[d] = domain;
   }
   s->dx = dx;
   s->end_time = 1;

@@ -151,8 +151,8 @@ static inline void assert_same_body(const mpm_body_desc *p, const mpm_body_desc 
 /* Every field of a scene that the def mirrors. */
 static inline void assert_same_scene(const mpm_scene *a, const mpm_scene *b) {
   assert_string_equal(a->name, b->name);
-  SAME(a, b, domain_min);
-  SAME(a, b, domain_max);
+  SAME(a, b, box_min);
+  SAME(a, b, box_max);
   SAME(a, b, dx);
   assert_same_grid(a, b);
   SAME(a, b, gravity);

@@ -325,7 +325,7 @@ static void test_build_from_body(void **state) {
   mpm_domain_set s;
   mpm_domain_set_init(&s);
   const double h = mpm_sample_spacing(&scene, 0);
-  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, scene.domain_min, h, "bodies[0]", &err),
+  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, scene.box_min, h, "bodies[0]", &err),
                    MPM_OK);
   assert_int_equal(s.particles.count, n);
   assert_true(s.corner_count < 2 * n); /* shared: about one corner per particle */
@@ -355,7 +355,7 @@ static void test_build_from_body(void **state) {
   p.count = 0;
   assert_int_equal(mpm_sample_body(&scene, 0, &p, &err), MPM_OK);
   mpm_domain_set_init(&s);
-  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, scene.domain_min, h, "bodies[0]", &err),
+  assert_int_equal(mpm_domain_set_add_lattice(&s, &p, 0, scene.box_min, h, "bodies[0]", &err),
                    MPM_ERR_INVALID);
   assert_non_null(strstr(err.message, "jitter"));
   mpm_domain_set_free(&s);

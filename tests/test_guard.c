@@ -148,7 +148,7 @@ static void test_particle_leaving_domain(void **state) {
   (void)state;
   mpm_sim *sim = block("stop", 8, "fixed_corotated");
   /* particle 7 on the G2P clamp at the floor: it went through the whole wall band */
-  sim->particles.x[1][7] = (mpm_real)(sim->scene.domain_min[1] + sim->scene.dx);
+  sim->particles.x[1][7] = (mpm_real)(sim->scene.box_min[1] + sim->scene.dx);
   const unsigned moved = sim->particles.id[7]; /* the step reorders the particles */
   assert_int_equal(mpm_sim_step(sim, 0), MPM_ERR_UNSTABLE);
   expect_message(sim, "left the domain");

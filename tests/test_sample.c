@@ -27,7 +27,7 @@ typedef struct fixture {
 /* Domain [0,1]^3, dx 0.05, one material of density 1000, one body of 8 ppc (h = 0.025). */
 static void fixture_init(fixture *f) {
   memset(f, 0, sizeof *f);
-  for (int d = 0; d < 3; ++d) f->scene.domain_max[d] = 1;
+  for (int d = 0; d < 3; ++d) f->scene.box_max[d] = 1;
   f->scene.dx = 0.05;
   f->material.density = 1000;
   f->scene.material_count = 1;
@@ -194,7 +194,7 @@ static void test_box_counts_mass_alignment(void **state) {
     for (int d = 0; d < 3; ++d) {
       double x = f.p.x[d][i];
       assert_true(fabs(x - 0.5) <= f.body.shape.half_extent[d]);
-      double k = x / h - 0.5; /* lattice: domain_min + (k + 1/2) h */
+      double k = x / h - 0.5; /* lattice: box_min + (k + 1/2) h */
       assert_close(k, round(k), TOL(1e-4, 1e-9));
       assert_true(f.p.v[d][i] == 0);
     }

@@ -61,7 +61,7 @@ static void test_full_scene(void **state) {
   parse_ok(json, &s);
   assert_string_equal(s.path, FILE_NAME);
   assert_string_equal(s.name, "jello_cubes");
-  assert_close(s.domain_max[0], 2.0, 0);
+  assert_close(s.box_max[0], 2.0, 0);
   assert_close(s.dx, 0.02, 0);
   assert_int_equal(s.wall_rule, MPM_BOUNDARY_SEPARATE);
   assert_close(s.wall_friction, 0.25, 0);

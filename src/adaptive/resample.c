@@ -284,8 +284,8 @@ mpm_status mpm_adaptive_resample(mpm_adaptive *a) {
       /* the children stay inside the domain's stencil clamp */
       for (size_t j = first; j < p->count; ++j)
         for (int d = 0; d < 3; ++d) {
-          const mpm_real lo = (mpm_real)(sc->domain_min[d] + sc->dx),
-                         hi = (mpm_real)(sc->domain_max[d] - sc->dx);
+          const mpm_real lo = (mpm_real)(sc->box_min[d] + sc->dx),
+                         hi = (mpm_real)(sc->box_max[d] - sc->dx);
           if (p->x[d][j] < lo || p->x[d][j] > hi) p->xc[d][j] = 0;
           p->x[d][j] = p->x[d][j] < lo ? lo : p->x[d][j] > hi ? hi : p->x[d][j];
         }

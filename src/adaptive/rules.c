@@ -39,7 +39,7 @@ static int refine_box_cells(const mpm_scene *sc, mpm_refinement *r, int level, c
   const double dx = (double)mpm_refinement_dx(r, level);
   int32_t lo[3], hi[3];
   for (int d = 0; d < 3; ++d) {
-    const double a = fmax(lo_m[d], sc->domain_min[d]), b = fmin(hi_m[d], sc->domain_max[d]);
+    const double a = fmax(lo_m[d], sc->box_min[d]), b = fmin(hi_m[d], sc->box_max[d]);
     /* a box face on a cell face (up to the rounding of dx in float) takes no cell beyond it */
     lo[d] = (int32_t)floor((a - (double)r->origin[d]) / dx + 1e-5);
     hi[d] = (int32_t)ceil((b - (double)r->origin[d]) / dx - 1e-5) - 1;
@@ -139,7 +139,7 @@ static void erode(uint8_t *m, const long n[3], long k, int edge, uint8_t *line, 
   for (int axis = 0; axis < 3; ++axis) erode_axis(m, n, axis, k, edge, line, left);
 }
 
-/* Material on a lattice of spacing h (points at domain_min + (idx + 1/2) h): the boxes
+/* Material on a lattice of spacing h (points at box_min + (idx + 1/2) h): the boxes
  * [x - L/2, x + L/2) of a set of points, each marking the lattice points inside it (the one
  * holding x when none is). */
 typedef struct lattice {
@@ -158,7 +158,7 @@ typedef struct box_source {
 
 static void point_range(const mpm_scene *sc, const lattice *l, int d, double x, double L, long *a,
                         long *b) {
-  const double u = (x - sc->domain_min[d]) / l->h;
+  const double u = (x - sc->box_min[d]) / l->h;
   *a = (long)ceil(u - 0.5 * L / l->h - 0.5);
   *b = (long)floor(u + 0.5 * L / l->h - 0.5 - 1e-9);
   if (*b < *a) *a = *b = (long)floor(u);
@@ -250,8 +250,8 @@ static int lattice_refine(const mpm_scene *sc, mpm_refinement *r, int level, lat
         double x[3];
         int inside = 1;
         for (int d = 0; d < 3; ++d) {
-          x[d] = sc->domain_min[d] + ((double)idx[d] + 0.5) * l->h;
-          inside &= x[d] > sc->domain_min[d] && x[d] < sc->domain_max[d];
+          x[d] = sc->box_min[d] + ((double)idx[d] + 0.5) * l->h;
+          inside &= x[d] > sc->box_min[d] && x[d] < sc->box_max[d];
           if (l->within_min) inside &= x[d] >= l->within_min[d] && x[d] <= l->within_max[d];
         }
         if (!inside) continue;
@@ -362,7 +362,7 @@ static int refine_particles(mpm_adaptive *a, mpm_refinement *r, const mpm_refine
     }
     long lo[3], hi[3];
     for (int d = 0; d < 3; ++d) {
-      const double x = (double)p->x[d][i] - sc->domain_min[d], h = 0.5 * L[i] + rule->distance;
+      const double x = (double)p->x[d][i] - sc->box_min[d], h = 0.5 * L[i] + rule->distance;
       lo[d] = (long)floor((x - h) / dx);
       hi[d] = (long)floor((x + h) / dx);
       lo[d] = lo[d] < 0 ? 0 : lo[d];
@@ -376,12 +376,11 @@ static int refine_particles(mpm_adaptive *a, mpm_refinement *r, const mpm_refine
   }
   for (int Lc = 0; Lc < MPM_LEVELS_MAX && !status; ++Lc) {
     if (!marks[Lc]) continue;
-    const int32_t offset[3] = {(int32_t)lround((sc->domain_min[0] - (double)r->origin[0]) /
-                                               (double)mpm_refinement_dx(r, Lc)),
-                               (int32_t)lround((sc->domain_min[1] - (double)r->origin[1]) /
-                                               (double)mpm_refinement_dx(r, Lc)),
-                               (int32_t)lround((sc->domain_min[2] - (double)r->origin[2]) /
-                                               (double)mpm_refinement_dx(r, Lc))};
+    const int32_t offset[3] = {
+        (int32_t)lround((sc->box_min[0] - (double)r->origin[0]) / (double)mpm_refinement_dx(r, Lc)),
+        (int32_t)lround((sc->box_min[1] - (double)r->origin[1]) / (double)mpm_refinement_dx(r, Lc)),
+        (int32_t)lround((sc->box_min[2] - (double)r->origin[2]) /
+                        (double)mpm_refinement_dx(r, Lc))};
     size_t q = 0;
     for (long ci = 0; ci < n[Lc][0] && !status; ++ci)
       for (long cj = 0; cj < n[Lc][1] && !status; ++cj)

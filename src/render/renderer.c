@@ -485,8 +485,8 @@ static mpm_status setup(mpm_renderer *r, const mpm_render_options *opts, const c
   make_legend(r);
   r->fps = r->have_scene ? r->scene.fps : 0;
   for (int d = 0; d < 3; ++d) {
-    r->dom_lo[d] = r->have_scene ? r->scene.domain_min[d] : r->survey.lo[d];
-    r->dom_hi[d] = r->have_scene ? r->scene.domain_max[d] : r->survey.hi[d];
+    r->dom_lo[d] = r->have_scene ? r->scene.box_min[d] : r->survey.lo[d];
+    r->dom_hi[d] = r->have_scene ? r->scene.box_max[d] : r->survey.hi[d];
     if (!(r->dom_hi[d] > r->dom_lo[d])) r->dom_lo[d] -= 0.5, r->dom_hi[d] += 0.5;
   }
   choose_ground(r);

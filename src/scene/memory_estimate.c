@@ -58,7 +58,7 @@ static double body_particles(const mpm_scene *s, int b) {
 static double dense_nodes(const mpm_scene *s) {
   if (s->solver.grid != MPM_GRID_DENSE) return 0;
   double n = 1;
-  for (int d = 0; d < 3; ++d) n *= (s->domain_max[d] - s->domain_min[d]) / s->dx + 4;
+  for (int d = 0; d < 3; ++d) n *= (s->box_max[d] - s->box_min[d]) / s->dx + 4;
   return n;
 }
 

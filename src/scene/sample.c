@@ -1,6 +1,6 @@
 /* sample.c - filling a body with particles on a grid-aligned lattice (see sample.h).
  *
- * The lattice points are domain_min + (k + 1/2) h with h = dx / cbrt(ppc): the usual MPM
+ * The lattice points are box_min + (k + 1/2) h with h = dx / cbrt(ppc): the usual MPM
  * initialisation of Gao et al. 2017 (sec. 7) and Zhu et al. 2017 (sec. 8), particles evenly
  * spaced inside each cell, each carrying V_p^0 = h^3 and m_p = rho h^3.
  *
@@ -461,7 +461,7 @@ mpm_status mpm_sample_body_kept(const mpm_scene *scene, int bi, double scale,
                          bi, body->jitter);
   const double density = scene->materials[body->material].density;
   const double h = mpm_sample_spacing(scene, bi) * scale;
-  const double *dmin = scene->domain_min, *dmax = scene->domain_max;
+  const double *dmin = scene->box_min, *dmax = scene->box_max;
 
   shape_ctx sc;
   memset(&sc, 0, sizeof sc);

@@ -1,7 +1,7 @@
 /* sample.h - filling a body's shape with material points on a grid-aligned lattice.
  *
  * Particles of a body sit on a regular lattice of spacing h = dx / cbrt(particles_per_cell)
- * whose points are domain_min + (k + 1/2) h, so that with an integer cube root every grid cell
+ * whose points are box_min + (k + 1/2) h, so that with an integer cube root every grid cell
  * holds the same number of points. Points inside the shape (box, sphere, capped cylinder,
  * closed triangle mesh) are kept; each carries volume h^3 and mass density h^3. */
 #ifndef MPM_SCENE_SAMPLE_H

@@ -132,8 +132,8 @@ void mpm_scene_default(mpm_scene *scene) {
   memset(scene, 0, sizeof *scene);
   snprintf(scene->name, sizeof scene->name, "scene");
   for (int d = 0; d < 3; ++d) {
-    scene->domain_min[d] = 0.0;
-    scene->domain_max[d] = 1.0;
+    scene->box_min[d] = 0.0;
+    scene->box_max[d] = 1.0;
   }
   scene->dx = 1.0 / 64.0;
   scene->gravity[1] = -9.81;

@@ -381,11 +381,12 @@ typedef struct mpm_scene {
   char path[MPM_PATH_MAX]; /* the scene file, for messages; mesh paths resolve against it */
   uint64_t source_hash;    /* FNV-1a of the scene text: a checkpoint resumes only the same scene */
   char name[MPM_NAME_MAX];
-  /* domain */
-  double domain_min[3], domain_max[3]; /* m */
-  double dx;                           /* grid cell size, m (of level 0 on a multi-level grid) */
-  int levels;                          /* domain.levels: 0 = the uniform grid; 1..6 = Gao's
-                                          multi-level grid (1: one level, through its path) */
+  /* the simulation box (the scene's `domain` key; "domain" in the code means Zhu's particle
+   * domains, src/domain/) */
+  double box_min[3], box_max[3]; /* m */
+  double dx;                     /* grid cell size, m (of level 0 on a multi-level grid) */
+  int levels;                    /* domain.levels: 0 = the uniform grid; 1..6 = Gao's
+                                    multi-level grid (1: one level, through its path) */
   int refine_count;
   mpm_refine_desc *refine;     /* domain.refine */
   mpm_resample_desc resample;  /* domain.resample */

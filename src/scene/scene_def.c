@@ -146,8 +146,8 @@ mpm_scene_def mpm_scene_def_default(void) {
   mpm_scene_def d;
   memset(&d, 0, sizeof d);
   for (int k = 0; k < 3; ++k) {
-    d.domain.min[k] = s.domain_min[k];
-    d.domain.max[k] = s.domain_max[k];
+    d.domain.min[k] = s.box_min[k];
+    d.domain.max[k] = s.box_max[k];
     d.gravity[k] = s.gravity[k];
   }
   d.domain.dx = s.dx;

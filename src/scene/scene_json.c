@@ -157,23 +157,23 @@ static int parse_domain(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   if (mpm_json_expect_object(c, dom, "an object with keys min, max and dx (or resolution)") < 0 ||
       mpm_json_check_keys(c, dom, DOMAIN_KEYS, NULL) < 0)
     return -1;
-  if (mpm_json_vec3(c, dom, "min", 1, mpm_json_any("m"), s->domain_min) < 0 ||
-      mpm_json_vec3(c, dom, "max", 1, mpm_json_any("m"), s->domain_max) < 0)
+  if (mpm_json_vec3(c, dom, "min", 1, mpm_json_any("m"), s->box_min) < 0 ||
+      mpm_json_vec3(c, dom, "max", 1, mpm_json_any("m"), s->box_max) < 0)
     return -1;
   char key[16], note[160], lo[40];
   for (int d = 0; d < 3; ++d)
-    if (!(s->domain_max[d] > s->domain_min[d])) {
+    if (!(s->box_max[d] > s->box_min[d])) {
       snprintf(key, sizeof key, "max[%d]", d);
       snprintf(note, sizeof note, "m, greater than min[%d]", d);
       char want[256], got[40];
-      mpm_json_range r = mpm_json_gt(s->domain_min[d], note);
+      mpm_json_range r = mpm_json_gt(s->box_min[d], note);
       return mpm_json_fail_at(c, key, MPM_ERR_INVALID, "expected %s, got %s",
                               mpm_json_describe_range(&r, 0, want, sizeof want),
-                              mpm_json_format_number(s->domain_max[d], got, sizeof got));
+                              mpm_json_format_number(s->box_max[d], got, sizeof got));
     }
   double extent[3], longest = 0;
   for (int d = 0; d < 3; ++d) {
-    extent[d] = s->domain_max[d] - s->domain_min[d];
+    extent[d] = s->box_max[d] - s->box_min[d];
     if (extent[d] > longest) longest = extent[d];
   }
   if (!isfinite(longest))
@@ -210,7 +210,7 @@ static int parse_domain(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
      on 8 points) */
   if (sizeof(mpm_real) == 4)
     for (int e = 0; e < 6; ++e) {
-      const double x = e < 3 ? s->domain_min[e] : s->domain_max[e - 3];
+      const double x = e < 3 ? s->box_min[e] : s->box_max[e - 3];
       const float xf = (float)fabs(x);
       const double spacing = (double)nextafterf(xf, INFINITY) - (double)xf;
       if (spacing > dx / 8) {
@@ -233,11 +233,11 @@ static int parse_domain(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
                "m: min[%d] + 8*dx with dx = %s m%s; the domain must be "
                "more than 8 cells wide on every axis",
                d, mpm_json_format_short(dx, lo, sizeof lo), has_res ? " from the resolution" : "");
-      mpm_json_range r = mpm_json_gt(s->domain_min[d] + 8.0 * dx, note);
+      mpm_json_range r = mpm_json_gt(s->box_min[d] + 8.0 * dx, note);
       char want[400], got[40];
       return mpm_json_fail_at(c, key, MPM_ERR_INVALID, "expected %s, got %s",
                               mpm_json_describe_range(&r, 0, want, sizeof want),
-                              mpm_json_format_number(s->domain_max[d], got, sizeof got));
+                              mpm_json_format_number(s->box_max[d], got, sizeof got));
     }
   if (parse_walls(c, dom, s) < 0) return -1;
   for (int d = 0; d < 3; ++d)

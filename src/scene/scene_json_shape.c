@@ -357,9 +357,9 @@ static int check_inside(mpm_json_ctx *c, const mpm_scene *s, const double lo[3],
                         const char *note) {
   double blo[3], bhi[3], longest = 0;
   for (int d = 0; d < 3; ++d) {
-    blo[d] = s->domain_min[d] + s->wall_cells * s->dx;
-    bhi[d] = s->domain_max[d] - s->wall_cells * s->dx;
-    longest = fmax(longest, s->domain_max[d] - s->domain_min[d]);
+    blo[d] = s->box_min[d] + s->wall_cells * s->dx;
+    bhi[d] = s->box_max[d] - s->wall_cells * s->dx;
+    longest = fmax(longest, s->box_max[d] - s->box_min[d]);
   }
   const double tol = 1e-9 * longest;
   char out[400], num[40];

@@ -42,8 +42,8 @@ static guard_hit scan(const mpm_sim *sim, const mpm_particles *p, const uint8_t 
   const double dx = sim->scene.dx;
   mpm_real lo[3], hi[3];
   for (int d = 0; d < 3; ++d) { /* the G2P clamp (step.c step_setup), rounded alike */
-    lo[d] = (mpm_real)(sim->scene.domain_min[d] + dx);
-    hi[d] = (mpm_real)(sim->scene.domain_max[d] - dx);
+    lo[d] = (mpm_real)(sim->scene.box_min[d] + dx);
+    hi[d] = (mpm_real)(sim->scene.box_max[d] - dx);
   }
   int fragile[64] = {0}, any_fragile = 0;
   for (int m = 0; m < sim->material_count && m < 64; ++m)

@@ -88,7 +88,7 @@ int mpm_sim_placement_report(const mpm_sim *sim, char *out, size_t cap) {
       const size_t nb = body_points(sim, j, &b, &bcap, &hb);
       if (!nb) continue;
       const double h = ha; /* body i's particle spacing; its lattice is offset by half of it */
-      const double o[3] = {sc->domain_min[0], sc->domain_min[1], sc->domain_min[2]};
+      const double o[3] = {sc->box_min[0], sc->box_min[1], sc->box_min[2]};
       uint64_t *grown = mpm_realloc(keys, na * sizeof *keys);
       if (!grown) break;
       keys = grown;

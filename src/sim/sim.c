@@ -162,8 +162,8 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
 
   /* grid geometry */
   for (int d = 0; d < 3; ++d) {
-    sim->origin[d] = (mpm_real)sc->domain_min[d];
-    sim->cells[d] = (int)lround((sc->domain_max[d] - sc->domain_min[d]) / sc->dx);
+    sim->origin[d] = (mpm_real)sc->box_min[d];
+    sim->cells[d] = (int)lround((sc->box_max[d] - sc->box_min[d]) / sc->dx);
   }
   /* particles */
   if (mpm_particles_init(&sim->particles, 1024)) {
@@ -188,8 +188,8 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
       snprintf(name, sizeof name, "%s: bodies[%d] (\"%s\")", sc->path, b, sc->bodies[b].name);
       const size_t dfirst = sim->domains.particles.count;
       const double h = mpm_sample_spacing(sc, b);
-      st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->domain_min, h,
-                                      name, err);
+      st = mpm_domain_set_add_lattice(&sim->domains, &sim->particles, first, sc->box_min, h, name,
+                                      err);
       if (st != MPM_OK) goto fail;
       const mpm_body_desc *bd = &sc->bodies[b];
       const mpm_enrichment_body settings = {.epsilon = (mpm_real)bd->enrichment,
@@ -216,7 +216,7 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
         st = mpm_sample_body_mesh(sc, b, &mesh, err);
         if (st == MPM_OK)
           st = mpm_embed_surface(&sim->surfaces[sim->surface_count], b, &mesh, &sim->domains,
-                                 dfirst, sc->domain_min, h, err);
+                                 dfirst, sc->box_min, h, err);
         mpm_mesh_free(&mesh);
         if (st != MPM_OK) goto fail;
         sim->surface_count++;

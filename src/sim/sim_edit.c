@@ -79,15 +79,15 @@ static mpm_status set_vectors(mpm_sim *sim, const char *what, size_t count, cons
       const double c = values[3 * k + d];
       /* a position inside the domain (the step's wall band takes particles near the walls);
          a velocity finite */
-      const int ok = positions ? c > sc->domain_min[d] && c < sc->domain_max[d]
-                               : isfinite(c) && fabs(c) <= 1e30;
+      const int ok =
+          positions ? c > sc->box_min[d] && c < sc->box_max[d] : isfinite(c) && fabs(c) <= 1e30;
       if (ok) continue;
       mpm_free(index);
       if (positions)
         return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                              "%s: particle id %u: coordinate %d is %g; expected a number inside "
                              "the domain, %g to %g (m)",
-                             what, ids[k], d, c, sc->domain_min[d], sc->domain_max[d]);
+                             what, ids[k], d, c, sc->box_min[d], sc->box_max[d]);
       return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                            "%s: particle id %u: velocity component %d is %g; expected a finite "
                            "number (m/s)",

@@ -276,8 +276,8 @@ static void step_setup(mpm_sim *sim, double dt, mpm_step_ctx *c) {
   for (int d = 0; d < 3; ++d) {
     t->origin[d] = sim->grid.origin[d];
     /* keep every stencil inside the grid: one cell from the domain faces */
-    t->clamp_lo[d] = (mpm_real)(sc->domain_min[d] + sc->dx);
-    t->clamp_hi[d] = (mpm_real)(sc->domain_max[d] - sc->dx);
+    t->clamp_lo[d] = (mpm_real)(sc->box_min[d] + sc->dx);
+    t->clamp_hi[d] = (mpm_real)(sc->box_max[d] - sc->dx);
   }
   c->dtc = c->tc;
   c->dtc.kernel = sim->domain_kernel;
