@@ -43,14 +43,14 @@ static void block_scene(mpm_scene *s, double dx, double lo, double hi, double do
   s->solver.kernel = kernel;
   s->solver.grid = grid;
   s->material_count = 1;
-  s->materials = calloc(1, sizeof *s->materials);
+  s->materials = mpm_calloc(1, sizeof *s->materials); /* the simulation frees them */
   s->materials[0] = mpm_material_desc_default();
   s->materials[0].model = MPM_MODEL_NEO_HOOKEAN;
   s->materials[0].E = 1e5;
   s->materials[0].nu = 0.3;
   s->materials[0].density = 1000;
   s->body_count = 1;
-  s->bodies = calloc(1, sizeof *s->bodies);
+  s->bodies = mpm_calloc(1, sizeof *s->bodies);
   s->bodies[0] = mpm_body_desc_default();
   s->bodies[0].shape.kind = MPM_SHAPE_BOX;
   for (int d = 0; d < 3; ++d) {

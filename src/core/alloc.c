@@ -15,6 +15,7 @@
 
 #include <stdatomic.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -56,7 +57,12 @@ static void raw_free(void *p) {
     free(p);
 }
 
+/* Before every block: where its allocation starts, its size, and a mark that it is one of ours
+ * (mpm_free of memory that mpm_alloc did not make stops with a message instead of miscounting
+ * the live bytes and freeing a wrong address). */
+#define HEADER_MARK 0x6d706d616c6c6f63ull /* "mpmalloc" */
 typedef struct header {
+  uint64_t mark;
   void *raw;
   size_t bytes;
 } header;
@@ -83,7 +89,7 @@ void *mpm_alloc(size_t bytes) {
   if (large && !hook.alloc) madvise(raw, total, MADV_HUGEPAGE); /* a hint; failure is harmless */
 #endif
   unsigned char *p = raw + offset;
-  header h = {raw, bytes};
+  header h = {HEADER_MARK, raw, bytes};
   memcpy(p - sizeof h, &h, sizeof h);
   count_bytes(bytes);
   return p;
@@ -96,18 +102,31 @@ void *mpm_calloc(size_t count, size_t size) {
   return p;
 }
 
+/* The header of block p, which must be one of ours. */
+static header header_of(const void *p, const char *what) {
+  header h;
+  memcpy(&h, (const unsigned char *)p - sizeof h, sizeof h);
+  if (h.mark != HEADER_MARK) {
+    fprintf(stderr,
+            "mpm: %s(%p): not a block of mpm_alloc (freed twice, or allocated with "
+            "another allocator)\n",
+            what, p);
+    abort();
+  }
+  return h;
+}
+
 void mpm_free(void *p) {
   if (!p) return;
-  header h;
-  memcpy(&h, (unsigned char *)p - sizeof h, sizeof h);
+  const header h = header_of(p, "mpm_free");
+  memset((unsigned char *)p - sizeof h, 0, sizeof h.mark); /* a second free is seen */
   atomic_fetch_sub(&live_bytes, h.bytes);
   raw_free(h.raw);
 }
 
 void *mpm_realloc(void *p, size_t bytes) {
   if (!p) return mpm_alloc(bytes);
-  header h;
-  memcpy(&h, (unsigned char *)p - sizeof h, sizeof h);
+  const header h = header_of(p, "mpm_realloc");
   void *q = mpm_alloc(bytes);
   if (!q) return NULL;
   memcpy(q, p, h.bytes < bytes ? h.bytes : bytes);
