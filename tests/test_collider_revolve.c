@@ -7,6 +7,7 @@
  *     central differences of phi, at random points in a tilted, shifted frame;
  *   - points on the surface give phi = 0 and the outward segment normal. */
 #include "support.h"
+#include "scene/scene.h"
 #include "collide/collider.h"
 
 #include <math.h>

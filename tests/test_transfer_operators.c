@@ -8,6 +8,7 @@
  *   - the matrix scatter and the gradient gather are adjoint;
  *   - sparse equals dense node by node, and 1 and 2 threads give bitwise the same results. */
 #include "support.h"
+#include "scene/scene.h"
 #include "core/parallel.h"
 #include "grid/dofs.h"
 #include "transfer/operators.h"

@@ -40,19 +40,10 @@ LAYERS = [
     ['sim'],
     ['analysis', 'plot', 'render'],
 ]
-# upward includes that stand today, each to go: the numerical folders take the enums of the
-# scene description (one scene description, with the enums beside their modules); the writers
-# read scene enums
+# upward includes that stand today, each to go: the embedded surface takes the scene's mesh type
+# (the triangle mesh belongs beside the io writers or the domains)
 KNOWN_UPWARD = {
-    ('src/collide/collider.h', 'scene/scene.h'),
-    ('src/collide/motion.h', 'scene/scene.h'),
     ('src/domain/embed.h', 'scene/mesh.h'),
-    ('src/interp/kernel.h', 'scene/scene.h'),
-    ('src/io/checkpoint.c', 'scene/scene.h'),
-    ('src/io/checkpoint_read.c', 'scene/scene.h'),
-    ('src/io/vtu.c', 'scene/scene.h'),
-    ('src/io/vtu_domains.c', 'scene/scene.h'),
-    ('src/material/material.h', 'scene/scene.h'),
 }
 
 

@@ -8,8 +8,8 @@
 #ifndef MPM_COLLIDE_COLLIDER_H
 #define MPM_COLLIDE_COLLIDER_H
 
+#include "collide/collider_desc.h"
 #include "core/real.h"
-#include "scene/scene.h"
 
 /* A collider moved by a script between steps (collider_script.c, mpm_sim_set_collider_pose):
  * from the first pose set it follows the script, not its scene motion. */

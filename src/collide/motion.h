@@ -8,7 +8,7 @@
 #ifndef MPM_COLLIDE_MOTION_H
 #define MPM_COLLIDE_MOTION_H
 
-#include "scene/scene.h"
+#include "collide/collider_desc.h"
 
 typedef struct mpm_motion_state {
   double translation[3]; /* offset of the centre from its rest position, m */

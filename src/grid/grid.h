@@ -26,6 +26,11 @@
 
 typedef struct mpm_grid mpm_grid;
 
+typedef enum mpm_grid_kind {
+  MPM_GRID_SPARSE = 0, /* paged blocks activated from particles (the production grid) */
+  MPM_GRID_DENSE = 1,  /* full box of nodes (reference implementation and baseline) */
+} mpm_grid_kind;
+
 /* What a variant remembers between lookups of one caller (the sparse grid: the blocks of the
  * last stencil's pad); one per thread, started with mpm_grid_cursor_init. */
 typedef struct mpm_grid_cursor {

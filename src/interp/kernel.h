@@ -26,7 +26,17 @@
 #define MPM_INTERP_KERNEL_H
 
 #include "core/real.h"
-#include "scene/scene.h"
+
+typedef enum mpm_kernel_kind {
+  MPM_KERNEL_LINEAR = 0,      /* trilinear hat (Gao eq. 2) */
+  MPM_KERNEL_QUADRATIC = 1,   /* quadratic B-spline (Stomakhin et al. 2013) */
+  MPM_KERNEL_CUBIC = 2,       /* cubic B-spline */
+  MPM_KERNEL_UGIMP = 3,       /* undeformed GIMP, closed form (Gao eqs. 5-6, sec. 6.2) */
+  MPM_KERNEL_UGIMP_WIDE = 4,  /* internal, no scene name: the uGIMP kernel mpm_kernel_make builds
+                                for boxes wider than dx (4 nodes per axis) */
+  MPM_KERNEL_UGIMP_PAIRED = 5 /* internal: uGIMP (box <= dx) from the even node at or below the
+                                 base, 4 nodes per axis (mpm_kernel_paired) */
+} mpm_kernel_kind;
 
 #define MPM_STENCIL_MAX 4
 

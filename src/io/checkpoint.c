@@ -26,7 +26,6 @@
 
 #include "io/checkpoint_format.h"
 #include "core/alloc.h"
-#include "scene/scene.h"
 
 #include <hdf5.h>
 #include <stdio.h>

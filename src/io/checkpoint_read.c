@@ -7,7 +7,6 @@
 #include "core/alloc.h"
 #include "io/input_file.h"
 #include "io/checkpoint_format.h"
-#include "scene/scene.h"
 
 #include <hdf5.h>
 #include <math.h>

@@ -11,6 +11,32 @@
 
 #include <stdio.h>
 
+/* The point arrays of frame_NNNN.vtu that output.fields selects, in the order the file lists
+ * them (src/io/vtu.c; docs/scene-format.md "output.fields" says what each holds). */
+typedef enum mpm_output_field {
+  MPM_FIELD_ID = 0,
+  MPM_FIELD_VELOCITY,
+  MPM_FIELD_MASS,
+  MPM_FIELD_VOLUME,
+  MPM_FIELD_J,
+  MPM_FIELD_STRESS, /* von Mises equivalent of the Cauchy stress */
+  MPM_FIELD_PLASTIC,
+  MPM_FIELD_MATERIAL,
+  MPM_FIELD_BODY,
+  MPM_FIELD_LEVEL,
+  MPM_FIELD_ENRICHMENT,
+  MPM_FIELD_TEMPERATURE,
+  MPM_FIELD_MELT,
+  MPM_FIELD_CAUCHY_STRESS, /* the full tensor sigma = P F^T / J */
+  MPM_FIELD_PRESSURE,      /* -tr(sigma) / 3 */
+  MPM_FIELD_F,             /* the deformation gradient */
+  MPM_FIELD_COUNT
+} mpm_output_field;
+
+/* The arrays written when output.fields is not given: those of the files before the key
+ * existed (id .. enrichment), with temperature and melt when the run has heat. */
+unsigned mpm_output_fields_default(int heat);
+
 /* ---- atomic files ---- */
 typedef struct mpm_atomic_file {
   FILE *fp;
@@ -42,10 +68,10 @@ typedef struct mpm_frame_fields {
                                 transitional, 2 enriched, -1 a material point; NULL: all -1 */
   int heat;                  /* the run has heat: write temperature and melt */
   const mpm_real *melt;      /* melt fraction per particle (material.h), NULL: 0 */
-  unsigned fields;        /* the point arrays written, bit (1u << f) per mpm_output_field (scene.h);
-                             0: mpm_output_fields_default(heat) */
-  const mpm_real *cauchy; /* Cauchy stress per particle, 9 row-major values each, Pa; NULL
-                             with cauchy_stress selected: zero */
+  unsigned fields;          /* the point arrays written, bit (1u << f) per mpm_output_field (below);
+                               0: mpm_output_fields_default(heat) */
+  const mpm_real *cauchy;   /* Cauchy stress per particle, 9 row-major values each, Pa; NULL
+                               with cauchy_stress selected: zero */
   const mpm_real *pressure; /* -tr(sigma) / 3 per particle, Pa; NULL: zero */
 } mpm_frame_fields;
 

@@ -21,7 +21,6 @@
 #include "io/io.h"
 #include "io/vtu_stream.h"
 #include "core/alloc.h"
-#include "scene/scene.h"
 
 #include <errno.h>
 #include <stdint.h>

@@ -11,7 +11,6 @@
 #include "io/io.h"
 #include "io/vtu_stream.h"
 #include "domain/domain.h"
-#include "scene/scene.h"
 
 #include <errno.h>
 #include <stdint.h>

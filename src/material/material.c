@@ -114,3 +114,8 @@ mpm_material mpm_material_at_temperature(const mpm_material *m, mpm_real plastic
   }
   return r;
 }
+
+void mpm_lame(double E, double nu, double *mu, double *lambda) {
+  *mu = E / (2.0 * (1.0 + nu));
+  *lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}

@@ -8,7 +8,7 @@
 #define MPM_MATERIAL_MATERIAL_H
 
 #include "core/real.h"
-#include "scene/scene.h"
+#include "material/material_desc.h"
 
 /* Particles per batch call: small enough for a stack buffer, large enough to vectorize. */
 #define MPM_STRESS_CHUNK 64

@@ -194,11 +194,6 @@ void mpm_scene_free(mpm_scene *scene) {
   scene->material_count = scene->body_count = scene->collider_count = scene->force_count = 0;
 }
 
-void mpm_lame(double E, double nu, double *mu, double *lambda) {
-  *mu = E / (2.0 * (1.0 + nu));
-  *lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-}
-
 double mpm_solver_cg_tolerance(const mpm_solver_desc *d) {
   if (d->cg_tolerance > 0) return d->cg_tolerance;
   return d->newton_iterations == 1 ? 1e-4 : 1e-2;

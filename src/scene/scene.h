@@ -7,121 +7,20 @@
 #ifndef MPM_SCENE_SCENE_H
 #define MPM_SCENE_SCENE_H
 
+#include "collide/collider_desc.h"
 #include "core/error.h"
+#include "core/limits.h"
+#include "grid/grid.h"
+#include "interp/kernel.h"
+#include "io/io.h"
+#include "material/material_desc.h"
+#include "transfer/transfer.h"
 
 #include <stddef.h>
 #include <stdint.h>
 
-#define MPM_NAME_MAX 64
 /* The largest mesh file read unless a shape's max_file_mb says more, MiB: as scenes are. */
 #define MPM_MESH_MAX_MB 64
-#define MPM_PATH_MAX 1024
-
-typedef enum mpm_kernel_kind {
-  MPM_KERNEL_LINEAR = 0,      /* trilinear hat (Gao eq. 2) */
-  MPM_KERNEL_QUADRATIC = 1,   /* quadratic B-spline (Stomakhin et al. 2013) */
-  MPM_KERNEL_CUBIC = 2,       /* cubic B-spline */
-  MPM_KERNEL_UGIMP = 3,       /* undeformed GIMP, closed form (Gao eqs. 5-6, sec. 6.2) */
-  MPM_KERNEL_UGIMP_WIDE = 4,  /* internal, no scene name: the uGIMP kernel mpm_kernel_make builds
-                                for boxes wider than dx (4 nodes per axis) */
-  MPM_KERNEL_UGIMP_PAIRED = 5 /* internal: uGIMP (box <= dx) from the even node at or below the
-                                 base, 4 nodes per axis (mpm_kernel_paired) */
-} mpm_kernel_kind;
-
-typedef enum mpm_transfer_kind {
-  MPM_TRANSFER_APIC = 0, /* affine PIC (Jiang et al. 2015) */
-  MPM_TRANSFER_FLIP = 1, /* PIC/FLIP blend with ratio flip_alpha (Gao sec. 3.2 step 6) */
-} mpm_transfer_kind;
-
-typedef enum mpm_grid_kind {
-  MPM_GRID_SPARSE = 0, /* paged blocks activated from particles (the production grid) */
-  MPM_GRID_DENSE = 1,  /* full box of nodes (reference implementation and baseline) */
-} mpm_grid_kind;
-
-typedef enum mpm_model_kind {
-  MPM_MODEL_FIXED_COROTATED = 0, /* Stomakhin et al. 2012; Gao sec. 4.1 */
-  MPM_MODEL_NEO_HOOKEAN = 1,     /* compressible neo-Hookean with clamped singular values
-                                    (Zhu sec. 5.3 and 7, Irving et al. 2004) */
-  MPM_MODEL_HENCKY_STVK = 2,     /* St. Venant-Kirchhoff in Hencky strain (Gao eq. 7) */
-  MPM_MODEL_DRUCKER_PRAGER = 3,  /* Hencky elasticity + Drucker-Prager sand (Klar et al. 2016,
-                                    volume correction of Tampubolon et al. 2017; Gao 4.2.1) */
-  MPM_MODEL_VON_MISES = 4,       /* Hencky elasticity + von Mises plasticity (Gao 4.2.2) */
-  MPM_MODEL_SNOW = 5,            /* fixed-corotated + snow plasticity (Stomakhin et al. 2013) */
-  MPM_MODEL_COUNT
-} mpm_model_kind;
-
-typedef enum mpm_boundary_rule {
-  MPM_BOUNDARY_STICKY = 0,   /* relative velocity set to zero */
-  MPM_BOUNDARY_SLIP = 1,     /* normal relative velocity removed */
-  MPM_BOUNDARY_SEPARATE = 2, /* normal relative velocity removed only when approaching */
-} mpm_boundary_rule;
-
-typedef enum mpm_shape_kind {
-  MPM_SHAPE_BOX = 0,
-  MPM_SHAPE_SPHERE = 1,
-  MPM_SHAPE_CYLINDER = 2,
-  MPM_SHAPE_MESH = 3,      /* closed triangle mesh (bodies only) */
-  MPM_SHAPE_HALFSPACE = 4, /* colliders only */
-  MPM_SHAPE_REVOLVE = 5,   /* solid of revolution of a profile polyline (colliders only) */
-} mpm_shape_kind;
-
-/* Most points of a revolve profile. */
-#define MPM_PROFILE_MAX 32
-
-#define MPM_STRENGTH_KEYS 16
-
-typedef struct mpm_material_desc {
-  char name[MPM_NAME_MAX];
-  mpm_model_kind model;
-  double E;              /* Young's modulus, Pa (> 0) */
-  double nu;             /* Poisson's ratio, (-1, 0.5) */
-  double density;        /* kg/m^3 (> 0) */
-  double min_stretch;    /* neo-Hookean: singular values clamped below this (Zhu 5.3); (0, 1] */
-  double friction_angle; /* Drucker-Prager: degrees, [0, 90); default 30 */
-  double cohesion;       /* Drucker-Prager: Pa, >= 0; default 0 (dry sand) */
-  double yield_stress;   /* von Mises: Pa, > 0 */
-  double theta_c;        /* snow: critical compression, (0, 1); default 2.5e-2 */
-  double theta_s;        /* snow: critical stretch, > 0; default 7.5e-3 */
-  double hardening;      /* snow: hardening coefficient xi, >= 0; default 10 */
-  /* strength schedule (Zhu Fig. 5): the moduli scaled by a factor interpolated linearly between
-   * keyframes (time s, factor >= 0), held before the first and after the last; none: 1 */
-  int strength_count;
-  double strength[MPM_STRENGTH_KEYS][2];
-  /* heat (scene `heat`; heat/heat.h) */
-  double specific_heat; /* c, J/(kg K), > 0; default 1000 */
-  double conductivity;  /* k, W/(m K), >= 0; default 0 (no conduction) */
-  /* melting (Zhu Fig. 11, a simplified Stomakhin et al. 2014): from `melt_point` on, the shear
-   * modulus falls linearly over `melt_range` degrees to melt_shear times its value, and the
-   * bulk part (lambda) to melt_bulk times its value; domain particles leave their domains when
-   * they pass melt_point. melting 0: none */
-  int melting;
-  double melt_point, melt_range, melt_shear, melt_bulk;
-  int heat_keys; /* the scene gave one of the heat keys (they need `heat`) */
-} mpm_material_desc;
-
-/* A solid shape in world coordinates. Boxes and cylinders may be rotated about `axis`-free
- * Euler angles later; for now a box is axis-aligned and a cylinder's axis is any unit vector. */
-typedef struct mpm_shape_desc {
-  mpm_shape_kind kind;
-  double center[3];      /* m */
-  double half_extent[3]; /* box half sizes, m */
-  double radius;         /* sphere and cylinder, m */
-  double axis[3];        /* cylinder or revolve axis (unit), or half-space outward normal */
-  double half_height;    /* cylinder half length along axis, m; <= 0 means infinite */
-  /* mesh bodies: the file, then scale about the mesh's bounding-box centre and a translation
-     that puts that centre at `center` */
-  char mesh_path[MPM_PATH_MAX];
-  double mesh_scale;
-  double mesh_max_mb; /* the largest mesh file read, MiB (key max_file_mb; default 64) */
-  double mesh_volume; /* the volume the mesh encloses once scaled, m^3 (set by the loader;
-                         0: unknown) */
-  double bounds_lo[3], bounds_hi[3]; /* bodies: the shape's bounding box, set by the loader */
-  /* revolve: points (radius, height along axis from center), m, from the axis back to the
-     axis (first and last radius 0); the solid is the region the polyline encloses with the
-     axis, turned about it */
-  double profile[MPM_PROFILE_MAX][2];
-  int profile_count;
-} mpm_shape_desc;
 
 /* Particle domains switched off (Zhu sec. 7): from `time` on, every domain particle of the body
  * inside the box [min, max] continues as a standard material point. */
@@ -162,37 +61,6 @@ typedef struct mpm_body_desc {
   int has_temperature; /* `temperature` given (else the scene's heat.temperature) */
   double temperature;  /* initial temperature of its particles */
 } mpm_body_desc;
-
-typedef struct mpm_keyframe {
-  double time;           /* s */
-  double translation[3]; /* offset of the collider from its rest position, m */
-  double angle;          /* rotation about motion.axis through the collider's centre, rad */
-} mpm_keyframe;
-
-/* Kinematic motion: pose(t) = translation(t) then rotation by angle(t) about `axis` through
- * the (moving) centre. Without keyframes translation(t) = velocity * t and
- * angle(t) = angular_speed * t. With keyframes both are piecewise linear and held constant
- * outside the keyframe span. */
-typedef struct mpm_motion_desc {
-  double velocity[3];   /* m/s */
-  double axis[3];       /* unit rotation axis */
-  double angular_speed; /* rad/s */
-  int keyframe_count;
-  mpm_keyframe *keyframes; /* owned by the scene; times strictly increasing */
-} mpm_motion_desc;
-
-typedef struct mpm_collider_desc {
-  char name[MPM_NAME_MAX];
-  mpm_shape_desc shape; /* box, sphere, cylinder or half-space (not mesh) */
-  int inside_out;       /* 1: the material is kept inside the shape (containers) */
-  mpm_boundary_rule rule;
-  double friction; /* Coulomb coefficient >= 0 (slip and separate) */
-  mpm_motion_desc motion;
-  double active[2];   /* s: the collider acts while active[0] <= t < active[1] (a grip that lets
-                         go); default [0, infinity) */
-  int heat_source;    /* `temperature` given: grid nodes inside the solid are held at it */
-  double temperature; /* a heat source's temperature (a hot plate) */
-} mpm_collider_desc;
 
 /* A body-force region (Zhu Fig. 9: a rabbit sucked up a straw): inside the region (a
  * collider's shape, with its motion and its `active` window; the rule and friction are unused)
@@ -236,34 +104,8 @@ typedef struct mpm_surface_desc {
   int per_body;              /* 1: surface_bB_NNNN.obj per body instead of one surface_NNNN */
 } mpm_surface_desc;
 
-/* The point arrays of frame_NNNN.vtu that output.fields selects, in the order the file lists
- * them (src/io/vtu.c; docs/scene-format.md "output.fields" says what each holds). */
-typedef enum mpm_output_field {
-  MPM_FIELD_ID = 0,
-  MPM_FIELD_VELOCITY,
-  MPM_FIELD_MASS,
-  MPM_FIELD_VOLUME,
-  MPM_FIELD_J,
-  MPM_FIELD_STRESS, /* von Mises equivalent of the Cauchy stress */
-  MPM_FIELD_PLASTIC,
-  MPM_FIELD_MATERIAL,
-  MPM_FIELD_BODY,
-  MPM_FIELD_LEVEL,
-  MPM_FIELD_ENRICHMENT,
-  MPM_FIELD_TEMPERATURE,
-  MPM_FIELD_MELT,
-  MPM_FIELD_CAUCHY_STRESS, /* the full tensor sigma = P F^T / J */
-  MPM_FIELD_PRESSURE,      /* -tr(sigma) / 3 */
-  MPM_FIELD_F,             /* the deformation gradient */
-  MPM_FIELD_COUNT
-} mpm_output_field;
-
 /* The names of output.fields, in the order of mpm_output_field; NULL-terminated. */
 extern const char *const mpm_output_field_names[MPM_FIELD_COUNT + 1];
-
-/* The arrays written when output.fields is not given: those of the files before the key
- * existed (id .. enrichment), with temperature and melt when the run has heat. */
-unsigned mpm_output_fields_default(int heat);
 
 typedef struct mpm_output_desc {
   char directory[MPM_PATH_MAX]; /* default "out"; `mpm run -o` overrides */
@@ -456,8 +298,5 @@ void mpm_scene_free(mpm_scene *scene);
 mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err);
 mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages, mpm_scene *scene,
                            mpm_error *err);
-
-/* Lamé parameters from E and nu. */
-void mpm_lame(double E, double nu, double *mu, double *lambda);
 
 #endif

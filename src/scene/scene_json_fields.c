@@ -16,13 +16,6 @@ const char *const mpm_output_field_names[MPM_FIELD_COUNT + 1] = {
     "plastic", "material",      "body",     "level",  "enrichment", "temperature",
     "melt",    "cauchy_stress", "pressure", "F",      NULL};
 
-unsigned mpm_output_fields_default(int heat) {
-  unsigned bits = 0;
-  for (int f = MPM_FIELD_ID; f <= MPM_FIELD_ENRICHMENT; ++f) bits |= 1u << f;
-  if (heat) bits |= 1u << MPM_FIELD_TEMPERATURE | 1u << MPM_FIELD_MELT;
-  return bits;
-}
-
 /* "id, velocity, ..., F" for messages. */
 static void field_list(char *out, size_t cap) {
   size_t len = 0;

@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "io/checkpoint.h"
+#include "scene/scene.h"
 #include "sim/step_ctx.h"
 
 #include <mpm/mpm.h>

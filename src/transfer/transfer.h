@@ -22,6 +22,11 @@ typedef struct mpm_stencil_ghost {
   uint32_t ghost; /* its ghost */
 } mpm_stencil_ghost;
 
+typedef enum mpm_transfer_kind {
+  MPM_TRANSFER_APIC = 0, /* affine PIC (Jiang et al. 2015) */
+  MPM_TRANSFER_FLIP = 1, /* PIC/FLIP blend with ratio flip_alpha (Gao sec. 3.2 step 6) */
+} mpm_transfer_kind;
+
 #define MPM_NOT_BOUNDARY UINT32_MAX
 
 typedef struct mpm_ghost_apic {
