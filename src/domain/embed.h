@@ -12,7 +12,7 @@
 #define MPM_DOMAIN_EMBED_H
 
 #include "domain/domain.h"
-#include "scene/mesh.h"
+#include "core/mesh.h"
 
 typedef struct mpm_embedded_surface {
   int body;

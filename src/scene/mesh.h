@@ -9,18 +9,9 @@
 #define MPM_SCENE_MESH_H
 
 #include "core/error.h"
+#include "core/mesh.h"
 
 #include <stddef.h>
-
-typedef struct mpm_mesh {
-  int vertex_count, triangle_count;
-  double *vertices; /* 3 per vertex: x y z, in the file's units */
-  int *triangles;   /* 3 per triangle: zero-based vertex indices */
-  /* per triangle, where the loader read its face: the OBJ line of its `f` record, or the
-     index of its PLY `face` element (source_is_line 0); NULL for meshes made otherwise */
-  int *triangle_source;
-  int source_is_line;
-} mpm_mesh;
 
 /// Read a triangle mesh; the format is chosen by the extension (.obj or .ply, any case).
 /// OBJ: `v` and `f` records (f accepts i, i/t, i//n, i/t/n and negative indices), everything
