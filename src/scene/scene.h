@@ -296,6 +296,10 @@ void mpm_scene_free(mpm_scene *scene);
 /* Load, parse and validate a JSON scene (scene_json.c). Every error names the file and the
  * key path (e.g. "bodies[2].material.E") and says what was expected; nothing else happens. */
 mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err);
+/* The same, and the text it read and parsed in *text (the caller's: mpm_free it; NULL on
+ * failure), so that what is kept of the scene (the output folder's scene.json) is what was run,
+ * from one read of the file. */
+mpm_status mpm_scene_load_text(const char *path, mpm_scene *scene, char **text, mpm_error *err);
 mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages, mpm_scene *scene,
                            mpm_error *err);
 

@@ -461,6 +461,11 @@ mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages,
 }
 
 mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
+  return mpm_scene_load_text(path, scene, NULL, err);
+}
+
+mpm_status mpm_scene_load_text(const char *path, mpm_scene *scene, char **text, mpm_error *err) {
+  if (text) *text = NULL;
   mpm_scene_default(scene);
   if (!path || !path[0])
     return mpm_error_set(err, MPM_ERR_IO, "cannot read a scene file: no path given");
@@ -526,6 +531,9 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {
                          path, line, col);
   }
   mpm_status st = mpm_scene_parse(buf, path, scene, err);
-  mpm_free(buf);
+  if (st == MPM_OK && text)
+    *text = buf; /* the caller's now */
+  else
+    mpm_free(buf);
   return st;
 }

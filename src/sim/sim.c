@@ -361,9 +361,11 @@ mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char 
   mpm_error err;
   mpm_error_clear(&err);
   mpm_scene scene;
-  mpm_status st = mpm_scene_load(scene_path, &scene, &err);
+  char *text = NULL; /* the file is read once: the copy kept is the scene that runs */
+  mpm_status st = mpm_scene_load_text(scene_path, &scene, &text, &err);
   if (st == MPM_OK) {
-    char *copy = mpm_scene_copy_of_file(scene_path, &scene);
+    char *copy = mpm_scene_copy_text(text, &scene);
+    mpm_free(text);
     st = mpm_sim_create_from_scene(&scene, out, &err);
     mpm_scene_free(&scene);
     if (st == MPM_OK)

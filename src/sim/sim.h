@@ -279,7 +279,6 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
  * with the mesh bodies' files made absolute, NULL when it cannot be read or is out of memory;
  * and writing sim->scene_copy as output_dir/scene.json (nothing without one). */
 char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene);
-char *mpm_scene_copy_of_file(const char *scene_path, const mpm_scene *scene);
 mpm_status mpm_sim_write_scene_copy(mpm_sim *sim);
 
 #endif

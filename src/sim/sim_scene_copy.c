@@ -6,7 +6,6 @@
 #define _DEFAULT_SOURCE /* realpath */
 #include "sim/sim.h"
 #include "core/alloc.h"
-#include "io/input_file.h"
 #include "io/run_folder.h"
 
 #include <cjson/cJSON.h>
@@ -14,26 +13,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static char *read_text(const char *path) {
-  char why[128];
-  FILE *fp = mpm_open_input(path, NULL, why, sizeof why);
-  if (!fp) return NULL;
-  char *text = NULL;
-  if (fseek(fp, 0, SEEK_END) == 0) {
-    const long n = ftell(fp);
-    if (n >= 0 && fseek(fp, 0, SEEK_SET) == 0 && (text = mpm_alloc((size_t)n + 1))) {
-      if (fread(text, 1, (size_t)n, fp) != (size_t)n) {
-        mpm_free(text);
-        text = NULL;
-      } else {
-        text[n] = 0;
-      }
-    }
-  }
-  fclose(fp);
-  return text;
-}
 
 char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
   cJSON *root = json_text ? cJSON_Parse(json_text) : NULL;
@@ -54,13 +33,6 @@ char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
   char *out = printed ? mpm_strdup(printed) : NULL; /* the simulation frees it with mpm_free() */
   cJSON_free(printed);
   return out;
-}
-
-char *mpm_scene_copy_of_file(const char *scene_path, const mpm_scene *scene) {
-  char *text = read_text(scene_path);
-  char *copy = mpm_scene_copy_text(text, scene);
-  mpm_free(text);
-  return copy;
 }
 
 mpm_status mpm_sim_write_scene_copy(mpm_sim *sim) {
