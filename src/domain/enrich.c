@@ -26,8 +26,7 @@ mpm_real mpm_hourglass_kappa(const mpm_domain_set *s, const mpm_material *materi
   const mpm_real h = (mpm_real)cbrt((double)s->particles.vol0[q]);
   const mpm_material *m = &materials[s->particles.material[q]];
   /* Young's modulus from the Lame parameters (0 while a strength schedule zeroes them) */
-  const double mu = (double)m->mu, lambda = (double)m->lambda;
-  const double E = mu + lambda > 0 ? mu * (3 * lambda + 2 * mu) / (lambda + mu) : 0;
+  const double E = mpm_young_from_lame((double)m->mu, (double)m->lambda);
   return (mpm_real)(E * (double)h / 48);
 }
 

@@ -50,7 +50,10 @@ typedef struct mpm_material_desc {
   int heat_keys; /* the scene gave one of the heat keys (they need `heat`) */
 } mpm_material_desc;
 
-/* Lamé parameters from E and nu (material.c). */
+/* Lamé parameters from E and nu, and Young's modulus back from them (material.c: the one place
+ * the relations are written; 0 when mu + lambda is not positive, as a schedule that zeroes the
+ * moduli makes them). */
 void mpm_lame(double E, double nu, double *mu, double *lambda);
+double mpm_young_from_lame(double mu, double lambda);
 
 #endif
