@@ -162,7 +162,7 @@ static const char *output_head(void) {
 }
 
 /* Run `mpm ARGS` for case c under its time limit, and heavy cases under a memory limit.
- * MPM_MEMORY_LIMIT makes the program's own memory check (sim/memory_estimate.c) answer
+ * MPM_MEMORY_LIMIT makes the program's own memory check (scene/memory_estimate.c) answer
  * the same on every machine. */
 static int run_case_command(const corpus_case *c, const char *args) {
   const int limit = c->known_bug ? TIMEOUT_KNOWN_BUG_S : TIMEOUT_S;
