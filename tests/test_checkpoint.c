@@ -166,14 +166,14 @@ static void test_resume_is_bit_identical(void **state) {
   /* stats rows other than wall time are the same too, the step figures of the frame the
    * checkpoint cut in two included */
   for (int f = 0; f <= mpm_sim_frame_count(a); ++f) {
-    assert_true(a->stats[f].kinetic == c->stats[f].kinetic);
-    assert_true(a->stats[f].momentum[1] == c->stats[f].momentum[1]);
-    assert_int_equal(a->stats[f].steps, c->stats[f].steps);
-    assert_true(a->stats[f].dt == c->stats[f].dt);
-    assert_true(a->stats[f].dt_min == c->stats[f].dt_min);
-    assert_true(a->stats[f].dt_max == c->stats[f].dt_max);
-    assert_true(a->stats[f].gravitational == c->stats[f].gravitational);
-    assert_true(a->stats[f].total_energy == c->stats[f].total_energy);
+    assert_true(a->out.stats[f].kinetic == c->out.stats[f].kinetic);
+    assert_true(a->out.stats[f].momentum[1] == c->out.stats[f].momentum[1]);
+    assert_int_equal(a->out.stats[f].steps, c->out.stats[f].steps);
+    assert_true(a->out.stats[f].dt == c->out.stats[f].dt);
+    assert_true(a->out.stats[f].dt_min == c->out.stats[f].dt_min);
+    assert_true(a->out.stats[f].dt_max == c->out.stats[f].dt_max);
+    assert_true(a->out.stats[f].gravitational == c->out.stats[f].gravitational);
+    assert_true(a->out.stats[f].total_energy == c->out.stats[f].total_energy);
   }
   /* every 2 frames, the two newest kept */
   char names[8][256];
@@ -226,12 +226,12 @@ static void test_resume_implicit(void **state) {
   assert_same_particles(&a->particles, &c->particles);
   assert_same_frames(full, part, mpm_sim_frame_count(a));
   for (int f = 0; f <= mpm_sim_frame_count(a); ++f) {
-    assert_true(a->stats[f].cg_iterations_mean == c->stats[f].cg_iterations_mean);
-    assert_int_equal(a->stats[f].cg_iterations_max, c->stats[f].cg_iterations_max);
-    assert_true(a->stats[f].cg_residual_max == c->stats[f].cg_residual_max);
-    assert_true(a->stats[f].newton_iterations_mean == c->stats[f].newton_iterations_mean);
+    assert_true(a->out.stats[f].cg_iterations_mean == c->out.stats[f].cg_iterations_mean);
+    assert_int_equal(a->out.stats[f].cg_iterations_max, c->out.stats[f].cg_iterations_max);
+    assert_true(a->out.stats[f].cg_residual_max == c->out.stats[f].cg_residual_max);
+    assert_true(a->out.stats[f].newton_iterations_mean == c->out.stats[f].newton_iterations_mean);
   }
-  assert_true(a->stats[3].cg_iterations_mean > 0);
+  assert_true(a->out.stats[3].cg_iterations_mean > 0);
   mpm_sim_destroy(a);
   mpm_sim_destroy(c);
 }
@@ -258,7 +258,7 @@ static void test_checkpoint_round_trip(void **state) {
   assert_int_equal(c.frame, 1);
   assert_int_equal(c.records, 2);
   assert_string_equal(c.frame_files[1], "frame_0001.vtu");
-  assert_true(c.stats[1].kinetic == a->stats[1].kinetic);
+  assert_true(c.stats[1].kinetic == a->out.stats[1].kinetic);
   assert_true(c.scene_hash == a->scene.source_hash);
   mpm_checkpoint_free(&c);
 

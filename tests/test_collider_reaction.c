@@ -54,7 +54,8 @@ static void run_all(struct mpm_sim *sim, const char *dir) {
 
 /* The force on collider c in frame f's row, component e. */
 static double force(const struct mpm_sim *sim, int f, int c, int e) {
-  return sim->stats_forces[3 * ((size_t)f * (size_t)sim->collider_count + (size_t)c) + (size_t)e];
+  return sim->out
+      .stats_forces[3 * ((size_t)f * (size_t)sim->collider_count + (size_t)c) + (size_t)e];
 }
 
 /* Frame by frame, the floor's force is M g - dp/dt within `balance_tol` of the weight (the
@@ -64,11 +65,11 @@ static double force(const struct mpm_sim *sim, int f, int c, int e) {
 static void check_resting(const struct mpm_sim *sim, double balance_tol, int settled, double spread,
                           double mean_tol) {
   const int frames = mpm_sim_frame_count(sim);
-  const double M = sim->stats[0].mass, W = M * G;
+  const double M = sim->out.stats[0].mass, W = M * G;
   assert_close(M, 8, 1e-3);
   double sum = 0;
   for (int f = 1; f <= frames; ++f) {
-    const mpm_stats_row *a = &sim->stats[f - 1], *b = &sim->stats[f];
+    const mpm_stats_row *a = &sim->out.stats[f - 1], *b = &sim->out.stats[f];
     const double dt = b->time - a->time;
     for (int e = 0; e < 3; ++e) {
       const double balance = (e == 1 ? -W : 0) - (b->momentum[e] - a->momentum[e]) / dt;
@@ -121,8 +122,9 @@ static void test_free_flight(void **state) {
   struct mpm_sim *sim = block_over_floor(0.7, 0.1, 0.2, "", "");
   run_all(sim, "free-flight");
   for (int f = 0; f <= mpm_sim_frame_count(sim); ++f)
-    for (int k = 0; k < 6; ++k) assert_true(sim->stats_forces[6 * f + k] == 0);
-  assert_close(sim->stats[2].momentum[1], -8 * G * 0.2, 1e-4 * 8 * G * 0.2); /* it fell freely */
+    for (int k = 0; k < 6; ++k) assert_true(sim->out.stats_forces[6 * f + k] == 0);
+  assert_close(sim->out.stats[2].momentum[1], -8 * G * 0.2,
+               1e-4 * 8 * G * 0.2); /* it fell freely */
   mpm_sim_destroy(sim);
 }
 
@@ -134,7 +136,7 @@ static void test_threads_bitwise(void **state) {
     mpm_set_threads(t + 1);
     struct mpm_sim *sim = block_on_floor(0.3, "", "");
     run_all(sim, t ? "threads-2" : "threads-1");
-    memcpy(got[t], sim->stats_forces, sizeof got[t]);
+    memcpy(got[t], sim->out.stats_forces, sizeof got[t]);
     mpm_sim_destroy(sim);
   }
   mpm_set_threads(2);
@@ -165,8 +167,8 @@ static void test_resume_bitwise(void **state) {
   while (mpm_sim_frame(c) < mpm_sim_frame_count(c))
     assert_int_equal(mpm_sim_advance_frame(c), MPM_OK);
   const size_t n = (size_t)(mpm_sim_frame_count(a) + 1) * 3 * 2;
-  assert_memory_equal(a->stats_forces, c->stats_forces, n * sizeof(double));
-  assert_true(a->stats_forces[3 * 2 * 4 + 4] < 0); /* frame 4 presses the floor */
+  assert_memory_equal(a->out.stats_forces, c->out.stats_forces, n * sizeof(double));
+  assert_true(a->out.stats_forces[3 * 2 * 4 + 4] < 0); /* frame 4 presses the floor */
   mpm_sim_destroy(a);
   mpm_sim_destroy(c);
 }

@@ -97,7 +97,7 @@ static void test_cfl_violation_domains(void **state) {
    * its particle */
   const double x0 = s->cx[0][s->corner[0][0]], dt_cfl = mpm_sim_cfl_dt(sim);
   assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
-  assert_int_equal(sim->dt_level, 3);
+  assert_int_equal(sim->retry.dt_level, 3);
   assert_close(sim->last_dt, dt_cfl / 8, 1e-9);
   /* the corner moved once, by the redone step, not by the undone ones */
   assert_close(s->cx[0][s->corner[0][0]] - x0, 50 * sim->last_dt, 0.05 * 50 * sim->last_dt);
@@ -118,8 +118,8 @@ static void test_retry_halves_dt_until_stable(void **state) {
   const double dt_cfl = mpm_sim_cfl_dt(sim);
   assert_int_equal(mpm_sim_step(sim, 0), MPM_OK);
   /* 50 m/s needs dt <= dx / 50 = 0.8 ms: three halvings of 4.4 ms */
-  assert_int_equal(sim->dt_level, 3);
-  assert_int_equal(sim->retries, 3);
+  assert_int_equal(sim->retry.dt_level, 3);
+  assert_int_equal(sim->retry.retries, 3);
   assert_int_equal(sim->steps, 1);
   assert_close(sim->last_dt, dt_cfl / 8, 1e-9);
   assert_close(sim->time, dt_cfl / 8, 1e-9);
@@ -129,7 +129,7 @@ static void test_retry_halves_dt_until_stable(void **state) {
   }
   /* the rest of the frame runs on (now CFL-bounded) steps; a halving is given back */
   assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
-  assert_int_equal(sim->dt_level, 2);
+  assert_int_equal(sim->retry.dt_level, 2);
   mpm_sim_destroy(sim);
 }
 

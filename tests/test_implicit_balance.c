@@ -89,7 +89,7 @@ static void test_cantilever_settles(void **state) {
   assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("cantilever")), MPM_OK);
   const double d = default_deflection = settle(sim);
   mpm_stats_row rest[2]; /* its last two frames, at rest */
-  memcpy(rest, &sim->stats[3], sizeof rest);
+  memcpy(rest, &sim->out.stats[3], sizeof rest);
   mpm_sim_destroy(sim);
   /* where a run solved to 1e-4 with up to 4 Newton iterations settles */
   mpm_sim *tight = cantilever(", \"newton_iterations\": 4, \"cg_tolerance\": 1e-4");
@@ -183,7 +183,7 @@ static void test_cantilever_multigrid(void **state) {
   assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("cantilever_multigrid")), MPM_OK);
   const double d = settle(sim);
   mpm_stats_row rest[2];
-  memcpy(rest, &sim->stats[3], sizeof rest);
+  memcpy(rest, &sim->out.stats[3], sizeof rest);
   mpm_sim_destroy(sim);
   print_message("multigrid: tip deflection %.6g m, Jacobi %.6g m (%+.2f%%); at rest %.2f Newton, "
                 "%.2f CG iterations per step\n",
@@ -220,9 +220,9 @@ static void test_free_fall_exact(void **state) {
   assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("fall")), MPM_OK);
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
     if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
-  const double M = sim->stats[0].mass, start = sim->stats[0].total_energy;
+  const double M = sim->out.stats[0].mass, start = sim->out.stats[0].total_energy;
   for (int f = 1; f <= mpm_sim_frame_count(sim); ++f) {
-    const mpm_stats_row *row = &sim->stats[f];
+    const mpm_stats_row *row = &sim->out.stats[f];
     const double p = -M * 9.81 * row->time;
     if (fabs(row->momentum[1] - p) > 1e-4 * fabs(p))
       fail_msg("frame %d: momentum %.9g, M g t = %.9g", f, row->momentum[1], p);
@@ -259,16 +259,16 @@ static void test_landing_with_friction(void **state) {
   assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("landing")), MPM_OK);
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
     if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
-  const double start = sim->stats[0].total_energy;
-  const double brought = start - sim->stats[mpm_sim_frame_count(sim)].gravitational;
+  const double start = sim->out.stats[0].total_energy;
+  const double brought = start - sim->out.stats[mpm_sim_frame_count(sim)].gravitational;
   double worst = -INFINITY;
   for (int f = 1; f <= mpm_sim_frame_count(sim); ++f) {
-    const mpm_stats_row *row = &sim->stats[f];
+    const mpm_stats_row *row = &sim->out.stats[f];
     worst = fmax(worst, row->total_energy - start);
     print_message("frame %2d: kinetic %.4f, elastic %.4f, total %+.5f J from the start\n", f,
                   row->kinetic, row->elastic, row->total_energy - start);
   }
-  const mpm_stats_row *end = &sim->stats[mpm_sim_frame_count(sim)];
+  const mpm_stats_row *end = &sim->out.stats[mpm_sim_frame_count(sim)];
   print_message("the most above the start: %.3g J (%.2g of it); at rest %.4f J elastic of the "
                 "%.3f J it brought down\n",
                 worst, worst / start, end->elastic, brought);

@@ -62,10 +62,11 @@ static void test_stats_dt_columns(void **state) {
   const int frames = mpm_sim_frame_count(sim);
   assert_int_equal(frames, 4);
   /* frame 0 had no steps */
-  assert_true(sim->stats[0].dt == 0 && sim->stats[0].dt_min == 0 && sim->stats[0].dt_max == 0);
+  assert_true(sim->out.stats[0].dt == 0 && sim->out.stats[0].dt_min == 0 &&
+              sim->out.stats[0].dt_max == 0);
   for (int f = 1; f <= frames; ++f) {
-    const mpm_stats_row *r = &sim->stats[f];
-    assert_int_equal(r->steps - sim->stats[f - 1].steps, 23);
+    const mpm_stats_row *r = &sim->out.stats[f];
+    assert_int_equal(r->steps - sim->out.stats[f - 1].steps, 23);
     assert_close(r->dt, max_dt, 1e-12);
     assert_close(r->dt_max, max_dt, 1e-12);
     assert_close(r->dt_min, 0.5 * (frame_dt - 21 * max_dt), 1e-12);
@@ -86,7 +87,7 @@ static void test_stats_dt_columns(void **state) {
   assert_true(c_min > 20 && c_max > 20);
   for (int f = 0; f <= frames; ++f) {
     assert_non_null(fgets(line, sizeof line, fp));
-    const mpm_stats_row *r = &sim->stats[f];
+    const mpm_stats_row *r = &sim->out.stats[f];
     assert_close(csv_field(line, c_dt), r->dt, 1e-8 * max_dt);
     assert_close(csv_field(line, c_min), r->dt_min, 1e-8 * max_dt);
     assert_close(csv_field(line, c_max), r->dt_max, 1e-8 * max_dt);
@@ -115,15 +116,16 @@ static void test_stats_dt_range_cfl(void **state) {
     assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
   int shortened = 0;
   for (int f = 1; f <= mpm_sim_frame_count(sim); ++f) {
-    const mpm_stats_row *r = &sim->stats[f];
+    const mpm_stats_row *r = &sim->out.stats[f];
     assert_true(r->dt_min > 0 && r->dt_min <= r->dt && r->dt <= r->dt_max);
     assert_true(r->dt_max <= dt0 * (1 + 1e-12)); /* faster particles only shorten it */
     if (r->dt_min < 0.9 * r->dt) ++shortened;
   }
   print_message("CFL step at rest %.6g s; frame 1: typical %.6g, %.6g..%.6g s\n", dt0,
-                sim->stats[1].dt, sim->stats[1].dt_min, sim->stats[1].dt_max);
+                sim->out.stats[1].dt, sim->out.stats[1].dt_min, sim->out.stats[1].dt_max);
   assert_true(shortened > 0);
-  assert_close(sim->stats[1].dt, dt0, 2e-2 * dt0); /* the step of the first frame, barely moving */
+  assert_close(sim->out.stats[1].dt, dt0,
+               2e-2 * dt0); /* the step of the first frame, barely moving */
   mpm_sim_destroy(sim);
 }
 
@@ -149,7 +151,7 @@ static void test_stats_energy_free_fall(void **state) {
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
     assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
   const int frames = mpm_sim_frame_count(sim);
-  const mpm_stats_row *s = sim->stats;
+  const mpm_stats_row *s = sim->out.stats;
   /* the reference: zero at the origin, so the block starts at m g y0 */
   assert_close(s[0].gravitational, s[0].mass * 9.81 * 1.6, 1e-4 * s[0].mass * 9.81 * 1.6);
   assert_true(s[0].kinetic == 0);
@@ -251,7 +253,7 @@ static void test_run_pvd_names_every_file(void **state) {
       assert_string_equal(d->file, want);
       assert_string_equal(d->name, part_name[k]);
       assert_int_equal(d->part, k);
-      assert_close(d->time, sim->frame_times[f], 1e-8 * (1 + sim->frame_times[f]));
+      assert_close(d->time, sim->out.frame_times[f], 1e-8 * (1 + sim->out.frame_times[f]));
       snprintf(path, sizeof path, "%s/%s", dir, d->file);
       size_t len = 0;
       char *body = (char *)slurp(path, &len);

@@ -372,7 +372,7 @@ static void test_run_writes_surfaces(void **state) {
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
     assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
   assert_int_equal(mpm_sim_frame_count(sim), 1);
-  assert_true(sim->surface_triangles > 0);
+  assert_true(sim->out.surface_triangles > 0);
   mpm_sim_destroy(sim);
   const char *names[] = {"surface_b0_0000.obj", "surface_b0_0000.ply", "levelset_b0_0000.vdb",
                          "surface_b1_0001.obj", "surface_b1_0001.ply", "levelset_b1_0001.vdb"};

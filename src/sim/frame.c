@@ -116,7 +116,7 @@ static mpm_status frame_step(mpm_sim *sim, double max_dt) {
   /* after an unstable step the retry guard runs on halved steps for a while */
   const mpm_status marked = mpm_sim_mark_enrichment(sim); /* they bound dt */
   if (marked != MPM_OK) return marked;
-  double nominal = ldexp(mpm_sim_cfl_dt(sim), -sim->dt_level);
+  double nominal = ldexp(mpm_sim_cfl_dt(sim), -sim->retry.dt_level);
   const int callers = max_dt > 0 && max_dt < nominal; /* the caller's bound is the step */
   if (callers) nominal = max_dt;
   double dt = nominal;
@@ -139,16 +139,16 @@ static mpm_status frame_step(mpm_sim *sim, double max_dt) {
 static mpm_status complete_frame(mpm_sim *sim) {
   sim->time = frame_end(sim);
   sim->frame++;
-  if (sim->dt_level > 0) sim->dt_level--; /* one halving is given back per calm frame */
-  mpm_status st = sim->output_enabled ? mpm_sim_write_frame(sim) : MPM_OK;
+  if (sim->retry.dt_level > 0) sim->retry.dt_level--; /* one halving is given back per calm frame */
+  mpm_status st = sim->out.enabled ? mpm_sim_write_frame(sim) : MPM_OK;
   /* the frame's solver figures went into its stats row; the next frame starts from zero (a
    * checkpoint taken mid-frame carries them) */
   sim->last_frame_solver = sim->solver_figures;
   memset(&sim->solver_figures, 0, sizeof sim->solver_figures);
   memset(&sim->step_figures, 0, sizeof sim->step_figures);
   memset(sim->collider_frame, 0, 3 * (size_t)sim->collider_count * sizeof *sim->collider_frame);
-  sim->frame_wall_start = mpm_wall_seconds(); /* the next frame's, for steps taken one by one */
-  if (!sim->output_enabled) return st;
+  sim->out.frame_wall_start = mpm_wall_seconds(); /* the next frame's, for steps taken one by one */
+  if (!sim->out.enabled) return st;
   const int every = sim->scene.output.checkpoint_every;
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
       sim->time < sim->scene.end_time * (1 - 1e-12))
@@ -185,7 +185,7 @@ static mpm_status advance_frame(mpm_sim *sim) {
   mpm_status st = refuse_if_failed(sim, "mpm_sim_advance_frame");
   if (st != MPM_OK) return st;
   if (sim->frame >= sim->frame_count) return at_end(sim);
-  sim->frame_wall_start = mpm_wall_seconds();
+  sim->out.frame_wall_start = mpm_wall_seconds();
   while (!frame_reached(sim)) {
     st = latch(sim, frame_step(sim, 0));
     if (st != MPM_OK) return st;

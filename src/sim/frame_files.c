@@ -40,7 +40,7 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
   for (int f = 0; f < frames; ++f) {
     char(*row)[NAME] = text + (size_t)f * (size_t)parts;
     k = 0;
-    snprintf(row[k++], NAME, "%s", sim->frame_files[f]);
+    snprintf(row[k++], NAME, "%s", sim->out.frame_files[f]);
     if (has_domains) snprintf(row[k++], NAME, "domains_%04d.vtu", f);
     for (int s = 0; s < sim->surface_count; ++s)
       snprintf(row[k++], NAME, "surface_body%d_%04d.vtp", sim->surfaces[s].body, f);
@@ -48,8 +48,8 @@ static mpm_status write_run_pvd(mpm_sim *sim, int frames, int has_domains) {
     for (k = 0; k < parts; ++k) files[(size_t)f * (size_t)parts + (size_t)k] = row[k];
   }
   char path[MPM_PATH_MAX + 64];
-  snprintf(path, sizeof path, "%s/run.pvd", sim->output_dir);
-  st = mpm_write_pvd_parts(path, frames, parts, sim->frame_times, name_of, files, &sim->error);
+  snprintf(path, sizeof path, "%s/run.pvd", sim->out.dir);
+  st = mpm_write_pvd_parts(path, frames, parts, sim->out.frame_times, name_of, files, &sim->error);
 done:
   mpm_free(names);
   mpm_free(text);
@@ -76,12 +76,12 @@ static mpm_status write_frame(mpm_sim *sim, const mpm_frame_record *r) {
     if (st != MPM_OK) return st;
   }
   if (o->vtu && records) {
-    snprintf(sim->frame_files[frame], sizeof sim->frame_files[frame], "%s", vtu_name);
-    sim->frame_times[frame] = sim->time;
+    snprintf(sim->out.frame_files[frame], sizeof sim->out.frame_files[frame], "%s", vtu_name);
+    sim->out.frame_times[frame] = sim->time;
     const char *files[frame + 1];
-    for (int f = 0; f <= frame; ++f) files[f] = sim->frame_files[f];
-    snprintf(path, sizeof path, "%s/frames.pvd", sim->output_dir);
-    st = mpm_write_pvd(path, frame + 1, sim->frame_times, files, &sim->error);
+    for (int f = 0; f <= frame; ++f) files[f] = sim->out.frame_files[f];
+    snprintf(path, sizeof path, "%s/frames.pvd", sim->out.dir);
+    st = mpm_write_pvd(path, frame + 1, sim->out.frame_times, files, &sim->error);
     if (st != MPM_OK) return st;
   }
   if (o->vtu && records && (st = sim->stack->write_frame(sim, frame)) != MPM_OK) return st;
@@ -165,9 +165,9 @@ static mpm_status write_frame(mpm_sim *sim, const mpm_frame_record *r) {
     if (st != MPM_OK) return st;
   }
   if (r->stats_rows > 0) {
-    snprintf(path, sizeof path, "%s/stats.csv", sim->output_dir);
-    st = mpm_write_stats_csv_forces(path, r->stats_rows, sim->stats, sim->collider_count,
-                                    sim->stats_forces, &sim->error);
+    snprintf(path, sizeof path, "%s/stats.csv", sim->out.dir);
+    st = mpm_write_stats_csv_forces(path, r->stats_rows, sim->out.stats, sim->collider_count,
+                                    sim->out.stats_forces, &sim->error);
   }
   return st;
 }

@@ -131,13 +131,13 @@ static mpm_status load(mpm_sim *sim, const mpm_checkpoint *c) {
 static mpm_status write_frame(mpm_sim *sim, int frame) {
   char path[MPM_PATH_MAX + 64];
   if (frame == 0) { /* the refinement at the start */
-    snprintf(path, sizeof path, "%s/grid_cells.vtu", sim->output_dir);
+    snprintf(path, sizeof path, "%s/grid_cells.vtu", sim->out.dir);
     const mpm_status st =
         mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
     if (st != MPM_OK) return st;
   }
   if (sim->scene.refine_every > 0) { /* and as it moves */
-    snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", sim->output_dir, frame);
+    snprintf(path, sizeof path, "%s/grid_cells_%04d.vtu", sim->out.dir, frame);
     return mpm_write_cells_vtu(path, &sim->adaptive->grid.tree, sim->time, &sim->error);
   }
   return MPM_OK;

@@ -45,14 +45,15 @@ static mpm_status plan_corners(mpm_sim *sim, mpm_step_ctx *c) {
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory planning the transfers of %zu domain corners",
                          (long long)sim->steps, s->corner_count);
-  if (!order || sim->corner_backup_capacity < s->corner_count) return MPM_OK;
+  if (!order || sim->retry.corner_backup_capacity < s->corner_count) return MPM_OK;
   mpm_real *tmp = mpm_arena_alloc(&sim->step_arena, (s->corner_count + 1) * sizeof *tmp);
   if (!tmp)
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory renumbering %zu domain corners",
                          (long long)sim->steps, s->corner_count);
-  for (size_t k = 0; k < sizeof sim->corner_backup / sizeof *sim->corner_backup; ++k)
-    mpm_domain_permute_values(sim->corner_backup[k], tmp, sizeof(mpm_real), order, s->corner_count);
+  for (size_t k = 0; k < sizeof sim->retry.corner_backup / sizeof *sim->retry.corner_backup; ++k)
+    mpm_domain_permute_values(sim->retry.corner_backup[k], tmp, sizeof(mpm_real), order,
+                              s->corner_count);
   return MPM_OK;
 }
 

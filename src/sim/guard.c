@@ -163,40 +163,40 @@ static void corner_state(mpm_domain_set *s, mpm_real *out[CORNER_STATE]) {
 /* Save what a step changes: the particles, the domain particles and their corners (the clock
  * is saved by the caller). */
 static int save_state(mpm_sim *sim) {
-  if (mpm_particles_assign(&sim->backup, &sim->particles)) return -1;
+  if (mpm_particles_assign(&sim->retry.backup, &sim->particles)) return -1;
   mpm_domain_set *s = &sim->domains;
   if (!s->active_count) return 0;
-  if (mpm_particles_assign(&sim->domain_backup, &s->particles)) return -1;
-  if (sim->corner_backup_capacity < s->corner_count) {
+  if (mpm_particles_assign(&sim->retry.domain_backup, &s->particles)) return -1;
+  if (sim->retry.corner_backup_capacity < s->corner_count) {
     for (int k = 0; k < CORNER_STATE; ++k) {
-      mpm_free(sim->corner_backup[k]);
-      sim->corner_backup[k] = mpm_alloc((s->corner_count + 1) * sizeof(mpm_real));
-      if (!sim->corner_backup[k]) {
-        sim->corner_backup_capacity = 0;
+      mpm_free(sim->retry.corner_backup[k]);
+      sim->retry.corner_backup[k] = mpm_alloc((s->corner_count + 1) * sizeof(mpm_real));
+      if (!sim->retry.corner_backup[k]) {
+        sim->retry.corner_backup_capacity = 0;
         return -1;
       }
     }
-    sim->corner_backup_capacity = s->corner_count;
+    sim->retry.corner_backup_capacity = s->corner_count;
   }
   mpm_real *c[CORNER_STATE];
   corner_state(s, c);
   for (int k = 0; k < CORNER_STATE; ++k)
-    memcpy(sim->corner_backup[k], c[k], s->corner_count * sizeof(mpm_real));
+    memcpy(sim->retry.corner_backup[k], c[k], s->corner_count * sizeof(mpm_real));
   return 0;
 }
 
 static void restore_state(mpm_sim *sim) {
   /* swap the arrays: the backup becomes the particles (the failed state is dropped) */
   mpm_particles t = sim->particles;
-  sim->particles = sim->backup;
-  sim->backup = t;
+  sim->particles = sim->retry.backup;
+  sim->retry.backup = t;
   mpm_domain_set *s = &sim->domains;
   if (!s->active_count) return;
-  mpm_particles_assign(&s->particles, &sim->domain_backup); /* same size: cannot fail */
+  mpm_particles_assign(&s->particles, &sim->retry.domain_backup); /* same size: cannot fail */
   mpm_real *c[CORNER_STATE];
   corner_state(s, c);
   for (int k = 0; k < CORNER_STATE; ++k)
-    memcpy(c[k], sim->corner_backup[k], s->corner_count * sizeof(mpm_real));
+    memcpy(c[k], sim->retry.corner_backup[k], s->corner_count * sizeof(mpm_real));
 }
 
 mpm_status mpm_sim_guarded_step(mpm_sim *sim, double max_dt) {
@@ -213,11 +213,11 @@ mpm_status mpm_sim_guarded_step(mpm_sim *sim, double max_dt) {
     mpm_status st = mpm_sim_raw_step(sim, dt_cap);
     if (st == MPM_OK) st = mpm_sim_guard_check(sim, sim->last_dt);
     if (st != MPM_ERR_UNSTABLE || !retry) return st;
-    if (sim->dt_level >= sim->scene.solver.max_retries) {
+    if (sim->retry.dt_level >= sim->scene.solver.max_retries) {
       char msg[sizeof sim->error.message];
       snprintf(msg, sizeof msg, "%s", sim->error.message);
       return mpm_error_set(&sim->error, MPM_ERR_UNSTABLE, "%s (still, after halving dt %d times)",
-                           msg, sim->dt_level);
+                           msg, sim->retry.dt_level);
     }
     /* undo the step and redo it with half the dt it took */
     const double dt_failed = sim->last_dt;
@@ -226,8 +226,8 @@ mpm_status mpm_sim_guarded_step(mpm_sim *sim, double max_dt) {
     sim->steps = steps0;
     sim->last_dt = last_dt0;
     sim->max_speed = speed0;
-    sim->dt_level++;
-    sim->retries++;
+    sim->retry.dt_level++;
+    sim->retry.retries++;
     dt_cap = 0.5 * dt_failed;
   }
 }

@@ -88,7 +88,7 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
   if (!sim) return oom(err, "the simulation");
   sim->scene = *scene;
   memset(scene, 0, sizeof *scene); /* the simulation owns the arrays now */
-  sim->output_lock = -1;
+  sim->out.lock = -1;
   const mpm_scene *sc = &sim->scene;
   /* refuse a scene the machine cannot hold before allocating anything for it */
   mpm_status st = mpm_scene_check_memory(sc, err);
@@ -278,7 +278,7 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
     if (v2 > vmax2) vmax2 = v2;
   }
   sim->max_speed = sample ? mpm_sqrt(vmax2) : (mpm_real)initial_speed_bound(sc);
-  snprintf(sim->output_dir, sizeof sim->output_dir, "%s", sc->output.directory);
+  snprintf(sim->out.dir, sizeof sim->out.dir, "%s", sc->output.directory);
   *out = sim;
   return MPM_OK;
 fail:
@@ -407,13 +407,13 @@ mpm_status mpm_sim_create_from_json(const char *json_text, const char *base_dir,
 void mpm_sim_destroy(mpm_sim *sim) {
   if (!sim) return;
   mpm_particles_free(&sim->particles);
-  mpm_particles_free(&sim->backup);
-  mpm_particles_free(&sim->domain_backup);
-  mpm_particles_free(&sim->view);
-  mpm_keep_free(&sim->view_keep, sim->view_derived);
-  mpm_keep_free(&sim->view_keep, sim->view_corner);
-  mpm_keep_clear(&sim->view_keep); /* whatever a binding still holds: the handle is gone */
-  for (int k = 0; k < 18; ++k) mpm_free(sim->corner_backup[k]);
+  mpm_particles_free(&sim->retry.backup);
+  mpm_particles_free(&sim->retry.domain_backup);
+  mpm_particles_free(&sim->views.particles);
+  mpm_keep_free(&sim->views.keep, sim->views.derived);
+  mpm_keep_free(&sim->views.keep, sim->views.corner);
+  mpm_keep_clear(&sim->views.keep); /* whatever a binding still holds: the handle is gone */
+  for (int k = 0; k < 18; ++k) mpm_free(sim->retry.corner_backup[k]);
   mpm_domain_set_free(&sim->domains);
   for (int i = 0; i < sim->surface_count; ++i) mpm_embedded_surface_free(&sim->surfaces[i]);
   mpm_free(sim->surfaces);
@@ -434,14 +434,14 @@ void mpm_sim_destroy(mpm_sim *sim) {
   mpm_heat_free(&sim->heat);
   mpm_arena_free(&sim->step_arena);
   mpm_free(sim->iscratch);
-  mpm_free(sim->frame_times);
-  mpm_free(sim->frame_files);
-  mpm_free(sim->stats);
-  mpm_free(sim->stats_forces);
+  mpm_free(sim->out.frame_times);
+  mpm_free(sim->out.frame_files);
+  mpm_free(sim->out.stats);
+  mpm_free(sim->out.stats_forces);
   mpm_scene_free(&sim->scene);
   mpm_free(sim->scene_copy);
   mpm_free(sim->mesh_digests);
-  mpm_run_folder_unlock(sim->output_lock); /* after the last file is written */
+  mpm_run_folder_unlock(sim->out.lock); /* after the last file is written */
   mpm_free(sim);
 }
 

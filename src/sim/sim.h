@@ -50,6 +50,46 @@ typedef struct mpm_step_figures {
   double min, max;      /* s */
 } mpm_step_figures;
 
+/* The output folder and its bookkeeping (sim_output.c, frame_files.c, sim_surface.c). */
+typedef struct mpm_sim_output {
+  int enabled;
+  char dir[MPM_PATH_MAX];
+  int lock; /* the descriptor holding dir's lock (io/run_folder.h), -1: none */
+  int written_frames;
+  double *frame_times;
+  char (*frame_files)[64];
+  mpm_stats_row *stats;
+  double *stats_forces; /* per stats row, 3 per collider: the mean force on each collider over
+                           the frame, N (stats.csv's last columns) */
+  double frame_wall_start;
+  /* output.surface (sim_surface.c): the last frame's reconstruction, for the progress line */
+  double surface_seconds;       /* wall time of the frame's surfaces, files included */
+  size_t surface_triangles;     /* triangles over all its surfaces */
+  double surface_seconds_total; /* over the frames written by this process */
+  int surface_frames;
+  char last_checkpoint[MPM_PATH_MAX + 32];
+} mpm_sim_output;
+
+/* What a retried step needs (guard.c, sim_checkpoint.c). */
+typedef struct mpm_sim_retry {
+  int dt_level;                /* dt is halved this many times after an unstable step */
+  long long retries;           /* steps redone with a smaller dt, over the run */
+  mpm_particles backup;        /* the particles at the start of a step (retry mode) */
+  mpm_particles domain_backup; /* the domain particles and corners at the start of a step */
+  mpm_real *corner_backup[18];
+  size_t corner_backup_capacity;
+} mpm_sim_retry;
+
+/* The copies behind the public views (sim_view.c). */
+typedef struct mpm_sim_views {
+  mpm_particles particles; /* mpm_sim_particles' copy of every particle when there are domains */
+  mpm_real *derived;       /* the view's J and Cauchy stress: 10 arrays of capacity */
+  size_t capacity;
+  uint32_t *corner; /* mpm_sim_domain_view's corner indices (8 per active particle) */
+  size_t corner_capacity;
+  mpm_keep keep; /* arrays replaced while a binding holds views (mpm_sim_hold_particle_arrays) */
+} mpm_sim_views;
+
 struct mpm_sim {
   mpm_scene scene;
   mpm_particles particles;
@@ -109,28 +149,8 @@ struct mpm_sim {
                                   creation (domain/enrich_contact.h) */
   /* outputs */
   const struct mpm_frame_writer *writer; /* where frames and checkpoints go (frame_writer.h) */
-  int output_enabled;
-  char output_dir[MPM_PATH_MAX];
-  int output_lock; /* the descriptor holding output_dir's lock (io/run_folder.h), -1: none */
-  int written_frames;
-  double *frame_times;
-  char (*frame_files)[64];
-  mpm_stats_row *stats;
-  double *stats_forces; /* per stats row, 3 per collider: the mean force on each collider over
-                           the frame, N (stats.csv's last columns) */
-  double frame_wall_start;
-  /* output.surface (sim_surface.c): the last frame's reconstruction, for the progress line */
-  double surface_seconds;       /* wall time of the frame's surfaces, files included */
-  size_t surface_triangles;     /* triangles over all its surfaces */
-  double surface_seconds_total; /* over the frames written by this process */
-  int surface_frames;
-  /* robustness (guard.c, sim_checkpoint.c) */
-  int dt_level;                /* dt is halved this many times after an unstable step */
-  long long retries;           /* steps redone with a smaller dt, over the run */
-  mpm_particles backup;        /* the particles at the start of a step (retry mode) */
-  mpm_particles domain_backup; /* the domain particles and corners at the start of a step */
-  mpm_real *corner_backup[18];
-  size_t corner_backup_capacity;
+  mpm_sim_output out;
+  mpm_sim_retry retry; /* robustness (guard.c, sim_checkpoint.c) */
   const volatile int *interrupt;
   /* a step that lost the state (MPM_ERR_UNSTABLE, MPM_ERR_NOMEM; frame.c): its status and
    * message, MPM_OK while the state is whole */
@@ -139,14 +159,7 @@ struct mpm_sim {
   /* called after every step inside mpm_sim_advance_frame (the CLI's progress within a frame) */
   void (*on_step)(void *ctx, const mpm_sim *sim);
   void *on_step_ctx;
-  mpm_particles view;     /* mpm_sim_particles' copy of every particle when there are domains */
-  mpm_real *view_derived; /* the view's J and Cauchy stress: 10 arrays of view_capacity */
-  size_t view_capacity;
-  uint32_t *view_corner; /* mpm_sim_domain_view's corner indices (8 per active particle) */
-  size_t view_corner_capacity;
-  mpm_keep
-      view_keep; /* arrays replaced while a binding holds views (mpm_sim_hold_particle_arrays) */
-  char last_checkpoint[MPM_PATH_MAX + 32];
+  mpm_sim_views views; /* the public views' copies (sim_view.c) */
   /* the scene's JSON, mesh paths made absolute, for the output folder's scene.json (made when
    * created from a file or JSON text; NULL when created from a scene struct) */
   char *scene_copy;

@@ -80,7 +80,7 @@ static void free_names(char **names, int n) {
 }
 
 mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
-  if (!sim->output_enabled)
+  if (!sim->out.enabled)
     return mpm_error_set(
         &sim->error, MPM_ERR_INVALID,
         "a checkpoint needs an output directory: call mpm_sim_enable_output first");
@@ -96,8 +96,8 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   c.max_speed = (double)sim->max_speed;
   c.steps = sim->steps;
   c.frame = sim->frame;
-  c.written_frames = sim->written_frames;
-  c.dt_level = sim->dt_level;
+  c.written_frames = sim->out.written_frames;
+  c.dt_level = sim->retry.dt_level;
   c.threads = mpm_thread_count();
   c.next_id = sim->next_id;
   const mpm_solver_figures *sf = &sim->solver_figures;
@@ -117,10 +117,10 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   memcpy(c.solver_figures, figures, sizeof figures);
   c.particles = sim->particles; /* borrowed, not freed */
   c.domains = sim->domains;
-  c.records = sim->written_frames;
-  c.frame_times = sim->frame_times;
-  c.frame_files = sim->frame_files;
-  c.stats = sim->stats;
+  c.records = sim->out.written_frames;
+  c.frame_times = sim->out.frame_times;
+  c.frame_files = sim->out.frame_files;
+  c.stats = sim->out.stats;
   /* the colliders' columns: the frame in progress's sums, then the rows' forces */
   const size_t nf = 3 * (size_t)sim->collider_count;
   double *forces = NULL;
@@ -129,7 +129,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     if (!forces)
       return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing a checkpoint");
     memcpy(forces, sim->collider_frame, nf * sizeof *forces);
-    memcpy(forces + nf, sim->stats_forces, (size_t)c.records * nf * sizeof *forces);
+    memcpy(forces + nf, sim->out.stats_forces, (size_t)c.records * nf * sizeof *forces);
     c.colliders = sim->collider_count;
     c.collider_forces = forces;
   }
@@ -153,7 +153,7 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
     c.mesh_digests = sim->mesh_digests;
   }
   char file[MPM_PATH_MAX + 32];
-  snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->output_dir, NAME_DIGITS,
+  snprintf(file, sizeof file, "%s/checkpoint_%0*lld.h5", sim->out.dir, NAME_DIGITS,
            (long long)sim->steps);
   /* the grid's own state (a tree the run rebuilt) */
   mpm_status st = sim->stack->save(sim, &c);
@@ -162,14 +162,14 @@ mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
   mpm_free(forces);
   mpm_free(scripts);
   if (st != MPM_OK) return st;
-  snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
+  snprintf(sim->out.last_checkpoint, sizeof sim->out.last_checkpoint, "%s", file);
   if (path && cap) snprintf(path, cap, "%s", file);
   /* keep the newest few: one may be damaged later, the run can fall back on the one before */
   char **names;
-  const int n = list_checkpoints(sim->output_dir, &names);
+  const int n = list_checkpoints(sim->out.dir, &names);
   for (int i = KEEP_CHECKPOINTS; i < n; ++i) {
     char old[MPM_PATH_MAX + 32];
-    snprintf(old, sizeof old, "%s/%s", sim->output_dir, names[i]);
+    snprintf(old, sizeof old, "%s/%s", sim->out.dir, names[i]);
     remove(old);
   }
   if (n > 0) free_names(names, n);
@@ -273,8 +273,8 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   sim->steps = c->steps;
   sim->next_id = c->next_id;
   sim->frame = c->frame;
-  sim->written_frames = c->written_frames;
-  sim->dt_level = c->dt_level;
+  sim->out.written_frames = c->written_frames;
+  sim->retry.dt_level = c->dt_level;
   mpm_solver_figures *sf = &sim->solver_figures;
   memset(sf, 0, sizeof *sf);
   sf->steps = (long long)c->solver_figures[0];
@@ -291,23 +291,24 @@ static mpm_status install(mpm_sim *sim, mpm_checkpoint *c) {
   sp->min = c->solver_figures[10];
   sp->max = c->solver_figures[11];
   for (int i = 0; i < c->records; ++i) {
-    sim->frame_times[i] = c->frame_times[i];
-    memcpy(sim->frame_files[i], c->frame_files[i], sizeof sim->frame_files[i]);
-    sim->stats[i] = c->stats[i];
+    sim->out.frame_times[i] = c->frame_times[i];
+    memcpy(sim->out.frame_files[i], c->frame_files[i], sizeof sim->out.frame_files[i]);
+    sim->out.stats[i] = c->stats[i];
   }
   /* the colliders' columns (a checkpoint from before them has none: zeros) */
   const size_t nf = 3 * (size_t)sim->collider_count;
   memset(sim->collider_frame, 0, nf * sizeof *sim->collider_frame);
   if (c->colliders == sim->collider_count && nf) {
     memcpy(sim->collider_frame, c->collider_forces, nf * sizeof *sim->collider_frame);
-    memcpy(sim->stats_forces, c->collider_forces + nf, (size_t)c->records * nf * sizeof(double));
+    memcpy(sim->out.stats_forces, c->collider_forces + nf,
+           (size_t)c->records * nf * sizeof(double));
   }
   if (c->collider_scripts && c->colliders == sim->collider_count)
     for (int k = 0; k < sim->collider_count; ++k)
       mpm_collider_script_load(&sim->colliders[k],
                                c->collider_scripts + (size_t)k * MPM_CKPT_SCRIPT_DOUBLES);
-  sim->output_enabled = 1;
-  sim->frame_wall_start = mpm_wall_seconds();
+  sim->out.enabled = 1;
+  sim->out.frame_wall_start = mpm_wall_seconds();
   return MPM_OK;
 }
 
@@ -315,7 +316,7 @@ static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n
                               size_t cap);
 
 mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap) {
-  if (strlen(dir) >= sizeof sim->output_dir)
+  if (strlen(dir) >= sizeof sim->out.dir)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
   char **names;
   const int n = list_checkpoints(dir, &names);
@@ -323,7 +324,7 @@ mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap)
     return mpm_error_set(&sim->error, MPM_ERR_IO, "%s: cannot read the output directory", dir);
   /* the folder is this run's from here (no other simulation writes there while it resumes):
      its stale temporaries are a killed run's, and go */
-  const int had_lock = sim->output_lock >= 0;
+  const int had_lock = sim->out.lock >= 0;
   mpm_status claimed = mpm_sim_claim_output(sim, dir, MPM_RUN_CLAIM_RESUME);
   if (claimed != MPM_OK) {
     free_names(names, n);
@@ -331,8 +332,8 @@ mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap)
   }
   mpm_status st = resume_from(sim, dir, names, n, path, cap);
   if (st != MPM_OK && !had_lock) { /* nothing resumed: the folder is free again */
-    mpm_run_folder_unlock(sim->output_lock);
-    sim->output_lock = -1;
+    mpm_run_folder_unlock(sim->out.lock);
+    sim->out.lock = -1;
   }
   return st;
 }
@@ -363,8 +364,8 @@ static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n
       st = install(sim, &c);
       if (st == MPM_OK) {
         used = i;
-        snprintf(sim->last_checkpoint, sizeof sim->last_checkpoint, "%s", file);
-        snprintf(sim->output_dir, sizeof sim->output_dir, "%s", dir);
+        snprintf(sim->out.last_checkpoint, sizeof sim->out.last_checkpoint, "%s", file);
+        snprintf(sim->out.dir, sizeof sim->out.dir, "%s", dir);
       }
     }
     mpm_checkpoint_free(&c);
@@ -388,7 +389,7 @@ static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n
     snprintf(to, sizeof to, "%s/%s.damaged", dir, names[i]);
     rename(from, to);
   }
-  if (path && cap) snprintf(path, cap, "%s", sim->last_checkpoint);
+  if (path && cap) snprintf(path, cap, "%s", sim->out.last_checkpoint);
   free_names(names, n);
   return MPM_OK;
 }

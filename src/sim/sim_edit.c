@@ -305,6 +305,6 @@ mpm_status mpm_sim_add_body(mpm_sim *sim, const char *body_json, const char *bas
   cJSON_free(text);
   mpm_scene_free(&next);
   if (count) *count = sim->particles.count - first;
-  if (sim->output_enabled) return mpm_sim_write_scene_copy(sim);
+  if (sim->out.enabled) return mpm_sim_write_scene_copy(sim);
   return MPM_OK;
 }

@@ -27,7 +27,7 @@ mpm_status mpm_sim_set_frame_limit(mpm_sim *sim, int frames) {
                          "mpm_sim_set_frame_limit: expected 1 to %d frames (the scene's "
                          "time.end %g s at %g fps), got %d",
                          most, sim->scene.end_time, sim->scene.fps, frames);
-  if (sim->output_enabled && frames > sim->frame_count)
+  if (sim->out.enabled && frames > sim->frame_count)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "mpm_sim_set_frame_limit: output is enabled for %d frames; the count "
                          "can only be lowered now (got %d)",
@@ -110,10 +110,10 @@ mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size)
   in.threads = sim->thread_request > 0 ? sim->thread_request : mpm_thread_count();
   in.memory_bytes =
       mpm_scene_memory_for(sc, (double)(sim->particles.count + sim->domains.particles.count));
-  in.output_enabled = sim->output_enabled;
-  in.output_dir = sim->output_dir;
-  in.written_frames = sim->written_frames;
-  in.last_checkpoint = sim->last_checkpoint;
+  in.output_enabled = sim->out.enabled;
+  in.output_dir = sim->out.dir;
+  in.written_frames = sim->out.written_frames;
+  in.last_checkpoint = sim->out.last_checkpoint;
   const mpm_solver_figures *sf = &sim->last_frame_solver;
   in.solver_steps = sf->steps;
   in.cg_iterations = sf->cg_iterations;
@@ -122,10 +122,10 @@ mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size)
   in.cg_max = sf->cg_max;
   in.cg_residual_max = sf->residual_max;
   in.surfaces = sc->output.surface.enabled;
-  in.surface_seconds = sim->surface_seconds;
-  in.surface_triangles = sim->surface_triangles;
-  in.surface_seconds_total = sim->surface_seconds_total;
-  in.surface_frames = sim->surface_frames;
+  in.surface_seconds = sim->out.surface_seconds;
+  in.surface_triangles = sim->out.surface_triangles;
+  in.surface_seconds_total = sim->out.surface_seconds_total;
+  in.surface_frames = sim->out.surface_frames;
   in.resampling = sc->resample.enabled;
   sim->stack->info(sim, &in); /* refinement and resampling */
   in.heat = sc->heat.enabled;

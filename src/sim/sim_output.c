@@ -17,17 +17,17 @@
 #include <string.h>
 
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
-  mpm_free(sim->frame_times);
-  mpm_free(sim->frame_files);
-  mpm_free(sim->stats);
-  mpm_free(sim->stats_forces);
+  mpm_free(sim->out.frame_times);
+  mpm_free(sim->out.frame_files);
+  mpm_free(sim->out.stats);
+  mpm_free(sim->out.stats_forces);
   const size_t n = (size_t)(records > sim->frame_count + 1 ? records : sim->frame_count + 1);
-  sim->frame_times = mpm_calloc(n, sizeof *sim->frame_times);
-  sim->frame_files = mpm_calloc(n, sizeof *sim->frame_files);
-  sim->stats = mpm_calloc(n, sizeof *sim->stats);
-  sim->stats_forces =
-      mpm_calloc(n * 3 * (size_t)sim->collider_count + 1, sizeof *sim->stats_forces);
-  if (!sim->frame_times || !sim->frame_files || !sim->stats || !sim->stats_forces)
+  sim->out.frame_times = mpm_calloc(n, sizeof *sim->out.frame_times);
+  sim->out.frame_files = mpm_calloc(n, sizeof *sim->out.frame_files);
+  sim->out.stats = mpm_calloc(n, sizeof *sim->out.stats);
+  sim->out.stats_forces =
+      mpm_calloc(n * 3 * (size_t)sim->collider_count + 1, sizeof *sim->out.stats_forces);
+  if (!sim->out.frame_times || !sim->out.frame_files || !sim->out.stats || !sim->out.stats_forces)
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory for output bookkeeping");
   return MPM_OK;
 }
@@ -51,7 +51,7 @@ mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
     }
   int lock = -1;
   mpm_status st = MPM_OK;
-  const int same = sim->output_lock >= 0 && mpm_same_file(dir, sim->output_dir);
+  const int same = sim->out.lock >= 0 && mpm_same_file(dir, sim->out.dir);
   if (!same) st = mpm_run_folder_lock(dir, &lock, &sim->error);
   if (st == MPM_OK) st = mpm_run_folder_claim(dir, (mpm_run_claim)how, keep, n, &sim->error);
   mpm_free(meshes);
@@ -61,8 +61,8 @@ mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
     return st;
   }
   if (!same) {
-    mpm_run_folder_unlock(sim->output_lock);
-    sim->output_lock = lock;
+    mpm_run_folder_unlock(sim->out.lock);
+    sim->out.lock = lock;
   }
   return MPM_OK;
 }
@@ -77,22 +77,22 @@ static mpm_status check_mode(mpm_sim *sim, const char *what, mpm_output_mode mod
 
 mpm_status mpm_sim_open_output(mpm_sim *sim, const char *dir, mpm_output_mode mode) {
   if (check_mode(sim, "mpm_sim_open_output", mode) != MPM_OK) return MPM_ERR_INVALID;
-  if (dir && strlen(dir) >= sizeof sim->output_dir)
+  if (dir && strlen(dir) >= sizeof sim->out.dir)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
   char target[MPM_PATH_MAX];
-  snprintf(target, sizeof target, "%s", dir ? dir : sim->output_dir);
+  snprintf(target, sizeof target, "%s", dir ? dir : sim->out.dir);
   mpm_status st = mpm_make_dirs(target, &sim->error);
   if (st == MPM_OK)
     st = mpm_sim_claim_output(
         sim, target, mode == MPM_OUTPUT_OVERWRITE ? MPM_RUN_CLAIM_OVERWRITE : MPM_RUN_CLAIM_NEW);
   if (st != MPM_OK) return st;
-  snprintf(sim->output_dir, sizeof sim->output_dir, "%s", target);
+  snprintf(sim->out.dir, sizeof sim->out.dir, "%s", target);
   st = mpm_sim_alloc_output(sim, 0);
   if (st != MPM_OK) return st;
   st = mpm_sim_write_scene_copy(sim);
   if (st != MPM_OK) return st;
-  sim->output_enabled = 1;
-  sim->frame_wall_start = mpm_wall_seconds();
+  sim->out.enabled = 1;
+  sim->out.frame_wall_start = mpm_wall_seconds();
   const int saved = mpm_sim_threads_enter(sim); /* the frame's stress loop is parallel */
   st = mpm_sim_write_frame(sim);
   mpm_sim_threads_leave(sim, saved);
@@ -169,7 +169,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
   /* the enrichment categories of the state written (the marks the next step will use) */
   if (has_domains && mpm_sim_all_particles(sim, &combined))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d",
-                         sim->written_frames);
+                         sim->out.written_frames);
   if (has_domains) {
     const mpm_status marked = mpm_sim_mark_enrichment(sim);
     if (marked != MPM_OK) {
@@ -230,7 +230,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
       (mpm_frame_fields){p, J, stress, sim->time, category, heat, melt, fields, cauchy, pressure};
   if (records && o->stats) { /* the run's figures (over every process) for stats.csv */
     mpm_diagnostics d = mpm_sim_diagnostics(sim);
-    mpm_stats_row *row = &sim->stats[frame];
+    mpm_stats_row *row = &sim->out.stats[frame];
     row->frame = frame;
     row->time = sim->time;
     const mpm_step_figures *sp = &sim->step_figures;
@@ -249,7 +249,7 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
       row->angular_momentum[k] = d.angular_momentum[k];
     }
     row->mass = d.mass;
-    row->wall_seconds = mpm_wall_seconds() - sim->frame_wall_start;
+    row->wall_seconds = mpm_wall_seconds() - sim->out.frame_wall_start;
     row->particles = p->count;
     const mpm_solver_figures *sf = &sim->solver_figures;
     const double steps = sf->steps > 0 ? (double)sf->steps : 1;
@@ -265,13 +265,13 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
             : 0;
     /* the colliders' mean force over the frame: the momentum they took over its time */
     const int nc = sim->collider_count;
-    double *force = sim->stats_forces + 3 * (size_t)frame * (size_t)nc;
+    double *force = sim->out.stats_forces + 3 * (size_t)frame * (size_t)nc;
     for (int k = 0; k < 3 * nc; ++k) force[k] = sp->sum > 0 ? sim->collider_frame[k] / sp->sum : 0;
     r.stats_rows = frame + 1;
   }
   st = sim->writer->frame(sim, &r);
   if (st != MPM_OK) goto done;
-  if (records) sim->written_frames++;
+  if (records) sim->out.written_frames++;
 done:
   mpm_particles_free(&combined);
   mpm_free(J);
@@ -284,9 +284,9 @@ done:
 }
 
 mpm_status mpm_sim_write_frame(mpm_sim *sim) {
-  if (sim->written_frames > sim->frame_count)
+  if (sim->out.written_frames > sim->frame_count)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "more frames than the scene has");
-  return write_frame(sim, sim->output_dir, sim->written_frames, 1);
+  return write_frame(sim, sim->out.dir, sim->out.written_frames, 1);
 }
 
 mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode mode,
@@ -300,7 +300,7 @@ mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode
   mpm_status st = mpm_make_dirs(dir, &sim->error);
   if (st != MPM_OK) return st;
   /* the run's own folder holds the run's record of its frames, which a one-off would break */
-  if (sim->output_enabled && mpm_same_file(dir, sim->output_dir))
+  if (sim->out.enabled && mpm_same_file(dir, sim->out.dir))
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "%s is this simulation's output folder: its frames there are the run's "
                          "own; write the one-off frame into another folder",

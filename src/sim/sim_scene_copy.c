@@ -38,7 +38,7 @@ char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
 mpm_status mpm_sim_write_scene_copy(mpm_sim *sim) {
   if (!sim->scene_copy) return MPM_OK; /* made from a scene struct: no JSON to keep */
   char path[MPM_PATH_MAX + 16];
-  snprintf(path, sizeof path, "%s/scene.json", sim->output_dir);
+  snprintf(path, sizeof path, "%s/scene.json", sim->out.dir);
   /* the scene run is that file itself (`mpm run out/scene.json -o out`): it is left as the
      user wrote it (renaming the copy over it would replace the user's file) */
   if (sim->scene.path[0] && mpm_same_file(path, sim->scene.path)) return MPM_OK;

@@ -141,10 +141,10 @@ mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const ch
   mpm_free(buf.vel);
   mpm_free(buf.mass);
   if (records) { /* the run's figures (mpm_sim_info); a one-off frame leaves them */
-    sim->surface_triangles = triangles;
-    sim->surface_seconds = mpm_wall_seconds() - t0;
-    sim->surface_seconds_total += sim->surface_seconds;
-    sim->surface_frames++;
+    sim->out.surface_triangles = triangles;
+    sim->out.surface_seconds = mpm_wall_seconds() - t0;
+    sim->out.surface_seconds_total += sim->out.surface_seconds;
+    sim->out.surface_frames++;
   }
   return st;
 }

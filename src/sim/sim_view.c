@@ -12,15 +12,15 @@
 
 /* The view's J and stress arrays for n particles: 10 arrays of capacity each in one block. */
 static mpm_real *derived_buffer(mpm_sim *sim, size_t n) {
-  if (n > sim->view_capacity || !sim->view_derived) {
+  if (n > sim->views.capacity || !sim->views.derived) {
     const size_t cap = n + n / 4 + 1; /* a split or a release adds particles: room to grow */
     mpm_real *b = mpm_alloc(10 * cap * sizeof(mpm_real));
     if (!b) return NULL;
-    mpm_keep_free(&sim->view_keep, sim->view_derived);
-    sim->view_derived = b;
-    sim->view_capacity = cap;
+    mpm_keep_free(&sim->views.keep, sim->views.derived);
+    sim->views.derived = b;
+    sim->views.capacity = cap;
   }
-  return sim->view_derived;
+  return sim->views.derived;
 }
 
 mpm_real mpm_sim_kirchhoff(const mpm_sim *sim, const mpm_particles *p, size_t i, mpm_real tau[9]) {
@@ -52,11 +52,11 @@ static void derive_stress(const mpm_sim *sim, const mpm_particles *p, mpm_real *
  * particle (NULL when out of memory). Every set whose arrays a view hands out frees them
  * through the simulation's keep from now on (mpm_sim_hold_particle_arrays). */
 static const mpm_particles *view_set(mpm_sim *sim) {
-  sim->particles.keep = sim->backup.keep = sim->view.keep = &sim->view_keep;
+  sim->particles.keep = sim->retry.backup.keep = sim->views.particles.keep = &sim->views.keep;
   if (sim->domains.active_count == 0) return &sim->particles;
-  if (mpm_sim_all_particles(sim, &sim->view)) return NULL;
-  sim->view.keep = &sim->view_keep; /* (a first copy initializes the set) */
-  return &sim->view;
+  if (mpm_sim_all_particles(sim, &sim->views.particles)) return NULL;
+  sim->views.particles.keep = &sim->views.keep; /* (a first copy initializes the set) */
+  return &sim->views.particles;
 }
 
 mpm_particle_view mpm_sim_particle_state(const mpm_sim *sim_in) {
@@ -87,20 +87,20 @@ mpm_particle_view mpm_sim_particle_state(const mpm_sim *sim_in) {
 mpm_particle_view mpm_sim_particles(const mpm_sim *sim_in) {
   mpm_sim *sim = (mpm_sim *)sim_in;
   mpm_particle_view v = mpm_sim_particle_state(sim);
-  const mpm_particles *p = sim->domains.active_count > 0 ? &sim->view : &sim->particles;
+  const mpm_particles *p = sim->domains.active_count > 0 ? &sim->views.particles : &sim->particles;
   mpm_real *derived = v.count || p->count == 0 ? derived_buffer(sim, p->count) : NULL;
   if (!derived) {
     memset(&v, 0, sizeof v);
     return v;
   }
   mpm_real *sigma[9];
-  for (int c = 0; c < 9; ++c) sigma[c] = derived + (size_t)(c + 1) * sim->view_capacity;
+  for (int c = 0; c < 9; ++c) sigma[c] = derived + (size_t)(c + 1) * sim->views.capacity;
   const int saved = mpm_sim_threads_enter(sim);
   derive_stress(sim, p, derived, sigma);
   mpm_sim_threads_leave(sim, saved);
   v.J = derived;
   for (int c = 0; c < 9; ++c) v.stress[c] = sigma[c];
-  v.stress_stride = sim->view_capacity * sizeof(mpm_real);
+  v.stress_stride = sim->views.capacity * sizeof(mpm_real);
   return v;
 }
 
@@ -113,17 +113,17 @@ mpm_domain_view mpm_sim_domain_view(const mpm_sim *sim_in) {
   v.first = sim->particles.count;
   if (s->corner_count == 0 || s->active_count == 0) return v;
   /* the active particles' corners, in the particle view's order (inactive slots left out) */
-  if (s->active_count > sim->view_corner_capacity || !sim->view_corner) {
+  if (s->active_count > sim->views.corner_capacity || !sim->views.corner) {
     const size_t cap = s->active_count + s->active_count / 4 + 1;
     uint32_t *b = mpm_alloc(8 * cap * sizeof *b);
     if (!b) return v;
-    mpm_keep_free(&sim->view_keep, sim->view_corner);
-    sim->view_corner = b;
-    sim->view_corner_capacity = cap;
+    mpm_keep_free(&sim->views.keep, sim->views.corner);
+    sim->views.corner = b;
+    sim->views.corner_capacity = cap;
   }
   size_t j = 0;
   for (size_t q = 0; q < s->particles.count; ++q)
-    if (s->active[q]) memcpy(sim->view_corner + 8 * j++, s->corner[q], 8 * sizeof(uint32_t));
+    if (s->active[q]) memcpy(sim->views.corner + 8 * j++, s->corner[q], 8 * sizeof(uint32_t));
   v.particles = j;
   v.corners = s->corner_count;
   for (int d = 0; d < 3; ++d) {
@@ -132,12 +132,12 @@ mpm_domain_view mpm_sim_domain_view(const mpm_sim *sim_in) {
     v.X[d] = s->cX[d];
   }
   v.enriched = s->enrich.enriched && s->enrich.valid ? s->enrich.enriched : NULL;
-  v.corner = sim->view_corner;
+  v.corner = sim->views.corner;
   return v;
 }
 
 void mpm_sim_hold_particle_arrays(mpm_sim *sim, int delta) {
-  if (delta) mpm_keep_hold(&sim->view_keep, delta > 0 ? 1 : -1);
+  if (delta) mpm_keep_hold(&sim->views.keep, delta > 0 ? 1 : -1);
 }
 
 int mpm_sim_collider_count(const mpm_sim *sim) {

@@ -91,7 +91,7 @@ static mpm_status stage_p2g(mpm_sim *sim, mpm_step_ctx *c) {
 /* Whether the step measures what the colliders take (only for stats.csv: a step without
  * colliders, or whose figures nobody writes, does no more work than before). */
 static int measures_colliders(const mpm_sim *sim, const mpm_step_ctx *c) {
-  return c->update.boundary.collider_count > 0 && sim->output_enabled && sim->scene.output.stats;
+  return c->update.boundary.collider_count > 0 && sim->out.enabled && sim->scene.output.stats;
 }
 
 /* Pose c's taken momentum to its collider's sum of the step (the poses are the active
