@@ -114,12 +114,3 @@ mpm_material mpm_material_at_temperature(const mpm_material *m, mpm_real plastic
   }
   return r;
 }
-
-void mpm_lame(double E, double nu, double *mu, double *lambda) {
-  *mu = E / (2.0 * (1.0 + nu));
-  *lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-}
-
-double mpm_young_from_lame(double mu, double lambda) {
-  return mu + lambda > 0 ? mu * (3 * lambda + 2 * mu) / (lambda + mu) : 0;
-}

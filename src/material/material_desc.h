@@ -50,10 +50,16 @@ typedef struct mpm_material_desc {
   int heat_keys; /* the scene gave one of the heat keys (they need `heat`) */
 } mpm_material_desc;
 
-/* Lamé parameters from E and nu, and Young's modulus back from them (material.c: the one place
- * the relations are written; 0 when mu + lambda is not positive, as a schedule that zeroes the
- * moduli makes them). */
-void mpm_lame(double E, double nu, double *mu, double *lambda);
-double mpm_young_from_lame(double mu, double lambda);
+/* Lamé parameters from E and nu, and Young's modulus back from them (the one place the relations
+ * are written; 0 when mu + lambda is not positive, as a schedule that zeroes the moduli makes
+ * them). */
+static inline void mpm_lame(double E, double nu, double *mu, double *lambda) {
+  *mu = E / (2.0 * (1.0 + nu));
+  *lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}
+
+static inline double mpm_young_from_lame(double mu, double lambda) {
+  return mu + lambda > 0 ? mu * (3 * lambda + 2 * mu) / (lambda + mu) : 0;
+}
 
 #endif
