@@ -153,3 +153,16 @@ void test_domain_match_corners(struct mpm_domain_set *s) {
       }
   mpm_domain_set_sync_particles(s);
 }
+
+const char *const test_block_json =
+    "{\"name\": \"block\", \"domain\": {\"min\": [0, 0, 0], \"max\": [0.5, 0.5, 0.5], \"dx\": "
+    "0.05},"
+    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
+    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
+    "  \"density\": 1000}],"
+    " \"bodies\": [{\"name\": \"b\", \"shape\": {\"type\": \"box\", \"center\": [0.25, 0.25, 0.25],"
+    "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"domains\": true}],"
+    " \"colliders\": [{\"name\": \"pusher\", \"shape\": {\"type\": \"sphere\", \"center\": [0.05, "
+    "0.05, 0.05],"
+    "  \"radius\": 0.02}, \"rule\": \"slip\", \"motion\": {\"velocity\": [0.5, 0, 0]},"
+    "  \"active\": [0.05, 1]}]}";

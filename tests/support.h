@@ -37,6 +37,10 @@ int test_cleanup(int failures);
 struct mpm_sim;
 struct mpm_sim *test_sim_from_json(const char *text, const char *name);
 
+/* A small elastic block at rest in zero gravity, with domains, and one moving sphere collider
+ * (the public API's and the allocator hook's tests). */
+extern const char *const test_block_json;
+
 /* The rest-state error (analysis/rest_error.h) of the simulation's domain particles against
  * their reference positions (from their corners' reference positions). */
 double test_domain_rest_error(const struct mpm_sim *sim);

@@ -11,20 +11,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-/* A small elastic block at rest in zero gravity, with domains, and one moving box collider. */
-static const char *const block_json =
-    "{\"name\": \"block\", \"domain\": {\"min\": [0, 0, 0], \"max\": [0.5, 0.5, 0.5], \"dx\": "
-    "0.05},"
-    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
-    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
-    "  \"density\": 1000}],"
-    " \"bodies\": [{\"name\": \"b\", \"shape\": {\"type\": \"box\", \"center\": [0.25, 0.25, 0.25],"
-    "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"domains\": true}],"
-    " \"colliders\": [{\"name\": \"pusher\", \"shape\": {\"type\": \"sphere\", \"center\": [0.05, "
-    "0.05, 0.05],"
-    "  \"radius\": 0.02}, \"rule\": \"slip\", \"motion\": {\"velocity\": [0.5, 0, 0]},"
-    "  \"active\": [0.05, 1]}]}";
-
 /* An embedding program's allocator: counts what it gives and takes back, and checks the
  * alignment the library asks for. */
 typedef struct counting_allocator {
@@ -75,7 +61,8 @@ static void test_allocator_hook(void **state) {
     if (k) assert_int_equal(mpm_set_allocator(&a), MPM_OK);
     mpm_sim *sim = NULL;
     char err[1024];
-    assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+    assert_int_equal(mpm_sim_create_from_json(test_block_json, NULL, &sim, err, sizeof err),
+                     MPM_OK);
     /* no change of allocator while the library holds memory */
     assert_int_equal(mpm_set_allocator(k ? NULL : &a), MPM_ERR_INVALID);
     assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);

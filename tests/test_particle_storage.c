@@ -8,7 +8,7 @@
  *     live-byte counter returns);
  *   - move through the free slot, a range owns no storage;
  *   - the moves that keep a particle whole (copy, append, assign, remove, and the migration's
- *     pack and unpack) carry every array: each value lands where the move says. */
+ *     pack and unpack, append by mask) carry every array: each value lands where the move says. */
 #include "support.h"
 #include "core/alloc.h"
 #include "core/particles.h"
@@ -207,6 +207,14 @@ static void test_moves_keep_particles_whole(void **state) {
   for (uint32_t i = 0; i < 40; ++i) all[i] = i;
   assert_int_equal(r.count, 40);
   check_values(&r, all);
+  /* those of a mask appended after them */
+  uint8_t keep[40] = {0};
+  keep[7] = keep[30] = 1;
+  assert_int_equal(mpm_particles_append_set(&r, &p, keep), 0);
+  const uint32_t tail[2] = {7, 30};
+  assert_int_equal(r.count, 42);
+  mpm_particles tail_set = mpm_particles_range(&r, 40, 2); /* the two appended */
+  check_values(&tail_set, tail);
   mpm_free(buf);
   mpm_particles_free(&p);
   mpm_particles_free(&q);

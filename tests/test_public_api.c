@@ -70,25 +70,11 @@ static void test_checkpoint_from_the_api(void **state) {
   mpm_sim_destroy(sim);
 }
 
-/* A small elastic block at rest in zero gravity, with domains, and one moving box collider. */
-static const char *const block_json =
-    "{\"name\": \"block\", \"domain\": {\"min\": [0, 0, 0], \"max\": [0.5, 0.5, 0.5], \"dx\": "
-    "0.05},"
-    " \"gravity\": [0, 0, 0], \"time\": {\"end\": 0.1, \"fps\": 20},"
-    " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
-    "  \"density\": 1000}],"
-    " \"bodies\": [{\"name\": \"b\", \"shape\": {\"type\": \"box\", \"center\": [0.25, 0.25, 0.25],"
-    "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\", \"domains\": true}],"
-    " \"colliders\": [{\"name\": \"pusher\", \"shape\": {\"type\": \"sphere\", \"center\": [0.05, "
-    "0.05, 0.05],"
-    "  \"radius\": 0.02}, \"rule\": \"slip\", \"motion\": {\"velocity\": [0.5, 0, 0]},"
-    "  \"active\": [0.05, 1]}]}";
-
 static void test_create_from_json(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
   char err[1024];
-  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_create_from_json(test_block_json, NULL, &sim, err, sizeof err), MPM_OK);
   mpm_particle_view v = mpm_sim_particles(sim);
   assert_true(v.count > 0); /* every particle has a domain: the view has them all */
   assert_int_equal(mpm_sim_frame_count(sim), 2);
@@ -129,7 +115,7 @@ static void test_set_threads(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
   char err[1024];
-  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_create_from_json(test_block_json, NULL, &sim, err, sizeof err), MPM_OK);
   assert_int_equal(mpm_sim_set_threads(sim, -1), MPM_ERR_INVALID);
   assert_non_null(strstr(mpm_sim_last_error(sim), "thread"));
   mpm_sim_destroy(sim);
@@ -187,7 +173,7 @@ static void test_view_state_and_strides(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
   char err[1024];
-  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_create_from_json(test_block_json, NULL, &sim, err, sizeof err), MPM_OK);
   const mpm_particle_view s = mpm_sim_particle_state(sim);
   assert_true(s.count > 0);
   assert_null(s.J);
@@ -293,7 +279,7 @@ static void test_set_velocities_and_positions(void **state) {
     if (v.id[i] == ids[3]) assert_true(at(&v, v.v[1], i) != 0);
   mpm_sim_destroy(sim);
   /* a particle with its domain on */
-  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_create_from_json(test_block_json, NULL, &sim, err, sizeof err), MPM_OK);
   v = mpm_sim_particle_state(sim);
   assert_int_equal(mpm_sim_set_velocities(sim, 1, v.id, vel), MPM_ERR_INVALID);
   assert_non_null(strstr(mpm_sim_last_error(sim), "has its domain on"));
@@ -596,7 +582,7 @@ static void test_collider_pose(void **state) {
   (void)state;
   mpm_sim *sim = NULL;
   char err[1024];
-  assert_int_equal(mpm_sim_create_from_json(block_json, NULL, &sim, err, sizeof err), MPM_OK);
+  assert_int_equal(mpm_sim_create_from_json(test_block_json, NULL, &sim, err, sizeof err), MPM_OK);
   assert_int_equal(mpm_sim_collider_count(sim), 1);
   mpm_collider_state c;
   assert_int_equal(mpm_sim_collider_pose(sim, 0, &c), MPM_OK);
@@ -673,8 +659,8 @@ static void folder_listing(const char *dir, char *out, size_t cap) {
 static void test_write_frame_to(void **state) {
   (void)state;
   char text[2048];
-  snprintf(text, sizeof text, "%.*s, \"output\": {\"ply\": true}}", (int)strlen(block_json) - 1,
-           block_json);
+  snprintf(text, sizeof text, "%.*s, \"output\": {\"ply\": true}}",
+           (int)strlen(test_block_json) - 1, test_block_json);
   char run[512], snap[512], held[512], written[512], listing[2048], path[700];
   snprintf(run, sizeof run, "%s", test_temp_dir("one_off_run"));
   snprintf(snap, sizeof snap, "%s/snapshots/a", test_temp_dir("one_off_snap"));

@@ -289,15 +289,29 @@ int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *ca
   return 0;
 }
 
+/* Every array of a set, looked up once for a loop of single-particle copies. */
+typedef struct particle_arrays {
+  mpm_real *real[MPM_PARTICLE_REAL_ARRAYS];
+  uint32_t *word[4];
+} particle_arrays;
+
+static particle_arrays arrays_of(const mpm_particles *p) {
+  particle_arrays a;
+  mpm_real **r[MPM_PARTICLE_REAL_ARRAYS];
+  mpm_particles_real_arrays((mpm_particles *)p, r);
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) a.real[k] = *r[k];
+  int_arrays((mpm_particles *)p, a.word);
+  return a;
+}
+
+static void copy_one(const particle_arrays *to, size_t j, const particle_arrays *from, size_t i) {
+  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) to->real[k][j] = from->real[k][i];
+  for (int k = 0; k < 4; ++k) to->word[k][j] = from->word[k][i];
+}
+
 void mpm_particles_copy(mpm_particles *dst, size_t j, const mpm_particles *src, size_t i) {
-  mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
-  mpm_particles_real_arrays((mpm_particles *)src, a);
-  mpm_particles_real_arrays(dst, b);
-  for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k) (*b[k])[j] = (*a[k])[i];
-  uint32_t *ia[4], *ib[4];
-  int_arrays((mpm_particles *)src, ia);
-  int_arrays(dst, ib);
-  for (int k = 0; k < 4; ++k) ib[k][j] = ia[k][i];
+  const particle_arrays to = arrays_of(dst), from = arrays_of(src);
+  copy_one(&to, j, &from, i);
 }
 
 long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i) {
@@ -307,6 +321,16 @@ long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i
   const size_t j = dst->count++;
   mpm_particles_copy(dst, j, src, i);
   return (long)j;
+}
+
+int mpm_particles_append_set(mpm_particles *dst, const mpm_particles *src, const uint8_t *keep) {
+  size_t n = 0;
+  for (size_t i = 0; i < src->count; ++i) n += !keep || keep[i];
+  if (dst->count + n > dst->capacity && mpm_particles_reserve(dst, dst->count + n)) return -1;
+  const particle_arrays to = arrays_of(dst), from = arrays_of(src);
+  for (size_t i = 0; i < src->count; ++i)
+    if (!keep || keep[i]) copy_one(&to, dst->count++, &from, i);
+  return 0;
 }
 
 int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src) {
@@ -329,10 +353,11 @@ int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src) {
 }
 
 void mpm_particles_remove(mpm_particles *p, const uint8_t *gone) {
+  const particle_arrays a = arrays_of(p);
   size_t w = 0;
   for (size_t i = 0; i < p->count; ++i) {
     if (gone[i]) continue;
-    if (w != i) mpm_particles_copy(p, w, p, i);
+    if (w != i) copy_one(&a, w, &a, i);
     ++w;
   }
   p->count = w;

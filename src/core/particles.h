@@ -99,6 +99,9 @@ int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *ca
  * particles with gone[i] set, the others keeping their order. */
 void mpm_particles_copy(mpm_particles *dst, size_t j, const mpm_particles *src, size_t i);
 long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i);
+/* Append the particles of src with keep[i] set (every one when keep is NULL), in order. 0, or -1
+ * when out of memory (dst as it was). */
+int mpm_particles_append_set(mpm_particles *dst, const mpm_particles *src, const uint8_t *keep);
 int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src);
 void mpm_particles_remove(mpm_particles *p, const uint8_t *gone);
 

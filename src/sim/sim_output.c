@@ -107,14 +107,10 @@ int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
   const mpm_particles *a = &sim->particles, *d = &sim->domains.particles;
   if (!all->x[0] && mpm_particles_init(all, a->count + sim->domains.active_count + 1)) return -1;
   all->count = 0;
-  for (int pass = 0; pass < 2; ++pass) {
-    const mpm_particles *p = pass ? d : a;
-    for (size_t i = 0; i < p->count; ++i) {
-      if (pass && !sim->domains.active[i]) continue;
-      if (mpm_particles_append(all, p, i) < 0) return -1;
-    }
-  }
-  return 0;
+  return mpm_particles_append_set(all, a, NULL) ||
+                 mpm_particles_append_set(all, d, sim->domains.active)
+             ? -1
+             : 0;
 }
 
 /* The first particle (in p's order) with a non-finite quantity of those a frame writes, as an
