@@ -3,7 +3,8 @@
  *
  * The truth is the JSON parser: a def and the hand-written text must give the same scene
  * structs (every field the def mirrors, compared bit for bit through mpm_scene_parse, which sees
- * the defaults no particle shows) and the same simulation (count, positions, velocities and
+ * the defaults no particle shows, and through mpm_scene_from_def, the tree the simulation is
+ * made of) and the same simulation (count, positions, velocities and
  * masses, bit for bit, after creation and after one frame). */
 #ifndef MPM_TEST_SCENE_DEF_SUPPORT_H
 #define MPM_TEST_SCENE_DEF_SUPPORT_H
@@ -213,14 +214,20 @@ static inline void assert_def_is_json(const mpm_scene_def *def, const char *json
   char *text = NULL;
   if (mpm_scene_def_to_json(def, &text, err, sizeof err) != MPM_OK) fail_msg("to_json: %s", err);
   char path[1100];
-  snprintf(path, sizeof path, "%s/<json>", base_dir ? base_dir : ".");
-  mpm_scene sa, sb;
+  snprintf(path, sizeof path, "%s/<def>", base_dir ? base_dir : ".");
+  mpm_scene sa, sb, sc;
   mpm_error e;
   if (mpm_scene_parse(text, path, &sa, &e) != MPM_OK) fail_msg("the def's JSON: %s", e.message);
   if (mpm_scene_parse(json, path, &sb, &e) != MPM_OK) fail_msg("the JSON: %s", e.message);
   assert_same_scene(&sa, &sb);
+  /* and the scene the simulation is made of: the def's tree, never printed and parsed */
+  if (mpm_scene_from_def(def, base_dir, &sc, NULL, &e) != MPM_OK)
+    fail_msg("the def: %s", e.message);
+  assert_same_scene(&sc, &sb);
+  assert_true(sc.source_hash != 0);
   mpm_scene_free(&sa);
   mpm_scene_free(&sb);
+  mpm_scene_free(&sc);
   mpm_free_string(text);
   /* the simulations */
   mpm_sim *a = NULL, *b = NULL;

@@ -210,6 +210,58 @@ static void test_scene_copy(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* The copy keeps every number's bits: 0.30000000000000004 is one bit above 0.3, which cJSON's own
+ * printer (15 digits, accepted within an epsilon) wrote as 0.3. From JSON text and from a def. */
+static void assert_copy_runs_the_same(mpm_sim *sim, const char *dir) {
+  if (mpm_sim_enable_output(sim, dir) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  char path[1200];
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  const char *text = read_all(path);
+  assert_non_null(text);
+  assert_non_null(strstr(text, "0.30000000000000004"));
+  mpm_sim *copy = NULL;
+  char err[1024];
+  if (mpm_sim_create_from_file(path, &copy, err, sizeof err) != MPM_OK) fail_msg("%s", err);
+  const mpm_particle_view a = mpm_sim_particles(sim), b = mpm_sim_particles(copy);
+  assert_int_equal(a.count, b.count);
+  assert_memory_equal(a.v[0], b.v[0], a.count * a.real_size);
+  assert_memory_equal(a.x[0], b.x[0], a.count * a.real_size);
+  mpm_sim_destroy(copy);
+}
+
+static void test_scene_copy_exact(void **state) {
+  (void)state;
+  static const char *const json =
+      "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.1},"
+      " \"time\": {\"end\": 0.1},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e4, \"nu\": 0.3,"
+      "  \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5],"
+      "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\","
+      "  \"velocity\": [0.30000000000000004, 0, 0]}]}";
+  mpm_sim *sim = NULL;
+  char err[1024];
+  if (mpm_sim_create_from_json(json, NULL, &sim, err, sizeof err) != MPM_OK) fail_msg("%s", err);
+  assert_copy_runs_the_same(sim, test_temp_dir("public_run_copy_json"));
+  mpm_sim_destroy(sim);
+
+  mpm_material_def m = mpm_material_def_default();
+  m.name = "m";
+  m.E = 1e4;
+  mpm_body_def box = mpm_body_def_default();
+  box.shape.center[0] = box.shape.center[1] = box.shape.center[2] = 0.5;
+  box.shape.half_extent[0] = box.shape.half_extent[1] = box.shape.half_extent[2] = 0.1;
+  box.velocity[0] = 0.30000000000000004;
+  mpm_scene_def def = mpm_scene_def_default();
+  def.domain.dx = 0.1;
+  def.time.end = 0.1;
+  def.materials = &m, def.material_count = 1;
+  def.bodies = &box, def.body_count = 1;
+  if (mpm_sim_create_from_def(&def, NULL, &sim, err, sizeof err) != MPM_OK) fail_msg("%s", err);
+  assert_copy_runs_the_same(sim, test_temp_dir("public_run_copy_def"));
+  mpm_sim_destroy(sim);
+}
+
 /* The rest-state error between two frame files (Zhu et al. 2017; `mpm error`): a frame against
  * itself is 0 with every particle matched; a rigidly moved copy (the frame one step later of a
  * body in free flight moves almost rigidly) is small; files that are not frames are refused with
@@ -332,6 +384,7 @@ int main(void) {
       cmocka_unit_test(test_warnings),
       cmocka_unit_test(test_next_dt),
       cmocka_unit_test(test_scene_copy),
+      cmocka_unit_test(test_scene_copy_exact),
       cmocka_unit_test(test_rest_error_frames),
       cmocka_unit_test(test_step_and_frame_agree),
       cmocka_unit_test(test_implicit_dt_fits_the_frame),

@@ -502,10 +502,11 @@ MPM_API mpm_refine_def mpm_refine_def_default(void);
 /// (MPM_DEF_HALFSPACE) _default(); this gives them for any type.
 MPM_API mpm_shape_def mpm_shape_def_default(mpm_def_shape_type type);
 
-/// Build the simulation of a def, as mpm_sim_create_from_json builds it from the def's JSON
-/// text (mpm_scene_def_to_json): mesh files resolve against `base_dir` (NULL: the current
-/// directory), and messages name the scene "<def>" (inside base_dir when given) and the field
-/// by its path. The def is not kept. On failure *out is NULL and err (of errlen bytes, may be
+/// Build the simulation of a def: the same scene, checks and simulation as mpm_sim_create_from_json
+/// makes from the def's JSON text (mpm_scene_def_to_json), with no text parsed on the way (the
+/// def's JSON tree is checked as a file's is): mesh files resolve against `base_dir` (NULL: the
+/// current directory), and messages name the scene "<def>" (inside base_dir when given) and the
+/// field by its path. The def is not kept. On failure *out is NULL and err (of errlen bytes, may be
 /// NULL) holds the message: MPM_ERR_INVALID for a NULL def, a NULL array with a nonzero count, a
 /// negative count, an enum value out of range, a material index out of range, a name longer
 /// than 63 bytes, a field that would have no effect (said at each struct) or an `active` window

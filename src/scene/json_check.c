@@ -127,6 +127,38 @@ const char *mpm_json_format_number(double v, char *buf, size_t cap) {
   return format_prec(v, 17, buf, cap);
 }
 
+/* Every number node of a tree that is the caller's becomes a raw node holding its exact text. */
+static int numbers_to_raw(cJSON *node) {
+  for (; node; node = node->next) {
+    if (cJSON_IsNumber(node)) {
+      char buf[64];
+      if (isfinite(node->valuedouble))
+        mpm_json_format_number(node->valuedouble, buf, sizeof buf);
+      else
+        snprintf(buf, sizeof buf, "null");
+      const size_t n = strlen(buf) + 1;
+      char *text = cJSON_malloc(n);
+      if (!text) return -1;
+      memcpy(text, buf, n);
+      node->type = cJSON_Raw;
+      node->valuestring = text; /* cJSON_Delete frees it */
+    } else if (numbers_to_raw(node->child) < 0) {
+      return -1;
+    }
+  }
+  return 0;
+}
+
+char *mpm_json_print_exact(const cJSON *root, int formatted) {
+  cJSON *copy = cJSON_Duplicate(root, 1);
+  if (!copy) return NULL;
+  char *text = NULL;
+  if (numbers_to_raw(copy) == 0)
+    text = formatted ? cJSON_Print(copy) : cJSON_PrintUnformatted(copy);
+  cJSON_Delete(copy);
+  return text;
+}
+
 const char *mpm_json_format_short(double v, char *buf, size_t cap) {
   return format_prec(v, 10, buf, cap);
 }

@@ -121,6 +121,13 @@ int mpm_json_check_syntax(mpm_json_ctx *c, const char *text, size_t len);
 /* The same for text that cJSON refused at `at` (its return_parse_end; NULL: the end). */
 void mpm_json_syntax_error(mpm_json_ctx *c, const char *text, size_t len, const char *at);
 
+/* The tree as JSON text (indented when `formatted`) with every number in its shortest exact form:
+ * cJSON's own printer writes 15 digits and accepts them within an epsilon, which can be one bit
+ * off, so a scene printed by it could run differently from the one it was printed from. A
+ * non-finite number is written as null. The text is cJSON's (free it with cJSON_free); NULL when
+ * out of memory. */
+char *mpm_json_print_exact(const cJSON *root, int formatted);
+
 /* "missing required key 'key'" at the current path; returns -1. */
 int mpm_json_missing(mpm_json_ctx *c, const char *key);
 

@@ -302,5 +302,20 @@ mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err);
 mpm_status mpm_scene_load_text(const char *path, mpm_scene *scene, char **text, mpm_error *err);
 mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages, mpm_scene *scene,
                            mpm_error *err);
+/* The same checks on a JSON tree already built (the scene def's), without its text: the source
+ * hash is left 0 for the caller, who holds the text the scene is kept as. */
+struct cJSON;
+mpm_status mpm_scene_parse_tree(const struct cJSON *root, const char *path_for_messages,
+                                mpm_scene *scene, mpm_error *err);
+
+/* A scene built in code (include/mpm/scene_def.h) as one validated scene (scene_def.c): the
+ * def's own checks, then the format's on the def's JSON tree, with no text parsed in between.
+ * Messages name the scene "<def>" ("BASE_DIR/<def>"), where mesh files resolve. The source hash
+ * is that of the tree's exact text, as if the def had been written to a file and read. *tree
+ * (when not NULL) receives the tree, for the output folder's copy of the scene (the caller's:
+ * cJSON_Delete it); NULL on failure. */
+struct mpm_scene_def;
+mpm_status mpm_scene_from_def(const struct mpm_scene_def *def, const char *base_dir,
+                              mpm_scene *scene, struct cJSON **tree, mpm_error *err);
 
 #endif

@@ -1,21 +1,25 @@
 /* scene_def.c - a scene built in code (include/mpm/scene_def.h): the defaults of the def
- * structs, the whole def written as the scene's JSON text (its parts: scene_def_write.c and
- * scene_def_options.c), and the simulation made from that text by mpm_sim_create_from_json, so
- * that every check and message of the scene format is the def's too (the format's key paths are
- * the def's field paths).
+ * structs, the whole def as the scene format's JSON tree (its parts: scene_def_write.c and
+ * scene_def_options.c), and the one validated scene made from that tree by the format's own
+ * reader (mpm_scene_parse_tree), so that every check and message of the scene format is the
+ * def's too (the format's key paths are the def's field paths). No text is parsed on the way;
+ * the text is printed only for mpm_scene_def_to_json, the source hash and the output folder's
+ * copy.
  *
- * Only what the JSON text cannot carry is checked by the def: NULL pointers and negative counts,
+ * Only what the JSON cannot carry is checked by the def: NULL pointers and negative counts,
  * enum values out of range, names longer than the format's 63 bytes (a C string has no length),
  * a material index out of range, and fields that the JSON leaves out for the object's model,
  * shape type, rule kind, integrator or switch yet were changed from their defaults. The format
  * refuses such keys because they would have no effect; dropping them silently would hide the
  * same mistake.
  *
- * Numbers are written with the fewest digits that read back as the same double, so a def and
- * its JSON make bit-identical simulations. A non-finite number is written as null, which the
- * format's check then names by its path. */
+ * Numbers are the def's doubles in the tree and are printed with the fewest digits that read
+ * back as the same double, so a def and its JSON text make bit-identical simulations. A
+ * non-finite number is null, which the format's check then names by its path. */
 #include "mpm/mpm.h"
 #include "core/alloc.h"
+#include "core/hash.h"
+#include "scene/json_check.h"
 #include "scene/scene.h"
 #include "scene/scene_def_parts.h"
 
@@ -315,7 +319,7 @@ mpm_status mpm_scene_def_to_json(const mpm_scene_def *def, char **json_out, char
   *json_out = NULL;
   cJSON *root = build(&c, def);
   if (!root) return c.status;
-  *json_out = cJSON_Print(root);
+  *json_out = mpm_json_print_exact(root, 1);
   cJSON_Delete(root);
   if (!*json_out) {
     if (err && errlen) snprintf(err, errlen, "<def>: out of memory printing the scene's JSON text");
@@ -328,43 +332,43 @@ void mpm_free_string(char *s) {
   cJSON_free(s); /* cJSON_Print allocated it, with cJSON's allocator */
 }
 
-/* mpm_sim_create_from_json names the scene "<json>" ("BASE/<json>" with a base_dir) at the
- * start of its messages: say "<def>" there, since the def is what the caller wrote. */
-static void relabel(const char *msg, const char *base_dir, char *err, size_t errlen) {
-  if (!err || !errlen) return;
-  static const char tag[] = "<json>";
-  const size_t tl = sizeof tag - 1;
-  size_t at = 0;
-  if (base_dir && base_dir[0]) {
-    const size_t bl = strlen(base_dir);
-    at = strncmp(msg, base_dir, bl) == 0 && msg[bl] == '/' ? bl + 1 : (size_t)-1;
-  }
-  if (at != (size_t)-1 && strncmp(msg + at, tag, tl) == 0)
-    snprintf(err, errlen, "%.*s<def>%s", (int)at, msg, msg + at + tl);
-  else
-    snprintf(err, errlen, "%s", msg);
-}
-
-mpm_status mpm_sim_create_from_def(const mpm_scene_def *def, const char *base_dir, mpm_sim **out,
-                                   char *err, size_t errlen) {
-  mpm_def_ctx c = {err, errlen, MPM_OK};
-  if (!out) {
-    mpm_def_fail(&c, "no place for the simulation given (out is NULL)");
-    return c.status;
-  }
-  *out = NULL;
+mpm_status mpm_scene_from_def(const mpm_scene_def *def, const char *base_dir, mpm_scene *scene,
+                              cJSON **tree, mpm_error *err) {
+  mpm_error local;
+  mpm_error_clear(&local);
+  if (tree) *tree = NULL;
+  mpm_scene_default(scene);
+  mpm_def_ctx c = {local.message, sizeof local.message, MPM_OK};
   cJSON *root = build(&c, def);
-  if (!root) return c.status;
-  char *text = cJSON_PrintUnformatted(root);
-  cJSON_Delete(root);
-  if (!text) {
-    if (err && errlen) snprintf(err, errlen, "<def>: out of memory printing the scene's JSON text");
-    return MPM_ERR_NOMEM;
+  if (!root) {
+    local.status = c.status;
+    if (err) *err = local;
+    return local.status;
   }
-  char msg[sizeof(((mpm_error *)0)->message) + MPM_PATH_MAX];
-  msg[0] = '\0';
-  const mpm_status st = mpm_sim_create_from_json(text, base_dir, out, msg, sizeof msg);
-  cJSON_free(text);
-  if (st != MPM_OK) relabel(msg, base_dir, err, errlen);
+  /* the scene's name in messages; its folder resolves the mesh files */
+  char path[MPM_PATH_MAX + 16];
+  if (base_dir && base_dir[0])
+    snprintf(path, sizeof path, "%.*s/<def>", MPM_PATH_MAX, base_dir);
+  else
+    snprintf(path, sizeof path, "<def>");
+  mpm_status st = mpm_scene_parse_tree(root, path, scene, &local);
+  if (st == MPM_OK) {
+    /* the hash a file holding the def's text would give (a checkpoint resumes the same scene) */
+    char *text = mpm_json_print_exact(root, 0);
+    if (text) {
+      scene->source_hash = mpm_fnv1a64(text, strlen(text));
+      cJSON_free(text);
+    } else {
+      mpm_scene_free(scene);
+      mpm_scene_default(scene);
+      st = mpm_error_set(&local, MPM_ERR_NOMEM, "%s: out of memory printing the scene's JSON text",
+                         path);
+    }
+  }
+  if (st == MPM_OK && tree)
+    *tree = root;
+  else
+    cJSON_Delete(root);
+  if (err) *err = local;
   return st;
 }

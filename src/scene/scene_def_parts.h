@@ -56,7 +56,8 @@ cJSON *mpm_def_add_object(mpm_def_writer *w, cJSON *parent, const char *key);
 cJSON *mpm_def_add_array(mpm_def_writer *w, cJSON *parent, const char *key);
 /* A new object appended to the array `arr` (NULL on failure, remembered). */
 cJSON *mpm_def_append_object(mpm_def_writer *w, cJSON *arr);
-/* Numbers with the fewest digits that read back as the same double; non-finite ones as null. */
+/* Numbers as number nodes (printed with their exact digits by mpm_json_print_exact); non-finite
+ * ones as null. */
 void mpm_def_add_number(mpm_def_writer *w, cJSON *obj, const char *key, double v);
 void mpm_def_add_vec3(mpm_def_writer *w, cJSON *obj, const char *key, const double v[3]);
 /* [[a, b], ...]: keyframes [time, factor] or profile points [radius, height]. */

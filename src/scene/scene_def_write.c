@@ -132,15 +132,10 @@ cJSON *mpm_def_append_object(mpm_def_writer *w, cJSON *arr) {
   return o;
 }
 
-/* cJSON's own printer writes 15 digits and accepts them within an epsilon, which can be one bit
- * off: the shortest round-trip form keeps a def and its JSON bit-identical. */
+/* A number node holds the def's double itself; a non-finite one is null, which the format's
+ * check names by its path. Printing goes through mpm_json_print_exact, which keeps the digits. */
 static cJSON *number_item(mpm_def_writer *w, double v) {
-  char buf[64];
-  if (isfinite(v))
-    mpm_json_format_number(v, buf, sizeof buf);
-  else
-    snprintf(buf, sizeof buf, "null");
-  cJSON *n = cJSON_CreateRaw(buf);
+  cJSON *n = isfinite(v) ? cJSON_CreateNumber(v) : cJSON_CreateNull();
   if (!n) w->nomem = 1;
   return n;
 }

@@ -425,39 +425,61 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   return 0;
 }
 
+/* The common start of a parse: the defaults, the path for messages and mesh files, and the name
+ * the path gives; 0, or -1 with the message when the path is too long. */
+static int begin(mpm_json_ctx *ctx, mpm_error *local, const char *path_for_messages,
+                 mpm_scene *scene) {
+  const char *file = path_for_messages ? path_for_messages : "<scene>";
+  mpm_error_clear(local);
+  mpm_json_ctx_init(ctx, file, local);
+  mpm_scene_default(scene);
+  if (strlen(file) >= sizeof scene->path) {
+    mpm_error_set(local, MPM_ERR_INVALID, "%.100s...: the scene path is longer than %d bytes", file,
+                  MPM_PATH_MAX - 1);
+    return -1;
+  }
+  snprintf(scene->path, sizeof scene->path, "%s", path_for_messages ? file : "");
+  if (path_for_messages) stem_of(file, scene->name, sizeof scene->name);
+  return 0;
+}
+
+/* On failure the scene is the defaults again, with nothing to free. */
+static mpm_status end(const mpm_error *local, mpm_scene *scene, mpm_error *err) {
+  if (local->status != MPM_OK) {
+    mpm_scene_free(scene);
+    mpm_scene_default(scene);
+  }
+  if (err) *err = *local;
+  return local->status;
+}
+
 mpm_status mpm_scene_parse(const char *json_text, const char *path_for_messages, mpm_scene *scene,
                            mpm_error *err) {
-  const char *file = path_for_messages ? path_for_messages : "<scene>";
   mpm_error local;
-  mpm_error_clear(&local);
   mpm_json_ctx ctx;
-  mpm_json_ctx_init(&ctx, file, &local);
-  mpm_scene_default(scene);
   if (!json_text) json_text = "";
-  scene->source_hash = mpm_fnv1a64(json_text, strlen(json_text));
-  if (strlen(file) >= sizeof scene->path) {
-    mpm_error_set(&local, MPM_ERR_INVALID, "%.100s...: the scene path is longer than %d bytes",
-                  file, MPM_PATH_MAX - 1);
-  } else {
-    snprintf(scene->path, sizeof scene->path, "%s", path_for_messages ? file : "");
-    if (path_for_messages) stem_of(file, scene->name, sizeof scene->name);
+  if (begin(&ctx, &local, path_for_messages, scene) == 0) {
     size_t len = strlen(json_text);
     if (mpm_json_check_syntax(&ctx, json_text, len) == 0) {
-      const char *end = NULL;
-      cJSON *root = cJSON_ParseWithLengthOpts(json_text, len + 1, &end, 1);
+      const char *end_at = NULL;
+      cJSON *root = cJSON_ParseWithLengthOpts(json_text, len + 1, &end_at, 1);
       if (!root)
-        mpm_json_syntax_error(&ctx, json_text, len, end);
+        mpm_json_syntax_error(&ctx, json_text, len, end_at);
       else
         parse_root(&ctx, root, scene);
       cJSON_Delete(root);
     }
   }
-  if (local.status != MPM_OK) {
-    mpm_scene_free(scene);
-    mpm_scene_default(scene);
-  }
-  if (err) *err = local;
-  return local.status;
+  scene->source_hash = mpm_fnv1a64(json_text, strlen(json_text));
+  return end(&local, scene, err);
+}
+
+mpm_status mpm_scene_parse_tree(const cJSON *root, const char *path_for_messages, mpm_scene *scene,
+                                mpm_error *err) {
+  mpm_error local;
+  mpm_json_ctx ctx;
+  if (begin(&ctx, &local, path_for_messages, scene) == 0) parse_root(&ctx, root, scene);
+  return end(&local, scene, err);
 }
 
 mpm_status mpm_scene_load(const char *path, mpm_scene *scene, mpm_error *err) {

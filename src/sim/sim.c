@@ -8,6 +8,8 @@
 #include "core/parallel.h"
 #include "scene/sample.h"
 
+#include <cjson/cJSON.h>
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -356,6 +358,18 @@ mpm_status mpm_sim_release_domains(mpm_sim *sim, const double lo[3], const doubl
   return st;
 }
 
+/* The simulation of a parsed scene, keeping `copy` (the output folder's scene.json) when made;
+ * the scene is freed either way. */
+static mpm_status create_keeping_copy(mpm_scene *scene, char *copy, mpm_sim **out, mpm_error *err) {
+  mpm_status st = mpm_sim_create_from_scene(scene, out, err);
+  mpm_scene_free(scene);
+  if (st == MPM_OK)
+    (*out)->scene_copy = copy;
+  else
+    mpm_free(copy);
+  return st;
+}
+
 mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char *errbuf,
                                     size_t errlen) {
   mpm_error err;
@@ -366,12 +380,7 @@ mpm_status mpm_sim_create_from_file(const char *scene_path, mpm_sim **out, char 
   if (st == MPM_OK) {
     char *copy = mpm_scene_copy_text(text, &scene);
     mpm_free(text);
-    st = mpm_sim_create_from_scene(&scene, out, &err);
-    mpm_scene_free(&scene);
-    if (st == MPM_OK)
-      (*out)->scene_copy = copy;
-    else
-      mpm_free(copy);
+    st = create_keeping_copy(&scene, copy, out, &err);
   }
   if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
   return st;
@@ -391,14 +400,30 @@ mpm_status mpm_sim_create_from_json(const char *json_text, const char *base_dir,
   *out = NULL;
   mpm_status st = json_text ? mpm_scene_parse(json_text, path, &scene, &err)
                             : mpm_error_set(&err, MPM_ERR_INVALID, "no scene text given (NULL)");
-  if (st == MPM_OK) {
-    char *copy = mpm_scene_copy_text(json_text, &scene);
-    st = mpm_sim_create_from_scene(&scene, out, &err);
-    mpm_scene_free(&scene);
-    if (st == MPM_OK)
-      (*out)->scene_copy = copy;
-    else
-      mpm_free(copy);
+  if (st == MPM_OK)
+    st = create_keeping_copy(&scene, mpm_scene_copy_text(json_text, &scene), out, &err);
+  if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
+  return st;
+}
+
+mpm_status mpm_sim_create_from_def(const mpm_scene_def *def, const char *base_dir, mpm_sim **out,
+                                   char *errbuf, size_t errlen) {
+  mpm_error err;
+  mpm_error_clear(&err);
+  mpm_status st;
+  if (!out) {
+    st = mpm_error_set(&err, MPM_ERR_INVALID,
+                       "<def>: no place for the simulation given (out is NULL)");
+  } else {
+    *out = NULL;
+    mpm_scene scene;
+    cJSON *tree = NULL; /* the def's tree, checked as a scene file's; kept as scene.json */
+    st = mpm_scene_from_def(def, base_dir, &scene, &tree, &err);
+    if (st == MPM_OK) {
+      char *copy = mpm_scene_copy_tree(tree, &scene);
+      cJSON_Delete(tree);
+      st = create_keeping_copy(&scene, copy, out, &err);
+    }
   }
   if (st != MPM_OK && errbuf && errlen) snprintf(errbuf, errlen, "%s", err.message);
   return st;

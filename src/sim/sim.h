@@ -288,9 +288,12 @@ mpm_status mpm_sim_write_frame(mpm_sim *sim);
 mpm_status mpm_sim_write_surfaces(mpm_sim *sim, const mpm_particles *p, const char *dir, int frame,
                                   int records);
 
-/* The output folder's copy of the scene (sim_scene_copy.c): the JSON text (or the scene file's)
- * with the mesh bodies' files made absolute, NULL when it cannot be read or is out of memory;
- * and writing sim->scene_copy as output_dir/scene.json (nothing without one). */
+/* The output folder's copy of the scene (sim_scene_copy.c): the JSON tree (the def's) or text
+ * (the scene file's) printed with its numbers exact and the mesh bodies' files made absolute
+ * (the tree is changed so), NULL when it cannot be read or is out of memory; and writing
+ * sim->scene_copy as output_dir/scene.json (nothing without one). */
+struct cJSON;
+char *mpm_scene_copy_tree(struct cJSON *root, const mpm_scene *scene);
 char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene);
 mpm_status mpm_sim_write_scene_copy(mpm_sim *sim);
 

@@ -1,12 +1,14 @@
 /* sim_scene_copy.c - the scene a run was made from, kept in its output folder as scene.json, so
  * that tools reading the folder later (`mpm render`, `mpm plot`) know the domain and the
- * colliders. The copy is made when the simulation is created from a scene file or JSON text,
- * with mesh files referred to by absolute path (the copy lives elsewhere, and the caller may
- * change its working directory), and written by mpm_sim_enable_output. */
+ * colliders. The copy is made when the simulation is created from a scene file, JSON text or a
+ * def, with its numbers exact (a run of the copy is the same run) and mesh files referred to by
+ * absolute path (the copy lives elsewhere, and the caller may change its working directory), and
+ * written by mpm_sim_enable_output. */
 #define _DEFAULT_SOURCE /* realpath */
 #include "sim/sim.h"
 #include "core/alloc.h"
 #include "io/run_folder.h"
+#include "scene/json_check.h"
 
 #include <cjson/cJSON.h>
 #include <limits.h>
@@ -14,8 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
-  cJSON *root = json_text ? cJSON_Parse(json_text) : NULL;
+char *mpm_scene_copy_tree(cJSON *root, const mpm_scene *scene) {
   if (!root) return NULL;
   const cJSON *bodies = cJSON_GetObjectItemCaseSensitive(root, "bodies");
   int i = 0;
@@ -28,10 +29,16 @@ char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
     if (!realpath(scene->bodies[i].shape.mesh_path, abs_path)) continue;
     cJSON_ReplaceItemInObjectCaseSensitive(shape, "file", cJSON_CreateString(abs_path));
   }
-  char *printed = cJSON_Print(root);
-  cJSON_Delete(root);
+  char *printed = mpm_json_print_exact(root, 1);
   char *out = printed ? mpm_strdup(printed) : NULL; /* the simulation frees it with mpm_free() */
   cJSON_free(printed);
+  return out;
+}
+
+char *mpm_scene_copy_text(const char *json_text, const mpm_scene *scene) {
+  cJSON *root = json_text ? cJSON_Parse(json_text) : NULL;
+  char *out = mpm_scene_copy_tree(root, scene);
+  cJSON_Delete(root);
   return out;
 }
 
