@@ -54,7 +54,7 @@ static void test_reorders_keep_the_layout(void **state) {
   (void)state;
   enum { N = 500 };
   mpm_particles p;
-  assert_int_equal(mpm_particles_init(&p, 16), 0);
+  assert_int_equal(mpm_particles_init(&p, 16), MPM_OK);
   fill(&p, N); /* grown from 16 by pushes: the block grew in place several times */
   uint32_t orig[N], perm[N], next[N], iscratch[N];
   for (uint32_t i = 0; i < N; ++i) orig[i] = i;
@@ -91,14 +91,14 @@ static void test_held_blocks_stay(void **state) {
   const size_t live0 = mpm_alloc_live_bytes();
   mpm_keep keep = {0};
   mpm_particles p;
-  assert_int_equal(mpm_particles_init(&p, 64), 0);
+  assert_int_equal(mpm_particles_init(&p, 64), MPM_OK);
   p.keep = &keep;
   fill(&p, 64);
   /* a holder has the arrays' pointers: growing must not free or move them */
   mpm_keep_hold(&keep, 1);
   const mpm_real *old_x = p.x[0], *old_F8 = p.F[8];
   const uint32_t *old_id = p.id;
-  assert_int_equal(mpm_particles_reserve(&p, 100000), 0);
+  assert_int_equal(mpm_particles_reserve(&p, 100000), MPM_OK);
   assert_ptr_not_equal(p.x[0], old_x);
   assert_true(keep.count > 0);
   for (size_t i = 0; i < 64; ++i) {
@@ -118,7 +118,7 @@ static void test_held_blocks_stay(void **state) {
   assert_int_equal(keep.count, 0);
   assert_true(mpm_alloc_live_bytes() < held);
   /* without a hold the block grows in place and nothing is kept */
-  assert_int_equal(mpm_particles_reserve(&p, 300000), 0);
+  assert_int_equal(mpm_particles_reserve(&p, 300000), MPM_OK);
   assert_int_equal(keep.count, 0);
   check(&p, orig);
   mpm_particles_free(&p);
@@ -133,7 +133,7 @@ static void test_fit_gives_back_spare_capacity(void **state) {
   const size_t live0 = mpm_alloc_live_bytes();
   enum { N = 140000 }; /* pushes from 16 double past it, to 262144 */
   mpm_particles p;
-  assert_int_equal(mpm_particles_init(&p, 16), 0);
+  assert_int_equal(mpm_particles_init(&p, 16), MPM_OK);
   fill(&p, N);
   static uint32_t orig[N + 1000];
   for (uint32_t i = 0; i < N + 1000; ++i) orig[i] = i;
@@ -142,16 +142,16 @@ static void test_fit_gives_back_spare_capacity(void **state) {
   p.keep = &keep;
   mpm_keep_hold(&keep, 1); /* held: nothing moves */
   const size_t capacity = p.capacity;
-  assert_int_equal(mpm_particles_fit(&p), 0);
+  assert_int_equal(mpm_particles_fit(&p), MPM_OK);
   assert_int_equal(p.capacity, capacity);
   mpm_keep_hold(&keep, -1);
   const size_t before = mpm_alloc_live_bytes();
-  assert_int_equal(mpm_particles_fit(&p), 0);
+  assert_int_equal(mpm_particles_fit(&p), MPM_OK);
   assert_true(p.capacity < capacity && p.capacity >= N + N / 16);
   assert_true(mpm_alloc_live_bytes() < before - 31 * (capacity - p.capacity) * sizeof(mpm_real));
   check(&p, orig);
   const size_t fitted = p.capacity;
-  assert_int_equal(mpm_particles_fit(&p), 0); /* nothing spare now */
+  assert_int_equal(mpm_particles_fit(&p), MPM_OK); /* nothing spare now */
   assert_int_equal(p.capacity, fitted);
   const mpm_real zero[3] = {0, 0, 0}; /* and it grows again */
   for (int i = 0; i < 20000; ++i) assert_true(mpm_particles_push(&p, zero, zero, 1, 1, 0, 0) >= 0);
@@ -179,9 +179,9 @@ static void check_values(mpm_particles *got, const uint32_t *orig) {
 static void test_moves_keep_particles_whole(void **state) {
   (void)state;
   mpm_particles p = {0}, q = {0}, r = {0};
-  assert_int_equal(mpm_particles_init(&p, 8), 0);
-  assert_int_equal(mpm_particles_init(&q, 4), 0);
-  assert_int_equal(mpm_particles_init(&r, 4), 0);
+  assert_int_equal(mpm_particles_init(&p, 8), MPM_OK);
+  assert_int_equal(mpm_particles_init(&q, 4), MPM_OK);
+  assert_int_equal(mpm_particles_init(&r, 4), MPM_OK);
   fill(&p, 40);
   /* pack particles 3, 17, 39, 0 and unpack them after two appended ones */
   const uint32_t idx[4] = {3, 17, 39, 0};
@@ -190,7 +190,7 @@ static void test_moves_keep_particles_whole(void **state) {
   mpm_particles_pack(&p, idx, 4, buf);
   assert_int_equal(mpm_particles_append(&q, &p, 5), 0);
   assert_int_equal(mpm_particles_append(&q, &p, 6), 1);
-  assert_int_equal(mpm_particles_unpack(&q, buf, 4), 0);
+  assert_int_equal(mpm_particles_unpack(&q, buf, 4), MPM_OK);
   const uint32_t want_q[6] = {5, 6, 3, 17, 39, 0};
   assert_int_equal(q.count, 6);
   check_values(&q, want_q);
@@ -202,7 +202,7 @@ static void test_moves_keep_particles_whole(void **state) {
   assert_int_equal(q.count, 4);
   check_values(&q, want_removed);
   /* a whole copy */
-  assert_int_equal(mpm_particles_assign(&r, &p), 0);
+  assert_int_equal(mpm_particles_assign(&r, &p), MPM_OK);
   uint32_t all[40];
   for (uint32_t i = 0; i < 40; ++i) all[i] = i;
   assert_int_equal(r.count, 40);
@@ -210,7 +210,7 @@ static void test_moves_keep_particles_whole(void **state) {
   /* those of a mask appended after them */
   uint8_t keep[40] = {0};
   keep[7] = keep[30] = 1;
-  assert_int_equal(mpm_particles_append_set(&r, &p, keep), 0);
+  assert_int_equal(mpm_particles_append_set(&r, &p, keep), MPM_OK);
   const uint32_t tail[2] = {7, 30};
   assert_int_equal(r.count, 42);
   mpm_particles tail_set = mpm_particles_range(&r, 40, 2); /* the two appended */

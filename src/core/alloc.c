@@ -154,26 +154,26 @@ void mpm_alloc_reset_peak(void) {
   atomic_store(&peak_bytes, atomic_load(&live_bytes));
 }
 
-int mpm_reserve(void **buf, size_t *cap, size_t need, size_t size) {
-  if (need <= *cap && *buf) return 0;
+mpm_status mpm_reserve(void **buf, size_t *cap, size_t need, size_t size) {
+  if (need <= *cap && *buf) return MPM_OK;
   mpm_free(*buf);
   const size_t n = need + need / 8 + 16;
   *buf = mpm_alloc(n * size);
   *cap = *buf ? n : 0;
-  return *buf ? 0 : -1;
+  return *buf ? MPM_OK : MPM_ERR_NOMEM;
 }
 
-int mpm_grow(void **buf, size_t *cap, size_t n, size_t size) {
-  if (n <= *cap) return 0;
+mpm_status mpm_grow(void **buf, size_t *cap, size_t n, size_t size) {
+  if (n <= *cap) return MPM_OK;
   size_t c = *cap ? *cap : 1024;
   while (c < n) c *= 2;
   void *b = mpm_alloc(c * size);
-  if (!b) return -1;
+  if (!b) return MPM_ERR_NOMEM;
   if (*buf && *cap) memcpy(b, *buf, *cap * size);
   mpm_free(*buf);
   *buf = b;
   *cap = c;
-  return 0;
+  return MPM_OK;
 }
 
 /* ---- growable blocks ---------------------------------------------------------------- */

@@ -6,6 +6,8 @@
 #ifndef MPM_CORE_ALLOC_H
 #define MPM_CORE_ALLOC_H
 
+#include "mpm/mpm.h"
+
 #include <stddef.h>
 
 void *mpm_alloc(size_t bytes); /* aligned to MPM_ALIGN, NULL on failure */
@@ -16,12 +18,12 @@ void mpm_free(void *p); /* NULL is fine */
 void *mpm_realloc(void *p, size_t bytes);
 char *mpm_strdup(const char *s); /* a copy of s, NULL on failure */
 /* Room for n items of `size` bytes in *buf, whose capacity is *cap items: doubled from 1024 as
- * needed, the contents kept. 0, or -1 when out of memory (*buf untouched). */
-int mpm_grow(void **buf, size_t *cap, size_t n, size_t size);
+ * needed, the contents kept. MPM_OK, or MPM_ERR_NOMEM when out of memory (*buf untouched). */
+mpm_status mpm_grow(void **buf, size_t *cap, size_t n, size_t size);
 /* Room for `need` items of `size` bytes in *buf, whose capacity is *cap items, without keeping
  * its contents (per-step tables rebuilt every time): a new buffer 1/8 larger than asked when it
- * is too small. 0, or -1 when out of memory (*buf NULL, *cap 0). */
-int mpm_reserve(void **buf, size_t *cap, size_t need, size_t size);
+ * is too small. MPM_OK, or MPM_ERR_NOMEM when out of memory (*buf NULL, *cap 0). */
+mpm_status mpm_reserve(void **buf, size_t *cap, size_t need, size_t size);
 /* Frees that wait while a caller holds the memory: a binding that gave an array's pointer to
  * garbage-collected code (the Python module's numpy views) holds the keep of its simulation,
  * and the arrays the engine would free meanwhile (a particle set grown, a view's buffer

@@ -46,17 +46,17 @@ void *mpm_arena_alloc(mpm_arena *a, size_t bytes) {
   return p;
 }
 
-int mpm_arena_reset(mpm_arena *a) {
+mpm_status mpm_arena_reset(mpm_arena *a) {
   const int overflowed = a->overflow_count > 0;
   free_overflow(a);
   a->used = 0;
   a->large_count = 0;
-  if (!overflowed) return 0;
+  if (!overflowed) return MPM_OK;
   /* grow to the peak, with room for some growth of the step */
   const size_t want = a->peak + a->peak / 8;
   mpm_free(a->base);
   a->base = mpm_alloc(want);
   a->capacity = a->base ? want : 0;
   a->grown++;
-  return a->base ? 0 : -1;
+  return a->base ? MPM_OK : MPM_ERR_NOMEM;
 }

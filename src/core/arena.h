@@ -11,6 +11,8 @@
 #ifndef MPM_CORE_ARENA_H
 #define MPM_CORE_ARENA_H
 
+#include "mpm/mpm.h"
+
 #include <stddef.h>
 
 #define MPM_ARENA_MAX_OVERFLOW 256
@@ -32,8 +34,8 @@ void mpm_arena_free(mpm_arena *a);
 void *mpm_arena_alloc(mpm_arena *a, size_t bytes);
 
 /* Take everything back. When the last round overflowed, the arena grows to its peak (so the
- * next round of the same size allocates nothing). 0, or -1 when growing ran out of memory (the
- * arena is then empty and still usable). */
-int mpm_arena_reset(mpm_arena *a);
+ * next round of the same size allocates nothing). MPM_OK, or MPM_ERR_NOMEM when growing ran out
+ * of memory (the arena is then empty and still usable). */
+mpm_status mpm_arena_reset(mpm_arena *a);
 
 #endif

@@ -1,7 +1,10 @@
 /* error.h - status codes and the error message that travels with them.
  *
  * Library code never exits: a function that can fail returns an mpm_status and writes a
- * message naming the file, key path, step or particle concerned into an mpm_error. */
+ * message naming the file, key path, step or particle concerned into an mpm_error. Internal
+ * functions that take no mpm_error return the status alone (MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory, MPM_ERR_INVALID and the like), and their caller writes the message; failures are
+ * positive, so callers test `!= MPM_OK`, never `< 0`. */
 #ifndef MPM_CORE_ERROR_H
 #define MPM_CORE_ERROR_H
 

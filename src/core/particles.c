@@ -46,13 +46,14 @@ mpm_particles mpm_particles_range(const mpm_particles *p, size_t begin, size_t c
 }
 
 /* An integer array grown to new_count, its first old_count items kept; the old one to keep. */
-static int regrow(void **ptr, size_t old_count, size_t new_count, size_t elem, mpm_keep *keep) {
+static mpm_status regrow(void **ptr, size_t old_count, size_t new_count, size_t elem,
+                         mpm_keep *keep) {
   void *q = mpm_alloc(new_count * elem);
-  if (!q) return -1;
+  if (!q) return MPM_ERR_NOMEM;
   if (*ptr && old_count) memcpy(q, *ptr, old_count * elem);
   mpm_keep_free(keep, *ptr);
   *ptr = q;
-  return 0;
+  return MPM_OK;
 }
 
 /* The slot stride for a capacity: whole 4 KiB pages plus 128 bytes (particles.h). */
@@ -78,22 +79,22 @@ static void poison_padding(const mpm_particles *p) {
     POISON(p->block + k * p->stride + p->capacity, (p->stride - p->capacity) * sizeof(mpm_real));
 }
 
-int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
-  if (capacity <= p->capacity) return 0;
+mpm_status mpm_particles_reserve(mpm_particles *p, size_t capacity) {
+  if (capacity <= p->capacity) return MPM_OK;
   const size_t stride = slot_stride(capacity);
   /* the integer arrays first: when the block cannot grow after them, they are merely larger */
   if (regrow((void **)&p->material, p->count, capacity, sizeof(int32_t), p->keep) ||
       regrow((void **)&p->body, p->count, capacity, sizeof(int32_t), p->keep) ||
       regrow((void **)&p->level, p->count, capacity, sizeof(int32_t), p->keep) ||
       regrow((void **)&p->id, p->count, capacity, sizeof(uint32_t), p->keep))
-    return -1;
+    return MPM_ERR_NOMEM;
   mpm_real *block;
   if (p->block) UNPOISON(p->block, block_bytes(p->stride));
   if (p->block && !(p->keep && p->keep->holds > 0)) {
     /* in place: the mapping grows (its pages move, no copy), then the arrays move up to their
        new slots, the top one first (each lands above every slot still to move) */
     block = mpm_block_grow(p->block, block_bytes(p->stride), block_bytes(stride));
-    if (!block) return -1;
+    if (!block) return MPM_ERR_NOMEM;
     for (int k = MPM_PARTICLE_REAL_ARRAYS - 1; k >= 0; --k) {
       const size_t slot = (size_t)(p->first + k);
       if (p->count)
@@ -102,7 +103,7 @@ int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
   } else {
     /* a new block (the first, or the old one is held by a view and must stay where it is) */
     block = mpm_block_alloc(block_bytes(stride));
-    if (!block) return -1;
+    if (!block) return MPM_ERR_NOMEM;
     mpm_real **arrays[MPM_PARTICLE_REAL_ARRAYS];
     mpm_particles_real_arrays(p, arrays);
     for (int k = 0; k < MPM_PARTICLE_REAL_ARRAYS; ++k)
@@ -115,14 +116,14 @@ int mpm_particles_reserve(mpm_particles *p, size_t capacity) {
   p->capacity = capacity;
   point_arrays(p);
   poison_padding(p);
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_particles_fit(mpm_particles *p) {
+mpm_status mpm_particles_fit(mpm_particles *p) {
   const size_t want = p->count + p->count / 16 + 16;
-  if (!p->block || want >= p->capacity || (p->keep && p->keep->holds > 0)) return 0;
+  if (!p->block || want >= p->capacity || (p->keep && p->keep->holds > 0)) return MPM_OK;
   const size_t stride = slot_stride(want), old = p->stride;
-  if (stride >= old) return 0; /* within the pages it has */
+  if (stride >= old) return MPM_OK; /* within the pages it has */
   mpm_real *block = p->block;
   UNPOISON(block, block_bytes(old));
   /* the arrays down to their new slots, the lowest first (each lands below every slot still to
@@ -138,7 +139,7 @@ int mpm_particles_fit(mpm_particles *p) {
       if (p->count) memmove(block + slot * old, block + slot * stride, p->count * sizeof(mpm_real));
     }
     poison_padding(p);
-    return -1;
+    return MPM_ERR_NOMEM;
   }
   p->block = fitted;
   p->stride = stride;
@@ -150,11 +151,11 @@ int mpm_particles_fit(mpm_particles *p) {
       regrow((void **)&p->body, p->count, want, sizeof(int32_t), p->keep) ||
       regrow((void **)&p->level, p->count, want, sizeof(int32_t), p->keep) ||
       regrow((void **)&p->id, p->count, want, sizeof(uint32_t), p->keep))
-    return -1;
-  return 0;
+    return MPM_ERR_NOMEM;
+  return MPM_OK;
 }
 
-int mpm_particles_init(mpm_particles *p, size_t capacity) {
+mpm_status mpm_particles_init(mpm_particles *p, size_t capacity) {
   memset(p, 0, sizeof *p);
   return mpm_particles_reserve(p, capacity < 16 ? 16 : capacity);
 }
@@ -276,17 +277,17 @@ int mpm_reorder_due(int64_t steps, int interval, size_t breaks, size_t n) {
   return (double)breaks > 0.1 * (double)n;
 }
 
-int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *capacity) {
+mpm_status mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *capacity) {
   const size_t cap = p->capacity;
-  if (*capacity >= cap) return 0;
+  if (*capacity >= cap) return MPM_OK;
   mpm_free(*scratch);
   *scratch = mpm_alloc(cap * sizeof(uint32_t));
   if (!*scratch) {
     *capacity = 0;
-    return -1;
+    return MPM_ERR_NOMEM;
   }
   *capacity = cap;
-  return 0;
+  return MPM_OK;
 }
 
 /* Every array of a set, looked up once for a loop of single-particle copies. */
@@ -323,23 +324,26 @@ long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i
   return (long)j;
 }
 
-int mpm_particles_append_set(mpm_particles *dst, const mpm_particles *src, const uint8_t *keep) {
+mpm_status mpm_particles_append_set(mpm_particles *dst, const mpm_particles *src,
+                                    const uint8_t *keep) {
   size_t n = 0;
   for (size_t i = 0; i < src->count; ++i) n += !keep || keep[i];
-  if (dst->count + n > dst->capacity && mpm_particles_reserve(dst, dst->count + n)) return -1;
+  if (dst->count + n > dst->capacity && mpm_particles_reserve(dst, dst->count + n))
+    return MPM_ERR_NOMEM;
   const particle_arrays to = arrays_of(dst), from = arrays_of(src);
   for (size_t i = 0; i < src->count; ++i)
     if (!keep || keep[i]) copy_one(&to, dst->count++, &from, i);
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src) {
+mpm_status mpm_particles_assign(mpm_particles *dst, const mpm_particles *src) {
   /* a copy may become the particles (the guard's restore swaps them): it always has arrays */
   const size_t want = src->capacity > 16 ? src->capacity : 16;
-  if ((dst->capacity < src->count || !dst->capacity) && mpm_particles_reserve(dst, want)) return -1;
+  if ((dst->capacity < src->count || !dst->capacity) && mpm_particles_reserve(dst, want))
+    return MPM_ERR_NOMEM;
   dst->count = 0;
   const size_t n = src->count;
-  if (!n) return 0;
+  if (!n) return MPM_OK;
   mpm_real **a[MPM_PARTICLE_REAL_ARRAYS], **b[MPM_PARTICLE_REAL_ARRAYS];
   mpm_particles_real_arrays((mpm_particles *)src, a);
   mpm_particles_real_arrays(dst, b);
@@ -349,7 +353,7 @@ int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src) {
   int_arrays(dst, ib);
   for (int k = 0; k < 4; ++k) memcpy(ib[k], ia[k], n * sizeof(uint32_t));
   dst->count = n;
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_particles_remove(mpm_particles *p, const uint8_t *gone) {
@@ -381,8 +385,8 @@ void mpm_particles_pack(const mpm_particles *p, const uint32_t *idx, size_t n, v
   }
 }
 
-int mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n) {
-  if (p->count + n > p->capacity && mpm_particles_reserve(p, p->count + n)) return -1;
+mpm_status mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n) {
+  if (p->count + n > p->capacity && mpm_particles_reserve(p, p->count + n)) return MPM_ERR_NOMEM;
   mpm_real **a[MPM_PARTICLE_REAL_ARRAYS];
   uint32_t *ia[4];
   mpm_particles_real_arrays(p, a);
@@ -395,5 +399,5 @@ int mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n) {
     for (int k = 0; k < 4; ++k, in += sizeof(uint32_t)) memcpy(&ia[k][j], in, sizeof(uint32_t));
   }
   p->count += n;
-  return 0;
+  return MPM_OK;
 }

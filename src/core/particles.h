@@ -17,6 +17,7 @@
 #define MPM_CORE_PARTICLES_H
 
 #include "core/real.h"
+#include "mpm/mpm.h"
 
 #include <stddef.h>
 #include <stdint.h>
@@ -55,14 +56,16 @@ typedef struct mpm_particles {
 /* All real-valued component arrays, for loops that treat them alike (permute, grow). */
 #define MPM_PARTICLE_REAL_ARRAYS 31
 
-int mpm_particles_init(mpm_particles *p, size_t capacity); /* 0 on success */
+/* An empty set with room for `capacity` particles (at least 16); room for `capacity` in all, the
+ * particles kept. Each MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_particles_init(mpm_particles *p, size_t capacity);
 void mpm_particles_free(mpm_particles *p);
-int mpm_particles_reserve(mpm_particles *p, size_t capacity);
+mpm_status mpm_particles_reserve(mpm_particles *p, size_t capacity);
 /* Give back the capacity past count + count / 16 (+ 16) when whole pages of every array are
  * spare: a set sampled by appending grows by doubling, and up to half of it can lie unused.
- * Nothing while a view holds the arrays. 0, or -1 (out of memory: the set as it was, or with
- * larger integer arrays than needed). */
-int mpm_particles_fit(mpm_particles *p);
+ * Nothing while a view holds the arrays. MPM_OK, or MPM_ERR_NOMEM when out of memory (the set as
+ * it was, or with larger integer arrays than needed). */
+mpm_status mpm_particles_fit(mpm_particles *p);
 
 /* Append one particle at rest state (F = I, B = 0, xc = 0, level 0, temperature 0); returns its
  * index or -1 on OOM. */
@@ -89,28 +92,30 @@ size_t mpm_order_breaks(const uint32_t *perm, size_t n);
  * mpm_order_breaks). */
 int mpm_reorder_due(int64_t steps, int interval, size_t breaks, size_t n);
 /* Room in *scratch for the permute's per-particle integers, p's capacity of them (*capacity:
- * what it holds, grown when smaller). 0, or -1 when out of memory. */
-int mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *capacity);
+ * what it holds, grown when smaller). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_particles_scratch(const mpm_particles *p, uint32_t **scratch, size_t *capacity);
 
 /* Particle moves that keep every array together (a particle's state never stays behind: its
  * reals, material, body, type and id move as one). Copy particle i of src over slot j of dst
  * (dst may be src); append particle i of src to dst (grown as needed: its index, or -1 when out
- * of memory); make dst a copy of the whole of src (grown as needed: 0, or -1); remove the
+ * of memory); make dst a copy of the whole of src (grown as needed: MPM_OK, or MPM_ERR_NOMEM);
+ * remove the
  * particles with gone[i] set, the others keeping their order. */
 void mpm_particles_copy(mpm_particles *dst, size_t j, const mpm_particles *src, size_t i);
 long mpm_particles_append(mpm_particles *dst, const mpm_particles *src, size_t i);
-/* Append the particles of src with keep[i] set (every one when keep is NULL), in order. 0, or -1
- * when out of memory (dst as it was). */
-int mpm_particles_append_set(mpm_particles *dst, const mpm_particles *src, const uint8_t *keep);
-int mpm_particles_assign(mpm_particles *dst, const mpm_particles *src);
+/* Append the particles of src with keep[i] set (every one when keep is NULL), in order. MPM_OK,
+ * or MPM_ERR_NOMEM when out of memory (dst as it was). */
+mpm_status mpm_particles_append_set(mpm_particles *dst, const mpm_particles *src,
+                                    const uint8_t *keep);
+mpm_status mpm_particles_assign(mpm_particles *dst, const mpm_particles *src);
 void mpm_particles_remove(mpm_particles *p, const uint8_t *gone);
 
 /* Migration between processes: particles idx[0 .. n) of p packed into buf
  * (n mpm_particles_packed_bytes() bytes: every array of each), and n packed particles appended
- * to p as they were (0, or -1 when out of memory: p as it was). */
+ * to p as they were (MPM_OK, or MPM_ERR_NOMEM when out of memory: p as it was). */
 size_t mpm_particles_packed_bytes(void);
 void mpm_particles_pack(const mpm_particles *p, const uint32_t *idx, size_t n, void *buf);
-int mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n);
+mpm_status mpm_particles_unpack(mpm_particles *p, const void *buf, size_t n);
 
 /* Move particle src[k] to slot dest[k] in every array, k < n, where dest is a permutation of src
  * (the particles at those slots trade places; the others stay), through the free slot and
