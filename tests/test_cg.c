@@ -69,8 +69,8 @@ static void make(system_t *s, double scale_spread, uint64_t seed) {
   for (int c = 0; c < 3; ++c) s->pos[c] = calloc(N, sizeof(mpm_real));
   mpm_dofs_init(&s->d);
   mpm_dofs_begin_layout(&s->d);
-  assert_int_equal(mpm_dofs_add_corners(&s->d, N, (const mpm_real *const *)s->pos), 0);
-  assert_int_equal(mpm_dofs_end_layout(&s->d, MPM_DOF_V), 0);
+  assert_int_equal(mpm_dofs_add_corners(&s->d, N, (const mpm_real *const *)s->pos), MPM_OK);
+  assert_int_equal(mpm_dofs_end_layout(&s->d, MPM_DOF_V), MPM_OK);
 }
 
 static void release(system_t *s) {
@@ -100,7 +100,7 @@ static int solve(system_t *s, int jacobi, int projected, double tol, mpm_cg_resu
   const mpm_cg_options o = {tol, 2000, 0, 0, NULL, NULL, 0};
   assert_int_equal(mpm_cg_solve(&s->d, apply, projected ? project : NULL, s, jacobi ? diag : NULL,
                                 b, x, &o, res),
-                   0);
+                   MPM_OK);
   double e = 0, xn = 0;
   for (int i = 0; i < N; ++i)
     for (int c = 0; c < 3; ++c) {

@@ -38,11 +38,11 @@ static void fixture_make(fixture *f) {
   const mpm_kernel k = mpm_kernel_make(MPM_KERNEL_QUADRATIC, f->sparse.dx, f->sparse.dx);
   mpm_arena scratch;
   mpm_arena_init(&scratch);
-  assert_int_equal(f->sparse.ops->activate(&f->sparse, &k, 1, &p, &scratch), 0);
+  assert_int_equal(f->sparse.ops->activate(&f->sparse, &k, 1, &p, &scratch), MPM_OK);
   mpm_arena_free(&scratch);
   mpm_particles_free(&p);
   const int n[3] = {5, 3, 4};
-  assert_int_equal(mpm_grid_init_dense(&f->dense, 1, origin, (mpm_real)0.025, n), 0);
+  assert_int_equal(mpm_grid_init_dense(&f->dense, 1, origin, (mpm_real)0.025, n), MPM_OK);
   uint64_t rng = 7;
   for (int d = 0; d < 3; ++d) {
     f->cx[d] = malloc(CORNERS * sizeof(mpm_real));
@@ -50,10 +50,10 @@ static void fixture_make(fixture *f) {
   }
   mpm_dofs_init(&f->d);
   mpm_dofs_begin_layout(&f->d);
-  assert_int_equal(mpm_dofs_add_grid(&f->d, &f->sparse), 0);
-  assert_int_equal(mpm_dofs_add_grid(&f->d, &f->dense), 0);
-  assert_int_equal(mpm_dofs_add_corners(&f->d, CORNERS, (const mpm_real *const *)f->cx), 0);
-  assert_int_equal(mpm_dofs_end_layout(&f->d, MPM_DOF_ALL), 0);
+  assert_int_equal(mpm_dofs_add_grid(&f->d, &f->sparse), MPM_OK);
+  assert_int_equal(mpm_dofs_add_grid(&f->d, &f->dense), MPM_OK);
+  assert_int_equal(mpm_dofs_add_corners(&f->d, CORNERS, (const mpm_real *const *)f->cx), MPM_OK);
+  assert_int_equal(mpm_dofs_end_layout(&f->d, MPM_DOF_ALL), MPM_OK);
 }
 
 static void fixture_free(fixture *f) {
@@ -148,11 +148,11 @@ static void test_reductions(void **state) {
       assert_close(y[c][i], (mpm_real)0.5 * b[c][i] - a[c][i], TOL(1e-6, 1e-15));
   /* a bigger layout resizes the vectors */
   mpm_dofs_begin_layout(&f.d);
-  assert_int_equal(mpm_dofs_add_grid(&f.d, &f.sparse), 0);
-  assert_int_equal(mpm_dofs_add_grid(&f.d, &f.dense), 0);
-  assert_int_equal(mpm_dofs_add_grid(&f.d, &f.dense), 0);
-  assert_int_equal(mpm_dofs_add_corners(&f.d, CORNERS, (const mpm_real *const *)f.cx), 0);
-  assert_int_equal(mpm_dofs_end_layout(&f.d, MPM_DOF_MASS | MPM_DOF_V), 0);
+  assert_int_equal(mpm_dofs_add_grid(&f.d, &f.sparse), MPM_OK);
+  assert_int_equal(mpm_dofs_add_grid(&f.d, &f.dense), MPM_OK);
+  assert_int_equal(mpm_dofs_add_grid(&f.d, &f.dense), MPM_OK);
+  assert_int_equal(mpm_dofs_add_corners(&f.d, CORNERS, (const mpm_real *const *)f.cx), MPM_OK);
+  assert_int_equal(mpm_dofs_end_layout(&f.d, MPM_DOF_MASS | MPM_DOF_V), MPM_OK);
   assert_null(f.d.f[0]);
   a = mpm_dofs_vector(&f.d, "r");
   for (size_t i = 0; i < f.d.count; ++i) /* the whole new range is there (values are stale) */
@@ -218,8 +218,8 @@ static void test_wall_band(void **state) {
   const int cells = 20, wall = 3;
   mpm_grid coarse, fine;
   const int n0[3] = {cells + 3, 2, 2}, n1[3] = {2 * cells + 5, 2, 2};
-  assert_int_equal(mpm_grid_init_dense(&coarse, 0, origin, dx, n0), 0);
-  assert_int_equal(mpm_grid_init_dense(&fine, 1, origin, dx / 2, n1), 0);
+  assert_int_equal(mpm_grid_init_dense(&coarse, 0, origin, dx, n0), MPM_OK);
+  assert_int_equal(mpm_grid_init_dense(&fine, 1, origin, dx / 2, n1), MPM_OK);
   mpm_real *cx[3], line[64];
   for (int k = 0; k < 64; ++k) line[k] = origin[0] + dx * (mpm_real)(k - 4) * (mpm_real)0.37;
   mpm_real zero[64] = {0}, mid[64];
@@ -231,10 +231,10 @@ static void test_wall_band(void **state) {
   mpm_dofs d;
   mpm_dofs_init(&d);
   mpm_dofs_begin_layout(&d);
-  assert_int_equal(mpm_dofs_add_grid(&d, &coarse), 0);
-  assert_int_equal(mpm_dofs_add_grid(&d, &fine), 0);
-  assert_int_equal(mpm_dofs_add_corners(&d, 64, (const mpm_real *const *)cx), 0);
-  assert_int_equal(mpm_dofs_end_layout(&d, MPM_DOF_ALL), 0);
+  assert_int_equal(mpm_dofs_add_grid(&d, &coarse), MPM_OK);
+  assert_int_equal(mpm_dofs_add_grid(&d, &fine), MPM_OK);
+  assert_int_equal(mpm_dofs_add_corners(&d, 64, (const mpm_real *const *)cx), MPM_OK);
+  assert_int_equal(mpm_dofs_end_layout(&d, MPM_DOF_ALL), MPM_OK);
   mpm_dofs_clear(&d, MPM_DOF_ALL);
   for (size_t i = 0; i < d.count; ++i) {
     d.mass[i] = 1;

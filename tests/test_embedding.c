@@ -45,7 +45,7 @@ static void build(setup *s, mpm_kernel_kind kind, uint64_t seed) {
   for (int d = 0; d < 3; ++d) s->x[d] = malloc(CARRIERS * sizeof(mpm_real));
   s->key = malloc(CARRIERS * sizeof *s->key);
   mpm_embedding_init(&s->E);
-  assert_int_equal(mpm_embedding_layout(&s->E, CARRIERS, NULL, 64), 0);
+  assert_int_equal(mpm_embedding_layout(&s->E, CARRIERS, NULL, 64), MPM_OK);
   for (int a = 0; a < CARRIERS; ++a) {
     mpm_real xr[3];
     for (int d = 0; d < 3; ++d) {
@@ -163,7 +163,7 @@ static void test_schedule(void **state) {
   mpm_real *u[1] = {serial};
   mpm_embedding_scatter(&s.E, 1, c, u);
   s.key[7] = -1; /* row 7 takes no part */
-  assert_int_equal(mpm_embedding_schedule(&s.E, s.key, 125, s.colour), 0);
+  assert_int_equal(mpm_embedding_schedule(&s.E, s.key, 125, s.colour), MPM_OK);
   mpm_set_threads(1);
   memset(one, 0, sizeof one);
   u[0] = one;
@@ -185,7 +185,7 @@ static void test_identity_rows(void **state) {
   mpm_embedding E;
   mpm_embedding_init(&E);
   const uint32_t len[4] = {1, 1, 2, 1};
-  assert_int_equal(mpm_embedding_layout(&E, 4, len, 0), 0);
+  assert_int_equal(mpm_embedding_layout(&E, 4, len, 0), MPM_OK);
   mpm_embedding_push(&E, 0, 5, 1);
   mpm_embedding_push(&E, 1, 2, 1);
   mpm_embedding_push(&E, 2, 2, (mpm_real)0.25); /* a T-junction-like row of two parents */

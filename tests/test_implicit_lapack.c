@@ -40,7 +40,7 @@ static void check_system(mpm_sim *sim, int constrained, const char *what) {
     walls.wall_hi[0] = (mpm_real)(0.62 + 0.1 - 0.5 * sim->scene.dx);
     walls.wall_rule = constrained == 1 ? MPM_BOUNDARY_SLIP : MPM_BOUNDARY_STICKY;
     s.boundary = &walls;
-    assert_int_equal(mpm_implicit_constraints(&s, x), 0);
+    assert_int_equal(mpm_implicit_constraints(&s, x), MPM_OK);
     assert_true(s.constraint_count > 0);
   }
   /* the unknowns: the massive DOFs */
@@ -105,7 +105,7 @@ static void check_system(mpm_sim *sim, int constrained, const char *what) {
   assert_int_equal(mpm_cg_solve(d, apply_fn,
                                 constrained ? (mpm_cg_project_fn)mpm_implicit_project : NULL, &s,
                                 diag, b, x, &o, &r),
-                   0);
+                   MPM_OK);
   if (!r.converged)
     fail_msg("%s: CG stopped at relative residual %.3g after %d iterations", what,
              r.residual / r.residual0, r.iterations);

@@ -37,9 +37,9 @@ static void multigrid_system(mpm_sim *sim, double dt, mpm_implicit *s) {
   assert_non_null(v);
   for (size_t i = 0; i < d->count; ++i) /* falling at 1 m/s into whatever holds it */
     for (int c = 0; c < 3; ++c) v[c][i] = c == 1 ? -1 : 0;
-  assert_int_equal(mpm_implicit_constraints(s, v), 0);
-  assert_int_equal(mpm_implicit_multigrid_prepare(s), 0);
-  assert_int_equal(mpm_implicit_multigrid_build(s), 0);
+  assert_int_equal(mpm_implicit_constraints(s, v), MPM_OK);
+  assert_int_equal(mpm_implicit_multigrid_prepare(s), MPM_OK);
+  assert_int_equal(mpm_implicit_multigrid_build(s), MPM_OK);
 }
 
 /* The finest level's rows as a DOF vector and back. */

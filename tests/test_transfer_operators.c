@@ -74,13 +74,13 @@ static void world_make(world *w, mpm_kernel_kind kind, mpm_transfer_kind transfe
   if (grid == MPM_GRID_SPARSE)
     mpm_grid_init_sparse(&w->grid, 0, ORIGIN, DX);
   else
-    assert_int_equal(mpm_grid_init_dense(&w->grid, 0, ORIGIN, DX, n), 0);
+    assert_int_equal(mpm_grid_init_dense(&w->grid, 0, ORIGIN, DX, n), MPM_OK);
   mpm_arena_init(&w->scratch);
-  assert_int_equal(w->grid.ops->activate(&w->grid, &t->kernel, 2, &w->p, &w->scratch), 0);
+  assert_int_equal(w->grid.ops->activate(&w->grid, &t->kernel, 2, &w->p, &w->scratch), MPM_OK);
   mpm_dofs_init(&w->dofs);
   mpm_dofs_begin_layout(&w->dofs);
-  assert_int_equal(mpm_dofs_add_grid(&w->dofs, &w->grid), 0);
-  assert_int_equal(mpm_dofs_end_layout(&w->dofs, MPM_DOF_ALL), 0);
+  assert_int_equal(mpm_dofs_add_grid(&w->dofs, &w->grid), MPM_OK);
+  assert_int_equal(mpm_dofs_end_layout(&w->dofs, MPM_DOF_ALL), MPM_OK);
   mpm_dofs_clear(&w->dofs, MPM_DOF_ALL);
   w->val = mpm_dofs_grid_values(&w->dofs, &w->grid);
 }

@@ -61,27 +61,27 @@ static mpm_dof_segment *push_segment(mpm_dofs *d, size_t count) {
   return s;
 }
 
-int mpm_dofs_add_grid(mpm_dofs *d, mpm_grid *g) {
+mpm_status mpm_dofs_add_grid(mpm_dofs *d, mpm_grid *g) {
   mpm_dof_segment *s = push_segment(d, g->ops->node_count(g));
-  if (!s) return -1;
+  if (!s) return MPM_ERR_INVALID;
   s->kind = MPM_DOF_GRID_NODE;
   s->level = g->level;
   s->grid = g;
   s->boundary_depth = R_(0.5) * g->dx;
   g->dof_begin = s->begin;
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_dofs_add_corners(mpm_dofs *d, size_t count, const mpm_real *const x[3]) {
+mpm_status mpm_dofs_add_corners(mpm_dofs *d, size_t count, const mpm_real *const x[3]) {
   mpm_dof_segment *s = push_segment(d, count);
-  if (!s) return -1;
+  if (!s) return MPM_ERR_INVALID;
   s->kind = MPM_DOF_CORNER;
   s->level = -1;
   for (int c = 0; c < 3; ++c) s->x[c] = x[c];
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_dofs_end_layout(mpm_dofs *d, unsigned fields) {
+mpm_status mpm_dofs_end_layout(mpm_dofs *d, unsigned fields) {
   mpm_real **a[10];
   unsigned bit[10];
   field_arrays(d, a, bit);
@@ -107,7 +107,7 @@ int mpm_dofs_end_layout(mpm_dofs *d, unsigned fields) {
     mpm_free(d->partial);
     if (!(d->partial = mpm_alloc((d->capacity / MPM_DOF_CHUNK + 2) * sizeof(double)))) goto oom;
   }
-  return 0;
+  return MPM_OK;
 oom:
   for (int k = 0; k < 10; ++k) {
     mpm_free(*a[k]);
@@ -115,7 +115,7 @@ oom:
   }
   d->fields = 0;
   d->capacity = 0;
-  return -1;
+  return MPM_ERR_NOMEM;
 }
 
 void mpm_dofs_clear(mpm_dofs *d, unsigned fields) {

@@ -29,6 +29,7 @@
 #ifndef MPM_GRID_DOFS_H
 #define MPM_GRID_DOFS_H
 
+#include "mpm/mpm.h"
 #include "core/reduce.h"
 #include "grid/grid.h"
 
@@ -81,15 +82,16 @@ void mpm_dofs_free(mpm_dofs *d);
 
 /* A new layout: no segments, count 0 (the arrays are kept for reuse). */
 void mpm_dofs_begin_layout(mpm_dofs *d);
-/* Append the nodes of grid level g as a segment (g->dof_begin is set). 0, or -1 when there are
- * already MPM_DOF_MAX_SEGMENTS segments. */
-int mpm_dofs_add_grid(mpm_dofs *d, mpm_grid *g);
-/* Append `count` corner DOFs whose positions are x[d][0 .. count). 0 or -1 as above. */
-int mpm_dofs_add_corners(mpm_dofs *d, size_t count, const mpm_real *const x[3]);
+/* Append the nodes of grid level g as a segment (g->dof_begin is set). MPM_OK, or MPM_ERR_INVALID
+ * when there are already MPM_DOF_MAX_SEGMENTS segments. */
+mpm_status mpm_dofs_add_grid(mpm_dofs *d, mpm_grid *g);
+/* Append `count` corner DOFs whose positions are x[d][0 .. count). MPM_OK or MPM_ERR_INVALID as
+ * above. */
+mpm_status mpm_dofs_add_corners(mpm_dofs *d, size_t count, const mpm_real *const x[3]);
 /* Make room for the layout's count DOFs in the fields of the mask (others are freed) and in
- * every attached vector. Values are not kept: a layout is made anew each step. 0, or -1 when
- * out of memory. */
-int mpm_dofs_end_layout(mpm_dofs *d, unsigned fields);
+ * every attached vector. Values are not kept: a layout is made anew each step. MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_dofs_end_layout(mpm_dofs *d, unsigned fields);
 
 /* Zero the fields of the mask over all DOFs (parallel). */
 void mpm_dofs_clear(mpm_dofs *d, unsigned fields);

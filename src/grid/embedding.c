@@ -25,8 +25,8 @@ size_t mpm_embedding_bytes(const mpm_embedding *E) {
          mpm_scatter_schedule_bytes(&E->schedule);
 }
 
-int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
-                         uint32_t uniform_len) {
+mpm_status mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
+                                uint32_t uniform_len) {
   E->schedule.built = 0;
   E->rows = 0;
   size_t rcap = E->row_capacity;
@@ -35,7 +35,7 @@ int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
     if (mpm_reserve((void **)&E->row_start, &rcap, rows + 1, sizeof(uint32_t)) ||
         mpm_reserve((void **)&E->row_len, &c2, rows + 1, sizeof(uint32_t))) {
       E->row_capacity = 0;
-      return -1;
+      return MPM_ERR_NOMEM;
     }
     E->row_capacity = rcap < c2 ? rcap : c2;
   }
@@ -45,23 +45,23 @@ int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
     total += max_len ? max_len[a] : uniform_len;
   }
   E->row_start[rows] = (uint32_t)total;
-  if (total > UINT32_MAX) return -1;
+  if (total > UINT32_MAX) return MPM_ERR_INVALID; /* past the 32-bit column index */
   size_t ccap = E->entry_capacity, wcap = E->entry_capacity;
   if (total > E->entry_capacity || !E->col) {
     if (mpm_reserve((void **)&E->col, &ccap, total, sizeof(uint32_t)) ||
         mpm_reserve((void **)&E->w, &wcap, total, sizeof(mpm_real))) {
       E->entry_capacity = 0;
-      return -1;
+      return MPM_ERR_NOMEM;
     }
     E->entry_capacity = ccap < wcap ? ccap : wcap;
   }
   memset(E->row_len, 0, rows * sizeof(uint32_t));
   E->rows = rows;
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
-                           const uint8_t *key_colour) {
+mpm_status mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
+                                  const uint8_t *key_colour) {
   return mpm_scatter_schedule_build(&E->schedule, E->rows, key, key_count, key_colour);
 }
 

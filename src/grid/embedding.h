@@ -26,6 +26,7 @@
 #ifndef MPM_GRID_EMBEDDING_H
 #define MPM_GRID_EMBEDDING_H
 
+#include "mpm/mpm.h"
 #include "core/real.h"
 #include "grid/scatter_schedule.h"
 
@@ -53,9 +54,10 @@ void mpm_embedding_free(mpm_embedding *E);
 
 /* Room for `rows` rows; row a may hold up to max_len[a] entries (max_len NULL: uniform_len
  * each). Row lengths start at 0; the caller fills col, w and row_len per row (in parallel if it
- * likes). Drops the schedule. 0, or -1 when out of memory. */
-int mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
-                         uint32_t uniform_len);
+ * likes). Drops the schedule. MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when the
+ * rows would hold 2^32 entries or more. */
+mpm_status mpm_embedding_layout(mpm_embedding *E, size_t rows, const uint32_t *max_len,
+                                uint32_t uniform_len);
 
 /* Append entry (col, w) to row a (serial use per row). */
 static inline void mpm_embedding_push(mpm_embedding *E, size_t a, uint32_t col, mpm_real w) {
@@ -69,9 +71,9 @@ static inline void mpm_embedding_push(mpm_embedding *E, size_t a, uint32_t col, 
  * with key[a] < 0 take no part (their values are not scattered); the others are grouped by key (0
  * <= key < key_count), groups numbered by colour (key_colour[key] in 0..MPM_EMBEDDING_COLOURS-1)
  * then by key, the rows of a group in row order. The caller guarantees that rows in groups of one
- * colour share no column. 0, or -1 when out of memory. */
-int mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
-                           const uint8_t *key_colour);
+ * colour share no column. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_embedding_schedule(mpm_embedding *E, const int32_t *key, size_t key_count,
+                                  const uint8_t *key_colour);
 
 /* u[k][col] += w c[k][a] for every entry of every scheduled row (all rows without a schedule),
  * for the `fields` pairs of arrays (c: carrier values, u: DOF values). */

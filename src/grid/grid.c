@@ -7,8 +7,8 @@
 
 /* ---- sparse: one box per 4x4x4 block, blocks in activation order ---- */
 
-static int sparse_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
-                           const mpm_particles *p, mpm_arena *scratch) {
+static mpm_status sparse_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
+                                  const mpm_particles *p, mpm_arena *scratch) {
   return mpm_sparse_grid_sort(&g->impl.sparse, k, g->origin, material_count, p, scratch);
 }
 
@@ -49,11 +49,11 @@ static inline uint64_t point_block(const mpm_grid *g, const mpm_kernel *k,
  * (from the index of its first point on: points such as domain corners come in block order,
  * so runs are long and the list short); then the pads of those blocks activated in point
  * order, one thread (the grid's insertions are serial). */
-static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
-                                  const mpm_real *const x[3], const uint8_t *use) {
+static mpm_status sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
+                                         const mpm_real *const x[3], const uint8_t *use) {
   mpm_sparse_grid *sg = &g->impl.sparse;
   if (mpm_reserve((void **)&sg->run_keys, &sg->run_capacity, n + 1, sizeof *sg->run_keys))
-    return -1;
+    return MPM_ERR_NOMEM;
   uint64_t *keys = sg->run_keys;
   enum { MAX_THREADS = 256 };
   int threads = n >= MPM_PARALLEL_MIN ? mpm_thread_count() : 1;
@@ -83,16 +83,17 @@ static int sparse_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
       const uint64_t key = keys[first[t] + r];
       int32_t bb[3];
       for (int d = 0; d < 3; ++d) bb[d] = (int32_t)((key >> (21 * (2 - d))) & 0x1FFFFF) - (1 << 20);
-      if (pad_blocks(sg, sg, bb, &c)) return -1;
+      if (pad_blocks(sg, sg, bb, &c)) return MPM_ERR_NOMEM; /* touching fails only so */
     }
-  return 0;
+  return MPM_OK;
 }
 
-static int sparse_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *c,
-                                uint32_t *nodes, int32_t *key, uint8_t *colour) {
+static mpm_status sparse_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W,
+                                       mpm_grid_cursor *c, uint32_t *nodes, int32_t *key,
+                                       uint8_t *colour) {
   const int32_t bb[3] = {base[0] >> MPM_BLOCK_BITS, base[1] >> MPM_BLOCK_BITS,
                          base[2] >> MPM_BLOCK_BITS};
-  if (pad_blocks(&g->impl.sparse, NULL, bb, c)) return -1;
+  if (pad_blocks(&g->impl.sparse, NULL, bb, c)) return MPM_ERR_INVALID; /* a block missing */
   int e = 0;
   for (int i = 0; i < W; ++i)
     for (int j = 0; j < W; ++j)
@@ -106,7 +107,7 @@ static int sparse_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W,
       }
   *key = c->blocks[0];
   *colour = (uint8_t)((bb[0] & 1) << 2 | (bb[1] & 1) << 1 | (bb[2] & 1));
-  return 0;
+  return MPM_OK;
 }
 
 static size_t sparse_scatter_key_count(const mpm_grid *g) {
@@ -154,26 +155,27 @@ static const mpm_grid_ops sparse_ops = {"sparse",
                                         sparse_free};
 /* ---- dense: every node always there, one box per x-slab ---- */
 
-static int dense_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
-                          const mpm_particles *p, mpm_arena *scratch) {
+static mpm_status dense_activate(mpm_grid *g, const mpm_kernel *k, int material_count,
+                                 const mpm_particles *p, mpm_arena *scratch) {
   (void)g, (void)k, (void)material_count, (void)p, (void)scratch;
-  return 0;
+  return MPM_OK;
 }
 
-static int dense_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
-                                 const mpm_real *const x[3], const uint8_t *use) {
+static mpm_status dense_activate_points(mpm_grid *g, const mpm_kernel *k, size_t n,
+                                        const mpm_real *const x[3], const uint8_t *use) {
   (void)g, (void)k, (void)n, (void)x, (void)use;
-  return 0;
+  return MPM_OK;
 }
 
 /* Stencils are keyed by virtual 4x4x4 blocks of the dense lattice, coloured by parity, as the
  * sparse grid's blocks are. */
-static int dense_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *c,
-                               uint32_t *nodes, int32_t *key, uint8_t *colour) {
+static mpm_status dense_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W,
+                                      mpm_grid_cursor *c, uint32_t *nodes, int32_t *key,
+                                      uint8_t *colour) {
   (void)c;
   const int *n = g->impl.dense.n;
   for (int d = 0; d < 3; ++d)
-    if (base[d] < 0 || base[d] + W > n[d]) return -1;
+    if (base[d] < 0 || base[d] + W > n[d]) return MPM_ERR_INVALID;
   int e = 0;
   for (int i = 0; i < W; ++i)
     for (int j = 0; j < W; ++j)
@@ -185,7 +187,7 @@ static int dense_stencil_nodes(const mpm_grid *g, const int32_t base[3], int W, 
                          (n[2] >> MPM_BLOCK_BITS) + 1};
   *key = (bb[0] * nb[1] + bb[1]) * nb[2] + bb[2];
   *colour = (uint8_t)((bb[0] & 1) << 2 | (bb[1] & 1) << 1 | (bb[2] & 1));
-  return 0;
+  return MPM_OK;
 }
 
 static size_t dense_scatter_key_count(const mpm_grid *g) {
@@ -247,15 +249,15 @@ void mpm_grid_init_sparse(mpm_grid *g, int level, const mpm_real origin[3], mpm_
   mpm_sparse_grid_init(&g->impl.sparse);
 }
 
-int mpm_grid_init_dense(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx,
-                        const int n[3]) {
+mpm_status mpm_grid_init_dense(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx,
+                               const int n[3]) {
   init_common(g, level, origin, dx);
   g->ops = &dense_ops;
   g->kind = MPM_GRID_DENSE;
   for (int d = 0; d < 3; ++d) {
-    if (n[d] <= 0) return -1;
+    if (n[d] <= 0) return MPM_ERR_INVALID;
     g->impl.dense.n[d] = n[d];
   }
   g->impl.dense.count = (size_t)n[0] * (size_t)n[1] * (size_t)n[2];
-  return 0;
+  return MPM_OK;
 }

@@ -47,21 +47,22 @@ typedef struct mpm_grid_ops {
   /* Make every node that the stencils of kernel k around the particles p touch part of the
    * level (sparse: sort p into owner blocks, activate their pads, colour them; dense: every node
    * already is). Nodes activated earlier in the step stay. Scratch comes from `scratch` (the
-   * step's arena). 0, or -1 when out of memory. */
-  int (*activate)(mpm_grid *g, const mpm_kernel *k, int material_count, const mpm_particles *p,
-                  mpm_arena *scratch);
+   * step's arena). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+  mpm_status (*activate)(mpm_grid *g, const mpm_kernel *k, int material_count,
+                         const mpm_particles *p, mpm_arena *scratch);
   /* Make the nodes of the stencils of kernel k at the points x[d][i], i < n, part of the level
    * (those with use[i] != 0; use NULL: all), as for carriers such as domain corners. Serial.
-   * 0, or -1 when out of memory. */
-  int (*activate_points)(mpm_grid *g, const mpm_kernel *k, size_t n, const mpm_real *const x[3],
-                         const uint8_t *use);
+   * MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+  mpm_status (*activate_points)(mpm_grid *g, const mpm_kernel *k, size_t n,
+                                const mpm_real *const x[3], const uint8_t *use);
   /* The level's nodes of the W^3 stencil nodes base + (i, j, k), 0 <= i, j, k < W, in (i, j, k)
    * order, and the stencil's scatter key (0 .. scatter_key_count) and colour (0..7): stencils
    * of one colour and different keys never share a node, so their scatters may run in
-   * parallel (grid/embedding.h). Read-only: safe in parallel with one cursor per thread. 0, or
-   * -1 when a node is not part of the level. */
-  int (*stencil_nodes)(const mpm_grid *g, const int32_t base[3], int W, mpm_grid_cursor *cursor,
-                       uint32_t *nodes, int32_t *key, uint8_t *colour);
+   * parallel (grid/embedding.h). Read-only: safe in parallel with one cursor per thread. MPM_OK,
+   * or MPM_ERR_INVALID when a node is not part of the level. */
+  mpm_status (*stencil_nodes)(const mpm_grid *g, const int32_t base[3], int W,
+                              mpm_grid_cursor *cursor, uint32_t *nodes, int32_t *key,
+                              uint8_t *colour);
   size_t (*scatter_key_count)(const mpm_grid *g);
   /* The order in which the last activation wants the particles visited (perm[j]: the particle
    * visited j-th; the caller may permute the particle arrays into it and reset it to the
@@ -92,9 +93,10 @@ struct mpm_grid {
 
 /* A sparse level at origin with spacing dx, no nodes yet. */
 void mpm_grid_init_sparse(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx);
-/* A dense level of n[0] x n[1] x n[2] nodes from origin. 0, or -1 when out of memory. */
-int mpm_grid_init_dense(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx,
-                        const int n[3]);
+/* A dense level of n[0] x n[1] x n[2] nodes from origin. MPM_OK, or MPM_ERR_INVALID when a count
+ * is not positive. */
+mpm_status mpm_grid_init_dense(mpm_grid *g, int level, const mpm_real origin[3], mpm_real dx,
+                               const int n[3]);
 
 /* The paged blocks of a sparse level, or NULL for the dense reference: what the fast paths that
  * walk blocks ask for (the corners' transfer plan, the multigrid's assembly). */

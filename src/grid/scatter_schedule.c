@@ -40,11 +40,11 @@ static size_t number_groups(mpm_scatter_schedule *s, const uint32_t *count, size
   return groups;
 }
 
-int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32_t *key,
-                               size_t key_count, const uint8_t *key_colour) {
+mpm_status mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32_t *key,
+                                      size_t key_count, const uint8_t *key_colour) {
   s->built = 0;
   if (mpm_reserve((void **)&s->key_group, &s->key_capacity, key_count + 1, sizeof(int32_t)))
-    return -1;
+    return MPM_ERR_NOMEM;
   int32_t *kg = s->key_group;
   for (size_t k = 0; k < key_count; ++k) kg[k] = -1;
   /* a counting sort of the rows by group, stable in row order, in parallel: each thread counts
@@ -57,7 +57,7 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
   if (mpm_reserve((void **)&s->count, &s->count_capacity, (size_t)threads * stride + stride,
                   sizeof *s->count) ||
       mpm_reserve((void **)&s->own_at, &s->own_at_capacity, (size_t)threads + 1, sizeof *s->own_at))
-    return -1;
+    return MPM_ERR_NOMEM;
   uint32_t *count = s->count;
   size_t *own_at = s->own_at;
   memset(count, 0, ((size_t)threads * stride + stride) * sizeof *count);
@@ -116,7 +116,7 @@ int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32
           s->own_row[own_next++] = (uint32_t)a;
     }
   }
-  if (failed) return -1;
+  if (failed) return MPM_ERR_NOMEM;
   s->built = 1;
-  return 0;
+  return MPM_OK;
 }

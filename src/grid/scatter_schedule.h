@@ -11,6 +11,8 @@
 #ifndef MPM_GRID_SCATTER_SCHEDULE_H
 #define MPM_GRID_SCATTER_SCHEDULE_H
 
+#include "mpm/mpm.h"
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -45,9 +47,9 @@ size_t mpm_scatter_schedule_bytes(const mpm_scatter_schedule *s);
  * rows; other rows with key[a] < 0 take no part; the others are grouped by key (0 <= key <
  * key_count), groups numbered by colour (key_colour[key] in 0 .. MPM_SCHEDULE_COLOURS - 1) then
  * by key, the rows of a group in row order. The caller guarantees that rows in groups of one
- * colour and different keys share no column. 0, or -1 when out of memory. */
-int mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32_t *key,
-                               size_t key_count, const uint8_t *key_colour);
+ * colour and different keys share no column. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_scatter_schedule_build(mpm_scatter_schedule *s, size_t rows, const int32_t *key,
+                                      size_t key_count, const uint8_t *key_colour);
 
 /* The key of group q (that of its first row). */
 static inline int32_t mpm_scatter_schedule_group_key(const mpm_scatter_schedule *s,

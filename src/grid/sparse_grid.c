@@ -150,19 +150,19 @@ static int ensure_u32(uint32_t **a, size_t *cap, size_t need) {
   return *a ? 0 : -1;
 }
 
-int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
-                         int material_count, const mpm_particles *p, mpm_arena *scratch) {
+mpm_status mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
+                                int material_count, const mpm_particles *p, mpm_arena *scratch) {
   const size_t n = p->count;
   if (n > g->particle_capacity || !g->perm) {
     mpm_free(g->perm);
     g->perm = mpm_alloc((n + 1) * sizeof(uint32_t));
-    if (!g->perm) return -1;
+    if (!g->perm) return MPM_ERR_NOMEM;
     g->particle_capacity = n;
   }
   uint64_t *pk = mpm_arena_alloc(scratch, (n + 1) * sizeof(uint64_t));
   uint32_t *pkey = mpm_arena_alloc(scratch, (n + 1) * sizeof(uint32_t));
-  if (!pk || !pkey) return -1;
-  if (!g->table_size && grow_table(g, 4096)) return -1;
+  if (!pk || !pkey) return MPM_ERR_NOMEM;
+  if (!g->table_size && grow_table(g, 4096)) return MPM_ERR_NOMEM;
   memset(g->keys, 0xFF, g->table_size * sizeof(uint64_t));
   g->block_count = 0;
   g->material_count = material_count;
@@ -195,7 +195,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
   }
   for (int t = 0; t < nch; ++t) run_count[t + 1] += run_count[t];
   uint32_t *runs = mpm_arena_alloc(scratch, (run_count[nch] + 1) * sizeof(uint32_t));
-  if (!runs) return -1;
+  if (!runs) return MPM_ERR_NOMEM;
 #pragma omp parallel for schedule(static, 1)
   for (int t = 0; t < nch; ++t) {
     const size_t lo = n * (size_t)t / (size_t)nch, hi = n * (size_t)(t + 1) / (size_t)nch;
@@ -209,7 +209,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
     const int32_t b = find_or_insert(g, (int32_t)(bk & mask19) - PKEY_BIAS,
                                      (int32_t)((bk >> 19) & mask19) - PKEY_BIAS,
                                      (int32_t)((bk >> 38) & mask19) - PKEY_BIAS);
-    if (b < 0) return -1;
+    if (b < 0) return MPM_ERR_NOMEM;
     pkey[runs[r]] = (uint32_t)b;
   }
 #pragma omp parallel for schedule(static, 1)
@@ -232,7 +232,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
    *    the unique stable order, the same for any number of threads. */
   const size_t keys = g->owner_count * (size_t)material_count * MPM_BLOCK_NODES;
   uint32_t *hist = mpm_arena_alloc(scratch, (keys * (size_t)nch + 1) * sizeof(uint32_t));
-  if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) || !hist) return -1;
+  if (ensure_u32(&g->cell_start, &g->cell_capacity, keys + 1) || !hist) return MPM_ERR_NOMEM;
   uint32_t *cs = g->cell_start;
   const int32_t *mat = p->material;
 #pragma omp parallel for schedule(static, 1)
@@ -270,7 +270,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
     const int32_t cx = g->coord[b][0], cy = g->coord[b][1], cz = g->coord[b][2];
     for (int o = 0; o < 8; ++o) {
       int32_t nb = find_or_insert(g, cx + ((o >> 2) & 1), cy + ((o >> 1) & 1), cz + (o & 1));
-      if (nb < 0) return -1;
+      if (nb < 0) return MPM_ERR_NOMEM;
       g->neighbor[b][o] = nb;
     }
   }
@@ -287,7 +287,7 @@ int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real
     int c = (g->coord[b][0] & 1) << 2 | (g->coord[b][1] & 1) << 1 | (g->coord[b][2] & 1);
     g->color_blocks[cursor[c]++] = (int32_t)b;
   }
-  return 0;
+  return MPM_OK;
 }
 
 int32_t mpm_sparse_grid_touch(mpm_sparse_grid *g, const int32_t c[3]) {

@@ -16,6 +16,7 @@
 #ifndef MPM_GRID_SPARSE_GRID_H
 #define MPM_GRID_SPARSE_GRID_H
 
+#include "mpm/mpm.h"
 #include "core/arena.h"
 #include "grid/block.h"
 #include "interp/kernel.h"
@@ -60,9 +61,9 @@ void mpm_sparse_grid_free(mpm_sparse_grid *g);
  * the sorted order is perm[j]), activate the pads and colour the owner blocks (see the file
  * comment). The particle arrays are not moved; the caller reorders them now and then with
  * mpm_particles_permute. The sort's keys and histograms come from `scratch` (taken back when the
- * step ends). Returns 0, or -1 when memory runs out. */
-int mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
-                         int material_count, const mpm_particles *p, mpm_arena *scratch);
+ * step ends). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_sparse_grid_sort(mpm_sparse_grid *g, const mpm_kernel *k, const mpm_real origin[3],
+                                int material_count, const mpm_particles *p, mpm_arena *scratch);
 
 /* Bytes held by the grid (hash, block lists, particle order), for memory reports; the node
  * values live in the DOF set. */

@@ -36,17 +36,17 @@ static double diag_norm(const mpm_dofs *d, mpm_real *const diag[3], mpm_cg_proje
   return sqrt(rr > 0 ? rr : 0);
 }
 
-int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
-                 mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
-                 const mpm_cg_options *options, mpm_cg_result *result) {
+mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
+                        mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
+                        const mpm_cg_options *options, mpm_cg_result *result) {
   mpm_real **r = mpm_dofs_vector(d, "cg.r"), **z = mpm_dofs_vector(d, "cg.z");
   mpm_real **p = mpm_dofs_vector(d, "cg.p"), **q = mpm_dofs_vector(d, "cg.Ap");
-  if (!r || !z || !p || !q) return -1;
+  if (!r || !z || !p || !q) return MPM_ERR_NOMEM;
   const int own = options->precondition != NULL; /* the caller's preconditioner */
   mpm_real **w = own ? mpm_dofs_vector(d, "cg.w") : NULL;
   /* flexible: the residual before the step, for Polak-Ribiere's beta */
   mpm_real **rold = own && options->flexible ? mpm_dofs_vector(d, "cg.rold") : NULL;
-  if ((own && !w) || (own && options->flexible && !rold)) return -1;
+  if ((own && !w) || (own && options->flexible && !rold)) return MPM_ERR_NOMEM;
   result->iterations = 0;
   /* the scale: |P b| in the preconditioner's norm, sqrt(<P b, P D^-1 P b>) */
   mpm_dofs_copy(d, b, p);
@@ -81,7 +81,7 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
     result->scale = target / options->rel_tol; /* the scale the answer is good to */
   }
   result->converged = result->residual <= target;
-  if (result->converged) return 0;
+  if (result->converged) return MPM_OK;
   mpm_dofs_copy(d, z, p);
   for (int k = 0; k < options->max_iterations; ++k) {
     apply(user, p, q);
@@ -120,5 +120,5 @@ int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, 
     rz = rz_new;
     mpm_dofs_xpby(d, z, beta, p); /* p = z + beta p */
   }
-  return 0;
+  return MPM_OK;
 }

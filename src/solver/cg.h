@@ -26,6 +26,7 @@
 #ifndef MPM_SOLVER_CG_H
 #define MPM_SOLVER_CG_H
 
+#include "mpm/mpm.h"
 #include "grid/dofs.h"
 
 /* y = A x, for vectors over the DOFs of the set. */
@@ -63,11 +64,11 @@ typedef struct mpm_cg_result {
 } mpm_cg_result;
 
 /* Solve A x = b: x holds the initial guess and receives the solution. diag: the Jacobi
- * diagonal (positive), or NULL for none; project: NULL for none. Returns 0, or -1 when the
- * work vectors cannot be allocated (x is then unchanged). A breakdown (<p, A p> <= 0: A is not
- * positive on the subspace) ends the solve, not converged. */
-int mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
-                 mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
-                 const mpm_cg_options *options, mpm_cg_result *result);
+ * diagonal (positive), or NULL for none; project: NULL for none. MPM_OK, or MPM_ERR_NOMEM when
+ * the work vectors cannot be allocated (x is then unchanged). A breakdown (<p, A p> <= 0: A is
+ * not positive on the subspace) ends the solve, not converged. */
+mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn project, void *user,
+                        mpm_real *const diag[3], mpm_real *const b[3], mpm_real *const x[3],
+                        const mpm_cg_options *options, mpm_cg_result *result);
 
 #endif

@@ -99,7 +99,7 @@ static size_t segment_units(const mpm_dof_segment *s) {
   return (s->count + CORNER_CHUNK - 1) / CORNER_CHUNK;
 }
 
-int mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mpm_dofs *d) {
+mpm_status mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mpm_dofs *d) {
   const int impulse = in == MPM_P2G_IMPULSE;
   const int measure = u->taken && u->boundary.collider_count > 0;
   double *slots = NULL;
@@ -109,7 +109,7 @@ int mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mp
     for (int k = 0; k < d->segment_count; ++k)
       if (segment_units(&d->segment[k]) > most) most = segment_units(&d->segment[k]);
     slots = mpm_arena_alloc(u->arena, most * per * sizeof *slots);
-    if (!slots) return -1;
+    if (!slots) return MPM_ERR_NOMEM;
   }
   for (int k = 0; k < d->segment_count; ++k) {
     const mpm_dof_segment *s = &d->segment[k];
@@ -128,5 +128,5 @@ int mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mp
       for (size_t b = 0, units = segment_units(s); b < units; ++b)
         for (size_t j = 0; j < per; ++j) u->taken[j] += slots[b * per + j];
   }
-  return 0;
+  return MPM_OK;
 }

@@ -9,6 +9,7 @@
 #ifndef MPM_SOLVER_EXPLICIT_UPDATE_H
 #define MPM_SOLVER_EXPLICIT_UPDATE_H
 
+#include "mpm/mpm.h"
 #include "collide/body_force.h"
 #include "collide/boundary.h"
 #include "core/arena.h"
@@ -38,8 +39,8 @@ typedef struct mpm_explicit_update {
 
 /* The update of every DOF of d (parallel over the boxes of each grid segment and over chunks
  * of corners; independent per DOF, so deterministic). Reads mass, v0 and (for
- * MPM_P2G_MOMENTUM_FORCE) f; writes v0 = v^n and v = v^{n+1}. Returns 0, or -1 when the arena
- * has no room for the sums of u->taken (nothing is updated then). */
-int mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mpm_dofs *d);
+ * MPM_P2G_MOMENTUM_FORCE) f; writes v0 = v^n and v = v^{n+1}. MPM_OK, or MPM_ERR_NOMEM when the
+ * arena has no room for the sums of u->taken (nothing is updated then). */
+mpm_status mpm_dofs_explicit_update(const mpm_explicit_update *u, mpm_p2g_output in, mpm_dofs *d);
 
 #endif

@@ -90,13 +90,13 @@ static int constrain_dof(int count, mpm_real n[4][3], mpm_real vo[4][3], mpm_rea
   return 1;
 }
 
-int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
+mpm_status mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
   mpm_dofs *d = s->dofs;
-  if (!s->px[0] && dof_positions(s, s->px, &s->depth)) return -1;
+  if (!s->px[0] && dof_positions(s, s->px, &s->depth)) return MPM_ERR_NOMEM;
   const size_t nd = d->count;
   uint8_t *flag = mpm_arena_alloc(s->arena, nd + 1);
   mpm_real(*P)[6] = mpm_arena_alloc(s->arena, (nd + 1) * sizeof *P);
-  if (!flag || !P) return -1;
+  if (!flag || !P) return MPM_ERR_NOMEM;
   const long n = (long)nd;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) {
@@ -125,7 +125,7 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
   s->constraint_dof = mpm_arena_alloc(s->arena, (count + 1) * sizeof *s->constraint_dof);
   s->constraint_P = mpm_arena_alloc(s->arena, (count + 1) * sizeof *s->constraint_P);
   s->constraint_friction = mpm_arena_alloc(s->arena, count + 1);
-  if (!s->constraint_dof || !s->constraint_P || !s->constraint_friction) return -1;
+  if (!s->constraint_dof || !s->constraint_P || !s->constraint_friction) return MPM_ERR_NOMEM;
   size_t k = 0;
   for (size_t i = 0; i < nd; ++i)
     if (flag[i]) {
@@ -135,7 +135,7 @@ int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]) {
       ++k;
     }
   s->constraint_count = count;
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_implicit_project(mpm_implicit *s, mpm_real *const v[3]) {
@@ -303,18 +303,20 @@ static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
 /* CG on (M + dt^2 K) x = b from x (cg_record'ed into r, the last solve's figures in cg). With
  * the multigrid and a flexible solve, the one-pass cycle first, for at most
  * MG_ONE_PASS_ITERATIONS; a solve it has not ended goes on from where it stopped with the
- * symmetric cycle under plain CG (solver/multigrid.h). 0, or -1 when out of memory. */
-static int solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3], mpm_real *const x[3],
-                 const mpm_cg_options *o, mpm_implicit_result *r, mpm_cg_result *cg) {
+ * symmetric cycle under plain CG (solver/multigrid.h). MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory. */
+static mpm_status solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3],
+                        mpm_real *const x[3], const mpm_cg_options *o, mpm_implicit_result *r,
+                        mpm_cg_result *cg) {
   mpm_cg_options opt = *o;
   double residual0 = -1; /* the first part's, when the solve is split */
   if (o->precondition && o->flexible) {
     s->mg->cheap = 1;
     if (opt.max_iterations > MG_ONE_PASS_ITERATIONS) opt.max_iterations = MG_ONE_PASS_ITERATIONS;
-    if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return -1;
+    if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
     if (cg->converged || o->max_iterations <= MG_ONE_PASS_ITERATIONS) {
       cg_record(r, cg);
-      return 0;
+      return MPM_OK;
     }
     r->cg_iterations += cg->iterations; /* the symmetric cycle's solve reports the rest */
     residual0 = cg->residual0;
@@ -322,10 +324,10 @@ static int solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3], mp
     opt.flexible = 0;
   }
   if (o->precondition) s->mg->cheap = 0;
-  if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return -1;
+  if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
   cg_record(r, cg);
   if (residual0 >= 0) cg->residual0 = residual0;
-  return 0;
+  return MPM_OK;
 }
 
 /* sqrt(<P v, D^-1 P v>) with v projected in place (D the Jacobi diagonal, I without one); w:
@@ -528,7 +530,8 @@ static double neg_gradient(mpm_implicit *s, mpm_real *const diag[3], mpm_real *c
  * of |r0| than this drop (cg.h, floor_drop). */
 #define REACHABLE_DROP (sizeof(mpm_real) == 4 ? 1e-5 : 1e-10)
 
-int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_implicit_result *r) {
+mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
+                              mpm_implicit_result *r) {
   memset(r, 0, sizeof *r);
   r->cg_converged = 1;
   mpm_dofs *d = s->dofs;
@@ -536,16 +539,16 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   mpm_real **diag = mpm_dofs_vector(d, "imp.diag"), **t = mpm_dofs_vector(d, "imp.t");
   mpm_real **u = mpm_dofs_vector(d, "imp.u"), **dv = mpm_dofs_vector(d, "imp.dv");
   mpm_real **v1 = mpm_dofs_vector(d, "imp.v1");
-  if (!vstar || !b || !diag || !t || !u || !dv || !v1) return -1;
+  if (!vstar || !b || !diag || !t || !u || !dv || !v1) return MPM_ERR_NOMEM;
   /* f^n as the incremental potential's own gradient has it at u = 0, in place of P2G's: the
      batched stresses of P2G differ from it by a few ulps of a stress that mostly balances the
      weight, which made a body at rest look 5% of its weight out of balance to the Newton test
      (and Zhu's step aim at another v* than the potential's) */
   mpm_implicit_displace(s, NULL);
   mpm_implicit_forces(s, d->f);
-  if (predictor(s)) return -1;
+  if (predictor(s)) return MPM_ERR_NOMEM;
   mpm_dofs_copy(d, d->v, vstar);
-  if (mpm_implicit_constraints(s, d->v)) return -1; /* the initial guess obeys them */
+  if (mpm_implicit_constraints(s, d->v)) return MPM_ERR_NOMEM; /* the initial guess obeys them */
   /* Newton iteration 1 (Zhu eq. 12): (M + dt^2 K(0)) v = M v* */
   const long n = (long)d->count;
   for (int c = 0; c < 3; ++c) {
@@ -576,7 +579,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
                         guess > NEAR_BALANCE * o->cg_tolerance * scale;
   if (multigrid) {
     const double t0 = mpm_wall_seconds();
-    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return -1;
+    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return MPM_ERR_NOMEM;
     r->mg_setup_seconds = mpm_wall_seconds() - t0;
     r->mg_bytes = s->mg->bytes;
     first.precondition = direction.precondition = mpm_implicit_multigrid_precondition;
@@ -589,7 +592,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
     direction.flexible = direction.floor_drop >= MG_ONE_PASS_DROP;
   }
   mpm_cg_result cg;
-  if (solve(s, D, b, d->v, &first, r, &cg)) return -1;
+  if (solve(s, D, b, d->v, &first, r, &cg)) return MPM_ERR_NOMEM;
   r->newton_iterations = 1;
   /* Newton iterations 2.. on E (Gast et al. 2015): the gradient in b, the step in dv; the step
      is done when the free DOFs' momentum out of balance is within the tolerance of the scale */
@@ -629,7 +632,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
        products) costs some 80 Jacobi-CG iterations on the rubber bunny; rebuilt each
        iteration it cost 10% more time for 13% fewer iterations */
     for (int c = 0; c < 3; ++c) memset(dv[c], 0, (size_t)n * sizeof(mpm_real));
-    if (solve(s, D, b, dv, &direction, r, &cg)) return -1;
+    if (solve(s, D, b, dv, &direction, r, &cg)) return MPM_ERR_NOMEM;
     r->newton_iterations = ++k;
     /* backtracking: the longest of 1, 1/2, 1/4, ... that lowers E enough (Armijo) */
     const double slope = -mpm_dofs_dot(d, NULL, b, dv); /* <grad E, dv> */
@@ -653,7 +656,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
   }
   boundary_after(s, vstar);
   r->mg_cycle_seconds = s->mg_cycle_seconds;
-  return 0;
+  return MPM_OK;
 }
 
 /* The momentum the colliders took in the solved step (stats.csv): the part of a DOF's momentum
@@ -666,7 +669,7 @@ int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_impli
  * the forces, only when the caller measures. Sums per chunk of DOFs, then in chunk order, so
  * they do not depend on the thread count. */
 #define TAKEN_CHUNK 1024
-int mpm_implicit_collider_taken(mpm_implicit *s, double *taken) {
+mpm_status mpm_implicit_collider_taken(mpm_implicit *s, double *taken) {
   mpm_dofs *d = s->dofs;
   const mpm_boundary *bd = s->boundary;
   const int nc = bd->collider_count;
@@ -674,7 +677,7 @@ int mpm_implicit_collider_taken(mpm_implicit *s, double *taken) {
   mpm_real **f = mpm_dofs_vector(d, "imp.b");
   const long n = (long)d->count, chunks = (n + TAKEN_CHUNK - 1) / TAKEN_CHUNK;
   double *slots = mpm_arena_alloc(s->arena, ((size_t)chunks * 3 * (size_t)nc + 1) * sizeof *slots);
-  if (!vstar || !u || !f || !slots) return -1;
+  if (!vstar || !u || !f || !slots) return MPM_ERR_NOMEM;
   displacement(s, d->v, u);
   mpm_implicit_displace(s, u);
   mpm_implicit_forces(s, f);
@@ -708,5 +711,5 @@ int mpm_implicit_collider_taken(mpm_implicit *s, double *taken) {
   }
   for (long h = 0; h < chunks; ++h)
     for (int k = 0; k < 3 * nc; ++k) taken[k] += slots[(size_t)h * 3 * (size_t)nc + (size_t)k];
-  return 0;
+  return MPM_OK;
 }

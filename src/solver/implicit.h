@@ -43,6 +43,7 @@
 #ifndef MPM_SOLVER_IMPLICIT_H
 #define MPM_SOLVER_IMPLICIT_H
 
+#include "mpm/mpm.h"
 #include "collide/body_force.h"
 #include "collide/boundary.h"
 #include "core/arena.h"
@@ -130,12 +131,13 @@ typedef struct mpm_implicit {
   double mg_cycle_seconds; /* the V-cycles' wall time in this step */
 } mpm_implicit;
 
-/* Scratch for the step (from s->arena). 0, or -1 when out of memory. */
-int mpm_implicit_init(mpm_implicit *s);
+/* Scratch for the step (from s->arena). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_implicit_init(mpm_implicit *s);
 
 /* The whole implicit update: v0 <- v^n, v <- v^{n+1} on every DOF (like the explicit update),
- * boundary rules applied. 0, or -1 when out of memory. */
-int mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o, mpm_implicit_result *r);
+ * boundary rules applied. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
+                              mpm_implicit_result *r);
 
 /* The pieces, for tests and benchmarks (u: a displacement over the DOF set):
  * displace   F^ = (I + G(u)) F (material points), F + sum u_a g^T (domains); u NULL: u = 0
@@ -161,21 +163,23 @@ void mpm_implicit_tangent(const mpm_implicit *s, uint32_t i, mpm_real C[81]);
  * sparse grid of material points: not yet on the multi-level grid nor with particle domains);
  * its hierarchy for the step's nodes with mass (after mpm_implicit_init); its matrices at the
  * displacement of the last mpm_implicit_build, with the constraints of the last
- * mpm_implicit_constraints; and z = B r, CG's preconditioner (user: the mpm_implicit). Each 0,
- * or -1 when out of memory. */
+ * mpm_implicit_constraints; and z = B r, CG's preconditioner (user: the mpm_implicit). The
+ * preparation and the build: MPM_OK, or MPM_ERR_NOMEM when out of memory (the build also
+ * MPM_ERR_INVALID where it is not supported: mpm_assemble_stiffness). */
 int mpm_implicit_multigrid_supported(const mpm_implicit *s);
-int mpm_implicit_multigrid_prepare(mpm_implicit *s);
-int mpm_implicit_multigrid_build(mpm_implicit *s);
+mpm_status mpm_implicit_multigrid_prepare(mpm_implicit *s);
+mpm_status mpm_implicit_multigrid_build(mpm_implicit *s);
 void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_real *const z[3]);
 
-/* Build the constraints from the predicted velocity v (over the DOF set). 0 or -1 (OOM). */
-int mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);
+/* Build the constraints from the predicted velocity v (over the DOF set). MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);
 /* v = P v at the constrained DOFs. */
 void mpm_implicit_project(mpm_implicit *s, mpm_real *const v[3]);
 /* After mpm_implicit_solve: add to taken[3 c + e] (pose c of s->boundary, component e) the
  * momentum collider c took from the DOFs in the step, kg m/s (implicit.c says how). Evaluates
- * the forces at the end of the step once more (the scratch of the solve is overwritten). 0, or
- * -1 when out of memory. */
-int mpm_implicit_collider_taken(mpm_implicit *s, double *taken);
+ * the forces at the end of the step once more (the scratch of the solve is overwritten). MPM_OK,
+ * or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_implicit_collider_taken(mpm_implicit *s, double *taken);
 
 #endif

@@ -20,7 +20,7 @@ static void *arena_reals(mpm_arena *a, size_t n) {
 /* The per-particle arrays live in the step's arena, allocated once per step so that Newton
  * iterations do not grow it; G is twice as long so that the diagonal's 18 quadratic-form
  * entries fit in it. */
-int mpm_implicit_init(mpm_implicit *s) {
+mpm_status mpm_implicit_init(mpm_implicit *s) {
   const size_t n = s->p ? s->p->count : 0;
   int ok = 1;
   mpm_real **h[5] = {s->hU, s->hW, s->hA, s->hs, s->hk};
@@ -49,9 +49,9 @@ int mpm_implicit_init(mpm_implicit *s) {
   s->mg_dof = NULL;
   if (ok && s->levels) ok = (s->ghosted = mpm_dofs_vector(s->dofs, "imp.ghosted")) != NULL;
   if (ok && s->domains)
-    ok = mpm_domain_hessian_init(&s->dh, s->domains, s->tc->materials, s->arena) == 0;
+    ok = mpm_domain_hessian_init(&s->dh, s->domains, s->tc->materials, s->arena) == MPM_OK;
   if (ok && s->domains) s->dh.exact = s->exact;
-  return ok ? 0 : -1;
+  return ok ? MPM_OK : MPM_ERR_NOMEM;
 }
 
 static mpm_material material_at(const mpm_implicit *s, size_t i) {

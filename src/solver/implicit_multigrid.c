@@ -19,7 +19,7 @@ int mpm_implicit_multigrid_supported(const mpm_implicit *s) {
          mpm_grid_paged(s->grid) && s->dofs->segment_count == 1;
 }
 
-int mpm_implicit_multigrid_prepare(mpm_implicit *s) {
+mpm_status mpm_implicit_multigrid_prepare(mpm_implicit *s) {
   const mpm_grid *g = s->grid;
   const mpm_sparse_grid *sg = &g->impl.sparse;
   const size_t nodes = sg->block_count * MPM_BLOCK_NODES;
@@ -28,7 +28,7 @@ int mpm_implicit_multigrid_prepare(mpm_implicit *s) {
   s->mg_dof = mpm_arena_alloc(s->arena, (nodes + 1) * sizeof *s->mg_dof);
   int32_t(*coord)[3] = mpm_arena_alloc(s->arena, (nodes + 1) * sizeof *coord);
   s->mg = mpm_arena_alloc(s->arena, sizeof *s->mg);
-  if (!s->mg_row_of || !s->mg_dof || !coord || !s->mg) return -1;
+  if (!s->mg_row_of || !s->mg_dof || !coord || !s->mg) return MPM_ERR_NOMEM;
   size_t rows = 0;
   for (size_t b = 0; b < sg->block_count; ++b)
     for (int k = 0; k < MPM_BLOCK_NODES; ++k) {
@@ -47,21 +47,22 @@ int mpm_implicit_multigrid_prepare(mpm_implicit *s) {
   const mpm_kernel *k = &s->tc->kernel;
   const mpm_mg_prolongation kind =
       k->kind == MPM_KERNEL_QUADRATIC ? MPM_MG_QUADRATIC : MPM_MG_LINEAR;
-  const int rc = mpm_multigrid_setup(s->mg, s->arena, rows, (const int32_t(*)[3])coord,
-                                     k->width - 1, kind, COARSEST_NODES);
-  return rc; /* the cycle (mg->cheap) is chosen solve by solve (implicit.c) */
+  const mpm_status st = mpm_multigrid_setup(s->mg, s->arena, rows, (const int32_t(*)[3])coord,
+                                            k->width - 1, kind, COARSEST_NODES);
+  return st; /* the cycle (mg->cheap) is chosen solve by solve (implicit.c) */
 }
 
 static void tangent(void *user, uint32_t i, mpm_real C[81]) {
   mpm_implicit_tangent(user, i, C);
 }
 
-int mpm_implicit_multigrid_build(mpm_implicit *s) {
+mpm_status mpm_implicit_multigrid_build(mpm_implicit *s) {
   mpm_multigrid *mg = s->mg;
   mpm_mg_level *L = &mg->level[0];
   mpm_multigrid_clear(mg);
-  if (mpm_assemble_stiffness(s->tc, s->grid, s->p, tangent, s, s->mg_row_of, L->radius, L->val))
-    return -1;
+  const mpm_status assembled =
+      mpm_assemble_stiffness(s->tc, s->grid, s->p, tangent, s, s->mg_row_of, L->radius, L->val);
+  if (assembled != MPM_OK) return assembled;
   /* the lumped mass on the diagonal blocks */
   const size_t centre = L->slots / 2;
   const long n = (long)L->n;
@@ -74,7 +75,7 @@ int mpm_implicit_multigrid_build(mpm_implicit *s) {
   /* the constraints as rows (every constrained DOF has mass, so a row) */
   const size_t nk = s->constraint_count;
   uint32_t *row = mpm_arena_alloc(s->arena, (nk + 1) * sizeof *row);
-  if (!row) return -1;
+  if (!row) return MPM_ERR_NOMEM;
   for (size_t k = 0; k < nk; ++k)
     row[k] = (uint32_t)s->mg_row_of[s->constraint_dof[k] - s->grid->dof_begin];
   return mpm_multigrid_factor(mg, nk, row, (const mpm_real(*)[6])s->constraint_P);

@@ -229,8 +229,9 @@ static int coarsen(mpm_multigrid *mg, int l) {
   return build_level(mg, C);
 }
 
-int mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n, const int32_t (*coord)[3],
-                        int radius, mpm_mg_prolongation prolongation, size_t coarsest) {
+mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
+                               const int32_t (*coord)[3], int radius,
+                               mpm_mg_prolongation prolongation, size_t coarsest) {
   memset(mg, 0, sizeof *mg);
   mg->arena = arena;
   mg->prolongation = prolongation;
@@ -240,13 +241,13 @@ int mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n, const int
   L0->radius = radius;
   L0->coord = mpm_arena_alloc(arena, (n + 1) * sizeof *L0->coord);
   mg->proj_of_row = mpm_arena_alloc(arena, (n + 1) * sizeof *mg->proj_of_row);
-  if (!L0->coord || !mg->proj_of_row) return -1;
+  if (!L0->coord || !mg->proj_of_row) return MPM_ERR_NOMEM;
   memcpy(L0->coord, coord, n * sizeof *coord);
-  if (build_level(mg, L0)) return -1;
+  if (build_level(mg, L0)) return MPM_ERR_NOMEM;
   mg->level_count = 1;
   if (coarsest < 8) coarsest = 8;
   while (mg->level[mg->level_count - 1].n > coarsest && mg->level_count < MPM_MG_LEVELS_MAX) {
-    if (coarsen(mg, mg->level_count - 1)) return -1;
+    if (coarsen(mg, mg->level_count - 1)) return MPM_ERR_NOMEM;
     ++mg->level_count;
   }
   const size_t N = 3 * mg->level[mg->level_count - 1].n;
@@ -254,7 +255,7 @@ int mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n, const int
   mg->chol = arena_zero(mg, (N * N + 1) * sizeof *mg->chol);
   mg->null = arena_zero(mg, N + 1);
   mg->dense_x = arena_zero(mg, (N + 1) * sizeof *mg->dense_x);
-  return mg->chol && mg->null && mg->dense_x ? 0 : -1;
+  return mg->chol && mg->null && mg->dense_x ? MPM_OK : MPM_ERR_NOMEM;
 }
 
 void mpm_multigrid_clear(mpm_multigrid *mg) {
@@ -447,17 +448,17 @@ static void dense_solve(mpm_multigrid *mg, const mpm_real *b, mpm_real *x) {
   for (size_t i = 0; i < N; ++i) x[i] = (mpm_real)y[i];
 }
 
-int mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
-                         const mpm_real (*P)[6]) {
+mpm_status mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
+                                const mpm_real (*P)[6]) {
   mg->constrained = count;
   mg->proj_row = row;
   mg->proj = P;
   project_finest(mg);
   for (int l = 0; l + 1 < mg->level_count; ++l)
-    if (galerkin(mg, l)) return -1;
+    if (galerkin(mg, l)) return MPM_ERR_NOMEM;
   for (int l = 0; l + 1 < mg->level_count; ++l) diagonal_inverses(&mg->level[l]);
   dense_factor(mg);
-  return 0;
+  return MPM_OK;
 }
 
 /* ---- the cycle ------------------------------------------------------------------------- */

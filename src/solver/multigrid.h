@@ -42,6 +42,7 @@
 #ifndef MPM_SOLVER_MULTIGRID_H
 #define MPM_SOLVER_MULTIGRID_H
 
+#include "mpm/mpm.h"
 #include "core/arena.h"
 #include "core/real.h"
 
@@ -101,19 +102,21 @@ typedef struct mpm_multigrid {
 /* The hierarchy over the finest level's n nodes at integer coordinates coord (distinct), for a
  * matrix of the given stencil radius: levels coarsened until one has at most `coarsest` nodes
  * (or MPM_MG_LEVELS_MAX). Everything from `arena` (valid until its reset). The finest level's
- * values are left zero for the caller to fill (level[0].val). 0, or -1 when out of memory. */
-int mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n, const int32_t (*coord)[3],
-                        int radius, mpm_mg_prolongation prolongation, size_t coarsest);
+ * values are left zero for the caller to fill (level[0].val). MPM_OK, or MPM_ERR_NOMEM when out
+ * of memory. */
+mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
+                               const int32_t (*coord)[3], int radius,
+                               mpm_mg_prolongation prolongation, size_t coarsest);
 
 /* Zero the finest level's values (before assembling them again). */
 void mpm_multigrid_clear(mpm_multigrid *mg);
 
 /* After the finest values are filled: project them with the constraints (count of them: rows
  * row[k] with projector P[k]; the arrays are kept and must outlive the V-cycles), form the
- * coarse levels' values (Galerkin), the smoother's inverses and the coarsest factor. 0, or -1
- * when out of memory. */
-int mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
-                         const mpm_real (*P)[6]);
+ * coarse levels' values (Galerkin), the smoother's inverses and the coarsest factor. MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
+                                const mpm_real (*P)[6]);
 
 /* x = B b on the finest level (level[0].b in, level[0].x out): one V-cycle from x = 0. B is
  * symmetric and, where A is positive definite on the unconstrained subspace, positive

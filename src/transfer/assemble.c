@@ -150,10 +150,10 @@ static void assemble_block(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g
   if (filled) flush_pairs(W, g, b, org, base, row_of, radius, val, cell);
 }
 
-int mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g,
-                                  const mpm_particles *p, mpm_tangent_fn tangent, void *user,
-                                  const int32_t *row_of, int radius, mpm_real *val) {
-  if (radius < ctx->kernel.width - 1) return -1;
+mpm_status mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                         const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                         const int32_t *row_of, int radius, mpm_real *val) {
+  if (radius < ctx->kernel.width - 1) return MPM_ERR_INVALID;
   const mpm_sparse_grid *sg = &g->impl.sparse;
   for (int colour = 0; colour < 8; ++colour) {
     const long begin = (long)sg->color_start[colour], end = (long)sg->color_start[colour + 1];
@@ -165,5 +165,5 @@ int mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g
         assemble_block(ctx, sg, p, tangent, user, row_of, radius, val, sg->color_blocks[q], local);
     }
   }
-  return 0;
+  return MPM_OK;
 }

@@ -431,11 +431,11 @@ static mpm_g2p_result dense_g2p(const mpm_transfer_ctx *ctx, const mpm_grid *g,
 }
 
 /* The dense reference assembles nothing (the multigrid runs on the sparse grid). */
-static int dense_assemble(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
-                          mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
-                          mpm_real *val) {
+static mpm_status dense_assemble(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                 const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                 const int32_t *row_of, int radius, mpm_real *val) {
   (void)ctx, (void)g, (void)p, (void)tangent, (void)user, (void)row_of, (void)radius, (void)val;
-  return -1;
+  return MPM_ERR_INVALID;
 }
 
 /* Indexed by the grid's kind: the one place the transfers ask which grid they run on. */
@@ -493,9 +493,9 @@ void mpm_gather_gradients(const mpm_transfer_ctx *ctx, const mpm_grid *g,
   mpm_transfer_variant_of(g)->gather_gradients(ctx, g, u, p, G);
 }
 
-int mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
-                           mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
-                           mpm_real *val) {
+mpm_status mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                  const int32_t *row_of, int radius, mpm_real *val) {
   return mpm_transfer_variant_of(g)->assemble_stiffness(ctx, g, p, tangent, user, row_of, radius,
                                                         val);
 }

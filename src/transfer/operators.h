@@ -28,6 +28,7 @@
 #ifndef MPM_TRANSFER_OPERATORS_H
 #define MPM_TRANSFER_OPERATORS_H
 
+#include "mpm/mpm.h"
 #include "transfer/transfer.h"
 
 void mpm_p2g_mass_momentum(const mpm_transfer_ctx *ctx, const mpm_grid *g,
@@ -53,17 +54,18 @@ void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
  * node at offset o = x_j - x_i in [-radius, radius]^3 (radius >= kernel width - 1) is at
  * val + 9 ((r S) + ((o_x + radius) span + o_y + radius) span + o_z + radius), span = 2 radius + 1,
  * S = span^3, row-major. C must be symmetric (C_ac,bd = C_bd,ac): only pairs i <= j are formed.
- * Sparse grid only: -1 otherwise, and 0. */
-int mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
-                           mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
-                           mpm_real *val);
+ * MPM_OK; MPM_ERR_INVALID on the dense grid (sparse grid only) or for a radius below the kernel
+ * width - 1. */
+mpm_status mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                  const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                  const int32_t *row_of, int radius, mpm_real *val);
 
 /* The grid variants' own (operators.c holds the table, mpm_transfer_variant_of): the sparse
  * grid's mass and momentum P2G (p2g.c, the fused kernels without the force) and its assembly
  * (assemble.c). */
-int mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g,
-                                  const mpm_particles *p, mpm_tangent_fn tangent, void *user,
-                                  const int32_t *row_of, int radius, mpm_real *val);
+mpm_status mpm_assemble_stiffness_sparse(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                         const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                         const int32_t *row_of, int radius, mpm_real *val);
 void mpm_p2g_mass_momentum_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                                   const mpm_grid_values *val, const mpm_particles *p);
 

@@ -94,9 +94,9 @@ typedef struct mpm_transfer_variant {
   void (*gather_gradients)(const mpm_transfer_ctx *ctx, const mpm_grid *g,
                            const mpm_real *const u[3], const mpm_particles *p,
                            mpm_real *const G[9]);
-  int (*assemble_stiffness)(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_particles *p,
-                            mpm_tangent_fn tangent, void *user, const int32_t *row_of, int radius,
-                            mpm_real *val);
+  mpm_status (*assemble_stiffness)(const mpm_transfer_ctx *ctx, const mpm_grid *g,
+                                   const mpm_particles *p, mpm_tangent_fn tangent, void *user,
+                                   const int32_t *row_of, int radius, mpm_real *val);
 } mpm_transfer_variant;
 const mpm_transfer_variant *mpm_transfer_variant_of(const mpm_grid *g);
 
