@@ -10,7 +10,7 @@
 static inline void test_refine_random(mpm_refinement *r, int L, const int32_t c[3], double p,
                                       uint64_t *rng) {
   if (L >= r->levels - 1 || test_rand(rng, 0, 1) >= p) return;
-  assert_int_equal(mpm_refinement_refine(r, L, c), 0);
+  assert_int_equal(mpm_refinement_refine(r, L, c), MPM_OK);
   for (int k = 0; k < 8; ++k) {
     const int32_t ch[3] = {2 * c[0] + (k & 1), 2 * c[1] + ((k >> 1) & 1), 2 * c[2] + (k >> 2)};
     test_refine_random(r, L + 1, ch, p, rng);

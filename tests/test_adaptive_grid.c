@@ -208,7 +208,7 @@ static void mark_cloud(mpm_adaptive_grid *g, const cloud *c) {
     stencil(g, c, p, base, n, w);
     const int32_t blo[3] = {base[0], base[1], base[2]};
     const int32_t bhi[3] = {base[0] + n[0] - 1, base[1] + n[1] - 1, base[2] + n[2] - 1};
-    assert_int_equal(mpm_adaptive_grid_activate_box(g, c->level[p], blo, bhi), 0);
+    assert_int_equal(mpm_adaptive_grid_activate_box(g, c->level[p], blo, bhi), MPM_OK);
   }
 }
 
@@ -239,13 +239,13 @@ static size_t setup(mpm_adaptive_grid *g, cloud *c, int levels, uint64_t seed) {
     c->level[p] = mpm_refinement_finest_level_in(&g->tree, lo, hi);
   }
   mark_cloud(g, c);
-  assert_int_equal(mpm_adaptive_grid_close(g), 0);
+  assert_int_equal(mpm_adaptive_grid_close(g), MPM_OK);
   size_t total = 0;
   for (int L = 0; L < levels; ++L) {
     g->level[L].dof_begin = total;
     total += g->level[L].ops->node_count(&g->level[L]);
   }
-  assert_int_equal(mpm_adaptive_grid_build_rows(g), 0);
+  assert_int_equal(mpm_adaptive_grid_build_rows(g), MPM_OK);
   return total;
 }
 
@@ -464,7 +464,7 @@ static void test_close_from_caches(void **state) {
     for (int L = 0; L < levels; ++L) blocks[L] = g.level[L].impl.sparse.block_count;
     mpm_adaptive_grid_clear_marks(&g);
     mark_cloud(&g, &c);
-    assert_int_equal(mpm_adaptive_grid_close(&g), 0);
+    assert_int_equal(mpm_adaptive_grid_close(&g), MPM_OK);
     assert_int_equal(g.build.count, n);
     assert_int_equal(g.build.term_count, nt);
     assert_memory_equal(g.build.len, len, n * sizeof *len);
@@ -477,7 +477,7 @@ static void test_close_from_caches(void **state) {
       total2 += g.level[L].ops->node_count(&g.level[L]);
     }
     assert_int_equal(total2, total);
-    assert_int_equal(mpm_adaptive_grid_build_rows(&g), 0);
+    assert_int_equal(mpm_adaptive_grid_build_rows(&g), MPM_OK);
     assert_memory_equal(g.ghost_slot, slot, n * sizeof *slot);
     print_message("%d levels: %zu ghosts, %zu row terms, the same from the caches\n", levels, n,
                   nt);

@@ -93,7 +93,7 @@ static void test_tjunction_rows(void **state) {
   const mpm_real o[3] = {0, 0, 0};
   mpm_refinement_init(&r, 3, o, 1);
   const int32_t c1[3] = {2, 0, 0};
-  assert_int_equal(mpm_refinement_refine(&r, 1, c1), 0);
+  assert_int_equal(mpm_refinement_refine(&r, 1, c1), MPM_OK);
   const int32_t c0[3] = {1, 0, 0};
   assert_true(mpm_refinement_is_refined(&r, 0, c0)); /* the ancestor came along */
   mpm_row_term t[MAXT];
@@ -422,8 +422,8 @@ static void test_lian_negative_ours_not(void **state) {
   const mpm_real o[3] = {0, 0, 0};
   mpm_refinement_init(&r, 2, o, 1);
   const int32_t right[3] = {1, 0, 0}, top[3] = {0, 1, 0};
-  assert_int_equal(mpm_refinement_refine(&r, 0, right), 0);
-  assert_int_equal(mpm_refinement_refine(&r, 0, top), 0);
+  assert_int_equal(mpm_refinement_refine(&r, 0, right), MPM_OK);
+  assert_int_equal(mpm_refinement_refine(&r, 0, top), MPM_OK);
   mpm_row_term t[MAXT];
   static mpm_adaptive_weight w[MAXT];
   double least_N = 1, least_w = 1, least_m = 1;
@@ -509,7 +509,7 @@ static void test_dense_index_agrees(void **state) {
     leaf[q] = mpm_refinement_leaf_level(&r, c);
   }
   const int32_t lo0[3] = {-REGION, -2, -REGION}, n0[3] = {2 * REGION, 3, 2 * REGION - 1};
-  assert_int_equal(mpm_refinement_index_dense(&r, lo0, n0, (size_t)1 << 20), 0);
+  assert_int_equal(mpm_refinement_index_dense(&r, lo0, n0, (size_t)1 << 20), MPM_OK);
   assert_non_null(r.refined[0].bits);
   for (int q = 0; q < N; ++q) {
     assert_int_equal(mpm_refinement_is_refined(&r, level[q], cell[q]), refined[q]);
@@ -519,7 +519,7 @@ static void test_dense_index_agrees(void **state) {
   }
   /* a refinement after indexing shows in the index */
   const int32_t fresh[3] = {REGION - 1, 0, REGION - 2};
-  assert_int_equal(mpm_refinement_refine(&r, 2, fresh), 0);
+  assert_int_equal(mpm_refinement_refine(&r, 2, fresh), MPM_OK);
   assert_true(mpm_refinement_is_refined(&r, 2, fresh));
   const int32_t parent[3] = {fresh[0] / 2, 0, fresh[2] / 2};
   assert_true(mpm_refinement_is_refined(&r, 1, parent));

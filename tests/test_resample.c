@@ -47,7 +47,7 @@ static void test_split(void **state) {
   uint64_t s = 3;
   for (int apic = 0; apic <= 1; ++apic) {
     mpm_particles p;
-    assert_int_equal(mpm_particles_init(&p, 1), 0); /* the split grows the arrays */
+    assert_int_equal(mpm_particles_init(&p, 1), MPM_OK); /* the split grows the arrays */
     const double x[3] = {0.31, 0.52, 0.77};
     fill_particle(&p, &s, x, 1, apic);
     p.id[0] = 41;
@@ -60,7 +60,7 @@ static void test_split(void **state) {
     for (int c = 0; c < 9; ++c) F0[c] = p.F[c][0], B0[c] = p.B[c][0];
     for (int d = 0; d < 3; ++d) v0[d] = p.v[d][0];
     uint32_t next = 100;
-    assert_int_equal(mpm_split_particle(&p, 0, &sd, &next), 0);
+    assert_int_equal(mpm_split_particle(&p, 0, &sd, &next), MPM_OK);
     assert_int_equal(p.count, 8);
     assert_int_equal(next, 107);
     double m1, mv1[3], L1[3], centre[3] = {0};
@@ -113,7 +113,7 @@ static void test_merge(void **state) {
   uint64_t s = 5;
   for (int apic = 0; apic <= 1; ++apic) {
     mpm_particles p;
-    assert_int_equal(mpm_particles_init(&p, 16), 0);
+    assert_int_equal(mpm_particles_init(&p, 16), MPM_OK);
     double xc[3] = {0};
     for (int k = 0; k < 8; ++k) {
       const double x[3] = {0.5 + test_rand(&s, -0.01, 0.01), 0.4 + test_rand(&s, -0.01, 0.01),

@@ -162,8 +162,8 @@ void mpm_adaptive_apic_g2p_before(mpm_adaptive *a);
  * types and strain from the particles). */
 mpm_status mpm_adaptive_apply_rules(mpm_adaptive *a, mpm_refinement *r, int rebuild,
                                     mpm_error *err);
-/* The dense index of tree r over the domain. 0, or -1 when out of memory. */
-int mpm_adaptive_index_tree(mpm_adaptive *a, mpm_refinement *r);
+/* The dense index of tree r over the domain. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_adaptive_index_tree(mpm_adaptive *a, mpm_refinement *r);
 /* Between steps, every domain.refine_every steps: a new tree from the rules. */
 mpm_status mpm_adaptive_refine(mpm_adaptive *a);
 /* The refined cells (level, i, j, k), for checkpoints: a new array (mpm_free it), NULL when out of

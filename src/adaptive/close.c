@@ -105,9 +105,12 @@ static int64_t block_slot(mpm_adaptive_grid *g, int level, const int32_t bc[3]) 
   return (int64_t)s;
 }
 
-int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]) {
+mpm_status mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3],
+                                           int *uniform) {
   const int64_t s = block_slot(g, level, bc);
-  return s < 0 ? -1 : g->blocks.uniform[s];
+  if (s < 0) return MPM_ERR_NOMEM;
+  *uniform = g->blocks.uniform[s];
+  return MPM_OK;
 }
 
 /* Whether cell c of `level` is a leaf: not refined, and its parent refined (or level 0). */
@@ -158,18 +161,18 @@ static uint64_t stable_cells(const mpm_refinement *r, int level, const int32_t b
   return mask;
 }
 
-int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const int32_t bc[3],
-                                         int reach, uint64_t *mask) {
+mpm_status mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level,
+                                                const int32_t bc[3], int reach, uint64_t *mask) {
   if (reach < 2 || reach > STABLE_REACH_MAX) {
     *mask = 0; /* not a reach the cache keeps: no cell is stable */
-    return 0;
+    return MPM_OK;
   }
   const int64_t s = block_slot(g, level, bc);
-  if (s < 0) return -1;
+  if (s < 0) return MPM_ERR_NOMEM;
   struct mpm_block_flags *f = &g->blocks;
   if (f->uniform[s]) {
     *mask = ~(uint64_t)0;
-    return 0;
+    return MPM_OK;
   }
   const int which = reach - 2;
   if (!(f->cells_known[s] >> which & 1)) {
@@ -177,7 +180,7 @@ int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const 
     f->cells_known[s] |= (uint8_t)(1 << which);
   }
   *mask = f->cells[2 * s + (size_t)which];
-  return 0;
+  return MPM_OK;
 }
 
 /* The row-cache ids of the nodes of (level, block bc): valid until the next call (the pool may
@@ -217,11 +220,11 @@ static inline size_t row_slot(uint64_t key, size_t size) {
   return (size_t)h & (size - 1);
 }
 
-/* The cache's entry for node idx of `level` at finest-lattice position key, made on first use
- * (a real node: its owner level; else its row). NULL when out of memory or when the row needs
- * more than MPM_ROW_MAX entries. */
-static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const int32_t idx[3],
-                                          uint64_t key) {
+/* The cache's entry for node idx of `level` at finest-lattice position key into *out, made on
+ * first use (a real node: its owner level; else its row). MPM_OK; MPM_ERR_NOMEM when out of
+ * memory; MPM_ERR_INVALID when the row needs more than MPM_ROW_MAX entries. */
+static mpm_status row_of(mpm_adaptive_grid *g, int level, const int32_t idx[3], uint64_t key,
+                         const struct mpm_row_entry **out) {
   struct mpm_row_cache *c = &g->rows;
   if (c->version != g->tree.version) { /* the tree changed: forget every row */
     if (c->size) memset(c->keys, 0xff, c->size * sizeof *c->keys);
@@ -230,7 +233,10 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
   }
   if (c->size)
     for (size_t s = row_slot(key, c->size);; s = (s + 1) & (c->size - 1)) {
-      if (c->keys[s] == key) return &c->entries[c->entry[s]];
+      if (c->keys[s] == key) {
+        *out = &c->entries[c->entry[s]];
+        return MPM_OK;
+      }
       if (c->keys[s] == ROW_EMPTY) break;
     }
   if (2 * (c->count + 1) > c->size) { /* grow the table, keep the entries */
@@ -240,7 +246,7 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
     if (!keys || !entry) {
       mpm_free(keys);
       mpm_free(entry);
-      return NULL;
+      return MPM_ERR_NOMEM;
     }
     memset(keys, 0xff, size * sizeof *keys);
     for (size_t s = 0; s < c->size; ++s)
@@ -259,7 +265,7 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
   if (mpm_grow((void **)&c->entries, &c->entry_capacity, c->count + 1, sizeof *c->entries) ||
       mpm_grow((void **)&c->terms, &c->term_capacity, c->term_count + MPM_ROW_MAX,
                sizeof *c->terms))
-    return NULL;
+    return MPM_ERR_NOMEM;
   struct mpm_row_entry *e = &c->entries[c->count];
   mpm_row_term own;
   if (mpm_refinement_node_is_real(&g->tree, level, idx, &own)) {
@@ -268,7 +274,7 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
   } else {
     const int n =
         mpm_refinement_node_row(&g->tree, level, idx, c->terms + c->term_count, MPM_ROW_MAX);
-    if (n < 0) return NULL;
+    if (n < 0) return MPM_ERR_INVALID;
     e->owner = -1;
     e->start = (uint32_t)c->term_count;
     e->len = (uint32_t)n;
@@ -278,30 +284,36 @@ static const struct mpm_row_entry *row_of(mpm_adaptive_grid *g, int level, const
   while (c->keys[s] != ROW_EMPTY) s = (s + 1) & (c->size - 1);
   c->keys[s] = key;
   c->entry[s] = (uint32_t)c->count;
-  return &c->entries[c->count++];
+  *out = &c->entries[c->count++];
+  return MPM_OK;
 }
 
-/* The row cache's entry of node idx of `level`, through its block's ids (block_ids). NULL when
- * out of memory or past MPM_ROW_MAX. */
-static const struct mpm_row_entry *entry_of(mpm_adaptive_grid *g, int level, const int32_t idx[3],
-                                            uint32_t *ids) {
+/* The row cache's entry of node idx of `level` into *out, through its block's ids (block_ids).
+ * MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID past MPM_ROW_MAX or outside the
+ * coordinate range. */
+static mpm_status entry_of(mpm_adaptive_grid *g, int level, const int32_t idx[3], uint32_t *ids,
+                           const struct mpm_row_entry **out) {
   const int local = local_of(idx);
-  if (ids[local] != UINT32_MAX) return &g->rows.entries[ids[local]];
+  if (ids[local] != UINT32_MAX) {
+    *out = &g->rows.entries[ids[local]];
+    return MPM_OK;
+  }
   const int shift = fine_shift(&g->tree, level);
   uint64_t key = 0; /* the position on the finest lattice, 21 bits per axis */
   for (int d = 0; d < 3; ++d) {
     const int64_t u =
         (int64_t)idx[d] * ((int64_t)1 << shift) + ((int64_t)1 << (MPM_REFINEMENT_COORD_BITS - 1));
-    if (u < 0 || u >= ((int64_t)1 << MPM_REFINEMENT_COORD_BITS)) return NULL;
+    if (u < 0 || u >= ((int64_t)1 << MPM_REFINEMENT_COORD_BITS)) return MPM_ERR_INVALID;
     key = (key << MPM_REFINEMENT_COORD_BITS) | (uint64_t)u;
   }
-  const struct mpm_row_entry *e = row_of(g, level, idx, key);
-  if (e) {
-    ids[local] = (uint32_t)(e - g->rows.entries);
-    if (e->owner == level) /* see owned_of */
-      g->blocks.owned[(size_t)(ids - g->blocks.ids) / MPM_BLOCK_NODES] |= (uint64_t)1 << local;
-  }
-  return e;
+  const struct mpm_row_entry *e;
+  const mpm_status st = row_of(g, level, idx, key, &e);
+  if (st != MPM_OK) return st;
+  ids[local] = (uint32_t)(e - g->rows.entries);
+  if (e->owner == level) /* see owned_of */
+    g->blocks.owned[(size_t)(ids - g->blocks.ids) / MPM_BLOCK_NODES] |= (uint64_t)1 << local;
+  *out = e;
+  return MPM_OK;
 }
 
 /* The nodes of a block (its ids, from block_ids) known to be real nodes owned by its level: a
@@ -310,11 +322,11 @@ static inline uint64_t owned_of(const mpm_adaptive_grid *g, const uint32_t *ids)
   return g->blocks.owned[(size_t)(ids - g->blocks.ids) / MPM_BLOCK_NODES];
 }
 
-/* The row of a slot of transfer grid G, or 0 when the slot is a real node owned by its level
- * on the level's own grid. On an extra grid every slot is a ghost: a real node owned by the
- * level is a duplicate of the level grid's slot; a real node owned by a coarser level is a
- * duplicate of that level's slot on any grid. `ids`: the slot's block's (block_ids). -1 past
- * MPM_ROW_MAX or when out of memory. */
+/* The row of a slot of transfer grid G (its length in *n), or 0 terms when the slot is a real
+ * node owned by its level on the level's own grid. On an extra grid every slot is a ghost: a real
+ * node owned by the level is a duplicate of the level grid's slot; a real node owned by a coarser
+ * level is a duplicate of that level's slot on any grid. `ids`: the slot's block's (block_ids).
+ * MPM_OK, or entry_of's failure. */
 /* The row of a duplicate: node idx of `level`, a real node owned by `owner`, is the owner's node
  * at the same position. 1 term. */
 static int duplicate_row(int level, int owner, const int32_t idx[3], mpm_row_term *row) {
@@ -326,27 +338,31 @@ static int duplicate_row(int level, int owner, const int32_t idx[3], mpm_row_ter
   return 1;
 }
 
-static int slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t *ids,
-                    mpm_row_term *row) {
+static mpm_status slot_row(mpm_adaptive_grid *g, int G, const int32_t idx[3], uint32_t *ids,
+                           mpm_row_term *row, int *n) {
   const int level = level_of(g, G);
-  const struct mpm_row_entry *e = entry_of(g, level, idx, ids);
-  if (!e) return -1;
-  if (e->owner >= 0) { /* real */
-    if (e->owner == level && G < MPM_LEVELS_MAX) return 0;
-    return duplicate_row(level, e->owner, idx, row);
+  const struct mpm_row_entry *e;
+  const mpm_status st = entry_of(g, level, idx, ids, &e);
+  if (st != MPM_OK) return st;
+  if (e->owner >= 0) /* real */
+    *n = e->owner == level && G < MPM_LEVELS_MAX ? 0 : duplicate_row(level, e->owner, idx, row);
+  else {
+    memcpy(row, g->rows.terms + e->start, e->len * sizeof *row);
+    *n = (int)e->len;
   }
-  memcpy(row, g->rows.terms + e->start, e->len * sizeof *row);
-  return (int)e->len;
+  return MPM_OK;
 }
 
-/* Room in g->build for the ghosts of one block (64) and their rows. 0, or -1 when out of
- * memory. */
-static int reserve_block_ghosts(mpm_adaptive_grid *g) {
+/* Room in g->build for the ghosts of one block (64) and their rows. MPM_OK, or MPM_ERR_NOMEM
+ * when out of memory. */
+static mpm_status reserve_block_ghosts(mpm_adaptive_grid *g) {
   const size_t a = g->build.count + MPM_BLOCK_NODES;
-  return mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
-         mpm_grow((void **)&g->build.where, &g->build.where_cap, a, sizeof *g->build.where) ||
-         mpm_grow((void **)&g->build.terms, &g->build.terms_cap,
-                  g->build.term_count + MPM_BLOCK_NODES * MPM_ROW_MAX, sizeof *g->build.terms);
+  if (mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
+      mpm_grow((void **)&g->build.where, &g->build.where_cap, a, sizeof *g->build.where) ||
+      mpm_grow((void **)&g->build.terms, &g->build.terms_cap,
+               g->build.term_count + MPM_BLOCK_NODES * MPM_ROW_MAX, sizeof *g->build.terms))
+    return MPM_ERR_NOMEM;
+  return MPM_OK;
 }
 
 /* Record ghost (G, b, local), its row's n terms already at build.terms[build.term_count ..),
@@ -363,23 +379,23 @@ static void record_ghost(mpm_adaptive_grid *g, int G, size_t b, int local, int n
 
 /* Close block b of transfer grid G on the serial path: look its pending slots' rows up (made in
  * the caches on first use), record its ghosts and mark their parents (activating their
- * blocks). 0, or -1 when out of memory or past MPM_ROW_MAX. */
-static int close_block_serial(mpm_adaptive_grid *g, int G, size_t b, uint64_t pending) {
+ * blocks). MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID past MPM_ROW_MAX. */
+static mpm_status close_block_serial(mpm_adaptive_grid *g, int G, size_t b, uint64_t pending) {
   const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
   const int level = level_of(g, G);
-  if (!pending) return 0;
+  if (!pending) return MPM_OK;
   if (G < MPM_LEVELS_MAX) { /* a block of owned real nodes has no rows */
-    const int u = mpm_adaptive_grid_block_uniform(g, G, sg->coord[b]);
-    if (u < 0) return -1;
-    if (u) return 0;
+    int u;
+    if (mpm_adaptive_grid_block_uniform(g, G, sg->coord[b], &u) != MPM_OK) return MPM_ERR_NOMEM;
+    if (u) return MPM_OK;
   }
   uint32_t *ids = block_ids(g, level, sg->coord[b]);
-  if (!ids) return -1;
+  if (!ids) return MPM_ERR_NOMEM;
   /* a real node owned by the level has no row on the level's grid; on an extra grid it is a
    * duplicate of the level grid's node (slot_row), here without the lookup */
   const uint64_t own = owned_of(g, ids);
   if (G < MPM_LEVELS_MAX) pending &= ~own;
-  if (pending && reserve_block_ghosts(g)) return -1;
+  if (pending && reserve_block_ghosts(g) != MPM_OK) return MPM_ERR_NOMEM;
   while (pending) {
     const int local = __builtin_ctzll(pending);
     pending &= pending - 1;
@@ -390,8 +406,8 @@ static int close_block_serial(mpm_adaptive_grid *g, int G, size_t b, uint64_t pe
     if (own >> local & 1) { /* slot_row's duplicate of the level grid's node */
       n = duplicate_row(level, level, idx, row);
     } else {
-      n = slot_row(g, G, idx, ids, row);
-      if (n < 0) return -1;
+      const mpm_status st = slot_row(g, G, idx, ids, row, &n);
+      if (st != MPM_OK) return st;
     }
     if (n) {
       g->ghost[G][b] |= (uint64_t)1 << local;
@@ -400,9 +416,9 @@ static int close_block_serial(mpm_adaptive_grid *g, int G, size_t b, uint64_t pe
     /* parents are real nodes of the level grids: their own rows are empty, so nothing more
      * follows from them */
     for (int t = 0; t < n; ++t)
-      if (mpm_adaptive_mark(g, row[t].level, row[t].idx) < 0) return -1;
+      if (mpm_adaptive_mark(g, row[t].level, row[t].idx) != MPM_OK) return MPM_ERR_NOMEM;
   }
-  return 0;
+  return MPM_OK;
 }
 
 /* Block b of transfer grid G (its pending slots) closed from the caches alone, changing none of
@@ -472,17 +488,17 @@ static int close_block_cached(mpm_adaptive_grid *g, int G, size_t b, uint64_t pe
  * active. Blocks whose rows the caches hold (every step between two rebuilds, nearly all) are
  * counted and then recorded in parallel; the others take the serial path in their turn, so
  * that records, caches and new blocks come in the serial order whatever the threads. */
-int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
+mpm_status mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
   g->build.count = g->build.term_count = 0;
   FOR_GRIDS(g, G) {
-    if (mpm_adaptive_ensure_masks(g, G)) return -1;
+    if (mpm_adaptive_ensure_masks(g, G)) return MPM_ERR_NOMEM;
     const mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
     const long nb = (long)sg->block_count;
     if (mpm_grow((void **)&g->closing.pending, &g->closing.pending_cap, (size_t)nb + 1,
                  sizeof *g->closing.pending) ||
         mpm_grow((void **)&g->closing.count, &g->closing.count_cap, (size_t)nb + 1,
                  sizeof *g->closing.count))
-      return -1;
+      return MPM_ERR_NOMEM;
     uint64_t *pend = g->closing.pending;
     uint32_t(*count)[2] = g->closing.count;
     /* the caches are the tree's (else every block takes the serial path, which renews them) */
@@ -499,7 +515,8 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
     }
     for (long b = 0; b < nb; ++b) {
       if (count[b][0] == UINT32_MAX) {
-        if (close_block_serial(g, G, (size_t)b, pend[b])) return -1;
+        const mpm_status st = close_block_serial(g, G, (size_t)b, pend[b]);
+        if (st != MPM_OK) return st;
         pend[b] = 0; /* done */
         continue;
       }
@@ -512,7 +529,7 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
       if (mpm_grow((void **)&g->build.len, &g->build.len_cap, a, sizeof *g->build.len) ||
           mpm_grow((void **)&g->build.where, &g->build.where_cap, a, sizeof *g->build.where) ||
           mpm_grow((void **)&g->build.terms, &g->build.terms_cap, t, sizeof *g->build.terms))
-        return -1;
+        return MPM_ERR_NOMEM;
       count[b][0] = (uint32_t)g->build.count; /* now where its records start */
       count[b][1] = (uint32_t)g->build.term_count;
       g->build.count = a;
@@ -520,16 +537,17 @@ int mpm_adaptive_grid_close(mpm_adaptive_grid *g) {
     }
     /* slots the serial path marked on this grid itself, new blocks included (parents of its
      * own level: real, so without rows; not expected, but closed as the serial loop would) */
-    if (mpm_adaptive_ensure_masks(g, G)) return -1;
+    if (mpm_adaptive_ensure_masks(g, G)) return MPM_ERR_NOMEM;
     for (size_t b = 0; b < sg->block_count; ++b) {
       const uint64_t p = g->used[G][b] & ~g->done[G][b];
       if (!p) continue;
       g->done[G][b] |= p;
-      if (close_block_serial(g, G, b, p)) return -1;
+      const mpm_status st = close_block_serial(g, G, b, p);
+      if (st != MPM_OK) return st;
     }
 #pragma omp parallel for schedule(dynamic, 32) if (nb > 256)
     for (long b = 0; b < nb; ++b)
       if (pend[b]) close_block_cached(g, G, (size_t)b, pend[b], NULL, count[b]);
   }
-  return 0;
+  return MPM_OK;
 }

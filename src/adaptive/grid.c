@@ -73,9 +73,9 @@ int mpm_adaptive_grid_next(const mpm_adaptive_grid *g, int G) {
 }
 
 /* The masks of transfer grid G cover its blocks (new blocks start unused). */
-int mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G) {
+mpm_status mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G) {
   const size_t n = grid_of(g, G)->impl.sparse.block_count;
-  if (n <= g->mask_capacity[G]) return 0;
+  if (n <= g->mask_capacity[G]) return MPM_OK;
   size_t cap = g->mask_capacity[G] ? g->mask_capacity[G] : 256;
   while (cap < n) cap *= 2;
   uint64_t **masks[3] = {&g->used[G], &g->done[G], &g->ghost[G]};
@@ -83,7 +83,7 @@ int mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G) {
   for (int k = 0; k < 3; ++k)
     if (!(grown[k] = mpm_calloc(cap, sizeof(uint64_t)))) {
       for (int j = 0; j < k; ++j) mpm_free(grown[j]);
-      return -1;
+      return MPM_ERR_NOMEM;
     }
   for (int k = 0; k < 3; ++k) {
     if (g->mask_capacity[G]) memcpy(grown[k], *masks[k], g->mask_capacity[G] * sizeof(uint64_t));
@@ -91,19 +91,17 @@ int mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G) {
     *masks[k] = grown[k];
   }
   g->mask_capacity[G] = cap;
-  return 0;
+  return MPM_OK;
 }
 
-/* Activate node idx of transfer grid G and mark it used; 1 when the mark is new, 0, or -1. */
-int mpm_adaptive_mark(mpm_adaptive_grid *g, int G, const int32_t idx[3]) {
+/* Activate node idx of transfer grid G and mark it used. */
+mpm_status mpm_adaptive_mark(mpm_adaptive_grid *g, int G, const int32_t idx[3]) {
   const int32_t bc[3] = {idx[0] >> MPM_BLOCK_BITS, idx[1] >> MPM_BLOCK_BITS,
                          idx[2] >> MPM_BLOCK_BITS};
   const int32_t b = mpm_sparse_grid_touch(&grid_of(g, G)->impl.sparse, bc);
-  if (b < 0 || mpm_adaptive_ensure_masks(g, G)) return -1;
-  const uint64_t bit = (uint64_t)1 << local_of(idx);
-  if (g->used[G][b] & bit) return 0;
-  g->used[G][b] |= bit;
-  return 1;
+  if (b < 0 || mpm_adaptive_ensure_masks(g, G)) return MPM_ERR_NOMEM;
+  g->used[G][b] |= (uint64_t)1 << local_of(idx);
+  return MPM_OK;
 }
 
 void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g) {
@@ -116,15 +114,15 @@ void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g) {
   g->ghost_count = 0;
 }
 
-int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
-                                   const int32_t hi[3]) {
+mpm_status mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
+                                          const int32_t hi[3]) {
   for (int32_t a = lo[0]; a <= hi[0]; ++a)
     for (int32_t b = lo[1]; b <= hi[1]; ++b)
       for (int32_t c = lo[2]; c <= hi[2]; ++c) {
         const int32_t idx[3] = {a, b, c};
-        if (mpm_adaptive_mark(g, level, idx) < 0) return -1;
+        if (mpm_adaptive_mark(g, level, idx) != MPM_OK) return MPM_ERR_NOMEM;
       }
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_adaptive_grid_stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]) {
@@ -139,9 +137,9 @@ void mpm_adaptive_grid_stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]) 
         }
 }
 
-int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
+mpm_status mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
   mpm_sparse_grid *sg = &grid_of(g, G)->impl.sparse;
-  if (mpm_adaptive_ensure_masks(g, G)) return -1;
+  if (mpm_adaptive_ensure_masks(g, G)) return MPM_ERR_NOMEM;
   uint64_t reach[MPM_BLOCK_NODES][8];
   mpm_adaptive_grid_stencil_masks(W, reach);
   /* particles of one (block, material, cell) share their stencil: mark it once, through the
@@ -165,7 +163,7 @@ int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W) {
     for (int o = 0; o < 8; ++o)
       if (mark[o]) __atomic_fetch_or(&used[sg->neighbor[b][o]], mark[o], __ATOMIC_RELAXED);
   }
-  return 0;
+  return MPM_OK;
 }
 
 int64_t mpm_adaptive_grid_slot(const mpm_adaptive_grid *g, int level, const int32_t idx[3]) {
@@ -177,8 +175,8 @@ int64_t mpm_adaptive_grid_slot(const mpm_adaptive_grid *g, int level, const int3
   return (int64_t)lv->dof_begin + (int64_t)b * MPM_BLOCK_NODES + local;
 }
 
-static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
-  if (n <= g->ghost_capacity) return 0;
+static mpm_status reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
+  if (n <= g->ghost_capacity) return MPM_OK;
   size_t cap = g->ghost_capacity ? g->ghost_capacity : 1024;
   while (cap < n) cap *= 2;
   uint32_t *slot = mpm_alloc(cap * sizeof *slot);
@@ -188,7 +186,7 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
     mpm_free(slot);
     mpm_free(scratch);
     mpm_free(spread);
-    return -1;
+    return MPM_ERR_NOMEM;
   }
   mpm_free(g->spread);
   g->spread = spread; /* filled by build_rows after every ghost is known */
@@ -198,15 +196,15 @@ static int reserve_ghosts(mpm_adaptive_grid *g, size_t n) {
   g->ghost_slot = slot;
   g->scratch = scratch;
   g->ghost_capacity = cap;
-  return 0;
+  return MPM_OK;
 }
 
 /* The ghosts' scatter in parallel, the same sums for any number of threads: ghosts grouped by
  * the level-0 block they lie in, coloured by its parity. A ghost's parents lie less than two
  * level-0 cells from it (build_rows checks, else the scatter stays serial), so ghosts in two
- * blocks of one colour, 4 level-0 cells apart at least, never share a parent. 0, or -1 when out
- * of memory. */
-static int build_schedule(mpm_adaptive_grid *g) {
+ * blocks of one colour, 4 level-0 cells apart at least, never share a parent. MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+static mpm_status build_schedule(mpm_adaptive_grid *g) {
   const size_t n = g->ghost_count;
   const uint32_t(*where)[3] = g->build.where;
   /* ghosts of one block are consecutive: at most one key per run of a block, so a table twice
@@ -222,12 +220,12 @@ static int build_schedule(mpm_adaptive_grid *g) {
     g->schedule.table_block = mpm_alloc(size * sizeof(uint64_t));
     g->schedule.table_key = mpm_alloc(size * sizeof(int32_t));
     g->schedule.table_size = g->schedule.table_block && g->schedule.table_key ? size : 0;
-    if (!g->schedule.table_size) return -1;
+    if (!g->schedule.table_size) return MPM_ERR_NOMEM;
   }
   size = g->schedule.table_size;
   if (mpm_grow((void **)&g->schedule.key, &g->schedule.key_cap, n + 1, sizeof(int32_t)) ||
       mpm_grow((void **)&g->schedule.colour, &g->schedule.colour_cap, runs + 1, 1))
-    return -1;
+    return MPM_ERR_NOMEM;
   memset(g->schedule.table_block, 0xff, size * sizeof(uint64_t));
   int32_t keys = 0, key = -1;
   for (size_t a = 0; a < n; ++a) {
@@ -253,16 +251,16 @@ static int build_schedule(mpm_adaptive_grid *g) {
   return mpm_embedding_schedule(&g->ghosts, g->schedule.key, (size_t)keys, g->schedule.colour);
 }
 
-int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
+mpm_status mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
   /* the ghosts close() found, in its order (grid, block, slot); the build arrays are kept from
    * step to step: fresh pages for tens of MB every step cost more than filling them */
   const uint32_t *len = g->build.len, (*where)[3] = g->build.where;
   const mpm_row_term *terms = g->build.terms;
   g->ghost_count = 0;
-  if (reserve_ghosts(g, g->build.count + 1)) return -1;
+  if (reserve_ghosts(g, g->build.count + 1)) return MPM_ERR_NOMEM;
   g->ghost_count = g->build.count;
-  int status = -1;
-  if (mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0)) goto done;
+  const mpm_status laid = mpm_embedding_layout(&g->ghosts, g->ghost_count, len, 0);
+  if (laid != MPM_OK) return laid;
   const size_t entries = g->ghosts.row_start[g->ghost_count];
   if (entries > g->offset_capacity) {
     size_t cap = g->offset_capacity ? g->offset_capacity : 4096;
@@ -274,7 +272,7 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     g->offset_capacity = cap;
     if (!g->offset[0] || !g->offset[1] || !g->offset[2]) {
       g->offset_capacity = 0;
-      goto done;
+      return MPM_ERR_NOMEM;
     }
   }
   /* each ghost's slot now that the layout is known, its entries, their APIC offsets and its
@@ -320,10 +318,8 @@ int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g) {
     }
     for (int q = 0; q < 6; ++q) g->spread[6 * (size_t)a + (size_t)q] = (mpm_real)S[q];
   }
-  if (inactive) goto done;
-  status = far ? 0 : build_schedule(g);
-done:
-  return status;
+  if (inactive) return MPM_ERR_INVALID; /* a parent not active: close() was not called */
+  return far ? MPM_OK : build_schedule(g);
 }
 
 /* The ghosts' values of field u into c, their slots in u zeroed; and back, c into the ghosts'

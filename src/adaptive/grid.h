@@ -130,9 +130,9 @@ static inline int mpm_adaptive_grid_levels(const mpm_adaptive_grid *g) {
 void mpm_adaptive_grid_clear_marks(mpm_adaptive_grid *g);
 
 /* Activate the nodes lo .. hi (inclusive, node indices of `level`) and mark them used. Serial.
- * 0, or -1 when out of memory. */
-int mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
-                                   const int32_t hi[3]);
+ * MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_adaptive_grid_activate_box(mpm_adaptive_grid *g, int level, const int32_t lo[3],
+                                          const int32_t hi[3]);
 
 /* Transfer grids are numbered G: level L's own grid is G = L; extra grids follow from
  * G = MPM_LEVELS_MAX. A new extra grid at `level` (no nodes yet): its number, or -1 when
@@ -145,8 +145,8 @@ int mpm_adaptive_grid_next(const mpm_adaptive_grid *g, int G);
 
 /* After transfer grid G's particles were sorted into it (mpm_sparse_grid_sort, which resets its
  * blocks, so before any other activation of it this step): mark the W^3 stencil of every
- * occupied base node used. 0, or -1 when out of memory. */
-int mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W);
+ * occupied base node used. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_adaptive_grid_mark_sorted(mpm_adaptive_grid *g, int G, int W);
 
 /* Per cell c of a block (its local index) and pad block o (as mpm_sparse_grid.neighbor: the
  * x, y, z offsets as bits 2, 1, 0), the nodes of o that the W^3 stencil based at c covers, as a
@@ -155,12 +155,14 @@ void mpm_adaptive_grid_stencil_masks(int W, uint64_t reach[MPM_BLOCK_NODES][8]);
 
 /* Activate and mark the parents of every used ghost, and record the ghosts with their rows for
  * mpm_adaptive_grid_build_rows. Parents are real, so one pass over the used slots suffices.
- * Serial. 0, or -1 when out of memory or when a row needs more than MPM_ROW_MAX entries. */
-int mpm_adaptive_grid_close(mpm_adaptive_grid *g);
+ * Serial. MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when a row needs more than
+ * MPM_ROW_MAX entries. */
+mpm_status mpm_adaptive_grid_close(mpm_adaptive_grid *g);
 
 /* After the DOF layout (each level's dof_begin set): the rows of the ghosts the last
- * mpm_adaptive_grid_close found. 0, or -1 when out of memory. */
-int mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g);
+ * mpm_adaptive_grid_close found. MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when
+ * a ghost's parent is not active (mpm_adaptive_grid_close was not called). */
+mpm_status mpm_adaptive_grid_build_rows(mpm_adaptive_grid *g);
 
 /* The slot (DOF index) of node idx of `level`, or -1 when it is not active. */
 int64_t mpm_adaptive_grid_slot(const mpm_adaptive_grid *g, int level, const int32_t idx[3]);
@@ -193,9 +195,10 @@ void mpm_adaptive_grid_gather_moments(const mpm_adaptive_grid *g, const mpm_real
  * MPM_UNIFORM_MARGIN cells on every side, holds leaves of that level only: then every node of the
  * block is a real node owned by the level, and a particle whose stencil's base node lies in the
  * block and moves less than a cell keeps meeting leaves of that level only. Cached while the
- * tree stands. 1, 0, or -1 when out of memory. */
+ * tree stands. The answer (1 or 0) in *uniform: MPM_OK, or MPM_ERR_NOMEM when out of memory. */
 #define MPM_UNIFORM_MARGIN 3
-int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3]);
+mpm_status mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32_t bc[3],
+                                           int *uniform);
 
 /* The cells of block bc of `level` (bit (x << 4 | y << 2 | z) for the cell at (x, y, z) in the
  * block) whose neighbours from one below to `reach` above on every axis (reach 2 or 3; none
@@ -203,9 +206,9 @@ int mpm_adaptive_grid_block_uniform(mpm_adaptive_grid *g, int level, const int32
  * base cell to a reach above that its kernel sets (adaptive/step.c, mark_stable, says how): then
  * it meets leaves of that level only, and its transfer grid stays. Cell by cell, since near a
  * change of level most of a block's cells are still far enough from it. All of them for a
- * uniform block. Cached while the tree stands. 0, or -1 when out of memory. */
-int mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level, const int32_t bc[3],
-                                         int reach, uint64_t *mask);
+ * uniform block. Cached while the tree stands. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_adaptive_grid_block_stable_cells(mpm_adaptive_grid *g, int level,
+                                                const int32_t bc[3], int reach, uint64_t *mask);
 
 size_t mpm_adaptive_grid_bytes(const mpm_adaptive_grid *g);
 

@@ -42,12 +42,13 @@ static inline void node_of(const mpm_sparse_grid *sg, size_t b, int local, int32
   idx[2] = c[2] * MPM_BLOCK + (local & 3);
 }
 
-/* The masks of transfer grid G cover its blocks (new blocks start unused). 0, or -1 when out of
- * memory. */
-int mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G);
+/* The masks of transfer grid G cover its blocks (new blocks start unused). MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_adaptive_ensure_masks(mpm_adaptive_grid *g, int G);
 
-/* Activate node idx of transfer grid G and mark it used; 1 when the mark is new, 0, or -1. */
-int mpm_adaptive_mark(mpm_adaptive_grid *g, int G, const int32_t idx[3]);
+/* Activate node idx of transfer grid G and mark it used. MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory. */
+mpm_status mpm_adaptive_mark(mpm_adaptive_grid *g, int G, const int32_t idx[3]);
 
 /* Free the row cache (adaptive/close.c). */
 void mpm_adaptive_rows_free(struct mpm_row_cache *c);

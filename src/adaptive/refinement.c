@@ -85,15 +85,17 @@ static void set_put(uint64_t *keys, size_t size, uint64_t key) {
   keys[i] = key;
 }
 
-/* 1 when inserted, 0 when already there, -1 when out of memory or out of range. */
-static int set_insert(mpm_cell_set *s, const int32_t c[3]) {
+/* Insert c (*inserted: 1, or 0 when it was there already). MPM_OK; MPM_ERR_INVALID when c is out
+ * of the coordinate range; MPM_ERR_NOMEM when out of memory. */
+static mpm_status set_insert(mpm_cell_set *s, const int32_t c[3], int *inserted) {
   uint64_t key;
-  if (pack(c, &key)) return -1;
-  if (set_contains(s, c)) return 0;
+  *inserted = 0;
+  if (pack(c, &key)) return MPM_ERR_INVALID;
+  if (set_contains(s, c)) return MPM_OK;
   if (2 * (s->count + 1) > s->size) {
     const size_t size = s->size ? 2 * s->size : 64;
     uint64_t *keys = mpm_alloc(size * sizeof *keys);
-    if (!keys) return -1;
+    if (!keys) return MPM_ERR_NOMEM;
     memset(keys, 0xff, size * sizeof *keys);
     for (size_t i = 0; i < s->size; ++i)
       if (s->keys[i] != EMPTY_KEY) set_put(keys, size, s->keys[i]);
@@ -107,7 +109,8 @@ static int set_insert(mpm_cell_set *s, const int32_t c[3]) {
     const int64_t b = dense_bit(s, c);
     if (b >= 0) s->bits[b >> 6] |= (uint64_t)1 << (b & 63);
   }
-  return 1;
+  *inserted = 1;
+  return MPM_OK;
 }
 
 /* ---- the tree ---- */
@@ -138,17 +141,18 @@ static inline int fine_shift(const mpm_refinement *r, int level) {
   return r->levels - 1 - level;
 }
 
-int mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]) {
-  if (level < 0 || level >= r->levels - 1) return -1;
+mpm_status mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]) {
+  if (level < 0 || level >= r->levels - 1) return MPM_ERR_INVALID;
   for (int L = level; L >= 0; --L) {
     int32_t c[3];
     for (int d = 0; d < 3; ++d) c[d] = shr_floor(cell[d], level - L);
-    const int rc = set_insert(&r->refined[L], c);
-    if (rc < 0) return -1;
-    if (rc == 0) break; /* its ancestors are refined already */
+    int inserted;
+    const mpm_status st = set_insert(&r->refined[L], c, &inserted);
+    if (st != MPM_OK) return st;
+    if (!inserted) break; /* its ancestors are refined already */
     r->version++;
   }
-  return 0;
+  return MPM_OK;
 }
 
 int mpm_refinement_is_refined(const mpm_refinement *r, int level, const int32_t cell[3]) {
@@ -441,8 +445,8 @@ void mpm_refinement_refined_cells(const mpm_refinement *r,
   }
 }
 
-int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
-                               size_t max_bytes) {
+mpm_status mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
+                                      size_t max_bytes) {
   size_t total = 0;
   for (int L = 0; L + 1 < r->levels; ++L) {
     mpm_cell_set *s = &r->refined[L];
@@ -456,7 +460,7 @@ int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const in
     const size_t bytes = (size_t)((cells + 63) / 64) * sizeof(uint64_t);
     if (total + bytes > max_bytes) break; /* finer levels stay on the hash */
     uint64_t *bits = mpm_calloc((size_t)((cells + 63) / 64), sizeof(uint64_t));
-    if (!bits) return -1;
+    if (!bits) return MPM_ERR_NOMEM;
     mpm_free(s->bits);
     s->bits = bits;
     for (int d = 0; d < 3; ++d) {
@@ -472,7 +476,7 @@ int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const in
     }
     total += bytes;
   }
-  return 0;
+  return MPM_OK;
 }
 
 /* As mpm_refinement_finest_level_in, with the open box: a refined cell [c, c + 1] counts

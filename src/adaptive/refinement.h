@@ -25,6 +25,7 @@
 #ifndef MPM_ADAPTIVE_REFINEMENT_H
 #define MPM_ADAPTIVE_REFINEMENT_H
 
+#include "mpm/mpm.h"
 #include "core/real.h"
 
 #include <stddef.h>
@@ -72,9 +73,10 @@ static inline mpm_real mpm_refinement_dx(const mpm_refinement *r, int level) {
 /* 1 when a and b refine the same cells (the same tree up to its version), else 0. */
 int mpm_refinement_same_cells(const mpm_refinement *a, const mpm_refinement *b);
 
-/* Refine cell `cell` of `level` (0 <= level < levels - 1) and every ancestor. 0, or -1 when out
- * of memory or when the cell lies outside the coordinate range. */
-int mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]);
+/* Refine cell `cell` of `level` (0 <= level < levels - 1) and every ancestor. MPM_OK;
+ * MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when the level is out of range or the cell
+ * lies outside the coordinate range. */
+mpm_status mpm_refinement_refine(mpm_refinement *r, int level, const int32_t cell[3]);
 int mpm_refinement_is_refined(const mpm_refinement *r, int level, const int32_t cell[3]);
 
 /* The level of the leaf holding the finest-level cell c. */
@@ -132,9 +134,10 @@ void mpm_refinement_refined_cells(const mpm_refinement *r,
 
 /* Index the refined cells of the levels densely over the level-0 cells lo0 .. lo0 + n0 (each
  * level's box scaled to its cells), from the coarsest level down while the bitmaps stay within
- * max_bytes together. Lookups give the same answers, faster. 0, or -1 when out of memory. */
-int mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
-                               size_t max_bytes);
+ * max_bytes together. Lookups give the same answers, faster. MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory. */
+mpm_status mpm_refinement_index_dense(mpm_refinement *r, const int32_t lo0[3], const int32_t n0[3],
+                                      size_t max_bytes);
 
 size_t mpm_refinement_bytes(const mpm_refinement *r);
 

@@ -443,7 +443,7 @@ nomem:
   return mpm_error_set(err, MPM_ERR_NOMEM, "%s: out of memory for the refined cells", sc->path);
 }
 
-int mpm_adaptive_index_tree(mpm_adaptive *a, mpm_refinement *r) {
+mpm_status mpm_adaptive_index_tree(mpm_adaptive *a, mpm_refinement *r) {
   /* the refined cells over the domain densely (a bit per cell, up to 64 MiB for all levels):
    * the step asks the tree for every particle */
   const int32_t lo0[3] = {-1, -1, -1},

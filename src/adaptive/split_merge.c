@@ -7,10 +7,11 @@
 #include <math.h>
 #include <string.h>
 
-int mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s, uint32_t *next_id) {
+mpm_status mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s,
+                              uint32_t *next_id) {
   if (p->count + 7 > p->capacity &&
       mpm_particles_reserve(p, p->count + 7 > 2 * p->capacity ? p->count + 7 : 2 * p->capacity))
-    return -1;
+    return MPM_ERR_NOMEM;
   double x0[3], v0[3], C[9] = {0}, B[9] = {0};
   for (int d = 0; d < 3; ++d) x0[d] = p->x[d][i], v0[d] = p->v[d][i];
   if (s->apic) /* the parent's velocity gradient, and the children's moment with it */
@@ -44,7 +45,7 @@ int mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s, uint
     if (s->apic)
       for (int e = 0; e < 9; ++e) p->B[e][j] = (mpm_real)B[e];
   }
-  return 0;
+  return MPM_OK;
 }
 
 /* F = U diag(sigma) V^T in double, from the engine's SVD (in mpm_real). */

@@ -19,6 +19,7 @@
 #ifndef MPM_ADAPTIVE_SPLIT_MERGE_H
 #define MPM_ADAPTIVE_SPLIT_MERGE_H
 
+#include "mpm/mpm.h"
 #include "core/particles.h"
 
 /* How a split places and sets its children. */
@@ -30,9 +31,10 @@ typedef struct mpm_split_desc {
 } mpm_split_desc;
 
 /* Split particle i of p: it becomes child 0 in place, children 1..7 are appended with ids
- * *next_id, *next_id + 1, ... (advanced). Type level + 1. 0, or -1 when out of memory (p is
- * unchanged then). */
-int mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s, uint32_t *next_id);
+ * *next_id, *next_id + 1, ... (advanced). Type level + 1. MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory (p is unchanged then). */
+mpm_status mpm_split_particle(mpm_particles *p, size_t i, const mpm_split_desc *s,
+                              uint32_t *next_id);
 
 /* The mean isotropic D of uGIMP on a grid of spacing dx with box side L (per axis). */
 static inline double mpm_ugimp_mean_D(double dx, double L) {

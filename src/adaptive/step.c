@@ -311,15 +311,15 @@ mpm_status mpm_adaptive_layout(mpm_adaptive *a, unsigned fields) {
   mpm_adaptive_grid *ag = &a->grid;
   mpm_dofs *d = a->host.dofs;
   mpm_dofs_begin_layout(d);
-  int failed = 0;
-  for (int G = 0; G >= 0 && !failed; G = mpm_adaptive_grid_next(ag, G)) {
+  mpm_status added = MPM_OK;
+  for (int G = 0; G >= 0 && added == MPM_OK; G = mpm_adaptive_grid_next(ag, G)) {
     mpm_grid *g = mpm_adaptive_grid_at(ag, G);
     if (g->impl.sparse.block_count)
-      failed = mpm_dofs_add_grid(d, g);
+      added = mpm_dofs_add_grid(d, g);
     else
       g->dof_begin = d->count; /* no nodes, no segment */
   }
-  if (failed || mpm_dofs_end_layout(d, fields) ||
+  if (added != MPM_OK || mpm_dofs_end_layout(d, fields) ||
       (ag->tree.levels > 1 && mpm_adaptive_grid_build_rows(ag)))
     return mpm_error_set(a->host.error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the values of %zu grid nodes",
