@@ -56,7 +56,7 @@ static inline void join(char *out, size_t cap, const char *dir, const char *name
 /* n particles with distinct positions, velocities, deformation gradients and shuffled ids;
  * J[i] = det F and a made-up stress. */
 static inline void make_particles(mpm_particles *p, size_t n, mpm_real *J, mpm_real *stress) {
-  assert_int_equal(mpm_particles_init(p, n), 0);
+  assert_int_equal(mpm_particles_init(p, n), MPM_OK);
   uint64_t rng = 777;
   for (size_t i = 0; i < n; ++i) {
     mpm_real x[3], v[3];

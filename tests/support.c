@@ -134,7 +134,7 @@ double test_domain_rest_error(const struct mpm_sim *sim) {
   const mpm_point_cloud rest = {n, (const double(*)[3])X, s->particles.id, NULL};
   const mpm_point_cloud final = {n, (const double(*)[3])x, s->particles.id, NULL};
   mpm_rest_error r;
-  assert_int_equal(mpm_rest_error_compute(&rest, &final, &r), 0);
+  assert_int_equal(mpm_rest_error_compute(&rest, &final, &r), MPM_OK);
   free(X);
   free(x);
   return r.mean;

@@ -62,7 +62,7 @@ typedef struct known {
 
 static void check_known(const mpm_collider_desc *d, const known *k, int count) {
   mpm_collider c;
-  assert_int_equal(mpm_collider_init(&c, d), 0);
+  assert_int_equal(mpm_collider_init(&c, d), MPM_OK);
   const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0.0);
   const double tol = TOL(2e-6, 1e-13);
   for (int i = 0; i < count; ++i) {
@@ -169,7 +169,7 @@ static void test_halfspace_known(void **state) {
   set3(d.shape.center, 0, 0.25, 0); /* a point on the plane */
   set3(d.shape.axis, 0, 1, 0);      /* outward normal: the solid is y < 0.25 */
   mpm_collider c;
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   mpm_collider_pose pose = mpm_collider_pose_at(&c, 0.0);
   const double tol = TOL(1e-6, 1e-14);
   const double x1[3] = {3, 1.25, -2}, x2[3] = {-7, -0.75, 4}, x3[3] = {1, 0.25, 1};
@@ -182,7 +182,7 @@ static void test_halfspace_known(void **state) {
   /* a tilted plane through the origin: phi = x.n with n = (1, 1, 1)/sqrt 3 */
   set3(d.shape.center, 0, 0, 0);
   set3(d.shape.axis, 1, 1, 1); /* not unit: init normalises */
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   pose = mpm_collider_pose_at(&c, 0.0);
   const double x4[3] = {1, 2, -0.5};
   assert_close(phi_at(&pose, x4, n), 2.5 / sqrt(3.0), tol);
@@ -202,8 +202,8 @@ static void test_random_points_distance(void **state) {
     mpm_collider_desc d = shape_desc(s), dio = d;
     dio.inside_out = 1;
     mpm_collider c, cio;
-    assert_int_equal(mpm_collider_init(&c, &d), 0);
-    assert_int_equal(mpm_collider_init(&cio, &dio), 0);
+    assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
+    assert_int_equal(mpm_collider_init(&cio, &dio), MPM_OK);
     const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0.0);
     const mpm_collider_pose pio = mpm_collider_pose_at(&cio, 0.0);
     for (int trial = 0; trial < 3000; ++trial) {
@@ -235,7 +235,7 @@ static void test_degenerate_normals(void **state) {
   for (int s = 0; s < SHAPES; ++s) {
     mpm_collider_desc d = shape_desc(s);
     mpm_collider c;
-    assert_int_equal(mpm_collider_init(&c, &d), 0);
+    assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
     const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0.0);
     double n[3];
     phi_at(&pose, d.shape.center, n); /* the centre: box, sphere and cylinder medial axis */
@@ -257,7 +257,7 @@ static void test_normal_is_gradient(void **state) {
   for (int s = 0; s < SHAPES; ++s) {
     const mpm_collider_desc d = moving(shape_desc(s));
     mpm_collider c;
-    assert_int_equal(mpm_collider_init(&c, &d), 0);
+    assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
     const mpm_collider_pose pose = mpm_collider_pose_at(&c, t);
     double R[9], ctr[3];
     rot(d.motion.axis, d.motion.angular_speed * t, R);

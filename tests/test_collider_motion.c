@@ -26,8 +26,8 @@ static void test_moving_phi(void **state) {
   for (int s = 0; s < SHAPES; ++s) {
     const mpm_collider_desc d0 = shape_desc(s), d = moving(d0);
     mpm_collider c0, c;
-    assert_int_equal(mpm_collider_init(&c0, &d0), 0);
-    assert_int_equal(mpm_collider_init(&c, &d), 0);
+    assert_int_equal(mpm_collider_init(&c0, &d0), MPM_OK);
+    assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
     const mpm_collider_pose still = mpm_collider_pose_at(&c0, 5.0); /* no motion: any time */
     for (int ti = 0; ti < 3; ++ti) {
       const double t = times[ti];
@@ -97,7 +97,7 @@ static void test_constant_motion(void **state) {
   uint64_t rng = 5;
   const mpm_collider_desc d = moving(shape_desc(0));
   mpm_collider c;
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   const double times[5] = {0.0, 0.35, 1.9, 4.0, 40.0}; /* 36 rad: several turns */
   for (int ti = 0; ti < 5; ++ti) {
     const double t = times[ti];
@@ -116,7 +116,7 @@ static void test_constant_motion(void **state) {
   /* pure translation with no rotation axis at all */
   mpm_collider_desc dt = shape_desc(1);
   set3(dt.motion.velocity, -1.0, 0.5, 2.0);
-  assert_int_equal(mpm_collider_init(&c, &dt), 0);
+  assert_int_equal(mpm_collider_init(&c, &dt), MPM_OK);
   const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zero[3] = {0, 0, 0};
   double ctr[3];
   for (int j = 0; j < 3; ++j) ctr[j] = dt.shape.center[j] + dt.motion.velocity[j] * 1.5;
@@ -147,7 +147,7 @@ static void test_keyframes(void **state) {
   d.motion.keyframe_count = 3;
   d.motion.keyframes = k;
   mpm_collider c;
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   /* the collider owns a copy: changing the scene's array afterwards changes nothing */
   mpm_keyframe saved[3];
   memcpy(saved, k, sizeof k);
@@ -201,7 +201,7 @@ static void test_keyframes(void **state) {
   /* a single keyframe: a fixed offset at every time */
   d.motion.keyframes = saved + 1;
   d.motion.keyframe_count = 1;
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   for (int m = 0; m < 3; ++m) {
     const mpm_collider_pose pose = mpm_collider_pose_at(&c, -1.0 + 2.0 * m);
     double R[9], ctr[3];
@@ -223,7 +223,7 @@ static void test_collider_velocity_rotation(void **state) {
   set3(d.motion.velocity, 0.5, 0, 0);
   d.rule = MPM_BOUNDARY_STICKY;
   mpm_collider c;
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   const mpm_collider_pose pose = mpm_collider_pose_at(&c, 2.0); /* centre (1, 0, 0) */
   const mpm_real x[3] = {1, R_(0.9), 0};
   mpm_real v[3] = {3, 4, 5};
@@ -339,7 +339,7 @@ static void test_apply(void **state) {
       d.rule = (mpm_boundary_rule)(s % 3);
       d.friction = 0.3;
       mpm_collider c;
-      assert_int_equal(mpm_collider_init(&c, &d), 0);
+      assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
       const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0.6);
       int inside = 0, outside = 0;
       for (int trial = 0; trial < 600; ++trial) {
@@ -382,7 +382,7 @@ static void test_corner_leaves_slip(void **state) {
     set3(d.shape.axis, 0, 1, 0); /* the floor y < 1 */
     d.rule = rule;
     mpm_collider c;
-    assert_int_equal(mpm_collider_init(&c, &d), 0);
+    assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
     const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0);
     /* the floor alone, then the wall y > 2 alone */
     const mpm_boundary floor = {{-9, -9, -9}, {9, 9, 9}, MPM_BOUNDARY_SLIP, 0, 1, &pose};
@@ -428,7 +428,7 @@ static void test_friction_constraints(void **state) {
   d.rule = MPM_BOUNDARY_SEPARATE;
   d.friction = 0.5;
   mpm_collider c;
-  assert_int_equal(mpm_collider_init(&c, &d), 0);
+  assert_int_equal(mpm_collider_init(&c, &d), MPM_OK);
   const mpm_collider_pose pose = mpm_collider_pose_at(&c, 0);
   const mpm_boundary floor = {{-9, -9, -9}, {9, 9, 9}, MPM_BOUNDARY_SLIP, 0, 1, &pose};
   const mpm_real x[3] = {0, R_(0.999), 0}, v[3] = {40, -40, 0};
@@ -448,7 +448,7 @@ static void test_friction_constraints(void **state) {
   }
   d.friction = 0;
   mpm_collider c0;
-  assert_int_equal(mpm_collider_init(&c0, &d), 0);
+  assert_int_equal(mpm_collider_init(&c0, &d), MPM_OK);
   const mpm_collider_pose pose0 = mpm_collider_pose_at(&c0, 0);
   const mpm_boundary frictionless = {{-9, -9, -9}, {9, 9, 9}, MPM_BOUNDARY_SLIP, 0, 1, &pose0};
   mpm_real n[4][3], vo[4][3];

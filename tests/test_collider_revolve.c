@@ -47,8 +47,8 @@ static void test_cylinder_profile(void **state) {
   dc.shape.radius = R;
   dc.shape.half_height = H;
   mpm_collider cr, cc;
-  assert_int_equal(mpm_collider_init(&cr, &dr), 0);
-  assert_int_equal(mpm_collider_init(&cc, &dc), 0);
+  assert_int_equal(mpm_collider_init(&cr, &dr), MPM_OK);
+  assert_int_equal(mpm_collider_init(&cc, &dc), MPM_OK);
   const mpm_collider_pose pr = mpm_collider_pose_at(&cr, 0), pc = mpm_collider_pose_at(&cc, 0);
   uint64_t rng = 3;
   const double tol = TOL(2e-6, 1e-12);
@@ -110,7 +110,7 @@ static void test_hourglass(void **state) {
   const double c[3] = {0.3, 0.5, 0.3}, axis[3] = {0.28, 0.96, 0}; /* unit: 0.28^2 + 0.96^2 */
   mpm_collider_desc d = revolve_desc(HG, HG_N, c, axis);
   mpm_collider col;
-  assert_int_equal(mpm_collider_init(&col, &d), 0);
+  assert_int_equal(mpm_collider_init(&col, &d), MPM_OK);
   const mpm_collider_pose pose = mpm_collider_pose_at(&col, 0);
   uint64_t rng = 11;
   double worst_dist = 0, worst_grad = 0;

@@ -71,7 +71,7 @@ static void test_weights_cube(void **state) {
   double X[8][3], w[8], g[8][3], V;
   uint64_t rng = 1;
   random_hex(&rng, 0.1, 0, X);
-  assert_int_equal(mpm_domain_weights(X, w, g, &V), 0);
+  assert_int_equal(mpm_domain_weights(X, w, g, &V), MPM_OK);
   assert_close(V, 1e-3, 1e-15);
   for (int a = 0; a < 8; ++a) {
     assert_close(w[a], 0.125, 1e-15);
@@ -87,7 +87,7 @@ static void test_weights_distorted(void **state) {
   for (int trial = 0; trial < 20; ++trial) {
     double X[8][3], w[8], g[8][3], V;
     random_hex(&rng, 0.05, 0.2, X);
-    assert_int_equal(mpm_domain_weights(X, w, g, &V), 0);
+    assert_int_equal(mpm_domain_weights(X, w, g, &V), MPM_OK);
     double sw = 0, sg[3] = {0, 0, 0}, XG[3][3] = {{0}};
     for (int a = 0; a < 8; ++a) {
       sw += w[a];
@@ -137,7 +137,7 @@ static void test_weights_distorted(void **state) {
   double X[8][3], w[8], g[8][3], V;
   random_hex(&rng, 0.05, 0, X);
   for (int a = 0; a < 8; ++a) X[a][0] = -X[a][0];
-  assert_int_equal(mpm_domain_weights(X, w, g, &V), -1);
+  assert_int_equal(mpm_domain_weights(X, w, g, &V), MPM_ERR_INVALID);
 }
 
 /* Linear hat weight of node i (index) at x, grid spacing dx (Zhu eqs. 2-3). */
@@ -344,7 +344,7 @@ static void test_build_from_body(void **state) {
     assert_close(s.cube_g[i], 1 / (4 * h), TOL(1e-6, 1e-13) / h);
   }
   s.g[1][3][1] *= (mpm_real)1.01;
-  assert_int_equal(mpm_domain_set_rebuild(&s), 0);
+  assert_int_equal(mpm_domain_set_rebuild(&s), MPM_OK);
   assert_true(s.cube_g[1] == 0);
   assert_true(s.cube_g[0] == s.g[0][7][0] && s.cube_g[2] == s.g[2][7][0]);
   mpm_domain_set_free(&s);
@@ -425,13 +425,14 @@ static void block_setup(block_fixture *fx, mpm_kernel_kind kind, mpm_transfer_ki
   mpm_grid_init_sparse(&fx->grid, 0, ctx->origin, (mpm_real)dx);
   mpm_particles_init(&fx->none, 16);
   mpm_arena_init(&fx->scratch);
-  assert_int_equal(fx->grid.ops->activate(&fx->grid, &ctx->kernel, 1, &fx->none, &fx->scratch), 0);
-  assert_int_equal(mpm_domain_activate(s, &fx->grid, &ctx->kernel), 0);
-  assert_int_equal(mpm_domain_plan(s, &fx->grid, &ctx->kernel, &fx->scratch), 0);
+  assert_int_equal(fx->grid.ops->activate(&fx->grid, &ctx->kernel, 1, &fx->none, &fx->scratch),
+                   MPM_OK);
+  assert_int_equal(mpm_domain_activate(s, &fx->grid, &ctx->kernel), MPM_OK);
+  assert_int_equal(mpm_domain_plan(s, &fx->grid, &ctx->kernel, &fx->scratch), MPM_OK);
   mpm_dofs_init(&fx->dofs);
   mpm_dofs_begin_layout(&fx->dofs);
-  assert_int_equal(mpm_dofs_add_grid(&fx->dofs, &fx->grid), 0);
-  assert_int_equal(mpm_dofs_end_layout(&fx->dofs, MPM_DOF_ALL), 0);
+  assert_int_equal(mpm_dofs_add_grid(&fx->dofs, &fx->grid), MPM_OK);
+  assert_int_equal(mpm_dofs_end_layout(&fx->dofs, MPM_DOF_ALL), MPM_OK);
   mpm_dofs_clear(&fx->dofs, MPM_DOF_ALL);
   fx->val = mpm_dofs_grid_values(&fx->dofs, &fx->grid);
   /* the grid update: no gravity, no walls */
@@ -526,9 +527,9 @@ static void run_pads_match_rows(mpm_kernel_kind kind, mpm_transfer_kind transfer
   block_setup(&a, kind, transfer);
   block_setup(&b, kind, transfer);
   b.s.corner_rows = 1; /* the implicit step's plan: rows */
-  assert_int_equal(mpm_domain_plan(&b.s, &b.grid, &b.ctx.kernel, &b.scratch), 0);
-  assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), 0);
-  assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), 0);
+  assert_int_equal(mpm_domain_plan(&b.s, &b.grid, &b.ctx.kernel, &b.scratch), MPM_OK);
+  assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), MPM_OK);
+  assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), MPM_OK);
   assert_true(a.s.pads.on);
   assert_false(b.s.pads.on);
   assert_true(a.s.corner_grid.rows == 0 && b.s.corner_grid.rows == b.s.corner_count);
@@ -586,7 +587,7 @@ static void run_permuted_corners(mpm_transfer_kind transfer) {
     order[j] = t;
   }
   for (size_t k = 0; k < nc; ++k) inv[order[k]] = (uint32_t)k;
-  assert_int_equal(mpm_domain_set_permute_corners(&b.s, order, &b.scratch), 0);
+  assert_int_equal(mpm_domain_set_permute_corners(&b.s, order, &b.scratch), MPM_OK);
   for (size_t q = 0; q < np; ++q)
     for (int c = 0; c < 8; ++c) assert_int_equal(b.s.corner[q][c], inv[a.s.corner[q][c]]);
   for (size_t c = 0; c < nc; ++c) {
@@ -597,9 +598,9 @@ static void run_permuted_corners(mpm_transfer_kind transfer) {
       assert_int_equal(b.s.adj[b.s.adj_start[k] + j], a.s.adj[a.s.adj_start[c] + j]);
     for (int d = 0; d < 3; ++d) assert_true(b.s.cx[d][k] == a.s.cx[d][c]);
   }
-  assert_int_equal(mpm_domain_plan(&b.s, &b.grid, &b.ctx.kernel, &b.scratch), 0);
-  assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), 0);
-  assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), 0);
+  assert_int_equal(mpm_domain_plan(&b.s, &b.grid, &b.ctx.kernel, &b.scratch), MPM_OK);
+  assert_int_equal(mpm_domain_p2g(&a.ctx, &a.s, &a.grid, &a.val, &a.scratch), MPM_OK);
+  assert_int_equal(mpm_domain_p2g(&b.ctx, &b.s, &b.grid, &b.val, &b.scratch), MPM_OK);
   const double tol = TOL(1e-6, 1e-14);
   same_grid_then_g2p(&a, &b, tol);
   mpm_real *back = test_malloc(nc * sizeof *back);
@@ -612,15 +613,17 @@ static void run_permuted_corners(mpm_transfer_kind transfer) {
   for (int e = 0; e < 9; ++e)
     assert_arrays_close(b.s.particles.F[e], a.s.particles.F[e], np, tol, "particle F");
   /* the step's renumbering: the lattice's numbers (a) break the pads' order everywhere */
-  assert_int_equal(mpm_domain_plan(&a.s, &a.grid, &a.ctx.kernel, &a.scratch), 0);
+  assert_int_equal(mpm_domain_plan(&a.s, &a.grid, &a.ctx.kernel, &a.scratch), MPM_OK);
   assert_true(a.s.pads.breaks > a.s.pads.grid_positions / 10);
   uint32_t *done = NULL;
-  assert_int_equal(mpm_domain_order_corners(&a.s, &a.grid, &a.ctx.kernel, &a.scratch, &done), 0);
+  assert_int_equal(mpm_domain_order_corners(&a.s, &a.grid, &a.ctx.kernel, &a.scratch, &done),
+                   MPM_OK);
   assert_non_null(done);
   assert_true(a.s.pads.on);
   assert_int_equal(a.s.pads.breaks, 0);
   for (size_t k = 0; k < a.s.pads.positions; ++k) assert_int_equal(a.s.pads.row[k], k);
-  assert_int_equal(mpm_domain_order_corners(&a.s, &a.grid, &a.ctx.kernel, &a.scratch, &done), 0);
+  assert_int_equal(mpm_domain_order_corners(&a.s, &a.grid, &a.ctx.kernel, &a.scratch, &done),
+                   MPM_OK);
   assert_null(done); /* in order: nothing to do */
   test_free(back);
   test_free(order);

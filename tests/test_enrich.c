@@ -229,7 +229,7 @@ static void test_categories(void **state) {
   assert_close(mpm_enrichment_epsilon(s, 0), 0.6, 1e-7);
   const size_t q0 = 17;
   stretch_particle(sim, q0, 4); /* K = 3 / sqrt(18 * 2.0625) = 0.49 <= 0.6 */
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   const mpm_domain_enrichment *e = &s->enrich;
   assert_int_equal(e->count, 8);
   for (int a = 0; a < MPM_HEX_CORNERS; ++a) assert_true(e->enriched[s->corner[q0][a]]);
@@ -255,31 +255,31 @@ static void test_categories(void **state) {
    * enriched particle stays enriched; at rest (K = 1) it returns to the grid, and from there a
    * stretch of 1.5 enriches nothing */
   stretch_particle(sim, q0, 1.5);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 8);
   stretch_particle(sim, q0, 1);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 0);
   stretch_particle(sim, q0, 1.5);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 0);
   /* without hysteresis (enrichment_exit = enrichment) the stretch of 1.5 releases it at once */
   const mpm_enrichment_body no_exit = {.epsilon = (mpm_real)0.6,
                                        .exit_k = (mpm_real)0.6,
                                        .spacing = (mpm_real)0.02,
                                        .metric = MPM_ENRICHMENT_FROBENIUS};
-  assert_int_equal(mpm_enrichment_set_body(s, 0, no_exit), 0);
+  assert_int_equal(mpm_enrichment_set_body(s, 0, no_exit), MPM_OK);
   stretch_particle(sim, q0, 4);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 8);
   stretch_particle(sim, q0, 1.5);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 0);
   /* epsilon 0 never enriches */
   stretch_particle(sim, q0, 4);
   const mpm_enrichment_body never = {.spacing = (mpm_real)0.02, .metric = MPM_ENRICHMENT_FROBENIUS};
-  assert_int_equal(mpm_enrichment_set_body(s, 0, never), 0);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_enrichment_set_body(s, 0, never), MPM_OK);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 0);
   assert_int_equal(e->particles[MPM_DOMAIN_UNENRICHED], 40);
   mpm_sim_destroy(sim);
@@ -512,10 +512,10 @@ static void test_bend_enrichment(void **state) {
   }
   /* straight neighbours far from q0: strain 0 */
   assert_close(mpm_enrichment_hourglass_strain(&sim->domains, 0, (mpm_real)h), 0, TOL(1e-4, 1e-12));
-  assert_int_equal(mpm_domain_mark_enrichment(&plain->domains, plain->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(&plain->domains, plain->materials), MPM_OK);
   assert_int_equal(plain->domains.enrich.count, 0);
   mpm_domain_set *s = &sim->domains;
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   const mpm_domain_enrichment *e = &s->enrich;
   assert_int_equal(e->category[q0], MPM_DOMAIN_ENRICHED);
   size_t flagged = 0;
@@ -530,7 +530,7 @@ static void test_bend_enrichment(void **state) {
   /* straight again: back to the grid */
   for (int a = 0; a < MPM_HEX_CORNERS; ++a)
     s->cx[0][s->corner[q0][a]] -= (mpm_real)(0.03 * h * mpm_hourglass_modes[0][a]);
-  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), 0);
+  assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
   assert_int_equal(e->count, 0);
   mpm_sim_destroy(plain);
   mpm_sim_destroy(sim);

@@ -296,7 +296,7 @@ static void test_vtu_roundtrip(void **state) {
 static void test_vtu_empty(void **state) {
   (void)state;
   mpm_particles p;
-  assert_int_equal(mpm_particles_init(&p, 0), 0);
+  assert_int_equal(mpm_particles_init(&p, 0), MPM_OK);
   const char *dir = test_temp_dir("io-vtu-empty");
   char path[600];
   join(path, sizeof path, dir, "empty.vtu");

@@ -54,7 +54,7 @@ static mpm_rest_error compute(const clouds *c, size_t np) {
   const mpm_point_cloud rest = {N, (const double(*)[3])c->q, c->qid, c->mass};
   const mpm_point_cloud final = {np, (const double(*)[3])c->p, c->pid, NULL};
   mpm_rest_error e;
-  assert_int_equal(mpm_rest_error_compute(&rest, &final, &e), 0);
+  assert_int_equal(mpm_rest_error_compute(&rest, &final, &e), MPM_OK);
   return e;
 }
 
@@ -128,7 +128,7 @@ static void test_matching_by_id(void **state) {
   const mpm_point_cloud rest = {N, (const double(*)[3])c.q, c.qid, NULL};
   const mpm_point_cloud final = {N, (const double(*)[3])c.p, c.pid, NULL};
   mpm_rest_error e2;
-  assert_int_equal(mpm_rest_error_compute(&rest, &final, &e2), -1);
+  assert_int_equal(mpm_rest_error_compute(&rest, &final, &e2), MPM_ERR_INVALID);
 }
 
 static double det(const double M[9]) {

@@ -37,7 +37,7 @@ static void fixture_init(fixture *f) {
   f->body.particles_per_cell = 8;
   f->body.shape.mesh_scale = 1;
   for (int d = 0; d < 3; ++d) f->body.shape.center[d] = 0.5;
-  assert_int_equal(mpm_particles_init(&f->p, 16), 0);
+  assert_int_equal(mpm_particles_init(&f->p, 16), MPM_OK);
   mpm_error_clear(&f->err);
 }
 

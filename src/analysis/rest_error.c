@@ -95,14 +95,14 @@ static id_index *id_order(const mpm_point_cloud *c) {
   return o;
 }
 
-int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *final,
-                           mpm_rest_error *out) {
+mpm_status mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *final,
+                                  mpm_rest_error *out) {
   memset(out, 0, sizeof *out);
   id_index *ro = id_order(rest), *fo = id_order(final);
   size_t(*pair)[2] = mpm_alloc((rest->n + 1) * sizeof *pair);
   if (!ro || !fo || !pair) {
     mpm_free(ro), mpm_free(fo), mpm_free(pair);
-    return -2;
+    return MPM_ERR_NOMEM;
   }
   /* matched pairs (rest index, final index), by merging the id orders */
   size_t n = 0;
@@ -120,7 +120,7 @@ int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *f
   }
   mpm_free(ro);
   mpm_free(fo);
-  int rc = -1;
+  mpm_status st = MPM_ERR_INVALID;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   double m = 0, qc[3] = {0, 0, 0}, pc[3] = {0, 0, 0};
   for (size_t k = 0; k < n; ++k) {
@@ -166,8 +166,8 @@ int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *f
     for (int r = 0; r < 3; ++r)
       out->translation[r] =
           pc[r] - (out->R[3 * r] * qc[0] + out->R[3 * r + 1] * qc[1] + out->R[3 * r + 2] * qc[2]);
-    rc = 0;
+    st = MPM_OK;
   }
   mpm_free(pair);
-  return rc;
+  return st;
 }

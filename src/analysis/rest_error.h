@@ -13,6 +13,8 @@
 #ifndef MPM_ANALYSIS_REST_ERROR_H
 #define MPM_ANALYSIS_REST_ERROR_H
 
+#include "mpm/mpm.h"
+
 #include <stddef.h>
 #include <stdint.h>
 
@@ -32,10 +34,11 @@ typedef struct mpm_point_cloud {
   const double *mass;
 } mpm_point_cloud;
 
-/* The error of `final` against `rest` into *out. Returns 0, -1 when no particle is in both
- * (or the rest shape has no extent), -2 when out of memory. Ids must be unique per cloud. */
-int mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *final,
-                           mpm_rest_error *out);
+/* The error of `final` against `rest` into *out. MPM_OK; MPM_ERR_INVALID when no particle is in
+ * both (or the rest shape has no extent); MPM_ERR_NOMEM when out of memory. Ids must be unique
+ * per cloud. */
+mpm_status mpm_rest_error_compute(const mpm_point_cloud *rest, const mpm_point_cloud *final,
+                                  mpm_rest_error *out);
 
 /* The nearest rotation to A (row-major): the orthogonal factor of its polar decomposition with
  * the reflection fix. A singular A of rank 2 still gives a rotation. */

@@ -91,10 +91,10 @@ mpm_status mpm_rest_error_frames(const char *rest_path, const char *final_path, 
     const mpm_point_cloud rc = {r.n, (const double(*)[3])r.x, r.id, r.mass};
     const mpm_point_cloud fc = {f.n, (const double(*)[3])f.x, f.id, f.mass};
     mpm_rest_error e;
-    const int rc_st = mpm_rest_error_compute(&rc, &fc, &e);
-    if (rc_st == -2) {
+    const mpm_status computed = mpm_rest_error_compute(&rc, &fc, &e);
+    if (computed == MPM_ERR_NOMEM) {
       st = mpm_error_set(&err, MPM_ERR_NOMEM, "out of memory");
-    } else if (rc_st) {
+    } else if (computed != MPM_OK) {
       st = mpm_error_set(&err, MPM_ERR_INVALID,
                          "%s and %s: no particle id is in both frames%s, or the rest shape has "
                          "no extent",

@@ -25,7 +25,7 @@ static void normalize3(double a[3]) {
     for (int d = 0; d < 3; ++d) a[d] /= len;
 }
 
-int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d) {
+mpm_status mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d) {
   memset(&c->script, 0, sizeof c->script);
   c->desc = *d;
   c->desc.motion.keyframes = NULL;
@@ -37,12 +37,12 @@ int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d) {
   if (n > 0) {
     assert(d->motion.keyframes);
     mpm_keyframe *k = mpm_alloc((size_t)n * sizeof *k);
-    if (!k) return -1;
+    if (!k) return MPM_ERR_NOMEM;
     memcpy(k, d->motion.keyframes, (size_t)n * sizeof *k);
     c->desc.motion.keyframes = k;
     c->desc.motion.keyframe_count = n;
   }
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_collider_free(mpm_collider *c) {

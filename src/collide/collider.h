@@ -8,6 +8,7 @@
 #ifndef MPM_COLLIDE_COLLIDER_H
 #define MPM_COLLIDE_COLLIDER_H
 
+#include "mpm/mpm.h"
 #include "collide/collider_desc.h"
 #include "core/real.h"
 
@@ -38,7 +39,8 @@ typedef struct mpm_collider_pose {
   mpm_real omega[3];    /* angular velocity, rad/s */
 } mpm_collider_pose;
 
-int mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d); /* 0, or -1 on OOM */
+/* A collider from its description d. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_collider_init(mpm_collider *c, const mpm_collider_desc *d);
 void mpm_collider_free(mpm_collider *c);
 
 /* The pose at time t: the scene's motion, or a scripted collider's pose now with the velocity

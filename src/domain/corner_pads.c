@@ -33,15 +33,15 @@ static int compare_place(const void *a, const void *b) {
   return x->key < y->key ? -1 : x->key > y->key;
 }
 
-int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_grid *g,
-                         const mpm_kernel *k, mpm_arena *scratch) {
+mpm_status mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_grid *g,
+                                const mpm_kernel *k, mpm_arena *scratch) {
   P->on = 0;
   const mpm_sparse_grid *sg = &g->impl.sparse;
   const size_t nc = s->corner_count, nk = sg->block_count;
   P->block = mpm_arena_alloc(scratch, (nc + 1) * sizeof *P->block);
   P->cell = mpm_arena_alloc(scratch, nc + 1);
   uint8_t *key_colour = mpm_arena_alloc(scratch, nk + 1);
-  if (!P->block || !P->cell || !key_colour) return -1;
+  if (!P->block || !P->cell || !key_colour) return MPM_ERR_NOMEM;
   const mpm_domain_enrichment *en = &s->enrich;
   const int enriched = en->count > 0;
   int missing = 0;
@@ -75,14 +75,14 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
       P->cell[c] = (uint8_t)((base[2] & 3) << 4 | (base[1] & 3) << 2 | (base[0] & 3));
     }
   }
-  if (missing) return -1;
+  if (missing) return MPM_ERR_INVALID;
   /* the colour of a block is the parity of its coordinates (grid.c, stencil_nodes) */
   for (size_t b = 0; b < nk; ++b) {
     const int32_t *bc = sg->coord[b];
     key_colour[b] = (uint8_t)((bc[0] & 1) << 2 | (bc[1] & 1) << 1 | (bc[2] & 1));
   }
   mpm_scatter_schedule *S = &P->schedule;
-  if (mpm_scatter_schedule_build(S, nc, P->block, nk, key_colour)) return -1;
+  if (mpm_scatter_schedule_build(S, nc, P->block, nk, key_colour)) return MPM_ERR_NOMEM;
   const size_t groups = S->colour_start[MPM_SCHEDULE_COLOURS];
   P->pad = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->pad);
   P->org = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->org);
@@ -91,7 +91,7 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   P->positions = P->grid_positions + S->own_rows;
   P->row = mpm_arena_alloc(scratch, (P->positions + 1) * sizeof *P->row);
   P->pos = mpm_arena_alloc(scratch, (nc + 1) * sizeof *P->pos);
-  if (!P->pad || !P->org || !P->cell_start || !P->row || !P->pos) return -1;
+  if (!P->pad || !P->org || !P->cell_start || !P->row || !P->pos) return MPM_ERR_NOMEM;
 #pragma omp parallel for schedule(static) if (nc > MPM_PARALLEL_MIN)
   for (long c = 0; c < (long)nc; ++c) P->pos[c] = MPM_CORNER_PADS_NONE;
   /* the groups' ranges of positions in the order of their blocks in space (z, y, x; x fastest),
@@ -100,7 +100,7 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   uint32_t *first = mpm_arena_alloc(scratch, (groups + 1) * sizeof *first);
   group_place *place = mpm_arena_alloc(scratch, (groups + 1) * sizeof *place);
   P->in_space = mpm_arena_alloc(scratch, (groups + 1) * sizeof *P->in_space);
-  if (!first || !place || !P->in_space) return -1;
+  if (!first || !place || !P->in_space) return MPM_ERR_NOMEM;
   for (size_t q = 0; q < groups; ++q) {
     const int32_t *bc = sg->coord[mpm_scatter_schedule_group_key(S, P->block, q)];
     place[q].key = (uint64_t)(uint32_t)(bc[2] + (1 << 20)) << 42 |
@@ -143,7 +143,7 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
     const int32_t *bc = sg->coord[mpm_scatter_schedule_group_key(S, P->block, q)];
     for (int o = 0; o < 8; ++o) {
       const int32_t nb[3] = {bc[0] + ((o >> 2) & 1), bc[1] + ((o >> 1) & 1), bc[2] + (o & 1)};
-      if ((P->pad[q][o] = mpm_sparse_grid_find(sg, nb)) < 0) return -1;
+      if ((P->pad[q][o] = mpm_sparse_grid_find(sg, nb)) < 0) return MPM_ERR_INVALID;
     }
     for (int d = 0; d < 3; ++d) P->org[q][d] = bc[d] * MPM_BLOCK;
   }
@@ -154,7 +154,7 @@ int mpm_corner_pads_plan(mpm_corner_pads *P, const mpm_domain_set *s, const mpm_
   P->breaks = (size_t)breaks;
   for (int d = 0; d < 3; ++d) P->origin[d] = g->origin[d];
   P->on = 1;
-  return 0;
+  return MPM_OK;
 }
 
 /* The DOFs of group q's pad of S^3 nodes, (i, j, k) at (i S + j) S + k. */
@@ -262,13 +262,13 @@ ALWAYS_INLINE void scatter_colour(const int W, const int apic, const mpm_corner_
   }
 }
 
-int mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, const mpm_kernel *k,
-                            const mpm_real *const carrier[7], int apic, mpm_real *const values[7],
-                            mpm_arena *scratch) {
+mpm_status mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s,
+                                   const mpm_kernel *k, const mpm_real *const carrier[7], int apic,
+                                   mpm_real *const values[7], mpm_arena *scratch) {
   const mpm_scatter_schedule *sch = &P->schedule;
   mpm_vl(*acc)[SCATTER_STRIDE] =
       mpm_arena_alloc(scratch, (size_t)mpm_thread_count() * PAD_NODES * sizeof *acc);
-  if (!acc) return -1;
+  if (!acc) return MPM_ERR_NOMEM;
   for (int colour = 0; colour < MPM_SCHEDULE_COLOURS; ++colour) {
     const long g0 = (long)sch->colour_start[colour], g1 = (long)sch->colour_start[colour + 1];
     /* the width and APIC constants in each copy: the stencil loops unroll */
@@ -301,7 +301,7 @@ int mpm_corner_pads_scatter(const mpm_corner_pads *P, const mpm_domain_set *s, c
                              zero * (cm * s->cB[3 * kk + 2][c]);
       }
   }
-  return 0;
+  return MPM_OK;
 }
 
 ALWAYS_INLINE mpm_real gather_group(const int W, const int apic, const mpm_corner_pads *P,

@@ -25,6 +25,7 @@
 #ifndef MPM_DOMAIN_CORNER_PADS_H
 #define MPM_DOMAIN_CORNER_PADS_H
 
+#include "mpm/mpm.h"
 #include "core/arena.h"
 #include "grid/grid.h"
 #include "grid/scatter_schedule.h"
@@ -58,19 +59,20 @@ typedef struct mpm_corner_pads {
 void mpm_corner_pads_free(mpm_corner_pads *P);
 
 /* Group the used corners of s by the base block of their stencils on sparse level g (enriched
- * corners are rows of their own: their DOFs), with kernel k; scratch from the step's arena. 0,
- * or -1 when out of memory or a block is missing (cannot happen after mpm_domain_activate). */
-int mpm_corner_pads_plan(mpm_corner_pads *P, const struct mpm_domain_set *s, const mpm_grid *g,
-                         const mpm_kernel *k, mpm_arena *scratch);
+ * corners are rows of their own: their DOFs), with kernel k; scratch from the step's arena.
+ * MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when a block is missing (cannot
+ * happen after mpm_domain_activate). */
+mpm_status mpm_corner_pads_plan(mpm_corner_pads *P, const struct mpm_domain_set *s,
+                                const mpm_grid *g, const mpm_kernel *k, mpm_arena *scratch);
 
 /* values[f][DOF] += omega_i(x_a) carrier[f][k] for the 7 fields (mass, momentum, force) of
  * corner a = P->row[k], and with apic the affine moment sum_j a_j (m_a B_a)[3k + j] added to
  * values[1 + k] (momentum), m_a = carrier[0] and B_a = s->cB by corner, as
  * mpm_embedding_scatter_moments does with the rows. Each thread's pad of lanes comes from
- * scratch: 0, or -1 when out of memory. */
-int mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_set *s,
-                            const mpm_kernel *k, const mpm_real *const carrier[7], int apic,
-                            mpm_real *const values[7], mpm_arena *scratch);
+ * scratch: MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_corner_pads_scatter(const mpm_corner_pads *P, const struct mpm_domain_set *s,
+                                   const mpm_kernel *k, const mpm_real *const carrier[7], int apic,
+                                   mpm_real *const values[7], mpm_arena *scratch);
 
 /* The grid's velocities at the corners, and the corners moved with them (G2P's corner half):
  * for every used corner v^g_a = sum_i omega_i(x_a) v_i (into s->corner_pack), with apic s->cB =

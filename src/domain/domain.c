@@ -52,8 +52,8 @@ void mpm_domain_set_free(mpm_domain_set *s) {
 
 /* ---- weights ------------------------------------------------------------------------ */
 
-int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORNERS],
-                       double g[MPM_HEX_CORNERS][3], double *volume) {
+mpm_status mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORNERS],
+                              double g[MPM_HEX_CORNERS][3], double *volume) {
   /* 2-point Gauss rule per axis: +-1/sqrt(3), weight 1 */
   const double q = 1 / sqrt(3.0);
   double V = 0;
@@ -71,7 +71,7 @@ int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORN
     const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
                        J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
                        J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
-    if (!(det > 0)) return -1;
+    if (!(det > 0)) return MPM_ERR_INVALID;
     /* grad_X N = J^-T grad_xi N, and J^-T = cof(J) / det: det dV folds the division away */
     double cof[3][3];
     cof[0][0] = J[1][1] * J[2][2] - J[1][2] * J[2][1];
@@ -95,7 +95,7 @@ int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORN
     for (int r = 0; r < 3; ++r) g[a][r] /= V;
   }
   *volume = V;
-  return 0;
+  return MPM_OK;
 }
 
 /* ---- building from a lattice ---------------------------------------------------------- */
@@ -135,13 +135,13 @@ static int reserve_particles(mpm_domain_set *s, size_t need) {
   return 0;
 }
 
-int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
+mpm_status mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners) {
   mpm_domain_set_init(s);
   if (reserve_particles(s, particles ? particles : 1) || reserve_corners(s, corners ? corners : 1))
-    return -1;
+    return MPM_ERR_NOMEM;
   s->particles.count = particles;
   s->corner_count = corners;
-  return 0;
+  return MPM_OK;
 }
 
 /* Rebuild the corner -> particle-slot adjacency (CSR) over the active particles. */
@@ -158,10 +158,10 @@ static void cube_scales(mpm_domain_set *s) {
   }
 }
 
-static int build_adjacency(mpm_domain_set *s) {
+static mpm_status build_adjacency(mpm_domain_set *s) {
   mpm_free(s->cube_g);
   s->cube_g = mpm_alloc((s->particles.count + 1) * sizeof *s->cube_g);
-  if (!s->cube_g) return -1;
+  if (!s->cube_g) return MPM_ERR_NOMEM;
   cube_scales(s);
   mpm_free(s->adj_start);
   mpm_free(s->adj);
@@ -169,7 +169,7 @@ static int build_adjacency(mpm_domain_set *s) {
   s->adj_start = mpm_calloc(s->corner_count + 1, sizeof *s->adj_start);
   s->adj = mpm_alloc((s->particles.count * MPM_HEX_CORNERS + 1) * sizeof *s->adj);
   s->corner_use = mpm_alloc(s->corner_count + 1);
-  if (!s->adj_start || !s->adj || !s->corner_use) return -1;
+  if (!s->adj_start || !s->adj || !s->corner_use) return MPM_ERR_NOMEM;
   for (size_t p = 0; p < s->particles.count; ++p)
     if (s->active[p])
       for (int a = 0; a < MPM_HEX_CORNERS; ++a) s->adj_start[s->corner[p][a] + 1]++;
@@ -178,7 +178,7 @@ static int build_adjacency(mpm_domain_set *s) {
     s->adj_start[c + 1] += s->adj_start[c];
   }
   uint32_t *fill = mpm_alloc((s->corner_count + 1) * sizeof *fill);
-  if (!fill) return -1;
+  if (!fill) return MPM_ERR_NOMEM;
   memcpy(fill, s->adj_start, (s->corner_count + 1) * sizeof *fill);
   for (size_t p = 0; p < s->particles.count; ++p)
     if (s->active[p])
@@ -188,7 +188,7 @@ static int build_adjacency(mpm_domain_set *s) {
   /* m_a = sum_p omega_ap m_p in slot order (domain.h, cmass) */
   mpm_free(s->cmass);
   s->cmass = mpm_alloc((s->corner_count + 1) * sizeof *s->cmass);
-  if (!s->cmass) return -1;
+  if (!s->cmass) return MPM_ERR_NOMEM;
   for (size_t c = 0; c < s->corner_count; ++c) {
     double m = 0;
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1]; ++j) {
@@ -198,7 +198,7 @@ static int build_adjacency(mpm_domain_set *s) {
     }
     s->cmass[c] = m;
   }
-  return 0;
+  return MPM_OK;
 }
 
 /* keep[i] = 0 for the particles of fragments (domain.h, MPM_DOMAIN_MIN_FRAGMENT): the
@@ -424,8 +424,8 @@ void mpm_domain_set_sync_particles(mpm_domain_set *s) {
   }
 }
 
-int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
-  if (i >= s->particles.count || !s->active[i]) return 0;
+mpm_status mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
+  if (i >= s->particles.count || !s->active[i]) return MPM_OK;
   const mpm_particles *p = &s->particles;
   mpm_real x[3], v[3];
   for (int d = 0; d < 3; ++d) {
@@ -433,14 +433,14 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to) {
     v[d] = p->v[d][i];
   }
   const long j = mpm_particles_push(to, x, v, p->mass[i], p->vol0[i], p->material[i], p->body[i]);
-  if (j < 0) return -1;
+  if (j < 0) return MPM_ERR_NOMEM;
   for (int c = 0; c < 9; ++c) to->F[c][j] = p->F[c][i];
   to->plastic[j] = p->plastic[i];
   to->temperature[j] = p->temperature[i];
   to->id[j] = p->id[i];
   s->active[i] = 0;
   s->active_count--;
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_domain_permute_values(void *a, void *tmp, size_t size, const uint32_t *order, size_t n) {
@@ -461,13 +461,14 @@ void mpm_domain_permute_values(void *a, void *tmp, size_t size, const uint32_t *
   memcpy(a, tmp, n * size);
 }
 
-int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm_arena *scratch) {
+mpm_status mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order,
+                                          mpm_arena *scratch) {
   const size_t nc = s->corner_count, np = s->particles.count;
   uint32_t *inv = mpm_arena_alloc(scratch, (nc + 1) * sizeof *inv);
   void *tmp = mpm_arena_alloc(scratch, (nc + 1) * sizeof(uint64_t));
   uint32_t *adj_start = mpm_arena_alloc(scratch, (nc + 1) * sizeof *adj_start);
   uint32_t *adj = mpm_arena_alloc(scratch, (s->adj_start[nc] + 1) * sizeof *adj);
-  if (!inv || !tmp || !adj_start || !adj) return -1;
+  if (!inv || !tmp || !adj_start || !adj) return MPM_ERR_NOMEM;
   const long m = (long)nc;
 #pragma omp parallel for schedule(static) if (m > MPM_PARALLEL_MIN)
   for (long k = 0; k < m; ++k) inv[order[k]] = (uint32_t)k;
@@ -498,10 +499,10 @@ int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm
 #pragma omp parallel for schedule(static) if (n > MPM_PARALLEL_MIN / 8)
   for (long q = 0; q < n; ++q)
     for (int c = 0; c < MPM_HEX_CORNERS; ++c) s->corner[q][c] = inv[s->corner[q][c]];
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_domain_set_rebuild(mpm_domain_set *s) {
+mpm_status mpm_domain_set_rebuild(mpm_domain_set *s) {
   s->enrich.valid = 0; /* other particles, other corners: the marks are stale */
   return build_adjacency(s);
 }

@@ -132,8 +132,8 @@ void mpm_domain_set_free(mpm_domain_set *s);
 
 /* An empty set with room for, and counts of, `particles` domain particles and `corners`
  * corners, their values to be filled in (checkpoint reading); call mpm_domain_set_rebuild
- * after filling corner and active. Returns 0, -1 on OOM. */
-int mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners);
+ * after filling corner and active. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_domain_set_alloc(mpm_domain_set *s, size_t particles, size_t corners);
 
 /* g_qa (Zhu eq. 5): from the cube's pattern into gc when particle q's hexahedron is a cube
  * (cube_g; then w_qa = 1/8), else the stored one. The same values either way, bit for bit; the
@@ -148,9 +148,10 @@ static inline const mpm_real *mpm_domain_gradient(const mpm_domain_set *s, uint3
 
 /* omega_ap and the reference gradient averages of the hexahedron with reference corners X
  * (in corner order, hex.h), by 2x2x2 Gauss quadrature (exact for trilinear hexahedra), and
- * its volume. Returns -1 when the hexahedron is inverted or flat at a quadrature point. */
-int mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORNERS],
-                       double g[MPM_HEX_CORNERS][3], double *volume);
+ * its volume. MPM_OK, or MPM_ERR_INVALID when the hexahedron is inverted or flat at a quadrature
+ * point. */
+mpm_status mpm_domain_weights(const double X[MPM_HEX_CORNERS][3], double w[MPM_HEX_CORNERS],
+                              double g[MPM_HEX_CORNERS][3], double *volume);
 
 /* Fragments (beyond Zhu): where a body is thinner than the lattice spacing, sampling can leave
  * a few particles whose cells touch the rest only along an edge or at a corner. Such a domain
@@ -175,9 +176,9 @@ mpm_status mpm_domain_set_add_lattice(mpm_domain_set *s, mpm_particles *p, size_
 void mpm_domain_set_sync_particles(mpm_domain_set *s);
 
 /* Switch the domain of particle i off: its state is appended to `to` as a standard material
- * point (APIC affine moment zero) and the slot becomes inactive. Returns 0, -1 on OOM. Call
- * mpm_domain_set_rebuild once after a batch of releases. */
-int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
+ * point (APIC affine moment zero) and the slot becomes inactive. MPM_OK, or MPM_ERR_NOMEM when
+ * out of memory. Call mpm_domain_set_rebuild once after a batch of releases. */
+mpm_status mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
 
 /* Renumber the corners: corner order[k] becomes corner k (order: a permutation of the corner
  * indices). Every corner array, the particles' corner indices, the adjacency and this step's
@@ -185,14 +186,16 @@ int mpm_domain_set_release(mpm_domain_set *s, size_t i, mpm_particles *to);
  * rounding: the sums over a corner's particles and over a cell's corners go in the new order.
  * The step keeps the corners in the order of its grid blocks with it (domain_transfer.h,
  * mpm_domain_order_corners). Its scratch comes from `scratch`.
- * Returns 0, -1 on OOM (nothing changed then). */
-int mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order, mpm_arena *scratch);
+ * MPM_OK, or MPM_ERR_NOMEM when out of memory (nothing changed then). */
+mpm_status mpm_domain_set_permute_corners(mpm_domain_set *s, const uint32_t *order,
+                                          mpm_arena *scratch);
 
 /* a[k] = a[order[k]] for n elements of `size` bytes (1, 4 or 8) through tmp (n elements): the
  * renumbering of one corner array, for copies of corner values held elsewhere. */
 void mpm_domain_permute_values(void *a, void *tmp, size_t size, const uint32_t *order, size_t n);
 
-/* Rebuild the corner adjacency over the active particles. Returns 0, -1 on OOM. */
-int mpm_domain_set_rebuild(mpm_domain_set *s);
+/* Rebuild the corner adjacency over the active particles. MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory. */
+mpm_status mpm_domain_set_rebuild(mpm_domain_set *s);
 
 #endif

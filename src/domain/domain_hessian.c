@@ -6,8 +6,8 @@
 
 #include <string.h>
 
-int mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s, const mpm_material *materials,
-                            mpm_arena *arena) {
+mpm_status mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s,
+                                   const mpm_material *materials, mpm_arena *arena) {
   memset(h, 0, sizeof *h);
   h->s = s;
   h->materials = materials;
@@ -31,7 +31,7 @@ int mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s, const mpm_
       memset(h->qh[q], 0, sizeof h->qh[q]);
     }
   }
-  return ok ? 0 : -1;
+  return ok ? MPM_OK : MPM_ERR_NOMEM;
 }
 
 /* cu = E u (0 for unused corners: their rows are empty). */

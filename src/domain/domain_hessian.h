@@ -19,6 +19,7 @@
 #ifndef MPM_DOMAIN_DOMAIN_HESSIAN_H
 #define MPM_DOMAIN_DOMAIN_HESSIAN_H
 
+#include "mpm/mpm.h"
 #include "core/arena.h"
 #include "domain/domain.h"
 #include "material/material.h"
@@ -40,9 +41,9 @@ typedef struct mpm_domain_hessian {
 } mpm_domain_hessian;
 
 /* Scratch from the step's arena for the set's particles and corners (after mpm_domain_p2g has
- * built the embedding). 0, or -1 when out of memory. */
-int mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s, const mpm_material *materials,
-                            mpm_arena *arena);
+ * built the embedding). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_domain_hessian_init(mpm_domain_hessian *h, mpm_domain_set *s,
+                                   const mpm_material *materials, mpm_arena *arena);
 /* F^ at the DOF displacement u (NULL: u = 0, F^ = F). */
 void mpm_domain_hessian_displace(mpm_domain_hessian *h, mpm_real *const u[3]);
 /* The per-particle factored stress derivative at F^ (definite unless h->exact). */

@@ -66,7 +66,7 @@ static inline real4 flip_sign(real4 r, mask4 sign) {
  * twentieth off the one, a fifth off the other) */
 #define PREFETCH_AHEAD 16
 
-int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
+mpm_status mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
   const mpm_real *const x[3] = {s->cx[0], s->cx[1], s->cx[2]};
   /* enriched corners (domain/enrich.h) do not touch the grid */
   const uint8_t *use = s->enrich.count ? s->enrich.on_grid : s->corner_use;
@@ -78,24 +78,27 @@ int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k) {
  * dof_begin + its node index); rows of unused corners stay empty. Its scatter schedule groups
  * the used corners by the grid's scatter key of their stencils and colours the keys as the grid
  * says (grid.h, stencil_nodes: for the sparse grid the base block and its parity, as the
- * standard P2G colours blocks), so that the groups of one colour never touch the same node. */
-static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const mpm_grid *g,
-                                  int apic, mpm_arena *scratch) {
+ * standard P2G colours blocks), so that the groups of one colour never touch the same node.
+ * MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when a node of a stencil is not
+ * active. */
+static mpm_status build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const mpm_grid *g,
+                                         int apic, mpm_arena *scratch) {
   const size_t nc = s->corner_count, nk = g->ops->scatter_key_count(g);
   const int W = k->width;
   mpm_embedding *E = &s->corner_grid;
-  if (mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W))) return -1;
+  const mpm_status laid = mpm_embedding_layout(E, nc, NULL, (uint32_t)(W * W * W));
+  if (laid != MPM_OK) return laid;
   /* APIC: the factors of every entry and D of every corner (step scratch) */
   for (int d = 0; d < 3; ++d) {
     s->apic_a[d] =
         apic ? mpm_arena_alloc(scratch, (E->entry_capacity + 1) * sizeof(mpm_real)) : NULL;
     s->apic_d[d] = apic ? mpm_arena_alloc(scratch, (nc + 1) * sizeof(mpm_real)) : NULL;
-    if (apic && (!s->apic_a[d] || !s->apic_d[d])) return -1;
+    if (apic && (!s->apic_a[d] || !s->apic_d[d])) return MPM_ERR_NOMEM;
   }
   int32_t *key = mpm_arena_alloc(scratch, (nc + 1) * sizeof *key);
   uint8_t *colour = mpm_arena_alloc(scratch, nc + 1),
           *key_colour = mpm_arena_alloc(scratch, nk + 1);
-  if (!key || !colour || !key_colour) return -1;
+  if (!key || !colour || !key_colour) return MPM_ERR_NOMEM;
   const uint32_t dof_begin = (uint32_t)g->dof_begin;
   const mpm_domain_enrichment *en = &s->enrich;
   const int enriched = en->count > 0;
@@ -151,7 +154,7 @@ static int build_corner_embedding(const mpm_kernel *k, mpm_domain_set *s, const 
           }
     }
   }
-  if (missing) return -1;
+  if (missing) return MPM_ERR_INVALID;
   for (size_t c = 0; c < nc; ++c) /* every corner of one key has the key's colour */
     if (key[c] >= 0) key_colour[key[c]] = colour[c];
   return mpm_embedding_schedule(E, key, nk, key_colour);
@@ -208,49 +211,50 @@ static void domain_stresses(const mpm_transfer_ctx *ctx, const mpm_domain_set *s
   }
 }
 
-int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k, mpm_arena *scratch) {
+mpm_status mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                           mpm_arena *scratch) {
   s->pads.on = 0;
-  if (!mpm_grid_paged(g) || s->corner_rows) return 0;
+  if (!mpm_grid_paged(g) || s->corner_rows) return MPM_OK;
   for (int d = 0; d < 3; ++d) s->apic_a[d] = s->apic_d[d] = NULL;
   s->corner_grid.rows = 0; /* not this step's */
   s->corner_grid.schedule.built = 0;
   return mpm_corner_pads_plan(&s->pads, s, g, k, scratch);
 }
 
-int mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                             mpm_arena *scratch, uint32_t **order) {
+mpm_status mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                                    mpm_arena *scratch, uint32_t **order) {
   *order = NULL;
   const mpm_corner_pads *P = &s->pads;
   /* the pads read and write the corners' values in the order of their positions, lane by lane
    * where the corner numbers of a batch are not consecutive: renumbered once a tenth of the
    * positions break the run (the material points' rule, sim/step.c), so that batches move
    * with vector loads and stores */
-  if (!P->on || (double)P->breaks <= 0.1 * (double)P->grid_positions) return 0;
+  if (!P->on || (double)P->breaks <= 0.1 * (double)P->grid_positions) return MPM_OK;
   const size_t nc = s->corner_count;
   uint32_t *o = mpm_arena_alloc(scratch, (nc + 1) * sizeof *o);
-  if (!o) return -1;
+  if (!o) return MPM_ERR_NOMEM;
   memcpy(o, P->row, P->positions * sizeof *o); /* the used corners, then the others */
   size_t next = P->positions;
   for (size_t c = 0; c < nc; ++c)
     if (P->pos[c] == MPM_CORNER_PADS_NONE) o[next++] = (uint32_t)c;
-  if (mpm_domain_set_permute_corners(s, o, scratch)) return -1;
+  if (mpm_domain_set_permute_corners(s, o, scratch)) return MPM_ERR_NOMEM;
   *order = o;
   return mpm_domain_plan(s, g, k, scratch);
 }
 
-int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
-                   const mpm_grid_values *dof, mpm_arena *scratch) {
+mpm_status mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
+                          const mpm_grid_values *dof, mpm_arena *scratch) {
   const mpm_particles *p = &s->particles;
   const long nc = (long)s->corner_count, np = (long)p->count;
   /* 0. V0 P of every active particle (domain_stresses), by columns */
   mpm_real(*vP)[VP_STRIDE] = mpm_arena_alloc(scratch, (p->count + 1) * sizeof *vP);
-  if (!vP) return -1;
+  if (!vP) return MPM_ERR_NOMEM;
   memset(vP[p->count], 0, sizeof *vP); /* the last particle's fourth lane (store_vp) */
   /* hourglass control of particles touching enriched corners, or of every particle of a body
    * with hourglass "all" (domain/enrich.h): kappa q */
   const int hourglass = mpm_hourglass_on(s);
   mpm_real(*Q)[4][3] = hourglass ? mpm_arena_alloc(scratch, (p->count + 1) * sizeof *Q) : NULL;
-  if (hourglass && !Q) return -1;
+  if (hourglass && !Q) return MPM_ERR_NOMEM;
   const int apic = ctx->transfer == MPM_TRANSFER_APIC;
   if (hourglass) {
 #pragma omp parallel for schedule(static)
@@ -281,12 +285,12 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   const uint32_t *pos = pads ? s->pads.pos : NULL;
   /* G2P's packed copy of the corners (step scratch) */
   s->corner_pack = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof *s->corner_pack);
-  if (!s->corner_pack) return -1;
+  if (!s->corner_pack) return MPM_ERR_NOMEM;
   memset(s->corner_pack[s->corner_count], 0, sizeof *s->corner_pack); /* the last one's lane 4 */
   mpm_real *mB[9] = {NULL}; /* APIC on the rows: m_a B_a (the pads make it themselves) */
   for (int e = 0; e < 9 && apic && !pads; ++e) {
     mB[e] = mpm_arena_alloc(scratch, (s->corner_count + 1) * sizeof(mpm_real));
-    if (!mB[e]) return -1;
+    if (!mB[e]) return MPM_ERR_NOMEM;
   }
 #pragma omp parallel for schedule(static)
   for (long c = 0; c < nc; ++c) {
@@ -352,7 +356,10 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
   /* 2. corner -> grid: the transpose of the corners' embedding (grid/embedding.h), scheduled
    *    so that a node receives the colours in a fixed order and each group's corners in corner
    *    order: the same sums for any number of threads (through the pads: the same terms) */
-  if (!pads && build_corner_embedding(&ctx->kernel, s, g, apic, scratch)) return -1;
+  if (!pads) {
+    const mpm_status built = build_corner_embedding(&ctx->kernel, s, g, apic, scratch);
+    if (built != MPM_OK) return built;
+  }
   const mpm_real *carrier[7] = {s->cm, s->cp[0], s->cp[1], s->cp[2], s->cf[0], s->cf[1], s->cf[2]};
   mpm_real *const values[7] = {dof->mass, dof->v0[0], dof->v0[1], dof->v0[2],
                                dof->f[0], dof->f[1],  dof->f[2]};
@@ -362,13 +369,13 @@ int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_gri
     return mpm_corner_pads_scatter(&s->pads, s, &ctx->kernel, carrier, apic, values, scratch);
   if (!apic) {
     mpm_embedding_scatter(&s->corner_grid, 7, carrier, values);
-    return 0;
+    return MPM_OK;
   }
   const mpm_real *const a[3] = {s->apic_a[0], s->apic_a[1], s->apic_a[2]};
   const mpm_real *const cm[9] = {mB[0], mB[1], mB[2], mB[3], mB[4], mB[5], mB[6], mB[7], mB[8]};
   mpm_real *const um[3] = {dof->v0[0], dof->v0[1], dof->v0[2]};
   mpm_embedding_scatter_moments(&s->corner_grid, 7, carrier, values, a, cm, um);
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_domain_update_F(mpm_domain_set *s, size_t q, mpm_real dt, const mpm_real *const vg[3]) {

@@ -23,37 +23,42 @@
 #ifndef MPM_DOMAIN_DOMAIN_TRANSFER_H
 #define MPM_DOMAIN_DOMAIN_TRANSFER_H
 
+#include "mpm/mpm.h"
 #include "collide/boundary.h"
 #include "domain/domain.h"
 #include "grid/grid.h"
 #include "transfer/transfer.h"
 
 /* Activate the grid level's nodes around every used corner's stencil (after the activation from
- * the standard particles, before the DOF layout). Returns 0, or -1 when out of memory. */
-int mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k);
+ * the standard particles, before the DOF layout). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_domain_activate(mpm_domain_set *s, mpm_grid *g, const mpm_kernel *k);
 
 /* The corner -> grid transfers' plan for this step, from the corners' positions (after
  * mpm_domain_activate): on a sparse level, unless the step applies the embedding as a matrix
  * (s->corner_rows: the implicit Hessian), the corners go to the grid through pads of nodes
- * (domain/corner_pads.h, s->pads.on); otherwise P2G builds the embedding's rows. Returns 0, -1
- * when out of memory. */
-int mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k, mpm_arena *scratch);
+ * (domain/corner_pads.h, s->pads.on); otherwise P2G builds the embedding's rows. MPM_OK;
+ * MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID when a corner's block is missing (not after
+ * mpm_domain_activate). */
+mpm_status mpm_domain_plan(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                           mpm_arena *scratch);
 
 /* After mpm_domain_plan: when the corners' numbers have come apart from the pads' order,
  * renumber the corners into it (mpm_domain_set_permute_corners) and plan again; *order is then
  * the permutation (new -> old, step scratch) for copies of corner arrays held elsewhere, else
- * NULL. The decision follows from the state alone (a resumed run takes the same). Returns 0,
- * -1 when out of memory. */
-int mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                             mpm_arena *scratch, uint32_t **order);
+ * NULL. The decision follows from the state alone (a resumed run takes the same). MPM_OK, or
+ * mpm_domain_plan's failure (MPM_ERR_NOMEM when out of memory). */
+mpm_status mpm_domain_order_corners(mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                                    mpm_arena *scratch, uint32_t **order);
 
 /* Rasterize the domain particles to their corners, and the corners to grid level g (its
  * DOFs from g->dof_begin) through the corners' embedding (s->corner_grid, built here): the DOF
  * set's mass, momentum (v0) and force (dof: the values of all DOFs, DOF 0 at index 0); the
  * particles' stresses and the scatter schedule's keys are step scratch (ctx: kernel,
- * origin, materials). Returns 0, -1 when out of memory (nothing added to the grid then). */
-int mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
-                   const mpm_grid_values *dof, mpm_arena *scratch);
+ * origin, materials). MPM_OK; MPM_ERR_NOMEM when out of memory (nothing added to the grid then);
+ * MPM_ERR_INVALID when a corner's stencil meets a node that is not active (not after
+ * mpm_domain_activate). */
+mpm_status mpm_domain_p2g(const mpm_transfer_ctx *ctx, mpm_domain_set *s, const mpm_grid *g,
+                          const mpm_grid_values *dof, mpm_arena *scratch);
 
 /* After the grid update (the DOF set holds v^n in v0 and v^{n+1} in v; dof as for P2G): the
  * corners' velocities through their embedding, the boundary rules (colliders at the end of

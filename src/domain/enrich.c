@@ -75,12 +75,12 @@ mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c) {
   return (mpm_real)(lo / hi);
 }
 
-int mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settings) {
+mpm_status mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settings) {
   mpm_domain_enrichment *e = &s->enrich;
-  if (b < 0) return -1;
+  if (b < 0) return MPM_ERR_INVALID;
   if (b >= e->body_count) {
     mpm_enrichment_body *grown = mpm_alloc((size_t)(b + 1) * sizeof *grown);
-    if (!grown) return -1;
+    if (!grown) return MPM_ERR_NOMEM;
     memset(grown, 0, (size_t)(b + 1) * sizeof *grown);
     if (e->body_count) memcpy(grown, e->body, (size_t)e->body_count * sizeof *grown);
     mpm_free(e->body);
@@ -96,7 +96,7 @@ int mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settin
     if (e->body[k].epsilon > 0 || e->body[k].bend > 0) e->any = 1;
     if (e->body[k].hourglass_all) e->hourglass_any = 1;
   }
-  return 0;
+  return MPM_OK;
 }
 
 void mpm_enrichment_move_settings(mpm_domain_enrichment *to, mpm_domain_enrichment *from) {
@@ -122,7 +122,7 @@ void mpm_enrichment_free(mpm_domain_enrichment *e) {
 }
 
 /* Room for the set's particles and corners (contents not kept). */
-int mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t corners) {
+mpm_status mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t corners) {
   if (particles > e->particle_capacity || !e->flag) {
     /* the flags are state (the hysteresis reads last step's): kept across a growth */
     uint8_t *old = e->flag;
@@ -134,7 +134,7 @@ int mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t co
     mpm_free(old);
     e->category = mpm_alloc(n);
     e->particle_capacity = e->flag && e->category ? n : 0;
-    if (!e->particle_capacity) return -1;
+    if (!e->particle_capacity) return MPM_ERR_NOMEM;
   }
   if (corners > e->corner_capacity || !e->enriched) {
     mpm_free(e->enriched);
@@ -153,23 +153,23 @@ int mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t co
       ok = ok && e->x[d];
     }
     e->corner_capacity = ok ? n : 0;
-    if (!ok) return -1;
+    if (!ok) return MPM_ERR_NOMEM;
   }
-  return 0;
+  return MPM_OK;
 }
 
-int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials) {
+mpm_status mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials) {
   mpm_domain_enrichment *e = &s->enrich;
   const mpm_particles *p = &s->particles;
   const long np = (long)p->count, nc = (long)s->corner_count;
-  if (mpm_enrichment_reserve(e, p->count + 1, s->corner_count + 1)) return -1;
+  if (mpm_enrichment_reserve(e, p->count + 1, s->corner_count + 1)) return MPM_ERR_NOMEM;
   e->rate = 0;
   if (!e->any) { /* no body enriches: nothing to evaluate (the domain step's common case) */
     memset(e->category, MPM_DOMAIN_UNENRICHED, p->count);
     e->count = 0;
     e->particles[0] = s->active_count;
     e->particles[1] = e->particles[2] = 0;
-    return 0;
+    return MPM_OK;
   }
   /* 1. the metric per particle (eq. 10 on the clamped F, sec. 5.3) */
 #pragma omp parallel for schedule(static) if (np >= MPM_PARALLEL_MIN / 8)
@@ -251,5 +251,5 @@ int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials)
       ++k;
     }
   e->count = k;
-  return 0;
+  return MPM_OK;
 }

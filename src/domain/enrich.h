@@ -54,6 +54,7 @@
 #ifndef MPM_DOMAIN_ENRICH_H
 #define MPM_DOMAIN_ENRICH_H
 
+#include "mpm/mpm.h"
 #include "domain/domain.h"
 #include "material/material.h"
 
@@ -72,8 +73,8 @@ mpm_real mpm_enrichment_condition(const mpm_real F[9], mpm_real c);
 /* Mark the corners and classify the particles of the set from their current F (materials: the
  * clamp of each particle's material; s->enrich.body[b].epsilon), and list the enriched
  * corners in corner order with their positions (the DOF segment's). Deterministic, parallel.
- * Returns 0, or -1 when out of memory. */
-int mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials);
+ * MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *materials);
 
 /* Body b's settings: all 0 (never enriched, the condition metric) for a body without any. */
 static inline const mpm_enrichment_body *mpm_enrichment_body_of(const mpm_domain_enrichment *e,
@@ -90,8 +91,9 @@ static inline mpm_real mpm_enrichment_epsilon(const mpm_domain_set *s, int b) {
 /* Set body b's settings (sim setup): the threshold epsilon, the exit threshold (an enriched
  * particle stays enriched while K <= exit_k; raised to epsilon when below), the bend threshold,
  * the metric (MPM_ENRICHMENT_*), hourglass control on every particle (hourglass_all, below)
- * and the lattice spacing h. 0, or -1 when out of memory. */
-int mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settings);
+ * and the lattice spacing h. MPM_OK; MPM_ERR_NOMEM when out of memory; MPM_ERR_INVALID for a
+ * negative b. */
+mpm_status mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body settings);
 
 /* The hourglass strain gamma = max_alpha |q_alpha| / (4 h) of particle q's hexahedron at its
  * corners' current positions (above; h: the body's lattice spacing). */
@@ -105,8 +107,8 @@ void mpm_enrichment_move_settings(mpm_domain_enrichment *to, mpm_domain_enrichme
 void mpm_enrichment_free(mpm_domain_enrichment *e);
 
 /* Room for the marks of `particles` particles and `corners` corners; the flags already held
- * are kept (checkpoint reading fills them). 0, or -1 when out of memory. */
-int mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t corners);
+ * are kept (checkpoint reading fills them). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_enrichment_reserve(mpm_domain_enrichment *e, size_t particles, size_t corners);
 
 /* Hourglass control of enriched domains (beyond Zhu: a domain has one quadrature point, its
  * particle, so the four hourglass modes of its hexahedron cost no energy; the grid's smooth

@@ -95,20 +95,20 @@ static void contact_body(const mpm_domain_set *s, const mpm_grid *g, const mpm_k
   }
 }
 
-int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                       const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
-                       size_t *contacts) {
+mpm_status mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                              const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
+                              size_t *contacts) {
   *contacts = 0;
   const mpm_domain_enrichment *e = &s->enrich;
-  if (!mpm_enrich_contact_on(s) || !s->corner_grid.rows) return 0;
+  if (!mpm_enrich_contact_on(s) || !s->corner_grid.rows) return MPM_OK;
   const size_t nc = s->corner_count;
   mpm_real *corner_mass = mpm_arena_alloc(scratch, (count + 1) * sizeof *corner_mass);
   mpm_real *own_mass = mpm_arena_alloc(scratch, (nc + 1) * sizeof *own_mass);
   int32_t *body = mpm_arena_alloc(scratch, (nc + 1) * sizeof *body);
-  if (!corner_mass || !own_mass || !body) return -1;
+  if (!corner_mass || !own_mass || !body) return MPM_ERR_NOMEM;
   for (size_t c = 0; c < nc; ++c) body[c] = corner_body(s, c);
   for (int b = 0; b < e->body_count; ++b)
     if (e->body[b].contact)
       contact_body(s, g, k, dofs, count, b, body, own_mass, corner_mass, contacts);
-  return 0;
+  return MPM_OK;
 }

@@ -26,6 +26,7 @@
 #ifndef MPM_DOMAIN_ENRICH_CONTACT_H
 #define MPM_DOMAIN_ENRICH_CONTACT_H
 
+#include "mpm/mpm.h"
 #include "core/arena.h"
 #include "domain/domain.h"
 #include "grid/grid.h"
@@ -35,9 +36,9 @@ int mpm_enrich_contact_on(const mpm_domain_set *s);
 
 /* The contacts of this step (above): dofs holds every DOF's mass and its velocity after the
  * update (v), count the DOFs; g and k the grid level and the corner kernel. *contacts: the
- * corners that took an impulse. 0, or -1 when out of memory. */
-int mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
-                       const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
-                       size_t *contacts);
+ * corners that took an impulse. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
+                              const mpm_grid_values *dofs, size_t count, mpm_arena *scratch,
+                              size_t *contacts);
 
 #endif

@@ -15,16 +15,17 @@ typedef struct mpm_lattice_map {
   size_t mask;
 } mpm_lattice_map;
 
-/* Room for `count` entries at a load of at most 1/2. Returns 0, or -1 when out of memory. */
-static inline int mpm_lattice_map_init(mpm_lattice_map *m, size_t count) {
+/* Room for `count` entries at a load of at most 1/2. MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory. */
+static inline mpm_status mpm_lattice_map_init(mpm_lattice_map *m, size_t count) {
   size_t size = 64;
   while (size < 2 * count) size *= 2;
   m->keys = mpm_alloc(size * sizeof *m->keys);
   m->values = mpm_alloc(size * sizeof *m->values);
   m->mask = size - 1;
-  if (!m->keys || !m->values) return -1;
+  if (!m->keys || !m->values) return MPM_ERR_NOMEM;
   memset(m->keys, 0xFF, size * sizeof *m->keys);
-  return 0;
+  return MPM_OK;
 }
 
 static inline void mpm_lattice_map_free(mpm_lattice_map *m) {

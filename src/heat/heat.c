@@ -105,8 +105,9 @@ static double now_seconds(void) {
 }
 
 /* The carriers' rows: weights and gradients to the level's nodes, heat capacity, heat, volume
- * and V k per particle, and the scatter keys. -2 when a node is missing. */
-static int build_rows(mpm_heat *h, const mpm_heat_step_desc *s) {
+ * and V k per particle, and the scatter keys. MPM_OK, or MPM_ERR_INVALID when a node is
+ * missing. */
+static mpm_status build_rows(mpm_heat *h, const mpm_heat_step_desc *s) {
   const mpm_grid *g = s->grid;
   const mpm_kernel *k = &s->kernel;
   const int W = k->width;
@@ -167,7 +168,7 @@ static int build_rows(mpm_heat *h, const mpm_heat_step_desc *s) {
     }
     first += p->count;
   }
-  return missing ? -2 : 0;
+  return missing ? MPM_ERR_INVALID : MPM_OK;
 }
 
 /* ---- the sources: held nodes as ghosts ------------------------------------------------- */
@@ -507,14 +508,14 @@ static void conduct(const mpm_heat *h, long b0, long b1, mpm_real dts, const mpm
 
 /* ---- the step ---------------------------------------------------------------------------- */
 
-int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
+mpm_status mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
   const double t0 = now_seconds();
   const mpm_grid *g = s->grid;
   mpm_dofs *d = s->dofs;
   size_t rows = 0;
   for (int set = 0; set < s->set_count; ++set) rows += s->sets[set].p->count;
   const uint32_t W3 = (uint32_t)(s->kernel.width * s->kernel.width * s->kernel.width);
-  if (reserve_rows(h, rows) || mpm_embedding_layout(&h->E, rows, NULL, W3)) return -1;
+  if (reserve_rows(h, rows) || mpm_embedding_layout(&h->E, rows, NULL, W3)) return MPM_ERR_NOMEM;
   h->E.rows = rows;
   if (h->E.entry_capacity > h->entry_capacity || !h->g[0]) {
     for (int k = 0; k < 3; ++k) {
@@ -522,25 +523,25 @@ int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
       h->g[k] = mpm_alloc((h->E.entry_capacity + 1) * sizeof(mpm_real));
       if (!h->g[k]) {
         h->entry_capacity = 0;
-        return -1;
+        return MPM_ERR_NOMEM;
       }
     }
     h->entry_capacity = h->E.entry_capacity;
   }
-  const int built = build_rows(h, s);
-  if (built) return built;
+  const mpm_status built = build_rows(h, s);
+  if (built != MPM_OK) return built;
   const size_t keys = g->ops->scatter_key_count(g);
-  if (grow((void **)&h->key_colour, &h->key_capacity, keys, 1)) return -1;
+  if (grow((void **)&h->key_colour, &h->key_capacity, keys, 1)) return MPM_ERR_NOMEM;
   for (size_t a = 0; a < rows; ++a)
     if (h->key[a] >= 0) h->key_colour[h->key[a]] = h->colour[a];
-  if (mpm_embedding_schedule(&h->E, h->key, keys, h->key_colour)) return -1;
+  if (mpm_embedding_schedule(&h->E, h->key, keys, h->key_colour)) return MPM_ERR_NOMEM;
 
   /* the node values: C_i, T_i, T_i^P2G (vector "heat"); the material's volume and V k
    * ("heat_volume"); the next substep's T (component 0 of "heat_next") */
   mpm_real **hv = mpm_dofs_vector(d, "heat");
   mpm_real **hvol = hv ? mpm_dofs_vector(d, "heat_volume") : NULL;
   mpm_real **hn = hvol ? mpm_dofs_vector(d, "heat_next") : NULL;
-  if (!hn || grow((void **)&h->held, &h->held_capacity, d->count, 1)) return -1;
+  if (!hn || grow((void **)&h->held, &h->held_capacity, d->count, 1)) return MPM_ERR_NOMEM;
   const long b0 = (long)g->dof_begin, b1 = b0 + (long)g->ops->node_count(g);
 #pragma omp parallel for schedule(static) if (b1 - b0 > MPM_PARALLEL_MIN)
   for (long i = b0; i < b1; ++i) hv[0][i] = hv[1][i] = hvol[0][i] = hvol[1][i] = 0;
@@ -568,9 +569,9 @@ int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
       ++held;
     }
   }
-  if (make_ghosts(h, s, held)) return -1;
+  if (make_ghosts(h, s, held)) return MPM_ERR_NOMEM;
   ghost_values(h, hv[0], hv[1]);
-  if (affine_p2g(h, s, hv)) return -1;
+  if (affine_p2g(h, s, hv)) return MPM_ERR_NOMEM;
   ghost_values(h, hv[0], hv[1]);
   /* a ghost's FLIP increment is its own change over the step: from the value it starts with,
      not from what the particles put there (that difference, added to the particles beside a
@@ -579,7 +580,7 @@ int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
 
   /* conduction, in substeps within the operator's own stability bound */
   double rate = 0;
-  if (links(h, s, hv, hvol, &rate)) return -1;
+  if (links(h, s, hv, hvol, &rate)) return MPM_ERR_NOMEM;
   const double n = ceil(s->dt * rate / SUBSTEP_SHARE);
   const int substeps = n < 1 ? 1 : n > 1e6 ? 1000000 : (int)n;
   const mpm_real dts = (mpm_real)(s->dt / substeps);
@@ -626,5 +627,5 @@ int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s) {
   h->figures.substeps = substeps;
   h->figures.held_nodes = held;
   h->figures.seconds = now_seconds() - t0;
-  return 0;
+  return MPM_OK;
 }

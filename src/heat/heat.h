@@ -40,6 +40,7 @@
 #ifndef MPM_HEAT_HEAT_H
 #define MPM_HEAT_HEAT_H
 
+#include "mpm/mpm.h"
 #include "collide/collider.h"
 #include "grid/embedding.h"
 #include "interp/kernel.h"
@@ -107,9 +108,10 @@ typedef struct mpm_heat {
 void mpm_heat_init(mpm_heat *h);
 void mpm_heat_free(mpm_heat *h);
 
-/* One heat step: the particles' temperatures advance by dt. 0; -1 when out of memory; -2 when
- * a particle's stencil reaches a node the grid does not have (the caller activates them). */
-int mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s);
+/* One heat step: the particles' temperatures advance by dt. MPM_OK; MPM_ERR_NOMEM when out of
+ * memory; MPM_ERR_INVALID when a particle's stencil reaches a node the grid does not have (the
+ * caller activates them). */
+mpm_status mpm_heat_step(mpm_heat *h, const mpm_heat_step_desc *s);
 
 /* The conduction substeps a step of dt needs in the bulk of the material: ceil(dt / (0.9 dx^2 /
  * (6 alpha_max))), alpha_max the largest k / (rho c) over the materials that conduct (1 when

@@ -51,16 +51,16 @@ FILE *mpm_open_input(const char *path, long long *size, char *why, size_t cap) {
   return f;
 }
 
-int mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap) {
+mpm_status mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap) {
   *digest = 0;
   FILE *f = mpm_open_input(path, NULL, why, cap);
-  if (!f) return -1;
+  if (!f) return MPM_ERR_IO;
   enum { PIECE = 1 << 16 };
   unsigned char *buf = mpm_alloc(PIECE);
   if (!buf) {
     fclose(f);
     snprintf(why, cap, "out of memory");
-    return -1;
+    return MPM_ERR_NOMEM;
   }
   /* pieces of a fixed size (fread fills each from a regular file), so the same bytes always
      give the same digest */
@@ -72,8 +72,8 @@ int mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap) 
   fclose(f);
   if (failed) {
     snprintf(why, cap, "read error");
-    return -1;
+    return MPM_ERR_IO;
   }
   *digest = h;
-  return 0;
+  return MPM_OK;
 }

@@ -8,6 +8,8 @@
 #ifndef MPM_IO_INPUT_FILE_H
 #define MPM_IO_INPUT_FILE_H
 
+#include "mpm/mpm.h"
+
 #include <stdint.h>
 #include <stdio.h>
 
@@ -17,7 +19,8 @@
 FILE *mpm_open_input(const char *path, long long *size, char *why, size_t cap);
 
 /* A digest of the file's bytes (64 bits; a changed file changes it, for checkpoints that must
- * resume with the inputs they were made from). 0, or -1 with the reason in `why`. */
-int mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap);
+ * resume with the inputs they were made from). MPM_OK; MPM_ERR_IO when the file cannot be read,
+ * MPM_ERR_NOMEM when out of memory, with the reason in `why`. */
+mpm_status mpm_input_digest(const char *path, uint64_t *digest, char *why, size_t cap);
 
 #endif

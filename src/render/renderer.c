@@ -249,7 +249,7 @@ static mpm_status load_scene(mpm_renderer *r, const char *scene) {
   if (n && (!r->colliders || !r->poses))
     return mpm_error_set(&r->error, MPM_ERR_NOMEM, "%s: out of memory for %d colliders", path, n);
   for (int k = 0; k < n; ++k)
-    if (mpm_collider_init(&r->colliders[r->collider_count], &r->scene.colliders[k]) == 0)
+    if (mpm_collider_init(&r->colliders[r->collider_count], &r->scene.colliders[k]) == MPM_OK)
       ++r->collider_count;
   return MPM_OK;
 }
@@ -471,7 +471,7 @@ static mpm_status setup(mpm_renderer *r, const mpm_render_options *opts, const c
   memset(&r->spec, 0, sizeof r->spec);
   r->spec.field = r->opts.field;
   r->spec.component = -1;
-  if (r->opts.field_array && mpm_render_field_parse(r->opts.field_array, &r->spec) != 0)
+  if (r->opts.field_array && mpm_render_field_parse(r->opts.field_array, &r->spec) != MPM_OK)
     return mpm_error_set(&r->error, MPM_ERR_INVALID,
                          "mpm_render_options.field_array: '%.80s' is no array name (NAME, "
                          "NAME.x .. NAME.z or NAME.xx .. NAME.zz, at most %d bytes)",

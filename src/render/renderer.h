@@ -25,9 +25,9 @@ typedef struct render_field_spec {
   char label[MPM_VTU_NAME_MAX + 4]; /* ARRAY: as asked ("pressure", "velocity.y") */
 } render_field_spec;
 
-/* Parse mpm_render_options.field_array ("NAME", "NAME.x", "NAME.xy") into spec; -1 for an empty
- * or too long name. */
-int mpm_render_field_parse(const char *text, render_field_spec *spec);
+/* Parse mpm_render_options.field_array ("NAME", "NAME.x", "NAME.xy") into spec. MPM_OK, or
+ * MPM_ERR_INVALID for an empty or too long name. */
+mpm_status mpm_render_field_parse(const char *text, render_field_spec *spec);
 
 /* What a sample of the frames to draw says (survey.c). */
 typedef struct render_survey {

@@ -27,11 +27,11 @@ static int cmp_float(const void *a, const void *b) {
   return x < y ? -1 : x > y;
 }
 
-int mpm_render_field_parse(const char *text, render_field_spec *spec) {
+mpm_status mpm_render_field_parse(const char *text, render_field_spec *spec) {
   static const char *const comps[] = {"x",  "y",  "z",  "xx", "xy", "xz",
                                       "yx", "yy", "yz", "zx", "zy", "zz"};
   const size_t len = text ? strlen(text) : 0;
-  if (len == 0 || len >= sizeof spec->array) return -1;
+  if (len == 0 || len >= sizeof spec->array) return MPM_ERR_INVALID;
   spec->field = MPM_RENDER_FIELD_ARRAY;
   spec->component = -1;
   snprintf(spec->label, sizeof spec->label, "%s", text);
@@ -46,7 +46,7 @@ int mpm_render_field_parse(const char *text, render_field_spec *spec) {
         if (k >= 3) spec->component += 100;
         break;
       }
-  return 0;
+  return MPM_OK;
 }
 
 /* The frame's arrays by name, for a message: "velocity, mass, J". */

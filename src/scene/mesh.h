@@ -59,8 +59,8 @@ typedef struct mpm_mesh_edges {
   int triangles[4], shared;
 } mpm_mesh_edges;
 
-/// Count the edges as above; 0, or -1 when out of memory.
-int mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out);
+/// Count the edges as above; MPM_OK, or MPM_ERR_NOMEM when out of memory.
+mpm_status mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out);
 
 /// 1 when p is inside the mesh: |generalized winding number| > 1/2. Exact 0/1 for closed
 /// meshes away from the surface, and a sensible answer for meshes with small holes; the

@@ -34,13 +34,13 @@ static int cmp_u64(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-int mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out) {
+mpm_status mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out) {
   memset(out, 0, sizeof *out);
   out->a = out->b = -1;
   size_t n = 0;
   uint64_t *keys =
       mpm_alloc((size_t)(mesh->triangle_count ? mesh->triangle_count : 1) * 3 * sizeof *keys);
-  if (!keys) return -1;
+  if (!keys) return MPM_ERR_NOMEM;
   for (int t = 0; t < mesh->triangle_count; ++t)
     for (int k = 0; k < 3; ++k) {
       uint32_t a = (uint32_t)mesh->triangles[3 * t + k];
@@ -71,12 +71,12 @@ int mpm_mesh_edge_check(const mpm_mesh *mesh, mpm_mesh_edges *out) {
         break;
       }
     }
-  return 0;
+  return MPM_OK;
 }
 
 long mpm_mesh_boundary_edges(const mpm_mesh *mesh) {
   mpm_mesh_edges e;
-  return mpm_mesh_edge_check(mesh, &e) ? -1 : e.boundary;
+  return mpm_mesh_edge_check(mesh, &e) != MPM_OK ? -1 : e.boundary;
 }
 
 double mpm_mesh_winding_number(const mpm_mesh *mesh, const double p[3]) {

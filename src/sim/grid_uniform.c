@@ -90,13 +90,13 @@ static mpm_status sort(mpm_sim *sim, mpm_step_ctx *c) {
 static mpm_status layout(mpm_sim *sim, mpm_step_ctx *c, unsigned fields) {
   mpm_dofs *d = &sim->dofs;
   mpm_domain_enrichment *en = &sim->domains.enrich;
-  int failed = mpm_dofs_add_grid(d, &sim->grid);
+  mpm_status added = mpm_dofs_add_grid(d, &sim->grid);
   if (c->domains && en->count) { /* enriched corners: DOFs of their own (Zhu eq. 12) */
     en->dof_begin = d->count;
     const mpm_real *const x[3] = {en->x[0], en->x[1], en->x[2]};
-    failed = failed || mpm_dofs_add_corners(d, en->count, x);
+    if (added == MPM_OK) added = mpm_dofs_add_corners(d, en->count, x);
   }
-  if (failed || mpm_dofs_end_layout(d, fields))
+  if (added != MPM_OK || mpm_dofs_end_layout(d, fields))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory for the values of %zu grid nodes",
                          (long long)sim->steps, d->count);

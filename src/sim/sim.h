@@ -190,9 +190,9 @@ int mpm_sim_threads_enter(const mpm_sim *sim);
 void mpm_sim_threads_leave(const mpm_sim *sim, int saved);
 
 /* The standard and the active domain particles in one set (`all`: zeroed, or a set this made
- * before, whose arrays it reuses): for the frame files and the public particle view. 0, or -1
- * when out of memory. */
-int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
+ * before, whose arrays it reuses): for the frame files and the public particle view. MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all);
 
 /* Particle i of p (sim's particles or a copy of them): its Kirchhoff stress tau = P F^T = J sigma
  * with the moduli the step uses (the material hardened by its plastic state, softened by
@@ -203,8 +203,9 @@ mpm_real mpm_sim_kirchhoff(const mpm_sim *sim, const mpm_particles *p, size_t i,
  * simulation's steps and reorder_interval). */
 int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n);
 
-/* Room for the periodic reorder's per-particle buffers. 0, or -1 when out of memory. */
-int mpm_sim_ensure_scratch(mpm_sim *sim);
+/* Room for the periodic reorder's per-particle buffers. MPM_OK, or MPM_ERR_NOMEM when out of
+ * memory. */
+mpm_status mpm_sim_ensure_scratch(mpm_sim *sim);
 
 /* What the bodies start in that is likely a mistake (placement.c): bodies overlapping each other
  * and bodies inside a collider, one line each in out (cap bytes). The number of findings. */

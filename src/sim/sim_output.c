@@ -103,14 +103,15 @@ mpm_status mpm_sim_enable_output(mpm_sim *sim, const char *dir) {
   return mpm_sim_open_output(sim, dir, MPM_OUTPUT_NEW);
 }
 
-int mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
+mpm_status mpm_sim_all_particles(const mpm_sim *sim, mpm_particles *all) {
   const mpm_particles *a = &sim->particles, *d = &sim->domains.particles;
-  if (!all->x[0] && mpm_particles_init(all, a->count + sim->domains.active_count + 1)) return -1;
+  if (!all->x[0] && mpm_particles_init(all, a->count + sim->domains.active_count + 1))
+    return MPM_ERR_NOMEM;
   all->count = 0;
-  return mpm_particles_append_set(all, a, NULL) ||
-                 mpm_particles_append_set(all, d, sim->domains.active)
-             ? -1
-             : 0;
+  if (mpm_particles_append_set(all, a, NULL) ||
+      mpm_particles_append_set(all, d, sim->domains.active))
+    return MPM_ERR_NOMEM;
+  return MPM_OK;
 }
 
 /* The first particle (in p's order) with a non-finite quantity of those a frame writes, as an

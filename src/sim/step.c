@@ -69,7 +69,7 @@ int mpm_sim_wants_reorder(const mpm_sim *sim, size_t breaks, size_t n) {
   return mpm_reorder_due(sim->steps, sim->reorder_interval, breaks, n);
 }
 
-int mpm_sim_ensure_scratch(mpm_sim *sim) {
+mpm_status mpm_sim_ensure_scratch(mpm_sim *sim) {
   return mpm_particles_scratch(&sim->particles, &sim->iscratch, &sim->scratch_capacity);
 }
 
@@ -228,11 +228,11 @@ static mpm_status stage_heat(mpm_sim *sim, mpm_step_ctx *c) {
     h.sets[h.set_count++] = (mpm_heat_set){&sim->domains.particles, sim->domains.active};
   h.pose_count = c->update.boundary.collider_count;
   h.poses = c->update.boundary.poses;
-  const int rc = mpm_heat_step(&sim->heat, &h);
-  if (rc == -1)
+  const mpm_status st = mpm_heat_step(&sim->heat, &h);
+  if (st == MPM_ERR_NOMEM)
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for heat transfer",
                          (long long)sim->steps);
-  if (rc)
+  if (st != MPM_OK)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID,
                          "step %lld: a particle's heat stencil reaches a grid node that is not "
                          "active",
