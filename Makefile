@@ -25,6 +25,8 @@ DEB_PACKAGES = cmake pkg-config libcjson-dev libcmocka-dev liblapacke-dev libpng
 FUZZ_DEB_PACKAGES = clang libclang-rt-14-dev
 # Blender (3.4, headless) for the add-on's test: `make test` installs it, `make demo` does not
 BLENDER_DEB_PACKAGES = blender
+# MPI (OpenMPI) for the distributed run's build and tests: `make test` installs it
+MPI_DEB_PACKAGES = libopenmpi-dev openmpi-bin
 # ThreadSanitizer needs clang and LLVM's OpenMP runtime with its Archer tool (libarcher.so)
 TSAN_DEB_PACKAGES = clang libclang-rt-14-dev libomp-14-dev
 ARCHER ?= /usr/lib/llvm-14/lib/libarcher.so
@@ -34,7 +36,8 @@ TSAN_TESTS = test_sim|test_resample_sim|test_domain_sim|test_domain|test_domain_
 
 .PHONY: all deps vdb-shim build build-double build-sanitize demo test test-float test-double \
 	test-sanitize bench clean format valgrind deps-fuzz build-fuzz fuzz test-fuzz deps-tsan \
-	build-tsan test-tsan install build-install deps-blender build-x86-64 test-x86-64
+	build-tsan test-tsan install build-install deps-blender build-x86-64 test-x86-64 \
+	deps-mpi build-mpi test-mpi
 
 all: build
 
@@ -122,7 +125,7 @@ demo: deps
 # The whole suite: the default float build, the double build, float under ASan + UBSan, the
 # parallel tests under ThreadSanitizer, a short fuzz run of the scene, mesh and checkpoint
 # readers, and the valgrind run below.
-test: test-float test-double test-sanitize test-tsan test-x86-64 test-fuzz valgrind
+test: test-float test-double test-sanitize test-tsan test-x86-64 test-mpi test-fuzz valgrind
 
 test-float: build deps-blender
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
@@ -163,6 +166,21 @@ fuzz: build-fuzz
 
 test-fuzz: build-fuzz
 	fuzz/run.sh $(BUILD_FUZZ) 15
+
+# The distributed run's build (-DMPM_MPI=ON: src/dist/mpi_*.c on OpenMPI), float, without OpenVDB
+# and the Python module, and its tests (tests/mpi: each program on 1 to 4 ranks, named _npN).
+BUILD_MPI = build-mpi
+deps-mpi: deps
+	$(call apt_install,$(MPI_DEB_PACKAGES))
+
+build-mpi: deps-mpi
+	cmake -S . -B $(BUILD_MPI) -DCMAKE_BUILD_TYPE=Release -DMPM_MPI=ON -DMPM_OPENVDB=OFF \
+	  -DMPM_PYTHON=OFF $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(BUILD_MPI) -j $(JOBS) --target \
+	  $$(ls tests/mpi | sed -n 's/^\(test_[a-z_0-9]*\)\.c$$/\1/p')
+
+test-mpi: build-mpi
+	cd $(BUILD_MPI) && ctest --output-on-failure -j $(JOBS) -R '_np[0-9]+$$'
 
 # A plain x86-64 build (-march=x86-64: SSE2, no AVX, no FMA), RelWithDebInfo, without OpenVDB
 # and the Python module: the lanes, the SVD and the transfers compiled for the oldest x86-64 a

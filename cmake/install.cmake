@@ -63,7 +63,7 @@ install(FILES ${PROJECT_BINARY_DIR}/mpmConfig.cmake ${PROJECT_BINARY_DIR}/mpmCon
 # ---- pkg-config ----
 # prefix from the file's own place: lib/pkgconfig -> ../..
 file(RELATIVE_PATH MPM_PC_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
-set(MPM_PC_REQUIRES_PRIVATE "libcjson libpng hdf5")
+set(MPM_PC_REQUIRES_PRIVATE "libcjson libpng hdf5-serial")
 set(MPM_PC_LIBS_PRIVATE "")
 if(MPM_OPENVDB)
   string(APPEND MPM_PC_LIBS_PRIVATE " -ldl") # dlopen of libmpmvdb.so

@@ -38,6 +38,7 @@ LAYERS = [
     ['surface'],
     ['solver'],
     ['sim'],
+    ['dist'],
     ['analysis', 'plot', 'render'],
 ]
 # upward includes that stand today, each to go (none now; the list may only shrink)
