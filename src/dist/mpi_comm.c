@@ -1,5 +1,6 @@
 /* mpi_comm.c - the processes of a distributed run and their reductions (comm.h), on MPI. */
 #include "dist/comm.h"
+#include "dist/mpi_internal.h"
 #include "core/alloc.h"
 
 #include <math.h>
@@ -32,6 +33,9 @@ void mpm_dist_destroy(mpm_dist *d) {
   mpm_free(d);
 }
 
+MPI_Comm mpm_dist_comm(const mpm_dist *d) {
+  return d->comm;
+}
 int mpm_dist_rank(const mpm_dist *d) {
   return d->rank;
 }

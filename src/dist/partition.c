@@ -128,7 +128,7 @@ double mpm_partition_weights(const mpm_partition *pt, size_t count, const uint64
   for (int r = 0; r < pt->ranks; ++r) rank_weight[r] = 0;
   double total = 0;
   for (size_t i = 0; i < count; ++i) {
-    const double w = weights && weights[i] > 0 ? weights[i] : 0;
+    const double w = !weights ? 1.0 : weights[i] > 0 ? weights[i] : 0;
     rank_weight[mpm_partition_owner(pt, keys[i])] += w;
     total += w;
   }

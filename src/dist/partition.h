@@ -44,8 +44,9 @@ void mpm_partition_free(mpm_partition *pt);
 /* The rank that owns key (binary search over the starts). */
 int mpm_partition_owner(const mpm_partition *pt, uint64_t key);
 
-/* The weight of each rank's range (ranks values) for the blocks given, and the imbalance: the
- * largest rank weight over the mean (1 when even; 0 weights give 1). */
+/* The weight of each rank's range (ranks values) for the blocks given (weights NULL: one each,
+ * as for the cut), and the imbalance: the largest rank weight over the mean (1 when even, and
+ * when there is no weight). */
 double mpm_partition_weights(const mpm_partition *pt, size_t count, const uint64_t *keys,
                              const double *weights, double *rank_weight);
 

@@ -120,6 +120,9 @@ struct mpm_sim {
    * grid (scene.levels > 0) in place of `grid`, whose state is `adaptive` (else NULL) */
   const struct mpm_grid_stack_ops *stack;
   struct mpm_adaptive *adaptive;
+  /* the state of a stack that wraps another (a rank's part of a distributed run, src/dist/:
+   * the ranks' halo exchange around the uniform stack's stages), else NULL */
+  void *stack_data;
   mpm_dofs dofs; /* the unknowns of the step: the values at the grid's nodes */
   /* the step's global reductions over the processes of a run (core/reduce.h), NULL for one
    * process; the DOF set's reductions use the same (mpm_sim_set_reduction) */

@@ -1,0 +1,403 @@
+/* mpi_sim.c - a simulation as one rank's part of a distributed run (dist_sim.h): the uniform
+ * grid stack wrapped with the migration at the sort, the ghost blocks named to their owners,
+ * their sums sent after P2G and the updated values fetched before G2P. */
+#include "dist/dist_sim.h"
+#include "core/alloc.h"
+#include "dist/mpi_internal.h"
+#include "dist/partition.h"
+#include "sim/grid_stack.h"
+#include "sim/sim.h"
+
+#include <math.h>
+#include <string.h>
+
+#ifdef MPM_USE_DOUBLE
+#define MPI_REAL_TYPE MPI_DOUBLE
+#else
+#define MPI_REAL_TYPE MPI_FLOAT
+#endif
+
+typedef struct dist_stack {
+  mpm_dist *d;
+  const mpm_grid_stack_ops *inner;
+  mpm_reduction reduction;
+  mpm_partition pt;
+  int rank, size;
+  /* per step: the ghost blocks here (local block indices) grouped by owner, and the blocks
+     here that ranks hold as ghosts, grouped by rank, in the order that rank names them */
+  int *ghost_count, *ghost_at, *shared_count, *shared_at, *send_n, *send_at, *recv_n, *recv_at;
+  uint32_t *ghost, *shared;
+  size_t ghost_total, shared_total, ghost_cap, shared_cap;
+  uint64_t *keys;
+  size_t keys_cap;
+  mpm_real *buf; /* the node values sent and received */
+  size_t buf_cap;
+  int32_t *dest;
+  size_t dest_cap;
+  mpm_dist_figures figures;
+} dist_stack;
+
+static dist_stack *state(const mpm_sim *sim) {
+  return sim->stack_data;
+}
+
+/* Grow *p to n elements of `size` bytes (kept when large enough). */
+static int grow(void *p, size_t *cap, size_t n, size_t size) {
+  if (n <= *cap) return 0;
+  void *q = mpm_realloc(*(void **)p, (n + n / 2 + 16) * size);
+  if (!q) return -1;
+  *(void **)p = q;
+  *cap = n + n / 2 + 16;
+  return 0;
+}
+
+/* floor(a / 4) for any sign */
+static int32_t block_of(int32_t a) {
+  return a >= 0 ? a / 4 : -((-a + 3) / 4);
+}
+
+/* The Morton key of the block of the cell holding particle i. */
+static uint64_t particle_key(const mpm_grid *g, const mpm_particles *p, size_t i) {
+  int32_t c[3];
+  for (int d = 0; d < 3; ++d)
+    c[d] = block_of((int32_t)floor(((double)p->x[d][i] - (double)g->origin[d]) / (double)g->dx));
+  return mpm_morton_key(c);
+}
+
+/* ---- the stages ------------------------------------------------------------------------- */
+
+static mpm_status nomem(mpm_sim *sim, const char *what) {
+  return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory %s",
+                       (long long)sim->steps, what);
+}
+
+/* The particles whose block another rank owns now go there. */
+static mpm_status migrate(mpm_sim *sim, dist_stack *s) {
+  mpm_particles *p = &sim->particles;
+  if (grow(&s->dest, &s->dest_cap, p->count + 1, sizeof *s->dest))
+    return nomem(sim, "choosing the particles' ranks");
+  for (size_t i = 0; i < p->count; ++i)
+    s->dest[i] = (int32_t)mpm_partition_owner(&s->pt, particle_key(&sim->grid, p, i));
+  mpm_error err;
+  const mpm_status st = mpm_dist_migrate(s->d, p, s->dest, &s->figures.migration, &err);
+  if (st != MPM_OK)
+    return mpm_error_set(&sim->error, st, "step %lld: %s", (long long)sim->steps, err.message);
+  return MPM_OK;
+}
+
+/* Name each ghost block to its owner, and activate the blocks others name here. */
+static mpm_status exchange_ghosts(mpm_sim *sim, dist_stack *s, const mpm_kernel *k) {
+  mpm_grid *g = &sim->grid;
+  mpm_sparse_grid *sg = &g->impl.sparse;
+  const MPI_Comm comm = mpm_dist_comm(s->d);
+  const int R = s->size;
+  const size_t nb = sg->block_count;
+  if (grow(&s->ghost, &s->ghost_cap, nb + 1, sizeof *s->ghost) ||
+      grow(&s->keys, &s->keys_cap, nb + 1, sizeof *s->keys))
+    return nomem(sim, "listing the ghost blocks");
+  memset(s->ghost_count, 0, (size_t)R * sizeof *s->ghost_count);
+  for (size_t b = 0; b < nb; ++b) {
+    const int r = mpm_partition_owner(&s->pt, mpm_morton_key(sg->coord[b]));
+    if (r != s->rank) ++s->ghost_count[r];
+  }
+  s->ghost_at[0] = 0;
+  for (int r = 1; r < R; ++r) s->ghost_at[r] = s->ghost_at[r - 1] + s->ghost_count[r - 1];
+  s->ghost_total = (size_t)s->ghost_at[R - 1] + (size_t)s->ghost_count[R - 1];
+  memcpy(s->send_at, s->ghost_at, (size_t)R * sizeof *s->send_at);
+  for (size_t b = 0; b < nb; ++b) {
+    const uint64_t key = mpm_morton_key(sg->coord[b]);
+    const int r = mpm_partition_owner(&s->pt, key);
+    if (r == s->rank) continue;
+    const int at = s->send_at[r]++;
+    s->ghost[at] = (uint32_t)b;
+    s->keys[at] = key;
+  }
+  MPI_Alltoall(s->ghost_count, 1, MPI_INT, s->shared_count, 1, MPI_INT, comm);
+  s->shared_at[0] = 0;
+  for (int r = 1; r < R; ++r) s->shared_at[r] = s->shared_at[r - 1] + s->shared_count[r - 1];
+  s->shared_total = (size_t)s->shared_at[R - 1] + (size_t)s->shared_count[R - 1];
+  uint64_t *named = mpm_alloc((s->shared_total + 1) * sizeof *named);
+  int failed = !named || grow(&s->shared, &s->shared_cap, s->shared_total + 1, sizeof *s->shared);
+  int any = 0;
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+  if (any) {
+    mpm_free(named);
+    return nomem(sim, "receiving the ghost blocks' names");
+  }
+  MPI_Alltoallv(s->keys, s->ghost_count, s->ghost_at, MPI_UINT64_T, named, s->shared_count,
+                s->shared_at, MPI_UINT64_T, comm);
+  /* the named blocks no particle here reaches: activated by a point whose stencil lies inside
+     the block (at node 4 B + 1.5 on each axis: the stencils of every kernel, 2 to 4 nodes wide,
+     stay within nodes 4 B .. 4 B + 3) */
+  mpm_status st = MPM_OK;
+  for (size_t q = 0; q < s->shared_total && st == MPM_OK; ++q) {
+    int32_t c[3];
+    mpm_morton_coords(named[q], c);
+    if (mpm_sparse_grid_find(sg, c) >= 0) continue;
+    mpm_real x[3];
+    for (int d = 0; d < 3; ++d) x[d] = g->origin[d] + (mpm_real)(4 * c[d] + 1.5) * g->dx;
+    const mpm_real *const px[3] = {&x[0], &x[1], &x[2]};
+    st = g->ops->activate_points(g, k, 1, px, NULL);
+  }
+  for (size_t q = 0; q < s->shared_total && st == MPM_OK; ++q) {
+    int32_t c[3];
+    mpm_morton_coords(named[q], c);
+    const int32_t b = mpm_sparse_grid_find(sg, c);
+    if (b < 0) st = MPM_ERR_INVALID;
+    s->shared[q] = (uint32_t)b;
+  }
+  mpm_free(named);
+  if (st != MPM_OK) return nomem(sim, "activating the blocks other ranks reach");
+  s->figures.ghost_blocks = s->ghost_total;
+  s->figures.shared_blocks = s->shared_total;
+  return MPM_OK;
+}
+
+static mpm_status sort(mpm_sim *sim, mpm_step_ctx *c) {
+  dist_stack *s = state(sim);
+  mpm_status st = migrate(sim, s);
+  if (st == MPM_OK) st = s->inner->sort(sim, c);
+  if (st == MPM_OK) st = exchange_ghosts(sim, s, &c->tc.kernel);
+  return st;
+}
+
+/* The DOF fields a block's nodes carry in an exchange, and their count. */
+static int fields_of(const mpm_dofs *dofs, int after_update, mpm_real *field[7]) {
+  int n = 0;
+  field[n++] = dofs->mass;
+  for (int e = 0; e < 3; ++e) field[n++] = dofs->v0[e];
+  const int third =
+      after_update ? (dofs->fields & MPM_DOF_V) != 0 : (dofs->fields & MPM_DOF_F) != 0;
+  if (third)
+    for (int e = 0; e < 3; ++e) field[n++] = after_update ? dofs->v[e] : dofs->f[e];
+  return n;
+}
+
+/* Send the values of blocks out[..] (grouped by rank: out_n, out_at) and receive those of
+ * in[..] (in_n, in_at); `add`: the received values are added to the nodes' (in the order of the
+ * sending ranks), else they replace them. */
+static mpm_status exchange_values(mpm_sim *sim, dist_stack *s, int after_update,
+                                  const uint32_t *out, const int *out_n, const int *out_at,
+                                  size_t out_total, const uint32_t *in, const int *in_n,
+                                  const int *in_at, size_t in_total, int add) {
+  mpm_dofs *dofs = &sim->dofs;
+  mpm_real *field[7];
+  const int nf = fields_of(dofs, after_update, field);
+  const size_t per_block = (size_t)nf * MPM_BLOCK_NODES, begin = sim->grid.dof_begin;
+  const int R = s->size;
+  if (grow(&s->buf, &s->buf_cap, (out_total + in_total) * per_block + 1, sizeof *s->buf))
+    return nomem(sim, "for the ghost blocks' values");
+  mpm_real *send = s->buf, *recv = s->buf + out_total * per_block;
+  for (size_t q = 0; q < out_total; ++q) {
+    const size_t node = begin + (size_t)out[q] * MPM_BLOCK_NODES;
+    mpm_real *o = send + q * per_block;
+    for (int f = 0; f < nf; ++f)
+      memcpy(o + (size_t)f * MPM_BLOCK_NODES, field[f] + node, MPM_BLOCK_NODES * sizeof *o);
+  }
+  /* counts and displacements in values (int: a rank's halo stays far below 2^31 values) */
+  size_t messages = 0;
+  for (int r = 0; r < R; ++r) {
+    s->send_n[r] = out_n[r] * (int)per_block;
+    s->send_at[r] = out_at[r] * (int)per_block;
+    s->recv_n[r] = in_n[r] * (int)per_block;
+    s->recv_at[r] = in_at[r] * (int)per_block;
+    messages += out_n[r] > 0;
+  }
+  MPI_Alltoallv(send, s->send_n, s->send_at, MPI_REAL_TYPE, recv, s->recv_n, s->recv_at,
+                MPI_REAL_TYPE, mpm_dist_comm(s->d));
+  s->figures.halo_bytes += out_total * per_block * sizeof *send;
+  s->figures.halo_messages += messages;
+  for (size_t q = 0; q < in_total; ++q) { /* in rank order, then the sender's order */
+    const size_t node = begin + (size_t)in[q] * MPM_BLOCK_NODES;
+    const mpm_real *v = recv + q * per_block;
+    for (int f = 0; f < nf; ++f) {
+      mpm_real *restrict to = field[f] + node;
+      const mpm_real *restrict from = v + (size_t)f * MPM_BLOCK_NODES;
+      if (add)
+        for (int k = 0; k < MPM_BLOCK_NODES; ++k) to[k] += from[k];
+      else
+        memcpy(to, from, MPM_BLOCK_NODES * sizeof *to);
+    }
+  }
+  return MPM_OK;
+}
+
+static mpm_status p2g(mpm_sim *sim, mpm_step_ctx *c) {
+  dist_stack *s = state(sim);
+  mpm_status st = s->inner->p2g(sim, c);
+  if (st != MPM_OK) return st;
+  s->figures.halo_bytes = s->figures.halo_messages = 0;
+  st = exchange_values(sim, s, 0, s->ghost, s->ghost_count, s->ghost_at, s->ghost_total, s->shared,
+                       s->shared_count, s->shared_at, s->shared_total, 1);
+  if (st != MPM_OK) return st;
+  /* the ghosts emptied: the update and the reaction sums see each node at its owner only */
+  mpm_dofs *dofs = &sim->dofs;
+  mpm_real *field[7];
+  const int nf = fields_of(dofs, 0, field);
+  for (size_t q = 0; q < s->ghost_total; ++q) {
+    const size_t node = sim->grid.dof_begin + (size_t)s->ghost[q] * MPM_BLOCK_NODES;
+    for (int f = 0; f < nf; ++f) memset(field[f] + node, 0, MPM_BLOCK_NODES * sizeof(mpm_real));
+  }
+  return MPM_OK;
+}
+
+static mpm_status g2p(mpm_sim *sim, mpm_step_ctx *c) {
+  dist_stack *s = state(sim);
+  const mpm_status st =
+      exchange_values(sim, s, 1, s->shared, s->shared_count, s->shared_at, s->shared_total,
+                      s->ghost, s->ghost_count, s->ghost_at, s->ghost_total, 0);
+  return st != MPM_OK ? st : s->inner->g2p(sim, c);
+}
+
+/* ---- the rest of the table: the uniform stack's ------------------------------------------ */
+
+static mpm_status make(mpm_sim *sim, mpm_error *err) {
+  return state(sim)->inner->make(sim, err);
+}
+
+static void free_state(dist_stack *s) {
+  mpm_partition_free(&s->pt);
+  mpm_free(s->ghost_count);
+  mpm_free(s->ghost), mpm_free(s->shared), mpm_free(s->keys), mpm_free(s->buf);
+  mpm_free(s->dest);
+  mpm_free(s);
+}
+
+static void destroy(mpm_sim *sim) {
+  dist_stack *s = state(sim);
+  s->inner->destroy(sim);
+  free_state(s);
+  sim->stack_data = NULL;
+}
+
+static mpm_status sample_body(mpm_sim *sim, int b, mpm_error *err) {
+  return state(sim)->inner->sample_body(sim, b, err);
+}
+static double finest_dx(const mpm_sim *sim) {
+  return state(sim)->inner->finest_dx(sim);
+}
+static mpm_status layout(mpm_sim *sim, mpm_step_ctx *c, unsigned fields) {
+  return state(sim)->inner->layout(sim, c, fields);
+}
+static void implicit_parts(mpm_sim *sim, mpm_implicit *i) {
+  state(sim)->inner->implicit_parts(sim, i);
+}
+static mpm_status refine(mpm_sim *sim) {
+  return state(sim)->inner->refine(sim);
+}
+static mpm_status resample(mpm_sim *sim) {
+  return state(sim)->inner->resample(sim);
+}
+static void particles_moved(mpm_sim *sim) {
+  state(sim)->inner->particles_moved(sim);
+}
+static mpm_status save(mpm_sim *sim, mpm_checkpoint *c) {
+  return state(sim)->inner->save(sim, c);
+}
+static mpm_status load(mpm_sim *sim, const mpm_checkpoint *c) {
+  return state(sim)->inner->load(sim, c);
+}
+static mpm_status write_frame(mpm_sim *sim, int frame) {
+  return state(sim)->inner->write_frame(sim, frame);
+}
+static const char *frame_part(const mpm_sim *sim) {
+  return state(sim)->inner->frame_part(sim);
+}
+static void info(const mpm_sim *sim, mpm_sim_info *in) {
+  state(sim)->inner->info(sim, in);
+}
+
+static const mpm_grid_stack_ops dist_ops = {
+    .name = "ranks",
+    .make = make,
+    .destroy = destroy,
+    .sample_body = sample_body,
+    .finest_dx = finest_dx,
+    .sort = sort,
+    .layout = layout,
+    .p2g = p2g,
+    .implicit_parts = implicit_parts,
+    .g2p = g2p,
+    .refine = refine,
+    .resample = resample,
+    .particles_moved = particles_moved,
+    .adds_bodies = 0,
+    .save = save,
+    .load = load,
+    .write_frame = write_frame,
+    .frame_part = frame_part,
+    .info = info,
+};
+
+/* ---- attaching ----------------------------------------------------------------------------- */
+
+/* What does not run on ranks yet, or NULL. */
+static const char *unsupported(const mpm_sim *sim) {
+  if (sim->stack != &mpm_grid_uniform) return "the multi-level grid (domain.levels)";
+  if (sim->grid.kind != MPM_GRID_SPARSE) return "the dense grid (solver.grid \"dense\")";
+  if (sim->scene.solver.integrator != MPM_INTEGRATOR_EXPLICIT)
+    return "the implicit step (solver.integrator \"implicit\")";
+  if (sim->domains.particles.count > 0) return "particle domains (bodies[].domains)";
+  if (sim->scene.heat.enabled) return "heat conduction (heat)";
+  if (sim->steps > 0) return "a simulation that has taken steps (attach it when made)";
+  return NULL;
+}
+
+mpm_status mpm_dist_attach(mpm_dist *d, mpm_sim *sim, mpm_error *err) {
+  const MPI_Comm comm = mpm_dist_comm(d);
+  const char *why = unsupported(sim);
+  int refused = why != NULL, any = 0;
+  MPI_Allreduce(&refused, &any, 1, MPI_INT, MPI_MAX, comm);
+  if (any)
+    return mpm_error_set(err, MPM_ERR_INVALID, "a run on %d ranks: %s does not run on ranks yet",
+                         mpm_dist_size(d), why ? why : "what another rank's scene asks");
+  const int R = mpm_dist_size(d);
+  dist_stack *s = mpm_calloc(1, sizeof *s);
+  int *ints = mpm_calloc(8 * (size_t)R, sizeof *ints);
+  mpm_particles *p = &sim->particles;
+  uint64_t *keys = mpm_alloc((p->count + 1) * sizeof *keys);
+  uint8_t *gone = mpm_calloc(p->count + 1, 1);
+  int failed = !s || !ints || !keys || !gone;
+  /* the particles' blocks, every one weighing one particle: every rank holds every particle
+     (made from the same scene), so every rank cuts alike and keeps its own */
+  if (!failed) {
+    for (size_t i = 0; i < p->count; ++i) keys[i] = particle_key(&sim->grid, p, i);
+    failed = mpm_partition_cut(&s->pt, R, p->count, keys, NULL) != MPM_OK;
+  }
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+  if (any) {
+    if (s) mpm_partition_free(&s->pt);
+    mpm_free(s), mpm_free(ints), mpm_free(keys), mpm_free(gone);
+    return mpm_error_set(err, MPM_ERR_NOMEM,
+                         "a run on %d ranks: out of memory cutting %zu "
+                         "particles' blocks into ranks",
+                         R, p->count);
+  }
+  s->d = d;
+  s->rank = mpm_dist_rank(d);
+  s->size = R;
+  s->inner = sim->stack;
+  s->ghost_count = ints, s->ghost_at = ints + R, s->shared_count = ints + 2 * R;
+  s->shared_at = ints + 3 * R, s->send_n = ints + 4 * R, s->send_at = ints + 5 * R;
+  s->recv_n = ints + 6 * R, s->recv_at = ints + 7 * R;
+  double *rank_w = mpm_calloc((size_t)R, sizeof *rank_w);
+  if (rank_w) {
+    s->figures.imbalance = mpm_partition_weights(&s->pt, p->count, keys, NULL, rank_w);
+    mpm_free(rank_w);
+  }
+  for (size_t i = 0; i < p->count; ++i) gone[i] = mpm_partition_owner(&s->pt, keys[i]) != s->rank;
+  mpm_particles_remove(p, gone);
+  mpm_free(keys);
+  mpm_free(gone);
+  s->reduction = mpm_dist_reduction(d);
+  sim->stack_data = s;
+  sim->stack = &dist_ops;
+  mpm_sim_set_reduction(sim, &s->reduction);
+  return MPM_OK;
+}
+
+mpm_dist_figures mpm_dist_sim_figures(const mpm_sim *sim) {
+  const dist_stack *s = sim->stack == &dist_ops ? state(sim) : NULL;
+  mpm_dist_figures none = {0};
+  return s ? s->figures : none;
+}
