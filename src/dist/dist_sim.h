@@ -4,7 +4,8 @@
  * particles (those whose block, the 4x4x4-cell block of their cell, the partition gives it:
  * partition.h) and wraps the grid stack (sim/grid_stack.h) with the ranks' exchanges, and sets
  * the simulation's reduction to the ranks' (comm.h). A step then runs as on one process, with:
- *   sort   the particles whose block now belongs to another rank migrate there, every array of
+ *   sort   when the ranks' particles are out of balance, the blocks are cut again; then the
+ *          particles whose block now belongs to another rank migrate there, every array of
  *          them (comm.h); the grid is activated around this rank's particles; each block it
  *          holds but does not own (a ghost: the stencils of its particles near the range's
  *          edge reach it) is named to its owner, which activates it too;
@@ -40,8 +41,14 @@ typedef struct mpm_dist_figures {
   size_t halo_bytes;    /* node values sent (after P2G and before G2P) */
   size_t halo_messages; /* nonzero sends among them */
   mpm_migration migration;
-  double imbalance; /* the largest rank's particles over the mean, at the last cut */
+  double imbalance;  /* the largest rank's particles over the mean, at the last step's start */
+  size_t rebalances; /* cuts made again since the attach */
 } mpm_dist_figures;
+
+/* The cut is made again, at a step's sort, when the largest rank holds more than this many times
+ * the mean of the particles (MPM_DIST_REBALANCE unless set; 0: never). The figures count it. */
+#define MPM_DIST_REBALANCE 1.25
+void mpm_dist_set_rebalance(mpm_sim *sim, double threshold);
 
 mpm_dist_figures mpm_dist_sim_figures(const mpm_sim *sim);
 

@@ -9,6 +9,7 @@
 #include "sim/sim.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #ifdef MPM_USE_DOUBLE
@@ -34,6 +35,7 @@ typedef struct dist_stack {
   size_t buf_cap;
   int32_t *dest;
   size_t dest_cap;
+  double rebalance_at; /* recut when the largest rank holds this many times the mean */
   mpm_dist_figures figures;
 } dist_stack;
 
@@ -153,9 +155,80 @@ static mpm_status exchange_ghosts(mpm_sim *sim, dist_stack *s, const mpm_kernel 
   return MPM_OK;
 }
 
+static int by_key(const void *a, const void *b) {
+  const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
+/* When the largest rank holds more than rebalance_at times the mean of the particles, the
+ * blocks are cut again by their particles (every rank's blocks with their counts gathered on
+ * every rank: a rare step's cost, which grows with the blocks), and the migration that follows
+ * moves the particles to their new ranks. */
+static mpm_status rebalance(mpm_sim *sim, dist_stack *s) {
+  const MPI_Comm comm = mpm_dist_comm(s->d);
+  const mpm_particles *p = &sim->particles;
+  long long n = (long long)p->count, most = 0, all = 0;
+  MPI_Allreduce(&n, &most, 1, MPI_LONG_LONG, MPI_MAX, comm);
+  MPI_Allreduce(&n, &all, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  s->figures.imbalance = all > 0 ? (double)most * s->size / (double)all : 1;
+  if (!(s->rebalance_at > 1) || !(s->figures.imbalance > s->rebalance_at)) return MPM_OK;
+  /* this rank's blocks and their particles, in key order */
+  uint64_t *key = mpm_alloc((p->count + 1) * sizeof *key);
+  double *w = mpm_alloc((p->count + 1) * sizeof *w);
+  int *count = mpm_alloc(2 * (size_t)s->size * sizeof *count);
+  int blocks = 0, failed = !key || !w || !count;
+  if (!failed) {
+    for (size_t i = 0; i < p->count; ++i) key[i] = particle_key(&sim->grid, p, i);
+    qsort(key, p->count, sizeof *key, by_key);
+    for (size_t i = 0; i < p->count; ++i) {
+      if (blocks > 0 && key[blocks - 1] == key[i]) {
+        w[blocks - 1] += 1;
+      } else {
+        key[blocks] = key[i];
+        w[blocks++] = 1;
+      }
+    }
+  }
+  int any = 0;
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+  uint64_t *all_key = NULL;
+  double *all_w = NULL;
+  int total = 0;
+  if (!any) {
+    int *at = count + s->size;
+    MPI_Allgather(&blocks, 1, MPI_INT, count, 1, MPI_INT, comm);
+    for (int r = 0; r < s->size; ++r) at[r] = total, total += count[r];
+    all_key = mpm_alloc(((size_t)total + 1) * sizeof *all_key);
+    all_w = mpm_alloc(((size_t)total + 1) * sizeof *all_w);
+    failed = !all_key || !all_w;
+    MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+    if (!any) {
+      MPI_Allgatherv(key, blocks, MPI_UINT64_T, all_key, count, at, MPI_UINT64_T, comm);
+      MPI_Allgatherv(w, blocks, MPI_DOUBLE, all_w, count, at, MPI_DOUBLE, comm);
+    }
+  }
+  mpm_status st = MPM_OK;
+  if (!any) {
+    mpm_partition cut;
+    st = mpm_partition_cut(&cut, s->size, (size_t)total, all_key, all_w);
+    failed = st != MPM_OK;
+    MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+    if (!any) {
+      mpm_partition_free(&s->pt);
+      s->pt = cut;
+      s->figures.rebalances++;
+    } else if (st == MPM_OK) {
+      mpm_partition_free(&cut);
+    }
+  }
+  mpm_free(key), mpm_free(w), mpm_free(count), mpm_free(all_key), mpm_free(all_w);
+  return any ? nomem(sim, "cutting the blocks into ranks again") : MPM_OK;
+}
+
 static mpm_status sort(mpm_sim *sim, mpm_step_ctx *c) {
   dist_stack *s = state(sim);
-  mpm_status st = migrate(sim, s);
+  mpm_status st = rebalance(sim, s);
+  if (st == MPM_OK) st = migrate(sim, s);
   if (st == MPM_OK) st = s->inner->sort(sim, c);
   if (st == MPM_OK) st = exchange_ghosts(sim, s, &c->tc.kernel);
   return st;
@@ -389,11 +462,16 @@ mpm_status mpm_dist_attach(mpm_dist *d, mpm_sim *sim, mpm_error *err) {
   mpm_particles_remove(p, gone);
   mpm_free(keys);
   mpm_free(gone);
+  s->rebalance_at = MPM_DIST_REBALANCE;
   s->reduction = mpm_dist_reduction(d);
   sim->stack_data = s;
   sim->stack = &dist_ops;
   mpm_sim_set_reduction(sim, &s->reduction);
   return MPM_OK;
+}
+
+void mpm_dist_set_rebalance(mpm_sim *sim, double threshold) {
+  if (sim->stack == &dist_ops) state(sim)->rebalance_at = threshold;
 }
 
 mpm_dist_figures mpm_dist_sim_figures(const mpm_sim *sim) {

@@ -5,7 +5,10 @@
  * position and of its largest speed in velocity (the ranks add a node's sums in another order),
  * bit for bit on one rank; no particle is lost or doubled and each keeps its mass to the bit;
  * two runs on the same rank count agree bit for bit. On 2 ranks and more, particles migrated
- * and ghost blocks were exchanged. A scene the ranks cannot run yet is refused on every rank. */
+ * and ghost blocks were exchanged. Cut again whenever a rank holds 1% more particles than the
+ * mean, the run stays as close to one process. The bytes a step exchanges grow with the cut's
+ * surface (a cube of twice the side: 2.6-3.1 times, not the volume's 8). A scene the ranks cannot
+ * run yet is refused on every rank. */
 #include "dist/comm.h"
 #include "dist/dist_sim.h"
 
@@ -120,10 +123,12 @@ static mpm_sim *make(void) {
 }
 
 /* STEPS steps on the ranks; the particles on rank 0 (and the figures summed over ranks). */
-static state run_on_ranks(mpm_dist *d, long *migrated, long *ghosts) {
+static state run_on_ranks(mpm_dist *d, double rebalance, long *migrated, long *ghosts,
+                          long *rebalances) {
   mpm_sim *sim = make();
   mpm_error err;
   CHECK(mpm_dist_attach(d, sim, &err) == MPM_OK, "attach: %s", err.message);
+  mpm_dist_set_rebalance(sim, rebalance);
   long moved = 0, ghost = 0;
   for (int k = 0; k < STEPS; ++k) {
     CHECK(mpm_sim_step(sim, DT) == MPM_OK, "step %d: %s", k, mpm_sim_last_error(sim));
@@ -133,6 +138,7 @@ static state run_on_ranks(mpm_dist *d, long *migrated, long *ghosts) {
   }
   MPI_Allreduce(&moved, migrated, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
   MPI_Allreduce(&ghost, ghosts, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  *rebalances = (long)mpm_dist_sim_figures(sim).rebalances;
   state s = collect(sim, 1);
   mpm_sim_destroy(sim);
   return s;
@@ -177,15 +183,61 @@ static void free_state(state *s) {
   free(s->xv);
 }
 
+/* The node values one step sends over all ranks for a resting cube of side `cells`. */
+static double halo_bytes(mpm_dist *d, int cells) {
+  char json[1024];
+  const double dx = 0.025, half = 0.5 * cells * dx;
+  snprintf(json, sizeof json,
+           "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1.2, 1.2, 1.2], \"dx\": %g},"
+           " \"time\": {\"end\": 1}, \"gravity\": [0, 0, 0],"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e5,"
+           "  \"nu\": 0.3, \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.6, 0.6, 0.6],"
+           "  \"half_extent\": [%.17g, %.17g, %.17g]}, \"material\": \"m\","
+           "  \"particles_per_cell\": 1}]}",
+           dx, half, half, half);
+  mpm_sim *sim = NULL;
+  char msg[1024];
+  mpm_error err;
+  if (mpm_sim_create_from_json(json, NULL, &sim, msg, sizeof msg) != MPM_OK) {
+    fprintf(stderr, "rank %d: %s\n", rank, msg);
+    MPI_Abort(MPI_COMM_WORLD, 2);
+  }
+  mpm_sim_set_threads(sim, 1);
+  CHECK(mpm_dist_attach(d, sim, &err) == MPM_OK, "attach: %s", err.message);
+  CHECK(mpm_sim_step(sim, DT) == MPM_OK, "step: %s", mpm_sim_last_error(sim));
+  double bytes = (double)mpm_dist_sim_figures(sim).halo_bytes, all = 0;
+  MPI_Allreduce(&bytes, &all, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  mpm_sim_destroy(sim);
+  return all;
+}
+
+/* The halo grows with the cut's surface: a cube of twice the side sends 2.6-3.1 times the bytes
+ * here (4 in the limit of large cubes: at these sizes the ghost layer's edges still count), where
+ * the volume (the grid, or the particles) would give 8. */
+static void test_halo_scales_with_surface(mpm_dist *d) {
+  if (size < 2) return;
+  const double small = halo_bytes(d, 16), large = halo_bytes(d, 32);
+  if (rank == 0)
+    printf("%d ranks: halo of a cube of 16 cells %.0f bytes a step, of 32 cells %.0f (x%.2f)\n",
+           size, small, large, large / small);
+  CHECK(small > 0 && large / small > 2 && large / small < 5.5,
+        "the halo grew %.2f times when the cube's side doubled (the surface: 4)", large / small);
+}
+
 int main(int argc, char **argv) {
   MPI_Init(&argc, &argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   mpm_error err;
   mpm_dist *d = mpm_dist_create_world(&err);
-  long migrated = 0, ghosts = 0, migrated2 = 0, ghosts2 = 0;
-  state a = run_on_ranks(d, &migrated, &ghosts);
-  state b = run_on_ranks(d, &migrated2, &ghosts2);
+  long migrated = 0, ghosts = 0, migrated2 = 0, ghosts2 = 0, cuts = 0, cuts2 = 0;
+  state a = run_on_ranks(d, MPM_DIST_REBALANCE, &migrated, &ghosts, &cuts);
+  state b = run_on_ranks(d, MPM_DIST_REBALANCE, &migrated2, &ghosts2, &cuts2);
+  /* cut again whenever a rank holds 1% more than the mean (the thrown block moves particles
+     into the next rank's range every step) */
+  long cuts3 = 0;
+  state c = run_on_ranks(d, 1.01, &migrated2, &ghosts2, &cuts3);
   if (rank == 0) {
     /* the same on one process, without the ranks */
     mpm_sim *sim = make();
@@ -199,10 +251,15 @@ int main(int argc, char **argv) {
     printf("%d ranks: %ld particles migrated, %ld ghost blocks exchanged over %d steps\n", size,
            migrated, ghosts, STEPS);
     if (size > 1) CHECK(migrated > 0 && ghosts > 0, "nothing crossed the ranks' ranges");
+    printf("%d ranks, cut again past 1.01 of the mean: %ld new cuts\n", size, cuts3);
+    compare(&c, &one);
+    if (size > 1) CHECK(cuts3 > 0, "the blocks were never cut again");
     free_state(&one);
   }
   free_state(&a);
   free_state(&b);
+  free_state(&c);
+  test_halo_scales_with_surface(d);
   /* a scene the ranks cannot run yet: refused on every rank, naming it */
   mpm_sim *sim = NULL;
   char msg[1024];
