@@ -34,7 +34,7 @@
  * on ranks yet (on every rank); MPM_ERR_NOMEM. */
 mpm_status mpm_dist_attach(mpm_dist *d, mpm_sim *sim, mpm_error *err);
 
-/* The last step's exchanges on this rank. */
+/* The last step's exchanges on this rank (and the counts and time since the attach). */
 typedef struct mpm_dist_figures {
   size_t ghost_blocks;  /* blocks held here and owned by another rank */
   size_t shared_blocks; /* blocks owned here that other ranks hold as ghosts */
@@ -43,6 +43,9 @@ typedef struct mpm_dist_figures {
   mpm_migration migration;
   double imbalance;  /* the largest rank's particles over the mean, at the last step's start */
   size_t rebalances; /* cuts made again since the attach */
+  /* wall seconds in the exchanges since the attach (the recut, the migration, the ghosts'
+     names and values, their packing and the waits for the other ranks included) */
+  double exchange_seconds;
 } mpm_dist_figures;
 
 /* The cut is made again, at a step's sort, when the largest rank holds more than this many times

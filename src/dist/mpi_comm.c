@@ -12,6 +12,14 @@ struct mpm_dist {
   int rank, size;
   double *gathered; /* size x capacity values, the reduction's scratch */
   int capacity;
+  /* the migration's: one packed particle as an element of the exchange, and scratch kept from
+     call to call (a step allocates nothing once warm) */
+  MPI_Datatype particle;
+  int *counts; /* 4 x size */
+  uint32_t *idx;
+  uint8_t *gone;
+  unsigned char *sendbuf, *recvbuf;
+  size_t idx_cap, gone_cap, send_cap, recv_cap;
 };
 
 mpm_dist *mpm_dist_create_world(mpm_error *err) {
@@ -23,13 +31,25 @@ mpm_dist *mpm_dist_create_world(mpm_error *err) {
   MPI_Comm_dup(MPI_COMM_WORLD, &d->comm);
   MPI_Comm_rank(d->comm, &d->rank);
   MPI_Comm_size(d->comm, &d->size);
+  d->counts = mpm_calloc(4 * (size_t)d->size, sizeof *d->counts);
+  if (!d->counts) {
+    mpm_dist_destroy(d);
+    mpm_error_set(err, MPM_ERR_NOMEM, "out of memory making the run's process group");
+    return NULL;
+  }
+  /* counts in particles stay within int where counts in bytes would not */
+  MPI_Type_contiguous((int)mpm_particles_packed_bytes(), MPI_BYTE, &d->particle);
+  MPI_Type_commit(&d->particle);
   return d;
 }
 
 void mpm_dist_destroy(mpm_dist *d) {
   if (!d) return;
+  if (d->counts) MPI_Type_free(&d->particle);
   MPI_Comm_free(&d->comm);
   mpm_free(d->gathered);
+  mpm_free(d->counts), mpm_free(d->idx), mpm_free(d->gone);
+  mpm_free(d->sendbuf), mpm_free(d->recvbuf);
   mpm_free(d);
 }
 
@@ -74,11 +94,21 @@ mpm_reduction mpm_dist_reduction(mpm_dist *d) {
   return r;
 }
 
-/* Whether any rank says so (a collective vote). */
-static int any_rank(mpm_dist *d, int mine) {
-  int any = 0;
-  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, d->comm);
-  return any;
+/* The largest of every rank's vote (a collective). */
+static int vote(mpm_dist *d, int mine) {
+  int most = 0;
+  MPI_Allreduce(&mine, &most, 1, MPI_INT, MPI_MAX, d->comm);
+  return most;
+}
+
+/* *buf with room for n bytes (kept when it has); 0, or -1 when out of memory. */
+static int room(void *buf, size_t *cap, size_t n) {
+  if (n <= *cap) return 0;
+  void *bigger = mpm_realloc(*(void **)buf, n + n / 2 + 64);
+  if (!bigger) return -1;
+  *(void **)buf = bigger;
+  *cap = n + n / 2 + 64;
+  return 0;
 }
 
 mpm_status mpm_dist_migrate(mpm_dist *d, mpm_particles *p, const int32_t *dest, mpm_migration *m,
@@ -86,77 +116,62 @@ mpm_status mpm_dist_migrate(mpm_dist *d, mpm_particles *p, const int32_t *dest, 
   memset(m, 0, sizeof *m);
   const size_t n = p->count, one = mpm_particles_packed_bytes();
   const int R = d->size;
+  int *send_count = d->counts, *send_at = d->counts + R, *recv_count = d->counts + 2 * R,
+      *recv_at = d->counts + 3 * R;
+  memset(send_count, 0, (size_t)R * sizeof *send_count);
   int bad = 0;
-  for (size_t i = 0; i < n && !bad; ++i) bad = dest[i] < 0 || dest[i] >= R;
-  if (any_rank(d, bad))
+  size_t leaving = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (dest[i] < 0 || dest[i] >= R) {
+      bad = 1;
+      break;
+    }
+    if (dest[i] != d->rank) ++send_count[dest[i]], ++leaving;
+  }
+  /* the particles leaving, grouped by destination in their order here */
+  int failed = !bad && (room(&d->idx, &d->idx_cap, (leaving + 1) * sizeof *d->idx) ||
+                        room(&d->sendbuf, &d->send_cap, leaving * one + 1));
+  const int verdict = vote(d, bad ? 2 : failed);
+  if (verdict == 2)
     return mpm_error_set(err, MPM_ERR_INVALID,
                          "particle migration: a destination rank outside [0, %d) (nothing moved)",
                          R);
-  /* the particles leaving, grouped by destination in their order here */
-  int *send_count = mpm_calloc((size_t)R, sizeof *send_count);
-  int *recv_count = mpm_calloc((size_t)R, sizeof *recv_count);
-  int *send_at = mpm_calloc((size_t)R, sizeof *send_at);
-  int *recv_at = mpm_calloc((size_t)R, sizeof *recv_at);
-  size_t leaving = 0;
-  for (size_t i = 0; i < n; ++i)
-    if (dest[i] != d->rank) ++leaving;
-  uint32_t *idx = mpm_alloc((leaving + 1) * sizeof *idx);
-  uint8_t *gone = mpm_calloc(n + 1, 1);
-  unsigned char *sendbuf = mpm_alloc(leaving * one + 1);
-  int failed = !send_count || !recv_count || !send_at || !recv_at || !idx || !gone || !sendbuf;
-  if (!failed) {
-    for (size_t i = 0; i < n; ++i)
-      if (dest[i] != d->rank) ++send_count[dest[i]];
-    for (int r = 1; r < R; ++r) send_at[r] = send_at[r - 1] + send_count[r - 1];
-    int *fill = recv_at; /* scratch until the counts come back */
-    memcpy(fill, send_at, (size_t)R * sizeof *fill);
-    for (size_t i = 0; i < n; ++i)
-      if (dest[i] != d->rank) {
-        idx[fill[dest[i]]++] = (uint32_t)i;
-        gone[i] = 1;
-      }
-    mpm_particles_pack(p, idx, leaving, sendbuf);
-  }
-  if (any_rank(d, failed)) {
-    mpm_free(send_count), mpm_free(recv_count), mpm_free(send_at), mpm_free(recv_at);
-    mpm_free(idx), mpm_free(gone), mpm_free(sendbuf);
+  if (verdict == 1)
     return mpm_error_set(err, MPM_ERR_NOMEM,
                          "particle migration: out of memory packing %zu particles (nothing moved)",
                          leaving);
-  }
+  send_at[0] = 0;
+  for (int r = 1; r < R; ++r) send_at[r] = send_at[r - 1] + send_count[r - 1];
+  memcpy(recv_at, send_at, (size_t)R * sizeof *recv_at); /* a cursor until the counts come */
+  for (size_t i = 0; i < n; ++i)
+    if (dest[i] != d->rank) d->idx[recv_at[dest[i]]++] = (uint32_t)i;
+  mpm_particles_pack(p, d->idx, leaving, d->sendbuf);
   MPI_Alltoall(send_count, 1, MPI_INT, recv_count, 1, MPI_INT, d->comm);
   size_t arriving = 0;
   for (int r = 0; r < R; ++r) {
     recv_at[r] = (int)arriving;
     arriving += (size_t)recv_count[r];
   }
-  /* one particle is one element of the exchange: counts in particles stay within int where
-     counts in bytes would not */
-  MPI_Datatype particle;
-  MPI_Type_contiguous((int)one, MPI_BYTE, &particle);
-  MPI_Type_commit(&particle);
-  unsigned char *recvbuf = mpm_alloc(arriving * one + 1);
-  const int short_of_memory = any_rank(d, !recvbuf);
-  mpm_status st = MPM_OK;
-  if (!short_of_memory) {
-    MPI_Alltoallv(sendbuf, send_count, send_at, particle, recvbuf, recv_count, recv_at, particle,
-                  d->comm);
-    mpm_particles_remove(p, gone);
-    st = mpm_particles_unpack(p, recvbuf, arriving);
-    if (st != MPM_OK)
-      mpm_error_set(err, st, "particle migration: out of memory receiving %zu particles", arriving);
-    m->sent = leaving;
-    m->received = arriving;
-    m->bytes_sent = leaving * one;
-    m->bytes_received = arriving * one;
-  } else {
-    st = mpm_error_set(err, MPM_ERR_NOMEM,
-                       "particle migration: out of memory for the particles arriving (nothing "
-                       "moved)");
+  failed = room(&d->recvbuf, &d->recv_cap, arriving * one + 1) ||
+           (leaving > 0 && room(&d->gone, &d->gone_cap, n + 1));
+  if (vote(d, failed))
+    return mpm_error_set(err, MPM_ERR_NOMEM,
+                         "particle migration: out of memory for the particles arriving (nothing "
+                         "moved)");
+  MPI_Alltoallv(d->sendbuf, send_count, send_at, d->particle, d->recvbuf, recv_count, recv_at,
+                d->particle, d->comm);
+  if (leaving > 0) { /* the others keep their order */
+    memset(d->gone, 0, n);
+    for (size_t k = 0; k < leaving; ++k) d->gone[d->idx[k]] = 1;
+    mpm_particles_remove(p, d->gone);
   }
-  MPI_Type_free(&particle);
-  mpm_free(recvbuf);
-  mpm_free(send_count), mpm_free(recv_count), mpm_free(send_at), mpm_free(recv_at);
-  mpm_free(idx), mpm_free(gone), mpm_free(sendbuf);
-  return st;
+  const mpm_status st = mpm_particles_unpack(p, d->recvbuf, arriving);
+  if (st != MPM_OK)
+    return mpm_error_set(err, st, "particle migration: out of memory receiving %zu particles",
+                         arriving);
+  m->sent = leaving;
+  m->received = arriving;
+  m->bytes_sent = leaving * one;
+  m->bytes_received = arriving * one;
+  return MPM_OK;
 }
