@@ -7,10 +7,12 @@
  * two runs on the same rank count agree bit for bit. On 2 ranks and more, particles migrated
  * and ghost blocks were exchanged. Cut again whenever a rank holds 1% more particles than the
  * mean, the run stays as close to one process. The bytes a step exchanges grow with the cut's
- * surface (a cube of twice the side: 2.6-3.1 times, not the volume's 8). A scene the ranks cannot
+ * surface (a cube of twice the side: 2.6-3.1 times, not the volume's 8). A value blown up on
+ * one rank stops every rank in the same step. A scene the ranks cannot
  * run yet is refused on every rank. */
 #include "dist/comm.h"
 #include "dist/dist_sim.h"
+#include "sim/sim.h"
 
 #include <math.h>
 #include <mpi.h>
@@ -225,6 +227,27 @@ static void test_halo_scales_with_surface(mpm_dist *d) {
         "the halo grew %.2f times when the cube's side doubled (the surface: 4)", large / small);
 }
 
+/* A value blown up on one rank stops every rank in the same step, with the status that names
+ * it: the rank that holds the particle names its id, the others the step. */
+static void test_instability_stops_all(mpm_dist *d) {
+  mpm_sim *sim = make();
+  mpm_error err;
+  CHECK(mpm_dist_attach(d, sim, &err) == MPM_OK, "attach: %s", err.message);
+  for (int k = 0; k < 3; ++k) CHECK(mpm_sim_step(sim, DT) == MPM_OK, "step %d", k);
+  if (rank == size - 1 && sim->particles.count > 0) sim->particles.v[0][0] = (mpm_real)NAN;
+  const mpm_status st = mpm_sim_step(sim, DT);
+  int stopped = st == MPM_ERR_UNSTABLE, all = 0;
+  MPI_Allreduce(&stopped, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  CHECK(all == size, "%d of %d ranks stopped (this one: status %d, '%s')", all, size, (int)st,
+        mpm_sim_last_error(sim));
+  CHECK(strstr(mpm_sim_last_error(sim), "step 4") != NULL, "the message names no step: %s",
+        mpm_sim_last_error(sim));
+  if (rank == 0)
+    printf("%d ranks: a NaN on rank %d stopped every rank: %s\n", size, size - 1,
+           mpm_sim_last_error(sim));
+  mpm_sim_destroy(sim);
+}
+
 int main(int argc, char **argv) {
   MPI_Init(&argc, &argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -260,6 +283,7 @@ int main(int argc, char **argv) {
   free_state(&b);
   free_state(&c);
   test_halo_scales_with_surface(d);
+  test_instability_stops_all(d);
   /* a scene the ranks cannot run yet: refused on every rank, naming it */
   mpm_sim *sim = NULL;
   char msg[1024];
