@@ -12,24 +12,13 @@
 #include "core/particles.h"
 #include "dist/comm.h"
 #include "dist/partition.h"
+#include "mpi_check.h"
 
 #include <math.h>
 #include <mpi.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int rank, size, failures;
-
-#define CHECK(cond, ...)                                                                           \
-  do {                                                                                             \
-    if (!(cond)) {                                                                                 \
-      fprintf(stderr, "rank %d: %s:%d: ", rank, __FILE__, __LINE__);                               \
-      fprintf(stderr, __VA_ARGS__);                                                                \
-      fprintf(stderr, "\n");                                                                       \
-      ++failures;                                                                                  \
-    }                                                                                              \
-  } while (0)
 
 /* rank r's k-th value: 1, 1, 1e16, -1e16, 1, ... times 1 + k, whose sum depends on the order of
  * adding (in rank order 2 + 1e16 is exact and the large ones cancel: 2 (1 + k) on 4 ranks; 1 and
@@ -187,9 +176,7 @@ static void test_migration(mpm_dist *d) {
 }
 
 int main(int argc, char **argv) {
-  MPI_Init(&argc, &argv);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  mpi_check_start(&argc, &argv);
   mpm_error err;
   mpm_dist *d = mpm_dist_create_world(&err);
   CHECK(d && mpm_dist_rank(d) == rank && mpm_dist_size(d) == size, "create");
@@ -197,10 +184,5 @@ int main(int argc, char **argv) {
   test_same_cut();
   test_migration(d);
   mpm_dist_destroy(d);
-  int all = 0;
-  MPI_Allreduce(&failures, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-  if (rank == 0)
-    printf("test_dist on %d ranks: %s (%d failures)\n", size, all ? "FAILED" : "passed", all);
-  MPI_Finalize();
-  return all ? 1 : 0;
+  return mpi_check_finish("test_dist");
 }

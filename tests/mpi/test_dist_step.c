@@ -13,6 +13,7 @@
 #include "dist/comm.h"
 #include "dist/dist_sim.h"
 #include "sim/sim.h"
+#include "mpi_check.h"
 
 #include <math.h>
 #include <mpi.h>
@@ -20,18 +21,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int rank, size, failures;
-
-#define CHECK(cond, ...)                                                                           \
-  do {                                                                                             \
-    if (!(cond)) {                                                                                 \
-      fprintf(stderr, "rank %d: %s:%d: ", rank, __FILE__, __LINE__);                               \
-      fprintf(stderr, __VA_ARGS__);                                                                \
-      fprintf(stderr, "\n");                                                                       \
-      ++failures;                                                                                  \
-    }                                                                                              \
-  } while (0)
 
 static const char *const scene =
     "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.025},"
@@ -249,9 +238,7 @@ static void test_instability_stops_all(mpm_dist *d) {
 }
 
 int main(int argc, char **argv) {
-  MPI_Init(&argc, &argv);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  mpi_check_start(&argc, &argv);
   mpm_error err;
   mpm_dist *d = mpm_dist_create_world(&err);
   long migrated = 0, ghosts = 0, migrated2 = 0, ghosts2 = 0, cuts = 0, cuts2 = 0;
@@ -300,10 +287,5 @@ int main(int argc, char **argv) {
         "the implicit step was not refused: %s", err.message);
   mpm_sim_destroy(sim);
   mpm_dist_destroy(d);
-  int all = 0;
-  MPI_Allreduce(&failures, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-  if (rank == 0)
-    printf("test_dist_step on %d ranks: %s (%d failures)\n", size, all ? "FAILED" : "passed", all);
-  MPI_Finalize();
-  return all ? 1 : 0;
+  return mpi_check_finish("test_dist_step");
 }
