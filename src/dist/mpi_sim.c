@@ -54,21 +54,19 @@ static int grow(void *p, size_t *cap, size_t n, size_t size) {
   return 0;
 }
 
-/* floor(a / 4) for any sign */
-static int32_t block_of(int32_t a) {
-  return a >= 0 ? a / 4 : -((-a + 3) / 4);
-}
-
 /* The block of the cell holding particle i (the one rule of a particle's block, for the cut,
- * the migration and the recut). */
-static void particle_block(const mpm_grid *g, const mpm_particles *p, size_t i, int32_t c[3]) {
+ * the migration and the recut): floor((x - origin) / dx) by the inverse spacing, and floor(c / 4)
+ * as an arithmetic shift (as gcc and clang shift a signed value), so that the migration's pass over
+ * every particle stays cheap. */
+static inline void particle_block(const mpm_grid *g, double inv_dx, const mpm_particles *p,
+                                  size_t i, int32_t c[3]) {
   for (int d = 0; d < 3; ++d)
-    c[d] = block_of((int32_t)floor(((double)p->x[d][i] - (double)g->origin[d]) / (double)g->dx));
+    c[d] = (int32_t)floor(((double)p->x[d][i] - (double)g->origin[d]) * inv_dx) >> 2;
 }
 
 static uint64_t particle_key(const mpm_grid *g, const mpm_particles *p, size_t i) {
   int32_t c[3];
-  particle_block(g, p, i, c);
+  particle_block(g, 1.0 / (double)g->dx, p, i, c);
   return mpm_morton_key(c);
 }
 
@@ -84,17 +82,24 @@ static mpm_status migrate(mpm_sim *sim, dist_stack *s) {
   mpm_particles *p = &sim->particles;
   if (grow(&s->dest, &s->dest_cap, p->count + 1, sizeof *s->dest))
     return nomem(sim, "choosing the particles' ranks");
-  /* the particles mostly lie in block order (the sort's periodic reorder): a block's owner is
-     looked up once for a run of its particles */
-  int32_t last[3] = {INT32_MIN, INT32_MIN, INT32_MIN}, owner = 0;
+  /* a block's owner from a small direct-mapped cache of the blocks met (the particles lie in
+     the sort's block order, so few blocks are met in a row: the Morton key and the search run
+     once per block, not per particle) */
+  enum { CACHE = 256 };
+  int32_t cache_block[CACHE][3], cache_owner[CACHE];
+  for (int k = 0; k < CACHE; ++k) cache_block[k][0] = INT32_MIN;
+  const double inv_dx = 1.0 / (double)sim->grid.dx;
   for (size_t i = 0; i < p->count; ++i) {
     int32_t c[3];
-    particle_block(&sim->grid, p, i, c);
-    if (c[0] != last[0] || c[1] != last[1] || c[2] != last[2]) {
-      owner = (int32_t)mpm_partition_owner(&s->pt, mpm_morton_key(c));
-      memcpy(last, c, sizeof last);
+    particle_block(&sim->grid, inv_dx, p, i, c);
+    const unsigned h =
+        ((unsigned)c[0] * 73856093u ^ (unsigned)c[1] * 19349663u ^ (unsigned)c[2] * 83492791u) &
+        (CACHE - 1);
+    if (cache_block[h][0] != c[0] || cache_block[h][1] != c[1] || cache_block[h][2] != c[2]) {
+      memcpy(cache_block[h], c, sizeof c);
+      cache_owner[h] = (int32_t)mpm_partition_owner(&s->pt, mpm_morton_key(c));
     }
-    s->dest[i] = owner;
+    s->dest[i] = cache_owner[h];
   }
   mpm_error err;
   const mpm_status st = mpm_dist_migrate(s->d, p, s->dest, &s->figures.migration, &err);
