@@ -17,6 +17,10 @@
  * The bytes a step sends grow with the surface of the ranks' ranges (the ghost blocks), not with
  * the particles or the grid.
  *
+ * A rank that runs out of memory in the sort, P2G or an exchange tells the others (a vote before
+ * each exchange), and every rank's step fails; one that fails in the grid update or G2P still
+ * leaves the others waiting at the next exchange (to be closed with a vote after every stage).
+ *
  * What runs on ranks so far: material points on the uniform sparse grid, the explicit step,
  * with every kernel, transfer, material, collider and body force. The rest (the implicit step,
  * the multi-level grid, particle domains, heat, the dense grid) is refused by mpm_dist_attach

@@ -72,6 +72,22 @@ static uint64_t particle_key(const mpm_grid *g, const mpm_particles *p, size_t i
 
 /* ---- the stages ------------------------------------------------------------------------- */
 
+/* The status of a rank whose step stops because another rank's failed (that one says why). */
+static mpm_status another_rank(mpm_sim *sim, const char *where) {
+  return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                       "step %lld: another rank of the run ran out of memory %s (its message "
+                       "names what)",
+                       (long long)sim->steps, where);
+}
+
+/* Whether any rank failed (a collective vote): a rank that runs out of memory must not leave the
+ * others waiting in the exchange it skips, so every failure before an exchange is voted on. */
+static int any_failed(const dist_stack *s, int mine) {
+  int any = 0;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, mpm_dist_comm(s->d));
+  return any;
+}
+
 static mpm_status nomem(mpm_sim *sim, const char *what) {
   return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory %s",
                        (long long)sim->steps, what);
@@ -80,7 +96,7 @@ static mpm_status nomem(mpm_sim *sim, const char *what) {
 /* The particles whose block another rank owns now go there. */
 static mpm_status migrate(mpm_sim *sim, dist_stack *s) {
   mpm_particles *p = &sim->particles;
-  if (grow(&s->dest, &s->dest_cap, p->count + 1, sizeof *s->dest))
+  if (any_failed(s, grow(&s->dest, &s->dest_cap, p->count + 1, sizeof *s->dest)))
     return nomem(sim, "choosing the particles' ranks");
   /* a block's owner from a small direct-mapped cache of the blocks met (the particles lie in
      the sort's block order, so few blocks are met in a row: the Morton key and the search run
@@ -115,8 +131,8 @@ static mpm_status exchange_ghosts(mpm_sim *sim, dist_stack *s, const mpm_kernel 
   const MPI_Comm comm = mpm_dist_comm(s->d);
   const int R = s->size;
   const size_t nb = sg->block_count;
-  if (grow(&s->ghost, &s->ghost_cap, nb + 1, sizeof *s->ghost) ||
-      grow(&s->keys, &s->keys_cap, nb + 1, sizeof *s->keys))
+  if (any_failed(s, grow(&s->ghost, &s->ghost_cap, nb + 1, sizeof *s->ghost) ||
+                        grow(&s->keys, &s->keys_cap, nb + 1, sizeof *s->keys)))
     return nomem(sim, "listing the ghost blocks");
   memset(s->ghost_count, 0, (size_t)R * sizeof *s->ghost_count);
   for (size_t b = 0; b < nb; ++b) {
@@ -140,10 +156,8 @@ static mpm_status exchange_ghosts(mpm_sim *sim, dist_stack *s, const mpm_kernel 
   for (int r = 1; r < R; ++r) s->shared_at[r] = s->shared_at[r - 1] + s->shared_count[r - 1];
   s->shared_total = (size_t)s->shared_at[R - 1] + (size_t)s->shared_count[R - 1];
   uint64_t *named = mpm_alloc((s->shared_total + 1) * sizeof *named);
-  int failed = !named || grow(&s->shared, &s->shared_cap, s->shared_total + 1, sizeof *s->shared);
-  int any = 0;
-  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
-  if (any) {
+  if (any_failed(s, !named ||
+                        grow(&s->shared, &s->shared_cap, s->shared_total + 1, sizeof *s->shared))) {
     mpm_free(named);
     return nomem(sim, "receiving the ghost blocks' names");
   }
@@ -170,7 +184,7 @@ static mpm_status exchange_ghosts(mpm_sim *sim, dist_stack *s, const mpm_kernel 
     s->shared[q] = (uint32_t)b;
   }
   mpm_free(named);
-  if (st != MPM_OK) return nomem(sim, "activating the blocks other ranks reach");
+  if (any_failed(s, st != MPM_OK)) return nomem(sim, "activating the blocks other ranks reach");
   s->figures.ghost_blocks = s->ghost_total;
   s->figures.shared_blocks = s->shared_total;
   return MPM_OK;
@@ -252,7 +266,10 @@ static mpm_status sort(mpm_sim *sim, mpm_step_ctx *c) {
   mpm_status st = rebalance(sim, s);
   if (st == MPM_OK) st = migrate(sim, s);
   const double t1 = mpm_wall_seconds();
-  if (st == MPM_OK) st = s->inner->sort(sim, c);
+  if (st == MPM_OK) {
+    st = s->inner->sort(sim, c);
+    if (any_failed(s, st != MPM_OK) && st == MPM_OK) st = another_rank(sim, "sorting");
+  }
   const double t2 = mpm_wall_seconds();
   if (st == MPM_OK) st = exchange_ghosts(sim, s, &c->tc.kernel);
   s->figures.exchange_seconds += (t1 - t0) + (mpm_wall_seconds() - t2);
@@ -283,7 +300,8 @@ static mpm_status exchange_values(mpm_sim *sim, dist_stack *s, int after_update,
   const int nf = fields_of(dofs, after_update, field);
   const size_t per_block = (size_t)nf * MPM_BLOCK_NODES, begin = sim->grid.dof_begin;
   const int R = s->size;
-  if (grow(&s->buf, &s->buf_cap, (out_total + in_total) * per_block + 1, sizeof *s->buf))
+  if (any_failed(
+          s, grow(&s->buf, &s->buf_cap, (out_total + in_total) * per_block + 1, sizeof *s->buf)))
     return nomem(sim, "for the ghost blocks' values");
   mpm_real *send = s->buf, *recv = s->buf + out_total * per_block;
   for (size_t q = 0; q < out_total; ++q) {
@@ -323,7 +341,7 @@ static mpm_status exchange_values(mpm_sim *sim, dist_stack *s, int after_update,
 static mpm_status p2g(mpm_sim *sim, mpm_step_ctx *c) {
   dist_stack *s = state(sim);
   mpm_status st = s->inner->p2g(sim, c);
-  if (st != MPM_OK) return st;
+  if (any_failed(s, st != MPM_OK)) return st != MPM_OK ? st : another_rank(sim, "in P2G");
   const double t0 = mpm_wall_seconds();
   s->figures.halo_bytes = s->figures.halo_messages = 0;
   st = exchange_values(sim, s, 0, s->ghost, s->ghost_count, s->ghost_at, s->ghost_total, s->shared,
