@@ -399,7 +399,14 @@ static void test_sigkill_at_random_moments(void **state) {
   snprintf(part, sizeof part, "%s/part", dir);
   write_scene(scene, 1.0, 1); /* a checkpoint every frame: kills land inside its writes too */
   snprintf(args, sizeof args, "run '%s' --quiet -o '%s'", scene, full);
+  struct timespec t0, t1;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
   assert_int_equal(mpm(args), 0);
+  clock_gettime(CLOCK_MONOTONIC, &t1);
+  /* the kills land within the whole run's time, so that the first run (from the start) is
+     always killed, on a fast machine too (this run takes 0.2 s on one, where fixed delays of
+     up to 0.35 s let every round finish now and then) */
+  const double whole = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
   const int frames = 20;
 
   uint64_t rng = 0x9e3779b97f4a7c15ull ^ (uint64_t)time(NULL);
@@ -421,7 +428,7 @@ static void test_sigkill_at_random_moments(void **state) {
               (char *)NULL);
       _exit(127);
     }
-    const double delay = test_rand(&rng, 0.02, 0.35);
+    const double delay = test_rand(&rng, 0.1 * whole, 0.8 * whole);
     struct timespec ts = {0, (long)(delay * 1e9)};
     nanosleep(&ts, NULL);
     kill(pid, SIGKILL);
