@@ -6,7 +6,9 @@
  *   - an implicit step's CG hands each dot product over: at least one sum per CG iteration,
  *     again bitwise as without a reduction;
  *   - the processes agree: when another process's particle blew up or broke the guard (the
- *     reduction says so), this process's step fails too, naming the other process. */
+ *     reduction says so), this process's step fails too, naming the other process; and when a
+ *     stage failed in another process (the verdict after each stage), this one stops with its
+ *     status instead of waiting in the next stage's exchange. */
 #include "support.h"
 #include "core/reduce.h"
 #include "sim/sim.h"
@@ -16,16 +18,26 @@
 typedef struct counting {
   long calls[3];  /* per op */
   long values[3]; /* values reduced, per op */
-  int poison;     /* 1: report a blow-up elsewhere; 2: a guard hit elsewhere */
+  int poison;     /* 1: report a blow-up elsewhere; 2: a guard hit elsewhere; 3: a stage failed
+                     elsewhere (out of memory) */
+  int stepped;    /* the step's (speed, blow-up) maximum came: the guard's verdict is next */
 } counting;
 
 static void count_all(void *ctx, mpm_reduce_op op, double *values, int count) {
   counting *c = ctx;
   c->calls[op]++;
   c->values[op] += count;
-  /* the step's maximum of (speed, blow-up flag), the guard's maximum of one flag */
-  if (c->poison == 1 && op == MPM_REDUCE_MAX && count == 2) values[1] = 1;
-  if (c->poison == 2 && op == MPM_REDUCE_MAX && count == 1) values[0] = 1;
+  /* the step's maximum of (speed, blow-up flag), then the guard's maximum of one flag (the
+     stages' verdicts, maxima of one status each, come before the step's) */
+  if (op == MPM_REDUCE_MAX && count == 2) {
+    if (c->poison == 1) values[1] = 1;
+    c->stepped = 1;
+  } else if (op == MPM_REDUCE_MAX && count == 1 && c->stepped) {
+    if (c->poison == 2) values[0] = 1;
+    c->stepped = 0;
+  } else if (op == MPM_REDUCE_MAX && count == 1 && c->poison == 3) {
+    values[0] = MPM_ERR_NOMEM;
+  }
 }
 
 static const char *scene(const char *integrator) {
@@ -69,8 +81,9 @@ static void test_explicit_step_reduces(void **state) {
   run_steps(plain, steps);
   run_steps(sim, steps);
   assert_same_state(plain, sim);
-  /* per step: the speed and blow-up flag, the guard's verdict (both maxima) */
-  assert_true(c.calls[MPM_REDUCE_MAX] >= 2 * steps);
+  /* per step: the verdicts on the scratch and on each of the 7 stages, the speed and blow-up
+     flag, the guard's verdict (all maxima) */
+  assert_true(c.calls[MPM_REDUCE_MAX] >= (8 + 2) * steps);
   assert_int_equal(c.calls[MPM_REDUCE_SUM], 0);
   const mpm_diagnostics d0 = mpm_sim_diagnostics(plain), d1 = mpm_sim_diagnostics(sim);
   assert_int_equal(c.calls[MPM_REDUCE_SUM], 1);
@@ -111,11 +124,25 @@ static void test_processes_agree(void **state) {
   }
 }
 
+/* A stage that failed in another process (out of memory there) stops this one's step too, with
+ * that status, where it would otherwise wait in the next stage's exchange. */
+static void test_stage_failure_elsewhere(void **state) {
+  (void)state;
+  mpm_sim *sim = test_sim_from_json(scene("explicit"), "reduce_stage.json");
+  counting c = {.poison = 3};
+  const mpm_reduction r = {count_all, &c};
+  mpm_sim_set_reduction(sim, &r);
+  assert_int_equal(mpm_sim_step(sim, 1), MPM_ERR_NOMEM);
+  assert_non_null(strstr(mpm_sim_last_error(sim), "another process"));
+  mpm_sim_destroy(sim);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_explicit_step_reduces),
       cmocka_unit_test(test_implicit_dots_reduce),
       cmocka_unit_test(test_processes_agree),
+      cmocka_unit_test(test_stage_failure_elsewhere),
   };
   return test_cleanup(cmocka_run_group_tests(tests, NULL, NULL));
 }

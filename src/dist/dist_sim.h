@@ -17,9 +17,9 @@
  * The bytes a step sends grow with the surface of the ranks' ranges (the ghost blocks), not with
  * the particles or the grid.
  *
- * A rank that runs out of memory in the sort, P2G or an exchange tells the others (a vote before
- * each exchange), and every rank's step fails; one that fails in the grid update or G2P still
- * leaves the others waiting at the next exchange (to be closed with a vote after every stage).
+ * A rank that runs out of memory tells the others instead of leaving them waiting in an exchange
+ * it skips: a vote before each of these exchanges, and the step's verdict after each stage
+ * (sim/step.c, through the reduction): every rank's step fails, the others naming the stage.
  *
  * What runs on ranks so far: material points on the uniform sparse grid, the explicit step,
  * with every kernel, transfer, material, collider and body force. The rest (the implicit step,

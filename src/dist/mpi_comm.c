@@ -32,7 +32,12 @@ mpm_dist *mpm_dist_create_world(mpm_error *err) {
   MPI_Comm_rank(d->comm, &d->rank);
   MPI_Comm_size(d->comm, &d->size);
   d->counts = mpm_calloc(4 * (size_t)d->size, sizeof *d->counts);
-  if (!d->counts) {
+  /* room for the reductions' values made now (a step's are at most the ten of stats.csv): a
+     reduction allocates nothing while the run goes on, so one rank short of memory cannot fail
+     it alone */
+  d->capacity = 64;
+  d->gathered = mpm_alloc((size_t)d->size * (size_t)d->capacity * sizeof *d->gathered);
+  if (!d->counts || !d->gathered) {
     mpm_dist_destroy(d);
     mpm_error_set(err, MPM_ERR_NOMEM, "out of memory making the run's process group");
     return NULL;
@@ -69,7 +74,7 @@ static void reduce_all(void *ctx, mpm_reduce_op op, double *values, int count) {
   if (count <= 0) return;
   if (count > d->capacity) {
     double *bigger = mpm_realloc(d->gathered, (size_t)d->size * (size_t)count * sizeof *bigger);
-    if (!bigger) MPI_Abort(d->comm, 3); /* a reduction cannot fail on one rank alone */
+    if (!bigger) MPI_Abort(d->comm, 3); /* past 64 values: a reduction cannot fail alone */
     d->gathered = bigger;
     d->capacity = count;
   }

@@ -83,8 +83,8 @@ static mpm_status another_rank(mpm_sim *sim, const char *where) {
 /* Whether any rank failed (a collective vote): a rank that runs out of memory must not leave the
  * others waiting in the exchange it skips, so every failure before an exchange is voted on. */
 static int any_failed(const dist_stack *s, int mine) {
-  int any = 0;
-  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, mpm_dist_comm(s->d));
+  int failed = mine != 0, any = 0; /* mine: any nonzero (grow's -1 too) */
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, mpm_dist_comm(s->d));
   return any;
 }
 

@@ -332,6 +332,22 @@ static const char *bad_quantity(const mpm_particles *p, long i) {
   return "deformation gradient";
 }
 
+/* The status that stops the step, this process's (st) or another's, or MPM_OK. With several
+ * processes (a reduction set) they vote after each stage, so that one that failed (out of
+ * memory, say) does not leave the others waiting in the next stage's exchange: every process
+ * stops with the largest status of the vote, and the others' messages say where. One process:
+ * st, no vote. */
+static mpm_status stage_verdict(mpm_sim *sim, mpm_status st, const char *where) {
+  if (!sim->reduction) return st;
+  double worst = (double)st;
+  mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, &worst, 1);
+  if (worst > 0 && st == MPM_OK)
+    mpm_error_set(&sim->error, (mpm_status)worst,
+                  "step %lld: another process of the run failed (%s); its message says why",
+                  (long long)sim->steps, where);
+  return st != MPM_OK ? st : (mpm_status)worst;
+}
+
 /* The collapse of dt: name the fastest particle (non-finite speeds count as fastest). */
 static mpm_status dt_collapsed(mpm_sim *sim, double dt) {
   const mpm_particles *p = &sim->particles;
@@ -379,9 +395,12 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   if (!(dt > 1e-12 * sim->frame_dt) || !isfinite(dt)) return dt_collapsed(sim, dt);
   const double t0 = mpm_wall_seconds();
   /* the last step's scratch is taken back (the arena grows to the largest step it saw) */
-  if (mpm_arena_reset(&sim->step_arena))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM, "step %lld: out of memory for step scratch",
-                         (long long)sim->steps);
+  mpm_status reset = mpm_arena_reset(&sim->step_arena);
+  if (reset != MPM_OK)
+    mpm_error_set(&sim->error, reset, "step %lld: out of memory for step scratch",
+                  (long long)sim->steps);
+  reset = stage_verdict(sim, reset, "making the step's scratch");
+  if (reset != MPM_OK) return reset;
   mpm_step_ctx c;
   step_setup(sim, dt, &c);
   /* a retried step starts over: only the accepted attempt's reactions count (frame.c) */
@@ -393,7 +412,7 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
                                       : sizeof explicit_stages / sizeof explicit_stages[0];
   for (size_t k = 0; k < stage_count; ++k) {
     const stage *s = &stages[k];
-    const mpm_status st = s->run(sim, &c);
+    const mpm_status st = stage_verdict(sim, s->run(sim, &c), s->name);
     if (st != MPM_OK) return st;
     const double now = mpm_wall_seconds();
     *(double *)((char *)&sim->times + s->timer) += now - t;
