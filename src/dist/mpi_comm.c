@@ -106,14 +106,10 @@ static int vote(mpm_dist *d, int mine) {
   return most;
 }
 
-/* *buf with room for n bytes (kept when it has); 0, or -1 when out of memory. */
+/* Room for n bytes in *buf (capacity *cap), the contents not kept (mpm_reserve): every buffer
+ * of the migration is written whole before it is read. Nonzero when out of memory. */
 static int room(void *buf, size_t *cap, size_t n) {
-  if (n <= *cap) return 0;
-  void *bigger = mpm_realloc(*(void **)buf, n + n / 2 + 64);
-  if (!bigger) return -1;
-  *(void **)buf = bigger;
-  *cap = n + n / 2 + 64;
-  return 0;
+  return mpm_reserve((void **)buf, cap, n, 1) != MPM_OK;
 }
 
 mpm_status mpm_dist_migrate(mpm_dist *d, mpm_particles *p, const int32_t *dest, mpm_migration *m,

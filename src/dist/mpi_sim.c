@@ -32,6 +32,8 @@ typedef struct dist_stack {
   size_t ghost_total, shared_total, ghost_cap, shared_cap;
   uint64_t *keys;
   size_t keys_cap;
+  int32_t *owner; /* each block's rank, this step */
+  size_t owner_cap;
   mpm_real *buf; /* the node values sent and received */
   size_t buf_cap;
   int32_t *dest;
@@ -44,15 +46,9 @@ static dist_stack *state(const mpm_sim *sim) {
   return sim->stack_data;
 }
 
-/* Grow *p to n elements of `size` bytes (kept when large enough). */
-static int grow(void *p, size_t *cap, size_t n, size_t size) {
-  if (n <= *cap) return 0;
-  void *q = mpm_realloc(*(void **)p, (n + n / 2 + 16) * size);
-  if (!q) return -1;
-  *(void **)p = q;
-  *cap = n + n / 2 + 16;
-  return 0;
-}
+/* Room for n items in *buf (capacity *cap): every buffer here is written whole before it is
+ * read, so the contents need not be kept (mpm_reserve). Nonzero when out of memory. */
+#define ROOM(buf, cap, n) (mpm_reserve((void **)&(buf), &(cap), (n), sizeof *(buf)) != MPM_OK)
 
 /* The block of the cell holding particle i (the one rule of a particle's block, for the cut,
  * the migration and the recut): floor((x - origin) / dx) by the inverse spacing, and floor(c / 4)
@@ -83,7 +79,7 @@ static mpm_status another_rank(mpm_sim *sim, const char *where) {
 /* Whether any rank failed (a collective vote): a rank that runs out of memory must not leave the
  * others waiting in the exchange it skips, so every failure before an exchange is voted on. */
 static int any_failed(const dist_stack *s, int mine) {
-  int failed = mine != 0, any = 0; /* mine: any nonzero (grow's -1 too) */
+  int failed = mine != 0, any = 0; /* mine: any nonzero failure (a -1 too) */
   MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, mpm_dist_comm(s->d));
   return any;
 }
@@ -96,7 +92,7 @@ static mpm_status nomem(mpm_sim *sim, const char *what) {
 /* The particles whose block another rank owns now go there. */
 static mpm_status migrate(mpm_sim *sim, dist_stack *s) {
   mpm_particles *p = &sim->particles;
-  if (any_failed(s, grow(&s->dest, &s->dest_cap, p->count + 1, sizeof *s->dest)))
+  if (any_failed(s, ROOM(s->dest, s->dest_cap, p->count + 1)))
     return nomem(sim, "choosing the particles' ranks");
   /* a block's owner from a small direct-mapped cache of the blocks met (the particles lie in
      the sort's block order, so few blocks are met in a row: the Morton key and the search run
@@ -131,33 +127,31 @@ static mpm_status exchange_ghosts(mpm_sim *sim, dist_stack *s, const mpm_kernel 
   const MPI_Comm comm = mpm_dist_comm(s->d);
   const int R = s->size;
   const size_t nb = sg->block_count;
-  if (any_failed(s, grow(&s->ghost, &s->ghost_cap, nb + 1, sizeof *s->ghost) ||
-                        grow(&s->keys, &s->keys_cap, nb + 1, sizeof *s->keys)))
+  if (any_failed(s, ROOM(s->ghost, s->ghost_cap, nb + 1) || ROOM(s->keys, s->keys_cap, nb + 1) ||
+                        ROOM(s->owner, s->owner_cap, nb + 1)))
     return nomem(sim, "listing the ghost blocks");
   memset(s->ghost_count, 0, (size_t)R * sizeof *s->ghost_count);
-  for (size_t b = 0; b < nb; ++b) {
-    const int r = mpm_partition_owner(&s->pt, mpm_morton_key(sg->coord[b]));
-    if (r != s->rank) ++s->ghost_count[r];
+  for (size_t b = 0; b < nb; ++b) { /* each block's owner, once */
+    s->owner[b] = (int32_t)mpm_partition_owner(&s->pt, mpm_morton_key(sg->coord[b]));
+    if (s->owner[b] != s->rank) ++s->ghost_count[s->owner[b]];
   }
   s->ghost_at[0] = 0;
   for (int r = 1; r < R; ++r) s->ghost_at[r] = s->ghost_at[r - 1] + s->ghost_count[r - 1];
   s->ghost_total = (size_t)s->ghost_at[R - 1] + (size_t)s->ghost_count[R - 1];
   memcpy(s->send_at, s->ghost_at, (size_t)R * sizeof *s->send_at);
   for (size_t b = 0; b < nb; ++b) {
-    const uint64_t key = mpm_morton_key(sg->coord[b]);
-    const int r = mpm_partition_owner(&s->pt, key);
+    const int r = s->owner[b];
     if (r == s->rank) continue;
     const int at = s->send_at[r]++;
     s->ghost[at] = (uint32_t)b;
-    s->keys[at] = key;
+    s->keys[at] = mpm_morton_key(sg->coord[b]);
   }
   MPI_Alltoall(s->ghost_count, 1, MPI_INT, s->shared_count, 1, MPI_INT, comm);
   s->shared_at[0] = 0;
   for (int r = 1; r < R; ++r) s->shared_at[r] = s->shared_at[r - 1] + s->shared_count[r - 1];
   s->shared_total = (size_t)s->shared_at[R - 1] + (size_t)s->shared_count[R - 1];
   uint64_t *named = mpm_alloc((s->shared_total + 1) * sizeof *named);
-  if (any_failed(s, !named ||
-                        grow(&s->shared, &s->shared_cap, s->shared_total + 1, sizeof *s->shared))) {
+  if (any_failed(s, !named || ROOM(s->shared, s->shared_cap, s->shared_total + 1))) {
     mpm_free(named);
     return nomem(sim, "receiving the ghost blocks' names");
   }
@@ -300,8 +294,7 @@ static mpm_status exchange_values(mpm_sim *sim, dist_stack *s, int after_update,
   const int nf = fields_of(dofs, after_update, field);
   const size_t per_block = (size_t)nf * MPM_BLOCK_NODES, begin = sim->grid.dof_begin;
   const int R = s->size;
-  if (any_failed(
-          s, grow(&s->buf, &s->buf_cap, (out_total + in_total) * per_block + 1, sizeof *s->buf)))
+  if (any_failed(s, ROOM(s->buf, s->buf_cap, (out_total + in_total) * per_block + 1)))
     return nomem(sim, "for the ghost blocks' values");
   mpm_real *send = s->buf, *recv = s->buf + out_total * per_block;
   for (size_t q = 0; q < out_total; ++q) {
@@ -379,6 +372,7 @@ static void free_state(dist_stack *s) {
   mpm_partition_free(&s->pt);
   mpm_free(s->ghost_count);
   mpm_free(s->ghost), mpm_free(s->shared), mpm_free(s->keys), mpm_free(s->buf);
+  mpm_free(s->owner);
   mpm_free(s->dest);
   mpm_free(s);
 }

@@ -4,6 +4,7 @@
 #define MPM_TEST_MPI_CHECK_H
 
 #include <mpi.h>
+#include <mpm/mpm.h>
 #include <stdio.h>
 
 static int rank, size, failures;
@@ -22,6 +23,19 @@ static inline void mpi_check_start(int *argc, char ***argv) {
   MPI_Init(argc, argv);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
+}
+
+/* A simulation of the JSON scene, one thread; a scene refused ends the run (the test's own
+ * mistake). */
+static inline mpm_sim *mpi_check_sim(const char *json) {
+  mpm_sim *sim = NULL;
+  char msg[1024];
+  if (mpm_sim_create_from_json(json, NULL, &sim, msg, sizeof msg) != MPM_OK) {
+    fprintf(stderr, "rank %d: %s\n", rank, msg);
+    MPI_Abort(MPI_COMM_WORLD, 2);
+  }
+  mpm_sim_set_threads(sim, 1);
+  return sim;
 }
 
 /* The failures of every rank added; rank 0 prints the verdict. The program's exit status. */

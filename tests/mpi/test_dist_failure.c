@@ -42,13 +42,7 @@ int main(int argc, char **argv) {
       "  \"half_extent\": [0.15, 0.1, 0.12]}, \"material\": \"m\"}]}";
   int k = 0, stopped_at = 0;
   for (;; ++k) {
-    mpm_sim *sim = NULL;
-    char msg[1024];
-    if (mpm_sim_create_from_json(scene, NULL, &sim, msg, sizeof msg) != MPM_OK) {
-      fprintf(stderr, "rank %d: %s\n", rank, msg);
-      MPI_Abort(MPI_COMM_WORLD, 2);
-    }
-    mpm_sim_set_threads(sim, 1);
+    mpm_sim *sim = mpi_check_sim(scene);
     CHECK(mpm_dist_attach(d, sim, &err) == MPM_OK, "attach: %s", err.message);
     allowed = rank == size - 1 ? k : -1;
     const mpm_status st = mpm_sim_step(sim, 4e-4);

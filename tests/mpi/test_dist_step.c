@@ -103,14 +103,7 @@ static state collect(const mpm_sim *sim, int gather) {
 }
 
 static mpm_sim *make(void) {
-  mpm_sim *sim = NULL;
-  char err[1024];
-  if (mpm_sim_create_from_json(scene, NULL, &sim, err, sizeof err) != MPM_OK) {
-    fprintf(stderr, "rank %d: %s\n", rank, err);
-    MPI_Abort(MPI_COMM_WORLD, 2);
-  }
-  mpm_sim_set_threads(sim, 1);
-  return sim;
+  return mpi_check_sim(scene);
 }
 
 /* STEPS steps on the ranks; the particles on rank 0 (and the figures summed over ranks). */
@@ -187,14 +180,8 @@ static double halo_bytes(mpm_dist *d, int cells) {
            "  \"half_extent\": [%.17g, %.17g, %.17g]}, \"material\": \"m\","
            "  \"particles_per_cell\": 1}]}",
            dx, half, half, half);
-  mpm_sim *sim = NULL;
-  char msg[1024];
+  mpm_sim *sim = mpi_check_sim(json);
   mpm_error err;
-  if (mpm_sim_create_from_json(json, NULL, &sim, msg, sizeof msg) != MPM_OK) {
-    fprintf(stderr, "rank %d: %s\n", rank, msg);
-    MPI_Abort(MPI_COMM_WORLD, 2);
-  }
-  mpm_sim_set_threads(sim, 1);
   CHECK(mpm_dist_attach(d, sim, &err) == MPM_OK, "attach: %s", err.message);
   CHECK(mpm_sim_step(sim, DT) == MPM_OK, "step: %s", mpm_sim_last_error(sim));
   double bytes = (double)mpm_dist_sim_figures(sim).halo_bytes, all = 0;
@@ -272,8 +259,6 @@ int main(int argc, char **argv) {
   test_halo_scales_with_surface(d);
   test_instability_stops_all(d);
   /* a scene the ranks cannot run yet: refused on every rank, naming it */
-  mpm_sim *sim = NULL;
-  char msg[1024];
   const char *implicit =
       "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.1},"
       " \"time\": {\"end\": 1}, \"solver\": {\"integrator\": \"implicit\"},"
@@ -281,8 +266,7 @@ int main(int argc, char **argv) {
       "  \"E\": 1e5, \"nu\": 0.3, \"density\": 1000}],"
       " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.5, 0.5],"
       "  \"half_extent\": [0.1, 0.1, 0.1]}, \"material\": \"m\"}]}";
-  if (mpm_sim_create_from_json(implicit, NULL, &sim, msg, sizeof msg) != MPM_OK)
-    MPI_Abort(MPI_COMM_WORLD, 2);
+  mpm_sim *sim = mpi_check_sim(implicit);
   CHECK(mpm_dist_attach(d, sim, &err) == MPM_ERR_INVALID && strstr(err.message, "implicit"),
         "the implicit step was not refused: %s", err.message);
   mpm_sim_destroy(sim);
