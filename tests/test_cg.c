@@ -97,7 +97,7 @@ static int solve(system_t *s, int jacobi, int projected, double tol, mpm_cg_resu
     }
   if (projected) project(s, xs);
   apply(s, xs, b);
-  const mpm_cg_options o = {tol, 2000, 0, 0, NULL, NULL, 0};
+  const mpm_cg_options o = {tol, 2000, 0, 0, NULL, NULL, 0, NULL};
   assert_int_equal(mpm_cg_solve(&s->d, apply, projected ? project : NULL, s, jacobi ? diag : NULL,
                                 b, x, &o, res),
                    MPM_OK);

@@ -100,7 +100,7 @@ static void check_system(mpm_sim *sim, int constrained, const char *what) {
   for (int k = 0; k < n; ++k) a.b[k] = b[a.dof[k] % 3][a.dof[k] / 3];
   for (int c = 0; c < 3; ++c) memset(x[c], 0, d->count * sizeof(mpm_real));
   const double tol = TOL(1e-5, 1e-10);
-  const mpm_cg_options o = {tol, 10000, 0, 0, NULL, NULL, 0};
+  const mpm_cg_options o = {tol, 10000, 0, 0, NULL, NULL, 0, NULL};
   mpm_cg_result r;
   assert_int_equal(mpm_cg_solve(d, apply_fn,
                                 constrained ? (mpm_cg_project_fn)mpm_implicit_project : NULL, &s,

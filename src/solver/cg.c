@@ -43,15 +43,18 @@ mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn pr
   mpm_real **p = mpm_dofs_vector(d, "cg.p"), **q = mpm_dofs_vector(d, "cg.Ap");
   if (!r || !z || !p || !q) return MPM_ERR_NOMEM;
   const int own = options->precondition != NULL; /* the caller's preconditioner */
-  mpm_real **w = own ? mpm_dofs_vector(d, "cg.w") : NULL;
+  /* the diagonal of the residuals' norm, and whether it is not the one that preconditions */
+  mpm_real *const *W = options->norm ? options->norm : diag;
+  const int apart = own || options->norm != NULL;
+  mpm_real **w = apart ? mpm_dofs_vector(d, "cg.w") : NULL;
   /* flexible: the residual before the step, for Polak-Ribiere's beta */
   mpm_real **rold = own && options->flexible ? mpm_dofs_vector(d, "cg.rold") : NULL;
-  if ((own && !w) || (own && options->flexible && !rold)) return MPM_ERR_NOMEM;
+  if ((apart && !w) || (own && options->flexible && !rold)) return MPM_ERR_NOMEM;
   result->iterations = 0;
   /* the scale: |P b| in the preconditioner's norm, sqrt(<P b, P D^-1 P b>) */
   mpm_dofs_copy(d, b, p);
   if (project) project(user, p);
-  precondition(d, diag, p, z);
+  precondition(d, W, p, z);
   if (project) project(user, z);
   result->rhs = sqrt(mpm_dofs_dot(d, NULL, p, z));
   /* r = P (b - A x), z = P D^-1 r */
@@ -61,7 +64,7 @@ mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn pr
   if (project) project(user, r);
   double rz;
   if (own) {
-    result->residual0 = result->residual = diag_norm(d, diag, project, user, r, w);
+    result->residual0 = result->residual = diag_norm(d, W, project, user, r, w);
     options->precondition(options->precondition_user, r, z);
     if (project) project(user, z);
     rz = mpm_dofs_dot(d, NULL, r, z);
@@ -70,7 +73,7 @@ mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn pr
     if (project)
       project(user, z); /* P M^-1 P: a diagonal need not commute with a slip projection */
     rz = mpm_dofs_dot(d, NULL, r, z);
-    result->residual0 = result->residual = sqrt(rz);
+    result->residual0 = result->residual = w ? diag_norm(d, W, project, user, r, w) : sqrt(rz);
   }
   result->scale = options->scale > 0                ? options->scale
                   : result->rhs > result->residual0 ? result->rhs
@@ -95,7 +98,7 @@ mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn pr
     result->iterations = k + 1;
     double rz_new;
     if (own) {
-      result->residual = diag_norm(d, diag, project, user, r, w);
+      result->residual = diag_norm(d, W, project, user, r, w);
       if (result->residual <= target) {
         result->converged = 1;
         break;
@@ -107,7 +110,7 @@ mpm_status mpm_cg_solve(mpm_dofs *d, mpm_cg_apply_fn apply, mpm_cg_project_fn pr
       precondition(d, diag, r, z);
       if (project) project(user, z);
       rz_new = mpm_dofs_dot(d, NULL, r, z);
-      result->residual = sqrt(rz_new > 0 ? rz_new : 0);
+      result->residual = w ? diag_norm(d, W, project, user, r, w) : sqrt(rz_new > 0 ? rz_new : 0);
     }
     if (result->residual <= target) {
       result->converged = 1;

@@ -12,7 +12,8 @@
  * the preconditioner's norm, |r|_D = sqrt(<r, P D^-1 P r>) (the <r, z> CG computes anyway;
  * for MPM it weighs each DOF's residual by 1/(m + dt^2 K_ii), i.e. in velocity units, so the
  * stiff modes that a large step resolves to round-off do not set the pace), and the solve stops
- * when |r|_D <= rel_tol max(|P b|_D, |r0|_D) or after max_iterations. Both scales are the
+ * when |r|_D <= rel_tol max(|P b|_D, |r0|_D) or after max_iterations (D, or the diagonal W a
+ * caller gives for the norm alone: options.norm). Both scales are the
  * problem's own: |b| (for MPM the momentum M v*) credits a good initial guess, |r0| (the
  * elastic correction dt^2 K v* a stiff body needs) asks for that correction to rel_tol, not for
  * the momentum of a body at rest to it. A caller may give its own scale instead (the implicit
@@ -53,6 +54,10 @@ typedef struct mpm_cg_options {
   /* with `precondition`: 1 when it is not symmetric (flexible CG: Polak-Ribiere's beta, one
      more vector "cg.rold" and one more dot product an iteration) */
   int flexible;
+  /* NULL, or the diagonal the residuals are measured in, |r|_W = sqrt(<r, P W^-1 P r>), in place
+     of the preconditioner's D (the implicit step floors D for its norm: implicit.c, jacobi());
+     one more pass over the residual an iteration with the Jacobi preconditioner */
+  mpm_real *const *norm;
 } mpm_cg_options;
 
 typedef struct mpm_cg_result {

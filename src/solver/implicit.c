@@ -241,14 +241,41 @@ static void displacement(mpm_implicit *s, mpm_real *const v[3], mpm_real *const 
   }
 }
 
-/* The Jacobi diagonal of M + dt^2 K; DOFs without mass (and without stiffness) get 1. */
-static void jacobi(mpm_implicit *s, mpm_real *const diag[3]) {
+/* The floor of the residuals' norm, as a fraction of the Jacobi diagonal's mean over the DOFs
+ * with mass (see jacobi()). */
+#define JACOBI_FLOOR 1e-2
+
+/* The Jacobi diagonal D of M + dt^2 K (DOFs without mass, and without stiffness, get 1), the
+ * preconditioner, and the diagonal W of the norm every residual is measured in, |r|_W (cg.h):
+ * D floored at JACOBI_FLOOR of its mean over the DOFs with mass. D itself as the norm counted
+ * the nodes at the edge of a particle's stencil as much as full ones: a particle s cells inside
+ * the edge of the quadratic B-spline's support gives its node a mass and a stiffness of order
+ * s^2 and a force of order s, so the node's r^2 / D is of order one (about that particle's
+ * strain energy) however small s is. Such nodes come and go as particles move by microns: the
+ * rubber bunny at rest on a floor began every step 20-25 tolerances out of balance through
+ * some 30 nodes of 1e-12 kg each (a particle 1e-6 m inside a support's edge) and paid 2 Newton
+ * iterations and 40 CG iterations a step for a state that did not change. In W, a node lighter
+ * than a hundredth of the mean counts as momentum on one of that weight: its residual vanishes
+ * with its share of a particle, and a full node's is measured as before. D is not floored: as
+ * the preconditioner, floored, it slowed a stiff block on a floor past 664 iterations. The sum
+ * runs in one order (one thread), so W is the same for any thread count. */
+static void jacobi(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const norm[3]) {
   mpm_implicit_diagonal(s, 1, s->apply_scale, diag);
-  const long n = (long)s->dofs->count;
+  const mpm_dofs *d = s->dofs;
+  const long n = (long)d->count;
+  double sum = 0;
+  long with_mass = 0;
+  for (int c = 0; c < 3; ++c)
+    for (long i = 0; i < n; ++i)
+      if (d->mass[i] > 0 && diag[c][i] > 0) sum += diag[c][i], ++with_mass;
+  const mpm_real least = with_mass ? (mpm_real)(JACOBI_FLOOR * sum / (double)with_mass) : 0;
   for (int c = 0; c < 3; ++c) {
-    mpm_real *restrict dc = diag[c];
+    mpm_real *restrict dc = diag[c], *restrict wc = norm[c];
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
-    for (long i = 0; i < n; ++i) dc[i] = dc[i] > 0 ? dc[i] : 1;
+    for (long i = 0; i < n; ++i) {
+      dc[i] = dc[i] > 0 ? dc[i] : 1;
+      wc[i] = dc[i] < least ? least : dc[i];
+    }
   }
 }
 
@@ -300,30 +327,85 @@ static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
  * friction it took 71 a step where the symmetric cycle took 21. */
 #define MG_ONE_PASS_ITERATIONS 12
 
+/* The Jacobi iterations a solve near balance gets before the multigrid is built for it: a body
+ * at rest or in free fall ends within them, for less than building the hierarchy costs (the
+ * assembly and the Galerkin products: some 80 Jacobi iterations on the rubber bunny). */
+#define JACOBI_BEFORE_MULTIGRID 4
+
+/* The smallest drop of its first residual a solve may ask for and still take the multigrid's
+ * one-pass cycle (see build_multigrid). */
+#define MG_ONE_PASS_DROP 1e-6
+
+/* Build the multigrid for this step's system (the matrix of the Newton iteration that first
+ * needs it: a preconditioner need only be near the matrix, and rebuilt each iteration it cost
+ * the rubber bunny 10% more time for 13% fewer iterations) and set o's preconditioner to it. */
+static mpm_status build_multigrid(mpm_implicit *s, mpm_cg_options *o, mpm_implicit_result *r) {
+  if (!s->mg_built) {
+    const double t0 = mpm_wall_seconds();
+    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return MPM_ERR_NOMEM;
+    s->mg_built = 1;
+    r->mg_setup_seconds += mpm_wall_seconds() - t0;
+    r->mg_bytes = s->mg->bytes;
+  }
+  o->precondition = mpm_implicit_multigrid_precondition;
+  /* the one-pass cycle (not symmetric: flexible CG) where the solve asks a drop of 1e-6 or less
+     of its first residual; beyond it flexible CG stagnates (the double build's first solves, to
+     1e-10: 40 iterations per Newton iteration where the symmetric cycle took 21) and the
+     symmetric cycle under plain CG takes them, and also where the one-pass cycle has not ended a
+     solve in MG_ONE_PASS_ITERATIONS (solve()) */
+  o->flexible = o->floor_drop >= MG_ONE_PASS_DROP;
+  return MPM_OK;
+}
+
 /* CG on (M + dt^2 K) x = b from x (cg_record'ed into r, the last solve's figures in cg). With
- * the multigrid and a flexible solve, the one-pass cycle first, for at most
- * MG_ONE_PASS_ITERATIONS; a solve it has not ended goes on from where it stopped with the
- * symmetric cycle under plain CG (solver/multigrid.h). MPM_OK, or MPM_ERR_NOMEM when out of
- * memory. */
+ * the multigrid (s->mg_wanted): where it is not built yet and the solve is near balance
+ * (`near`), JACOBI_BEFORE_MULTIGRID Jacobi iterations first; a solve they do not end goes on
+ * with the multigrid, from where they left x or, where they raised the residual, from x as it
+ * was (a few Jacobi iterations from far out of balance raised it 50-fold on the falling rubber
+ * bunny, and the multigrid then took 60 iterations where it takes 10 from the start). With the
+ * multigrid, its one-pass cycle under flexible CG first, for at most MG_ONE_PASS_ITERATIONS,
+ * then the symmetric cycle under plain CG (solver/multigrid.h), from where the one-pass cycle
+ * stopped; cg's residual0 is the first part's. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
 static mpm_status solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3],
-                        mpm_real *const x[3], const mpm_cg_options *o, mpm_implicit_result *r,
-                        mpm_cg_result *cg) {
+                        mpm_real *const x[3], int near, const mpm_cg_options *o,
+                        mpm_implicit_result *r, mpm_cg_result *cg) {
   mpm_cg_options opt = *o;
   double residual0 = -1; /* the first part's, when the solve is split */
-  if (o->precondition && o->flexible) {
+  int left = o->max_iterations;
+  if (s->mg_wanted) {
+    if (!s->mg_built && near) {
+      mpm_real **x0 = mpm_dofs_vector(s->dofs, "imp.x0");
+      if (!x0) return MPM_ERR_NOMEM;
+      mpm_dofs_copy(s->dofs, x, x0);
+      opt.max_iterations = left < JACOBI_BEFORE_MULTIGRID ? left : JACOBI_BEFORE_MULTIGRID;
+      if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
+      if (cg->converged || cg->iterations >= left) {
+        cg_record(r, cg);
+        return MPM_OK;
+      }
+      r->cg_iterations += cg->iterations;
+      residual0 = cg->residual0;
+      left -= cg->iterations;
+      if (cg->residual > cg->residual0) mpm_dofs_copy(s->dofs, x0, x);
+    }
+    if (build_multigrid(s, &opt, r)) return MPM_ERR_NOMEM;
+  }
+  if (opt.precondition && opt.flexible) {
     s->mg->cheap = 1;
-    if (opt.max_iterations > MG_ONE_PASS_ITERATIONS) opt.max_iterations = MG_ONE_PASS_ITERATIONS;
+    opt.max_iterations = left < MG_ONE_PASS_ITERATIONS ? left : MG_ONE_PASS_ITERATIONS;
     if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
-    if (cg->converged || o->max_iterations <= MG_ONE_PASS_ITERATIONS) {
+    if (residual0 < 0) residual0 = cg->residual0;
+    if (cg->converged || cg->iterations >= left) {
       cg_record(r, cg);
+      cg->residual0 = residual0;
       return MPM_OK;
     }
     r->cg_iterations += cg->iterations; /* the symmetric cycle's solve reports the rest */
-    residual0 = cg->residual0;
-    opt.max_iterations = o->max_iterations - cg->iterations;
+    left -= cg->iterations;
     opt.flexible = 0;
   }
-  if (o->precondition) s->mg->cheap = 0;
+  if (opt.precondition) s->mg->cheap = 0;
+  opt.max_iterations = left;
   if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
   cg_record(r, cg);
   if (residual0 >= 0) cg->residual0 = residual0;
@@ -518,13 +600,8 @@ static double neg_gradient(mpm_implicit *s, mpm_real *const diag[3], mpm_real *c
 }
 
 /* A step whose first residual is within this many tolerances of the scale is near balance:
- * no line search (E is no guide there), and no multigrid hierarchy (Jacobi converges in a few
- * iterations). */
+ * no line search (E is no guide there). */
 #define NEAR_BALANCE 10
-
-/* The smallest drop of its first residual a solve may ask for and still take the multigrid's
- * one-pass cycle (see mpm_implicit_solve). */
-#define MG_ONE_PASS_DROP 1e-6
 
 /* The precision a solve can reach from its first residual in the real type: CG asks no more
  * of |r0| than this drop (cg.h, floor_drop). */
@@ -538,8 +615,8 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
   mpm_real **vstar = mpm_dofs_vector(d, "imp.vstar"), **b = mpm_dofs_vector(d, "imp.b");
   mpm_real **diag = mpm_dofs_vector(d, "imp.diag"), **t = mpm_dofs_vector(d, "imp.t");
   mpm_real **u = mpm_dofs_vector(d, "imp.u"), **dv = mpm_dofs_vector(d, "imp.dv");
-  mpm_real **v1 = mpm_dofs_vector(d, "imp.v1");
-  if (!vstar || !b || !diag || !t || !u || !dv || !v1) return MPM_ERR_NOMEM;
+  mpm_real **v1 = mpm_dofs_vector(d, "imp.v1"), **norm = mpm_dofs_vector(d, "imp.norm");
+  if (!vstar || !b || !diag || !t || !u || !dv || !v1 || !norm) return MPM_ERR_NOMEM;
   /* f^n as the incremental potential's own gradient has it at u = 0, in place of P2G's: the
      batched stresses of P2G differ from it by a few ulps of a stress that mostly balances the
      weight, which made a body at rest look 5% of its weight out of balance to the Newton test
@@ -558,41 +635,29 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
     for (long i = 0; i < n; ++i) bc[i] = m[i] * vs[i];
   }
   mpm_implicit_build(s); /* at u = 0 (displaced above) */
-  if (o->precondition) jacobi(s, diag);
-  mpm_real *const *D = o->precondition ? diag : NULL;
+  if (o->precondition) jacobi(s, diag, norm);
+  /* the preconditioner, and the norm of the residuals */
+  mpm_real *const *D = o->precondition ? diag : NULL, *const *N = o->precondition ? norm : NULL;
   /* the tolerance is relative to the step's impulses, and never below what the real type
      resolves */
-  const double resolved = resolution_scale(s, D, t, u) / o->cg_tolerance;
-  double scale = impulse_scale(s, D, t, u);
+  const double resolved = resolution_scale(s, N, t, u) / o->cg_tolerance;
+  double scale = impulse_scale(s, N, t, u);
   if (resolved > scale) scale = resolved;
   /* the first solve to the tolerance (or as far as the real type reaches); the Newton
      directions after it as inexact Newton does, to the tolerance of their own residual */
-  mpm_cg_options first = {o->cg_tolerance, o->cg_max_iterations, scale, REACHABLE_DROP, NULL, s, 0};
+  mpm_cg_options first = {
+      o->cg_tolerance, o->cg_max_iterations, scale, REACHABLE_DROP, NULL, s, 0, N};
   mpm_cg_options direction = {
-      o->cg_tolerance, o->cg_max_iterations, scale, o->cg_tolerance, NULL, s, 0};
-  const double guess = initial_guess(s, D, b, dv, t, u, v1);
-  /* the multigrid V-cycle preconditions CG where it is built and the step is not already near
-     balance (a body at rest or in free fall: Jacobi takes a few iterations there, fewer than
-     building the hierarchy costs); the residuals are measured in the Jacobi norm D either way
-     (cg.h), so the tolerance means the same */
-  const int multigrid = o->precondition == 2 && mpm_implicit_multigrid_supported(s) &&
-                        guess > NEAR_BALANCE * o->cg_tolerance * scale;
-  if (multigrid) {
-    const double t0 = mpm_wall_seconds();
-    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return MPM_ERR_NOMEM;
-    r->mg_setup_seconds = mpm_wall_seconds() - t0;
-    r->mg_bytes = s->mg->bytes;
-    first.precondition = direction.precondition = mpm_implicit_multigrid_precondition;
-    /* the one-pass cycle (not symmetric: flexible CG) where the solve asks a drop of 1e-6 or
-       less of its first residual; beyond it flexible CG stagnates (the double build's first
-       solves, to 1e-10: 40 iterations per Newton iteration where the symmetric cycle took 21)
-       and the symmetric cycle under plain CG takes them, and also where the one-pass cycle has
-       not ended a solve in MG_ONE_PASS_ITERATIONS (solve()) */
-    first.flexible = first.floor_drop >= MG_ONE_PASS_DROP;
-    direction.flexible = direction.floor_drop >= MG_ONE_PASS_DROP;
-  }
+      o->cg_tolerance, o->cg_max_iterations, scale, o->cg_tolerance, NULL, s, 0, N};
+  const double guess = initial_guess(s, N, b, dv, t, u, v1);
+  /* the multigrid V-cycle preconditions CG where it is built, from the first solve that Jacobi
+     does not end in a few iterations (solve()); the residuals are measured in the Jacobi norm D
+     either way (cg.h), so the tolerance means the same */
+  s->mg_wanted = o->precondition == 2 && mpm_implicit_multigrid_supported(s);
+  s->mg_built = 0;
   mpm_cg_result cg;
-  if (solve(s, D, b, d->v, &first, r, &cg)) return MPM_ERR_NOMEM;
+  if (solve(s, D, b, d->v, guess <= NEAR_BALANCE * o->cg_tolerance * scale, &first, r, &cg))
+    return MPM_ERR_NOMEM;
   r->newton_iterations = 1;
   /* Newton iterations 2.. on E (Gast et al. 2015): the gradient in b, the step in dv; the step
      is done when the free DOFs' momentum out of balance is within the tolerance of the scale */
@@ -600,7 +665,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
   const int near = cg.residual0 <= NEAR_BALANCE * o->cg_tolerance * scale;
   for (int k = 1; k < o->newton_iterations;) {
     double E0;
-    const double gn = neg_gradient(s, D, b, t, u, dv, &E0);
+    const double gn = neg_gradient(s, N, b, t, u, dv, &E0);
     if (!(gn > o->cg_tolerance * scale)) break; /* converged */
     /* Near balance (Zhu's step began within 10 tolerances of it) the step cannot overshoot,
        and E is no guide: its differences are below its rounding (a 1e9 Pa block at rest in
@@ -618,7 +683,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
         /* no step along it lowers E: the one out of balance the less is kept, not rest by
            default (which froze a beam short of its deflection) */
         double E;
-        if (neg_gradient(s, D, b, t, u, dv, &E) >= gn)
+        if (neg_gradient(s, N, b, t, u, dv, &E) >= gn)
           mpm_dofs_copy(d, v1, d->v);
         else
           r->line_search_failed = 1;
@@ -626,13 +691,13 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
       continue; /* the gradient where the search left v */
     }
     mpm_implicit_build(s);
-    if (o->precondition) jacobi(s, diag);
+    if (o->precondition) jacobi(s, diag, norm);
     /* the multigrid hierarchy of the first iteration preconditions the later ones: a
        preconditioner need only be near the matrix, and building it (assembly and Galerkin
        products) costs some 80 Jacobi-CG iterations on the rubber bunny; rebuilt each
        iteration it cost 10% more time for 13% fewer iterations */
     for (int c = 0; c < 3; ++c) memset(dv[c], 0, (size_t)n * sizeof(mpm_real));
-    if (solve(s, D, b, dv, &direction, r, &cg)) return MPM_ERR_NOMEM;
+    if (solve(s, D, b, dv, 1, &direction, r, &cg)) return MPM_ERR_NOMEM;
     r->newton_iterations = ++k;
     /* backtracking: the longest of 1, 1/2, 1/4, ... that lowers E enough (Armijo) */
     const double slope = -mpm_dofs_dot(d, NULL, b, dv); /* <grad E, dv> */

@@ -129,6 +129,7 @@ typedef struct mpm_implicit {
   int32_t *mg_row_of;
   uint32_t *mg_dof;
   double mg_cycle_seconds; /* the V-cycles' wall time in this step */
+  int mg_wanted, mg_built; /* this step: the multigrid preconditions its solves; it is built */
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
