@@ -88,8 +88,12 @@ static void test_run_file_names(void **state) {
                                     "levelset_0001.vdb",
                                     "levelset_b1_0001.vdb",
                                     "checkpoint_000000000120.h5",
-                                    "checkpoint_000000000120.h5.damaged"};
+                                    "checkpoint_000000000120.h5.damaged",
+                                    "frame_0002.pvtu",
+                                    "frame_0002_p0003.vtu",
+                                    "frame_0002_p0000.ply"};
   static const char *const temp[] = {".frame_0001.vtu.tmp.123", ".stats.csv.tmp.9.2",
+                                     ".frame_0002_p0001.vtu.tmp.5", ".frame_0002.pvtu.tmp.5",
                                      ".checkpoint_000000000120.h5.tmp.77"};
   static const char *const not_run[] = {"frame_notes.txt",
                                         "frame_001.vtu",
@@ -108,7 +112,10 @@ static void test_run_file_names(void **state) {
                                         ".notes.tmp.1",
                                         "frame_backup_full",
                                         ".mpm.lock",
-                                        "surface_body_0001.obj"};
+                                        "surface_body_0001.obj",
+                                        "frame_0002_p3.vtu",
+                                        "frame_0002_p0003.vtu.old",
+                                        "frame_0002.pvtu.bak"};
   for (size_t k = 0; k < sizeof run / sizeof run[0]; ++k)
     if (mpm_run_file_kind_of(run[k]) != MPM_RUN_FILE) fail_msg("%s is a run's file", run[k]);
   for (size_t k = 0; k < sizeof temp / sizeof temp[0]; ++k)

@@ -81,6 +81,13 @@ typedef struct mpm_frame_fields {
  * material, body, level, enrichment, and temperature and melt with heat). */
 mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error *err);
 
+/* The index of a frame written as pieces (one a process of a run on ranks, each written by
+ * mpm_write_vtu): a VTK XML PUnstructuredGrid whose PPointData lists the arrays that f->fields
+ * (f->heat) selects, as the pieces have them, and whose pieces are sources[0 .. pieces) (names
+ * relative to the file's folder). f's particles are not read. */
+mpm_status mpm_write_pvtu(const char *path, const mpm_frame_fields *f, int pieces,
+                          const char *const *sources, mpm_error *err);
+
 /* ParaView collection listing the frame files written so far (file names relative to the
  * PVD's directory). */
 mpm_status mpm_write_pvd(const char *path, int count, const double *times, const char *const *files,

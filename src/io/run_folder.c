@@ -21,15 +21,33 @@
 #include <unistd.h>
 
 /* The names the writers make (sim_output.c, sim_surface.c, sim_checkpoint.c,
- * sim_scene_copy.c). In a pattern '#' is a frame number (4 digits or more, as "%04d" prints
- * it), '%' a body index (1 digit or more), '@' the 12 digits of a checkpoint's step; every other
- * character stands for itself. */
+ * sim_scene_copy.c; a run on ranks: dist/mpi_frame_writer.c, its pieces frame_NNNN_pRRRR.*). In a
+ * pattern '#' is a frame number (4 digits or more, as "%04d" prints it), '%' a body index (1 digit
+ * or more), '@' the 12 digits of a checkpoint's step; every other character stands for itself. */
 static const char *const run_patterns[] = {
-    "frame_#.vtu",      "frame_#.ply",         "frames.pvd",          "run.pvd",
-    "stats.csv",        "scene.json",          "domains_#.vtu",       "grid_cells.vtu",
-    "grid_cells_#.vtu", "surface_body%_#.obj", "surface_body%_#.ply", "surface_body%_#.vtp",
-    "surface_#.obj",    "surface_#.ply",       "surface_b%_#.obj",    "surface_b%_#.ply",
-    "levelset_#.vdb",   "levelset_b%_#.vdb",   "checkpoint_@.h5",     "checkpoint_@.h5.damaged",
+    "frame_#.vtu",
+    "frame_#.ply",
+    "frames.pvd",
+    "run.pvd",
+    "frame_#.pvtu",
+    "frame_#_p#.vtu",
+    "frame_#_p#.ply",
+    "stats.csv",
+    "scene.json",
+    "domains_#.vtu",
+    "grid_cells.vtu",
+    "grid_cells_#.vtu",
+    "surface_body%_#.obj",
+    "surface_body%_#.ply",
+    "surface_body%_#.vtp",
+    "surface_#.obj",
+    "surface_#.ply",
+    "surface_b%_#.obj",
+    "surface_b%_#.ply",
+    "levelset_#.vdb",
+    "levelset_b%_#.vdb",
+    "checkpoint_@.h5",
+    "checkpoint_@.h5.damaged",
 };
 
 /* Digits at s: how many (0 when none). */

@@ -290,6 +290,59 @@ mpm_status mpm_write_vtu(const char *path, const mpm_frame_fields *f, mpm_error 
   return mpm_atomic_commit(&af, err);
 }
 
+/* ---- the index of a frame written in pieces (a run on ranks) ---- */
+
+/* VTK XML PUnstructuredGrid (Kitware, "VTK File Formats", Parallel File Formats): the PPoints
+ * and PPointData elements name the type, name and components of each array of the pieces
+ * without their values, and one <Piece Source=".."/> per piece file. ParaView's reader checks
+ * the pieces' arrays against these, so they come from the table mpm_write_vtu writes from. The
+ * cells need no entry (PUnstructuredGrid has no PCells), nor the TIME field data (each piece
+ * carries its own, and the PVD index gives the time). */
+mpm_status mpm_write_pvtu(const char *path, const mpm_frame_fields *f, int pieces,
+                          const char *const *sources, mpm_error *err) {
+  const unsigned fields = f->fields ? f->fields : mpm_output_fields_default(f->heat);
+  mpm_atomic_file af;
+  mpm_status st = mpm_atomic_open(&af, path, err);
+  if (st != MPM_OK) return st;
+  mpm_vtu_stream o = {af.fp, 0};
+  char line[512];
+  mpm_vtu_put_text(&o, "<?xml version=\"1.0\"?>\n"
+                       "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" "
+                       "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+                       "  <PUnstructuredGrid GhostLevel=\"0\">\n");
+  /* the same active attributes as the pieces' PointData */
+  snprintf(line, sizeof line, "    <PPointData%s%s%s>\n",
+           fields >> MPM_FIELD_STRESS & 1u ? " Scalars=\"stress\"" : "",
+           fields >> MPM_FIELD_VELOCITY & 1u ? " Vectors=\"velocity\"" : "",
+           fields >> MPM_FIELD_CAUCHY_STRESS & 1u ? " Tensors=\"cauchy_stress\"" : "");
+  mpm_vtu_put_text(&o, line);
+  const char *const sections[2][2] = {{"point", "PPointData"}, {"points", "PPoints"}};
+  for (int s = 0; s < 2; ++s) {
+    if (s == 1) mpm_vtu_put_text(&o, "    <PPoints>\n");
+    for (int k = 0; k < VTU_ARRAYS; ++k) {
+      const vtu_array *a = &vtu_arrays[k];
+      if (strcmp(a->section, sections[s][0]) != 0 || !written(a, fields)) continue;
+      char comps[48] = "";
+      if (a->comps > 1) snprintf(comps, sizeof comps, " NumberOfComponents=\"%d\"", a->comps);
+      snprintf(line, sizeof line, "      <PDataArray type=\"%s\" Name=\"%s\"%s/>\n",
+               a->type ? a->type : VTU_REAL_TYPE, a->name, comps);
+      mpm_vtu_put_text(&o, line);
+    }
+    snprintf(line, sizeof line, "    </%s>\n", sections[s][1]);
+    mpm_vtu_put_text(&o, line);
+  }
+  for (int k = 0; k < pieces; ++k) { /* the sources are the writer's own names: no escaping */
+    snprintf(line, sizeof line, "    <Piece Source=\"%s\"/>\n", sources[k]);
+    mpm_vtu_put_text(&o, line);
+  }
+  mpm_vtu_put_text(&o, "  </PUnstructuredGrid>\n</VTKFile>\n");
+  if (o.err) {
+    mpm_atomic_abort(&af);
+    return mpm_error_set(err, MPM_ERR_IO, "cannot write '%s': %s", path, strerror(o.err));
+  }
+  return mpm_atomic_commit(&af, err);
+}
+
 /* ---- the per-particle arrays for another file's CellData (vtu_domains.c) ---- */
 
 /* Whether array a is one of the per-particle ones `fields` selects. */
