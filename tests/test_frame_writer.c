@@ -31,7 +31,8 @@ static mpm_status checkpoint(mpm_sim *sim, const char *path, const mpm_checkpoin
   return pass_on ? mpm_frame_files.checkpoint(sim, path, c) : MPM_OK;
 }
 
-static const mpm_frame_writer counting = {"counting", frame, checkpoint};
+static const mpm_frame_writer counting = {
+    .name = "counting", .frame = frame, .checkpoint = checkpoint};
 
 static const char *scene =
     "{\"domain\": {\"min\": [0,0,0], \"max\": [0.4,0.4,0.4], \"dx\": 0.04},"

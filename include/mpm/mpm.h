@@ -381,9 +381,40 @@ typedef struct mpm_sim_info {
   int conduction_substeps;
   long long refinements_unchanged; /* of refinements: trees equal to the one in use, which was
                                       kept (its caches stay valid) */
+  /* a run on MPI ranks (mpm_sim_join_mpi_world): this process's rank and the run's ranks, and
+     the particles of every rank (`particles` above is this rank's); one process: 0, 1 and
+     `particles` */
+  int rank, ranks;
+  size_t run_particles;
 } mpm_sim_info;
 
 MPM_API mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size);
+
+/// Runs on MPI ranks (docs/distributed.md; a library built with -DMPM_MPI=ON). Make `sim`
+/// this process's part of a run over every process of MPI_COMM_WORLD: every process made its
+/// simulation from the same scene and calls this first (no step taken, output not opened; the
+/// caller initialises MPI before and finalises it after destroying the simulation). Each
+/// process then keeps the particles of its part of the domain and its steps exchange with the
+/// others. From then on every process makes the same calls in the same order (they are
+/// collective): mpm_sim_open_output (rank 0 locks and claims the folder, which every rank must
+/// see at the same path), mpm_sim_advance_frame, mpm_sim_step. Frames are written as one piece
+/// per rank, frame_NNNN_pRRRR.vtu (and .ply), with frame_NNNN.pvtu listing them, frames.pvd,
+/// run.pvd and stats.csv (figures over every rank) by rank 0. Not yet on ranks: checkpoints
+/// (mpm_sim_write_checkpoint and mpm_sim_resume refused, output.checkpoint_every ignored). A
+/// failure of the steps or the frames comes back on every rank alike (mpm_sim_ranks_agree
+/// picks one message for all). Collective. MPM_ERR_INVALID on every rank, the message naming it,
+/// for what does not run on ranks yet (the implicit step, the multi-level grid, particle
+/// domains, heat, the dense grid, particle surfaces) and in a library built without MPI;
+/// MPM_ERR_NOMEM.
+MPM_API mpm_status mpm_sim_join_mpi_world(mpm_sim *sim);
+
+/// After a call that every rank of a run on MPI ranks made (mpm_sim_join_mpi_world, and a
+/// call that may have failed on some ranks only): `st` is this rank's result. Returns the
+/// largest status of every rank's, and where it is a failure, every rank's mpm_sim_last_error
+/// becomes the message of the rank where the failure began (the others' messages only point
+/// at it), so that one rank can print it for all. Collective. A simulation that is not a rank's
+/// part of a run (one process, or the join refused): st, nothing else.
+MPM_API mpm_status mpm_sim_ranks_agree(mpm_sim *sim, mpm_status st);
 
 /// What a scene will need, from its description alone: its bodies are not sampled, so a scene
 /// of 10^8 particles is answered in a moment and without its memory (`mpm check` on a large

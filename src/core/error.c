@@ -11,6 +11,7 @@ mpm_status mpm_error_set(mpm_error *err, mpm_status status, const char *fmt, ...
     vsnprintf(err->message, sizeof err->message, fmt, ap);
     va_end(ap);
     err->status = status;
+    err->elsewhere = 0;
   }
   return status;
 }
@@ -19,6 +20,7 @@ void mpm_error_clear(mpm_error *err) {
   if (err) {
     err->status = MPM_OK;
     err->message[0] = '\0';
+    err->elsewhere = 0;
   }
 }
 

@@ -13,6 +13,9 @@
 typedef struct mpm_error {
   mpm_status status;
   char message[1024];
+  /* the failure is another process's of a distributed run, which this message only points at
+     (its own names the cause); 0 after every mpm_error_set */
+  int elsewhere;
 } mpm_error;
 
 /* Set err (if non-NULL) to status and a printf-style message; returns status. */

@@ -7,6 +7,7 @@
  * and never repeats them. */
 #include "sim/sim.h"
 
+#include "sim/frame_writer.h"
 #include "sim/grid_stack.h"
 
 #include <math.h>
@@ -149,7 +150,8 @@ static mpm_status complete_frame(mpm_sim *sim) {
   memset(sim->collider_frame, 0, 3 * (size_t)sim->collider_count * sizeof *sim->collider_frame);
   sim->out.frame_wall_start = mpm_wall_seconds(); /* the next frame's, for steps taken one by one */
   if (!sim->out.enabled) return st;
-  const int every = sim->scene.output.checkpoint_every;
+  /* (a writer that writes no checkpoint, a run on ranks', takes none: frame_writer.h) */
+  const int every = sim->writer->no_checkpoints ? 0 : sim->scene.output.checkpoint_every;
   if (st == MPM_OK && every > 0 && sim->frame % every == 0 &&
       sim->time < sim->scene.end_time * (1 - 1e-12))
     st = mpm_sim_write_checkpoint(sim, NULL, 0);

@@ -30,9 +30,21 @@ typedef struct mpm_frame_writer {
   const char *name;
   mpm_status (*frame)(mpm_sim *sim, const mpm_frame_record *r);
   mpm_status (*checkpoint)(mpm_sim *sim, const char *path, const mpm_checkpoint *c);
+  /* Make dir the run's folder (mpm_sim_open_output): made, locked and claimed (`how`, an
+   * mpm_run_claim), out.dir set and the scene's copy written. NULL: this process does it all
+   * (mpm_sim_prepare_output); a run on ranks lets one rank do it and gives every rank its
+   * verdict, since the lock is one process's. */
+  mpm_status (*open)(mpm_sim *sim, const char *dir, int how);
+  /* Why this writer writes no checkpoint, or NULL: then mpm_sim_write_checkpoint and
+   * mpm_sim_resume are refused with it, and output.checkpoint_every writes nothing. */
+  const char *no_checkpoints;
 } mpm_frame_writer;
 
 /* This process writes every file (the default). */
 extern const mpm_frame_writer mpm_frame_files;
+
+/* What the default writer's open does (see open above): the folder made, locked and claimed by
+ * this process, out.dir set, the scene's copy written. */
+mpm_status mpm_sim_prepare_output(mpm_sim *sim, const char *dir, int how);
 
 #endif

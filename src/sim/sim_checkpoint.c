@@ -80,6 +80,9 @@ static void free_names(char **names, int n) {
 }
 
 mpm_status mpm_sim_write_checkpoint(mpm_sim *sim, char *path, size_t cap) {
+  if (sim->writer->no_checkpoints)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "no checkpoint: %s",
+                         sim->writer->no_checkpoints);
   if (!sim->out.enabled)
     return mpm_error_set(
         &sim->error, MPM_ERR_INVALID,
@@ -316,6 +319,9 @@ static mpm_status resume_from(mpm_sim *sim, const char *dir, char **names, int n
                               size_t cap);
 
 mpm_status mpm_sim_resume(mpm_sim *sim, const char *dir, char *path, size_t cap) {
+  if (sim->writer->no_checkpoints)
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID, "cannot resume %s: %s", dir,
+                         sim->writer->no_checkpoints);
   if (strlen(dir) >= sizeof sim->out.dir)
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
   char **names;

@@ -127,7 +127,10 @@ mpm_status mpm_sim_get_info(const mpm_sim *sim, mpm_sim_info *info, size_t size)
   in.surface_seconds_total = sim->out.surface_seconds_total;
   in.surface_frames = sim->out.surface_frames;
   in.resampling = sc->resample.enabled;
-  sim->stack->info(sim, &in); /* refinement and resampling */
+  in.rank = 0; /* a run on ranks: its stack says (src/dist) */
+  in.ranks = 1;
+  in.run_particles = in.particles;
+  sim->stack->info(sim, &in); /* refinement and resampling; a rank's part of a run */
   in.heat = sc->heat.enabled;
   in.melted_domains = sim->melted_domains;
   in.conduction_substeps = sim->heat.figures.substeps;

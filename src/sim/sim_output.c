@@ -16,6 +16,22 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The verdict over every process of a run (one process: st) on a part of the output that may
+ * fail on one process alone (out of memory, a non-finite value in its particles) before the
+ * frame's reductions: that process must not leave the others waiting in them, so every process
+ * stops with the largest status, the others' messages pointing at its message. */
+static mpm_status verdict(mpm_sim *sim, mpm_status st, const char *what, int frame) {
+  if (!sim->reduction) return st;
+  double worst = (double)st;
+  mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, &worst, 1);
+  if (worst > 0 && st == MPM_OK) {
+    mpm_error_set(&sim->error, (mpm_status)worst,
+                  "%s %d: another process of the run failed; its message says why", what, frame);
+    sim->error.elsewhere = 1;
+  }
+  return st != MPM_OK ? st : (mpm_status)worst;
+}
+
 mpm_status mpm_sim_alloc_output(mpm_sim *sim, int records) {
   mpm_free(sim->out.frame_times);
   mpm_free(sim->out.frame_files);
@@ -67,6 +83,14 @@ mpm_status mpm_sim_claim_output(mpm_sim *sim, const char *dir, int how) {
   return MPM_OK;
 }
 
+mpm_status mpm_sim_prepare_output(mpm_sim *sim, const char *dir, int how) {
+  mpm_status st = mpm_make_dirs(dir, &sim->error);
+  if (st == MPM_OK) st = mpm_sim_claim_output(sim, dir, how);
+  if (st != MPM_OK) return st;
+  snprintf(sim->out.dir, sizeof sim->out.dir, "%s", dir);
+  return mpm_sim_write_scene_copy(sim);
+}
+
 /* MPM_ERR_INVALID naming the call when mode is not an mpm_output_mode. */
 static mpm_status check_mode(mpm_sim *sim, const char *what, mpm_output_mode mode) {
   if (mode == MPM_OUTPUT_NEW || mode == MPM_OUTPUT_OVERWRITE) return MPM_OK;
@@ -81,15 +105,11 @@ mpm_status mpm_sim_open_output(mpm_sim *sim, const char *dir, mpm_output_mode mo
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "%.64s...: path too long", dir);
   char target[MPM_PATH_MAX];
   snprintf(target, sizeof target, "%s", dir ? dir : sim->out.dir);
-  mpm_status st = mpm_make_dirs(target, &sim->error);
-  if (st == MPM_OK)
-    st = mpm_sim_claim_output(
-        sim, target, mode == MPM_OUTPUT_OVERWRITE ? MPM_RUN_CLAIM_OVERWRITE : MPM_RUN_CLAIM_NEW);
+  const int how = mode == MPM_OUTPUT_OVERWRITE ? MPM_RUN_CLAIM_OVERWRITE : MPM_RUN_CLAIM_NEW;
+  mpm_status st = sim->writer->open ? sim->writer->open(sim, target, how)
+                                    : mpm_sim_prepare_output(sim, target, how);
   if (st != MPM_OK) return st;
-  snprintf(sim->out.dir, sizeof sim->out.dir, "%s", target);
-  st = mpm_sim_alloc_output(sim, 0);
-  if (st != MPM_OK) return st;
-  st = mpm_sim_write_scene_copy(sim);
+  st = verdict(sim, mpm_sim_alloc_output(sim, 0), "opening the output for frame", 0);
   if (st != MPM_OK) return st;
   sim->out.enabled = 1;
   sim->out.frame_wall_start = mpm_wall_seconds();
@@ -191,11 +211,9 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     cauchy = want_cauchy ? mpm_alloc((9 * p->count + 1) * sizeof(mpm_real)) : NULL;
     pressure = want_pressure ? mpm_alloc((p->count + 1) * sizeof(mpm_real)) : NULL;
     if (!J || !stress || !category || (heat && !melt) || (want_cauchy && !cauchy) ||
-        (want_pressure && !pressure)) {
+        (want_pressure && !pressure))
       st = mpm_error_set(&sim->error, MPM_ERR_NOMEM, "out of memory writing frame %d", frame);
-      goto done;
-    }
-    const long n = (long)p->count;
+    const long n = st == MPM_OK ? (long)p->count : 0;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
       mpm_real tau[9];
@@ -214,7 +232,8 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
   /* nothing non-finite goes into a frame: the step's guard scans positions and F, but a mass,
      a temperature or a stress can overflow alone (a density of 1e308, a temperature of 1e308,
      a snow hardening of 1e300 wrote inf into every frame and exited 0) */
-  st = scan_frame_fields(sim, p, J, stress, frame);
+  if (st == MPM_OK) st = scan_frame_fields(sim, p, J, stress, frame);
+  st = verdict(sim, st, "frame", frame);
   if (st != MPM_OK) goto done;
   if (category) { /* as mpm_sim_all_particles orders them: material points, then active domains */
     size_t j = 0;
@@ -248,6 +267,11 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     row->mass = d.mass;
     row->wall_seconds = mpm_wall_seconds() - sim->out.frame_wall_start;
     row->particles = p->count;
+    if (sim->reduction) { /* every process's particles */
+      double all = (double)p->count;
+      mpm_reduce_all(sim->reduction, MPM_REDUCE_SUM, &all, 1);
+      row->particles = (size_t)all;
+    }
     const mpm_solver_figures *sf = &sim->solver_figures;
     const double steps = sf->steps > 0 ? (double)sf->steps : 1;
     row->cg_iterations_mean = (double)sf->cg_iterations / steps;
@@ -264,6 +288,8 @@ static mpm_status write_frame(mpm_sim *sim, const char *dir, int frame, int reco
     const int nc = sim->collider_count;
     double *force = sim->out.stats_forces + 3 * (size_t)frame * (size_t)nc;
     for (int k = 0; k < 3 * nc; ++k) force[k] = sp->sum > 0 ? sim->collider_frame[k] / sp->sum : 0;
+    /* each process of a run took the reactions of the nodes it owns (the same dt on all) */
+    mpm_reduce_all(sim->reduction, MPM_REDUCE_SUM, force, 3 * nc);
     r.stats_rows = frame + 1;
   }
   st = sim->writer->frame(sim, &r);
@@ -290,6 +316,10 @@ mpm_status mpm_sim_write_frame_to(mpm_sim *sim, const char *dir, mpm_output_mode
                                   char *written, size_t cap) {
   if (written && cap) written[0] = 0;
   if (check_mode(sim, "mpm_sim_write_frame_to", mode) != MPM_OK) return MPM_ERR_INVALID;
+  if (sim->reduction) /* each process holds a part: its folder and lock would be its own */
+    return mpm_error_set(&sim->error, MPM_ERR_INVALID,
+                         "mpm_sim_write_frame_to: a one-off frame is not written by the "
+                         "processes of a distributed run yet");
   if (!dir || !dir[0])
     return mpm_error_set(&sim->error, MPM_ERR_INVALID, "mpm_sim_write_frame_to: no folder");
   if (strlen(dir) >= MPM_PATH_MAX)
