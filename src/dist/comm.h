@@ -28,6 +28,12 @@ void mpm_dist_destroy(mpm_dist *d);
 int mpm_dist_rank(const mpm_dist *d);
 int mpm_dist_size(const mpm_dist *d);
 
+/* After a call that every rank made, st being this rank's result and err its message: MPM_OK
+ * on every rank when every rank's was; else, on every rank, the status and the message of the
+ * first rank whose failure is its own (err->elsewhere 0; else the first rank that failed), so
+ * that one rank can print it for all. Collective. */
+mpm_status mpm_dist_agree(mpm_dist *d, mpm_status st, mpm_error *err);
+
 /* The reduction for mpm_sim_set_reduction (core/reduce.h), valid while d lives. Collective: every
  * rank makes the same calls in the same order. */
 mpm_reduction mpm_dist_reduction(mpm_dist *d);

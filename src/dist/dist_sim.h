@@ -59,4 +59,17 @@ void mpm_dist_set_rebalance(mpm_sim *sim, double threshold);
 
 mpm_dist_figures mpm_dist_sim_figures(const mpm_sim *sim);
 
+/* The run's processes of an attached simulation, NULL for one that is not a rank's part. */
+mpm_dist *mpm_dist_of(const mpm_sim *sim);
+
+/* The simulation destroys its d with itself (mpm_sim_join_mpi_world's, made for it). */
+void mpm_dist_sim_own(mpm_sim *sim);
+
+/* The frame writer of a run on ranks (mpi_frame_writer.c): each rank writes its particles as a
+ * piece, frame_NNNN_pRRRR.vtu and .ply (RRRR the rank, four digits or more), and rank 0 the
+ * frame's index frame_NNNN.pvtu (VTK XML PUnstructuredGrid), frames.pvd and run.pvd pointing
+ * at the indexes, and stats.csv with the figures over every rank; rank 0 alone claims and
+ * locks the output folder. No checkpoint yet (refused, with the reason). */
+extern const struct mpm_frame_writer mpm_frame_ranks;
+
 #endif

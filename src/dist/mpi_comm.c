@@ -23,22 +23,32 @@ struct mpm_dist {
 };
 
 mpm_dist *mpm_dist_create_world(mpm_error *err) {
+  /* the communicator first (a collective): a rank short of memory before it would leave the
+     others waiting in it; after it, the ranks vote */
+  MPI_Comm comm;
+  MPI_Comm_dup(MPI_COMM_WORLD, &comm);
   mpm_dist *d = mpm_calloc(1, sizeof *d);
-  if (!d) {
-    mpm_error_set(err, MPM_ERR_NOMEM, "out of memory making the run's process group");
-    return NULL;
+  int failed = !d;
+  if (d) {
+    d->comm = comm;
+    d->particle = MPI_DATATYPE_NULL;
+    MPI_Comm_rank(d->comm, &d->rank);
+    MPI_Comm_size(d->comm, &d->size);
+    d->counts = mpm_calloc(4 * (size_t)d->size, sizeof *d->counts);
+    /* room for the reductions' values made now (a step's are at most the ten of stats.csv): a
+       reduction allocates nothing while the run goes on, so one rank short of memory cannot
+       fail it alone */
+    d->capacity = 64;
+    d->gathered = mpm_alloc((size_t)d->size * (size_t)d->capacity * sizeof *d->gathered);
+    failed = !d->counts || !d->gathered;
   }
-  MPI_Comm_dup(MPI_COMM_WORLD, &d->comm);
-  MPI_Comm_rank(d->comm, &d->rank);
-  MPI_Comm_size(d->comm, &d->size);
-  d->counts = mpm_calloc(4 * (size_t)d->size, sizeof *d->counts);
-  /* room for the reductions' values made now (a step's are at most the ten of stats.csv): a
-     reduction allocates nothing while the run goes on, so one rank short of memory cannot fail
-     it alone */
-  d->capacity = 64;
-  d->gathered = mpm_alloc((size_t)d->size * (size_t)d->capacity * sizeof *d->gathered);
-  if (!d->counts || !d->gathered) {
-    mpm_dist_destroy(d);
+  int any = 0;
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, comm);
+  if (any) {
+    if (d)
+      mpm_dist_destroy(d);
+    else
+      MPI_Comm_free(&comm);
     mpm_error_set(err, MPM_ERR_NOMEM, "out of memory making the run's process group");
     return NULL;
   }
@@ -50,7 +60,7 @@ mpm_dist *mpm_dist_create_world(mpm_error *err) {
 
 void mpm_dist_destroy(mpm_dist *d) {
   if (!d) return;
-  if (d->counts) MPI_Type_free(&d->particle);
+  if (d->particle != MPI_DATATYPE_NULL) MPI_Type_free(&d->particle);
   MPI_Comm_free(&d->comm);
   mpm_free(d->gathered);
   mpm_free(d->counts), mpm_free(d->idx), mpm_free(d->gone);
@@ -92,6 +102,24 @@ static void reduce_all(void *ctx, mpm_reduce_op op, double *values, int count) {
     }
     values[k] = acc;
   }
+}
+
+mpm_status mpm_dist_agree(mpm_dist *d, mpm_status st, mpm_error *err) {
+  /* the first rank whose failure is its own, and the first rank that failed (size: none) */
+  const int mine[2] = {st != MPM_OK && !err->elsewhere ? d->rank : d->size,
+                       st != MPM_OK ? d->rank : d->size};
+  int all[2];
+  MPI_Allreduce(mine, all, 2, MPI_INT, MPI_MIN, d->comm);
+  if (all[1] == d->size) return MPM_OK;
+  const int from = all[0] < d->size ? all[0] : all[1];
+  int status = (int)st;
+  char text[sizeof err->message];
+  if (d->rank == from) memcpy(text, err->message, sizeof text);
+  MPI_Bcast(&status, 1, MPI_INT, from, d->comm);
+  MPI_Bcast(text, (int)sizeof text, MPI_CHAR, from, d->comm);
+  text[sizeof text - 1] = '\0';
+  mpm_error_set(err, (mpm_status)status, "%s", text);
+  return (mpm_status)status;
 }
 
 mpm_reduction mpm_dist_reduction(mpm_dist *d) {

@@ -40,6 +40,8 @@ typedef struct dist_stack {
   size_t dest_cap;
   double rebalance_at; /* recut when the largest rank holds this many times the mean */
   mpm_dist_figures figures;
+  long long run_particles; /* over every rank, at the last step's start (or the attach) */
+  int owns_dist;           /* d is destroyed with the simulation (mpm_dist_sim_own) */
 } dist_stack;
 
 static dist_stack *state(const mpm_sim *sim) {
@@ -70,10 +72,11 @@ static uint64_t particle_key(const mpm_grid *g, const mpm_particles *p, size_t i
 
 /* The status of a rank whose step stops because another rank's failed (that one says why). */
 static mpm_status another_rank(mpm_sim *sim, const char *where) {
-  return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                       "step %lld: another rank of the run ran out of memory %s (its message "
-                       "names what)",
-                       (long long)sim->steps, where);
+  mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                "step %lld: another rank of the run ran out of memory %s (its message names what)",
+                (long long)sim->steps, where);
+  sim->error.elsewhere = 1;
+  return MPM_ERR_NOMEM;
 }
 
 /* Whether any rank failed (a collective vote): a rank that runs out of memory must not leave the
@@ -200,6 +203,7 @@ static mpm_status rebalance(mpm_sim *sim, dist_stack *s) {
   MPI_Allreduce(&n, &most, 1, MPI_LONG_LONG, MPI_MAX, comm);
   MPI_Allreduce(&n, &all, 1, MPI_LONG_LONG, MPI_SUM, comm);
   s->figures.imbalance = all > 0 ? (double)most * s->size / (double)all : 1;
+  s->run_particles = all;
   if (!(s->rebalance_at > 1) || !(s->figures.imbalance > s->rebalance_at)) return MPM_OK;
   /* this rank's blocks and their particles, in key order */
   uint64_t *key = mpm_alloc((p->count + 1) * sizeof *key);
@@ -379,9 +383,11 @@ static void free_state(dist_stack *s) {
 
 static void destroy(mpm_sim *sim) {
   dist_stack *s = state(sim);
+  mpm_dist *owned = s->owns_dist ? s->d : NULL;
   s->inner->destroy(sim);
   free_state(s);
   sim->stack_data = NULL;
+  mpm_dist_destroy(owned);
 }
 
 static mpm_status sample_body(mpm_sim *sim, int b, mpm_error *err) {
@@ -418,7 +424,11 @@ static const char *frame_part(const mpm_sim *sim) {
   return state(sim)->inner->frame_part(sim);
 }
 static void info(const mpm_sim *sim, mpm_sim_info *in) {
-  state(sim)->inner->info(sim, in);
+  const dist_stack *s = state(sim);
+  s->inner->info(sim, in);
+  in->rank = s->rank;
+  in->ranks = s->size;
+  in->run_particles = (size_t)s->run_particles;
 }
 
 static const mpm_grid_stack_ops dist_ops = {
@@ -499,6 +509,7 @@ mpm_status mpm_dist_attach(mpm_dist *d, mpm_sim *sim, mpm_error *err) {
     s->figures.imbalance = mpm_partition_weights(&s->pt, p->count, keys, NULL, rank_w);
     mpm_free(rank_w);
   }
+  s->run_particles = (long long)p->count; /* every rank holds every particle until now */
   for (size_t i = 0; i < p->count; ++i) gone[i] = mpm_partition_owner(&s->pt, keys[i]) != s->rank;
   mpm_particles_remove(p, gone);
   mpm_free(keys);
@@ -513,6 +524,14 @@ mpm_status mpm_dist_attach(mpm_dist *d, mpm_sim *sim, mpm_error *err) {
 
 void mpm_dist_set_rebalance(mpm_sim *sim, double threshold) {
   if (sim->stack == &dist_ops) state(sim)->rebalance_at = threshold;
+}
+
+mpm_dist *mpm_dist_of(const mpm_sim *sim) {
+  return sim->stack == &dist_ops ? state(sim)->d : NULL;
+}
+
+void mpm_dist_sim_own(mpm_sim *sim) {
+  if (sim->stack == &dist_ops) state(sim)->owns_dist = 1;
 }
 
 mpm_dist_figures mpm_dist_sim_figures(const mpm_sim *sim) {
