@@ -168,7 +168,8 @@ test-fuzz: build-fuzz
 	fuzz/run.sh $(BUILD_FUZZ) 15
 
 # The distributed run's build (-DMPM_MPI=ON: src/dist/mpi_*.c on OpenMPI), float, without OpenVDB
-# and the Python module, and its tests (tests/mpi: each program on 1 to 4 ranks, named _npN).
+# and the Python module, and its tests (tests/mpi: each program on 1 to 4 ranks, named _npN;
+# the program itself for `mpm run` under mpirun, tests/mpi/run_cli.sh).
 BUILD_MPI = build-mpi
 deps-mpi: deps
 	$(call apt_install,$(MPI_DEB_PACKAGES))
@@ -176,7 +177,7 @@ deps-mpi: deps
 build-mpi: deps-mpi
 	cmake -S . -B $(BUILD_MPI) -DCMAKE_BUILD_TYPE=Release -DMPM_MPI=ON -DMPM_OPENVDB=OFF \
 	  -DMPM_PYTHON=OFF $(CMAKE_FLAGS) >/dev/null
-	cmake --build $(BUILD_MPI) -j $(JOBS) --target \
+	cmake --build $(BUILD_MPI) -j $(JOBS) --target mpm \
 	  $$(ls tests/mpi | sed -n 's/^\(test_[a-z_0-9]*\)\.c$$/\1/p')
 
 test-mpi: build-mpi

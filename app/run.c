@@ -6,6 +6,7 @@
 
 #include "cli.h"
 #include "progress.h"
+#include "ranks.h"
 #include "mpm/mpm.h"
 
 #ifdef _OPENMP
@@ -54,16 +55,17 @@ static void print_warnings(const mpm_sim *sim, const char *scene) {
   }
 }
 
-/* Progress within a frame (the step callback). */
-static void progress_on_step(void *ctx, const mpm_sim *sim) {
-  mpm_progress_step(ctx, mpm_sim_frame(sim), mpm_sim_time(sim), mpm_sim_steps(sim),
-                    mpm_sim_particle_count(sim));
-}
-
 static mpm_sim_info info_of(const mpm_sim *sim) {
   mpm_sim_info info;
   mpm_sim_get_info(sim, &info, sizeof info);
   return info;
+}
+
+/* Progress within a frame (the step callback): the particles of every rank (on one process,
+ * mpm_sim_particle_count's). */
+static void progress_on_step(void *ctx, const mpm_sim *sim) {
+  mpm_progress_step(ctx, mpm_sim_frame(sim), mpm_sim_time(sim), mpm_sim_steps(sim),
+                    info_of(sim).run_particles);
 }
 
 /* Above this many expected particles `mpm check` answers from the scene's description alone
@@ -193,7 +195,8 @@ static int interrupted(mpm_sim *sim, const char *scene_path, int sig) {
   return 128 + sig;
 }
 
-int mpm_cmd_run(int argc, char **argv) {
+/* `mpm run`; ranks: the ranks of a run on MPI ranks (ranks.h), 0 for one process. */
+static int run_scene(int argc, char **argv, int ranks) {
   const char *scene_path = NULL, *out_dir = NULL, *resume_dir = NULL;
   int threads = 0, quiet = 0, max_frames = 0, render = 0, overwrite = 0;
   for (int i = 0; i < argc; ++i) {
@@ -246,6 +249,20 @@ int mpm_cmd_run(int argc, char **argv) {
             resume_dir, out_dir);
     return MPM_EXIT_USAGE;
   }
+  if (mpm_cli_rank() != 0) quiet = 1; /* (its output goes nowhere: mpm_cmd_run) */
+  /* what a run on ranks does not do yet (docs/distributed.md) */
+  if (ranks && resume_dir) {
+    fprintf(stderr, "mpm run: --resume: a run on MPI ranks writes no checkpoints yet, so there "
+                    "is none to resume from (run it again from the start with -o DIR "
+                    "--overwrite)\n");
+    return MPM_EXIT_USAGE;
+  }
+  if (ranks && render) {
+    fprintf(stderr, "mpm run: --render: not on MPI ranks yet (mpm render reads a frame from "
+                    "one file, a run on ranks writes a piece per rank); open the run's run.pvd "
+                    "in ParaView\n");
+    return MPM_EXIT_USAGE;
+  }
   /* the program's OpenMP threads, for everything it runs (the simulation, --render) */
 #ifdef _OPENMP
   if (threads > 0) omp_set_num_threads(threads);
@@ -254,8 +271,17 @@ int mpm_cmd_run(int argc, char **argv) {
   char err[4096];
   mpm_sim *sim = NULL;
   mpm_status st = mpm_sim_create_from_file(scene_path, &sim, err, sizeof err);
-  if (st != MPM_OK) {
+  /* every rank made its simulation from the same scene, or none goes on (the message of the
+     first rank that could not) */
+  if (mpm_cli_ranks_any(st != MPM_OK, err, sizeof err)) {
     fprintf(stderr, "mpm: %s\n", err);
+    mpm_sim_destroy(sim);
+    return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
+  }
+  /* this process's part of the run: what does not run on ranks yet is refused on every rank */
+  if (ranks && (st = mpm_sim_join_mpi_world(sim)) != MPM_OK) {
+    fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
+    mpm_sim_destroy(sim);
     return st == MPM_ERR_NOMEM ? MPM_EXIT_FAILURE : MPM_EXIT_USAGE;
   }
   if (threads > 0) mpm_sim_set_threads(sim, threads);
@@ -289,27 +315,34 @@ int mpm_cmd_run(int argc, char **argv) {
        files refused or, with --overwrite, removed (those alone); then frame 0 and the copy of
        the scene (scene.json, for `mpm render`) */
     st = mpm_sim_open_output(sim, out_dir, overwrite ? MPM_OUTPUT_OVERWRITE : MPM_OUTPUT_NEW);
+    st = mpm_sim_ranks_agree(sim, st); /* on ranks: one verdict, one message */
     if (st != MPM_OK) {
       const char *dir = out_dir ? out_dir : info_of(sim).output_dir;
       fprintf(stderr, "mpm run: %s\n", mpm_sim_last_error(sim));
-      if (st == MPM_ERR_INVALID)
+      if (st == MPM_ERR_INVALID && !ranks)
         fprintf(stderr,
                 "mpm run: continue that run with --resume %s, replace it with --overwrite, or "
                 "write this one elsewhere with -o DIR\n",
                 dir);
+      else if (st == MPM_ERR_INVALID) /* (no resume on ranks yet) */
+        fprintf(stderr,
+                "mpm run: replace that run with --overwrite, or write this one elsewhere with "
+                "-o DIR\n");
       mpm_sim_destroy(sim);
       return st == MPM_ERR_INVALID ? MPM_EXIT_USAGE : MPM_EXIT_FAILURE;
     }
   }
   stop_signal = 0;
-  catch_stop_signals();
+  /* (on ranks the signals keep their default action: a checkpoint to stop with is to come, and
+     the ranks would see the signal at different steps; the atomic writes keep the files whole) */
+  if (!ranks) catch_stop_signals();
   mpm_sim_set_interrupt(sim, &stop_signal);
   const mpm_sim_info start = info_of(sim);
   mpm_progress pr;
   mpm_progress_begin(&pr,
                      quiet ? MPM_PROGRESS_QUIET
                            : (isatty(STDERR_FILENO) ? MPM_PROGRESS_BAR : MPM_PROGRESS_LINES),
-                     start.frame_count, start.particles);
+                     start.frame_count, start.run_particles);
   pr.first_frame = mpm_sim_frame(sim);
   pr.first_steps = mpm_sim_steps(sim);
   pr.t0 = mpm_sim_time(sim);
@@ -321,13 +354,19 @@ int mpm_cmd_run(int argc, char **argv) {
     fprintf(stderr, "mpm: resuming %s from %s: frame %d of %d, t = %.6g s, step %lld\n", scene_path,
             checkpoint, mpm_sim_frame(sim), start.frame_count, mpm_sim_time(sim),
             (long long)mpm_sim_steps(sim));
-  if (!quiet)
+  if (!quiet && !ranks)
     fprintf(stderr, "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d threads, %s)\n",
             scene_path, start.particles, start.dx, start.frame_count, start.output_dir,
             start.threads, mpm_real_type());
+  if (!quiet && ranks)
+    fprintf(stderr,
+            "mpm: %s: %zu particles, dx = %g m, %d frames to %s/ (%d MPI ranks x %d threads, "
+            "%s; no checkpoints on ranks yet)\n",
+            scene_path, start.run_particles, start.dx, start.frame_count, start.output_dir,
+            start.ranks, start.threads, mpm_real_type());
   int code = MPM_EXIT_OK;
   while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
-    st = mpm_sim_advance_frame(sim);
+    st = mpm_sim_ranks_agree(sim, mpm_sim_advance_frame(sim));
     if (st == MPM_ERR_INTERRUPTED) {
       mpm_progress_end(&pr);
       code = interrupted(sim, scene_path, stop_signal);
@@ -356,10 +395,11 @@ int mpm_cmd_run(int argc, char **argv) {
                len ? ", " : "", in.surface_seconds, in.surface_triangles);
     }
     mpm_progress_update(&pr, mpm_sim_frame(sim), mpm_sim_time(sim), mpm_sim_steps(sim),
-                        in.particles, solver);
+                        in.run_particles, solver);
   }
-  /* stopped short of the scene's end by --frames: leave a checkpoint to continue from */
-  if (code == MPM_EXIT_OK && mpm_sim_time(sim) < start.end_time * (1 - 1e-12) &&
+  /* stopped short of the scene's end by --frames: leave a checkpoint to continue from (not on
+     ranks yet) */
+  if (code == MPM_EXIT_OK && !ranks && mpm_sim_time(sim) < start.end_time * (1 - 1e-12) &&
       !checkpoint_is_current(sim)) {
     if (mpm_sim_write_checkpoint(sim, checkpoint, sizeof checkpoint) != MPM_OK) {
       fprintf(stderr, "mpm: %s\n", mpm_sim_last_error(sim));
@@ -404,5 +444,20 @@ int mpm_cmd_run(int argc, char **argv) {
     return mpm_cmd_render(quiet ? 2 : 1, rargv);
   }
   mpm_sim_destroy(sim);
+  return code;
+}
+
+int mpm_cmd_run(int argc, char **argv) {
+  /* under an MPI launcher, one rank of a run on ranks (ranks.h). Rank 0 alone prints: the ranks
+     agree on every failure and rank 0 holds the message of the rank where it began, so the
+     others' output would only repeat it (their progress included) */
+  const int ranks = mpm_cli_ranks_start();
+  if (mpm_cli_rank() != 0) { /* (should /dev/null fail them, they print: nothing worse) */
+    FILE *out = freopen("/dev/null", "w", stdout), *err = freopen("/dev/null", "w", stderr);
+    (void)out;
+    (void)err;
+  }
+  const int code = run_scene(argc, argv, ranks);
+  mpm_cli_ranks_end();
   return code;
 }
