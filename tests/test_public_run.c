@@ -1,8 +1,9 @@
 /* test_public_run.c - the public calls a program needs around a run (include/mpm/mpm.h, issue
  * 17: `mpm run` and `mpm check` are written on them alone): mpm_sim_get_info against the
  * particle view and the other getters, the frame limit, the step callback, the scene's
- * warnings, the next step's dt against the step then taken, and the copy of the scene that
- * mpm_sim_enable_output keeps for `mpm render`. */
+ * warnings, the next step's dt against the step then taken, the copy of the scene that
+ * mpm_sim_enable_output keeps for `mpm render`, and the calls of a run on MPI ranks in a process
+ * that is none (tests/mpi runs them on ranks). */
 #include "support.h"
 #include "mpm/mpm.h"
 #include "mpm/plot.h"
@@ -69,6 +70,30 @@ static void test_info(void **state) {
   for (size_t k = older; k < sizeof bytes; ++k) assert_int_equal(bytes[k], 0xAB);
   assert_int_equal(((mpm_sim_info *)(void *)bytes)->particles, in.particles);
   assert_int_equal(mpm_sim_get_info(sim, NULL, sizeof in), MPM_ERR_INVALID);
+  mpm_sim_destroy(sim);
+}
+
+/* A simulation of one process is no rank's part: its info says rank 0 of 1 with its own
+ * particles, the join is refused here (a build without MPI, or MPI not started: this program
+ * is no MPI program) naming why, changing nothing, and the ranks' agreement is its own
+ * status. */
+static void test_ranks_without_mpi(void **state) {
+  (void)state;
+  mpm_sim *sim = two_boxes(0.7, "quadratic");
+  mpm_sim_info in;
+  mpm_sim_get_info(sim, &in, sizeof in);
+  assert_int_equal(in.rank, 0);
+  assert_int_equal(in.ranks, 1);
+  assert_int_equal(in.run_particles, in.particles);
+  assert_int_equal(mpm_sim_join_mpi_world(sim), MPM_ERR_INVALID);
+  const char *why = mpm_sim_last_error(sim);
+  assert_true(strstr(why, "built without MPI") || strstr(why, "MPI is not initialised"));
+  mpm_sim_get_info(sim, &in, sizeof in);
+  assert_int_equal(in.ranks, 1);
+  assert_int_equal(in.run_particles, mpm_sim_particle_count(sim));
+  assert_int_equal(mpm_sim_ranks_agree(sim, MPM_OK), MPM_OK);
+  assert_int_equal(mpm_sim_ranks_agree(sim, MPM_ERR_IO), MPM_ERR_IO);
+  assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK); /* it runs as before */
   mpm_sim_destroy(sim);
 }
 
@@ -371,6 +396,7 @@ static void test_implicit_dt_fits_the_frame(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_info),
+      cmocka_unit_test(test_ranks_without_mpi),
       cmocka_unit_test(test_frame_limit),
       cmocka_unit_test(test_step_callback),
       cmocka_unit_test(test_warnings),
