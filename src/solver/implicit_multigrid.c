@@ -14,6 +14,15 @@
    unknowns costs less than one fine sweep) */
 #define COARSEST_NODES 64
 
+/* Gauss-Seidel sweeps on each level per cycle (after the coarse correction in the one-pass
+   cycle, before and after it in the symmetric one). Two against one, `mpm bench implicit --only
+   resolution --threads 2` (one run each, one sitting): CG iterations per Newton iteration 10.0,
+   9.0, 10.5 -> 7.0, 6.0, 9.0 on the soft block (dx 4, 2, 1 cm) and 5.5, 4.0, 3.5 -> 3.5, 2.5,
+   2.5 on the stiff one, the step 0.08, 0.46, 2.99 -> 0.07, 0.42, 2.80 s and 0.06, 0.31, 1.96 ->
+   0.07, 0.29, 1.79 s; the rubber bunny's first 0.3 s (at the CFL rate) 18.6 -> 16.6 s, its
+   steps on the floor 51-57 -> 31-35 iterations. Three sweeps: fewer iterations, more time. */
+#define SWEEPS 2
+
 int mpm_implicit_multigrid_supported(const mpm_implicit *s) {
   return s->p && s->p->count > 0 && !s->levels && !s->domains && s->part_count <= 1 && s->grid &&
          mpm_grid_paged(s->grid) && s->dofs->segment_count == 1;
@@ -49,6 +58,7 @@ mpm_status mpm_implicit_multigrid_prepare(mpm_implicit *s) {
       k->kind == MPM_KERNEL_QUADRATIC ? MPM_MG_QUADRATIC : MPM_MG_LINEAR;
   const mpm_status st = mpm_multigrid_setup(s->mg, s->arena, rows, (const int32_t(*)[3])coord,
                                             k->width - 1, kind, COARSEST_NODES);
+  s->mg->sweeps = SWEEPS;
   return st; /* the cycle (mg->cheap) is chosen solve by solve (implicit.c) */
 }
 
