@@ -477,23 +477,34 @@ void mpm_multigrid_apply(const mpm_multigrid *mg, int l, const mpm_real *x, mpm_
   }
 }
 
+/* Eight reals: the first eight entries of a 3x3 block, row-major (the ninth is apart). */
+typedef mpm_real block8 __attribute__((vector_size(8 * sizeof(mpm_real))));
+
 /* sum_j A_ij x_j over row i, x a level's own vector (its node n, past the last, is zero: an
- * absent neighbour reads it, so the loop has no branch). */
+ * absent neighbour reads it, so the loop has no branch). Each block's first eight entries are
+ * multiplied at once by (x0 x1 x2 x0 x1 x2 x0 x1) and summed lane by lane over the row, the
+ * ninth apart (GCC's vector extensions, core/lanes.h: one AVX register in float): the sweeps
+ * of the smoother, 125 blocks a row, took a third of the rubber bunny's implicit run in scalar
+ * code. The sums run in one order, whatever the threads. */
 static inline void row_product(const mpm_mg_level *L, size_t i, const mpm_real *restrict x,
                                mpm_real acc[3]) {
   const int32_t *restrict nb = L->nbr + i * L->slots;
   const mpm_real *restrict A = L->val + i * L->slots * 9;
   const int32_t none = (int32_t)L->n;
-  mpm_real a0 = 0, a1 = 0, a2 = 0;
+  block8 sum = {0};
+  mpm_real ninth = 0;
   for (size_t s = 0; s < L->slots; ++s) {
     const size_t j = 3 * (size_t)(nb[s] < 0 ? none : nb[s]);
     const mpm_real x0 = x[j], x1 = x[j + 1], x2 = x[j + 2];
-    const mpm_real *B = A + 9 * s;
-    a0 += B[0] * x0 + B[1] * x1 + B[2] * x2;
-    a1 += B[3] * x0 + B[4] * x1 + B[5] * x2;
-    a2 += B[6] * x0 + B[7] * x1 + B[8] * x2;
+    const block8 xs = {x0, x1, x2, x0, x1, x2, x0, x1};
+    block8 B;
+    memcpy(&B, A + 9 * s, sizeof B); /* 36-byte stride: an unaligned load */
+    sum += B * xs;
+    ninth += A[9 * s + 8] * x2;
   }
-  acc[0] = a0, acc[1] = a1, acc[2] = a2;
+  acc[0] = sum[0] + sum[1] + sum[2];
+  acc[1] = sum[3] + sum[4] + sum[5];
+  acc[2] = sum[6] + sum[7] + ninth;
 }
 
 /* x_i += D_i^+ (b_i - sum_j A_ij x_j) for the rows of colour c (independent of each other). */
