@@ -258,24 +258,29 @@ static void displacement(mpm_implicit *s, mpm_real *const v[3], mpm_real *const 
  * than a hundredth of the mean counts as momentum on one of that weight: its residual vanishes
  * with its share of a particle, and a full node's is measured as before. D is not floored: as
  * the preconditioner, floored, it slowed a stiff block on a floor past 664 iterations. The sum
- * runs in one order (one thread), so W is the same for any thread count. */
+ * runs in one order (one thread), so W is the same for any thread count. W is made once a step
+ * (norm NULL leaves it): the scale and every residual of the step are measured in it. */
 static void jacobi(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const norm[3]) {
   mpm_implicit_diagonal(s, 1, s->apply_scale, diag);
   const mpm_dofs *d = s->dofs;
   const long n = (long)d->count;
+  for (int c = 0; c < 3; ++c) {
+    mpm_real *restrict dc = diag[c];
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+    for (long i = 0; i < n; ++i) dc[i] = dc[i] > 0 ? dc[i] : 1;
+  }
+  if (!norm) return;
   double sum = 0;
   long with_mass = 0;
   for (int c = 0; c < 3; ++c)
     for (long i = 0; i < n; ++i)
-      if (d->mass[i] > 0 && diag[c][i] > 0) sum += diag[c][i], ++with_mass;
+      if (d->mass[i] > 0) sum += diag[c][i], ++with_mass;
   const mpm_real least = with_mass ? (mpm_real)(JACOBI_FLOOR * sum / (double)with_mass) : 0;
   for (int c = 0; c < 3; ++c) {
-    mpm_real *restrict dc = diag[c], *restrict wc = norm[c];
+    const mpm_real *restrict dc = diag[c];
+    mpm_real *restrict wc = norm[c];
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
-    for (long i = 0; i < n; ++i) {
-      dc[i] = dc[i] > 0 ? dc[i] : 1;
-      wc[i] = dc[i] < least ? least : dc[i];
-    }
+    for (long i = 0; i < n; ++i) wc[i] = dc[i] < least ? least : dc[i];
   }
 }
 
@@ -691,7 +696,9 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
       continue; /* the gradient where the search left v */
     }
     mpm_implicit_build(s);
-    if (o->precondition) jacobi(s, diag, norm);
+    /* Jacobi's diagonal at the new iterate where Jacobi preconditions (the multigrid once
+       built preconditions the rest of the step); the norm stays the step's */
+    if (o->precondition && !s->mg_built) jacobi(s, diag, NULL);
     /* the multigrid hierarchy of the first iteration preconditions the later ones: a
        preconditioner need only be near the matrix, and building it (assembly and Galerkin
        products) costs some 80 Jacobi-CG iterations on the rubber bunny; rebuilt each
