@@ -66,11 +66,7 @@ static mpm_status write_indexes(mpm_sim *sim, const mpm_frame_record *r, int ran
       st = mpm_write_pvd_parts(path, frame + 1, 1, sim->out.frame_times, part, files, &sim->error);
     if (st != MPM_OK) return st;
   }
-  if (r->stats_rows > 0) {
-    snprintf(path, sizeof path, "%s/stats.csv", sim->out.dir);
-    st = mpm_write_stats_csv_forces(path, r->stats_rows, sim->out.stats, sim->collider_count,
-                                    sim->out.stats_forces, &sim->error);
-  }
+  if (r->stats_rows > 0) st = mpm_sim_write_stats(sim, r->stats_rows);
   return st;
 }
 

@@ -164,12 +164,15 @@ static mpm_status write_frame(mpm_sim *sim, const mpm_frame_record *r) {
     st = mpm_write_ply_points(path, &ff, &sim->error);
     if (st != MPM_OK) return st;
   }
-  if (r->stats_rows > 0) {
-    snprintf(path, sizeof path, "%s/stats.csv", sim->out.dir);
-    st = mpm_write_stats_csv_forces(path, r->stats_rows, sim->out.stats, sim->collider_count,
-                                    sim->out.stats_forces, &sim->error);
-  }
+  if (r->stats_rows > 0) st = mpm_sim_write_stats(sim, r->stats_rows);
   return st;
+}
+
+mpm_status mpm_sim_write_stats(mpm_sim *sim, int rows) {
+  char path[MPM_PATH_MAX + 64];
+  snprintf(path, sizeof path, "%s/stats.csv", sim->out.dir);
+  return mpm_write_stats_csv_forces(path, rows, sim->out.stats, sim->collider_count,
+                                    sim->out.stats_forces, &sim->error);
 }
 
 static mpm_status write_checkpoint(mpm_sim *sim, const char *path, const mpm_checkpoint *c) {

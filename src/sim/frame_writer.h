@@ -47,4 +47,8 @@ extern const mpm_frame_writer mpm_frame_files;
  * this process, out.dir set, the scene's copy written. */
 mpm_status mpm_sim_prepare_output(mpm_sim *sim, const char *dir, int how);
 
+/* stats.csv in the run's folder, its first `rows` rows (every writer's, from the one process
+ * that writes it). */
+mpm_status mpm_sim_write_stats(mpm_sim *sim, int rows);
+
 #endif
