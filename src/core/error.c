@@ -16,6 +16,18 @@ mpm_status mpm_error_set(mpm_error *err, mpm_status status, const char *fmt, ...
   return status;
 }
 
+mpm_status mpm_error_set_elsewhere(mpm_error *err, mpm_status status, const char *fmt, ...) {
+  if (err) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->message, sizeof err->message, fmt, ap);
+    va_end(ap);
+    err->status = status;
+    err->elsewhere = 1;
+  }
+  return status;
+}
+
 void mpm_error_clear(mpm_error *err) {
   if (err) {
     err->status = MPM_OK;

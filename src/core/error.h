@@ -21,6 +21,9 @@ typedef struct mpm_error {
 /* Set err (if non-NULL) to status and a printf-style message; returns status. */
 mpm_status mpm_error_set(mpm_error *err, mpm_status status, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
+/* The same for a failure that is another process's (elsewhere set): the message points at it. */
+mpm_status mpm_error_set_elsewhere(mpm_error *err, mpm_status status, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 void mpm_error_clear(mpm_error *err);
 
 #endif

@@ -72,11 +72,10 @@ static uint64_t particle_key(const mpm_grid *g, const mpm_particles *p, size_t i
 
 /* The status of a rank whose step stops because another rank's failed (that one says why). */
 static mpm_status another_rank(mpm_sim *sim, const char *where) {
-  mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                "step %lld: another rank of the run ran out of memory %s (its message names what)",
-                (long long)sim->steps, where);
-  sim->error.elsewhere = 1;
-  return MPM_ERR_NOMEM;
+  return mpm_error_set_elsewhere(
+      &sim->error, MPM_ERR_NOMEM,
+      "step %lld: another rank of the run ran out of memory %s (its message names what)",
+      (long long)sim->steps, where);
 }
 
 /* Whether any rank failed (a collective vote): a rank that runs out of memory must not leave the

@@ -140,14 +140,11 @@ mpm_status mpm_sim_guard_check(mpm_sim *sim, double dt) {
   double hit = h.kind != GUARD_NONE;
   mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, &hit, 1);
   if (h.kind != GUARD_NONE) return report(sim, at, &h, dt);
-  if (hit > 0) {
-    mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
-                  "simulation unstable at step %lld (t = %.6g s, dt = %.3g s): a particle of "
-                  "another process of the run (its message names it)",
-                  (long long)sim->steps, sim->time, dt);
-    sim->error.elsewhere = 1;
-    return MPM_ERR_UNSTABLE;
-  }
+  if (hit > 0)
+    return mpm_error_set_elsewhere(&sim->error, MPM_ERR_UNSTABLE,
+                                   "simulation unstable at step %lld (t = %.6g s, dt = %.3g s): a "
+                                   "particle of another process of the run (its message names it)",
+                                   (long long)sim->steps, sim->time, dt);
   return MPM_OK;
 }
 

@@ -25,9 +25,9 @@ static mpm_status verdict(mpm_sim *sim, mpm_status st, const char *what, int fra
   double worst = (double)st;
   mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, &worst, 1);
   if (worst > 0 && st == MPM_OK) {
-    mpm_error_set(&sim->error, (mpm_status)worst,
-                  "%s %d: another process of the run failed; its message says why", what, frame);
-    sim->error.elsewhere = 1;
+    mpm_error_set_elsewhere(&sim->error, (mpm_status)worst,
+                            "%s %d: another process of the run failed; its message says why", what,
+                            frame);
   }
   return st != MPM_OK ? st : (mpm_status)worst;
 }

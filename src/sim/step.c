@@ -342,10 +342,10 @@ static mpm_status stage_verdict(mpm_sim *sim, mpm_status st, const char *where) 
   double worst = (double)st;
   mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, &worst, 1);
   if (worst > 0 && st == MPM_OK) {
-    mpm_error_set(&sim->error, (mpm_status)worst,
-                  "step %lld: another process of the run failed (%s); its message says why",
-                  (long long)sim->steps, where);
-    sim->error.elsewhere = 1;
+    mpm_error_set_elsewhere(&sim->error, (mpm_status)worst,
+                            "step %lld: another process of the run failed (%s); its message says "
+                            "why",
+                            (long long)sim->steps, where);
   }
   return st != MPM_OK ? st : (mpm_status)worst;
 }
@@ -428,14 +428,11 @@ mpm_status mpm_sim_raw_step(mpm_sim *sim, double max_dt) {
   double speed_bad[2] = {(double)c.r.max_speed, c.r.bad_particle >= 0};
   mpm_reduce_all(sim->reduction, MPM_REDUCE_MAX, speed_bad, 2);
   sim->max_speed = (mpm_real)speed_bad[0];
-  if (c.r.bad_particle < 0 && speed_bad[1] > 0) {
-    mpm_error_set(&sim->error, MPM_ERR_UNSTABLE,
-                  "simulation blew up at step %lld (t = %.6g s, dt = %.3g s) on another "
-                  "process of the run (its message names the particle)",
-                  (long long)sim->steps, sim->time, dt);
-    sim->error.elsewhere = 1;
-    return MPM_ERR_UNSTABLE;
-  }
+  if (c.r.bad_particle < 0 && speed_bad[1] > 0)
+    return mpm_error_set_elsewhere(&sim->error, MPM_ERR_UNSTABLE,
+                                   "simulation blew up at step %lld (t = %.6g s, dt = %.3g s) on "
+                                   "another process of the run (its message names the particle)",
+                                   (long long)sim->steps, sim->time, dt);
   if (c.r.bad_particle >= 0) {
     const long i = c.r.bad_particle;
     const mpm_particles *q = c.bad_set;
