@@ -381,16 +381,17 @@ static int time_to_solution(const drop_case *c) {
       const int cfl = ladder[k] == 0;
       if ((cfl && (ladder_choice == 1 || v == 0)) || (!cfl && ladder_choice == 2)) continue;
       const int newton = solves[v].newton;
-      char solver[300], rung[64];
-      if (cfl)
+      char solver[300], rung[64], rate[64] = "";
+      if (cfl) {
         snprintf(rung, sizeof rung, "at the CFL rate %g (up to 1/60 s)", CFL_RATE);
-      else
+        snprintf(rate, sizeof rate, ", \"cfl\": %g, \"max_dt\": %.10g", CFL_RATE, 1.0 / 60);
+      } else {
         snprintf(rung, sizeof rung, "= 1/%.0f s", 1 / ladder[k]);
+      }
       snprintf(solver, sizeof solver,
                "\"integrator\": \"implicit\", \"dt\": %.9g, \"cg_tolerance\": %g, "
                "\"newton_iterations\": %d%s%s",
-               ladder[k], solves[v].tol, newton, preconditioner_key,
-               cfl ? ", \"cfl\": 0.8, \"max_dt\": 0.0166666667" : "");
+               ladder[k], solves[v].tol, newton, preconditioner_key, rate);
       simulate(c, solver, &im);
       /* accurate: within half a cell of the explicit run up to its first impact, and resting at
        * the end where the explicit block touches the floor; the rebound, a wave faster than
