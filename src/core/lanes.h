@@ -3,8 +3,8 @@
  * GCC vector extensions (no intrinsics): the compiler maps them to AVX/AVX-512 registers or
  * splits them into narrower ones, so the same source runs on any x86-64 or AArch64 target.
  * Two widths:
- *   mpm_vl: MPM_LANES = 8 reals, the particles of one cell in the transfers
- *           (transfer/transfer_lanes.h);
+ *   mpm_vl: MPM_LANES reals (8 floats, 4 doubles), the particles of one cell in the
+ *           transfers, MPM_LANES at a time (transfer/transfer_lanes.h);
  *   mpm_vn: MPM_NLANES reals in 32 bytes (8 floats or 4 doubles), one AVX register, for long
  *           straight-line kernels such as the batch SVD (core/svd3_lanes.h), where a vector
  *           wider than a register would be split with poor code for the selects.
@@ -16,9 +16,19 @@
 
 #include <stdint.h>
 
+/* In the double build one AVX register too (4 lanes: a cell's 8 particles in two batches).
+   Eight doubles, two registers, made GCC 12 build the transfers' vectors through the stack (a
+   broadcast became eight scalar stores and four 16-byte reloads, which store forwarding cannot
+   serve): the double build's explicit step cost 4.4 times the float one's (docs/performance.md). */
+#ifdef MPM_USE_DOUBLE
+#define MPM_LANES 4
+#else
 #define MPM_LANES 8
+#endif
 #define MPM_NLANES ((int)(32 / sizeof(mpm_real)))
 typedef mpm_real mpm_vl __attribute__((vector_size(MPM_LANES * sizeof(mpm_real))));
+/* Eight reals, whatever the lanes: the sums of eight lane vectors (transfer_lanes.h). */
+typedef mpm_real mpm_v8 __attribute__((vector_size(8 * sizeof(mpm_real))));
 typedef mpm_real mpm_vn __attribute__((vector_size(32)));
 #ifdef MPM_USE_DOUBLE
 typedef int64_t mpm_vl_index __attribute__((vector_size(MPM_LANES * sizeof(int64_t))));

@@ -62,8 +62,8 @@ MPM_ALWAYS_INLINE mpm_real mpm_corner_move(mpm_domain_set *s, const mpm_corner_m
   return vg[0] * vg[0] + vg[1] * vg[1] + vg[2] * vg[2];
 }
 
-/* mpm_corner_move for a batch of MPM_LANES consecutive corners c0 .. c0 + 7 of the pads (not
- * enriched) at once, lane by lane the same operations, so the same results bit for bit. Only
+/* mpm_corner_move for a batch of MPM_LANES consecutive corners c0 .. c0 + MPM_LANES - 1 of the pads
+ * (not enriched) at once, lane by lane the same operations, so the same results bit for bit. Only
  * where nothing in the boundary acts on them: no colliders, and no corner in a wall band
  * (checked here). Returns 0 (nothing done: move them one by one) or 1, with *max_v2 raised to
  * the largest |v^g|^2. */

@@ -244,7 +244,7 @@ ALWAYS_INLINE void scatter_group(const int W, const int apic, const mpm_corner_p
   pad_dofs(P, q, S, dof);
   for (int n = 0; n < S * S * S; ++n) {
     acc[n][SCATTER_FIELDS] = zero;
-    const mpm_vl sum = mpm_vl_sum8(acc[n]);
+    const mpm_v8 sum = mpm_vl_sum8(acc[n]);
     for (int f = 0; f < SCATTER_FIELDS; ++f) values[f][dof[n]] += sum[f];
   }
 }

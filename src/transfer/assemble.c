@@ -86,7 +86,7 @@ static void batch_pairs(const int W, const mpm_vl gw[KMAX][3], const mpm_vl C[81
         for (int bb = 0; bb < 3; ++bb)
           acc[3 * a + bb] = gw[i][0] * t[3 * (3 * a) + bb] + gw[i][1] * t[3 * (3 * a + 1) + bb] +
                             gw[i][2] * t[3 * (3 * a + 2) + bb];
-      const mpm_vl s8 = mpm_vl_sum8(acc);
+      const mpm_v8 s8 = mpm_vl_sum8(acc);
       for (int k = 0; k < 8; ++k) blk[k] += s8[k];
       mpm_real last = 0;
       for (int l = 0; l < MPM_LANES; ++l) last += acc[8][l];

@@ -1,9 +1,10 @@
 /* transfer_lanes.h - P2G and G2P for the sparse grid with particles as SIMD lanes.
  *
  * Particles are sorted by the cell of their stencil's base node (sparse_grid.h), so the up to
- * 8 particles of one cell share every grid node they touch. A batch of them becomes the lanes
- * of one vector: a node's value is broadcast to all lanes (G2P) or the lanes' contributions are
- * summed once per node (P2G), and every weight is computed lane-wise. The tensor-product
+ * 8 particles of one cell share every grid node they touch. A batch of them (MPM_LANES: 8 in
+ * float, 4 in double) becomes the lanes of one vector: a node's value is broadcast to all lanes
+ * (G2P) or the lanes' contributions are summed once per node (P2G), and every weight is computed
+ * lane-wise. The tensor-product
  * structure of the kernels (Gao et al. 2017, sec. 6.2) is used to contract one axis at a time:
  *
  *   P2G (APIC, force fused in):  p_d(i,j,k) = wz_k (wy_j X_di + wx_i Y_dj) + wx_i wy_j Z_dk,
@@ -28,9 +29,11 @@ typedef mpm_real mpm_vq __attribute__((vector_size(4 * sizeof(mpm_real))));
  * momentum, force / new and old velocity). */
 #define MPM_PAD_STRIDE(apic) ((apic) ? 4 : 8)
 
-/* Pairwise lane sums of two vectors: (a0+a1, a2+a3, a4+a5, a6+a7, b0+b1, ..., b6+b7). */
+/* Pairwise lane sums of two vectors: (a0+a1, a2+a3, ..., b0+b1, b2+b3, ...). */
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_pair(mpm_vl a, mpm_vl b) {
-#if defined(__clang__) /* clang has no __builtin_shuffle (the fuzz build, fuzz/, uses clang) */
+#if MPM_LANES == 4
+  return __builtin_shufflevector(a, b, 0, 2, 4, 6) + __builtin_shufflevector(a, b, 1, 3, 5, 7);
+#elif defined(__clang__) /* clang has no __builtin_shuffle (the fuzz build, fuzz/, uses clang) */
   return __builtin_shufflevector(a, b, 0, 2, 4, 6, 8, 10, 12, 14) +
          __builtin_shufflevector(a, b, 1, 3, 5, 7, 9, 11, 13, 15);
 #else
@@ -39,17 +42,25 @@ MPM_ALWAYS_INLINE mpm_vl mpm_vl_pair(mpm_vl a, mpm_vl b) {
 #endif
 }
 
-/* Lane sums of 8 vectors, as one vector: (sum v0, sum v1, ..., sum v7). */
-MPM_ALWAYS_INLINE mpm_vl mpm_vl_sum8(const mpm_vl v[8]) {
+/* Lane sums of 8 vectors: (sum v0, sum v1, ..., sum v7). */
+MPM_ALWAYS_INLINE mpm_v8 mpm_vl_sum8(const mpm_vl v[8]) {
   const mpm_vl a = mpm_vl_pair(v[0], v[1]), b = mpm_vl_pair(v[2], v[3]);
   const mpm_vl c = mpm_vl_pair(v[4], v[5]), d = mpm_vl_pair(v[6], v[7]);
+#if MPM_LANES == 8
   return mpm_vl_pair(mpm_vl_pair(a, b), mpm_vl_pair(c, d));
+#else
+  return __builtin_shufflevector(mpm_vl_pair(a, b), mpm_vl_pair(c, d), 0, 1, 2, 3, 4, 5, 6, 7);
+#endif
 }
 
-/* Lane sums of 4 vectors in lanes 0..3, zeros in 4..7. */
+/* Lane sums of 4 vectors in lanes 0..3 (and zeros in 4..7 of 8 lanes). */
 MPM_ALWAYS_INLINE mpm_vl mpm_vl_sum4(const mpm_vl v[4]) {
+#if MPM_LANES == 4
+  return mpm_vl_pair(mpm_vl_pair(v[0], v[1]), mpm_vl_pair(v[2], v[3]));
+#else
   const mpm_vl zero = {0};
   return mpm_vl_pair(mpm_vl_pair(mpm_vl_pair(v[0], v[1]), mpm_vl_pair(v[2], v[3])), zero);
+#endif
 }
 
 /* A batch is contiguous when its n = MPM_LANES particles are consecutive in memory, which is
@@ -279,7 +290,7 @@ MPM_ALWAYS_INLINE void mpm_p2g_lanes(const int W, const int fused, const mpm_lan
           node_q += sum_q;
           __builtin_memcpy(node, &node_q, sizeof node_q);
         } else {
-          mpm_vl node_v;
+          mpm_v8 node_v;
           __builtin_memcpy(&node_v, node, sizeof node_v);
           const mpm_vl zero = {0};
           mpm_vl c[8] = {mwxy * wz,
