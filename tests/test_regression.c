@@ -55,7 +55,7 @@
  * were rewritten with it (level_crossing's kinetic energy and angular momentum over 4 frames
  * agree with the old results to 2e-7 relative; the others unchanged).
  * Lanes of one register in the double build (core/lanes.h, 2026-12-07: 4 doubles where 8 made
- * GCC build the transfers' vectors through the stack; the explicit step 2.2-3.5 times faster):
+ * GCC build the transfers' vectors through the stack; the explicit step 2.9-3.4 times faster):
  * a cell's particles are summed 4 at a time, then the batches, in another order: every double
  * digest was rewritten with it (the float build is unchanged). sand_pile, jello_cubes and the
  * explicit cantilever agree with the old build in kinetic, elastic and total energy to every
