@@ -4,14 +4,19 @@
 #include <stdarg.h>
 #include <stdio.h>
 
+/* The message from fmt and ap, the status, and whether the failure was another process's. */
+static void set(mpm_error *err, mpm_status status, int elsewhere, const char *fmt, va_list ap) {
+  vsnprintf(err->message, sizeof err->message, fmt, ap);
+  err->status = status;
+  err->elsewhere = elsewhere;
+}
+
 mpm_status mpm_error_set(mpm_error *err, mpm_status status, const char *fmt, ...) {
   if (err) {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(err->message, sizeof err->message, fmt, ap);
+    set(err, status, 0, fmt, ap);
     va_end(ap);
-    err->status = status;
-    err->elsewhere = 0;
   }
   return status;
 }
@@ -20,10 +25,8 @@ mpm_status mpm_error_set_elsewhere(mpm_error *err, mpm_status status, const char
   if (err) {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(err->message, sizeof err->message, fmt, ap);
+    set(err, status, 1, fmt, ap);
     va_end(ap);
-    err->status = status;
-    err->elsewhere = 1;
   }
   return status;
 }
