@@ -4,8 +4,8 @@
  * 8 particles of one cell share every grid node they touch. A batch of them (MPM_LANES: 8 in
  * float, 4 in double) becomes the lanes of one vector: a node's value is broadcast to all lanes
  * (G2P) or the lanes' contributions are summed once per node (P2G), and every weight is computed
- * lane-wise. The tensor-product
- * structure of the kernels (Gao et al. 2017, sec. 6.2) is used to contract one axis at a time:
+ * lane-wise. The tensor-product structure of the kernels (Gao et al. 2017, sec. 6.2) is used to
+ * contract one axis at a time:
  *
  *   P2G (APIC, force fused in):  p_d(i,j,k) = wz_k (wy_j X_di + wx_i Y_dj) + wx_i wy_j Z_dk,
  *     X_d = m v_d wx + (mB)_d0 ax + dt K_d0 dwx,  Y_d = (mB)_d1 ay + dt K_d1 dwy,
