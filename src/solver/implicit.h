@@ -155,10 +155,12 @@ void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]);
 double mpm_implicit_energy(mpm_implicit *s);
 void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
                            mpm_real *const d[3]);
-/* Particle i's linear map of velocity gradients in the action of dt^2 K (apply_scale): C with
+/* The linear maps of velocity gradients in the action of dt^2 K (apply_scale) of the particles
+ * idx[0 .. count), one per lane (lanes past count: the first particle's): C with
  * M_ac = sum_bd C[9 (3 a + c) + 3 b + d] G_bd, M = apply_scale V0 (C_i : G F) F^T, the factored
  * definite derivative (or the model's own in exact mode) after mpm_implicit_build. */
-void mpm_implicit_tangent(const mpm_implicit *s, uint32_t i, mpm_real C[81]);
+void mpm_implicit_tangent(const mpm_implicit *s, const uint32_t idx[MPM_NLANES], int count,
+                          mpm_vn C[81]);
 
 /* The multigrid preconditioner (implicit_multigrid.c): whether it is built for this system (one
  * sparse grid of material points: not yet on the multi-level grid nor with particle domains);

@@ -189,17 +189,24 @@ static factored_view view_of(const mpm_implicit *s) {
   return v;
 }
 
-/* The operator on one particle (T = mpm_real) or on MPM_NLANES consecutive particles
- * (T = mpm_vn), from the structure of arrays. */
+/* The operator on one particle (T = mpm_real), on MPM_NLANES consecutive particles
+ * (T = mpm_vn) or on MPM_NLANES particles anywhere (T = mpm_vn, I their indices), from the
+ * structure of arrays. */
 #define LOAD_REAL(a, i) ((a)[i])
 #define LOAD_VN(a, i) load_vn((a) + (i))
+#define GATHER_VN(a, idx) gather_vn((a), (idx))
 static inline mpm_vn load_vn(const mpm_real *a) {
   mpm_vn v;
   memcpy(&v, a, sizeof v);
   return v;
 }
-#define DEFINE_FACTORED_OP(NAME, T, LOAD)                                                          \
-  MPM_ALWAYS_INLINE void NAME(const factored_view *s, long i, const T X[9], T M[9]) {              \
+static inline mpm_vn gather_vn(const mpm_real *a, const uint32_t *idx) {
+  mpm_vn v;
+  for (int l = 0; l < MPM_NLANES; ++l) v[l] = a[idx[l]];
+  return v;
+}
+#define DEFINE_FACTORED_OP(NAME, T, I, LOAD)                                                       \
+  MPM_ALWAYS_INLINE void NAME(const factored_view *s, I i, const T X[9], T M[9]) {                 \
     T U[9], W[9], Tm[9], d[9], q[9];                                                               \
     for (int c = 0; c < 9; ++c) U[c] = LOAD(s->U[c], i), W[c] = LOAD(s->W[c], i);                  \
     for (int r = 0; r < 3; ++r) /* d = U^T X W */                                                  \
@@ -230,8 +237,9 @@ static inline mpm_vn load_vn(const mpm_real *a) {
         M[3 * r + c] =                                                                             \
             Tm[3 * r] * W[3 * c] + Tm[3 * r + 1] * W[3 * c + 1] + Tm[3 * r + 2] * W[3 * c + 2];    \
   }
-DEFINE_FACTORED_OP(factored_op, mpm_real, LOAD_REAL)
-DEFINE_FACTORED_OP(factored_op_lanes, mpm_vn, LOAD_VN)
+DEFINE_FACTORED_OP(factored_op, mpm_real, long, LOAD_REAL)
+DEFINE_FACTORED_OP(factored_op_lanes, mpm_vn, long, LOAD_VN)
+DEFINE_FACTORED_OP(factored_op_gather, mpm_vn, const uint32_t *, GATHER_VN)
 
 /* M = (C_i : X F) F^T at particle i's F^ (the model's own derivative in exact mode). */
 static void stress_op(const mpm_implicit *s, long i, const mpm_real X[9], mpm_real M[9]) {
@@ -248,15 +256,31 @@ static void stress_op(const mpm_implicit *s, long i, const mpm_real X[9], mpm_re
   mpm_m3_mul_bt(dP, F, M);
 }
 
-void mpm_implicit_tangent(const mpm_implicit *s, uint32_t i, mpm_real C[81]) {
-  const mpm_real v = s->apply_scale * s->p->vol0[i];
-  for (int b = 0; b < 3; ++b)
-    for (int d = 0; d < 3; ++d) {
-      mpm_real X[9] = {0}, M[9];
-      X[3 * b + d] = 1;
-      stress_op(s, (long)i, X, M);
-      for (int ac = 0; ac < 9; ++ac) C[9 * ac + 3 * b + d] = v * M[ac];
-    }
+void mpm_implicit_tangent(const mpm_implicit *s, const uint32_t idx[MPM_NLANES], int count,
+                          mpm_vn C[81]) {
+  uint32_t at[MPM_NLANES]; /* the lanes past count repeat the first particle */
+  for (int l = 0; l < MPM_NLANES; ++l) at[l] = idx[l < count ? l : 0];
+  const mpm_vn v = s->apply_scale * gather_vn(s->p->vol0, at);
+  if (s->exact) { /* the model's own derivative, one particle at a time */
+    for (int l = 0; l < MPM_NLANES; ++l)
+      for (int bd = 0; bd < 9; ++bd) {
+        mpm_real X[9] = {0}, M[9];
+        X[bd] = 1;
+        stress_op(s, (long)at[l], X, M);
+        for (int ac = 0; ac < 9; ++ac) C[9 * ac + bd][l] = v[l] * M[ac];
+      }
+    return;
+  }
+  /* the factored form, the lanes' particles at once: column (b, d) of C is the operator on the
+     unit gradient e_b e_d^T */
+  const factored_view fv = view_of(s);
+  const mpm_vn zero = {0}, one = zero + 1;
+  for (int bd = 0; bd < 9; ++bd) {
+    mpm_vn X[9], M[9];
+    for (int c = 0; c < 9; ++c) X[c] = c == bd ? one : zero;
+    factored_op_gather(&fv, at, X, M);
+    for (int ac = 0; ac < 9; ++ac) C[9 * ac + bd] = v * M[ac];
+  }
 }
 
 void mpm_implicit_apply(mpm_implicit *s, mpm_real mass_scale, mpm_real scale, mpm_real *const x[3],
@@ -377,10 +401,36 @@ void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
       Q[c] = s->G[c];
       Q[9 + c] = s->G[c] + n + 1;
     }
+    /* Q^a_nm = V0 [(C : e_a e_n^T F) F^T]_am: grad w^T Q^a grad w is the diagonal entry; the
+       factored form MPM_NLANES consecutive particles at once, the rest (and the exact mode's
+       derivative) one at a time */
+    static const int e6[6] = {0, 1, 2, 4, 5, 8};
+    const long nv = s->exact ? 0 : n / MPM_NLANES;
+    if (nv > 0) {
+      const factored_view fv = view_of(s);
+      const mpm_vn zero = {0}, one = zero + 1;
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
+      for (long k = 0; k < nv; ++k) {
+        const long i = k * MPM_NLANES;
+        const mpm_vn v = scale * load_vn(p->vol0 + i);
+        for (int a = 0; a < 3; ++a) {
+          mpm_vn Qa[9];
+          for (int e = 0; e < 3; ++e) {
+            mpm_vn X[9], M[9];
+            for (int c = 0; c < 9; ++c) X[c] = c == 3 * a + e ? one : zero;
+            factored_op_lanes(&fv, i, X, M);
+            for (int m = 0; m < 3; ++m) Qa[3 * e + m] = M[3 * a + m];
+          }
+          for (int q = 0; q < 6; ++q) {
+            const mpm_vn out = v * Qa[e6[q]];
+            memcpy(Q[6 * a + q] + i, &out, sizeof out);
+          }
+        }
+      }
+    }
+#pragma omp parallel for schedule(static)
+    for (long i = nv * MPM_NLANES; i < n; ++i) {
       const mpm_real v = scale * p->vol0[i];
-      /* Q^a_nm = V0 [(C : e_a e_n^T F) F^T]_am: grad w^T Q^a grad w is the diagonal entry */
       for (int a = 0; a < 3; ++a) {
         mpm_real Qa[9];
         for (int e = 0; e < 3; ++e) {
@@ -389,8 +439,7 @@ void mpm_implicit_diagonal(mpm_implicit *s, mpm_real mass_scale, mpm_real scale,
           stress_op(s, i, X, M);
           for (int m = 0; m < 3; ++m) Qa[3 * e + m] = M[3 * a + m];
         }
-        const int e6[6] = {0, 1, 2, 4, 5, 8};
-        for (int k = 0; k < 6; ++k) Q[6 * a + k][i] = v * Qa[e6[k]];
+        for (int q = 0; q < 6; ++q) Q[6 * a + q][i] = v * Qa[e6[q]];
       }
     }
     scatter_quadratic_forms(s, d, Q);

@@ -62,8 +62,9 @@ mpm_status mpm_implicit_multigrid_prepare(mpm_implicit *s) {
   return st; /* the cycle (mg->cheap) is chosen solve by solve (implicit.c) */
 }
 
-static void tangent(void *user, uint32_t i, mpm_real C[81]) {
-  mpm_implicit_tangent(user, i, C);
+_Static_assert(MPM_LANES == MPM_NLANES, "the assembly's batches are the tangent's lanes");
+static void tangent(void *user, const uint32_t particle[MPM_LANES], int count, mpm_vl C[81]) {
+  mpm_implicit_tangent(user, particle, count, C);
 }
 
 mpm_status mpm_implicit_multigrid_build(mpm_implicit *s) {

@@ -64,9 +64,10 @@ static void flush_pairs(const int W, const mpm_sparse_grid *g, int32_t b, const 
     }
 }
 
-/* The pairs of a batch of up to MPM_LANES particles that share a stencil (lanes >= n hold
- * zeros), summed over the lanes into the cell table: per pair (i, n) the 9 entries are vectors
- * over the particles, reduced 8 at a time (mpm_vl_sum8) and the 9th alone. */
+/* The pairs of a batch of up to MPM_LANES particles that share a stencil (the lanes past the
+ * batch hold zero weight gradients, so whatever their C they add zeros), summed over the lanes into
+ * the cell table: per pair (i, n) the 9 entries are vectors over the particles, reduced 8 at a time
+ * (mpm_vl_sum8) and the 9th alone. */
 static void batch_pairs(const int W, const mpm_vl gw[KMAX][3], const mpm_vl C[81], mpm_real *cell) {
   const int K = W * W * W;
   /* T_n[(a, c), b] = sum_d C[(a, c), (b, d)] grad w_n^d */
@@ -109,6 +110,7 @@ static void assemble_block(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g
   size_t q1;
   const size_t q0 = mpm_block_cells(g, (size_t)b, &q1);
   int base[3] = {0, 0, 0}, filled = 0, lanes = 0;
+  uint32_t batch[MPM_LANES];
   mpm_vl gw[KMAX][3], C[81];
   const mpm_vl zero = {0};
   for (size_t q = q0; q < q1; ++q)
@@ -121,6 +123,7 @@ static void assemble_block(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g
       const int same =
           filled && s.base[0] == base[0] && s.base[1] == base[1] && s.base[2] == base[2];
       if (lanes && (!same || lanes == MPM_LANES)) { /* the batch is full or ends here */
+        tangent(user, batch, lanes, C);
         batch_pairs(W, (const mpm_vl(*)[3])gw, C, cell);
         lanes = 0;
       }
@@ -130,10 +133,8 @@ static void assemble_block(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g
         memset(cell, 0, table);
         filled = 1;
       }
-      if (lanes == 0) {
+      if (lanes == 0)
         for (int n = 0; n < K; ++n) gw[n][0] = gw[n][1] = gw[n][2] = zero;
-        for (int k = 0; k < 81; ++k) C[k] = zero;
-      }
       for (int a = 0, n = 0; a < W; ++a)
         for (int e = 0; e < W; ++e)
           for (int c = 0; c < W; ++c, ++n) {
@@ -141,12 +142,12 @@ static void assemble_block(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g
             gw[n][1][lanes] = s.w[0][a] * s.dw[1][e] * s.w[2][c];
             gw[n][2][lanes] = s.w[0][a] * s.w[1][e] * s.dw[2][c];
           }
-      mpm_real Cp[81];
-      tangent(user, pi, Cp);
-      for (int k = 0; k < 81; ++k) C[k][lanes] = Cp[k];
-      ++lanes;
+      batch[lanes++] = pi;
     }
-  if (lanes) batch_pairs(W, (const mpm_vl(*)[3])gw, C, cell);
+  if (lanes) {
+    tangent(user, batch, lanes, C);
+    batch_pairs(W, (const mpm_vl(*)[3])gw, C, cell);
+  }
   if (filled) flush_pairs(W, g, b, org, base, row_of, radius, val, cell);
 }
 

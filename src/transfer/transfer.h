@@ -9,6 +9,7 @@
 #ifndef MPM_TRANSFER_TRANSFER_H
 #define MPM_TRANSFER_TRANSFER_H
 
+#include "core/lanes.h"
 #include "core/particles.h"
 #include "grid/grid.h"
 #include "interp/kernel.h"
@@ -75,7 +76,10 @@ int mpm_p2g_fuses_force(const mpm_transfer_ctx *ctx, const mpm_grid *g);
 /* The transfers of one grid variant (the sparse paged grid, the dense reference), one table
  * each, chosen by mpm_transfer_variant_of (operators.c) once per call: P2G and G2P here, the
  * operators of operators.h, the assembly. */
-typedef void (*mpm_tangent_fn)(void *user, uint32_t particle, mpm_real C[81]);
+/* The stiffness assembly's particle tangents, a batch of MPM_LANES at once: C[k] lane l is
+   entry k of particle[l]'s 9 x 9 map (operators.h); lanes from count on are ignored. */
+typedef void (*mpm_tangent_fn)(void *user, const uint32_t particle[MPM_LANES], int count,
+                               mpm_vl C[81]);
 typedef struct mpm_transfer_variant {
   int fuses_force; /* its APIC P2G folds dt f into the momentum */
   void (*p2g)(const mpm_transfer_ctx *ctx, const mpm_grid *g, const mpm_grid_values *val,
