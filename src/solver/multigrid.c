@@ -92,6 +92,10 @@ static void pseudo_inverse(const mpm_real *A, mpm_real *out) {
     }
 }
 
+/* The largest stencil span (2 radius + 1) and window the Galerkin products hold on the stack:
+   kernels up to the cubic (radius 3). */
+#define MG_SPAN_MAX 7
+
 /* ---- the hierarchy --------------------------------------------------------------------- */
 
 static void *arena_zero(mpm_multigrid *mg, size_t bytes) {
@@ -233,6 +237,7 @@ mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
                                const int32_t (*coord)[3], int radius,
                                mpm_mg_prolongation prolongation, size_t coarsest) {
   memset(mg, 0, sizeof *mg);
+  if (radius < 1 || 2 * radius + 1 > MG_SPAN_MAX) return MPM_ERR_INVALID;
   mg->arena = arena;
   mg->prolongation = prolongation;
   mg->sweeps = 1;
@@ -317,6 +322,66 @@ static void window(const mpm_multigrid *mg, int radius, int *lo, int *hi) {
   *hi = half + 1;
 }
 
+/* y += w x over n reals (the Galerkin products' rows of blocks: contiguous, so vectorized) */
+static inline void axpy(int n, mpm_real w, const mpm_real *restrict x, mpm_real *restrict y) {
+  for (int k = 0; k < n; ++k) y[k] += w * x[k];
+}
+
+/* P's rows on one axis for a fine row at coordinate x: for each stencil offset d (index
+   d + radius), its parents' window indices J - floor(x / 2) - lo and weights. */
+typedef struct axis_weights {
+  int n[MG_SPAN_MAX];
+  int m[MG_SPAN_MAX][2];
+  mpm_real w[MG_SPAN_MAX][2];
+} axis_weights;
+
+static void axis_of(mpm_mg_prolongation kind, int32_t x, int radius, int lo, axis_weights *a) {
+  const int32_t h = x >> 1;
+  for (int d = -radius; d <= radius; ++d) {
+    int32_t p[2];
+    mpm_real w[2];
+    const int np = parents_1d(kind, x + d, p, w);
+    a->n[d + radius] = np;
+    for (int k = 0; k < np; ++k) {
+      a->m[d + radius][k] = (int)(p[k] - h - lo);
+      a->w[d + radius][k] = w[k];
+    }
+  }
+}
+
+/* Row i of A P in its window (ws^3 blocks, J - floor(x_i / 2) - lo): the row's blocks form a
+ * dense span^3 stencil (absent neighbours' blocks are zero), and P is a tensor product, so the
+ * product is three contractions, one axis at a time (z, then y, then x), each over contiguous
+ * lines of blocks; about 2,250 multiply-adds an axis for the quadratic kernel where the
+ * neighbour-by-parent sum took 9,000 scattered ones. */
+static void ap_row(const mpm_multigrid *mg, const mpm_mg_level *F, size_t i, int lo, int ws,
+                   mpm_real *restrict out) {
+  const int S = F->span, R = F->radius;
+  axis_weights ax[3];
+  for (int e = 0; e < 3; ++e) axis_of(mg->prolongation, F->coord[i][e], R, lo, &ax[e]);
+  const mpm_real *A = F->val + i * F->slots * 9;
+  mpm_real T1[MG_SPAN_MAX * MG_SPAN_MAX * MG_SPAN_MAX * 9]; /* [dx][dy][mz] */
+  mpm_real T2[MG_SPAN_MAX * MG_SPAN_MAX * MG_SPAN_MAX * 9]; /* [dx][my][mz] */
+  const int line = ws * 9, plane = ws * ws * 9;
+  memset(T1, 0, (size_t)(S * S * line) * sizeof *T1);
+  for (int xy = 0; xy < S * S; ++xy)
+    for (int dz = 0; dz < S; ++dz)
+      for (int k = 0; k < ax[2].n[dz]; ++k)
+        axpy(9, ax[2].w[dz][k], A + (size_t)(xy * S + dz) * 9,
+             T1 + (size_t)(xy * ws + ax[2].m[dz][k]) * 9);
+  memset(T2, 0, (size_t)(S * plane) * sizeof *T2);
+  for (int dx = 0; dx < S; ++dx)
+    for (int dy = 0; dy < S; ++dy)
+      for (int k = 0; k < ax[1].n[dy]; ++k)
+        axpy(line, ax[1].w[dy][k], T1 + (size_t)((dx * S + dy) * line),
+             T2 + (size_t)(dx * plane + ax[1].m[dy][k] * line));
+  memset(out, 0, (size_t)(ws * plane) * sizeof *out);
+  for (int dx = 0; dx < S; ++dx)
+    for (int k = 0; k < ax[0].n[dx]; ++k)
+      axpy(plane, ax[0].w[dx][k], T2 + (size_t)(dx * plane),
+           out + (size_t)(ax[0].m[dx][k] * plane));
+}
+
 /* Level l + 1's values: P^T A_l P. */
 static int galerkin(mpm_multigrid *mg, int l) {
   mpm_mg_level *F = &mg->level[l], *C = &mg->level[l + 1];
@@ -328,29 +393,10 @@ static int galerkin(mpm_multigrid *mg, int l) {
   if (!AP) return -1;
   mg->bytes += F->n * wslots * 9 * sizeof *AP;
   const long nf = (long)F->n;
-  /* A P, row by fine row: (A P)_{i, J} = sum_j A_ij w_jJ, J - floor(x_i / 2) in the window */
 #pragma omp parallel for schedule(static) if (nf > 256)
-  for (long i = 0; i < nf; ++i) {
-    mpm_real *out = AP + (size_t)i * wslots * 9;
-    memset(out, 0, wslots * 9 * sizeof *out);
-    const int32_t h[3] = {F->coord[i][0] >> 1, F->coord[i][1] >> 1, F->coord[i][2] >> 1};
-    for (size_t s = 0; s < F->slots; ++s) {
-      const int32_t j = F->nbr[(size_t)i * F->slots + s];
-      if (j < 0) continue;
-      const mpm_real *A = F->val + ((size_t)i * F->slots + s) * 9;
-      for (int k = 0; k < 8; ++k) {
-        const int32_t J = F->parent[8 * (size_t)j + (size_t)k];
-        if (J < 0) break;
-        const mpm_real w = F->pw[8 * (size_t)j + (size_t)k];
-        const int32_t *cJ = C->coord[J];
-        const size_t ws_ =
-            (size_t)(((cJ[0] - h[0] - lo) * ws + (cJ[1] - h[1] - lo)) * ws + (cJ[2] - h[2] - lo));
-        mpm_real *o = out + ws_ * 9;
-        for (int e = 0; e < 9; ++e) o[e] += w * A[e];
-      }
-    }
-  }
-  /* P^T (A P), row by coarse row through its children */
+  for (long i = 0; i < nf; ++i) ap_row(mg, F, (size_t)i, lo, ws, AP + (size_t)i * wslots * 9);
+  /* P^T (A P), row by coarse row through its children: a child's window, shifted to the coarse
+     row's offsets, lands in the row's stencil as contiguous z lines */
   const long nc = (long)C->n;
   const int Rc = C->radius, sc = C->span;
 #pragma omp parallel for schedule(static) if (nc > 64)
@@ -361,18 +407,21 @@ static int galerkin(mpm_multigrid *mg, int l) {
     for (uint32_t q = C->child_start[I]; q < C->child_start[I + 1]; ++q) {
       const uint32_t i = C->child[q];
       const mpm_real w = C->cw[q];
-      const int32_t h[3] = {F->coord[i][0] >> 1, F->coord[i][1] >> 1, F->coord[i][2] >> 1};
+      /* window index m is coarse offset o = shift + m */
+      int sh[3], m0[3], m1[3];
+      for (int e = 0; e < 3; ++e) {
+        sh[e] = (int)((F->coord[i][e] >> 1) + lo - cI[e]);
+        m0[e] = -Rc - sh[e] > 0 ? -Rc - sh[e] : 0;
+        m1[e] = Rc - sh[e] < ws - 1 ? Rc - sh[e] : ws - 1;
+      }
+      if (m1[2] < m0[2]) continue;
       const mpm_real *src = AP + (size_t)i * wslots * 9;
-      for (int a = 0, k = 0; a < ws; ++a)
-        for (int b = 0; b < ws; ++b)
-          for (int c = 0; c < ws; ++c, ++k) {
-            const int o[3] = {h[0] + lo + a - cI[0], h[1] + lo + b - cI[1], h[2] + lo + c - cI[2]};
-            if (o[0] < -Rc || o[0] > Rc || o[1] < -Rc || o[1] > Rc || o[2] < -Rc || o[2] > Rc)
-              continue;
-            const mpm_real *s = src + (size_t)k * 9;
-            mpm_real *d = row + (size_t)(((o[0] + Rc) * sc + (o[1] + Rc)) * sc + (o[2] + Rc)) * 9;
-            for (int e = 0; e < 9; ++e) d[e] += w * s[e];
-          }
+      for (int a = m0[0]; a <= m1[0]; ++a)
+        for (int b = m0[1]; b <= m1[1]; ++b)
+          axpy((m1[2] - m0[2] + 1) * 9, w, src + (size_t)((a * ws + b) * ws + m0[2]) * 9,
+               row + (size_t)(((a + sh[0] + Rc) * sc + (b + sh[1] + Rc)) * sc +
+                              (m0[2] + sh[2] + Rc)) *
+                         9);
     }
   }
   return 0;

@@ -13,8 +13,9 @@
  *                       particles would make on the coarse grid (HOT sec. 4.2): nothing is lost
  *                       to a rediscretization;
  *   other kernels       linear interpolation: 1/2, 1, 1/2 at fine nodes 2I - 1 .. 2I + 1.
- * The coarse operators are Galerkin, A_{l+1} = P^T A_l P, taken in two sparse passes (A P by
- * fine rows, then P^T (A P) by coarse rows through each coarse node's children), so they stay
+ * The coarse operators are Galerkin, A_{l+1} = P^T A_l P, taken in two passes (A P by fine
+ * rows, each row's dense stencil contracted with P's tensor-product rows one axis at a time, then
+ * P^T (A P) by coarse rows through each coarse node's children), so they stay
  * symmetric and positive (semi-)definite whatever the particles do.
  *
  * Boundary conditions: the finest level's constrained nodes carry a projector Pi_i (sticky: 0;
@@ -102,8 +103,8 @@ typedef struct mpm_multigrid {
 /* The hierarchy over the finest level's n nodes at integer coordinates coord (distinct), for a
  * matrix of the given stencil radius: levels coarsened until one has at most `coarsest` nodes
  * (or MPM_MG_LEVELS_MAX). Everything from `arena` (valid until its reset). The finest level's
- * values are left zero for the caller to fill (level[0].val). MPM_OK, or MPM_ERR_NOMEM when out
- * of memory. */
+ * values are left zero for the caller to fill (level[0].val). MPM_OK; MPM_ERR_INVALID for a
+ * radius outside 1 .. 3 (the kernels' stencils); MPM_ERR_NOMEM when out of memory. */
 mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
                                const int32_t (*coord)[3], int radius,
                                mpm_mg_prolongation prolongation, size_t coarsest);
