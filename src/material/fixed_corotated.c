@@ -100,11 +100,11 @@ static void fcr_dpdf_action(const mpm_material *m, const mpm_real F[9], const mp
     dP[i] = two_mu * (dF[i] - dR[i]) + l * dJ * C[i] + l * (J - 1) * dC[i];
 }
 
-static void fcr_hessian_definite(const mpm_material *m, const mpm_real F[9],
-                                 mpm_stress_hessian *Hp) {
+static void fcr_hessian_definite_svd(const mpm_material *m, const mpm_real U[9],
+                                     const mpm_real s[3], const mpm_real V[9],
+                                     mpm_stress_hessian *Hp) {
   mpm_iso_hessian H;
-  mpm_real s[3];
-  mpm_svd3(F, H.U, s, H.V);
+  for (int e = 0; e < 9; ++e) H.U[e] = U[e], H.V[e] = V[e];
   const mpm_real two_mu = 2 * m->mu, l = m->lambda;
   const mpm_real J = s[0] * s[1] * s[2];
   const mpm_real Js[3] = {s[1] * s[2], s[0] * s[2], s[0] * s[1]};
@@ -121,6 +121,13 @@ static void fcr_hessian_definite(const mpm_material *m, const mpm_real F[9],
   }
   mpm_iso_make_definite(&H);
   *Hp = H;
+}
+
+static void fcr_hessian_definite(const mpm_material *m, const mpm_real F[9],
+                                 mpm_stress_hessian *H) {
+  mpm_real U[9], s[3], V[9];
+  mpm_svd3(F, U, s, V);
+  fcr_hessian_definite_svd(m, U, s, V, H);
 }
 
 static void fcr_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
@@ -190,6 +197,7 @@ const mpm_model mpm_model_fixed_corotated = {
     .dpdf_action = fcr_dpdf_action,
     .dpdf_action_definite = fcr_dpdf_action_definite,
     .hessian_definite = fcr_hessian_definite,
+    .hessian_definite_svd = fcr_hessian_definite_svd,
     .kirchhoff_batch = fcr_kirchhoff_batch,
     .pk1_batch = fcr_pk1_batch,
     .return_map = NULL,

@@ -62,6 +62,11 @@ struct mpm_model {
   /* The definite derivative above, factored (for repeated actions): dpdf_action_definite(F,
    * dF) equals mpm_stress_hessian_action(H, dF) with H from here, bitwise. */
   void (*hessian_definite)(const mpm_material *m, const mpm_real F[9], mpm_stress_hessian *H);
+  /* The same from F's SVD F = U diag(s) V^T (core/svd3.h's signs) taken by the caller, which
+   * hessian_definite is after its own mpm_svd3 (bitwise): for callers that take the SVDs of many
+   * particles at once (mpm_svd3_batch). NULL: no such entry. */
+  void (*hessian_definite_svd)(const mpm_material *m, const mpm_real U[9], const mpm_real s[3],
+                               const mpm_real V[9], mpm_stress_hessian *H);
   /* Batch: for n <= MPM_STRESS_CHUNK particles whose F components start at F[0..8][0] and
    * whose plastic state starts at plastic[0] (NULL: every particle at plastic_initial), write
    * the Kirchhoff stress tau = P F^T into tau[c][i] (component c, particle i). */

@@ -133,11 +133,11 @@ static void nh_dpdf_action(const mpm_material *m, const mpm_real F[9], const mpm
   mpm_m3_mul_bt(T, d.V, dP);
 }
 
-static void nh_hessian_definite(const mpm_material *m, const mpm_real F[9],
-                                mpm_stress_hessian *Hp) {
+static void nh_hessian_definite_svd(const mpm_material *m, const mpm_real U[9], const mpm_real s[3],
+                                    const mpm_real V[9], mpm_stress_hessian *Hp) {
   mpm_iso_hessian H;
-  mpm_real s[3], c[3];
-  mpm_svd3(F, H.U, s, H.V);
+  mpm_real c[3];
+  for (int e = 0; e < 9; ++e) H.U[e] = U[e], H.V[e] = V[e];
   const mpm_real cmin = mpm_fmax(m->min_stretch, MPM_REAL_EPS);
   for (int i = 0; i < 3; ++i) c[i] = mpm_fmax(s[i], cmin);
   const mpm_real lnJ = mpm_log(c[0] * c[1] * c[2]);
@@ -152,6 +152,12 @@ static void nh_hessian_definite(const mpm_material *m, const mpm_real F[9],
   }
   mpm_iso_make_definite(&H);
   *Hp = H;
+}
+
+static void nh_hessian_definite(const mpm_material *m, const mpm_real F[9], mpm_stress_hessian *H) {
+  mpm_real U[9], s[3], V[9];
+  mpm_svd3(F, U, s, V);
+  nh_hessian_definite_svd(m, U, s, V, H);
 }
 
 static void nh_dpdf_action_definite(const mpm_material *m, const mpm_real F[9],
@@ -253,6 +259,7 @@ const mpm_model mpm_model_neo_hookean = {
     .dpdf_action = nh_dpdf_action,
     .dpdf_action_definite = nh_dpdf_action_definite,
     .hessian_definite = nh_hessian_definite,
+    .hessian_definite_svd = nh_hessian_definite_svd,
     .kirchhoff_batch = nh_kirchhoff_batch,
     .pk1_batch = nh_pk1_batch,
     .return_map = NULL,

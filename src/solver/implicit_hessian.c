@@ -9,6 +9,7 @@
 #include "core/mat3.h"
 #include "core/ordered_sum.h"
 #include "core/particles.h"
+#include "core/svd3.h"
 #include "transfer/operators.h"
 
 #include <string.h>
@@ -150,24 +151,60 @@ void mpm_implicit_displace(mpm_implicit *s, mpm_real *const u[3]) {
   if (s->domains) mpm_domain_hessian_displace(&s->dh, u);
 }
 
+/* Particle i's factored derivative from its definite Hessian H at F^: U, W = F V, the diagonal
+ * block's six entries and the pairs' eigenvalues. */
+static void store_hessian(mpm_implicit *s, long i, const mpm_stress_hessian *H) {
+  mpm_real F[9], W[9];
+  for (int c = 0; c < 9; ++c) F[c] = s->p->F[c][i];
+  mpm_m3_mul(F, H->V, W);
+  for (int c = 0; c < 9; ++c) s->hU[c][i] = H->U[c], s->hW[c][i] = W[c];
+  static const int sym[6] = {0, 1, 2, 4, 5, 8};
+  for (int c = 0; c < 6; ++c) s->hA[c][i] = H->A[sym[c]];
+  for (int c = 0; c < 3; ++c) s->hs[c][i] = H->lsym[c], s->hk[c][i] = H->lskew[c];
+}
+
 void mpm_implicit_build(mpm_implicit *s) {
   s->dh.exact = s->exact;
   const long n = s->p ? (long)s->p->count : 0;
   if (!s->exact) {
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
-      const mpm_material m = material_at(s, (size_t)i);
-      mpm_real Fh[9];
-      for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
-      mpm_stress_hessian H;
-      m.model->hessian_definite(&m, Fh, &H);
-      mpm_real F[9], W[9];
-      for (int c = 0; c < 9; ++c) F[c] = s->p->F[c][i];
-      mpm_m3_mul(F, H.V, W);
-      for (int c = 0; c < 9; ++c) s->hU[c][i] = H.U[c], s->hW[c][i] = W[c];
-      static const int sym[6] = {0, 1, 2, 4, 5, 8};
-      for (int c = 0; c < 6; ++c) s->hA[c][i] = H.A[sym[c]];
-      for (int c = 0; c < 3; ++c) s->hs[c][i] = H.lsym[c], s->hk[c][i] = H.lskew[c];
+    /* in chunks of MPM_STRESS_CHUNK: a run of particles of one material whose moduli do not
+       vary per particle takes its SVDs in one SIMD batch (mpm_svd3_batch) where the model
+       builds its Hessian from a given SVD; the others one at a time */
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long c0 = 0; c0 < n; c0 += MPM_STRESS_CHUNK) {
+      const long c1 = c0 + MPM_STRESS_CHUNK < n ? c0 + MPM_STRESS_CHUNK : n;
+      for (long a = c0, b; a < c1; a = b) {
+        const int32_t mi = s->p->material[a];
+        for (b = a + 1; b < c1 && s->p->material[b] == mi;) ++b;
+        const mpm_material *mat = &s->tc->materials[mi];
+        if (mat->model->hessian_definite_svd && !mpm_material_varies(mat)) {
+          _Alignas(MPM_ALIGN) mpm_real U[9][MPM_STRESS_CHUNK], V[9][MPM_STRESS_CHUNK],
+              sg[3][MPM_STRESS_CHUNK];
+          const mpm_real *F[9];
+          mpm_real *Up[9], *Vp[9], *sp[3];
+          for (int c = 0; c < 9; ++c) F[c] = s->Fh[c] + a, Up[c] = U[c], Vp[c] = V[c];
+          for (int c = 0; c < 3; ++c) sp[c] = sg[c];
+          mpm_svd3_batch((int)(b - a), F, Up, sp, Vp);
+          for (long i = a; i < b; ++i) {
+            const long q = i - a;
+            mpm_real Ui[9], si[3], Vi[9];
+            for (int c = 0; c < 9; ++c) Ui[c] = U[c][q], Vi[c] = V[c][q];
+            for (int c = 0; c < 3; ++c) si[c] = sg[c][q];
+            mpm_stress_hessian H;
+            mat->model->hessian_definite_svd(mat, Ui, si, Vi, &H);
+            store_hessian(s, i, &H);
+          }
+        } else {
+          for (long i = a; i < b; ++i) {
+            const mpm_material m = material_at(s, (size_t)i);
+            mpm_real Fh[9];
+            for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
+            mpm_stress_hessian H;
+            m.model->hessian_definite(&m, Fh, &H);
+            store_hessian(s, i, &H);
+          }
+        }
+      }
     }
   }
   if (s->domains) mpm_domain_hessian_build(&s->dh);
