@@ -46,6 +46,13 @@ static inline void mpm_iso_make_definite(mpm_iso_hessian *h) {
     for (int j = 0; j < i; ++j) a[3 * i + j] = a[3 * j + i] = 0.5 * (a[3 * i + j] + a[3 * j + i]);
   const double scale = fabs(a[0]) + fabs(a[4]) + fabs(a[8]) + fabs(a[1]) + fabs(a[2]) + fabs(a[5]);
   if (!(scale > 0)) return;
+  /* positive definite by its leading minors (Sylvester): A stays as is, which is what the
+     eigenvalues below would conclude, without the sweeps (most particles of an elastic body
+     are here; the sweeps were half of the implicit step's Hessian build) */
+  const double m2 = a[0] * a[4] - a[1] * a[1];
+  const double m3 = a[0] * (a[4] * a[8] - a[5] * a[5]) - a[1] * (a[1] * a[8] - a[5] * a[2]) +
+                    a[2] * (a[1] * a[5] - a[4] * a[2]);
+  if (a[0] > 0 && m2 > 0 && m3 > 0) return;
   for (int sweep = 0; sweep < 12; ++sweep) {
     const double off = fabs(a[1]) + fabs(a[2]) + fabs(a[5]);
     if (off <= 1e-18 * scale) break;
