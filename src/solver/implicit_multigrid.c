@@ -74,6 +74,7 @@ mpm_status mpm_implicit_multigrid_build(mpm_implicit *s) {
   const mpm_status assembled =
       mpm_assemble_stiffness(s->tc, s->grid, s->p, tangent, s, s->mg_row_of, L->radius, L->val);
   if (assembled != MPM_OK) return assembled;
+  mpm_multigrid_mirror_lower(mg);
   /* the lumped mass on the diagonal blocks */
   const size_t centre = L->slots / 2;
   const long n = (long)L->n;

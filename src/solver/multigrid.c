@@ -268,6 +268,22 @@ void mpm_multigrid_clear(mpm_multigrid *mg) {
   memset(L->val, 0, L->n * L->slots * 9 * sizeof *L->val);
 }
 
+void mpm_multigrid_mirror_lower(mpm_multigrid *mg) {
+  mpm_mg_level *L = &mg->level[0];
+  const size_t S = L->slots, centre = S / 2;
+  const long n = (long)L->n;
+#pragma omp parallel for schedule(static) if (n > 256)
+  for (long i = 0; i < n; ++i)
+    for (size_t s = 0; s < centre; ++s) {
+      const int32_t j = L->nbr[(size_t)i * S + s];
+      if (j < 0) continue;
+      const mpm_real *src = L->val + ((size_t)j * S + (S - 1 - s)) * 9;
+      mpm_real *dst = L->val + ((size_t)i * S + s) * 9;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) dst[3 * a + b] = src[3 * b + a];
+    }
+}
+
 /* ---- values: projection, Galerkin products, inverses, the coarse factor -------------- */
 
 /* Pi_i A_ij Pi_j on the finest level, plus c_i (I - Pi_i) on the constrained diagonals. */

@@ -112,6 +112,10 @@ mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
 /* Zero the finest level's values (before assembling them again). */
 void mpm_multigrid_clear(mpm_multigrid *mg);
 
+/* The finest level's blocks before the centre slot from the symmetric ones after it,
+ * A_ij = A_ji^T (for a caller that assembled the upper half of each row). */
+void mpm_multigrid_mirror_lower(mpm_multigrid *mg);
+
 /* After the finest values are filled: project them with the constraints (count of them: rows
  * row[k] with projector P[k]; the arrays are kept and must outlive the V-cycles), form the
  * coarse levels' values (Galerkin), the smoother's inverses and the coarsest factor. MPM_OK, or

@@ -12,7 +12,9 @@
  * summed in a local W^3 x W^3 table of blocks and added to the matrix once per cell; per particle
  * the product is taken in two stages, T_j[(a, c), b] = sum_d C[(a, c), (b, d)] grad w_j^d for each
  * node, then K_ij[a][b] += sum_c grad w_i^c T_j[(a, c), b], over the pairs i <= j only (the
- * definite stress derivative is symmetric, so K_ji = K_ij^T). Blocks run colour by colour as in
+ * definite stress derivative is symmetric, so K_ji = K_ij^T), written to row i alone: the
+ * transposed write to row j doubled the scattered traffic into the matrix, and the caller fills
+ * the lower half afterwards in one pass over rows. Blocks run colour by colour as in
  * the scatters (operators.c): a colour's blocks write disjoint rows, and every row receives its
  * sums in a fixed order, whatever the number of threads. */
 #include "core/parallel.h"
@@ -25,7 +27,9 @@
 #define KMAX (MPM_STENCIL_MAX * MPM_STENCIL_MAX * MPM_STENCIL_MAX)
 
 /* The table of one stencil's pairs (cell) into the matrix rows of its nodes, base node `base`
- * in owner block b (origin org): K_in at row i, and K_in^T at row n. */
+ * in owner block b (origin org): K_in at row i, n >= i in the stencil's order, so its offset
+ * x_n - x_i is at or after the centre in the slots' order (the upper half; the caller mirrors
+ * it, operators.h). */
 static void flush_pairs(const int W, const mpm_sparse_grid *g, int32_t b, const int org[3],
                         const int base[3], const int32_t *row_of, int radius, mpm_real *val,
                         const mpm_real *cell) {
@@ -55,11 +59,6 @@ static void flush_pairs(const int W, const mpm_sparse_grid *g, int32_t b, const 
       if (rows[i] >= 0) {
         mpm_real *dst = val + ((size_t)rows[i] * S + slot) * 9;
         for (int k = 0; k < 9; ++k) dst[k] += blk[k];
-      }
-      if (n != i && rows[n] >= 0) {
-        mpm_real *dst = val + ((size_t)rows[n] * S + (S - 1 - slot)) * 9;
-        for (int a = 0; a < 3; ++a)
-          for (int bb = 0; bb < 3; ++bb) dst[3 * a + bb] += blk[3 * bb + a];
       }
     }
 }

@@ -53,7 +53,9 @@ void mpm_scatter_quadratic_forms(const mpm_transfer_ctx *ctx, const mpm_grid *g,
  * level's dof_begin not added) is row row_of[n] (-1: not stored), and the block of row r for the
  * node at offset o = x_j - x_i in [-radius, radius]^3 (radius >= kernel width - 1) is at
  * val + 9 ((r S) + ((o_x + radius) span + o_y + radius) span + o_z + radius), span = 2 radius + 1,
- * S = span^3, row-major. C must be symmetric (C_ac,bd = C_bd,ac): only pairs i <= j are formed.
+ * S = span^3, row-major. C must be symmetric (C_ac,bd = C_bd,ac): only pairs i <= j are formed,
+ * and only the upper half of each row is added to: the blocks at the centre slot and after it
+ * (offsets lexicographically >= 0); the caller fills the rest as K_ij = K_ji^T.
  * MPM_OK; MPM_ERR_INVALID on the dense grid (sparse grid only) or for a radius below the kernel
  * width - 1. */
 mpm_status mpm_assemble_stiffness(const mpm_transfer_ctx *ctx, const mpm_grid *g,
