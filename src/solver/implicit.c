@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <stdlib.h>
 
 /* ---- DOF positions ------------------------------------------------------------------- */
 
@@ -337,17 +338,29 @@ static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
  * assembly and the Galerkin products: some 80 Jacobi iterations on the rubber bunny). */
 #define JACOBI_BEFORE_MULTIGRID 4
 
+/* The iterations past which a Newton iteration's solve has the multigrid's values rebuilt at
+ * the next iterate (the hierarchy's rows stay: the DOFs are the step's): a solve the one-pass
+ * cycle did not end (MG_ONE_PASS_ITERATIONS) and the symmetric one took 20 more for. Rebuilt
+ * every Newton iteration, the rubber bunny at the CFL rate (1 s, 2 threads, one sitting) took
+ * 19.3 s against 18.3 s, 574 CG iterations against 666; after the solves of more than 32 (its
+ * landing at 1/60 s, where the second iterate's matrix is far from the first's): 16.5-17.0 s
+ * against 17.4-18.3, 606 iterations; after more than 24 or 42: 17.8, 17.5-17.6 s. */
+#define MG_REBUILD_ITERATIONS (MG_ONE_PASS_ITERATIONS + 20)
+
 /* The smallest drop of its first residual a solve may ask for and still take the multigrid's
  * one-pass cycle (see build_multigrid). */
 #define MG_ONE_PASS_DROP 1e-6
 
 /* Build the multigrid for this step's system (the matrix of the Newton iteration that first
- * needs it: a preconditioner need only be near the matrix, and rebuilt each iteration it cost
- * the rubber bunny 10% more time for 13% fewer iterations) and set o's preconditioner to it. */
+ * needs it: a preconditioner need only be near the matrix; its values again where the last
+ * solve marked them stale, MG_REBUILD_ITERATIONS) and set o's preconditioner to it. */
 static mpm_status build_multigrid(mpm_implicit *s, mpm_cg_options *o, mpm_implicit_result *r) {
-  if (!s->mg_built) {
+  if (!s->mg_built || s->mg_stale) {
+    s->mg_stale = 0;
     const double t0 = mpm_wall_seconds();
-    if (mpm_implicit_multigrid_prepare(s) || mpm_implicit_multigrid_build(s)) return MPM_ERR_NOMEM;
+    if (!s->mg_prepared && mpm_implicit_multigrid_prepare(s)) return MPM_ERR_NOMEM;
+    s->mg_prepared = 1;
+    if (mpm_implicit_multigrid_build(s)) return MPM_ERR_NOMEM;
     s->mg_built = 1;
     r->mg_setup_seconds += mpm_wall_seconds() - t0;
     r->mg_bytes = s->mg->bytes;
@@ -370,7 +383,8 @@ static mpm_status build_multigrid(mpm_implicit *s, mpm_cg_options *o, mpm_implic
  * bunny, and the multigrid then took 60 iterations where it takes 10 from the start). With the
  * multigrid, its one-pass cycle under flexible CG first, for at most MG_ONE_PASS_ITERATIONS,
  * then the symmetric cycle under plain CG (solver/multigrid.h), from where the one-pass cycle
- * stopped; cg's residual0 is the first part's. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+ * stopped; cg's residual0 is the first part's, its iterations all parts'. MPM_OK, or MPM_ERR_NOMEM
+ * when out of memory. */
 static mpm_status solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3],
                         mpm_real *const x[3], int near, const mpm_cg_options *o,
                         mpm_implicit_result *r, mpm_cg_result *cg) {
@@ -403,6 +417,7 @@ static mpm_status solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b
     if (cg->converged || cg->iterations >= left) {
       cg_record(r, cg);
       cg->residual0 = residual0;
+      cg->iterations += o->max_iterations - left; /* the Jacobi iterations' before it */
       return MPM_OK;
     }
     r->cg_iterations += cg->iterations; /* the symmetric cycle's solve reports the rest */
@@ -414,6 +429,7 @@ static mpm_status solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b
   if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
   cg_record(r, cg);
   if (residual0 >= 0) cg->residual0 = residual0;
+  cg->iterations += o->max_iterations - left; /* the solve's, all parts */
   return MPM_OK;
 }
 
@@ -659,7 +675,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
      does not end in a few iterations (solve()); the residuals are measured in the Jacobi norm D
      either way (cg.h), so the tolerance means the same */
   s->mg_wanted = o->precondition == 2 && mpm_implicit_multigrid_supported(s);
-  s->mg_built = 0;
+  s->mg_built = s->mg_prepared = s->mg_stale = 0;
   mpm_cg_result cg;
   if (solve(s, D, b, d->v, guess <= NEAR_BALANCE * o->cg_tolerance * scale, &first, r, &cg))
     return MPM_ERR_NOMEM;
@@ -696,13 +712,16 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
       continue; /* the gradient where the search left v */
     }
     mpm_implicit_build(s);
+    /* a solve the hierarchy did not end in MG_REBUILD_ITERATIONS: its values are rebuilt at
+       the new iterate (the matrix moved far from the one it was built for) */
+    if (s->mg_built && cg.iterations > MG_REBUILD_ITERATIONS) s->mg_stale = 1;
     /* Jacobi's diagonal at the new iterate where Jacobi preconditions (the multigrid once
        built preconditions the rest of the step); the norm stays the step's */
     if (o->precondition && !s->mg_built) jacobi(s, diag, NULL);
-    /* the multigrid hierarchy of the first iteration preconditions the later ones: a
+    /* otherwise the multigrid of the first iteration preconditions the later ones: a
        preconditioner need only be near the matrix, and building it (assembly and Galerkin
-       products) costs some 80 Jacobi-CG iterations on the rubber bunny; rebuilt each
-       iteration it cost 10% more time for 13% fewer iterations */
+       products, 65 ms a step of the rubber bunny at 2 threads) costs some 20 Jacobi-CG
+       iterations (the matrix-free action: 2.5 ms) */
     for (int c = 0; c < 3; ++c) memset(dv[c], 0, (size_t)n * sizeof(mpm_real));
     if (solve(s, D, b, dv, 1, &direction, r, &cg)) return MPM_ERR_NOMEM;
     r->newton_iterations = ++k;

@@ -130,6 +130,8 @@ typedef struct mpm_implicit {
   uint32_t *mg_dof;
   double mg_cycle_seconds; /* the V-cycles' wall time in this step */
   int mg_wanted, mg_built; /* this step: the multigrid preconditions its solves; it is built */
+  int mg_prepared;         /* this step: its hierarchy (rows, levels) is laid out */
+  int mg_stale;            /* its values are to be rebuilt at the current iterate */
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
