@@ -233,6 +233,8 @@ static int coarsen(mpm_multigrid *mg, int l) {
   return build_level(mg, C);
 }
 
+static void window(const mpm_multigrid *mg, int radius, int *lo, int *hi);
+
 mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
                                const int32_t (*coord)[3], int radius,
                                mpm_mg_prolongation prolongation, size_t coarsest) {
@@ -255,6 +257,18 @@ mpm_status mpm_multigrid_setup(mpm_multigrid *mg, mpm_arena *arena, size_t n,
     if (coarsen(mg, mg->level_count - 1)) return MPM_ERR_NOMEM;
     ++mg->level_count;
   }
+  /* the Galerkin products' scratch (A P), one for every level and every rebuild of the values:
+     allocated per product, a rebuild grew the arena (fresh pages, slow to fault in) */
+  size_t ap = 0;
+  for (int l = 0; l + 1 < mg->level_count; ++l) {
+    int lo, hi;
+    window(mg, mg->level[l].radius, &lo, &hi);
+    const size_t ws = (size_t)(hi - lo + 1), need = mg->level[l].n * ws * ws * ws * 9;
+    if (need > ap) ap = need;
+  }
+  mg->ap = mpm_arena_alloc(arena, (ap + 1) * sizeof *mg->ap);
+  if (!mg->ap) return MPM_ERR_NOMEM;
+  mg->bytes += ap * sizeof *mg->ap;
   const size_t N = 3 * mg->level[mg->level_count - 1].n;
   mg->dense_n = N;
   mg->chol = arena_zero(mg, (N * N + 1) * sizeof *mg->chol);
@@ -405,9 +419,7 @@ static int galerkin(mpm_multigrid *mg, int l) {
   window(mg, F->radius, &lo, &hi);
   const int ws = hi - lo + 1;
   const size_t wslots = (size_t)ws * (size_t)ws * (size_t)ws;
-  mpm_real *AP = mpm_arena_alloc(mg->arena, (F->n * wslots * 9 + 1) * sizeof *AP);
-  if (!AP) return -1;
-  mg->bytes += F->n * wslots * 9 * sizeof *AP;
+  mpm_real *AP = mg->ap; /* sized for the largest level at setup */
   const long nf = (long)F->n;
 #pragma omp parallel for schedule(static) if (nf > 256)
   for (long i = 0; i < nf; ++i) ap_row(mg, F, (size_t)i, lo, ws, AP + (size_t)i * wslots * 9);

@@ -96,6 +96,7 @@ typedef struct mpm_multigrid {
   double *chol;
   uint8_t *null;
   double *dense_x;
+  mpm_real *ap; /* the Galerkin products' scratch, A P of one level at a time */
   mpm_arena *arena;
   size_t bytes; /* what the levels and the Galerkin products' scratch took from the arena */
 } mpm_multigrid;
