@@ -55,9 +55,14 @@ mpm_status mpm_implicit_init(mpm_implicit *s) {
   return ok ? MPM_OK : MPM_ERR_NOMEM;
 }
 
-static mpm_material material_at(const mpm_implicit *s, size_t i) {
-  return mpm_material_at_temperature(&s->tc->materials[s->p->material[i]], s->p->plastic[i],
-                                     s->p->temperature[i]);
+/* Particle i's material: the scene's own where its moduli do not vary per particle, else its
+ * moduli at the particle's plastic state and temperature, in *own (the copy per particle cost
+ * the implicit step's force and energy loops more than their stresses). */
+static const mpm_material *material_at(const mpm_implicit *s, size_t i, mpm_material *own) {
+  const mpm_material *m = &s->tc->materials[s->p->material[i]];
+  if (!mpm_material_varies(m)) return m;
+  *own = mpm_material_at_temperature(m, s->p->plastic[i], s->p->temperature[i]);
+  return own;
 }
 
 /* ---- the material points' transfers, part by part ------------------------------------------ */
@@ -196,11 +201,12 @@ void mpm_implicit_build(mpm_implicit *s) {
           }
         } else {
           for (long i = a; i < b; ++i) {
-            const mpm_material m = material_at(s, (size_t)i);
+            mpm_material own;
+            const mpm_material *m = material_at(s, (size_t)i, &own);
             mpm_real Fh[9];
             for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
             mpm_stress_hessian H;
-            m.model->hessian_definite(&m, Fh, &H);
+            m->model->hessian_definite(m, Fh, &H);
             store_hessian(s, i, &H);
           }
         }
@@ -285,11 +291,12 @@ static void stress_op(const mpm_implicit *s, long i, const mpm_real X[9], mpm_re
     factored_op(&v, i, X, M);
     return;
   }
-  const mpm_material m = material_at(s, (size_t)i);
+  mpm_material own;
+  const mpm_material *m = material_at(s, (size_t)i, &own);
   mpm_real Fh[9], F[9], dF[9], dP[9];
   for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i], F[c] = s->p->F[c][i];
   mpm_m3_mul(X, F, dF);
-  m.model->dpdf_action(&m, Fh, dF, dP);
+  m->model->dpdf_action(m, Fh, dF, dP);
   mpm_m3_mul_bt(dP, F, M);
 }
 
@@ -387,10 +394,11 @@ void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]) {
     /* f_i = -sum_p V0 P(F^_p) F_p^T grad w_ip */
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
-      const mpm_material m = material_at(s, (size_t)i);
+      mpm_material own;
+      const mpm_material *m = material_at(s, (size_t)i, &own);
       mpm_real Fh[9], F[9], P[9], M[9];
       for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i], F[c] = p->F[c][i];
-      m.model->pk1(&m, Fh, P);
+      m->model->pk1(m, Fh, P);
       mpm_m3_mul_bt(P, F, M);
       const mpm_real v = -p->vol0[i];
       for (int c = 0; c < 9; ++c) s->G[c][i] = v * M[c];
@@ -402,10 +410,11 @@ void mpm_implicit_forces(mpm_implicit *s, mpm_real *const f[3]) {
 
 static double point_energy(const void *ctx, size_t i) {
   const mpm_implicit *s = ctx;
-  const mpm_material m = material_at(s, i);
+  mpm_material own;
+  const mpm_material *m = material_at(s, i, &own);
   mpm_real Fh[9];
   for (int c = 0; c < 9; ++c) Fh[c] = s->Fh[c][i];
-  return (double)s->p->vol0[i] * (double)m.model->energy(&m, Fh);
+  return (double)s->p->vol0[i] * (double)m->model->energy(m, Fh);
 }
 
 double mpm_implicit_energy(mpm_implicit *s) {
