@@ -7,7 +7,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdlib.h>
 
 /* ---- DOF positions ------------------------------------------------------------------- */
 
@@ -335,7 +334,7 @@ static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
 
 /* The Jacobi iterations a solve near balance gets before the multigrid is built for it: a body
  * at rest or in free fall ends within them, for less than building the hierarchy costs (the
- * assembly and the Galerkin products: some 80 Jacobi iterations on the rubber bunny). */
+ * assembly and the Galerkin products: some 20 Jacobi iterations on the rubber bunny). */
 #define JACOBI_BEFORE_MULTIGRID 4
 
 /* The iterations past which a Newton iteration's solve has the multigrid's values rebuilt at
