@@ -3,7 +3,6 @@
  * (see implicit.h). */
 #include "solver/implicit.h"
 #include "core/parallel.h"
-#include "core/clock.h"
 
 #include <math.h>
 #include <string.h>
@@ -152,15 +151,6 @@ void mpm_implicit_project(mpm_implicit *s, mpm_real *const v[3]) {
 }
 
 /* ---- the solve ------------------------------------------------------------------------- */
-
-static void cg_apply(void *user, mpm_real *const x[3], mpm_real *const y[3]) {
-  mpm_implicit *s = user;
-  mpm_implicit_apply(s, 1, s->apply_scale, x, y);
-}
-
-static void cg_project(void *user, mpm_real *const v[3]) {
-  mpm_implicit_project(user, v);
-}
 
 /* With body-force regions, each DOF's acceleration (gravity plus the regions at its
  * position) into s->accel, and where a region drags each DOF's drag rate into s->drag. 0, or
@@ -317,119 +307,6 @@ static void boundary_after(mpm_implicit *s, mpm_real *const vstar[3]) {
     }
     for (int c = 0; c < 3; ++c) d->v[c][i] = v[c];
   }
-}
-
-static void cg_record(mpm_implicit_result *r, const mpm_cg_result *cg) {
-  r->cg_iterations += cg->iterations;
-  const double rel = cg->scale > 0 ? cg->residual / cg->scale : 0;
-  if (rel > r->cg_residual) r->cg_residual = rel;
-  if (!cg->converged) r->cg_converged = 0;
-}
-
-/* The iterations the multigrid's one-pass cycle gets before the solve goes on with the
- * symmetric cycle: on a spinning block in free flight it converged in 3.5-16 per Newton
- * iteration where the symmetric cycle took 12-15, on the rubber bunny sliding to rest with
- * friction it took 71 a step where the symmetric cycle took 21. */
-#define MG_ONE_PASS_ITERATIONS 12
-
-/* The Jacobi iterations a solve near balance gets before the multigrid is built for it: a body
- * at rest or in free fall ends within them, for less than building the hierarchy costs (the
- * assembly and the Galerkin products: some 20 Jacobi iterations on the rubber bunny). */
-#define JACOBI_BEFORE_MULTIGRID 4
-
-/* The iterations past which a Newton iteration's solve has the multigrid's values rebuilt at
- * the next iterate (the hierarchy's rows stay: the DOFs are the step's): a solve the one-pass
- * cycle did not end (MG_ONE_PASS_ITERATIONS) and the symmetric one took 20 more for. Rebuilt
- * every Newton iteration, the rubber bunny at the CFL rate (1 s, 2 threads, one sitting) took
- * 19.3 s against 18.3 s, 574 CG iterations against 666; after the solves of more than 32 (its
- * landing at 1/60 s, where the second iterate's matrix is far from the first's): 16.5-17.0 s
- * against 17.4-18.3, 606 iterations; after more than 24 or 42: 17.8, 17.5-17.6 s. */
-#define MG_REBUILD_ITERATIONS (MG_ONE_PASS_ITERATIONS + 20)
-
-/* The smallest drop of its first residual a solve may ask for and still take the multigrid's
- * one-pass cycle (see build_multigrid). */
-#define MG_ONE_PASS_DROP 1e-6
-
-/* Build the multigrid for this step's system (the matrix of the Newton iteration that first
- * needs it: a preconditioner need only be near the matrix; its values again where the last
- * solve marked them stale, MG_REBUILD_ITERATIONS) and set o's preconditioner to it. */
-static mpm_status build_multigrid(mpm_implicit *s, mpm_cg_options *o, mpm_implicit_result *r) {
-  if (!s->mg_built || s->mg_stale) {
-    s->mg_stale = 0;
-    const double t0 = mpm_wall_seconds();
-    if (!s->mg_prepared && mpm_implicit_multigrid_prepare(s)) return MPM_ERR_NOMEM;
-    s->mg_prepared = 1;
-    if (mpm_implicit_multigrid_build(s)) return MPM_ERR_NOMEM;
-    s->mg_built = 1;
-    r->mg_setup_seconds += mpm_wall_seconds() - t0;
-    r->mg_bytes = s->mg->bytes;
-  }
-  o->precondition = mpm_implicit_multigrid_precondition;
-  /* the one-pass cycle (not symmetric: flexible CG) where the solve asks a drop of 1e-6 or less
-     of its first residual; beyond it flexible CG stagnates (the double build's first solves, to
-     1e-10: 40 iterations per Newton iteration where the symmetric cycle took 21) and the
-     symmetric cycle under plain CG takes them, and also where the one-pass cycle has not ended a
-     solve in MG_ONE_PASS_ITERATIONS (solve()) */
-  o->flexible = o->floor_drop >= MG_ONE_PASS_DROP;
-  return MPM_OK;
-}
-
-/* CG on (M + dt^2 K) x = b from x (cg_record'ed into r, the last solve's figures in cg). With
- * the multigrid (s->mg_wanted): where it is not built yet and the solve is near balance
- * (`near`), JACOBI_BEFORE_MULTIGRID Jacobi iterations first; a solve they do not end goes on
- * with the multigrid, from where they left x or, where they raised the residual, from x as it
- * was (a few Jacobi iterations from far out of balance raised it 50-fold on the falling rubber
- * bunny, and the multigrid then took 60 iterations where it takes 10 from the start). With the
- * multigrid, its one-pass cycle under flexible CG first, for at most MG_ONE_PASS_ITERATIONS,
- * then the symmetric cycle under plain CG (solver/multigrid.h), from where the one-pass cycle
- * stopped; cg's residual0 is the first part's, its iterations all parts'. MPM_OK, or MPM_ERR_NOMEM
- * when out of memory. */
-static mpm_status solve(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3],
-                        mpm_real *const x[3], int near, const mpm_cg_options *o,
-                        mpm_implicit_result *r, mpm_cg_result *cg) {
-  mpm_cg_options opt = *o;
-  double residual0 = -1; /* the first part's, when the solve is split */
-  int left = o->max_iterations;
-  if (s->mg_wanted) {
-    if (!s->mg_built && near) {
-      mpm_real **x0 = mpm_dofs_vector(s->dofs, "imp.x0");
-      if (!x0) return MPM_ERR_NOMEM;
-      mpm_dofs_copy(s->dofs, x, x0);
-      opt.max_iterations = left < JACOBI_BEFORE_MULTIGRID ? left : JACOBI_BEFORE_MULTIGRID;
-      if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
-      if (cg->converged || cg->iterations >= left) {
-        cg_record(r, cg);
-        return MPM_OK;
-      }
-      r->cg_iterations += cg->iterations;
-      residual0 = cg->residual0;
-      left -= cg->iterations;
-      if (cg->residual > cg->residual0) mpm_dofs_copy(s->dofs, x0, x);
-    }
-    if (build_multigrid(s, &opt, r)) return MPM_ERR_NOMEM;
-  }
-  if (opt.precondition && opt.flexible) {
-    s->mg->cheap = 1;
-    opt.max_iterations = left < MG_ONE_PASS_ITERATIONS ? left : MG_ONE_PASS_ITERATIONS;
-    if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
-    if (residual0 < 0) residual0 = cg->residual0;
-    if (cg->converged || cg->iterations >= left) {
-      cg_record(r, cg);
-      cg->residual0 = residual0;
-      cg->iterations += o->max_iterations - left; /* the Jacobi iterations' before it */
-      return MPM_OK;
-    }
-    r->cg_iterations += cg->iterations; /* the symmetric cycle's solve reports the rest */
-    left -= cg->iterations;
-    opt.flexible = 0;
-  }
-  if (opt.precondition) s->mg->cheap = 0;
-  opt.max_iterations = left;
-  if (mpm_cg_solve(s->dofs, cg_apply, cg_project, s, D, b, x, &opt, cg)) return MPM_ERR_NOMEM;
-  cg_record(r, cg);
-  if (residual0 >= 0) cg->residual0 = residual0;
-  cg->iterations += o->max_iterations - left; /* the solve's, all parts */
-  return MPM_OK;
 }
 
 /* sqrt(<P v, D^-1 P v>) with v projected in place (D the Jacobi diagonal, I without one); w:
@@ -676,7 +553,8 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
   s->mg_wanted = o->precondition == 2 && mpm_implicit_multigrid_supported(s);
   s->mg_built = s->mg_prepared = s->mg_stale = 0;
   mpm_cg_result cg;
-  if (solve(s, D, b, d->v, guess <= NEAR_BALANCE * o->cg_tolerance * scale, &first, r, &cg))
+  if (mpm_implicit_pcg(s, D, b, d->v, guess <= NEAR_BALANCE * o->cg_tolerance * scale, &first, r,
+                       &cg))
     return MPM_ERR_NOMEM;
   r->newton_iterations = 1;
   /* Newton iterations 2.. on E (Gast et al. 2015): the gradient in b, the step in dv; the step
@@ -711,9 +589,9 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
       continue; /* the gradient where the search left v */
     }
     mpm_implicit_build(s);
-    /* a solve the hierarchy did not end in MG_REBUILD_ITERATIONS: its values are rebuilt at
-       the new iterate (the matrix moved far from the one it was built for) */
-    if (s->mg_built && cg.iterations > MG_REBUILD_ITERATIONS) s->mg_stale = 1;
+    /* a solve the hierarchy took long for has its values rebuilt at the new iterate (the matrix
+       moved far from the one it was built for) */
+    mpm_implicit_multigrid_mark(s, cg.iterations);
     /* Jacobi's diagonal at the new iterate where Jacobi preconditions (the multigrid once
        built preconditions the rest of the step); the norm stays the step's */
     if (o->precondition && !s->mg_built) jacobi(s, diag, NULL);
@@ -722,7 +600,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
        products, 65 ms a step of the rubber bunny at 2 threads) costs some 20 Jacobi-CG
        iterations (the matrix-free action: 2.5 ms) */
     for (int c = 0; c < 3; ++c) memset(dv[c], 0, (size_t)n * sizeof(mpm_real));
-    if (solve(s, D, b, dv, 1, &direction, r, &cg)) return MPM_ERR_NOMEM;
+    if (mpm_implicit_pcg(s, D, b, dv, 1, &direction, r, &cg)) return MPM_ERR_NOMEM;
     r->newton_iterations = ++k;
     /* backtracking: the longest of 1, 1/2, 1/4, ... that lowers E enough (Armijo) */
     const double slope = -mpm_dofs_dot(d, NULL, b, dv); /* <grad E, dv> */

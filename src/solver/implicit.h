@@ -176,6 +176,17 @@ mpm_status mpm_implicit_multigrid_prepare(mpm_implicit *s);
 mpm_status mpm_implicit_multigrid_build(mpm_implicit *s);
 void mpm_implicit_multigrid_precondition(void *user, mpm_real *const r[3], mpm_real *const z[3]);
 
+/* CG on (M + dt^2 K) x = b from x, its figures added to r (the last part's in cg), with Jacobi
+ * (diagonal D) or, where s->mg_wanted, the multigrid built here when first needed (`near`: the
+ * solve starts near balance, and a few Jacobi iterations may end it first). implicit_multigrid.c
+ * says the policy. MPM_OK, or MPM_ERR_NOMEM when out of memory. */
+mpm_status mpm_implicit_pcg(mpm_implicit *s, mpm_real *const D[3], mpm_real *const b[3],
+                            mpm_real *const x[3], int near, const mpm_cg_options *o,
+                            mpm_implicit_result *r, mpm_cg_result *cg);
+/* After a Newton iteration's solve of `iterations`: marks the multigrid's values stale where
+ * the solve took long enough that the matrix has moved far from the one they were built for. */
+void mpm_implicit_multigrid_mark(mpm_implicit *s, int iterations);
+
 /* Build the constraints from the predicted velocity v (over the DOF set). MPM_OK, or
  * MPM_ERR_NOMEM when out of memory. */
 mpm_status mpm_implicit_constraints(mpm_implicit *s, mpm_real *const v[3]);

@@ -413,7 +413,7 @@ static void ap_row(const mpm_multigrid *mg, const mpm_mg_level *F, size_t i, int
 }
 
 /* Level l + 1's values: P^T A_l P. */
-static int galerkin(mpm_multigrid *mg, int l) {
+static void galerkin(mpm_multigrid *mg, int l) {
   mpm_mg_level *F = &mg->level[l], *C = &mg->level[l + 1];
   int lo, hi;
   window(mg, F->radius, &lo, &hi);
@@ -452,7 +452,6 @@ static int galerkin(mpm_multigrid *mg, int l) {
                          9);
     }
   }
-  return 0;
 }
 
 static void diagonal_inverses(mpm_mg_level *L) {
@@ -525,17 +524,15 @@ static void dense_solve(mpm_multigrid *mg, const mpm_real *b, mpm_real *x) {
   for (size_t i = 0; i < N; ++i) x[i] = (mpm_real)y[i];
 }
 
-mpm_status mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
-                                const mpm_real (*P)[6]) {
+void mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
+                          const mpm_real (*P)[6]) {
   mg->constrained = count;
   mg->proj_row = row;
   mg->proj = P;
   project_finest(mg);
-  for (int l = 0; l + 1 < mg->level_count; ++l)
-    if (galerkin(mg, l)) return MPM_ERR_NOMEM;
+  for (int l = 0; l + 1 < mg->level_count; ++l) galerkin(mg, l);
   for (int l = 0; l + 1 < mg->level_count; ++l) diagonal_inverses(&mg->level[l]);
   dense_factor(mg);
-  return MPM_OK;
 }
 
 /* ---- the cycle ------------------------------------------------------------------------- */

@@ -119,10 +119,10 @@ void mpm_multigrid_mirror_lower(mpm_multigrid *mg);
 
 /* After the finest values are filled: project them with the constraints (count of them: rows
  * row[k] with projector P[k]; the arrays are kept and must outlive the V-cycles), form the
- * coarse levels' values (Galerkin), the smoother's inverses and the coarsest factor. MPM_OK, or
- * MPM_ERR_NOMEM when out of memory. */
-mpm_status mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
-                                const mpm_real (*P)[6]);
+ * coarse levels' values (Galerkin, in the scratch allocated at setup), the smoother's inverses
+ * and the coarsest factor. */
+void mpm_multigrid_factor(mpm_multigrid *mg, size_t count, const uint32_t *row,
+                          const mpm_real (*P)[6]);
 
 /* x = B b on the finest level (level[0].b in, level[0].x out): one V-cycle from x = 0. B is
  * symmetric and, where A is positive definite on the unconstrained subspace, positive
