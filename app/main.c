@@ -51,7 +51,7 @@ static const usage_section SECTIONS[] = {
               "                     [--repeats N] [--only action|drop|resolution]\n"
               "                     [--case block5e6|block1e9|bunny] [--preconditioner "
               "jacobi|multigrid]\n"
-              "                     [--ladder all|fixed|cfl]\n"
+              "                     [--ladder all|fixed|cfl] [--scheme backward_euler|newmark]\n"
               "      the Hessian action against explicit P2G + G2P, CG iterations with and\n"
               "      without the preconditioner, time to simulate 1 s explicit and implicit\n"
               "      (a dropped block of two moduli, the rubber bunny; implicit at the CFL\n"

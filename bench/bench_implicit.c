@@ -17,7 +17,8 @@
  * 1/60 s) and at each fixed step of a ladder (1/60 s down), with Zhu's single linearized step
  * (CG to 1e-4, fixed steps only) and with 2 Newton iterations (CG to 1e-2: inexact Newton)
  * (--ladder cfl|fixed: those runs only), judged against the explicit run:
- * (--preconditioner multigrid: the implicit runs with the multigrid V-cycle)
+ * (--preconditioner multigrid: the implicit runs with the multigrid V-cycle; --scheme newmark:
+ * with Newmark's positions, solver/implicit.h)
  * "stable" = no guard stop and no energy growth beyond the start; "accurate" = the centre of
  * mass within half a cell of the explicit one at every frame up to the first impact, and at the
  * end within half a cell of the explicit block's lowest point after impact (resting on the
@@ -340,6 +341,9 @@ static double rebound(const double *com, int n, int k0) {
 /* The implicit runs' preconditioner key (--preconditioner): "" for the default (Jacobi). */
 static const char *preconditioner_key = "";
 
+/* The implicit runs' scheme key (--scheme): "" for the default (backward Euler). */
+static const char *scheme_key = "";
+
 /* Which steps part 2 runs (--ladder): 0 all, 1 the fixed steps only, 2 the CFL rate only. */
 static int ladder_choice = 0;
 
@@ -390,21 +394,22 @@ static int time_to_solution(const drop_case *c) {
       }
       snprintf(solver, sizeof solver,
                "\"integrator\": \"implicit\", \"dt\": %.9g, \"cg_tolerance\": %g, "
-               "\"newton_iterations\": %d%s%s",
-               ladder[k], solves[v].tol, newton, preconditioner_key, rate);
+               "\"newton_iterations\": %d%s%s%s",
+               ladder[k], solves[v].tol, newton, preconditioner_key, scheme_key, rate);
       simulate(c, solver, &im);
       /* accurate: within half a cell of the explicit run up to its first impact, and resting at
        * the end where the explicit block touches the floor; the rebound, a wave faster than
        * dt, is printed, not judged */
-      double err = 0;
-      for (int fr = 0; fr <= impact; ++fr) err = fmax(err, fabs(im.com[fr] - ref.com[fr]));
-      err = fmax(err, fabs(im.com[FRAMES - 1] - contact));
+      double fall = 0;
+      for (int fr = 0; fr <= impact; ++fr) fall = fmax(fall, fabs(im.com[fr] - ref.com[fr]));
+      const double rest = fabs(im.com[FRAMES - 1] - contact), err = fmax(fall, rest);
       const int accurate = im.ok && err <= 0.5 * dx;
       const int k0 = first_minimum(im.com, FRAMES);
       printf("      implicit dt %s, %d Newton, CG to %g: %lld steps, %.1f CG iterations "
-             "per step, %.2f s, %s, %s (error %.4f m; rebound %.4f m) -> %.1fx\n",
+             "per step, %.2f s, %s, %s (error %.4f m in the fall, %.4f m at rest; rebound "
+             "%.4f m) -> %.1fx\n",
              rung, newton, solves[v].tol, im.steps, im.mean_cg, im.seconds,
-             im.ok ? "stable" : "UNSTABLE", accurate ? "accurate" : "not accurate", err,
+             im.ok ? "stable" : "UNSTABLE", accurate ? "accurate" : "not accurate", fall, rest,
              im.ok ? rebound(im.com, FRAMES, k0) : 0, ref.seconds / im.seconds);
       fflush(stdout);
       if (accurate && (best_seconds == 0 || im.seconds < best_seconds)) {
@@ -483,6 +488,16 @@ int mpm_bench_implicit(int argc, char **argv) {
         fprintf(stderr, "mpm bench implicit: --preconditioner expects jacobi or multigrid\n");
         return MPM_EXIT_USAGE;
       }
+    } else if (!strcmp(argv[i], "--scheme") && i + 1 < argc) {
+      ++i;
+      if (!strcmp(argv[i], "newmark"))
+        scheme_key = ", \"scheme\": \"newmark\"";
+      else if (!strcmp(argv[i], "backward_euler"))
+        scheme_key = "";
+      else {
+        fprintf(stderr, "mpm bench implicit: --scheme expects backward_euler or newmark\n");
+        return MPM_EXIT_USAGE;
+      }
     } else if (!strcmp(argv[i], "--threads") && i + 1 < argc) {
       nthreads = bench_parse_threads(argv[++i], threads, 16);
       if (nthreads < 1) {
@@ -519,8 +534,9 @@ int mpm_bench_implicit(int argc, char **argv) {
     printf("implicit benchmark, part 2: 1 s of a block (about %d particles, dx = 4 cm) dropped "
            "10 cm onto a slip floor; stable = no guard stop and no energy growth, accurate = "
            "centre of mass within half a cell of the explicit run up to the first impact and at "
-           "rest; implicit runs preconditioned by %s\n",
-           drop_particles, preconditioner_key[0] ? "a multigrid V-cycle" : "Jacobi");
+           "rest; implicit runs preconditioned by %s, positions by %s\n",
+           drop_particles, preconditioner_key[0] ? "a multigrid V-cycle" : "Jacobi",
+           scheme_key[0] ? "Newmark's scheme" : "backward Euler");
     char mesh[4200];
     const drop_case cases[3] = {
         {"block, E = 5e+06 Pa", drop_particles, 5e6, 0.04, NULL},

@@ -113,6 +113,12 @@ typedef enum mpm_def_preconditioner {
   MPM_DEF_PRECONDITIONER_MULTIGRID = 1 /* "multigrid": a Galerkin multigrid V-cycle */
 } mpm_def_preconditioner;
 
+/// solver.scheme (implicit)
+typedef enum mpm_def_scheme {
+  MPM_DEF_SCHEME_BACKWARD_EULER = 0, /* "backward_euler": positions by v^{n+1} (the default) */
+  MPM_DEF_SCHEME_NEWMARK = 1         /* "newmark": by (v^n + v^{n+1}) / 2 (beta 1/2, gamma 1) */
+} mpm_def_scheme;
+
 /// bodies[].enrichment_metric
 typedef enum mpm_def_enrichment_metric {
   MPM_DEF_METRIC_CONDITION = 0, /* "condition": sigma_min / sigma_max (the default) */
@@ -390,6 +396,7 @@ typedef struct mpm_solver_def {
   mpm_def_cg_failure on_cg_failure; /* implicit: solver.on_cg_failure; default MPM_DEF_CG_WARN */
   mpm_def_preconditioner preconditioner; /* implicit: solver.preconditioner; default
                                             MPM_DEF_PRECONDITIONER_JACOBI */
+  mpm_def_scheme scheme; /* implicit: solver.scheme; default MPM_DEF_SCHEME_BACKWARD_EULER */
 } mpm_solver_def;
 
 /// The point arrays of frame_NNNN.vtu (output.fields, docs/scene-format.md): bit (1u << f) of

@@ -367,9 +367,14 @@ void mpm_adaptive_p2g(mpm_adaptive *a, const mpm_transfer_ctx *tc, int impulse) 
 
 mpm_g2p_result mpm_adaptive_g2p(mpm_adaptive *a, const mpm_transfer_ctx *tc) {
   mpm_dofs *d = a->host.dofs;
-  mpm_real *u[6] = {d->v[0], d->v[1], d->v[2], d->v0[0], d->v0[1], d->v0[2]};
+  mpm_real *u[9] = {d->v[0], d->v[1], d->v[2]};
   const int apic = a->grid.tree.levels > 1 && tc->transfer == MPM_TRANSFER_APIC;
-  mpm_adaptive_grid_gather(&a->grid, apic ? 3 : 6, u);
+  int count = 3;
+  if (!apic)
+    for (int e = 0; e < 3; ++e) u[count++] = d->v0[e];
+  if (d->vm[0]) /* the motion field, where the update set one (grid/dofs.h) */
+    for (int e = 0; e < 3; ++e) u[count++] = d->vm[e];
+  mpm_adaptive_grid_gather(&a->grid, count, u);
   if (apic) mpm_adaptive_apic_g2p_before(a);
   mpm_g2p_result r = {0, -1};
   mpm_transfer_ctx t = *tc;

@@ -49,6 +49,7 @@ void mpm_dofs_free(mpm_dofs *d) {
 void mpm_dofs_begin_layout(mpm_dofs *d) {
   d->segment_count = 0;
   d->count = 0;
+  for (int c = 0; c < 3; ++c) d->vm[c] = NULL;
 }
 
 static mpm_dof_segment *push_segment(mpm_dofs *d, size_t count) {
@@ -139,6 +140,7 @@ static mpm_grid_values values_from(const mpm_dofs *d, size_t o) {
     v.v0[c] = d->v0[c] ? d->v0[c] + o : NULL;
     v.v[c] = d->v[c] ? d->v[c] + o : NULL;
     v.f[c] = d->f[c] ? d->f[c] + o : NULL;
+    v.vm[c] = d->vm[c] ? d->vm[c] + o : NULL;
   }
   return v;
 }

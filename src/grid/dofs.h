@@ -13,6 +13,8 @@
  *   v0[3]     P2G: the momentum; after the update: the velocity at the start of the step v^n
  *   v[3]      the velocity at the end of the step v^{n+1} (CG's unknown)
  *   f[3]      the force
+ *   vm[3]     after an update that sets it, the velocity the particles move and deform by
+ *             (the implicit step's Newmark scheme: a solver vector); NULL: v
  * Only the fields a step uses are allocated (explicit APIC folds the force into the momentum
  * and needs no f).
  *
@@ -68,6 +70,7 @@ typedef struct mpm_dofs {
   size_t count, capacity;
   unsigned fields; /* the fields allocated, MPM_DOF_* */
   mpm_real *mass, *v0[3], *v[3], *f[3];
+  mpm_real *vm[3]; /* set by the update, reset by a layout (see above) */
   int segment_count;
   mpm_dof_segment segment[MPM_DOF_MAX_SEGMENTS];
   int vector_count;

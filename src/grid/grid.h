@@ -120,12 +120,15 @@ static inline void mpm_grid_node_position(const mpm_grid *g, const int32_t idx[3
  *   v0    P2G accumulates the momentum sum w m v (APIC: + its affine part) here; the explicit
  *         update turns it into the velocity at the start of the step v^n (FLIP reads it)
  *   v     the velocity at the end of the step v^{n+1}
- *   f     the force, -sum V0 tau grad w (not used when P2G folds dt f into the momentum) */
+ *   f     the force, -sum V0 tau grad w (not used when P2G folds dt f into the momentum)
+ *   vm    the velocity the particles move and deform by, where it is not v (the implicit step's
+ *         Newmark scheme: (v^n + v^{n+1}) / 2); NULL: v */
 typedef struct mpm_grid_values {
   mpm_real *mass;
   mpm_real *v0[3];
   mpm_real *v[3];
   mpm_real *f[3];
+  mpm_real *vm[3];
 } mpm_grid_values;
 
 #endif

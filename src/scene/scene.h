@@ -151,6 +151,11 @@ typedef enum mpm_preconditioner_kind {
   MPM_PRECONDITIONER_MULTIGRID = 1 /* a Galerkin multigrid V-cycle (solver/multigrid.h) */
 } mpm_preconditioner_kind;
 
+typedef enum mpm_scheme_kind {
+  MPM_SCHEME_BACKWARD_EULER = 0, /* positions move by v^{n+1} (Zhu sec. 6; default) */
+  MPM_SCHEME_NEWMARK = 1         /* by (v^n + v^{n+1}) / 2: beta 1/2, gamma 1 (solver/implicit.h) */
+} mpm_scheme_kind;
+
 typedef struct mpm_solver_desc {
   mpm_kernel_kind kernel;
   mpm_transfer_kind transfer;
@@ -172,6 +177,7 @@ typedef struct mpm_solver_desc {
   int cg_max_iterations;               /* implicit: default 500 */
   mpm_cg_failure_action on_cg_failure; /* implicit: warn (default) or stop */
   mpm_preconditioner_kind preconditioner; /* implicit: CG's preconditioner */
+  mpm_scheme_kind scheme;                 /* implicit: the positions' time integration */
 } mpm_solver_desc;
 
 /* Most levels of the multi-level grid (MPM_LEVELS_MAX of adaptive/refinement.h). */

@@ -189,6 +189,7 @@ mpm_scene_def mpm_scene_def_default(void) {
   d.solver.cg_max_iterations = s.solver.cg_max_iterations;
   d.solver.on_cg_failure = (mpm_def_cg_failure)s.solver.on_cg_failure;
   d.solver.preconditioner = (mpm_def_preconditioner)s.solver.preconditioner;
+  d.solver.scheme = (mpm_def_scheme)s.solver.scheme;
   d.output.directory = "out"; /* mpm_scene_default's, as a string of static storage */
   d.output.vtu = s.output.vtu;
   d.output.ply = s.output.ply;

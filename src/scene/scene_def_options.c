@@ -203,6 +203,7 @@ int mpm_def_write_solver(mpm_def_writer *w, const mpm_solver_def *s, cJSON *root
       {"solver.domain_kernel", (int)s->domain_kernel, &mpm_def_kernels},
       {"solver.on_cg_failure", (int)s->on_cg_failure, &mpm_def_cg_failures},
       {"solver.preconditioner", (int)s->preconditioner, &mpm_def_preconditioners},
+      {"solver.scheme", (int)s->scheme, &mpm_def_schemes},
   };
   const char *names[sizeof enums / sizeof enums[0]];
   for (size_t k = 0; k < sizeof enums / sizeof enums[0]; ++k)
@@ -215,6 +216,7 @@ int mpm_def_write_solver(mpm_def_writer *w, const mpm_solver_def *s, cJSON *root
                               : s->cg_max_iterations != d.cg_max_iterations ? "cg_max_iterations"
                               : s->on_cg_failure != d.on_cg_failure         ? "on_cg_failure"
                               : s->preconditioner != d.preconditioner       ? "preconditioner"
+                              : s->scheme != d.scheme                       ? "scheme"
                                                                             : NULL;
   if (!implicit && implicit_only)
     return mpm_def_fail(w->c,
@@ -243,6 +245,7 @@ int mpm_def_write_solver(mpm_def_writer *w, const mpm_solver_def *s, cJSON *root
     mpm_def_add_number(w, o, "cg_max_iterations", s->cg_max_iterations);
     mpm_def_add_string(w, o, "on_cg_failure", names[6]);
     mpm_def_add_string(w, o, "preconditioner", names[7]);
+    mpm_def_add_string(w, o, "scheme", names[8]);
   }
   return 0;
 }

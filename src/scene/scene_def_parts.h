@@ -34,7 +34,7 @@ typedef struct mpm_def_enum {
 
 extern const mpm_def_enum mpm_def_rules, mpm_def_integrators, mpm_def_transfers, mpm_def_kernels,
     mpm_def_grids, mpm_def_instabilities, mpm_def_cg_failures, mpm_def_preconditioners,
-    mpm_def_filters, mpm_def_refine_kinds;
+    mpm_def_schemes, mpm_def_filters, mpm_def_refine_kinds;
 
 /* The spelling of value v at `path`; NULL with the message when the enum has no such value. */
 const char *mpm_def_spell(mpm_def_ctx *c, const char *path, int v, const mpm_def_enum *t);

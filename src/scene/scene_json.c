@@ -47,7 +47,7 @@ static const char *const SOLVER_KEYS[] = {
     "max_retries", "domain_kernel",
     /* implicit integration */
     "integrator", "dt", "newton_iterations", "cg_tolerance", "cg_max_iterations", "on_cg_failure",
-    "preconditioner", NULL};
+    "preconditioner", "scheme", NULL};
 /* The keys that only the implicit integrator reads. */
 static const char *const IMPLICIT_KEYS[] = {"dt",
                                             "newton_iterations",
@@ -55,6 +55,7 @@ static const char *const IMPLICIT_KEYS[] = {"dt",
                                             "cg_max_iterations",
                                             "on_cg_failure",
                                             "preconditioner",
+                                            "scheme",
                                             NULL};
 static const char *const OUTPUT_KEYS[] = {"directory",        "vtu",     "ply", "stats",
                                           "checkpoint_every", "surface", "vdb", "vdb_density",
@@ -71,6 +72,7 @@ static const char *const DOMAIN_KERNEL_NAMES[] = {"linear", "quadratic", "cubic"
 static const char *const INTEGRATOR_NAMES[] = {"explicit", "implicit", NULL};
 static const char *const CG_FAILURE_NAMES[] = {"warn", "stop", NULL};
 static const char *const PRECONDITIONER_NAMES[] = {"jacobi", "multigrid", NULL};
+static const char *const SCHEME_NAMES[] = {"backward_euler", "newmark", NULL};
 
 const char mpm_sj_axis_name[3] = {'x', 'y', 'z'};
 
@@ -282,7 +284,7 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   long long retries = d->max_retries;
   int domain_kernel = (int)d->domain_kernel;
   int integrator = (int)d->integrator, on_cg_failure = (int)d->on_cg_failure;
-  int preconditioner = (int)d->preconditioner;
+  int preconditioner = (int)d->preconditioner, scheme = (int)d->scheme;
   long long newton = d->newton_iterations, cg_max = d->cg_max_iterations;
   if (mpm_json_expect_object(c, sv, "an object of solver options") < 0 ||
       mpm_json_check_keys(c, sv, SOLVER_KEYS, NULL) < 0 ||
@@ -317,8 +319,10 @@ static int parse_solver(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_json_integer(c, sv, "cg_max_iterations", 0, mpm_json_in('[', 1, 100000, ']', NULL),
                        &cg_max) < 0 ||
       mpm_json_enum(c, sv, "on_cg_failure", 0, CG_FAILURE_NAMES, &on_cg_failure) < 0 ||
-      mpm_json_enum(c, sv, "preconditioner", 0, PRECONDITIONER_NAMES, &preconditioner) < 0)
+      mpm_json_enum(c, sv, "preconditioner", 0, PRECONDITIONER_NAMES, &preconditioner) < 0 ||
+      mpm_json_enum(c, sv, "scheme", 0, SCHEME_NAMES, &scheme) < 0)
     return -1;
+  d->scheme = (mpm_scheme_kind)scheme;
   d->integrator = (mpm_integrator_kind)integrator;
   d->on_cg_failure = (mpm_cg_failure_action)on_cg_failure;
   d->preconditioner = (mpm_preconditioner_kind)preconditioner;
@@ -392,6 +396,23 @@ static int parse_camera(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
   return 0;
 }
 
+/* Newmark's positions (solver.scheme) move material points by the mean of the step's grid
+ * velocities; particle domains move their corners by the new one (domain_transfer.c), which
+ * would leave their F short of the state the solve balanced. */
+static int check_scheme(mpm_json_ctx *c, const mpm_scene *s) {
+  if (s->solver.scheme != MPM_SCHEME_NEWMARK) return 0;
+  for (int i = 0; i < s->body_count; ++i)
+    if (s->bodies[i].domains) {
+      mpm_json_push_key(c, "solver");
+      mpm_json_fail_at(c, "scheme", MPM_ERR_INVALID,
+                       "\"newmark\" moves material points only; bodies[%d] has particle domains "
+                       "(use \"backward_euler\" there)",
+                       i);
+      return -1;
+    }
+  return 0;
+}
+
 /* ---- the whole file ------------------------------------------------------------------- */
 
 /* Default name: the file name without directory and extension. */
@@ -420,7 +441,7 @@ static int parse_root(mpm_json_ctx *c, const cJSON *root, mpm_scene *s) {
       mpm_sj_parse_colliders(c, root, s) < 0 || mpm_sj_parse_forces(c, root, s) < 0 ||
       parse_output(c, root, s) < 0 || parse_camera(c, root, s) < 0 ||
       mpm_sj_parse_refinement(c, root, s) < 0 || mpm_sj_parse_heat(c, root, s) < 0 ||
-      mpm_sj_check_fields_heat(c, root, s) < 0)
+      mpm_sj_check_fields_heat(c, root, s) < 0 || check_scheme(c, s) < 0)
     return -1;
   return 0;
 }

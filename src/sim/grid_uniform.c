@@ -130,6 +130,7 @@ static void implicit_parts(mpm_sim *sim, mpm_implicit *s) {
 }
 
 static mpm_status g2p(mpm_sim *sim, mpm_step_ctx *c) {
+  c->val = mpm_dofs_grid_values(&sim->dofs, &sim->grid); /* with the update's motion field */
   c->r = mpm_g2p(&c->tc, &sim->grid, &c->val, &sim->particles);
   c->bad_set = &sim->particles;
   if (c->domains) {

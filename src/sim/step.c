@@ -126,6 +126,7 @@ static mpm_status stage_update(mpm_sim *sim, mpm_step_ctx *c) {
 static void implicit_system(mpm_sim *sim, mpm_step_ctx *c, mpm_implicit *s) {
   memset(s, 0, sizeof *s);
   s->dt = c->update.dt;
+  s->theta = sim->scene.solver.scheme == MPM_SCHEME_NEWMARK ? R_(0.5) : 1;
   for (int d = 0; d < 3; ++d) s->gravity[d] = c->update.gravity[d];
   s->region_count = c->update.region_count;
   s->regions = c->update.regions;

@@ -178,8 +178,40 @@ static int dof_accelerations(mpm_implicit *s) {
   return 0;
 }
 
-/* v0 <- v^n = momentum / m, v <- v* = v^n + dt (f / m + g); massless DOFs get 0. g is gravity,
- * or with body-force regions each DOF's own acceleration. 0, or -1 when out of memory. */
+/* v0 <- v^n = momentum / m; massless DOFs get 0. */
+static void start_velocity(mpm_implicit *s) {
+  mpm_dofs *d = s->dofs;
+  const long n = (long)d->count;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    const mpm_real m = d->mass[i];
+    for (int c = 0; c < 3; ++c) d->v0[c][i] = m > 0 ? d->v0[c][i] / m : 0;
+  }
+}
+
+/* Whether an obstacle or a wall acts at a DOF with mass in this step: its rule changes the
+ * step's motion without elastic forces, v^n + dt g (collide/boundary.h). Newmark's positions are
+ * taken only in steps where none does (implicit.h says why). 0 or 1; -1 when out of memory. */
+static int touches(mpm_implicit *s) {
+  mpm_dofs *d = s->dofs;
+  if (!s->px[0] && dof_positions(s, s->px, &s->depth)) return -1;
+  const long n = (long)d->count;
+  int any = 0;
+#pragma omp parallel for schedule(static) reduction(| : any)
+  for (long i = 0; i < n; ++i) {
+    if (!(d->mass[i] > 0)) continue;
+    mpm_real v[3], w[3];
+    for (int c = 0; c < 3; ++c) v[c] = w[c] = d->v0[c][i] + s->dt * s->gravity[c];
+    const mpm_real x[3] = {s->px[0][i], s->px[1][i], s->px[2][i]};
+    mpm_boundary_apply(s->boundary, x, s->depth[i], (size_t)i >= s->corner_begin, v);
+    any |= v[0] != w[0] || v[1] != w[1] || v[2] != w[2];
+  }
+  return any;
+}
+
+/* v <- v* = v^n + dt (f / m + g) (f at the step's base displacement); massless DOFs get 0. g is
+ * gravity, or with body-force regions each DOF's own acceleration. 0, or -1 when out of
+ * memory. */
 static int predictor(mpm_implicit *s) {
   mpm_dofs *d = s->dofs;
   if (s->region_count > 0 && dof_accelerations(s)) return -1;
@@ -188,21 +220,15 @@ static int predictor(mpm_implicit *s) {
   for (long i = 0; i < n; ++i) {
     const mpm_real m = d->mass[i];
     for (int c = 0; c < 3; ++c) {
-      if (!(m > 0)) {
-        d->v0[c][i] = d->v[c][i] = 0;
-        continue;
-      }
-      const mpm_real vn = d->v0[c][i] / m;
       const mpm_real g = s->accel[c] ? s->accel[c][i] : s->gravity[c];
-      d->v0[c][i] = vn;
-      d->v[c][i] = vn + s->dt * (d->f[c][i] / m + g);
+      d->v[c][i] = m > 0 ? d->v0[c][i] + s->dt * (d->f[c][i] / m + g) : 0;
     }
   }
   return 0;
 }
 
-/* E(v) up to a constant: 1/2 sum m |v - v^n - dt g|^2 + Phi(x + dt v), with F^ already
- * displaced to u = dt v. t: work vector. */
+/* E(v) up to a constant: 1/2 sum m |v - v^n - dt g|^2 + Phi(x + u(v)) / theta, with F^ already
+ * displaced to u(v) (displacement()). t: work vector. */
 static double incremental_potential(mpm_implicit *s, mpm_real *const v[3], mpm_real *const t[3]) {
   mpm_dofs *d = s->dofs;
   const long n = (long)d->count;
@@ -217,17 +243,25 @@ static double incremental_potential(mpm_implicit *s, mpm_real *const v[3], mpm_r
       for (long i = 0; i < n; ++i) t[c][i] = v[c][i] - d->v0[c][i] - dg;
     }
   }
-  return 0.5 * mpm_dofs_dot(d, d->mass, t, t) + mpm_implicit_energy(s);
+  const double phi = mpm_implicit_energy(s);
+  return 0.5 * mpm_dofs_dot(d, d->mass, t, t) + (s->theta < 1 ? phi / s->theta : phi);
 }
 
-/* u = dt v */
+/* u(v) = dt ((1 - theta) v^n + theta v): dt v for backward Euler (theta 1) */
 static void displacement(mpm_implicit *s, mpm_real *const v[3], mpm_real *const u[3]) {
-  mpm_dofs_copy(s->dofs, v, u);
   const long n = (long)s->dofs->count;
+  const mpm_real dt = s->dt, a = s->theta * dt, b = dt - a;
   for (int c = 0; c < 3; ++c) {
+    const mpm_real *restrict vc = v[c];
     mpm_real *restrict uc = u[c];
+    if (s->theta < 1) {
+      const mpm_real *restrict v0 = s->dofs->v0[c];
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
-    for (long i = 0; i < n; ++i) uc[i] *= s->dt;
+      for (long i = 0; i < n; ++i) uc[i] = a * vc[i] + b * v0[i];
+    } else {
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+      for (long i = 0; i < n; ++i) uc[i] = dt * vc[i];
+    }
   }
 }
 
@@ -372,7 +406,7 @@ static double resolution_scale(mpm_implicit *s, mpm_real *const diag[3], mpm_rea
   mpm_dofs *d = s->dofs;
   const long n = (long)d->count;
   /* the roundings of the stencil's some 27 particles add in quadrature: sqrt(27) / 27 */
-  const mpm_real k = R_(0.2) * MPM_REAL_EPS * s->tc->kernel.dx / s->dt;
+  const mpm_real k = R_(0.2) * MPM_REAL_EPS * s->tc->kernel.dx / (s->theta * s->dt);
   for (int c = 0; c < 3; ++c) {
     const mpm_real *restrict m = d->mass, *restrict dc = diag[c];
     mpm_real *restrict tc = t[c];
@@ -475,8 +509,8 @@ static double initial_guess(mpm_implicit *s, mpm_real *const diag[3], mpm_real *
 }
 
 /* -grad E at v = d->v into b, projected, and its free norm (E into *E):
- *   grad E = m (v - v^n - dt g) - dt f(dt v)
- * with F^ displaced to dt v (left so for the Hessian). t, u, w: work. */
+ *   grad E = m (v - v^n - dt g) - dt f(u(v))
+ * with F^ displaced to u(v) (left so for the Hessian). t, u, w: work. */
 static double neg_gradient(mpm_implicit *s, mpm_real *const diag[3], mpm_real *const b[3],
                            mpm_real *const t[3], mpm_real *const u[3], mpm_real *const w[3],
                            double *E) {
@@ -494,6 +528,22 @@ static double neg_gradient(mpm_implicit *s, mpm_real *const diag[3], mpm_real *c
     for (long i = 0; i < n; ++i) bc[i] = -(m[i] * tc[i] - dt * bc[i]);
   }
   return free_norm(s, diag, b, w);
+}
+
+/* With theta < 1: the velocity the particles move and deform by, v_m = u(v) / dt =
+ * (1 - theta) v^n + theta v^{n+1}, as the DOF set's vm (grid/dofs.h: G2P reads it). MPM_OK, or
+ * MPM_ERR_NOMEM when out of memory. */
+static mpm_status motion(mpm_implicit *s) {
+  mpm_dofs *d = s->dofs;
+  mpm_real **vm = mpm_dofs_vector(d, "imp.motion");
+  if (!vm) return MPM_ERR_NOMEM;
+  const long n = (long)d->count;
+  const mpm_real a = s->theta, b = 1 - s->theta;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) vm[c][i] = a * d->v[c][i] + b * d->v0[c][i];
+  for (int c = 0; c < 3; ++c) d->vm[c] = vm[c];
+  return MPM_OK;
 }
 
 /* A step whose first residual is within this many tolerances of the scale is near balance:
@@ -518,7 +568,26 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
      batched stresses of P2G differ from it by a few ulps of a stress that mostly balances the
      weight, which made a body at rest look 5% of its weight out of balance to the Newton test
      (and Zhu's step aim at another v* than the potential's) */
-  mpm_implicit_displace(s, NULL);
+  start_velocity(s);
+  if (s->theta < 1) { /* Newmark's positions where nothing touches an obstacle */
+    const int touching = touches(s);
+    if (touching < 0) return MPM_ERR_NOMEM;
+    if (touching) s->theta = 1;
+    s->apply_scale = s->theta * s->dt * s->dt;
+  }
+  if (s->theta < 1) { /* the base u(0) = dt (1 - theta) v^n */
+    const long nd = (long)d->count;
+    const mpm_real a = s->dt - s->theta * s->dt;
+    for (int c = 0; c < 3; ++c) {
+      const mpm_real *restrict v0 = d->v0[c];
+      mpm_real *restrict uc = u[c];
+#pragma omp parallel for simd schedule(static) if (nd > MPM_PARALLEL_MIN)
+      for (long i = 0; i < nd; ++i) uc[i] = a * v0[i];
+    }
+    mpm_implicit_displace(s, u);
+  } else {
+    mpm_implicit_displace(s, NULL);
+  }
   mpm_implicit_forces(s, d->f);
   if (predictor(s)) return MPM_ERR_NOMEM;
   mpm_dofs_copy(d, d->v, vstar);
@@ -531,7 +600,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
     for (long i = 0; i < n; ++i) bc[i] = m[i] * vs[i];
   }
-  mpm_implicit_build(s); /* at u = 0 (displaced above) */
+  mpm_implicit_build(s); /* at u(0) (displaced above) */
   if (o->precondition) jacobi(s, diag, norm);
   /* the preconditioner, and the norm of the residuals */
   mpm_real *const *D = o->precondition ? diag : NULL, *const *N = o->precondition ? norm : NULL;
@@ -624,13 +693,13 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
   }
   boundary_after(s, vstar);
   r->mg_cycle_seconds = s->mg_cycle_seconds;
-  return MPM_OK;
+  return s->theta < 1 ? motion(s) : MPM_OK;
 }
 
 /* The momentum the colliders took in the solved step (stats.csv): the part of a DOF's momentum
  * change that neither gravity nor the elastic forces at the end of the step explain, the
  * obstacle's impulse on it (backward Euler, m (v - v^n) = dt m g + dt f(u) + J):
- *   J_i = m_i (v_i - v*_i) + dt f_i^n - dt f_i(dt v),  v* = v^n + dt (g + f^n / m),
+ *   J_i = m_i (v_i - v*_i) + dt f_i^n - dt f_i(u(v)),  v* = v^n + dt (g + f^n / m),
  * zero at free DOFs (there it is the Newton residual, to the solver's tolerance). The DOFs
  * inside collider (pose) c where the step began (or, for corners, where it takes them) count
  * for c, the first one when several hold a DOF; the collider took -J_i. One more evaluation of

@@ -36,7 +36,8 @@ mpm_status mpm_implicit_init(mpm_implicit *s) {
   s->constraint_count = 0;
   s->constraint_dof = NULL;
   s->constraint_P = NULL;
-  s->apply_scale = s->dt * s->dt;
+  if (!(s->theta > 0 && s->theta <= 1)) s->theta = 1; /* unset: backward Euler */
+  s->apply_scale = s->theta * s->dt * s->dt;
   for (int c = 0; c < 3; ++c) s->px[c] = NULL;
   s->depth = NULL;
   if (s->part_count == 0 && s->p) { /* one grid, one kernel: one part */

@@ -31,15 +31,16 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_tr
   mpm_kernel_stencil(k, xr, &s);
   const long off = (long)(s.base[0] - org[0]) * sx + (long)(s.base[1] - org[1]) * sy +
                    (long)(s.base[2] - org[2]);
-  const mpm_real *vn[3], *vo[3];
+  const mpm_real *vn[3], *vo[3], *vm[3];
   for (int d = 0; d < 3; ++d) {
     vn[d] = val->v[d] + off;
     vo[d] = val->v0[d] ? val->v0[d] + off : NULL;
+    vm[d] = val->vm[d] ? val->vm[d] + off : NULL;
   }
   mpm_real f[3];
   for (int d = 0; d < 3; ++d) f[d] = xr[d] * k->inv_dx - (mpm_real)s.base[d];
   mpm_g2p_gather o;
-  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, vn, vo, sx, sy, &o);
+  mpm_g2p_particle(W, &s, f, k->dx, flip, apic, vn, vo, vm[0] ? vm : NULL, sx, sy, &o);
 
   const mpm_real dt = ctx->dt;
   mpm_real v[3];
@@ -64,7 +65,7 @@ ALWAYS_INLINE mpm_real update_particle(const int W, const int apic, const mpm_tr
   }
   for (int d = 0; d < 3; ++d) {
     /* x += dt v with compensation (particles.h, xc; core/compensated.h) */
-    const mpm_real xn = mpm_compensated_move(p->x[d][i], dt * o.v[d], ctx->clamp_lo[d],
+    const mpm_real xn = mpm_compensated_move(p->x[d][i], dt * o.xv[d], ctx->clamp_lo[d],
                                              ctx->clamp_hi[d], &p->xc[d][i]);
     p->x[d][i] = xn;
     p->v[d][i] = v[d];
@@ -99,7 +100,7 @@ ALWAYS_INLINE void batch_update(const int apic, const mpm_transfer_ctx *ctx, mpm
     /* x += dt v with compensation (particles.h, xc; core/compensated.h) */
     mpm_vl rem = mpm_lanes_load(p->xc[d], idx, n, contiguous);
     const mpm_vl xn =
-        mpm_compensated_move_lanes(mpm_lanes_load(p->x[d], idx, n, contiguous), dt * o->v[d],
+        mpm_compensated_move_lanes(mpm_lanes_load(p->x[d], idx, n, contiguous), dt * o->xv[d],
                                    ctx->clamp_lo[d], ctx->clamp_hi[d], &rem);
     mpm_lanes_store(p->x[d], idx, n, contiguous, xn);
     mpm_lanes_store(p->xc[d], idx, n, contiguous, rem);
@@ -156,17 +157,22 @@ static void range_return_map(const mpm_material *mat, mpm_particles *p, const ui
   }
 }
 
-ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx *ctx,
-                             const mpm_sparse_grid *g, const mpm_grid_values *val, mpm_particles *p,
-                             int32_t b, mpm_real *max_v2, long *bad) {
-  /* the 8 blocks around the owner block as an AoS pad: v_new xyz, v_old xyz per node; and the
-     blocks of the next owner block are requested while this one is processed */
-  const mpm_real *const vel[6] = {val->v[0],  val->v[1],  val->v[2],
-                                  val->v0[0], val->v0[1], val->v0[2]};
-  const int count = apic ? 3 : 6;
+ALWAYS_INLINE void g2p_block(const int W, const int apic, const int motion,
+                             const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
+                             const mpm_grid_values *val, mpm_particles *p, int32_t b,
+                             mpm_real *max_v2, long *bad) {
+  /* the 8 blocks around the owner block as an AoS pad: v_new xyz, (FLIP) v_old xyz, (motion)
+     v_m xyz per node (mpm_g2p_pad_stride); and the blocks of the next owner block are requested
+     while this one is processed */
+  const mpm_real *vel[9] = {val->v[0], val->v[1], val->v[2]};
+  int count = 3;
+  if (!apic)
+    for (int d = 0; d < 3; ++d) vel[count++] = val->v0[d];
+  if (motion)
+    for (int d = 0; d < 3; ++d) vel[count++] = val->vm[d];
   if ((size_t)b + 1 < g->owner_count) MPM_PAD_PREFETCH(g, b + 1, count, vel, 0);
-  mpm_real pad[MPM_PAD_NODES * 8] __attribute__((aligned(MPM_ALIGN)));
-  mpm_pad_gather(W, g, b, count, vel, MPM_PAD_STRIDE(apic), pad);
+  mpm_real pad[MPM_PAD_NODES * 12] __attribute__((aligned(MPM_ALIGN)));
+  mpm_pad_gather(W, g, b, count, vel, mpm_g2p_pad_stride(apic, motion), pad);
   const int org[3] = {g->coord[b][0] * MPM_BLOCK, g->coord[b][1] * MPM_BLOCK,
                       g->coord[b][2] * MPM_BLOCK};
   const mpm_real *const x[3] = {p->x[0], p->x[1], p->x[2]};
@@ -185,8 +191,8 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
       mpm_lane_stencil s;
       mpm_lane_stencil_eval(W, &ctx->kernel, x, ctx->origin, idx, n, contiguous, 0, base, &s);
       mpm_g2p_lanes_out o;
-      mpm_g2p_lanes(W, apic, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org), MPM_PAD * MPM_PAD,
-                    MPM_PAD, &o);
+      mpm_g2p_lanes(W, apic, motion, &s, ctx->kernel.dx, pad, mpm_pad_offset(base, org),
+                    MPM_PAD * MPM_PAD, MPM_PAD, &o);
       if (bc != MPM_NOT_BOUNDARY) mpm_ghost_apic_g2p(W, ga, bc, &s, o.B);
       batch_update(apic, ctx, p, idx, n, contiguous, &o, max_v2, bad);
     }
@@ -203,31 +209,41 @@ ALWAYS_INLINE void g2p_block(const int W, const int apic, const mpm_transfer_ctx
 typedef void (*g2p_block_fn)(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                              const mpm_grid_values *val, mpm_particles *p, int32_t b,
                              mpm_real *max_v2, long *bad);
-#define G2P_BLOCK(W, A)                                                                            \
-  static void g2p_block_w##W##_a##A(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,         \
-                                    const mpm_grid_values *val, mpm_particles *p, int32_t b,       \
-                                    mpm_real *max_v2, long *bad) {                                 \
-    g2p_block(W, A, ctx, g, val, p, b, max_v2, bad);                                               \
+#define G2P_BLOCK(W, A, M)                                                                         \
+  static void g2p_block_w##W##_a##A##_m##M(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,  \
+                                           const mpm_grid_values *val, mpm_particles *p,           \
+                                           int32_t b, mpm_real *max_v2, long *bad) {               \
+    g2p_block(W, A, M, ctx, g, val, p, b, max_v2, bad);                                            \
   }
-G2P_BLOCK(2, 0)
-G2P_BLOCK(2, 1)
-G2P_BLOCK(3, 0)
-G2P_BLOCK(3, 1)
-G2P_BLOCK(4, 0)
-G2P_BLOCK(4, 1)
+G2P_BLOCK(2, 0, 0)
+G2P_BLOCK(2, 1, 0)
+G2P_BLOCK(3, 0, 0)
+G2P_BLOCK(3, 1, 0)
+G2P_BLOCK(4, 0, 0)
+G2P_BLOCK(4, 1, 0)
+G2P_BLOCK(2, 0, 1)
+G2P_BLOCK(2, 1, 1)
+G2P_BLOCK(3, 0, 1)
+G2P_BLOCK(3, 1, 1)
+G2P_BLOCK(4, 0, 1)
+G2P_BLOCK(4, 1, 1)
 #undef G2P_BLOCK
 
-/* [width: 2, 3, 4][apic] */
-static const g2p_block_fn g2p_block_variants[3][2] = {
-    {g2p_block_w2_a0, g2p_block_w2_a1},
-    {g2p_block_w3_a0, g2p_block_w3_a1},
-    {g2p_block_w4_a0, g2p_block_w4_a1},
+/* [motion field][width: 2, 3, 4][apic] */
+static const g2p_block_fn g2p_block_variants[2][3][2] = {
+    {{g2p_block_w2_a0_m0, g2p_block_w2_a1_m0},
+     {g2p_block_w3_a0_m0, g2p_block_w3_a1_m0},
+     {g2p_block_w4_a0_m0, g2p_block_w4_a1_m0}},
+    {{g2p_block_w2_a0_m1, g2p_block_w2_a1_m1},
+     {g2p_block_w3_a0_m1, g2p_block_w3_a1_m1},
+     {g2p_block_w4_a0_m1, g2p_block_w4_a1_m1}},
 };
 
 mpm_g2p_result mpm_g2p_sparse(const mpm_transfer_ctx *ctx, const mpm_sparse_grid *g,
                               const mpm_grid_values *val, mpm_particles *p) {
   const int apic = ctx->transfer == MPM_TRANSFER_APIC;
-  const g2p_block_fn block = g2p_block_variants[mpm_width_index(ctx->kernel.width)][apic];
+  const g2p_block_fn block =
+      g2p_block_variants[val->vm[0] != NULL][mpm_width_index(ctx->kernel.width)][apic];
   const long nb = (long)g->owner_count;
   mpm_real max_v2 = 0;
   long bad = -1;

@@ -52,19 +52,22 @@ MPM_ALWAYS_INLINE void mpm_p2g_particle(const int W, const mpm_stencil *s, mpm_r
 typedef struct mpm_g2p_gather {
   mpm_real v[3];    /* PIC velocity sum w v^{n+1} */
   mpm_real dv[3];   /* FLIP increment sum w (v^{n+1} - v^n) */
-  mpm_real grad[9]; /* sum v^{n+1} grad w^T */
+  mpm_real grad[9]; /* sum v^{n+1} grad w^T (with a motion field: sum v_m grad w^T) */
   mpm_real B[9];    /* APIC: B_p = sum w v^{n+1} (x_i - x_p)^T */
+  mpm_real xv[3];   /* the velocity the particle moves by: v, or sum w v_m */
 } mpm_g2p_gather;
 
 /* f = distance of the particle from its base node in cells; dx the cell size. vn: the new
- * velocity v^{n+1} per axis, vo: the old one v^n (read for FLIP only), both offset to the base
- * node. */
+ * velocity v^{n+1} per axis, vo: the old one v^n (read for FLIP only), vm: NULL, or the motion
+ * field (grid.h) that grad and xv are taken from, all offset to the base node. */
 MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const mpm_real f[3],
                                         mpm_real dx, int flip, int apic,
                                         const mpm_real *const vn[3], const mpm_real *const vo[3],
-                                        long sx, long sy, mpm_g2p_gather *o) {
+                                        const mpm_real *const vm[3], long sx, long sy,
+                                        mpm_g2p_gather *o) {
   mpm_real v0 = 0, v1 = 0, v2 = 0, d0 = 0, d1 = 0, d2 = 0;
-  mpm_real G[9] = {0}, B[9] = {0};
+  mpm_real G[9] = {0}, B[9] = {0}, X[3] = {0, 0, 0};
+  const mpm_real *const *vg = vm ? vm : vn; /* what grad and xv read */
   for (int i = 0; i < W; ++i)
     for (int j = 0; j < W; ++j) {
       const mpm_real wij = s->w[0][i] * s->w[1][j];
@@ -85,15 +88,21 @@ MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const
           d2 += w * (uz - vo[2][n]);
         }
         const mpm_real gx = gx_ij * wz, gy = gy_ij * wz, gz = wij * s->dw[2][k];
-        G[0] += ux * gx;
-        G[1] += ux * gy;
-        G[2] += ux * gz;
-        G[3] += uy * gx;
-        G[4] += uy * gy;
-        G[5] += uy * gz;
-        G[6] += uz * gx;
-        G[7] += uz * gy;
-        G[8] += uz * gz;
+        const mpm_real mx = vg[0][n], my = vg[1][n], mz = vg[2][n];
+        if (vm) {
+          X[0] += w * mx;
+          X[1] += w * my;
+          X[2] += w * mz;
+        }
+        G[0] += mx * gx;
+        G[1] += mx * gy;
+        G[2] += mx * gz;
+        G[3] += my * gx;
+        G[4] += my * gy;
+        G[5] += my * gz;
+        G[6] += mz * gx;
+        G[7] += mz * gy;
+        G[8] += mz * gz;
         if (apic) {
           const mpm_real rz = ((mpm_real)k - f[2]) * dx;
           const mpm_real ax = w * rx, ay = w * ry, az = w * rz;
@@ -115,6 +124,7 @@ MPM_ALWAYS_INLINE void mpm_g2p_particle(const int W, const mpm_stencil *s, const
   o->dv[0] = d0;
   o->dv[1] = d1;
   o->dv[2] = d2;
+  for (int d = 0; d < 3; ++d) o->xv[d] = vm ? X[d] : o->v[d];
   for (int c = 0; c < 9; ++c) {
     o->grad[c] = G[c];
     o->B[c] = B[c];

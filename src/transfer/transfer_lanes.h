@@ -342,30 +342,47 @@ MPM_ALWAYS_INLINE void mpm_p2g_lanes_acc(const int W, const mpm_lane_stencil *s,
 /* Lane results of G2P. */
 typedef struct mpm_g2p_lanes_out {
   mpm_vl v[3], dv[3], grad[9], B[9];
+  mpm_vl xv[3]; /* the velocity the particle moves by: v, or with a motion channel sum w v_m */
 } mpm_g2p_lanes_out;
 
-/* G2P of one batch from an AoS pad (per node: v_new xyz, then for FLIP v_old xyz). */
-MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane_stencil *s,
-                                     mpm_real dx, const mpm_real *pad, long off, long sx, long sy,
-                                     mpm_g2p_lanes_out *o) {
+/* The G2P pads' layout: per node v_new xyz, then for FLIP v_old xyz, then with a motion field
+ * (grid.h, vm) its xyz, in `stride` reals. */
+MPM_ALWAYS_INLINE int mpm_g2p_pad_stride(int apic, int motion) {
+  return motion ? (apic ? 8 : 12) : MPM_PAD_STRIDE(apic);
+}
+
+/* G2P of one batch from an AoS pad (mpm_g2p_pad_stride). With `motion`, grad v and the
+ * particle's motion xv are taken from the motion channel, v, B and the FLIP increment from
+ * v_new; without, all from v_new (xv = v). */
+MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const int motion,
+                                     const mpm_lane_stencil *s, mpm_real dx, const mpm_real *pad,
+                                     long off, long sx, long sy, mpm_g2p_lanes_out *o) {
+  const int stride = mpm_g2p_pad_stride(apic, motion), mo = apic ? 3 : 6;
   mpm_vl rw[3][MPM_STENCIL_MAX]; /* w (x_i - x_p) per axis, m */
   for (int d = 0; d < 3; ++d)
     for (int q = 0; q < W; ++q) rw[d][q] = s->w[d][q] * (((mpm_real)q - s->f[d]) * dx);
   const mpm_vl zero = {0};
-  mpm_vl v[3], gx[3], gy[3], gz[3], bx[3], by[3], bz[3], dv[3];
-  for (int d = 0; d < 3; ++d) v[d] = gx[d] = gy[d] = gz[d] = bx[d] = by[d] = bz[d] = dv[d] = zero;
+  mpm_vl v[3], gx[3], gy[3], gz[3], bx[3], by[3], bz[3], dv[3], xv[3];
+  for (int d = 0; d < 3; ++d)
+    v[d] = gx[d] = gy[d] = gz[d] = bx[d] = by[d] = bz[d] = dv[d] = xv[d] = zero;
   for (int i = 0; i < W; ++i) {
-    mpm_vl Y0[3], Y1[3], Y2[3], Y3[3], Y4[3], YD[3];
-    for (int d = 0; d < 3; ++d) Y0[d] = Y1[d] = Y2[d] = Y3[d] = Y4[d] = YD[d] = zero;
+    mpm_vl Y0[3], Y1[3], Y2[3], Y3[3], Y4[3], YD[3], YM[3];
+    for (int d = 0; d < 3; ++d) Y0[d] = Y1[d] = Y2[d] = Y3[d] = Y4[d] = YD[d] = YM[d] = zero;
     for (int j = 0; j < W; ++j) {
-      mpm_vl Z0[3], Z1[3], Z2[3], ZD[3];
-      for (int d = 0; d < 3; ++d) Z0[d] = Z1[d] = Z2[d] = ZD[d] = zero;
+      mpm_vl Z0[3], Z1[3], Z2[3], ZD[3], ZM[3];
+      for (int d = 0; d < 3; ++d) Z0[d] = Z1[d] = Z2[d] = ZD[d] = ZM[d] = zero;
       for (int k = 0; k < W; ++k) {
-        const mpm_real *node = pad + (off + i * sx + j * sy + k) * MPM_PAD_STRIDE(apic);
+        const mpm_real *node = pad + (off + i * sx + j * sy + k) * stride;
         for (int d = 0; d < 3; ++d) {
           const mpm_vl u = mpm_vl_splat(node[d]);
           Z0[d] += s->w[2][k] * u;
-          Z1[d] += s->dw[2][k] * u;
+          if (motion) {
+            const mpm_vl um = mpm_vl_splat(node[mo + d]);
+            ZM[d] += s->w[2][k] * um;
+            Z1[d] += s->dw[2][k] * um;
+          } else {
+            Z1[d] += s->dw[2][k] * u;
+          }
           if (apic)
             Z2[d] += rw[2][k] * u;
           else
@@ -373,9 +390,12 @@ MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane
         }
       }
       for (int d = 0; d < 3; ++d) {
+        /* the motion's w sums (ZM; Z0 without a motion channel) make the gradient's */
+        const mpm_vl zm = motion ? ZM[d] : Z0[d];
         Y0[d] += s->w[1][j] * Z0[d];
-        Y1[d] += s->dw[1][j] * Z0[d];
+        Y1[d] += s->dw[1][j] * zm;
         Y2[d] += s->w[1][j] * Z1[d];
+        if (motion) YM[d] += s->w[1][j] * ZM[d];
         if (apic) {
           Y3[d] += rw[1][j] * Z0[d];
           Y4[d] += s->w[1][j] * Z2[d];
@@ -385,10 +405,12 @@ MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane
       }
     }
     for (int d = 0; d < 3; ++d) {
+      const mpm_vl ym = motion ? YM[d] : Y0[d];
       v[d] += s->w[0][i] * Y0[d];
-      gx[d] += s->dw[0][i] * Y0[d];
+      gx[d] += s->dw[0][i] * ym;
       gy[d] += s->w[0][i] * Y1[d];
       gz[d] += s->w[0][i] * Y2[d];
+      if (motion) xv[d] += s->w[0][i] * YM[d];
       if (apic) {
         bx[d] += rw[0][i] * Y0[d];
         by[d] += s->w[0][i] * Y3[d];
@@ -400,6 +422,7 @@ MPM_ALWAYS_INLINE void mpm_g2p_lanes(const int W, const int apic, const mpm_lane
   }
   for (int d = 0; d < 3; ++d) {
     o->v[d] = v[d];
+    o->xv[d] = motion ? xv[d] : v[d];
     o->dv[d] = dv[d];
     o->grad[3 * d] = gx[d];
     o->grad[3 * d + 1] = gy[d];

@@ -1,0 +1,261 @@
+/* test_implicit_newmark.c - the implicit step with Newmark's positions (solver.scheme "newmark":
+ * beta = 1/2, gamma = 1; solver/implicit.h): the grid moves by the mean of the step's
+ * velocities, and G2P moves and deforms the particles by it (grid.h, vm).
+ *   - A block falls freely at steps of a frame (1/60 s): its centre of mass follows
+ *     y0 - g t^2 / 2 to the rounding, where backward Euler's lags by g dt t / 2 (checked too, so
+ *     the test tells the schemes apart), on the uniform grid and on the multi-level one; its
+ *     momentum is M g t, its elastic energy stays near zero, and its total energy never rises.
+ *   - A rubber block thrown spinning onto a floor with friction at a long step: its total energy
+ *     never rises above the start, and it comes to rest nearly unstrained.
+ *   - Steps in contact are backward Euler: a cantilever clamped by a sticky box (in contact at
+ *     every step) runs bitwise as with "backward_euler", and at rest a step is one Newton
+ *     iteration and at most 5 CG ones. (With Newmark's positions in contact steps, a rubber
+ *     bunny landing at the CFL rate rebounded faster than its step allowed, and one resting on
+ *     a floor with friction slowly gained strain.)
+ *   - 1 and 2 threads give bitwise the same run.
+ *   - Particle domains with "newmark" are refused, naming solver.scheme. */
+#include "support.h"
+#include "core/parallel.h"
+#include "sim/sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static double com_height(const mpm_sim *sim) {
+  const mpm_particles *p = &sim->particles;
+  double m = 0, my = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    m += p->mass[i];
+    my += (double)p->mass[i] * p->x[1][i];
+  }
+  return my / m;
+}
+
+/* A 1e7 Pa block falling from rest for 0.4 s at dt = 1/60 s (dx 8 cm: a step of the fall stays
+ * within a cell) with `scheme`, or with `levels` > 0 for 0.2 s at 1/120 s on a multi-level grid
+ * whose finer level holds the block's +x half (the guard allows half a fine cell a step). Returns
+ * the largest distance of its centre of mass from y0 - g t^2 / 2 over the frames; checks momentum
+ * and energy. */
+static double free_fall(const char *scheme, int levels) {
+  char domain[256], text[2048];
+  if (levels)
+    snprintf(domain, sizeof domain,
+             "\"domain\": {\"min\": [0,0,0], \"max\": [0.96,2.4,0.96], \"dx\": 0.08, "
+             "\"levels\": 2, \"refine\": [{\"level\": 1, \"box\": {\"min\": [0.48,0,0], "
+             "\"max\": [0.96,2.4,0.96]}}]}");
+  else
+    snprintf(domain, sizeof domain,
+             "\"domain\": {\"min\": [0,0,0], \"max\": [0.96,2.4,0.96], \"dx\": 0.08}");
+  snprintf(text, sizeof text,
+           "{%s, \"gravity\": [0,-9.81,0], \"time\": {\"end\": %g, \"fps\": 20},"
+           " \"solver\": {\"integrator\": \"implicit\", \"dt\": %.10g, \"scheme\": \"%s\","
+           " \"preconditioner\": \"multigrid\"},"
+           " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e7, \"nu\": 0.3,"
+           " \"density\": 1000}],"
+           " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.48,1.6,0.48],"
+           " \"half_extent\": [0.16,0.16,0.16]}, \"material\": \"m\", \"jitter\": 0}]}",
+           domain, levels ? 0.2 : 0.4, levels ? 1.0 / 120 : 1.0 / 60, scheme);
+  mpm_sim *sim = test_sim_from_json(text, "newmark_fall.json");
+  assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("newmark_fall")), MPM_OK);
+  const double y0 = com_height(sim);
+  double worst = 0;
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim)) {
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+    const double t = sim->time;
+    worst = fmax(worst, fabs(com_height(sim) - (y0 - 0.5 * 9.81 * t * t)));
+  }
+  const double M = sim->out.stats[0].mass, start = sim->out.stats[0].total_energy;
+  double elastic = 0;
+  for (int f = 1; f <= mpm_sim_frame_count(sim); ++f) {
+    const mpm_stats_row *row = &sim->out.stats[f];
+    const double p = -M * 9.81 * row->time;
+    if (fabs(row->momentum[1] - p) > 1e-4 * fabs(p))
+      fail_msg("%s: frame %d: momentum %.9g, M g t = %.9g", scheme, f, row->momentum[1], p);
+    if (!(row->total_energy <= start + 1e-5 * fabs(start)))
+      fail_msg("%s: frame %d: total energy %.9g J, above the start %.9g J", scheme, f,
+               row->total_energy, start);
+    /* the solve's tolerance (1e-2 of the weight's impulse) leaves strains of about 1e-4 */
+    if (!(fabs(row->elastic) <= 1e-5 * fabs(start)))
+      fail_msg("%s: frame %d: elastic energy %.3g J in free fall", scheme, f, row->elastic);
+    elastic = fmax(elastic, fabs(row->elastic));
+  }
+  print_message("%s: elastic energy at most %.3g J (%.2g of the total)\n", scheme, elastic,
+                elastic / fabs(start));
+  mpm_sim_destroy(sim);
+  return worst;
+}
+
+static void test_free_fall(void **state) {
+  (void)state;
+  for (int levels = 0; levels < 2; ++levels) {
+    const double nm = free_fall("newmark", levels), be = free_fall("backward_euler", levels);
+    /* backward Euler's lag at the end: g dt t / 2 = 33 mm (uniform), 8 mm (levels) */
+    print_message("%s grid: centre of mass off y0 - g t^2 / 2 by at most %.3g m (Newmark), "
+                  "%.3g m (backward Euler)\n",
+                  levels ? "multi-level" : "uniform", nm, be);
+    assert_true(be > (levels ? 0.006 : 0.025));
+    /* float: the particles' positions near 1.9 m round to 1e-7 m, the 30 steps' sums on them */
+    assert_true(nm < TOL(2e-5, 1e-9));
+  }
+}
+
+/* A rubber block (E = 1e7 Pa) thrown spinning onto a floor with friction 0.5 at 1/240 s. */
+static void test_landing(void **state) {
+  (void)state;
+  mpm_sim *sim = test_sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,0.6,0.6], \"dx\": 0.02},"
+      " \"gravity\": [0,-9.81,0], \"time\": {\"end\": 0.5, \"fps\": 24},"
+      " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.0041666667, \"scheme\": \"newmark\"},"
+      " \"materials\": [{\"name\": \"rubber\", \"model\": \"neo_hookean\", \"E\": 1e7,"
+      " \"nu\": 0.4, \"density\": 1100}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.4,0.26,0.3],"
+      " \"half_extent\": [0.08,0.08,0.08]}, \"material\": \"rubber\", \"jitter\": 0,"
+      " \"velocity\": [1,0,0], \"angular_velocity\": [0,2,0]}],"
+      " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0,0.1,0],"
+      " \"normal\": [0,1,0]}, \"rule\": \"separate\", \"friction\": 0.5}]}",
+      "newmark_landing.json");
+  assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("newmark_landing")), MPM_OK);
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  const double start = sim->out.stats[0].total_energy;
+  const double brought = start - sim->out.stats[mpm_sim_frame_count(sim)].gravitational;
+  double worst = -INFINITY;
+  for (int f = 1; f <= mpm_sim_frame_count(sim); ++f) {
+    const mpm_stats_row *row = &sim->out.stats[f];
+    worst = fmax(worst, row->total_energy - start);
+    print_message("frame %2d: kinetic %.4f, elastic %.4f, total %+.5f J from the start\n", f,
+                  row->kinetic, row->elastic, row->total_energy - start);
+  }
+  const mpm_stats_row *end = &sim->out.stats[mpm_sim_frame_count(sim)];
+  print_message("the most above the start: %.3g J (%.2g of it); at the end %.4f J elastic of "
+                "the %.3f J it brought down\n",
+                worst, worst / start, end->elastic, brought);
+  assert_true(worst <= 1e-5 * fabs(start));
+  assert_true(end->elastic < 0.05 * brought);
+  mpm_sim_destroy(sim);
+}
+
+/* The cantilever of test_implicit_balance.c (0.6 m free, E = 6e7 Pa, clamped by a sticky box) at
+ * dt = 0.01 s. Returns the mean tip deflection at the end; the rest rows' figures in rest. */
+static double cantilever(const char *scheme, mpm_stats_row rest[2]) {
+  char text[2048];
+  snprintf(
+      text, sizeof text,
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [0.9,0.6,0.3], \"dx\": 0.025},"
+      " \"gravity\": [0,-9.81,0], \"time\": {\"end\": 2.0, \"fps\": 4},"
+      " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.01, \"scheme\": \"%s\"},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"fixed_corotated\", \"E\": 6e7, \"nu\": 0,"
+      " \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.45,0.4,0.15],"
+      " \"half_extent\": [0.35,0.05,0.05]}, \"material\": \"m\", \"jitter\": 0}],"
+      " \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": [0.1,0.4,0.15],"
+      " \"half_extent\": [0.1,0.1,0.1]}, \"rule\": \"sticky\"}]}",
+      scheme);
+  mpm_sim *sim = test_sim_from_json(text, "newmark_cantilever.json");
+  assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("newmark_cantilever")), MPM_OK);
+  const mpm_particles *p = &sim->particles;
+  double y0 = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < p->count; ++i)
+    if (p->x[0][i] > 0.775) y0 += p->x[1][i], ++n;
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  double y = 0;
+  size_t m = 0;
+  for (size_t i = 0; i < p->count; ++i)
+    if (p->x[0][i] > 0.77) y += p->x[1][i], ++m;
+  assert_int_equal(m, n);
+  for (int f = 1; f <= mpm_sim_frame_count(sim); ++f)
+    print_message("%s frame %d: kinetic %.3g J, %.2f Newton and %.2f CG iterations a step\n",
+                  scheme, f, sim->out.stats[f].kinetic, sim->out.stats[f].newton_iterations_mean,
+                  sim->out.stats[f].cg_iterations_mean);
+  memcpy(rest, &sim->out.stats[7], 2 * sizeof *rest);
+  mpm_sim_destroy(sim);
+  return (y0 - y) / (double)n;
+}
+
+static void test_contact_steps_backward_euler(void **state) {
+  (void)state;
+  mpm_stats_row rest[2], be_rest[2];
+  const double nm = cantilever("newmark", rest), be = cantilever("backward_euler", be_rest);
+  print_message("tip deflection: Newmark %.6g m, backward Euler %.6g m (%+.2f%%); at rest %.2f "
+                "Newton and %.2f CG iterations a step\n",
+                nm, be, 100 * (nm / be - 1), rest[1].newton_iterations_mean,
+                rest[1].cg_iterations_mean);
+  assert_true(nm == be);
+  for (int f = 0; f < 2; ++f)
+    if (!(rest[f].newton_iterations_mean <= 1 && rest[f].cg_iterations_mean <= 5))
+      fail_msg("frame %d, at rest: %.2f Newton and %.2f CG iterations per step", f + 7,
+               rest[f].newton_iterations_mean, rest[f].cg_iterations_mean);
+}
+
+/* A spinning rubber ball thrown down onto a slip floor, 12 steps of 1/120 s, multigrid: some in
+ * flight (Newmark's), the rest in contact. */
+static mpm_sim *spin_run(void) {
+  mpm_sim *sim = test_sim_from_json(
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [0.6,0.6,0.6], \"dx\": 0.03},"
+      " \"gravity\": [0,-9.81,0], \"time\": {\"end\": 0.1, \"fps\": 10},"
+      " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.0083333333, \"scheme\": \"newmark\","
+      " \"preconditioner\": \"multigrid\"},"
+      " \"materials\": [{\"name\": \"rubber\", \"model\": \"neo_hookean\", \"E\": 1e6,"
+      " \"nu\": 0.4, \"density\": 1100}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"sphere\", \"center\": [0.3,0.3,0.3],"
+      " \"radius\": 0.1}, \"material\": \"rubber\", \"velocity\": [0.4,-1,0],"
+      " \"angular_velocity\": [0,4,0]}],"
+      " \"colliders\": [{\"shape\": {\"type\": \"halfspace\", \"point\": [0,0.1,0],"
+      " \"normal\": [0,1,0]}, \"rule\": \"slip\"}]}",
+      "newmark_spin.json");
+  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
+    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+  return sim;
+}
+
+static void test_threads_bitwise(void **state) {
+  (void)state;
+  mpm_sim *r[2];
+  for (int t = 0; t < 2; ++t) {
+    mpm_set_threads(t + 1);
+    r[t] = spin_run();
+  }
+  mpm_set_threads(0);
+  const mpm_particles *p = &r[0]->particles, *q = &r[1]->particles;
+  assert_int_equal(p->count, q->count);
+  for (int c = 0; c < 3; ++c) {
+    assert_memory_equal(p->x[c], q->x[c], p->count * sizeof(mpm_real));
+    assert_memory_equal(p->v[c], q->v[c], p->count * sizeof(mpm_real));
+  }
+  for (int c = 0; c < 9; ++c) assert_memory_equal(p->F[c], q->F[c], p->count * sizeof(mpm_real));
+  assert_int_equal(r[0]->cg_iterations, r[1]->cg_iterations);
+  mpm_sim_destroy(r[0]);
+  mpm_sim_destroy(r[1]);
+}
+
+static void test_domains_refused(void **state) {
+  (void)state;
+  mpm_scene scene;
+  mpm_error err;
+  const char *text =
+      "{\"domain\": {\"min\": [0,0,0], \"max\": [1,1,1], \"dx\": 0.1},"
+      " \"time\": {\"end\": 1, \"fps\": 10},"
+      " \"solver\": {\"integrator\": \"implicit\", \"scheme\": \"newmark\"},"
+      " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e6, \"nu\": 0.3,"
+      " \"density\": 1000}],"
+      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.5,0.5,0.5],"
+      " \"half_extent\": [0.2,0.2,0.2]}, \"material\": \"m\", \"jitter\": 0, \"domains\": true}]}";
+  assert_int_equal(mpm_scene_parse(text, "newmark_domains.json", &scene, &err), MPM_ERR_INVALID);
+  print_message("%s\n", err.message);
+  assert_non_null(strstr(err.message, "solver.scheme"));
+  assert_non_null(strstr(err.message, "bodies[0]"));
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_free_fall),
+      cmocka_unit_test(test_landing),
+      cmocka_unit_test(test_contact_steps_backward_euler),
+      cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_domains_refused),
+  };
+  return test_cleanup(cmocka_run_group_tests_name("implicit_newmark", tests, NULL, NULL));
+}
