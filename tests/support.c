@@ -119,6 +119,26 @@ struct mpm_sim *test_sim_from_json(const char *text, const char *name) {
   return sim;
 }
 
+double test_centre_height(const struct mpm_sim *sim) {
+  const mpm_particles *p = &sim->particles;
+  double m = 0, my = 0;
+  for (size_t i = 0; i < p->count; ++i) {
+    m += p->mass[i];
+    my += (double)p->mass[i] * p->x[1][i];
+  }
+  return my / m;
+}
+
+void test_assert_same_particles(const struct mpm_sim *a, const struct mpm_sim *b) {
+  const mpm_particles *p = &a->particles, *q = &b->particles;
+  assert_int_equal(p->count, q->count);
+  for (int c = 0; c < 3; ++c) {
+    assert_memory_equal(p->x[c], q->x[c], p->count * sizeof(mpm_real));
+    assert_memory_equal(p->v[c], q->v[c], p->count * sizeof(mpm_real));
+  }
+  for (int c = 0; c < 9; ++c) assert_memory_equal(p->F[c], q->F[c], p->count * sizeof(mpm_real));
+}
+
 /* Rest-state error of the domain particles against their reference positions. */
 double test_domain_rest_error(const struct mpm_sim *sim) {
   const mpm_domain_set *s = &sim->domains;

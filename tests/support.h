@@ -37,6 +37,12 @@ int test_cleanup(int failures);
 struct mpm_sim;
 struct mpm_sim *test_sim_from_json(const char *text, const char *name);
 
+/* The height (y) of the material points' centre of mass, m. */
+double test_centre_height(const struct mpm_sim *sim);
+
+/* Asserts two runs' material points bitwise equal: count, x, v and F. */
+void test_assert_same_particles(const struct mpm_sim *a, const struct mpm_sim *b);
+
 /* A small elastic block at rest in zero gravity, with domains, and one moving sphere collider
  * (the public API's and the allocator hook's tests). */
 extern const char *const test_block_json;

@@ -20,24 +20,14 @@ static const char *SCENE =
     " \"colliders\": [{\"name\": \"grip\", \"shape\": {\"type\": \"box\", \"center\": "
     "[0.4,0.9,0.4], \"half_extent\": [0.15,0.04,0.15]}, \"rule\": \"sticky\"%s}]}";
 
-static double com_y(const mpm_sim *sim) {
-  const mpm_particles *p = &sim->particles;
-  double m = 0, my = 0;
-  for (size_t i = 0; i < p->count; ++i) {
-    m += p->mass[i];
-    my += (double)p->mass[i] * p->x[1][i];
-  }
-  return my / m;
-}
-
 static void test_grip_lets_go(void **state) {
   (void)state;
   char text[2048];
   snprintf(text, sizeof text, SCENE, ", \"active\": [0, 0.1]");
   mpm_sim *sim = test_sim_from_json(text, "grip.json");
-  const double y0 = com_y(sim);
+  const double y0 = test_centre_height(sim);
   for (int f = 0; f < 2; ++f) assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK); /* t = 0.1 */
-  const double y_held = com_y(sim);
+  const double y_held = test_centre_height(sim);
   /* held: the block sags a little under its weight but does not fall (free fall: 5 cm) */
   assert_true(y0 - y_held < 0.02);
   const mpm_particles *p = &sim->particles;
@@ -45,7 +35,7 @@ static void test_grip_lets_go(void **state) {
   for (size_t i = 0; i < p->count; ++i) m += p->mass[i], vy += (double)p->mass[i] * p->v[1][i];
   vy /= m;
   for (int f = 2; f < 6; ++f) assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK); /* t = 0.3 */
-  const double y_end = com_y(sim), T = 0.2;
+  const double y_end = test_centre_height(sim), T = 0.2;
   const double expected = y_held + vy * T - 0.5 * 10 * T * T; /* free fall from the release */
   print_message("grip: centre of mass %.4f -> %.4f held (t = 0.1 s) -> %.4f at 0.3 s; free fall "
                 "from the release gives %.4f\n",
@@ -56,7 +46,7 @@ static void test_grip_lets_go(void **state) {
   snprintf(text, sizeof text, SCENE, "");
   sim = test_sim_from_json(text, "grip.json");
   while (sim->frame < sim->frame_count) assert_int_equal(mpm_sim_advance_frame(sim), MPM_OK);
-  assert_true(y0 - com_y(sim) < 0.02);
+  assert_true(y0 - test_centre_height(sim) < 0.02);
   mpm_sim_destroy(sim);
 }
 

@@ -289,12 +289,7 @@ static void test_threads_bitwise(void **state) {
     held_run("multigrid", 1e-3, 3, 3, &r[t]);
   }
   mpm_set_threads(0);
-  const mpm_particles *p = &r[0]->particles, *q = &r[1]->particles;
-  assert_int_equal(p->count, q->count);
-  for (int c = 0; c < 3; ++c) {
-    assert_memory_equal(p->x[c], q->x[c], p->count * sizeof(mpm_real));
-    assert_memory_equal(p->v[c], q->v[c], p->count * sizeof(mpm_real));
-  }
+  test_assert_same_particles(r[0], r[1]);
   assert_int_equal(r[0]->cg_iterations, r[1]->cg_iterations);
   mpm_sim_destroy(r[0]);
   mpm_sim_destroy(r[1]);
