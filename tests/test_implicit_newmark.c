@@ -5,14 +5,10 @@
  *     y0 - g t^2 / 2 to the rounding, where backward Euler's lags by g dt t / 2 (checked too, so
  *     the test tells the schemes apart), on the uniform grid and on the multi-level one; its
  *     momentum is M g t, its elastic energy stays near zero, and its total energy never rises.
- *   - Steps in contact are backward Euler: a cantilever clamped by a sticky box (in contact at
- *     every step) runs bitwise as with "backward_euler", and at rest a step is one Newton
- *     iteration and at most 5 CG ones. (With Newmark's positions in contact steps, a rubber
- *     bunny landing at the CFL rate rebounded faster than its step allowed, and one resting on
- *     a floor with friction slowly gained strain.)
  *   - 1 and 2 threads give bitwise the same run.
  *   - Particle domains with "newmark" are refused, naming solver.scheme.
- * A landing with friction, with each scheme, is test_implicit_balance.c's. */
+ * A landing with friction with each scheme, and a clamped cantilever (steps in contact are
+ * backward Euler's), are test_implicit_balance.c's. */
 #include "support.h"
 #include "core/parallel.h"
 #include "sim/sim.h"
@@ -89,60 +85,6 @@ static void test_free_fall(void **state) {
   }
 }
 
-/* The cantilever of test_implicit_balance.c (0.6 m free, E = 6e7 Pa, clamped by a sticky box) at
- * dt = 0.01 s. Returns the mean tip deflection at the end; the rest rows' figures in rest. */
-static double cantilever(const char *scheme, mpm_stats_row rest[2]) {
-  char text[2048];
-  snprintf(
-      text, sizeof text,
-      "{\"domain\": {\"min\": [0,0,0], \"max\": [0.9,0.6,0.3], \"dx\": 0.025},"
-      " \"gravity\": [0,-9.81,0], \"time\": {\"end\": 2.0, \"fps\": 4},"
-      " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.01, \"scheme\": \"%s\"},"
-      " \"materials\": [{\"name\": \"m\", \"model\": \"fixed_corotated\", \"E\": 6e7, \"nu\": 0,"
-      " \"density\": 1000}],"
-      " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.45,0.4,0.15],"
-      " \"half_extent\": [0.35,0.05,0.05]}, \"material\": \"m\", \"jitter\": 0}],"
-      " \"colliders\": [{\"shape\": {\"type\": \"box\", \"center\": [0.1,0.4,0.15],"
-      " \"half_extent\": [0.1,0.1,0.1]}, \"rule\": \"sticky\"}]}",
-      scheme);
-  mpm_sim *sim = test_sim_from_json(text, "newmark_cantilever.json");
-  assert_int_equal(mpm_sim_enable_output(sim, test_temp_dir("newmark_cantilever")), MPM_OK);
-  const mpm_particles *p = &sim->particles;
-  double y0 = 0;
-  size_t n = 0;
-  for (size_t i = 0; i < p->count; ++i)
-    if (p->x[0][i] > 0.775) y0 += p->x[1][i], ++n;
-  while (mpm_sim_frame(sim) < mpm_sim_frame_count(sim))
-    if (mpm_sim_advance_frame(sim) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
-  double y = 0;
-  size_t m = 0;
-  for (size_t i = 0; i < p->count; ++i)
-    if (p->x[0][i] > 0.77) y += p->x[1][i], ++m;
-  assert_int_equal(m, n);
-  for (int f = 1; f <= mpm_sim_frame_count(sim); ++f)
-    print_message("%s frame %d: kinetic %.3g J, %.2f Newton and %.2f CG iterations a step\n",
-                  scheme, f, sim->out.stats[f].kinetic, sim->out.stats[f].newton_iterations_mean,
-                  sim->out.stats[f].cg_iterations_mean);
-  memcpy(rest, &sim->out.stats[7], 2 * sizeof *rest);
-  mpm_sim_destroy(sim);
-  return (y0 - y) / (double)n;
-}
-
-static void test_contact_steps_backward_euler(void **state) {
-  (void)state;
-  mpm_stats_row rest[2], be_rest[2];
-  const double nm = cantilever("newmark", rest), be = cantilever("backward_euler", be_rest);
-  print_message("tip deflection: Newmark %.6g m, backward Euler %.6g m (%+.2f%%); at rest %.2f "
-                "Newton and %.2f CG iterations a step\n",
-                nm, be, 100 * (nm / be - 1), rest[1].newton_iterations_mean,
-                rest[1].cg_iterations_mean);
-  assert_true(nm == be);
-  for (int f = 0; f < 2; ++f)
-    if (!(rest[f].newton_iterations_mean <= 1 && rest[f].cg_iterations_mean <= 5))
-      fail_msg("frame %d, at rest: %.2f Newton and %.2f CG iterations per step", f + 7,
-               rest[f].newton_iterations_mean, rest[f].cg_iterations_mean);
-}
-
 /* A spinning rubber ball thrown down onto a slip floor, 12 steps of 1/120 s, multigrid: some in
  * flight (Newmark's), the rest in contact. */
 static mpm_sim *spin_run(void) {
@@ -200,7 +142,6 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_free_fall),
 
-      cmocka_unit_test(test_contact_steps_backward_euler),
       cmocka_unit_test(test_threads_bitwise),
       cmocka_unit_test(test_domains_refused),
   };
