@@ -5,7 +5,7 @@
  *     y0 - g t^2 / 2 to the rounding, where backward Euler's lags by g dt t / 2 (checked too, so
  *     the test tells the schemes apart), on the uniform grid and on the multi-level one; its
  *     momentum is M g t, its elastic energy stays near zero, and its total energy never rises.
- *   - 1 and 2 threads give bitwise the same run.
+ *   - 1 and 2 threads give bitwise the same run, and so does a run resumed from a checkpoint.
  *   - Particle domains with "newmark" are refused, naming solver.scheme.
  * A landing with friction with each scheme, and a clamped cantilever (steps in contact are
  * backward Euler's), are test_implicit_balance.c's. */
@@ -120,6 +120,48 @@ static void test_threads_bitwise(void **state) {
   mpm_sim_destroy(r[1]);
 }
 
+/* A run checkpointed after a frame of Newmark steps and resumed ends bitwise as the whole run
+ * (the scheme keeps no state of its own: v^n is P2G's). */
+static void test_resume_bitwise(void **state) {
+  (void)state;
+  const char *dir = test_temp_dir("newmark_resume");
+  char scene[512], full[512], part[512], path[1100];
+  snprintf(scene, sizeof scene, "%s/scene.json", dir);
+  snprintf(full, sizeof full, "%s/full", dir);
+  snprintf(part, sizeof part, "%s/part", dir);
+  FILE *f = fopen(scene, "w");
+  assert_non_null(f);
+  fputs("{\"domain\": {\"min\": [0,0,0], \"max\": [0.96,2.4,0.96], \"dx\": 0.08},"
+        " \"gravity\": [0,-9.81,0], \"time\": {\"end\": 0.1, \"fps\": 20},"
+        " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.0166666667,"
+        " \"scheme\": \"newmark\", \"preconditioner\": \"multigrid\"},"
+        " \"materials\": [{\"name\": \"m\", \"model\": \"neo_hookean\", \"E\": 1e7,"
+        " \"nu\": 0.3, \"density\": 1000}],"
+        " \"bodies\": [{\"shape\": {\"type\": \"box\", \"center\": [0.48,1.6,0.48],"
+        " \"half_extent\": [0.16,0.16,0.16]}, \"material\": \"m\","
+        " \"angular_velocity\": [0,3,1]}]}",
+        f);
+  assert_int_equal(fclose(f), 0);
+  mpm_sim *r[3];
+  char err[1024];
+  for (int k = 0; k < 3; ++k)
+    if (mpm_sim_create_from_file(scene, &r[k], err, sizeof err) != MPM_OK) fail_msg("%s", err);
+  assert_int_equal(mpm_sim_enable_output(r[0], full), MPM_OK);
+  while (mpm_sim_frame(r[0]) < mpm_sim_frame_count(r[0]))
+    assert_int_equal(mpm_sim_advance_frame(r[0]), MPM_OK);
+  assert_int_equal(mpm_sim_enable_output(r[1], part), MPM_OK);
+  assert_int_equal(mpm_sim_advance_frame(r[1]), MPM_OK);
+  assert_int_equal(mpm_sim_write_checkpoint(r[1], path, sizeof path), MPM_OK);
+  mpm_sim_destroy(r[1]);
+  assert_int_equal(mpm_sim_resume(r[2], part, path, sizeof path), MPM_OK);
+  while (mpm_sim_frame(r[2]) < mpm_sim_frame_count(r[2]))
+    assert_int_equal(mpm_sim_advance_frame(r[2]), MPM_OK);
+  assert_int_equal(r[0]->steps, r[2]->steps);
+  test_assert_same_particles(r[0], r[2]);
+  mpm_sim_destroy(r[0]);
+  mpm_sim_destroy(r[2]);
+}
+
 static void test_domains_refused(void **state) {
   (void)state;
   mpm_scene scene;
@@ -143,6 +185,7 @@ int main(void) {
       cmocka_unit_test(test_free_fall),
 
       cmocka_unit_test(test_threads_bitwise),
+      cmocka_unit_test(test_resume_bitwise),
       cmocka_unit_test(test_domains_refused),
   };
   return test_cleanup(cmocka_run_group_tests_name("implicit_newmark", tests, NULL, NULL));
