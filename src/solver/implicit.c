@@ -569,6 +569,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
      weight, which made a body at rest look 5% of its weight out of balance to the Newton test
      (and Zhu's step aim at another v* than the potential's) */
   start_velocity(s);
+  s->newmark = s->theta < 1;
   if (s->theta < 1) { /* Newmark's positions where nothing touches an obstacle */
     const int touching = touches(s);
     if (touching < 0) return MPM_ERR_NOMEM;

@@ -151,6 +151,7 @@ typedef struct mpm_implicit {
   int mg_wanted, mg_built; /* this step: the multigrid preconditions its solves; it is built */
   int mg_prepared;         /* this step: its hierarchy (rows, levels) is laid out */
   int mg_stale;            /* its values are to be rebuilt at the current iterate */
+  int newmark;             /* the step was asked for Newmark's positions (theta < 1 at its start) */
 } mpm_implicit;
 
 /* Scratch for the step (from s->arena). MPM_OK, or MPM_ERR_NOMEM when out of memory. */
