@@ -247,13 +247,20 @@ static double incremental_potential(mpm_implicit *s, mpm_real *const v[3], mpm_r
   return 0.5 * mpm_dofs_dot(d, d->mass, t, t) + (s->theta < 1 ? phi / s->theta : phi);
 }
 
-/* u(v) = dt ((1 - theta) v^n + theta v): dt v for backward Euler (theta 1) */
+/* u(v) = dt ((1 - theta) v^n + theta v): dt v for backward Euler (theta 1); v NULL: v = 0 (the
+ * step's base u(0), theta < 1) */
 static void displacement(mpm_implicit *s, mpm_real *const v[3], mpm_real *const u[3]) {
   const long n = (long)s->dofs->count;
   const mpm_real dt = s->dt, a = s->theta * dt, b = dt - a;
   for (int c = 0; c < 3; ++c) {
-    const mpm_real *restrict vc = v[c];
     mpm_real *restrict uc = u[c];
+    if (!v) {
+      const mpm_real *restrict v0 = s->dofs->v0[c];
+#pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
+      for (long i = 0; i < n; ++i) uc[i] = b * v0[i];
+      continue;
+    }
+    const mpm_real *restrict vc = v[c];
     if (s->theta < 1) {
       const mpm_real *restrict v0 = s->dofs->v0[c];
 #pragma omp parallel for simd schedule(static) if (n > MPM_PARALLEL_MIN)
@@ -577,14 +584,7 @@ mpm_status mpm_implicit_solve(mpm_implicit *s, const mpm_implicit_options *o,
     s->apply_scale = s->theta * s->dt * s->dt;
   }
   if (s->theta < 1) { /* the base u(0) = dt (1 - theta) v^n */
-    const long nd = (long)d->count;
-    const mpm_real a = s->dt - s->theta * s->dt;
-    for (int c = 0; c < 3; ++c) {
-      const mpm_real *restrict v0 = d->v0[c];
-      mpm_real *restrict uc = u[c];
-#pragma omp parallel for simd schedule(static) if (nd > MPM_PARALLEL_MIN)
-      for (long i = 0; i < nd; ++i) uc[i] = a * v0[i];
-    }
+    displacement(s, NULL, u);
     mpm_implicit_displace(s, u);
   } else {
     mpm_implicit_displace(s, NULL);
