@@ -187,13 +187,23 @@ int mpm_cli_parse_int(const char *opt, const char *value, int lo, int hi, int *o
   return 0;
 }
 
-/* The OpenMP runtime reads its wait policy once, when it is loaded. Threads that spin at
- * barriers cost a busy machine dearly (jello_cubes, 12 frames, 2 threads, one busy loop beside:
- * 3.4-4.6 s spinning, 2.1 s passive; five busy loops: 17.6-19.7 s against 4.8-5.0 s) and gain
- * an idle one little (1.15 s against 1.22 s), so the program asks for the passive policy unless
- * the environment chose one: it runs itself again with OMP_WAIT_POLICY=PASSIVE. */
-static void prefer_passive_threads(char **argv) {
-  if (getenv("OMP_WAIT_POLICY") || !argv[0]) return;
+/* The spin count the program asks of libgomp's threads (GOMP_SPINCOUNT): how long a thread that
+ * ends its share of a parallel loop spins before it sleeps. The implicit step runs thousands of
+ * short loops a second (the multigrid's colours, level by level), and a sleeping thread takes
+ * long to wake on this project's VM: 0.5 s of jello_cubes (2 threads, idle machine) took 2.58 s
+ * with passive threads (they sleep at once), 1.04-1.10 s spinning 10,000 times or for ever;
+ * 0.35 s of the implicit rubber bunny 15.1 s with 1,000 or 2,000 spins, 12.8 s with 5,000,
+ * 11.9 s with 10,000, 11.7 s with 50,000, 12.2 s active. Bounded, the spin costs a busy
+ * machine little: beside five busy loops the jello took 5.5-6.5 s against passive threads'
+ * 5.4-5.7 (threads that spin for ever: 17.6-19.7 s against 4.8-5.0, an earlier sitting), beside
+ * one 1.9-2.2 s against 2.3-2.7. */
+#define SPIN_COUNT "10000"
+
+/* The OpenMP runtime reads its wait policy once, when it is loaded, so the program runs itself
+ * again with GOMP_SPINCOUNT set (SPIN_COUNT) unless the environment chose a policy
+ * (OMP_WAIT_POLICY) or a spin count of its own. */
+static void prefer_bounded_spin(char **argv) {
+  if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT") || !argv[0]) return;
   char self[4096];
   const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
   if (n <= 0) return; /* no /proc: go on with the policy the runtime has */
@@ -202,12 +212,12 @@ static void prefer_passive_threads(char **argv) {
    * /proc/self/exe is valgrind's) */
   const char *a = strrchr(argv[0], '/'), *b = strrchr(self, '/');
   if (strcmp(a ? a + 1 : argv[0], b ? b + 1 : self)) return;
-  if (setenv("OMP_WAIT_POLICY", "PASSIVE", 0)) return;
+  if (setenv("GOMP_SPINCOUNT", SPIN_COUNT, 0)) return;
   execv(self, argv);
 }
 
 int main(int argc, char **argv) {
-  prefer_passive_threads(argv);
+  prefer_bounded_spin(argv);
   if (argc < 2) {
     usage(stderr);
     return MPM_EXIT_USAGE;
@@ -218,9 +228,15 @@ int main(int argc, char **argv) {
     return MPM_EXIT_OK;
   }
   if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
-    const char *policy = getenv("OMP_WAIT_POLICY");
-    printf("mpm %s (%s; OpenMP threads wait %s)\n", mpm_version(), mpm_real_type(),
-           policy ? policy : "as the runtime chooses");
+    const char *policy = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
+    if (policy)
+      printf("mpm %s (%s; OpenMP threads wait %s)\n", mpm_version(), mpm_real_type(), policy);
+    else if (spin)
+      printf("mpm %s (%s; OpenMP threads spin %s times, then sleep)\n", mpm_version(),
+             mpm_real_type(), spin);
+    else
+      printf("mpm %s (%s; OpenMP threads wait as the runtime chooses)\n", mpm_version(),
+             mpm_real_type());
     return MPM_EXIT_OK;
   }
   /* `mpm CMD --help` (anywhere among CMD's arguments): CMD's usage, exit 0 */

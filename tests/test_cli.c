@@ -24,9 +24,12 @@ static void test_help_and_version(void **state) {
   (void)state;
   assert_int_equal(mpm("--version"), 0);
   expect_output("mpm ");
-  /* the program waits passively unless the environment says otherwise (app/main.c) */
-  assert_int_equal(mpm_env("env -u OMP_WAIT_POLICY", "--version"), 0);
-  expect_output("OpenMP threads wait PASSIVE");
+  /* the program's threads spin a while, then sleep, unless the environment says otherwise
+     (app/main.c) */
+  assert_int_equal(mpm_env("env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT", "--version"), 0);
+  expect_output("OpenMP threads spin 10000 times, then sleep");
+  assert_int_equal(mpm_env("env -u OMP_WAIT_POLICY GOMP_SPINCOUNT=500", "--version"), 0);
+  expect_output("OpenMP threads spin 500 times");
   assert_int_equal(mpm_env("env OMP_WAIT_POLICY=active", "--version"), 0);
   expect_output("OpenMP threads wait active");
   assert_int_equal(mpm("--help"), 0);
