@@ -201,7 +201,8 @@ int mpm_cli_parse_int(const char *opt, const char *value, int lo, int hi, int *o
 
 /* The OpenMP runtime reads its wait policy once, when it is loaded, so the program runs itself
  * again with GOMP_SPINCOUNT set (SPIN_COUNT) unless the environment chose a policy
- * (OMP_WAIT_POLICY) or a spin count of its own. */
+ * (OMP_WAIT_POLICY) or a spin count of its own. GOMP_SPINCOUNT is read by GCC's runtime (libgomp,
+ * in the gcc builds); LLVM's (the ThreadSanitizer build's) keeps its own KMP_BLOCKTIME. */
 static void prefer_bounded_spin(char **argv) {
   if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT") || !argv[0]) return;
   char self[4096];
