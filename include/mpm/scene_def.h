@@ -241,12 +241,15 @@ typedef struct mpm_body_def {
   const mpm_release_def *domain_release;       /* bodies[].domain_release, at most 16; the
                                                   caller's array; default NULL */
   int domain_release_count;
-  mpm_def_hourglass hourglass; /* bodies[].hourglass; default MPM_DEF_HOURGLASS_ENRICHED */
-  double enrichment_hourglass; /* bodies[].enrichment_hourglass, hourglass strain at or above
-                                  which a particle is enriched (beyond Zhu), [0, 1]; default 0:
-                                  never */
-  int enrichment_contact;      /* bodies[].enrichment_contact: its enriched corners meet other
-                                  material on the grid (beyond Zhu); 0 or 1; default 0 */
+  mpm_def_hourglass hourglass;    /* bodies[].hourglass; default MPM_DEF_HOURGLASS_ENRICHED */
+  double enrichment_hourglass;    /* bodies[].enrichment_hourglass, hourglass strain at or above
+                                     which a particle is enriched (beyond Zhu), [0, 1]; default 0:
+                                     never */
+  int enrichment_contact;         /* bodies[].enrichment_contact: its enriched corners meet other
+                                     material on the grid (beyond Zhu); 0 or 1; default 0 */
+  int enrichment_surface_contact; /* bodies[].enrichment_surface_contact: its enriched surface
+                                     meets enriched surfaces, other bodies' and its own (beyond
+                                     Zhu); 0 or 1; default 1 */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).

@@ -29,17 +29,19 @@
 
 /* A body's enrichment settings (the scene's; all 0 for a body without them). */
 typedef struct mpm_enrichment_body {
-  mpm_real epsilon;  /* enriched when K(F) <= epsilon (0: never) */
-  mpm_real exit_k;   /* an enriched particle stays enriched while K(F) <= exit_k (>= epsilon:
-                        hysteresis) */
-  mpm_real spacing;  /* the domain lattice's spacing h, m */
-  mpm_real bend;     /* also enriched when the hourglass strain of the particle's hexahedron
-                        (mpm_enrichment_hourglass_strain) is >= bend (0: never; beyond Zhu) */
-  int metric;        /* MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
-  int hourglass_all; /* hourglass control on every particle, not only on those touching an
-                        enriched corner (domain/enrich.h) */
-  int contact;       /* its enriched corners meet other material on the grid
-                        (domain/enrich_contact.h) */
+  mpm_real epsilon;    /* enriched when K(F) <= epsilon (0: never) */
+  mpm_real exit_k;     /* an enriched particle stays enriched while K(F) <= exit_k (>= epsilon:
+                          hysteresis) */
+  mpm_real spacing;    /* the domain lattice's spacing h, m */
+  mpm_real bend;       /* also enriched when the hourglass strain of the particle's hexahedron
+                          (mpm_enrichment_hourglass_strain) is >= bend (0: never; beyond Zhu) */
+  int metric;          /* MPM_ENRICHMENT_CONDITION or _FROBENIUS (domain/enrich.h) */
+  int hourglass_all;   /* hourglass control on every particle, not only on those touching an
+                          enriched corner (domain/enrich.h) */
+  int contact;         /* its enriched corners meet other material on the grid
+                          (domain/enrich_contact.h) */
+  int surface_contact; /* its enriched surface meets enriched surfaces, other bodies' and its
+                          own (domain/enrich_surface_contact.h) */
 } mpm_enrichment_body;
 
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */

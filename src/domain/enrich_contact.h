@@ -21,8 +21,8 @@
  * tangential velocities are left alone. Corners touch the grid one after the other in corner
  * order, body by body (deterministic, serial: a few hundred corners in Zhu's scenes). The body's
  * own corners' mass on the grid comes from the embedding's rows, which the step then builds
- * (s->corner_rows). Enriched parts meeting each other (of two bodies, or of one) are not seen:
- * neither is on the grid. */
+ * (s->corner_rows). Enriched parts meeting each other (of two bodies, or of one) are not on the
+ * grid: domain/enrich_surface_contact.h meets them. */
 #ifndef MPM_DOMAIN_ENRICH_CONTACT_H
 #define MPM_DOMAIN_ENRICH_CONTACT_H
 

@@ -53,6 +53,7 @@ mpm_body_desc mpm_body_desc_default(void) {
   b.particles_per_cell = 8.0;
   b.jitter = 0.0;
   b.seed = 1u;
+  b.enrichment_surface_contact = 1; /* enriched surfaces meet (domain/enrich_surface_contact.h) */
   return b;
 }
 

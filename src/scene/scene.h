@@ -33,27 +33,30 @@ typedef struct mpm_domain_release {
 typedef struct mpm_body_desc {
   char name[MPM_NAME_MAX];
   mpm_shape_desc shape;
-  int material;                /* index into scene.materials */
-  double velocity[3];          /* initial velocity, m/s */
-  double angular_velocity[3];  /* initial angular velocity about the body's centre, rad/s */
-  double particles_per_cell;   /* along the volume: ppc particles per grid cell (e.g. 8) */
-  double jitter;               /* 0..1 fraction of the lattice spacing */
-  unsigned seed;               /* jitter seed */
-  int domains;                 /* 1: particle domains (Zhu et al. 2017 sec. 4); needs jitter 0 */
-  double enrichment;           /* domains: enrich where K(F) <= this (Zhu sec. 5); default 0:
-                                  never (Zhu: 0.6) */
-  double enrichment_exit;      /* domains: an enriched particle stays enriched while K(F) <= this
-                                  (hysteresis); default 0.95, or `enrichment` when larger */
-  double enrichment_hourglass; /* domains: also enrich where the hexahedron's hourglass strain
-                                  is >= this (domain/enrich.h: bending K(F) does not see);
-                                  default 0: never (beyond Zhu) */
-  int enrichment_contact;      /* domains: enriched corners meet other material
-                                  on the grid (domain/enrich_contact.h); default 0 */
-  int enrichment_metric;       /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
-                                  Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
-  int hourglass;               /* domains: hourglass control of the particles touching an
-                                  enriched corner (0, "enriched", the default) or of every domain
-                                  particle (1, "all"; domain/enrich.h) */
+  int material;                   /* index into scene.materials */
+  double velocity[3];             /* initial velocity, m/s */
+  double angular_velocity[3];     /* initial angular velocity about the body's centre, rad/s */
+  double particles_per_cell;      /* along the volume: ppc particles per grid cell (e.g. 8) */
+  double jitter;                  /* 0..1 fraction of the lattice spacing */
+  unsigned seed;                  /* jitter seed */
+  int domains;                    /* 1: particle domains (Zhu et al. 2017 sec. 4); needs jitter 0 */
+  double enrichment;              /* domains: enrich where K(F) <= this (Zhu sec. 5); default 0:
+                                     never (Zhu: 0.6) */
+  double enrichment_exit;         /* domains: an enriched particle stays enriched while K(F) <= this
+                                     (hysteresis); default 0.95, or `enrichment` when larger */
+  double enrichment_hourglass;    /* domains: also enrich where the hexahedron's hourglass strain
+                                     is >= this (domain/enrich.h: bending K(F) does not see);
+                                     default 0: never (beyond Zhu) */
+  int enrichment_contact;         /* domains: enriched corners meet other material
+                                     on the grid (domain/enrich_contact.h); default 0 */
+  int enrichment_surface_contact; /* domains: the enriched surface meets enriched surfaces, of
+                                     other bodies and its own (domain/enrich_surface_contact.h);
+                                     default 1 */
+  int enrichment_metric;          /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
+                                     Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
+  int hourglass;                  /* domains: hourglass control of the particles touching an
+                                     enriched corner (0, "enriched", the default) or of every domain
+                                     particle (1, "all"; domain/enrich.h) */
   int release_count;
   mpm_domain_release release[MPM_MAX_RELEASES];
   int resample;        /* domain.resample on: its particles split and merge (all bodies unless

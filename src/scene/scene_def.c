@@ -83,6 +83,7 @@ mpm_body_def mpm_body_def_default(void) {
   d.enrichment_metric = (mpm_def_enrichment_metric)b.enrichment_metric;
   d.enrichment_hourglass = b.enrichment_hourglass;
   d.enrichment_contact = b.enrichment_contact;
+  d.enrichment_surface_contact = b.enrichment_surface_contact;
   d.hourglass = (mpm_def_hourglass)b.hourglass;
   return d;
 }

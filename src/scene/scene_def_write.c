@@ -421,9 +421,11 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
                         : b->enrichment_metric != d.enrichment_metric       ? "enrichment_metric"
                         : b->enrichment_hourglass != d.enrichment_hourglass ? "enrichment_hourglass"
                         : b->enrichment_contact != d.enrichment_contact     ? "enrichment_contact"
-                        : b->hourglass != d.hourglass                       ? "hourglass"
-                        : b->domain_release_count != 0                      ? "domain_release"
-                                                                            : NULL;
+                        : b->enrichment_surface_contact != d.enrichment_surface_contact
+                            ? "enrichment_surface_contact"
+                        : b->hourglass != d.hourglass  ? "hourglass"
+                        : b->domain_release_count != 0 ? "domain_release"
+                                                       : NULL;
   if (!b->domains) {
     if (!changed) return 0;
     return mpm_def_fail(w->c,
@@ -442,6 +444,8 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
     mpm_def_add_number(w, o, "enrichment_hourglass", b->enrichment_hourglass);
   if (b->enrichment_contact != d.enrichment_contact)
     mpm_def_add_bool(w, o, "enrichment_contact", b->enrichment_contact);
+  if (b->enrichment_surface_contact != d.enrichment_surface_contact)
+    mpm_def_add_bool(w, o, "enrichment_surface_contact", b->enrichment_surface_contact);
   if (b->hourglass != d.hourglass) { /* written when not the default: older files unchanged */
     snprintf(p, sizeof p, "%s.hourglass", path);
     const char *hourglass = mpm_def_spell(w->c, p, (int)b->hourglass, &HOURGLASSES);

@@ -33,6 +33,7 @@ static const char *const BODY_KEYS[] = {"name",
                                         "enrichment_exit",
                                         "enrichment_hourglass",
                                         "enrichment_contact",
+                                        "enrichment_surface_contact",
                                         "enrichment_metric",
                                         "hourglass",
                                         "temperature",
@@ -451,10 +452,10 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
    * enrichment) */
   b->enrichment = 0;
-  static const char *const enrichment_keys[] = {"enrichment",           "enrichment_exit",
-                                                "enrichment_hourglass", "enrichment_contact",
-                                                "enrichment_metric",    "hourglass"};
-  for (int k = 0; k < 6; ++k)
+  static const char *const enrichment_keys[] = {
+      "enrichment",        "enrichment_exit", "enrichment_hourglass",      "enrichment_contact",
+      "enrichment_metric", "hourglass",       "enrichment_surface_contact"};
+  for (int k = 0; k < 7; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
@@ -485,6 +486,9 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
     return -1;
   b->enrichment_contact = 0;
   if (mpm_json_bool(c, node, "enrichment_contact", 0, &b->enrichment_contact) < 0) return -1;
+  b->enrichment_surface_contact = 1;
+  if (mpm_json_bool(c, node, "enrichment_surface_contact", 0, &b->enrichment_surface_contact) < 0)
+    return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,
                             "expected 0 with \"domains\": true (particle domains are the cells "

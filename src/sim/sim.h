@@ -150,6 +150,8 @@ struct mpm_sim {
                                               creation (benchmarks) */
   long long enriched_contacts; /* enriched corners' contacts with the grid's material since
                                   creation (domain/enrich_contact.h) */
+  long long surface_contacts;  /* enriched corners' contacts with enriched faces since creation
+                                  (domain/enrich_surface_contact.h) */
   /* outputs */
   const struct mpm_frame_writer *writer; /* where frames and checkpoints go (frame_writer.h) */
   mpm_sim_output out;

@@ -26,6 +26,7 @@
 #include "core/alloc.h"
 #include "domain/enrich.h"
 #include "domain/enrich_contact.h"
+#include "domain/enrich_surface_contact.h"
 #include "sim/grid_stack.h"
 #include "solver/explicit_update.h"
 #include "solver/implicit.h"
@@ -190,17 +191,29 @@ static mpm_status stage_solve(mpm_sim *sim, mpm_step_ctx *c) {
   return MPM_OK;
 }
 
-/* Enriched corners meet other material on the grid (enrich_contact.h), after the velocity
- * update and before G2P reads it. */
+/* Enriched corners meet other material on the grid (enrich_contact.h), then enriched surfaces
+ * meet enriched surfaces (enrich_surface_contact.h), after the velocity update and before G2P
+ * reads it. */
 static mpm_status stage_contact(mpm_sim *sim, mpm_step_ctx *c) {
-  if (!c->domains || !mpm_enrich_contact_on(&sim->domains)) return MPM_OK;
-  size_t contacts = 0;
-  if (mpm_enrich_contact(&sim->domains, &sim->grid, &c->dtc.kernel, &c->all, sim->dofs.count,
-                         &sim->step_arena, &contacts))
-    return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
-                         "step %lld: out of memory for the contacts of %zu enriched corners",
-                         (long long)sim->steps, sim->domains.enrich.count);
-  sim->enriched_contacts += contacts;
+  if (!c->domains) return MPM_OK;
+  if (mpm_enrich_contact_on(&sim->domains)) {
+    size_t contacts = 0;
+    if (mpm_enrich_contact(&sim->domains, &sim->grid, &c->dtc.kernel, &c->all, sim->dofs.count,
+                           &sim->step_arena, &contacts))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory for the contacts of %zu enriched corners",
+                           (long long)sim->steps, sim->domains.enrich.count);
+    sim->enriched_contacts += contacts;
+  }
+  if (mpm_surface_contact_on(&sim->domains)) {
+    mpm_surface_contact_stats st;
+    if (mpm_surface_contact(&sim->domains, &c->all, c->dt, &sim->step_arena, &st))
+      return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
+                           "step %lld: out of memory for the surface contacts of %zu enriched "
+                           "corners",
+                           (long long)sim->steps, sim->domains.enrich.count);
+    sim->surface_contacts += st.contacts;
+  }
   return MPM_OK;
 }
 
