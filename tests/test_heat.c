@@ -196,6 +196,41 @@ static void test_domains_switch_off_at_melting_point(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* Heat with the implicit integrator: the step's Newton and CG vectors and heat's on one DOF
+ * set (a block with domains, whose solve takes Jacobi, and one of material points with the
+ * multigrid, whose solve keeps a vector more); a few steps run, and the blocks warm. */
+static void test_heat_with_the_implicit_step(void **state) {
+  (void)state;
+  for (int domains = 0; domains < 2; ++domains) {
+    char text[1536];
+    snprintf(text, sizeof text,
+             "{\"domain\": {\"min\": [0, 0, 0], \"max\": [1, 1, 1], \"dx\": 0.03125},"
+             " \"gravity\": [0, -9.81, 0], \"time\": {\"end\": 0.1, \"fps\": 10},"
+             " \"heat\": {\"temperature\": 20},"
+             " \"solver\": {\"integrator\": \"implicit\", \"dt\": 0.005, \"preconditioner\": "
+             "\"multigrid\"},"
+             " \"materials\": [{\"name\": \"wax\", \"model\": \"neo_hookean\", \"E\": 1e4, "
+             "\"nu\": 0.3, \"density\": 1000, \"specific_heat\": 1000, \"conductivity\": 100, "
+             "\"melting\": {\"point\": 60, \"range\": 10}}],"
+             " \"bodies\": [{\"material\": \"wax\", \"domains\": %s, \"temperature\": 40, "
+             "\"shape\": {\"type\": \"box\", \"center\": [0.5, 0.4375, 0.5], "
+             "\"half_extent\": [0.0625, 0.0625, 0.0625]}},"
+             " {\"material\": \"wax\", \"temperature\": 10, \"shape\": {\"type\": \"box\", "
+             "\"center\": [0.5, 0.5625, 0.5], \"half_extent\": [0.0625, 0.0625, 0.0625]}}]}",
+             domains ? "true" : "false");
+    mpm_sim *sim = test_sim_from_json(text, "implicit_heat.json");
+    for (int k = 0; k < 3; ++k)
+      if (mpm_sim_step(sim, 0) != MPM_OK) fail_msg("%s", mpm_sim_last_error(sim));
+    assert_true(sim->implicit_steps == 3);
+    double cold = 1e30; /* the cold block took heat from the warm one */
+    for (size_t i = 0; i < sim->particles.count; ++i)
+      if (sim->particles.body[i] == 1 && sim->particles.temperature[i] > 10.001)
+        cold = fmin(cold, sim->particles.temperature[i]);
+    assert_true(cold < 1e30);
+    mpm_sim_destroy(sim);
+  }
+}
+
 /* A melting block on a hot plate, checkpointed mid-run and resumed: bit-identical. */
 static void test_resume_is_bit_identical(void **state) {
   (void)state;
@@ -275,6 +310,7 @@ int main(void) {
       cmocka_unit_test(test_hot_end_follows_erfc),
       cmocka_unit_test(test_melting_schedule),
       cmocka_unit_test(test_domains_switch_off_at_melting_point),
+      cmocka_unit_test(test_heat_with_the_implicit_step),
       cmocka_unit_test(test_resume_is_bit_identical),
       cmocka_unit_test(test_bad_heat_keys),
   };

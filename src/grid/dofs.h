@@ -57,7 +57,10 @@ typedef struct mpm_dof_segment {
 } mpm_dof_segment;
 
 #define MPM_DOF_MAX_SEGMENTS 72 /* the multi-level grid's transfer grids, and corners */
-#define MPM_DOF_MAX_VECTORS 16
+/* the named vectors a DOF set carries: the implicit step's (its Newton state, CG's, the
+   multigrid's start) and heat's are 20 together; 16 made a melting scene's implicit step fail
+   at its first heat transfer */
+#define MPM_DOF_MAX_VECTORS 32
 #define MPM_DOF_VECTOR_NAME 16
 #define MPM_DOF_CHUNK 4096
 
