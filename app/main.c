@@ -59,7 +59,10 @@ static const usage_section SECTIONS[] = {
               "      three resolutions with Jacobi and multigrid\n"
               "  mpm bench surface [--particles N] [--threads LIST] [--smoothing PASSES]\n"
               "      seconds of one frame's particle surface (output.surface) for a 1M-particle\n"
-              "      cube and ball: level set, filter, mesh, OBJ + PLY\n"},
+              "      cube and ball: level set, filter, mesh, OBJ + PLY\n"
+              "  mpm bench contact [--threads LIST] [--repeats N]\n"
+              "      the enriched surfaces' contact pass alone on two blocks of enriched\n"
+              "      domains at three sizes: ms a pass, ns per enriched corner\n"},
     {"render",
      "  mpm render OUTDIR [--field velocity|J|stress|plastic|material|body|temperature|melt|\n"
      "                             ARRAY[.x|.xx]]\n"

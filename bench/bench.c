@@ -286,8 +286,10 @@ int mpm_cmd_bench(int argc, char **argv) {
   if (argc >= 1 && !strcmp(argv[0], "domains")) return mpm_bench_domains(argc - 1, argv + 1);
   if (argc >= 1 && !strcmp(argv[0], "implicit")) return mpm_bench_implicit(argc - 1, argv + 1);
   if (argc >= 1 && !strcmp(argv[0], "surface")) return mpm_bench_surface(argc - 1, argv + 1);
+  if (argc >= 1 && !strcmp(argv[0], "contact")) return mpm_bench_contact(argc - 1, argv + 1);
   fprintf(stderr,
-          "usage: mpm bench transfer|step|stress|checkpoint|domains|implicit|surface [options] "
+          "usage: mpm bench transfer|step|stress|checkpoint|domains|implicit|surface|contact "
+          "[options] "
           "(see mpm --help)\n");
   return MPM_EXIT_USAGE;
 }

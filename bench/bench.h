@@ -32,5 +32,6 @@ int mpm_bench_step_levels(const int *threads, int nthreads, int steps, int repea
 /* `mpm bench surface`: the seconds of one frame's particle surface (level set, filter, mesh,
  * writers) for about 1M particles, per thread count (bench_surface.c). */
 int mpm_bench_surface(int argc, char **argv);
+int mpm_bench_contact(int argc, char **argv);
 
 #endif

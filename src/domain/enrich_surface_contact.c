@@ -27,14 +27,13 @@
 /* ... and behind it, how far off it may project and still be pushed back out */
 #define LATERAL_BEHIND 0.5
 /* contacts kept per corner (the nearest; a corner at an edge or a vertex touches 2 or 3 faces),
-   Gauss-Seidel sweeps over them, faces looked at per corner */
+   Gauss-Seidel sweeps over them */
 /* the share of its depth below the skin a corner is moved out by in a step (a corner that
    slid in across an edge or a turning face comes back out over a few steps instead of staying
    there; Baumgarte's stabilization) */
 #define RECOVERY 0.2
 #define PER_CORNER 4
 #define SWEEPS 4
-#define CANDIDATES 64
 
 int mpm_surface_contact_on(const mpm_domain_set *s) {
   const mpm_domain_enrichment *e = &s->enrich;
@@ -48,6 +47,8 @@ typedef struct face {
   uint32_t particle;
   uint32_t corner[4]; /* in cyclic order around the face */
   int32_t body;
+  float centre[3];    /* its particle's hexahedron's centre (outward is away from it) */
+  float lo[3], hi[3]; /* its box over the step */
 } face;
 
 typedef struct contact {
@@ -74,12 +75,13 @@ static int uses(const mpm_domain_set *s, uint32_t q, uint32_t c) {
 }
 
 /* Whether face f of particle p is on the surface (no other active particle has its corners)
- * with its four corners enriched. */
-static int surface_face(const mpm_domain_set *s, uint32_t p, int f, uint32_t k[4]) {
+ * with its four corners enriched (users: each corner's active particles, at most 8). */
+static int surface_face(const mpm_domain_set *s, const uint8_t *users, uint32_t p, int f,
+                        uint32_t k[4]) {
   const uint8_t *en = s->enrich.enriched;
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < 4; ++j) { /* a corner of 8 active particles is inside the body */
     k[j] = s->corner[p][face_corner(f, j)];
-    if (!en[k[j]]) return 0;
+    if (!en[k[j]] || users[k[j]] >= MPM_HEX_CORNERS) return 0;
   }
   for (uint32_t a = s->adj_start[k[0]]; a < s->adj_start[k[0] + 1]; ++a) {
     const uint32_t q = s->adj[a] / MPM_HEX_CORNERS;
@@ -228,10 +230,8 @@ static int touch(const ctx *x, uint32_t c, const double xc[3], const double vc[3
   n[2] = e1[0] * e2[1] - e1[1] * e2[0];
   const double nn = sqrt(vdot(n, n));
   if (!(nn > 0)) return 0;
-  double centre[3] = {0, 0, 0}, out_dir[3];
-  for (int a = 0; a < MPM_HEX_CORNERS; ++a)
-    for (int d = 0; d < 3; ++d)
-      centre[d] += (double)s->cx[d][s->corner[F->particle][a]] / MPM_HEX_CORNERS;
+  const double centre[3] = {F->centre[0], F->centre[1], F->centre[2]};
+  double out_dir[3];
   vsub(p, centre, out_dir);
   const double sign = vdot(out_dir, n) < 0 ? -1 : 1;
   for (int d = 0; d < 3; ++d) n[d] *= sign / nn;
@@ -296,8 +296,7 @@ static int corner_contacts(const ctx *x, uint32_t c, contact *out) {
   }
   int64_t lo[3], hi[3];
   cell_range(a, b, x->H, lo, hi);
-  uint32_t seen[CANDIDATES];
-  int nseen = 0, n = 0;
+  int n = 0;
   double end_gap[PER_CORNER];
   int64_t cc[3];
   for (cc[0] = lo[0]; cc[0] <= hi[0]; ++cc[0])
@@ -314,10 +313,18 @@ static int corner_contacts(const ctx *x, uint32_t c, contact *out) {
         }
         for (; l < x->hash_count && x->hash[l].key == key; ++l) {
           const uint32_t f = x->hash[l].face;
-          int dup = 0;
-          for (int k = 0; k < nseen && !dup; ++k) dup = seen[k] == f;
-          if (dup || nseen == CANDIDATES) continue;
-          seen[nseen++] = f;
+          const face *F = &x->faces[f];
+          if (F->lo[0] > b[0] || F->hi[0] < a[0] || F->lo[1] > b[1] || F->hi[1] < a[1] ||
+              F->lo[2] > b[2] || F->hi[2] < a[2])
+            continue; /* their boxes apart */
+          /* the face is in every cell its box touches: taken in the first cell that both
+             boxes touch only */
+          int first = 1;
+          for (int d = 0; d < 3 && first; ++d) {
+            const int64_t from = (int64_t)floor((double)F->lo[d] / x->H);
+            first = cc[d] == (from > lo[d] ? from : lo[d]);
+          }
+          if (!first) continue;
           contact k;
           if (!touch(x, c, xc, vc, f, &k)) continue;
           double vn = vdot(vc, k.n);
@@ -381,10 +388,17 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
   uint32_t *start = mpm_arena_alloc(scratch, (np + 1) * sizeof *start);
   int32_t *body = mpm_arena_alloc(scratch, (nc + 1) * sizeof *body);
   if (!mask || !start || !body) return MPM_ERR_NOMEM;
-  for (size_t c = 0; c < nc; ++c)
-    body[c] = s->adj_start[c] == s->adj_start[c + 1]
-                  ? -1
-                  : s->particles.body[s->adj[s->adj_start[c]] / MPM_HEX_CORNERS];
+  uint8_t *users = mpm_arena_alloc(scratch, nc + 1);
+  if (!users) return MPM_ERR_NOMEM;
+  const long ncl = (long)nc;
+#pragma omp parallel for schedule(static) if (ncl > MPM_PARALLEL_MIN)
+  for (long c = 0; c < ncl; ++c) {
+    const uint32_t a0 = s->adj_start[c], a1 = s->adj_start[c + 1];
+    body[c] = a0 == a1 ? -1 : s->particles.body[s->adj[a0] / MPM_HEX_CORNERS];
+    int n = 0;
+    for (uint32_t a = a0; a < a1; ++a) n += s->active[s->adj[a] / MPM_HEX_CORNERS] != 0;
+    users[c] = (uint8_t)n;
+  }
   const long npl = (long)np;
 #pragma omp parallel for schedule(static) if (npl > MPM_PARALLEL_MIN)
   for (long p = 0; p < npl; ++p) {
@@ -393,7 +407,7 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
     if (!s->active[p] || b < 0 || b >= e->body_count || !e->body[b].surface_contact) continue;
     uint32_t k[4];
     for (int f = 0; f < 6; ++f)
-      if (surface_face(s, (uint32_t)p, f, k)) mask[p] |= (uint8_t)(1u << f);
+      if (surface_face(s, users, (uint32_t)p, f, k)) mask[p] |= (uint8_t)(1u << f);
   }
   size_t nf = 0;
   for (size_t p = 0; p < np; ++p) {
@@ -422,6 +436,9 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
       F->particle = (uint32_t)p;
       F->body = s->particles.body[p];
       for (int j = 0; j < 4; ++j) F->corner[j] = s->corner[p][face_corner(f, j)];
+      double centre[3] = {0, 0, 0};
+      for (int k = 0; k < MPM_HEX_CORNERS; ++k)
+        for (int d = 0; d < 3; ++d) centre[d] += (double)s->cx[d][s->corner[p][k]];
       /* its box over the step */
       double a[3] = {INFINITY, INFINITY, INFINITY}, b[3] = {-INFINITY, -INFINITY, -INFINITY};
       for (int j = 0; j < 4; ++j) {
@@ -433,6 +450,11 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
           a[d] = fmin(a[d], fmin(x[d], y));
           b[d] = fmax(b[d], fmax(x[d], y));
         }
+      }
+      for (int d = 0; d < 3; ++d) {
+        F->centre[d] = (float)(centre[d] / MPM_HEX_CORNERS);
+        F->lo[d] = (float)a[d];
+        F->hi[d] = (float)b[d];
       }
       int64_t lo[3], hi[3];
       cell_range(a, b, H, lo, hi);
@@ -453,17 +475,7 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
 #pragma omp parallel for schedule(static) if (nfl > MPM_PARALLEL_MIN)
   for (long f = 0; f < nfl; ++f) {
     const face *F = &faces[f];
-    double a[3] = {INFINITY, INFINITY, INFINITY}, b[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int j = 0; j < 4; ++j) {
-      double x[3], v[3];
-      corner_x(s, F->corner[j], x);
-      dof_v(dofs, dof_of(s, F->corner[j]), v);
-      for (int d = 0; d < 3; ++d) {
-        const double y = x[d] + dt * v[d];
-        a[d] = fmin(a[d], fmin(x[d], y));
-        b[d] = fmax(b[d], fmax(x[d], y));
-      }
-    }
+    const double a[3] = {F->lo[0], F->lo[1], F->lo[2]}, b[3] = {F->hi[0], F->hi[1], F->hi[2]};
     int64_t lo[3], hi[3], c[3];
     cell_range(a, b, H, lo, hi);
     size_t at = cells[f];
@@ -480,14 +492,13 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
   memset(normal, 0, nc * sizeof *normal);
   for (size_t f = 0; f < nf; ++f) { /* each corner's faces' outward normals, summed */
     const face *F = &faces[f];
-    double q[4][3], d1[3], d2[3], centre[3] = {0, 0, 0}, mid[3] = {0, 0, 0};
+    const double centre[3] = {F->centre[0], F->centre[1], F->centre[2]};
+    double q[4][3], d1[3], d2[3], mid[3] = {0, 0, 0};
     for (int j = 0; j < 4; ++j) corner_x(s, F->corner[j], q[j]);
     vsub(q[2], q[0], d1);
     vsub(q[3], q[1], d2);
     double n[3] = {d1[1] * d2[2] - d1[2] * d2[1], d1[2] * d2[0] - d1[0] * d2[2],
                    d1[0] * d2[1] - d1[1] * d2[0]};
-    for (int a = 0; a < MPM_HEX_CORNERS; ++a)
-      for (int d = 0; d < 3; ++d) centre[d] += (double)s->cx[d][s->corner[F->particle][a]] / 8;
     for (int j = 0; j < 4; ++j)
       for (int d = 0; d < 3; ++d) mid[d] += q[j][d] / 4;
     vsub(mid, centre, d1);
