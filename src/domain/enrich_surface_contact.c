@@ -455,6 +455,8 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
         F->centre[d] = (float)(centre[d] / MPM_HEX_CORNERS);
         F->lo[d] = (float)a[d];
         F->hi[d] = (float)b[d];
+        a[d] = F->lo[d]; /* the cells of the box as kept (the hash's fill reads these) */
+        b[d] = F->hi[d];
       }
       int64_t lo[3], hi[3];
       cell_range(a, b, H, lo, hi);
