@@ -5,7 +5,8 @@
  *    velocity reversed, no corner of one inside the other's hexahedra at any step, linear
  *    momentum conserved, no energy gained;
  *  - a C-shaped body (all enriched) whose upper arm sags onto its lower arm under gravity
- *    passes through itself without the contact and not with it;
+ *    passes through itself without self-contact (the default) and not with it
+ *    (bodies[].enrichment_self_contact);
  *  - 1 and 2 threads give bitwise the same state;
  *  - the key's errors. */
 #include "support.h"
@@ -208,7 +209,7 @@ static mpm_sim *folding(int contact, char *mesh, size_t mesh_size) {
            "true, \"enrichment\": 1%s}],"
            " \"colliders\": [{\"name\": \"floor\", \"shape\": {\"type\": \"halfspace\", \"point\": "
            "[0, 0.2, 0], \"normal\": [0, 1, 0]}, \"rule\": \"separate\", \"friction\": 0.5}]}",
-           mesh, contact ? "" : ", \"enrichment_surface_contact\": false");
+           mesh, contact ? ", \"enrichment_self_contact\": true" : "");
   return test_sim_from_json(text, "folding.json");
 }
 
@@ -254,13 +255,13 @@ static void test_c_shape_does_not_pass_through_itself(void **state) {
       depth[on] = fmax(depth[on], sag_depth(sim));
     }
     contacts[on] = sim->surface_contacts;
-    print_message("surface contact %s: the upper arm at most %.4f m into the lower one, %lld "
+    print_message("self-contact %s: the upper arm at most %.4f m into the lower one, %lld "
                   "contacts\n",
                   on ? "on" : "off", depth[on], contacts[on]);
     mpm_sim_destroy(sim);
   }
   unlink(mesh);
-  /* without the contact the upper arm sinks through the lower one */
+  /* without self-contact (the default) the upper arm sinks through the lower one */
   assert_true(depth[0] > 0.03);
   /* with it the upper arm rests on the lower one */
   assert_true(contacts[1] > 0);
@@ -295,6 +296,8 @@ static void test_scene_key(void **state) {
   static const char *const bad[] = {
       "\"domains\": true, \"enrichment_surface_contact\": 0",
       "\"enrichment_surface_contact\": false",
+      "\"domains\": true, \"enrichment_self_contact\": \"yes\"",
+      "\"enrichment_self_contact\": true",
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
     char text[1024];
@@ -308,8 +311,9 @@ static void test_scene_key(void **state) {
     mpm_scene scene;
     mpm_error err;
     assert_int_not_equal(mpm_scene_parse(text, "e.json", &scene, &err), MPM_OK);
-    if (!strstr(err.message, "bodies[0].enrichment_surface_contact"))
-      fail_msg("'%s' lacks 'bodies[0].enrichment_surface_contact'", err.message);
+    const char *key =
+        k < 2 ? "bodies[0].enrichment_surface_contact" : "bodies[0].enrichment_self_contact";
+    if (!strstr(err.message, key)) fail_msg("'%s' lacks '%s'", err.message, key);
   }
 }
 

@@ -250,6 +250,8 @@ typedef struct mpm_body_def {
   int enrichment_surface_contact; /* bodies[].enrichment_surface_contact: its enriched surface
                                      meets enriched surfaces, other bodies' and its own (beyond
                                      Zhu); 0 or 1; default 1 */
+  int enrichment_self_contact;    /* bodies[].enrichment_self_contact: its enriched surface meets
+                                     its own elsewhere (beyond Zhu); 0 or 1; default 0 */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).

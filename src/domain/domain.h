@@ -42,6 +42,7 @@ typedef struct mpm_enrichment_body {
                           (domain/enrich_contact.h) */
   int surface_contact; /* its enriched surface meets enriched surfaces, other bodies' and its
                           own (domain/enrich_surface_contact.h) */
+  int self_contact;    /* ... and its own enriched surface elsewhere */
 } mpm_enrichment_body;
 
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */

@@ -91,6 +91,7 @@ mpm_status mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body
   settings.hourglass_all = settings.hourglass_all != 0;
   settings.contact = settings.contact != 0;
   settings.surface_contact = settings.surface_contact != 0;
+  settings.self_contact = settings.surface_contact && settings.self_contact != 0;
   e->body[b] = settings;
   e->any = e->hourglass_any = 0;
   for (int k = 0; k < e->body_count; ++k) {

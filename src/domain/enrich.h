@@ -79,7 +79,7 @@ mpm_status mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *mat
 /* Body b's settings: all 0 (never enriched, the condition metric) for a body without any. */
 static inline const mpm_enrichment_body *mpm_enrichment_body_of(const mpm_domain_enrichment *e,
                                                                 int b) {
-  static const mpm_enrichment_body none = {0, 0, 0, 0, MPM_ENRICHMENT_CONDITION, 0, 0, 0};
+  static const mpm_enrichment_body none = {0, 0, 0, 0, MPM_ENRICHMENT_CONDITION, 0, 0, 0, 0};
   return b >= 0 && b < e->body_count ? &e->body[b] : &none;
 }
 

@@ -196,6 +196,7 @@ static int touch(const ctx *x, uint32_t c, const double xc[3], const double vc[3
   const int bc = x->body[c];
   const double h = (double)s->enrich.body[bc].spacing;
   if (F->body == bc) {
+    if (!s->enrich.body[bc].self_contact) return 0;
     double r[3] = {0, 0, 0};
     for (int j = 0; j < 4; ++j)
       for (int d = 0; d < 3; ++d) r[d] += 0.25 * (double)s->cX[d][F->corner[j]];

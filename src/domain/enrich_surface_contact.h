@@ -15,10 +15,11 @@
  *             of an active particle's hexahedron that no other active particle shares), with
  *             the outward normal of their particle;
  *   corners   the enriched corners of those faces;
- *   pairs     a corner and a face of another body, or of its own body whose reference centre
- *             lies more than SELF_REACH lattice spacings from the corner's reference position
- *             (nearer faces are the corner's own neighbourhood, which elasticity keeps apart),
- *             both bodies with the contact on, found through a spatial hash of the faces' boxes
+ *   pairs     a corner and a face of another body, both bodies with the contact on
+ *             (surface_contact), or of its own body where it has self_contact on and the
+ *             face's reference centre lies more than SELF_REACH lattice spacings from the
+ *             corner's reference position (nearer faces are the corner's own neighbourhood,
+ *             which elasticity keeps apart), found through a spatial hash of the faces' boxes
  *             swept over the step (cost linear in the corners);
  *   contact   the corner's closest point p on the face (its two triangles); in front of the
  *             face the gap d = |x_c - p| along n = (x_c - p) / d (a corner over an edge or a

@@ -416,16 +416,17 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
                           b->domain_release_count) < 0)
     return -1;
   const mpm_body_def d = mpm_body_def_default();
-  const char *changed = b->enrichment != d.enrichment                       ? "enrichment"
-                        : b->enrichment_exit != d.enrichment_exit           ? "enrichment_exit"
-                        : b->enrichment_metric != d.enrichment_metric       ? "enrichment_metric"
-                        : b->enrichment_hourglass != d.enrichment_hourglass ? "enrichment_hourglass"
-                        : b->enrichment_contact != d.enrichment_contact     ? "enrichment_contact"
-                        : b->enrichment_surface_contact != d.enrichment_surface_contact
-                            ? "enrichment_surface_contact"
-                        : b->hourglass != d.hourglass  ? "hourglass"
-                        : b->domain_release_count != 0 ? "domain_release"
-                                                       : NULL;
+  const char *changed =
+      b->enrichment != d.enrichment                                   ? "enrichment"
+      : b->enrichment_exit != d.enrichment_exit                       ? "enrichment_exit"
+      : b->enrichment_metric != d.enrichment_metric                   ? "enrichment_metric"
+      : b->enrichment_hourglass != d.enrichment_hourglass             ? "enrichment_hourglass"
+      : b->enrichment_contact != d.enrichment_contact                 ? "enrichment_contact"
+      : b->enrichment_surface_contact != d.enrichment_surface_contact ? "enrichment_surface_contact"
+      : b->enrichment_self_contact != d.enrichment_self_contact       ? "enrichment_self_contact"
+      : b->hourglass != d.hourglass                                   ? "hourglass"
+      : b->domain_release_count != 0                                  ? "domain_release"
+                                                                      : NULL;
   if (!b->domains) {
     if (!changed) return 0;
     return mpm_def_fail(w->c,
@@ -446,6 +447,8 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
     mpm_def_add_bool(w, o, "enrichment_contact", b->enrichment_contact);
   if (b->enrichment_surface_contact != d.enrichment_surface_contact)
     mpm_def_add_bool(w, o, "enrichment_surface_contact", b->enrichment_surface_contact);
+  if (b->enrichment_self_contact != d.enrichment_self_contact)
+    mpm_def_add_bool(w, o, "enrichment_self_contact", b->enrichment_self_contact);
   if (b->hourglass != d.hourglass) { /* written when not the default: older files unchanged */
     snprintf(p, sizeof p, "%s.hourglass", path);
     const char *hourglass = mpm_def_spell(w->c, p, (int)b->hourglass, &HOURGLASSES);

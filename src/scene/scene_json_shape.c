@@ -34,6 +34,7 @@ static const char *const BODY_KEYS[] = {"name",
                                         "enrichment_hourglass",
                                         "enrichment_contact",
                                         "enrichment_surface_contact",
+                                        "enrichment_self_contact",
                                         "enrichment_metric",
                                         "hourglass",
                                         "temperature",
@@ -452,10 +453,15 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   /* Zhu sec. 5.1 uses epsilon = 0.6; off by default (docs/scene-format.md: dynamic
    * enrichment) */
   b->enrichment = 0;
-  static const char *const enrichment_keys[] = {
-      "enrichment",        "enrichment_exit", "enrichment_hourglass",      "enrichment_contact",
-      "enrichment_metric", "hourglass",       "enrichment_surface_contact"};
-  for (int k = 0; k < 7; ++k)
+  static const char *const enrichment_keys[] = {"enrichment",
+                                                "enrichment_exit",
+                                                "enrichment_hourglass",
+                                                "enrichment_contact",
+                                                "enrichment_metric",
+                                                "hourglass",
+                                                "enrichment_surface_contact",
+                                                "enrichment_self_contact"};
+  for (int k = 0; k < 8; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
@@ -488,6 +494,9 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   if (mpm_json_bool(c, node, "enrichment_contact", 0, &b->enrichment_contact) < 0) return -1;
   b->enrichment_surface_contact = 1;
   if (mpm_json_bool(c, node, "enrichment_surface_contact", 0, &b->enrichment_surface_contact) < 0)
+    return -1;
+  b->enrichment_self_contact = 0;
+  if (mpm_json_bool(c, node, "enrichment_self_contact", 0, &b->enrichment_self_contact) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
     return mpm_json_fail_at(c, "jitter", MPM_ERR_INVALID,
