@@ -5,8 +5,8 @@
  *    velocity reversed, no corner of one inside the other's hexahedra at any step, linear
  *    momentum conserved, no energy gained;
  *  - a C-shaped body (all enriched) whose upper arm sags onto its lower arm under gravity
- *    passes through itself without self-contact (the default) and not with it
- *    (bodies[].enrichment_self_contact);
+ *    passes through itself without self-contact (bodies[].enrichment_self_contact false) and
+ *    not with it (the default);
  *  - 1 and 2 threads give bitwise the same state;
  *  - the key's errors. */
 #include "support.h"
@@ -209,7 +209,7 @@ static mpm_sim *folding(int contact, char *mesh, size_t mesh_size) {
            "true, \"enrichment\": 1%s}],"
            " \"colliders\": [{\"name\": \"floor\", \"shape\": {\"type\": \"halfspace\", \"point\": "
            "[0, 0.2, 0], \"normal\": [0, 1, 0]}, \"rule\": \"separate\", \"friction\": 0.5}]}",
-           mesh, contact ? ", \"enrichment_self_contact\": true" : "");
+           mesh, contact ? "" : ", \"enrichment_self_contact\": false");
   return test_sim_from_json(text, "folding.json");
 }
 
@@ -261,11 +261,14 @@ static void test_c_shape_does_not_pass_through_itself(void **state) {
     mpm_sim_destroy(sim);
   }
   unlink(mesh);
-  /* without self-contact (the default) the upper arm sinks through the lower one */
+  /* without self-contact the upper arm sinks through the lower one */
   assert_true(depth[0] > 0.03);
-  /* with it the upper arm rests on the lower one */
+  /* with it the upper arm rests on the lower one: a corner that slides in past a turning face
+     of its own body is not pushed back out (enrich_surface_contact.c: from behind its own
+     body's faces it would tear a crushed body), so the arm may sink in by less than a third of
+     a lattice spacing (0.02 m), against its whole thickness (0.04 m) without */
   assert_true(contacts[1] > 0);
-  assert_true(depth[1] < 0.001);
+  assert_true(depth[1] < 0.006);
 }
 
 static void test_threads_bitwise(void **state) {

@@ -251,7 +251,7 @@ typedef struct mpm_body_def {
                                      meets enriched surfaces, other bodies' and its own (beyond
                                      Zhu); 0 or 1; default 1 */
   int enrichment_self_contact;    /* bodies[].enrichment_self_contact: its enriched surface meets
-                                     its own elsewhere (beyond Zhu); 0 or 1; default 0 */
+                                     its own elsewhere (beyond Zhu); 0 or 1; default 1 */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).

@@ -19,14 +19,13 @@
  *             (surface_contact), or of its own body where it has self_contact on and the
  *             face's reference centre lies more than SELF_REACH lattice spacings from the
  *             corner's reference position (nearer faces are the corner's own neighbourhood,
- *             which elasticity keeps apart), found through a spatial hash of the faces' boxes
- *             swept over the step (cost linear in the corners);
+ *             which elasticity keeps apart), from the front only, found through a spatial hash
+ *             of the faces' boxes swept over the step (cost linear in the corners);
  *   contact   the corner's closest point p on the face (its two triangles); in front of the
  *             face the gap d = |x_c - p| along n = (x_c - p) / d (a corner over an edge or a
  *             crease meets the edge); behind it, where the corner projects onto the face, d the
- *             depth along the face's outward normal n, down to -DEPTH h (behind a face of its
- *             own body only where the corner's own surface faces the face and down to
- *             -SELF_DEPTH h: elsewhere that is the body's own inside); a pair is a contact when
+ *             depth along the face's outward normal n, down to -DEPTH h (never behind a face
+ *             of its own body: that is mostly the body's own inside); a pair is a contact when
  *             the gap would close past the skin s (SKIN h) within the step at the current
  *             velocities: d + dt (v_c - v_p) . n < s, v_p = sum_k beta_k v_k (beta: p's
  *             barycentric weights over the triangle's three corners);

@@ -54,6 +54,7 @@ mpm_body_desc mpm_body_desc_default(void) {
   b.jitter = 0.0;
   b.seed = 1u;
   b.enrichment_surface_contact = 1; /* enriched surfaces meet (domain/enrich_surface_contact.h) */
+  b.enrichment_self_contact = 1;
   return b;
 }
 

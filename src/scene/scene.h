@@ -53,7 +53,7 @@ typedef struct mpm_body_desc {
                                      other bodies and its own (domain/enrich_surface_contact.h);
                                      default 1 */
   int enrichment_self_contact;    /* domains: ... and its own enriched surface elsewhere
-                                     (domain/enrich_surface_contact.h); default 0 */
+                                     (domain/enrich_surface_contact.h); default 1 */
   int enrichment_metric;          /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
                                      Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
   int hourglass;                  /* domains: hourglass control of the particles touching an

@@ -495,7 +495,7 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
   b->enrichment_surface_contact = 1;
   if (mpm_json_bool(c, node, "enrichment_surface_contact", 0, &b->enrichment_surface_contact) < 0)
     return -1;
-  b->enrichment_self_contact = 0;
+  b->enrichment_self_contact = 1;
   if (mpm_json_bool(c, node, "enrichment_self_contact", 0, &b->enrichment_self_contact) < 0)
     return -1;
   if (b->domains && b->jitter != 0)
