@@ -10,6 +10,7 @@
  *  - 1 and 2 threads give bitwise the same state;
  *  - the key's errors. */
 #include "support.h"
+#include "core/mat3.h"
 #include "core/parallel.h"
 #include "domain/hex.h"
 #include "sim/sim.h"
@@ -75,21 +76,12 @@ static int inside_hex(const double q[MPM_HEX_CORNERS][3], const double x[3], dou
         for (int e = 0; e < 3; ++e) J[d][e] += q[a][d] * dN[a][e];
       }
     for (int d = 0; d < 3; ++d) r[d] -= x[d];
-    const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1]) -
-                       J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0]) +
-                       J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
-    if (!(fabs(det) > 0)) return 0;
-    double inv[3][3];
-    inv[0][0] = (J[1][1] * J[2][2] - J[1][2] * J[2][1]) / det;
-    inv[0][1] = (J[0][2] * J[2][1] - J[0][1] * J[2][2]) / det;
-    inv[0][2] = (J[0][1] * J[1][2] - J[0][2] * J[1][1]) / det;
-    inv[1][0] = (J[1][2] * J[2][0] - J[1][0] * J[2][2]) / det;
-    inv[1][1] = (J[0][0] * J[2][2] - J[0][2] * J[2][0]) / det;
-    inv[1][2] = (J[0][2] * J[1][0] - J[0][0] * J[1][2]) / det;
-    inv[2][0] = (J[1][0] * J[2][1] - J[1][1] * J[2][0]) / det;
-    inv[2][1] = (J[0][1] * J[2][0] - J[0][0] * J[2][1]) / det;
-    inv[2][2] = (J[0][0] * J[1][1] - J[0][1] * J[1][0]) / det;
-    for (int d = 0; d < 3; ++d) xi[d] -= inv[d][0] * r[0] + inv[d][1] * r[1] + inv[d][2] * r[2];
+    mpm_real A[9], inv[9]; /* the Newton step through J's inverse */
+    for (int d = 0; d < 3; ++d)
+      for (int e = 0; e < 3; ++e) A[3 * d + e] = (mpm_real)J[d][e];
+    if (!(fabs((double)mpm_m3_inverse(A, inv)) > 0)) return 0;
+    for (int d = 0; d < 3; ++d)
+      xi[d] -= inv[3 * d] * r[0] + inv[3 * d + 1] * r[1] + inv[3 * d + 2] * r[2];
   }
   for (int d = 0; d < 3; ++d)
     if (fabs(xi[d]) > 1 - skin) return 0;
