@@ -14,7 +14,7 @@
    1.1-1.9 */
 #define SELF_REACH 2.5
 /* the skin a contact stops at, and the depth past which a corner is taken as through the face
-   already (not pulled back), in lattice spacings */
+   already (not pushed back), in lattice spacings */
 #define SKIN 0.02
 #define DEPTH 0.5
 /* how far off the face a corner may project and still touch it (the two triangles of a
@@ -22,12 +22,12 @@
 #define LATERAL 0.05
 /* ... and behind it, how far off it may project and still be pushed back out */
 #define LATERAL_BEHIND 0.5
-/* contacts kept per corner (the nearest; a corner at an edge or a vertex touches 2 or 3 faces),
-   Gauss-Seidel sweeps over them */
 /* the share of its depth below the skin a corner is moved out by in a step (a corner that
    slid in across an edge or a turning face comes back out over a few steps instead of staying
    there; Baumgarte's stabilization) */
 #define RECOVERY 0.2
+/* contacts kept per corner (the nearest; a corner at an edge or a vertex touches 2 or 3 faces),
+   Gauss-Seidel sweeps over them */
 #define PER_CORNER 4
 #define SWEEPS 4
 
