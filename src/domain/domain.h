@@ -40,8 +40,8 @@ typedef struct mpm_enrichment_body {
                           enriched corner (domain/enrich.h) */
   int contact;         /* its enriched corners meet other material on the grid
                           (domain/enrich_contact.h) */
-  int surface_contact; /* its enriched surface meets enriched surfaces, other bodies' and its
-                          own (domain/enrich_surface_contact.h) */
+  int surface_contact; /* its enriched surface meets other bodies' enriched surfaces
+                          (domain/enrich_surface_contact.h) */
   int self_contact;    /* ... and its own enriched surface elsewhere */
 } mpm_enrichment_body;
 
@@ -149,6 +149,12 @@ static inline const mpm_real *mpm_domain_gradient(const mpm_domain_set *s, uint3
   return gc;
 }
 
+/* The body of corner c (its first particle's: a lattice is one body's); -1 for a corner no
+ * particle uses. */
+static inline int mpm_domain_corner_body(const mpm_domain_set *s, size_t c) {
+  if (s->adj_start[c] == s->adj_start[c + 1]) return -1;
+  return s->particles.body[s->adj[s->adj_start[c]] / MPM_HEX_CORNERS];
+}
 /* omega_ap and the reference gradient averages of the hexahedron with reference corners X
  * (in corner order, hex.h), by 2x2x2 Gauss quadrature (exact for trilinear hexahedra), and
  * its volume. MPM_OK, or MPM_ERR_INVALID when the hexahedron is inverted or flat at a quadrature

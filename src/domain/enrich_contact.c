@@ -14,12 +14,6 @@ int mpm_enrich_contact_on(const mpm_domain_set *s) {
   return 0;
 }
 
-/* The body of corner c (its first particle's: a lattice is one body's). */
-static int corner_body(const mpm_domain_set *s, size_t c) {
-  if (s->adj_start[c] == s->adj_start[c + 1]) return -1;
-  return s->particles.body[s->adj[s->adj_start[c]] / MPM_HEX_CORNERS];
-}
-
 /* The contacts of body b's enriched corners (body: each corner's body; own_mass, corner_mass:
  * scratch of nc and count values). */
 static void contact_body(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
@@ -106,7 +100,7 @@ mpm_status mpm_enrich_contact(const mpm_domain_set *s, const mpm_grid *g, const 
   mpm_real *own_mass = mpm_arena_alloc(scratch, (nc + 1) * sizeof *own_mass);
   int32_t *body = mpm_arena_alloc(scratch, (nc + 1) * sizeof *body);
   if (!corner_mass || !own_mass || !body) return MPM_ERR_NOMEM;
-  for (size_t c = 0; c < nc; ++c) body[c] = corner_body(s, c);
+  for (size_t c = 0; c < nc; ++c) body[c] = mpm_domain_corner_body(s, c);
   for (int b = 0; b < e->body_count; ++b)
     if (e->body[b].contact)
       contact_body(s, g, k, dofs, count, b, body, own_mass, corner_mass, contacts);

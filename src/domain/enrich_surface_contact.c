@@ -17,10 +17,8 @@
    already (not pushed back), in lattice spacings */
 #define SKIN 0.02
 #define DEPTH 0.5
-/* how far off the face a corner may project and still touch it (the two triangles of a
-   non-planar face leave a crease), in lattice spacings */
-#define LATERAL 0.05
-/* ... and behind it, how far off it may project and still be pushed back out */
+/* how far off a face a corner behind it may project and still be pushed back out, in lattice
+   spacings */
 #define LATERAL_BEHIND 0.5
 /* the share of its depth below the skin a corner is moved out by in a step (a corner that
    slid in across an edge or a turning face comes back out over a few steps instead of staying
@@ -386,7 +384,7 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
 #pragma omp parallel for schedule(static) if (ncl > MPM_PARALLEL_MIN)
   for (long c = 0; c < ncl; ++c) {
     const uint32_t a0 = s->adj_start[c], a1 = s->adj_start[c + 1];
-    body[c] = a0 == a1 ? -1 : s->particles.body[s->adj[a0] / MPM_HEX_CORNERS];
+    body[c] = mpm_domain_corner_body(s, (size_t)c);
     int n = 0;
     for (uint32_t a = a0; a < a1; ++a) n += s->active[s->adj[a] / MPM_HEX_CORNERS] != 0;
     users[c] = (uint8_t)n;

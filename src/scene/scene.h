@@ -49,9 +49,8 @@ typedef struct mpm_body_desc {
                                      default 0: never (beyond Zhu) */
   int enrichment_contact;         /* domains: enriched corners meet other material
                                      on the grid (domain/enrich_contact.h); default 0 */
-  int enrichment_surface_contact; /* domains: the enriched surface meets enriched surfaces, of
-                                     other bodies and its own (domain/enrich_surface_contact.h);
-                                     default 1 */
+  int enrichment_surface_contact; /* domains: the enriched surface meets other bodies' enriched
+                                     surfaces (domain/enrich_surface_contact.h); default 1 */
   int enrichment_self_contact;    /* domains: ... and its own enriched surface elsewhere
                                      (domain/enrich_surface_contact.h); default 1 */
   int enrichment_metric;          /* domains: 0 sigma_min / sigma_max (default), 1 the normalized

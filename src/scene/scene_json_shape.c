@@ -461,7 +461,7 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
                                                 "hourglass",
                                                 "enrichment_surface_contact",
                                                 "enrichment_self_contact"};
-  for (int k = 0; k < 8; ++k)
+  for (size_t k = 0; k < sizeof enrichment_keys / sizeof enrichment_keys[0]; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
                               "applies only to a body with \"domains\": true");
