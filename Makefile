@@ -32,7 +32,7 @@ TSAN_DEB_PACKAGES = clang libclang-rt-14-dev libomp-14-dev
 ARCHER ?= /usr/lib/llvm-14/lib/libarcher.so
 # the tests run under ThreadSanitizer: every parallel kernel (P2G colouring, G2P, the sort, the
 # DOF set's reductions and update, the embedding's scatter, the transfer operators, domains)
-TSAN_TESTS = test_sim|test_resample_sim|test_domain_sim|test_domain|test_domain_apic|test_dofs|test_embedding|test_adaptive_grid|test_adaptive_step|test_transfer_operators|test_memory|test_cg|test_implicit|test_multigrid
+TSAN_TESTS = test_sim|test_tile_batches|test_enrich_contact|test_enrich_surface_contact|test_resample_sim|test_domain_sim|test_domain|test_domain_apic|test_dofs|test_embedding|test_adaptive_grid|test_adaptive_step|test_transfer_operators|test_memory|test_cg|test_implicit|test_multigrid
 
 .PHONY: all deps vdb-shim build build-double build-sanitize demo test test-float test-double \
 	test-sanitize bench clean format valgrind deps-fuzz build-fuzz fuzz test-fuzz deps-tsan \

@@ -18,8 +18,9 @@
  * together, as two bodies in a slip contact of reduced mass mu = m_c M / (m_c + M):
  *   j = mu (v_c - v_g) . n,   v_c -= (j / m_c) n,   v_i += (j w_i / M) n   (i in the stencil),
  * so that sum_i m_i dv_i = j n: linear momentum is conserved exactly (up to rounding), and the
- * tangential velocities are left alone. Corners touch the grid one after the other in corner
- * order, body by body (deterministic, serial: a few hundred corners in Zhu's scenes). The body's
+ * tangential velocities are left alone. Body by body, the corners touch the grid one after the
+ * other within tiles of the grid, the tiles of a colour in parallel (core/tile_batches.h): the
+ * order, and so the result, does not depend on the thread count. The body's
  * own corners' mass on the grid comes from the embedding's rows, which the step then builds
  * (s->corner_rows). Enriched parts meeting each other (of two bodies, or of one) are not on the
  * grid: domain/enrich_surface_contact.h meets them. */

@@ -1,6 +1,7 @@
 /* enrich_surface_contact.c - enriched parts meet enriched parts (see enrich_surface_contact.h). */
 #include "domain/enrich_surface_contact.h"
 #include "core/parallel.h"
+#include "core/tile_batches.h"
 #include "domain/enrich.h"
 #include "domain/hex.h"
 
@@ -171,6 +172,10 @@ typedef struct ctx {
 
 static uint32_t dof_of(const mpm_domain_set *s, uint32_t c) {
   return (uint32_t)(s->enrich.dof_begin + s->enrich.slot[c]);
+}
+
+static uint32_t corner_of(const mpm_domain_set *s, uint32_t dof) {
+  return s->enrich.corner[dof - s->enrich.dof_begin];
 }
 
 static void corner_x(const mpm_domain_set *s, uint32_t c, double x[3]) {
@@ -463,7 +468,7 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
   hash_entry *hash = mpm_arena_alloc(scratch, (ne + 1) * sizeof *hash);
   if (!hash) return MPM_ERR_NOMEM;
   const long nfl = (long)nf;
-#pragma omp parallel for schedule(static) if (nfl > MPM_PARALLEL_MIN)
+#pragma omp parallel for schedule(static) if (nfl > MPM_PARALLEL_MIN / 8)
   for (long f = 0; f < nfl; ++f) {
     const face *F = &faces[f];
     const double a[3] = {F->lo[0], F->lo[1], F->lo[2]}, b[3] = {F->hi[0], F->hi[1], F->hi[2]};
@@ -491,7 +496,9 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
     if (on_surface[c]) corner[k++] = (uint32_t)c;
   const ctx x = {s, dofs, dt, faces, hash, ne, H, body};
   const long nsl = (long)ns;
-#pragma omp parallel for schedule(dynamic, 64) if (nsl > MPM_PARALLEL_MIN)
+  /* a corner's search (its hash cells, each face there) costs some hundred times an
+     element-wise loop's item: parallel from far fewer corners */
+#pragma omp parallel for schedule(dynamic, 64) if (nsl > MPM_PARALLEL_MIN / 64)
   for (long k = 0; k < nsl; ++k) {
     const uint32_t c = corner[k];
     const int b = body[c];
@@ -499,15 +506,45 @@ mpm_status mpm_surface_contact(const mpm_domain_set *s, const mpm_grid_values *d
     if (b < 0 || b >= e->body_count || !e->body[b].surface_contact) continue;
     count[k] = (uint8_t)corner_contacts(&x, c, found + (size_t)k * PER_CORNER);
   }
-  /* the impulses, serially in corner order */
   size_t nk = 0;
   for (size_t k = 0; k < ns; ++k)
     for (int j = 0; j < count[k]; ++j) found[nk++] = found[k * PER_CORNER + (size_t)j];
+  if (!nk) return MPM_OK;
+  /* the impulses: a few Gauss-Seidel sweeps, in parallel by tiles (core/tile_batches.h). A
+     contact touches its corner and its face's corners, all within `reach` of the corner along
+     each axis; tiles of twice that side keep one colour's tiles' contacts apart */
   uint8_t *took = mpm_arena_alloc(scratch, nk + 1);
-  if (!took) return MPM_ERR_NOMEM;
+  int32_t(*tile)[3] = mpm_arena_alloc(scratch, (nk + 1) * sizeof *tile);
+  if (!took || !tile) return MPM_ERR_NOMEM;
   memset(took, 0, nk + 1);
+  double reach = 0;
+  for (size_t k = 0; k < nk; ++k) {
+    double xc[3];
+    corner_x(s, corner_of(s, found[k].dof), xc);
+    for (int j = 0; j < 3; ++j) {
+      double xf[3];
+      corner_x(s, corner_of(s, found[k].fdof[j]), xf);
+      for (int d = 0; d < 3; ++d) reach = fmax(reach, fabs(xf[d] - xc[d]));
+    }
+  }
+  const double side = 2.001 * reach + 1e-3 * hmax;
+  for (size_t k = 0; k < nk; ++k) {
+    double xc[3];
+    corner_x(s, corner_of(s, found[k].dof), xc);
+    for (int d = 0; d < 3; ++d) tile[k][d] = (int32_t)fmax(-1e9, fmin(1e9, floor(xc[d] / side)));
+  }
+  mpm_tile_batches batch;
+  if (mpm_tile_batches_build(nk, (const int32_t(*)[3])tile, scratch, &batch)) return MPM_ERR_NOMEM;
   for (int sweep = 0; sweep < SWEEPS; ++sweep)
-    for (size_t k = 0; k < nk; ++k) took[k] |= (uint8_t)resolve(&found[k], dofs, dt);
+    for (int colour = 0; colour < MPM_TILE_COLOURS; ++colour) {
+      const long t0 = (long)batch.colour_start[colour], t1 = (long)batch.colour_start[colour + 1];
+#pragma omp parallel for schedule(dynamic, 4) if (t1 - t0 > 1)
+      for (long t = t0; t < t1; ++t)
+        for (size_t i = batch.tile_start[t]; i < batch.tile_start[t + 1]; ++i) {
+          const uint32_t k = batch.item[i];
+          took[k] |= (uint8_t)resolve(&found[k], dofs, dt);
+        }
+    }
   for (size_t k = 0; k < nk; ++k) stats->contacts += took[k];
   return MPM_OK;
 }

@@ -38,10 +38,12 @@
  *             so linear momentum is conserved exactly (sum_k beta_k = 1), the tangential
  *             velocities are left alone, and an impulse that stops an approach lowers the
  *             kinetic energy (the relative normal speed only falls; only the slow recovery
- *             out of a skin adds any). The contacts are taken in corner order, a few
- *             Gauss-Seidel sweeps over them (a corner at an edge touches two faces).
- * The faces, the hash and the pairs are found in parallel into per-corner slots; the impulses
- * are applied serially in corner order: the result does not depend on the thread count. */
+ *             out of a skin adds any). A few Gauss-Seidel sweeps over the contacts (a
+ *             corner at an edge touches two faces).
+ * The faces, the hash and the pairs are found in parallel into per-corner slots; the sweeps run
+ * in parallel by coloured tiles of space twice the widest contact's reach
+ * (core/tile_batches.h): the order of the impulses, and so the result, does not depend on the
+ * thread count. */
 #ifndef MPM_DOMAIN_ENRICH_SURFACE_CONTACT_H
 #define MPM_DOMAIN_ENRICH_SURFACE_CONTACT_H
 
