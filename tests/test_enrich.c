@@ -285,6 +285,44 @@ static void test_categories(void **state) {
   mpm_sim_destroy(sim);
 }
 
+/* Marks of the bar's particle q0 over `steps` marks at the stretch a: how many came out
+ * enriched. */
+static int marks_enriched(mpm_sim *sim, size_t q0, double a, int steps) {
+  mpm_domain_set *s = &sim->domains;
+  int n = 0;
+  stretch_particle(sim, q0, a);
+  for (int k = 0; k < steps; ++k) {
+    assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
+    n += s->enrich.flag[q0] != 0;
+    assert_int_equal(s->enrich.count, s->enrich.flag[q0] ? 8 : 0);
+  }
+  return n;
+}
+
+/* The exit's wait (bodies[].enrichment_exit_wait): an enriched particle at rest (K = 1 above the
+ * exit) returns to the grid only after 0.1 s of steps of 0.01 s at rest in a row (the tenth
+ * mark); a stretch back past the exit (K = 0.93) in between starts the count again; without a
+ * wait it returns at the first mark at rest. */
+static void test_exit_wait(void **state) {
+  (void)state;
+  mpm_sim *sim = bar(", \"enrichment\": 0.6, \"enrichment_exit_wait\": 0.1", "");
+  mpm_domain_set *s = &sim->domains;
+  s->enrich.step_dt = 0.01;
+  const size_t q0 = 17;
+  assert_int_equal(marks_enriched(sim, q0, 4, 1), 1);  /* K = 0.49: enriched */
+  assert_int_equal(marks_enriched(sim, q0, 1, 12), 9); /* back at the tenth mark */
+  assert_int_equal(marks_enriched(sim, q0, 4, 1), 1);
+  assert_int_equal(marks_enriched(sim, q0, 1, 5), 5);   /* at rest for 5 steps ... */
+  assert_int_equal(marks_enriched(sim, q0, 1.5, 3), 3); /* stretched past the exit again ... */
+  assert_int_equal(marks_enriched(sim, q0, 1, 12), 9);  /* ... so 10 more at rest */
+  mpm_sim_destroy(sim);
+  sim = bar(", \"enrichment\": 0.6", "");
+  sim->domains.enrich.step_dt = 0.01;
+  assert_int_equal(marks_enriched(sim, q0, 4, 1), 1);
+  assert_int_equal(marks_enriched(sim, q0, 1, 3), 0);
+  mpm_sim_destroy(sim);
+}
+
 /* Sum of m v over the domain particles. */
 static void particle_momentum(const mpm_sim *sim, double p[3], double *mass) {
   const mpm_particles *q = &sim->domains.particles;
@@ -534,6 +572,22 @@ static void test_bend_enrichment(void **state) {
   assert_int_equal(e->count, 0);
   mpm_sim_destroy(plain);
   mpm_sim_destroy(sim);
+  /* with exit 0.999 a bent particle returns only once its bend is below 1 - 0.999 as well: at
+     a strain of 0.02 (below the threshold 0.05, where the default exit lets it go) it stays */
+  sim =
+      bar(", \"enrichment\": 0.6, \"enrichment_hourglass\": 0.05, \"enrichment_exit\": 0.999", "");
+  s = &sim->domains;
+  const double d[3] = {0.03, 0.01, 0.0004}; /* strains 0.06, 0.02, 0.0008 */
+  const int want[3] = {1, 1, 0};
+  double at = 0;
+  for (int k = 0; k < 3; ++k) {
+    for (int a = 0; a < MPM_HEX_CORNERS; ++a)
+      s->cx[0][s->corner[q0][a]] += (mpm_real)((d[k] - at) * h * mpm_hourglass_modes[0][a]);
+    at = d[k];
+    assert_int_equal(mpm_domain_mark_enrichment(s, sim->materials), MPM_OK);
+    assert_int_equal(s->enrich.flag[q0] != 0, want[k]);
+  }
+  mpm_sim_destroy(sim);
 }
 
 /* kappa (domain/enrich.h): a domain bent by a hourglass pattern u_d = b s_i s_j (d one of the
@@ -664,6 +718,7 @@ static void test_scene_key(void **state) {
       {"\"hourglass\": \"some\"", "bodies[0].hourglass"},
       {"\"enrichment_hourglass\": 1.5", "bodies[0].enrichment_hourglass"},
       {"\"enrichment_hourglass\": -0.01", "bodies[0].enrichment_hourglass"},
+      {"\"enrichment_exit_wait\": -1", "bodies[0].enrichment_exit_wait"},
   };
   for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
     char text[1024];
@@ -709,6 +764,7 @@ int main(void) {
       cmocka_unit_test(test_metric),
       cmocka_unit_test(test_condition_metric),
       cmocka_unit_test(test_categories),
+      cmocka_unit_test(test_exit_wait),
       cmocka_unit_test(test_mixed_conservation),
       cmocka_unit_test(test_always_enriched_translation),
       cmocka_unit_test(test_twist_release),

@@ -289,6 +289,7 @@ static mpm_scene_def implicit_def(void) {
   b[0].enrichment_contact = 1;
   b[0].enrichment_surface_contact = 0;
   b[0].enrichment_self_contact = 0;
+  b[0].enrichment_exit_wait = 0.2;
   b[0].enrichment_metric = MPM_DEF_METRIC_FROBENIUS;
   b[0].hourglass = MPM_DEF_HOURGLASS_ALL;
   b[0].domain_release = releases, b[0].domain_release_count = 2;
@@ -341,6 +342,7 @@ static void test_implicit_and_domain_fields(void **state) {
       "   \"material\": \"rubber\", \"domains\": true, \"enrichment\": 0.6,"
       "   \"enrichment_exit\": 0.9, \"enrichment_hourglass\": 0.05, \"enrichment_contact\": true,"
       "   \"enrichment_surface_contact\": false, \"enrichment_self_contact\": false,"
+      "   \"enrichment_exit_wait\": 0.2,"
       "   \"enrichment_metric\": \"frobenius\", "
       "\"hourglass\": \"all\","
       "   \"domain_release\": [{\"time\": 0.004, \"min\": [0, 0, 0], \"max\": [0.4, 0.8, 0.8]},"
@@ -474,6 +476,8 @@ static void test_refused_by_def(void **state) {
     bodies[0].enrichment_surface_contact = 1;
     assert_refused(&d, "bodies[0].enrichment_self_contact: a field of particle domains");
     bodies[0].enrichment_self_contact = 1;
+    assert_refused(&d, "bodies[0].enrichment_exit_wait: a field of particle domains");
+    bodies[0].enrichment_exit_wait = 0;
     assert_refused(&d, "bodies[0].hourglass: a field of particle domains");
     bodies[0].hourglass = MPM_DEF_HOURGLASS_ENRICHED;
     assert_refused(&d, "bodies[0].domain_release: a field of particle domains");

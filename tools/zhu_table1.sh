@@ -13,6 +13,7 @@
 #                                                    domains: enrichment_exit (0.6 with the
 #                                                    scenes' epsilon is the paper's rule) and the
 #                                                    bend threshold enrichment_hourglass
+#   FLIP=0.95 tools/zhu_table1.sh ...                another PIC/FLIP blend (solver.flip_alpha)
 #
 # Seconds per frame are per 1/30 s of simulated time (the paper's timings are at 30 frames per
 # second), whatever the scene's fps.
@@ -51,9 +52,10 @@ for line in "${scenes[@]}"; do
   src=$root/examples/zhu/$s.json
   ppc=${PPC:-}
   if [ -n "$ppc" ] && [ "$ppcmin" -gt "$ppc" ]; then ppc=$ppcmin; fi
-  python3 - "$src" "$out/zhu/on_$s.json" "$ppc" "${EXIT:-}" "${BEND:-}" << 'PY'
+  python3 - "$src" "$out/zhu/on_$s.json" "$ppc" "${EXIT:-}" "${BEND:-}" "${FLIP:-}" << 'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
+if sys.argv[6]: d["solver"]["flip_alpha"] = float(sys.argv[6])
 for b in d["bodies"]:
     if not b.get("domains"): continue
     if sys.argv[3]: b["particles_per_cell"] = int(sys.argv[3])

@@ -252,6 +252,9 @@ typedef struct mpm_body_def {
                                      Zhu); 0 or 1; default 1 */
   int enrichment_self_contact;    /* bodies[].enrichment_self_contact: its enriched surface meets
                                      its own elsewhere (beyond Zhu); 0 or 1; default 1 */
+  double enrichment_exit_wait;    /* bodies[].enrichment_exit_wait: seconds an enriched particle
+                                     stays relaxed before it returns to the grid (beyond Zhu),
+                                     >= 0; default 0: at once */
 } mpm_body_def;
 
 /// A pose of a keyframed motion (motion.keyframes[i]).

@@ -43,6 +43,8 @@ typedef struct mpm_enrichment_body {
   int surface_contact; /* its enriched surface meets other bodies' enriched surfaces
                           (domain/enrich_surface_contact.h) */
   int self_contact;    /* ... and its own enriched surface elsewhere */
+  double exit_wait;    /* seconds an enriched particle stays relaxed (K(F) > exit_k, its bend
+                          below 1 - exit_k where bend > 0) before it returns (0: at once) */
 } mpm_enrichment_body;
 
 /* Dynamic enrichment (Zhu sec. 5, domain/enrich.h): the marks of one step. */
@@ -51,8 +53,10 @@ typedef struct mpm_domain_enrichment {
   int body_count;
   int any;             /* some body has epsilon > 0 or bend > 0 */
   int hourglass_any;   /* some body has hourglass_all */
-  uint8_t *flag;       /* per particle: enriched this step (K(F_p) <= epsilon, or <= exit_k
-                          when it was last step): state, kept in checkpoints */
+  uint8_t *flag;       /* per particle: 0 not enriched this step; 1 + the steps it has been
+                          relaxed in a row when enriched (domain/enrich.h: the exit's wait, at
+                          most 254): state, kept in checkpoints */
+  double step_dt;      /* the step the flags' wait counts in (the last step's), s */
   uint8_t *category;   /* per particle: MPM_DOMAIN_UNENRICHED / TRANSITIONAL / ENRICHED */
   uint8_t *enriched;   /* per corner: 1 when it is a DOF of its own this step */
   uint8_t *on_grid;    /* per corner: used and not enriched (it is embedded in the grid) */

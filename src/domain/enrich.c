@@ -92,6 +92,7 @@ mpm_status mpm_enrichment_set_body(mpm_domain_set *s, int b, mpm_enrichment_body
   settings.contact = settings.contact != 0;
   settings.surface_contact = settings.surface_contact != 0;
   settings.self_contact = settings.surface_contact && settings.self_contact != 0;
+  if (!(settings.exit_wait > 0)) settings.exit_wait = 0;
   e->body[b] = settings;
   e->any = e->hourglass_any = 0;
   for (int k = 0; k < e->body_count; ++k) {
@@ -195,17 +196,30 @@ mpm_status mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *mat
     const mpm_real K = eps >= 1                           ? 1
                        : kind == MPM_ENRICHMENT_FROBENIUS ? mpm_enrichment_metric(F, cc)
                                                           : mpm_enrichment_condition(F, cc);
-    /* the bend K does not see (enrich.h) */
-    const int bent = eb->bend > 0 && eps < 1 &&
-                     mpm_enrichment_hourglass_strain(s, (size_t)q, eb->spacing) >= eb->bend;
-    e->flag[q] = eps >= 1 || K <= eps || bent || (was && K <= exit_k);
+    /* the bend K does not see (enrich.h); an enriched particle returns only once its bend is
+       below 1 - exit_k too, the strain its stretch must be within (a particle let go at the
+       entry's bend keeps that much bend for good) */
+    const mpm_real bend =
+        eb->bend > 0 && eps < 1 ? mpm_enrichment_hourglass_strain(s, (size_t)q, eb->spacing) : 0;
+    const int bent = eb->bend > 0 && eps < 1 && bend >= eb->bend;
+    const int relaxed = K > exit_k && !(eb->bend > 0 && bend >= 1 - exit_k);
+    if (eps >= 1 || K <= eps || bent || (was && !relaxed)) {
+      e->flag[q] = 1;
+    } else if (was) {
+      /* relaxed: back to the grid once it has been so for the body's wait (this step counted),
+         not while it only passes through its rest shape (a ringing part let go there keeps
+         the rest of its swing in the grid's hold) */
+      const int steps = was; /* was - 1 earlier steps, and this one */
+      const int waited = steps >= 255 || (double)steps * e->step_dt >= eb->exit_wait;
+      e->flag[q] = waited ? 0 : (uint8_t)(steps + 1);
+    }
   }
   /* 2. a corner is enriched when one of its particles is (gathered per corner: no races) */
 #pragma omp parallel for schedule(static) if (nc >= MPM_PARALLEL_MIN)
   for (long c = 0; c < nc; ++c) {
     uint8_t on = 0;
     for (uint32_t j = s->adj_start[c]; j < s->adj_start[c + 1] && !on; ++j)
-      on = e->flag[s->adj[j] / MPM_HEX_CORNERS];
+      on = e->flag[s->adj[j] / MPM_HEX_CORNERS] != 0;
     e->enriched[c] = on;
     e->on_grid[c] = s->corner_use[c] && !on;
   }

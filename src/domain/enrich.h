@@ -29,7 +29,9 @@
  * F is clamped first (sec. 5.3): its signed singular values below the material's min_stretch c
  * are raised to c, so that flat and inverted particles get a small finite K. An enriched
  * particle stays enriched while K <= the body's exit threshold (bodies[].enrichment_exit >=
- * epsilon): the flags are state.
+ * epsilon), and, with a wait (bodies[].enrichment_exit_wait), until it has been relaxed for that
+ * long in a row (a flag counts the relaxed steps: 1 + the count, at most 255): the flags are
+ * state.
  *
  * Bending the metric does not see (beyond Zhu; bodies[].enrichment_hourglass). A domain has one
  * quadrature point, so K(F) sees only its hexahedron's average gradient. A layer one domain
@@ -42,9 +44,9 @@
  *   gamma = max_alpha |q_alpha| / (4 h),   q_alpha = sum_a h_alpha,a x_a   (below),
  * reaches it: gamma is the bending strain at the faces of a cube of side h bent by the pattern
  * u = d xi eta (q = 8 d, strain 2 d / h), zero for every affine motion. Such a particle stays
- * enriched while K <= exit_k or gamma >= the threshold: with exit_k < 1 it returns to the grid
- * as soon as gamma is below the threshold, and keeps that much bend (a plate one domain thick,
- * bent and released: tests/test_enrich_bend.c).
+ * enriched while K <= exit_k, gamma >= the threshold or gamma >= 1 - exit_k: it returns to the
+ * grid only with its bend within the strain its stretch must be within, and keeps the bend it
+ * had then (a plate one domain thick, bent and released: tests/test_enrich_bend.c).
  *
  * The explicit time step. Grid nodes are dx apart whatever the material does, but enriched
  * corners are the material's own nodes: h apart at rest, h sigma_min apart in a compressed
@@ -79,7 +81,7 @@ mpm_status mpm_domain_mark_enrichment(mpm_domain_set *s, const mpm_material *mat
 /* Body b's settings: all 0 (never enriched, the condition metric) for a body without any. */
 static inline const mpm_enrichment_body *mpm_enrichment_body_of(const mpm_domain_enrichment *e,
                                                                 int b) {
-  static const mpm_enrichment_body none = {0, 0, 0, 0, MPM_ENRICHMENT_CONDITION, 0, 0, 0, 0};
+  static const mpm_enrichment_body none = {0, 0, 0, 0, MPM_ENRICHMENT_CONDITION, 0, 0, 0, 0, 0};
   return b >= 0 && b < e->body_count ? &e->body[b] : &none;
 }
 

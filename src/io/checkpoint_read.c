@@ -196,8 +196,8 @@ static int read_domains(reader *r, mpm_checkpoint *c) {
     goto done;
   s->active_count = 0;
   for (uint64_t i = 0; i < nd; ++i) {
-    if (s->active[i] > 1 || s->enrich.flag[i] > 1) {
-      bad(r, "%s", "a domain's active or enriched flag is neither 0 nor 1");
+    if (s->active[i] > 1) { /* (an enriched flag counts its relaxed steps: any byte) */
+      bad(r, "%s", "a domain's active flag is neither 0 nor 1");
       goto done;
     }
     s->active_count += s->active[i];

@@ -53,6 +53,9 @@ typedef struct mpm_body_desc {
                                      surfaces (domain/enrich_surface_contact.h); default 1 */
   int enrichment_self_contact;    /* domains: ... and its own enriched surface elsewhere
                                      (domain/enrich_surface_contact.h); default 1 */
+  double enrichment_exit_wait;    /* domains: seconds an enriched particle must stay relaxed (K(F)
+                                     above enrichment_exit, and its bend below 1 - exit with a bend
+                                     threshold) before it returns to the grid; default 0: at once */
   int enrichment_metric;          /* domains: 0 sigma_min / sigma_max (default), 1 the normalized
                                      Frobenius form 3 / (|F| |F^-1|) (domain/enrich.h) */
   int hourglass;                  /* domains: hourglass control of the particles touching an

@@ -85,6 +85,7 @@ mpm_body_def mpm_body_def_default(void) {
   d.enrichment_contact = b.enrichment_contact;
   d.enrichment_surface_contact = b.enrichment_surface_contact;
   d.enrichment_self_contact = b.enrichment_self_contact;
+  d.enrichment_exit_wait = b.enrichment_exit_wait;
   d.hourglass = (mpm_def_hourglass)b.hourglass;
   return d;
 }

@@ -424,6 +424,7 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
       : b->enrichment_contact != d.enrichment_contact                 ? "enrichment_contact"
       : b->enrichment_surface_contact != d.enrichment_surface_contact ? "enrichment_surface_contact"
       : b->enrichment_self_contact != d.enrichment_self_contact       ? "enrichment_self_contact"
+      : b->enrichment_exit_wait != d.enrichment_exit_wait             ? "enrichment_exit_wait"
       : b->hourglass != d.hourglass                                   ? "hourglass"
       : b->domain_release_count != 0                                  ? "domain_release"
                                                                       : NULL;
@@ -449,6 +450,8 @@ static int write_domain_keys(mpm_def_writer *w, const char *path, const mpm_body
     mpm_def_add_bool(w, o, "enrichment_surface_contact", b->enrichment_surface_contact);
   if (b->enrichment_self_contact != d.enrichment_self_contact)
     mpm_def_add_bool(w, o, "enrichment_self_contact", b->enrichment_self_contact);
+  if (b->enrichment_exit_wait != d.enrichment_exit_wait)
+    mpm_def_add_number(w, o, "enrichment_exit_wait", b->enrichment_exit_wait);
   if (b->hourglass != d.hourglass) { /* written when not the default: older files unchanged */
     snprintf(p, sizeof p, "%s.hourglass", path);
     const char *hourglass = mpm_def_spell(w->c, p, (int)b->hourglass, &HOURGLASSES);

@@ -31,6 +31,7 @@ static const char *const BODY_KEYS[] = {"name",
                                         "domain_release",
                                         "enrichment",
                                         "enrichment_exit",
+                                        "enrichment_exit_wait",
                                         "enrichment_hourglass",
                                         "enrichment_contact",
                                         "enrichment_surface_contact",
@@ -460,7 +461,8 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
                                                 "enrichment_metric",
                                                 "hourglass",
                                                 "enrichment_surface_contact",
-                                                "enrichment_self_contact"};
+                                                "enrichment_self_contact",
+                                                "enrichment_exit_wait"};
   for (size_t k = 0; k < sizeof enrichment_keys / sizeof enrichment_keys[0]; ++k)
     if (mpm_json_get(node, enrichment_keys[k]) && !b->domains)
       return mpm_json_fail_at(c, enrichment_keys[k], MPM_ERR_INVALID,
@@ -483,6 +485,12 @@ static int parse_body(mpm_json_ctx *c, const cJSON *node, int index, int named, 
            b->enrichment);
   if (mpm_json_number(c, node, "enrichment_exit", 0,
                       mpm_json_in('[', b->enrichment, 1, ']', exit_note), &b->enrichment_exit) < 0)
+    return -1;
+  b->enrichment_exit_wait = 0;
+  if (mpm_json_number(c, node, "enrichment_exit_wait", 0,
+                      mpm_json_in('[', 0, 1e9, ']',
+                                  "seconds an enriched particle stays relaxed before it returns"),
+                      &b->enrichment_exit_wait) < 0)
     return -1;
   b->enrichment_hourglass = 0;
   if (mpm_json_number(c, node, "enrichment_hourglass", 0,

@@ -202,7 +202,8 @@ static mpm_status create(mpm_scene *scene, mpm_sim **out, mpm_error *err, int sa
                                             .hourglass_all = bd->hourglass,
                                             .contact = bd->enrichment_contact,
                                             .surface_contact = bd->enrichment_surface_contact,
-                                            .self_contact = bd->enrichment_self_contact};
+                                            .self_contact = bd->enrichment_self_contact,
+                                            .exit_wait = bd->enrichment_exit_wait};
       if (mpm_enrichment_set_body(&sim->domains, b, settings)) {
         st = oom(err, "the enrichment thresholds");
         goto fail;

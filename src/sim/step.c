@@ -390,6 +390,9 @@ static mpm_status dt_collapsed(mpm_sim *sim, double dt) {
 mpm_status mpm_sim_mark_enrichment(mpm_sim *sim) {
   mpm_domain_enrichment *e = &sim->domains.enrich;
   if (!sim->domains.active_count || (e->valid && e->marked_step == sim->steps)) return MPM_OK;
+  /* the exit's wait counts steps of the last step's length (this one's is not set yet: its
+     bound reads the marks) */
+  e->step_dt = sim->last_dt > 0 ? sim->last_dt : fmax(sim->scene.solver.dt, 0);
   if (mpm_domain_mark_enrichment(&sim->domains, sim->materials))
     return mpm_error_set(&sim->error, MPM_ERR_NOMEM,
                          "step %lld: out of memory marking the enrichment of %zu domain particles",
