@@ -60,7 +60,7 @@ static double bend_and_release(const char *extra, double R, double seconds, size
 }
 
 /* The bend threshold frees what the grid keeps of a plate's bend, which K(F) never sees: with
- * enrichment_exit 1 (Zhu's scenes here) the plate comes back flat, as with every domain enriched
+ * enrichment_exit 1 the plate comes back flat, as with every domain enriched
  * (2.2e-6 after 2 s, measured); with K alone the grid keeps about a third of the bend (3.5e-2).
  * With a lower exit a particle goes back to the grid once its stretch and its bend are both
  * within 1 - exit of none, and keeps what bend it had then: at 0.999 (after 0.25 s relaxed)

@@ -23,8 +23,9 @@ typedef struct items {
   double side;
 } items;
 
-/* N points in a 1 m box (a few far off), tiled by cubes of side */
-static void make_items(items *it, double side, uint64_t seed) {
+/* N points in a 1 m box (a few far off), tiled by cubes of side, and their batches (scratch
+ * from a, initialized here) */
+static void make_items(items *it, double side, uint64_t seed, mpm_arena *a, mpm_tile_batches *b) {
   for (int i = 0; i < N; ++i)
     for (int d = 0; d < 3; ++d) {
       it->x[i][d] = test_rand(&seed, 0, 1);
@@ -32,16 +33,16 @@ static void make_items(items *it, double side, uint64_t seed) {
       it->tile[i][d] = (int32_t)floor(it->x[i][d] / side);
     }
   it->side = side;
+  mpm_arena_init(a);
+  assert_int_equal(mpm_tile_batches_build(N, (const int32_t(*)[3])it->tile, a, b), MPM_OK);
 }
 
 static void test_every_item_once_in_order(void **state) {
   (void)state;
   static items it;
-  make_items(&it, 0.07, 11);
   mpm_arena a;
-  mpm_arena_init(&a);
   mpm_tile_batches b;
-  assert_int_equal(mpm_tile_batches_build(N, (const int32_t(*)[3])it.tile, &a, &b), MPM_OK);
+  make_items(&it, 0.07, 11, &a, &b);
   int seen[N] = {0};
   assert_int_equal(b.colour_start[0], 0);
   assert_int_equal(b.colour_start[MPM_TILE_COLOURS], b.tiles);
@@ -68,11 +69,9 @@ static void test_every_item_once_in_order(void **state) {
 static void test_one_colour_tiles_apart(void **state) {
   (void)state;
   static items it;
-  make_items(&it, 0.05, 12);
   mpm_arena a;
-  mpm_arena_init(&a);
   mpm_tile_batches b;
-  assert_int_equal(mpm_tile_batches_build(N, (const int32_t(*)[3])it.tile, &a, &b), MPM_OK);
+  make_items(&it, 0.05, 12, &a, &b);
   static int32_t tile_of[N];
   for (size_t t = 0; t < b.tiles; ++t)
     for (size_t i = b.tile_start[t]; i < b.tile_start[t + 1]; ++i) tile_of[b.item[i]] = (int32_t)t;
@@ -131,11 +130,9 @@ static void relax(const items *it, const mpm_tile_batches *b, double *grid) {
 static void test_pass_same_on_any_threads(void **state) {
   (void)state;
   static items it;
-  make_items(&it, 0.1, 13);
   mpm_arena a;
-  mpm_arena_init(&a);
   mpm_tile_batches b;
-  assert_int_equal(mpm_tile_batches_build(N, (const int32_t(*)[3])it.tile, &a, &b), MPM_OK);
+  make_items(&it, 0.1, 13, &a, &b);
   double *grid[2];
   for (int r = 0; r < 2; ++r) {
     grid[r] = malloc(sizeof(double) * G * G * G);

@@ -64,7 +64,7 @@ for b in d["bodies"]:
 json.dump(d, open(sys.argv[2], "w"), indent=1)
 PY
   sed -E 's/"enrichment": [0-9.]+/"enrichment": 0/; s/"enrichment_hourglass": [0-9.]+/"enrichment_hourglass": 0/' "$out/zhu/on_$s.json" > "$out/zhu/off_$s.json"
-  sed -E 's/"enrichment": [0-9.]+/"enrichment": 1/' "$out/zhu/on_$s.json" > "$out/zhu/all_$s.json"
+  sed -E 's/"enrichment": [0-9.]+/"enrichment": 1/; s/"enrichment_exit": [0-9.]+/"enrichment_exit": 1/' "$out/zhu/on_$s.json" > "$out/zhu/all_$s.json"
   for v in $variants; do
     rm -rf "${out:?}/${v}_$s"
     run "$out/zhu/${v}_$s.json" "${v}_$s" 1 &
