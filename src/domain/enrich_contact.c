@@ -1,5 +1,6 @@
 /* enrich_contact.c - enriched corners meet other material on the grid (see enrich_contact.h). */
 #include "domain/enrich_contact.h"
+#include "core/intmath.h"
 #include "core/parallel.h"
 #include "core/tile_batches.h"
 #include "domain/enrich.h"
@@ -75,11 +76,6 @@ static int contact_corner(const mpm_domain_set *s, const mpm_grid *g, const mpm_
   return 1;
 }
 
-/* floor(a / b), b > 0 */
-static int32_t floor_div(int32_t a, int32_t b) {
-  return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-
 /* The contacts of body b's enriched corners (body: each corner's body; own_mass, corner_mass:
  * scratch of nc and count values). */
 static mpm_status contact_body(const mpm_domain_set *s, const mpm_grid *g, const mpm_kernel *k,
@@ -112,7 +108,7 @@ static mpm_status contact_body(const mpm_domain_set *s, const mpm_grid *g, const
                             s->cx[2][c] - g->origin[2]};
     mpm_stencil st;
     mpm_kernel_stencil(k, xr, &st);
-    for (int d = 0; d < 3; ++d) tile[i][d] = floor_div(st.base[d], k->width);
+    for (int d = 0; d < 3; ++d) tile[i][d] = (int32_t)mpm_floor_div(st.base[d], k->width);
     took[i] = 0;
   }
   mpm_tile_batches batch;

@@ -2,6 +2,7 @@
  * it is). */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "heat/heat.h"
+#include "core/intmath.h"
 #include "core/alloc.h"
 #include "core/parallel.h"
 
@@ -340,10 +341,6 @@ typedef struct mpm_heat_links {
 /* The level's node boxes (grid.h: they cover its nodes, all of one size and aligned to it: the
  * sparse grid's blocks, the dense grid's slabs) in a hash by box coordinate, for the nodes'
  * neighbours: a stencil lookup would need the blocks around the neighbour as well. */
-static int64_t floor_div(int32_t a, int32_t b) {
-  return a >= 0 ? a / b : -((-(int64_t)a + b - 1) / b);
-}
-
 static uint64_t box_hash(const int64_t k[3]) {
   uint64_t h = (uint64_t)k[0] * 0x9E3779B97F4A7C15ull ^ (uint64_t)k[1] * 0xC2B2AE3D27D4EB4Full ^
                (uint64_t)k[2] * 0x165667B19E3779F9ull;
@@ -364,7 +361,7 @@ static int box_index_build(mpm_heat *h, const mpm_grid *g) {
   for (size_t b = 0; b < boxes; ++b) {
     const mpm_node_box box = g->ops->box(g, b);
     int64_t k[3];
-    for (int d = 0; d < 3; ++d) k[d] = floor_div(box.lo[d], h->box_size[d]);
+    for (int d = 0; d < 3; ++d) k[d] = mpm_floor_div(box.lo[d], h->box_size[d]);
     size_t at = box_hash(k) & (slots - 1);
     while (h->box_slot[at] != SIZE_MAX) at = (at + 1) & (slots - 1);
     h->box_slot[at] = b;
@@ -375,7 +372,7 @@ static int box_index_build(mpm_heat *h, const mpm_grid *g) {
 /* The DOF of the node at integer coordinates c of the level, or UINT32_MAX. */
 static uint32_t node_at(const mpm_heat *h, const mpm_grid *g, const int32_t c[3]) {
   int64_t k[3];
-  for (int d = 0; d < 3; ++d) k[d] = floor_div(c[d], h->box_size[d]);
+  for (int d = 0; d < 3; ++d) k[d] = mpm_floor_div(c[d], h->box_size[d]);
   for (size_t at = box_hash(k) & (h->box_slots - 1);; at = (at + 1) & (h->box_slots - 1)) {
     const size_t b = h->box_slot[at];
     if (b == SIZE_MAX) return UINT32_MAX;
